@@ -1,0 +1,402 @@
+//! The outer/inner cascade shared by every controller (paper §3.1–3.3).
+//!
+//! Outer loop (position): each channel's [`AxisLaw`] gives a commanded
+//! acceleration `a_i = q̈_d + v_fb,i` (Eq. 18–20); the thrust is
+//! `u1 = m (a_z + g)/(cφ cθ)` (Eq. 20 with gravity, erratum 1), optionally
+//! scaled by the mass estimate, `U1 = α̂ u1` (§3.2, Eq. 44); the virtual
+//! controls `u_x = m a_x / U1`, `u_y = m a_y / U1` (Remark 2) are inverted to
+//! the desired roll and pitch (Eq. 52, corrected). Inner loop (attitude): the
+//! same kind of law on φ, θ, ψ, and torques that cancel the plant's coupling,
+//! gyroscopic and drag terms (Eq. 56–58, corrected).
+
+use crate::allocation::{residual_speed, rotor_speeds};
+use crate::law::{check_non_negative, check_open, check_positive, AxisLaw, GainError, MAX_ESTIMATES};
+use crate::math::{asin, cos, sin_cos};
+use crate::model::{Command, QuadState, QuadrotorParams, Reference};
+
+/// How the desired-attitude derivatives φ̇_d, φ̈_d, θ̇_d, θ̈_d are obtained
+/// (the paper does not say; see docs/paper-errata.md).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "serde", derive(serde::Deserialize, serde::Serialize))]
+#[cfg_attr(feature = "serde", serde(rename_all = "kebab-case"))]
+pub enum AttitudeDerivatives {
+    /// Pass φ_d, θ_d through a second-order command filter whose states give
+    /// the reference and its two derivatives.
+    CommandFilter,
+    /// Use φ_d, θ_d directly with zero derivatives.
+    Zero,
+}
+
+/// Second-order command filter `r̈ = ω_n²(u − r) − 2ζω_n ṙ`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Deserialize, serde::Serialize))]
+#[cfg_attr(feature = "serde", serde(deny_unknown_fields))]
+pub struct CommandFilterParams {
+    /// Natural frequency ω_n, rad/s (default 50).
+    pub natural_frequency: f64,
+    /// Damping ratio ζ (default 1, critically damped).
+    pub damping: f64,
+}
+
+impl Default for CommandFilterParams {
+    fn default() -> Self {
+        Self { natural_frequency: 50.0, damping: 1.0 }
+    }
+}
+
+/// Cascade options common to all controllers.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Deserialize, serde::Serialize))]
+#[cfg_attr(feature = "serde", serde(deny_unknown_fields, default))]
+pub struct CascadeSettings {
+    /// Desired-attitude derivative option (default `command-filter`).
+    pub attitude_derivatives: AttitudeDerivatives,
+    /// Command filter parameters (used with `command-filter`).
+    pub command_filter: CommandFilterParams,
+    /// Maximum desired tilt, rad: the asin arguments of Eq. 52 are clamped to
+    /// `±sin(max_tilt)` (default 0.6 rad ≈ 34°).
+    pub max_tilt: f64,
+}
+
+impl Default for CascadeSettings {
+    fn default() -> Self {
+        Self {
+            attitude_derivatives: AttitudeDerivatives::CommandFilter,
+            command_filter: CommandFilterParams::default(),
+            max_tilt: 0.6,
+        }
+    }
+}
+
+impl CascadeSettings {
+    /// Range checks.
+    pub fn check(&self) -> Result<(), GainError> {
+        check_positive("command_filter.natural_frequency", self.command_filter.natural_frequency)?;
+        check_positive("command_filter.damping", self.command_filter.damping)?;
+        check_open("max_tilt", self.max_tilt, 0.0, core::f64::consts::FRAC_PI_2, "0 < max_tilt < π/2")
+    }
+}
+
+/// Mass adaptation of §3.2: `U1 = α̂ u1`, `dα̂/dt = −β1 (S_z u1 cθ cφ / m + β2 α̂)` (Eq. 44).
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Deserialize, serde::Serialize))]
+#[cfg_attr(feature = "serde", serde(deny_unknown_fields))]
+pub struct MassAdaptation {
+    /// Switch the adaptation on or off (off: `U1 = u1`, α̂ stays at `alpha_hat0`).
+    pub enabled: bool,
+    /// β1 > 0, adaptation rate (Table 5: 0.8).
+    pub beta1: f64,
+    /// β2 > 0, leakage (Table 5: 0.01).
+    pub beta2: f64,
+    /// α̂(0) > 0 (default 1: nominal mass).
+    #[cfg_attr(feature = "serde", serde(default = "one"))]
+    pub alpha_hat0: f64,
+}
+
+#[cfg(feature = "serde")]
+fn one() -> f64 {
+    1.0
+}
+
+impl MassAdaptation {
+    /// Table 5 values, enabled.
+    pub const PAPER: Self = Self { enabled: true, beta1: 0.8, beta2: 0.01, alpha_hat0: 1.0 };
+    /// No adaptation (`U1 = u1`).
+    pub const OFF: Self = Self { enabled: false, beta1: 0.8, beta2: 0.01, alpha_hat0: 1.0 };
+
+    /// Range checks (β1, β2 > 0, α̂(0) > 0).
+    pub fn check(&self) -> Result<(), GainError> {
+        check_positive("beta1", self.beta1)?;
+        check_positive("beta2", self.beta2)?;
+        check_positive("alpha_hat0", self.alpha_hat0)?;
+        check_non_negative("alpha_hat0", self.alpha_hat0)
+    }
+}
+
+/// Everything the cascade needs besides the six axis laws.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CascadeConfig {
+    /// Nominal model used for cancellation (the plant may differ).
+    pub model: QuadrotorParams,
+    /// Common options.
+    pub settings: CascadeSettings,
+    /// Mass adaptation (FTAFTSMC only; [`MassAdaptation::OFF`] for the baselines).
+    pub mass_adaptation: MassAdaptation,
+}
+
+/// Channel indices into the six-element arrays of [`Telemetry`].
+pub mod channel {
+    /// x position.
+    pub const X: usize = 0;
+    /// y position.
+    pub const Y: usize = 1;
+    /// z position (altitude).
+    pub const Z: usize = 2;
+    /// Roll φ.
+    pub const PHI: usize = 3;
+    /// Pitch θ.
+    pub const THETA: usize = 4;
+    /// Yaw ψ.
+    pub const PSI: usize = 5;
+    /// Names as used in outputs.
+    pub const NAMES: [&str; 6] = ["x", "y", "z", "phi", "theta", "psi"];
+}
+
+/// What the controller computed at its last update, for recording.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Telemetry {
+    /// Attitude reference actually tracked `[φ_ref, θ_ref, ψ_d]`, rad
+    /// (filtered when the command filter is on).
+    pub attitude_reference: [f64; 3],
+    /// Its rate, rad/s.
+    pub attitude_reference_rate: [f64; 3],
+    /// Its acceleration, rad/s².
+    pub attitude_reference_acceleration: [f64; 3],
+    /// Raw Eq. 52 output `[φ_d, θ_d]` before filtering, rad.
+    pub attitude_demand: [f64; 2],
+    /// Sliding variables `[S_x, S_y, S_z, S_φ, S_θ, S_ψ]`.
+    pub sliding: [f64; 6],
+    /// Adaptive / internal states of each channel ([`AxisLaw::estimates`]).
+    pub estimates: [[f64; MAX_ESTIMATES]; 6],
+    /// Commanded accelerations `[a_x, a_y, a_z]`, m/s².
+    pub commanded_acceleration: [f64; 3],
+    /// Thrust before mass adaptation u1, N.
+    pub nominal_thrust: f64,
+    /// Mass ratio estimate α̂ (estimated mass = α̂ m).
+    pub alpha_hat: f64,
+}
+
+/// A complete quadrotor controller: state and reference in, command out.
+pub trait Controller {
+    /// Machine name (e.g. `"ftaftsmc"`).
+    fn name(&self) -> &'static str;
+    /// One control period: compute the command from the measured state and
+    /// the reference, and advance internal states by `dt` (s).
+    fn update(&mut self, state: &QuadState, reference: &Reference, dt: f64) -> Command;
+    /// Quantities computed at the last update.
+    fn telemetry(&self) -> &Telemetry;
+    /// Restore initial internal states.
+    fn reset(&mut self);
+}
+
+#[derive(Clone, Copy, Debug, Default)]
+struct FilterState {
+    value: f64,
+    rate: f64,
+    initialised: bool,
+}
+
+/// Smallest `cφ cθ` used when dividing by it (tilt ≈ 87°); beyond this the
+/// simulation declares divergence anyway.
+const MIN_TILT_COSINE: f64 = 0.05;
+
+/// The cascade of six axis laws of type `L`.
+#[derive(Clone, Debug)]
+pub struct Cascade<L: AxisLaw> {
+    /// Configuration.
+    pub config: CascadeConfig,
+    /// Laws for `[x, y, z, φ, θ, ψ]`.
+    pub laws: [L; 6],
+    filter: [FilterState; 2],
+    alpha_hat: f64,
+    last_command: Command,
+    telemetry: Telemetry,
+}
+
+impl<L: AxisLaw> Cascade<L> {
+    /// Build from a configuration and the six channel laws `[x, y, z, φ, θ, ψ]`.
+    pub fn new(config: CascadeConfig, laws: [L; 6]) -> Self {
+        let hover = Command { thrust: config.model.mass * config.model.gravity, torque: [0.0; 3] };
+        Self {
+            config,
+            laws,
+            filter: [FilterState::default(); 2],
+            alpha_hat: config.mass_adaptation.alpha_hat0,
+            last_command: hover,
+            telemetry: Telemetry { alpha_hat: config.mass_adaptation.alpha_hat0, ..Telemetry::default() },
+        }
+    }
+
+    /// Current mass-ratio estimate α̂.
+    pub fn alpha_hat(&self) -> f64 {
+        self.alpha_hat
+    }
+
+    /// Desired roll and pitch from the virtual controls (Eq. 52 corrected:
+    /// θ_d divides by cos φ_d), asin arguments clamped to `±sin(max_tilt)`.
+    pub fn desired_roll_pitch(ux: f64, uy: f64, yaw_d: f64, max_tilt: f64) -> [f64; 2] {
+        let limit = crate::math::sin(max_tilt);
+        let (s_psi, c_psi) = sin_cos(yaw_d);
+        let roll = asin((ux * s_psi - uy * c_psi).clamp(-limit, limit));
+        let pitch = asin(((ux * c_psi + uy * s_psi) / cos(roll)).clamp(-limit, limit));
+        [roll, pitch]
+    }
+
+    fn attitude_reference(&mut self, demand: [f64; 2], dt: f64) -> ([f64; 2], [f64; 2], [f64; 2]) {
+        match self.config.settings.attitude_derivatives {
+            AttitudeDerivatives::Zero => (demand, [0.0; 2], [0.0; 2]),
+            AttitudeDerivatives::CommandFilter => {
+                let wn = self.config.settings.command_filter.natural_frequency;
+                let zeta = self.config.settings.command_filter.damping;
+                let mut value = [0.0; 2];
+                let mut rate = [0.0; 2];
+                let mut accel = [0.0; 2];
+                for i in 0..2 {
+                    let f = &mut self.filter[i];
+                    if !f.initialised {
+                        *f = FilterState { value: demand[i], rate: 0.0, initialised: true };
+                    }
+                    let a = wn * wn * (demand[i] - f.value) - 2.0 * zeta * wn * f.rate;
+                    value[i] = f.value;
+                    rate[i] = f.rate;
+                    accel[i] = a;
+                    // Semi-implicit Euler on the control clock.
+                    f.rate += dt * a;
+                    f.value += dt * f.rate;
+                }
+                (value, rate, accel)
+            }
+        }
+    }
+}
+
+impl<L: AxisLaw> Controller for Cascade<L> {
+    fn name(&self) -> &'static str {
+        L::NAME
+    }
+
+    fn update(&mut self, state: &QuadState, reference: &Reference, dt: f64) -> Command {
+        let model = self.config.model;
+        let m = model.mass;
+        let g = model.gravity;
+
+        // Outer loop: commanded accelerations (Eq. 18–20).
+        let mut accel = [0.0; 3];
+        for i in 0..3 {
+            let e = state.position[i] - reference.position[i];
+            let e_dot = state.velocity[i] - reference.velocity[i];
+            accel[i] = reference.acceleration[i] + self.laws[i].update(e, e_dot, dt);
+        }
+        let [phi, theta, _] = state.attitude;
+        let tilt_cos = (cos(phi) * cos(theta)).max(MIN_TILT_COSINE);
+        let nominal_thrust = m * (accel[2] + g) / tilt_cos;
+
+        // Mass adaptation (§3.2, Eq. 44): U1 = α̂ u1.
+        let ma = self.config.mass_adaptation;
+        let thrust = if ma.enabled { self.alpha_hat * nominal_thrust } else { nominal_thrust };
+        if ma.enabled {
+            let s_z = self.laws[2].sliding_variable();
+            let rate = -ma.beta1 * (s_z * nominal_thrust * tilt_cos / m + ma.beta2 * self.alpha_hat);
+            self.alpha_hat += dt * rate;
+        }
+
+        // Remark 2: u_x = m a_x / U1, u_y = m a_y / U1; guard U1 → 0.
+        let thrust_for_inversion = thrust.max(1e-3 * m * g);
+        let ux = m * accel[0] / thrust_for_inversion;
+        let uy = m * accel[1] / thrust_for_inversion;
+        let demand = Self::desired_roll_pitch(ux, uy, reference.yaw, self.config.settings.max_tilt);
+        let (att_ref, att_rate, att_accel) = self.attitude_reference(demand, dt);
+        let reference_attitude = [att_ref[0], att_ref[1], reference.yaw];
+        let reference_rate = [att_rate[0], att_rate[1], reference.yaw_rate];
+        let reference_accel = [att_accel[0], att_accel[1], reference.yaw_acceleration];
+
+        // Inner loop: angular accelerations then torques (Eq. 56–58).
+        let mut angular_accel = [0.0; 3];
+        for i in 0..3 {
+            let e = state.attitude[i] - reference_attitude[i];
+            let e_dot = state.angular_rate[i] - reference_rate[i];
+            angular_accel[i] = reference_accel[i] + self.laws[3 + i].update(e, e_dot, dt);
+        }
+        let [p, q, r] = state.angular_rate;
+        let [i1, i2, i3] = model.inertia;
+        let [k1, k2, k3] = model.drag_rotational;
+        let omega_bar = residual_speed(&rotor_speeds(&model, &self.last_command, f64::INFINITY));
+        let jr = model.rotor_inertia;
+        // Plant (SPEC §1): I φ̈ = coupling − J_r Ω̄ θ̇ − K φ̇|φ̇| + u, so u = I v − (…).
+        let torque = [
+            i1 * angular_accel[0] - ((i2 - i3) * q * r - jr * omega_bar * q - k1 * p * p.abs()),
+            i2 * angular_accel[1] - ((i3 - i1) * p * r + jr * omega_bar * p - k2 * q * q.abs()),
+            i3 * angular_accel[2] - ((i1 - i2) * p * q - k3 * r * r.abs()),
+        ];
+        let command = Command { thrust, torque };
+        self.last_command = command;
+
+        let mut sliding = [0.0; 6];
+        let mut estimates = [[0.0; MAX_ESTIMATES]; 6];
+        for i in 0..6 {
+            sliding[i] = self.laws[i].sliding_variable();
+            estimates[i] = self.laws[i].estimates();
+        }
+        self.telemetry = Telemetry {
+            attitude_reference: reference_attitude,
+            attitude_reference_rate: reference_rate,
+            attitude_reference_acceleration: reference_accel,
+            attitude_demand: demand,
+            sliding,
+            estimates,
+            commanded_acceleration: accel,
+            nominal_thrust,
+            alpha_hat: self.alpha_hat,
+        };
+        command
+    }
+
+    fn telemetry(&self) -> &Telemetry {
+        &self.telemetry
+    }
+
+    fn reset(&mut self) {
+        for law in &mut self.laws {
+            law.reset();
+        }
+        let hover = Command { thrust: self.config.model.mass * self.config.model.gravity, torque: [0.0; 3] };
+        self.filter = [FilterState::default(); 2];
+        self.alpha_hat = self.config.mass_adaptation.alpha_hat0;
+        self.last_command = hover;
+        self.telemetry = Telemetry { alpha_hat: self.alpha_hat, ..Telemetry::default() };
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::ftaftsmc::{FtaftsmcAxis, FtaftsmcGains};
+
+    fn paper_ftaftsmc(settings: CascadeSettings) -> Cascade<FtaftsmcAxis> {
+        let xy = FtaftsmcAxis::new(FtaftsmcGains::PAPER_XY);
+        let laws = [
+            xy,
+            xy,
+            FtaftsmcAxis::new(FtaftsmcGains::PAPER_Z),
+            FtaftsmcAxis::new(FtaftsmcGains::PAPER_ROLL_PITCH),
+            FtaftsmcAxis::new(FtaftsmcGains::PAPER_ROLL_PITCH),
+            FtaftsmcAxis::new(FtaftsmcGains::PAPER_YAW),
+        ];
+        let config = CascadeConfig { model: QuadrotorParams::default(), settings, mass_adaptation: MassAdaptation::PAPER };
+        Cascade::new(config, laws)
+    }
+
+    #[test]
+    fn desired_attitude_inverts_eq2_exactly() {
+        for &(phi, theta, psi) in &[(0.1, -0.2, 0.3), (-0.3, 0.25, -1.2), (0.0, 0.4, 2.0)] {
+            let (sp, cp) = (f64::sin(phi), f64::cos(phi));
+            let (st, _) = (f64::sin(theta), f64::cos(theta));
+            let (ss, cs) = (f64::sin(psi), f64::cos(psi));
+            let ux = cp * st * cs + sp * ss;
+            let uy = cp * st * ss - sp * cs;
+            let [r, p] = Cascade::<FtaftsmcAxis>::desired_roll_pitch(ux, uy, psi, 1.2);
+            assert!((r - phi).abs() < 1e-12 && (p - theta).abs() < 1e-12, "{r} {p}");
+        }
+    }
+
+    #[test]
+    fn hover_at_reference_gives_weight_and_zero_torque() {
+        let mut c = paper_ftaftsmc(CascadeSettings::default());
+        let state = QuadState { position: [0.0, 0.0, 1.0], ..QuadState::default() };
+        let reference = Reference { position: [0.0, 0.0, 1.0], ..Reference::default() };
+        let cmd = c.update(&state, &reference, 1e-3);
+        let p = QuadrotorParams::default();
+        assert!((cmd.thrust - p.mass * p.gravity).abs() < 1e-12, "{}", cmd.thrust);
+        assert!(cmd.torque.iter().all(|t| t.abs() < 1e-15));
+    }
+}

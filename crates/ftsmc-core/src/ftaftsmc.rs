@@ -1,0 +1,430 @@
+//! FTAFTSMC on one channel: the fixed-time fast terminal sliding surface
+//! (paper Eq. 5–13), the switching law (Eq. 15–16) and the δ̂ adaptation
+//! (Eq. 17). The same law serves the position (§3.1) and attitude (§3.3,
+//! Eq. 53–55) channels; the mass adaptation of §3.2 lives in the cascade.
+//!
+//! Notation: `sig^a(v) = |v|^a sign(v)`; `e = q − q_d`, `ė = q̇ − q̇_d`.
+
+use crate::law::{check_finite, check_non_negative, check_open, check_positive, AxisLaw, GainError};
+use crate::math::{exp, pow_abs, pow_abs_minus_one, sig, sign};
+
+/// Gains of one FTAFTSMC channel (paper Tables 4 and 5).
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Deserialize, serde::Serialize))]
+#[cfg_attr(feature = "serde", serde(deny_unknown_fields))]
+pub struct FtaftsmcGains {
+    /// λ > 0: gain of the `sig^q(e)` term of the surface (Eq. 5).
+    pub lambda: f64,
+    /// γ > 0: gain of the `S_Δ` term of the surface (Eq. 5).
+    pub gamma: f64,
+    /// η > 0: gain of the linear term of the surface (Eq. 5).
+    pub eta: f64,
+    /// q > 1: fast exponent of the surface (Eq. 5).
+    pub q: f64,
+    /// 0 < p < 1: terminal exponent of the surface (Eq. 5, 7).
+    pub p: f64,
+    /// ℵ1 in (0, 1]: `Y(∞) = 1/ℵ1` (Eq. 6; Table 4 uses ℵ1 = 1, i.e. Y ≡ 1).
+    pub aleph1: f64,
+    /// ℵ2 > 0: rate of the exponential in `Y(e)` (Eq. 6).
+    pub aleph2: f64,
+    /// ℵ3 > 0: exponent of `|e|` in `Y(e)` (Eq. 6).
+    pub aleph3: f64,
+    /// ε > 0: width of the nonsingular switch of `S_Δ` (Eq. 7, 9), channel units.
+    pub epsilon: f64,
+    /// λ2 > 0: gain of `sig^q2(S)` in the reaching law (Eq. 15).
+    pub lambda2: f64,
+    /// γ2 > 0: gain of `sig^p2(S)` in the reaching law (Eq. 15).
+    pub gamma2: f64,
+    /// η2 > 0: linear gain of the reaching law (Eq. 15).
+    pub eta2: f64,
+    /// q2 > 1: fast exponent of the reaching law (Eq. 15).
+    pub q2: f64,
+    /// 0 < p2 < 1: terminal exponent of the reaching law (Eq. 15).
+    pub p2: f64,
+    /// ξ > 0: scaling of the adaptive term `δ̂/(2ξ²) S` (Eq. 15, 17).
+    pub xi: f64,
+    /// α1 > 0: adaptation rate (Eq. 17).
+    pub alpha1: f64,
+    /// α2 > 0: leakage of the adaptation (Eq. 17).
+    pub alpha2: f64,
+    /// δ̂(0) ≥ 0: initial estimate of δ = Λ² (not given in the paper; default 0).
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub delta_hat0: f64,
+}
+
+impl FtaftsmcGains {
+    /// Reject gains outside the ranges stated under Eq. 9 and Eq. 16–17.
+    pub fn check(&self) -> Result<(), GainError> {
+        check_positive("lambda", self.lambda)?;
+        check_positive("gamma", self.gamma)?;
+        check_positive("eta", self.eta)?;
+        check_open("q", self.q, 1.0, f64::INFINITY, "q > 1")?;
+        check_open("p", self.p, 0.0, 1.0, "0 < p < 1")?;
+        if !(self.aleph1.is_finite() && self.aleph1 > 0.0 && self.aleph1 <= 1.0) {
+            return Err(GainError { field: "aleph1", value: self.aleph1, expected: "0 < aleph1 <= 1" });
+        }
+        check_positive("aleph2", self.aleph2)?;
+        check_positive("aleph3", self.aleph3)?;
+        check_positive("epsilon", self.epsilon)?;
+        check_positive("lambda2", self.lambda2)?;
+        check_positive("gamma2", self.gamma2)?;
+        check_positive("eta2", self.eta2)?;
+        check_open("q2", self.q2, 1.0, f64::INFINITY, "q2 > 1")?;
+        check_open("p2", self.p2, 0.0, 1.0, "0 < p2 < 1")?;
+        check_positive("xi", self.xi)?;
+        check_positive("alpha1", self.alpha1)?;
+        check_positive("alpha2", self.alpha2)?;
+        check_non_negative("delta_hat0", self.delta_hat0)?;
+        check_finite("delta_hat0", self.delta_hat0)
+    }
+
+    /// Table 5, x and y channels (ε = 0.05).
+    pub const PAPER_XY: Self = Self {
+        lambda: 0.4,
+        gamma: 0.4,
+        eta: 0.4,
+        q: 1.5,
+        p: 0.1,
+        aleph1: 0.8,
+        aleph2: 30.0,
+        aleph3: 2.0,
+        epsilon: 0.05,
+        lambda2: 0.2,
+        gamma2: 2.0,
+        eta2: 0.2,
+        q2: 4.0,
+        p2: 0.2,
+        xi: 0.08,
+        alpha1: 0.001,
+        alpha2: 0.005,
+        delta_hat0: 0.0,
+    };
+
+    /// Table 5, z channel (ε = 0.05).
+    pub const PAPER_Z: Self = Self {
+        lambda: 0.3,
+        gamma: 1.0,
+        eta: 0.3,
+        q: 1.5,
+        p: 0.1,
+        aleph1: 0.8,
+        aleph2: 30.0,
+        aleph3: 2.0,
+        epsilon: 0.05,
+        lambda2: 0.5,
+        gamma2: 1.0,
+        eta2: 0.5,
+        q2: 1.1,
+        p2: 0.4,
+        xi: 0.08,
+        alpha1: 0.01,
+        alpha2: 0.001,
+        delta_hat0: 0.0,
+    };
+
+    /// Table 4, φ and θ channels (ℵ1 = 1 as printed, ε = 0.05).
+    pub const PAPER_ROLL_PITCH: Self = Self {
+        lambda: 2.0,
+        gamma: 2.0,
+        eta: 2.0,
+        q: 4.0,
+        p: 0.1,
+        aleph1: 1.0,
+        aleph2: 30.0,
+        aleph3: 2.0,
+        epsilon: 0.05,
+        lambda2: 1.0,
+        gamma2: 2.0,
+        eta2: 1.0,
+        q2: 2.0,
+        p2: 0.6,
+        xi: 0.08,
+        alpha1: 0.01,
+        alpha2: 0.02,
+        delta_hat0: 0.0,
+    };
+
+    /// Table 4, ψ channel (the printed λ_φ, α_1φ, λ_2φ, q_2φ of the ψ block
+    /// read as λ_ψ, α_1ψ, λ_2ψ, q_2ψ).
+    pub const PAPER_YAW: Self = Self {
+        lambda: 2.0,
+        gamma: 2.0,
+        eta: 4.0,
+        q: 2.0,
+        p: 0.1,
+        aleph1: 1.0,
+        aleph2: 30.0,
+        aleph3: 2.0,
+        epsilon: 0.05,
+        lambda2: 4.0,
+        gamma2: 4.0,
+        eta2: 1.0,
+        q2: 2.0,
+        p2: 0.4,
+        xi: 0.08,
+        alpha1: 0.001,
+        alpha2: 0.005,
+        delta_hat0: 0.0,
+    };
+
+    /// The paper's reaching-time bound of Eq. 38 (s):
+    /// `T ≤ 1/(λ2 (q2 − 1)) + 1/(γ2 (1 − p2))`.
+    pub fn reaching_time_bound(&self) -> f64 {
+        1.0 / (self.lambda2 * (self.q2 - 1.0)) + 1.0 / (self.gamma2 * (1.0 - self.p2))
+    }
+}
+
+/// Every intermediate quantity of the surface at one instant, for tests,
+/// telemetry and the fixed-time analysis.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct SurfaceTerms {
+    /// `Y(e)` (Eq. 6, with the `(1 − ℵ1)` of Eq. 11).
+    pub y: f64,
+    /// `Ẏ(e)` (Eq. 11), 1/s.
+    pub y_dot: f64,
+    /// `S_Δ(e)` (Eq. 7).
+    pub s_delta: f64,
+    /// `Ṡ_Δ` (Eq. 12).
+    pub s_delta_dot: f64,
+    /// Sliding variable `S` (Eq. 5), channel units per second.
+    pub s: f64,
+    /// `ϖ` (Eq. 13): the part of the equivalent control that cancels `d/dt`
+    /// of the surface's error terms, channel units per s².
+    pub varpi: f64,
+}
+
+/// `Y(e) = 1 / (ℵ1 + (1 − ℵ1) exp(−ℵ2 |e|^ℵ3))` and its time derivative
+/// (Eq. 6 with the erratum, Eq. 11).
+#[inline]
+pub fn gain_shaping(g: &FtaftsmcGains, e: f64, e_dot: f64) -> (f64, f64) {
+    if g.aleph1 == 1.0 {
+        return (1.0, 0.0);
+    }
+    let decay = exp(-g.aleph2 * pow_abs(e, g.aleph3));
+    let den = g.aleph1 + (1.0 - g.aleph1) * decay;
+    let y = 1.0 / den;
+    let y_dot = (1.0 - g.aleph1) * decay * g.aleph2 * g.aleph3 * pow_abs_minus_one(e, g.aleph3) * e_dot * sign(e)
+        / (den * den);
+    (y, y_dot)
+}
+
+/// `S_Δ(e)` and `Ṡ_Δ` (Eq. 7, 9, 12): `sig^p(e)` outside `|e| ≤ ε`, the
+/// quadratic `κ1 e + κ2 sig²(e)` inside, matching value and slope at `|e| = ε`.
+#[inline]
+pub fn nonsingular_term(g: &FtaftsmcGains, e: f64, e_dot: f64) -> (f64, f64) {
+    let ae = e.abs();
+    if ae > g.epsilon {
+        let pow_p = pow_abs(e, g.p);
+        (pow_p * sign(e), g.p * e_dot * pow_p / ae)
+    } else {
+        let kappa1 = (2.0 - g.p) * pow_abs(g.epsilon, g.p - 1.0);
+        let kappa2 = (g.p - 1.0) * pow_abs(g.epsilon, g.p - 2.0);
+        (kappa1 * e + kappa2 * sig(e, 2.0), kappa1 * e_dot + 2.0 * kappa2 * ae * e_dot)
+    }
+}
+
+/// Evaluate the fixed-time sliding surface (Eq. 5) and `ϖ` (Eq. 13).
+#[inline]
+pub fn sliding_surface(g: &FtaftsmcGains, e: f64, e_dot: f64) -> SurfaceTerms {
+    let (y, y_dot) = gain_shaping(g, e, e_dot);
+    let (s_delta, s_delta_dot) = nonsingular_term(g, e, e_dot);
+    let pow_q = pow_abs(e, g.q);
+    // λ sig^q(e) + γ S_Δ + η e
+    let shape = g.lambda * pow_q * sign(e) + g.gamma * s_delta + g.eta * e;
+    // d/dt of the same bracket: λ q |e|^(q−1) ė + γ Ṡ_Δ + η ė
+    let pow_q_minus_one = if e == 0.0 { pow_abs_minus_one(e, g.q) } else { pow_q / e.abs() };
+    let shape_dot = g.lambda * g.q * pow_q_minus_one * e_dot + g.gamma * s_delta_dot + g.eta * e_dot;
+    SurfaceTerms {
+        y,
+        y_dot,
+        s_delta,
+        s_delta_dot,
+        s: e_dot + y * shape,
+        varpi: -y_dot * shape - y * shape_dot,
+    }
+}
+
+/// `ϖ2` (Eq. 15): `−[λ2 sig^q2(S) + γ2 sig^p2(S) + η2 S + δ̂/(2ξ²) S]`.
+#[inline]
+pub fn reaching_law(g: &FtaftsmcGains, s: f64, delta_hat: f64) -> f64 {
+    -(g.lambda2 * sig(s, g.q2) + g.gamma2 * sig(s, g.p2) + g.eta2 * s + delta_hat / (2.0 * g.xi * g.xi) * s)
+}
+
+/// `dδ̂/dt = α1 (S²/(2ξ²) − α2 δ̂)` (Eq. 17).
+#[inline]
+pub fn delta_hat_rate(g: &FtaftsmcGains, s: f64, delta_hat: f64) -> f64 {
+    g.alpha1 * (s * s / (2.0 * g.xi * g.xi) - g.alpha2 * delta_hat)
+}
+
+/// One FTAFTSMC channel: gains, the estimate δ̂ and the last surface terms.
+#[derive(Clone, Copy, Debug)]
+pub struct FtaftsmcAxis {
+    /// Gains (Tables 4–5).
+    pub gains: FtaftsmcGains,
+    /// Current estimate δ̂ of δ = Λ² (Eq. 17).
+    pub delta_hat: f64,
+    /// Surface terms of the last update.
+    pub last: SurfaceTerms,
+    /// `ϖ2` of the last update (Eq. 15).
+    pub last_reaching: f64,
+}
+
+impl FtaftsmcAxis {
+    /// A channel with δ̂ = `gains.delta_hat0`.
+    pub fn new(gains: FtaftsmcGains) -> Self {
+        Self { gains, delta_hat: gains.delta_hat0, last: SurfaceTerms::default(), last_reaching: 0.0 }
+    }
+}
+
+impl AxisLaw for FtaftsmcAxis {
+    const NAME: &'static str = "ftaftsmc";
+
+    /// Returns `ϖ + ϖ2` (Eq. 13 + Eq. 15), so that `q̈_cmd = q̈_d + ϖ + ϖ2`
+    /// (Eq. 18–20, 56–58 before model cancellation).
+    #[inline]
+    fn update(&mut self, e: f64, e_dot: f64, dt: f64) -> f64 {
+        let terms = sliding_surface(&self.gains, e, e_dot);
+        let reaching = reaching_law(&self.gains, terms.s, self.delta_hat);
+        self.delta_hat += dt * delta_hat_rate(&self.gains, terms.s, self.delta_hat);
+        self.last = terms;
+        self.last_reaching = reaching;
+        terms.varpi + reaching
+    }
+
+    fn sliding_variable(&self) -> f64 {
+        self.last.s
+    }
+
+    fn estimates(&self) -> [f64; 3] {
+        [self.delta_hat, 0.0, 0.0]
+    }
+
+    fn reset(&mut self) {
+        *self = Self::new(self.gains);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use approx::assert_relative_eq;
+
+    fn gains_xy() -> FtaftsmcGains {
+        FtaftsmcGains::PAPER_XY
+    }
+
+    #[test]
+    fn y_is_one_at_zero_and_tends_to_inverse_aleph1() {
+        let g = gains_xy();
+        assert_eq!(gain_shaping(&g, 0.0, 1.0).0, 1.0);
+        let far = gain_shaping(&g, 50.0, 0.0).0;
+        assert_relative_eq!(far, 1.0 / g.aleph1, epsilon = 1e-12);
+        // Monotone in |e| between the two limits.
+        let mid = gain_shaping(&g, 0.2, 0.0).0;
+        assert!(mid > 1.0 && mid < 1.0 / g.aleph1);
+    }
+
+    #[test]
+    fn s_delta_value_and_slope_continuous_at_epsilon() {
+        for g in [FtaftsmcGains::PAPER_XY, FtaftsmcGains::PAPER_Z, FtaftsmcGains::PAPER_ROLL_PITCH] {
+            for side in [1.0, -1.0] {
+                let at = side * g.epsilon;
+                let outside = side * g.epsilon * (1.0 + 1e-15);
+                let (v_in, d_in) = nonsingular_term(&g, at, 1.0);
+                // Evaluate the outer branch exactly at ε by its formula.
+                let v_out = sig(at, g.p);
+                let d_out = g.p * pow_abs(at, g.p - 1.0);
+                assert!((v_in - v_out).abs() < 1e-12, "value jump {v_in} vs {v_out}");
+                assert!((d_in - d_out).abs() < 1e-12, "slope jump {d_in} vs {d_out}");
+                let (v_next, _) = nonsingular_term(&g, outside, 1.0);
+                assert!((v_next - v_in).abs() < 1e-12);
+            }
+        }
+    }
+
+    fn finite_difference_check(g: &FtaftsmcGains, e: f64, e_dot: f64) {
+        let h = 1e-7;
+        let (y0, y_dot) = gain_shaping(g, e, e_dot);
+        let (y1, _) = gain_shaping(g, e + h * e_dot, e_dot);
+        let fd = (y1 - y0) / h;
+        assert!((fd - y_dot).abs() < 1e-5 * (1.0 + y_dot.abs()), "Ẏ at e={e}: fd {fd} vs {y_dot}");
+        let (s0, s_dot) = nonsingular_term(g, e, e_dot);
+        let (s1, _) = nonsingular_term(g, e + h * e_dot, e_dot);
+        let fd = (s1 - s0) / h;
+        assert!((fd - s_dot).abs() < 1e-4 * (1.0 + s_dot.abs()), "Ṡ_Δ at e={e}: fd {fd} vs {s_dot}");
+    }
+
+    #[test]
+    fn derivatives_match_finite_differences() {
+        for g in [FtaftsmcGains::PAPER_XY, FtaftsmcGains::PAPER_Z] {
+            for &e in &[-2.0, -0.3, -0.06, -0.03, 0.01, 0.04, 0.07, 0.5, 3.0] {
+                for &e_dot in &[-1.3, 0.7] {
+                    finite_difference_check(&g, e, e_dot);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn varpi_is_minus_time_derivative_of_surface_error_terms() {
+        // Along a smooth trajectory e(t), S − ė = Y·shape(e); its time
+        // derivative must equal −ϖ.
+        let g = FtaftsmcGains::PAPER_Z;
+        let e = |t: f64| 0.8 * (1.3 * t).sin() - 0.1;
+        let e_dot = |t: f64| 0.8 * 1.3 * (1.3 * t).cos();
+        let h = 1e-6;
+        for &t in &[0.1, 0.5, 1.0, 2.2, 3.0] {
+            let part = |t: f64| {
+                let terms = sliding_surface(&g, e(t), e_dot(t));
+                terms.s - e_dot(t)
+            };
+            let fd = (part(t + h) - part(t - h)) / (2.0 * h);
+            let varpi = sliding_surface(&g, e(t), e_dot(t)).varpi;
+            assert!((fd + varpi).abs() < 1e-5 * (1.0 + fd.abs()), "t={t}: fd {fd} vs −ϖ {}", -varpi);
+        }
+    }
+
+    #[test]
+    fn surface_is_finite_at_zero_and_huge_errors() {
+        for g in [FtaftsmcGains::PAPER_XY, FtaftsmcGains::PAPER_Z, FtaftsmcGains::PAPER_ROLL_PITCH, FtaftsmcGains::PAPER_YAW] {
+            for &(e, ed) in &[(0.0, 0.0), (0.0, 1.0), (100.0, -100.0), (-100.0, 0.0), (1e-300, 0.0)] {
+                let mut axis = FtaftsmcAxis::new(g);
+                let u = axis.update(e, ed, 1e-3);
+                assert!(u.is_finite() && axis.delta_hat.is_finite(), "e={e} ė={ed} → {u}");
+            }
+        }
+    }
+
+    #[test]
+    fn delta_hat_follows_eq17_one_step() {
+        let g = FtaftsmcGains::PAPER_Z;
+        let mut axis = FtaftsmcAxis::new(FtaftsmcGains { delta_hat0: 0.3, ..g });
+        let (e, ed, dt) = (0.2, -0.1, 1e-3);
+        let s = sliding_surface(&g, e, ed).s;
+        axis.update(e, ed, dt);
+        let want = 0.3 + dt * g.alpha1 * (s * s / (2.0 * 0.08 * 0.08) - g.alpha2 * 0.3);
+        assert_relative_eq!(axis.delta_hat, want, epsilon = 1e-15);
+    }
+
+    #[test]
+    fn paper_gains_pass_and_bad_gains_name_the_field() {
+        for g in [FtaftsmcGains::PAPER_XY, FtaftsmcGains::PAPER_Z, FtaftsmcGains::PAPER_ROLL_PITCH, FtaftsmcGains::PAPER_YAW] {
+            g.check().unwrap();
+        }
+        let err = FtaftsmcGains { p: 1.2, ..FtaftsmcGains::PAPER_Z }.check().unwrap_err();
+        assert_eq!(err.field, "p");
+        assert_eq!(err.value, 1.2);
+        let err = FtaftsmcGains { q2: 0.9, ..FtaftsmcGains::PAPER_Z }.check().unwrap_err();
+        assert_eq!(err.field, "q2");
+        let err = FtaftsmcGains { aleph1: 1.5, ..FtaftsmcGains::PAPER_Z }.check().unwrap_err();
+        assert_eq!(err.field, "aleph1");
+    }
+
+    #[test]
+    fn reaching_time_bound_matches_hand_computation() {
+        // z: 1/(0.5·0.1) + 1/(1·0.6) = 20 + 1.6667
+        assert_relative_eq!(FtaftsmcGains::PAPER_Z.reaching_time_bound(), 20.0 + 1.0 / 0.6, epsilon = 1e-12);
+        // x, y: 1/(0.2·3) + 1/(2·0.8) = 1.6667 + 0.625
+        assert_relative_eq!(FtaftsmcGains::PAPER_XY.reaching_time_bound(), 1.0 / 0.6 + 0.625, epsilon = 1e-12);
+    }
+}

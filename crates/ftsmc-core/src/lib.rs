@@ -1,0 +1,29 @@
+//! # ftsmc-core
+//!
+//! The control laws of *Robust Fixed Time Adaptive Terminal Sliding Mode
+//! Control of a QUAUV Under Time Varying Disturbances and Payload* (FTAFTSMC)
+//! and its two comparison controllers, as a `no_std` library: no I/O, no
+//! allocation, no simulation plumbing.
+//!
+//! - [`ftaftsmc`]: the fixed-time sliding surface, reaching and adaptive laws (Eq. 5–17).
+//! - [`cascade`]: the outer/inner cascade with mass adaptation (Eq. 18–20, 44, 52, 56–58).
+//! - [`allocation`]: rotor allocation (Eq. 2).
+//! - [`model`]: physical parameters (Table 2, corrected), state, reference, command.
+//! - [`law`]: the [`law::AxisLaw`] interface all controllers implement.
+//!
+//! Built without the default `std` feature, every transcendental function
+//! goes through the pure-Rust `libm` crate.
+#![cfg_attr(not(feature = "std"), no_std)]
+#![warn(missing_docs)]
+
+pub mod allocation;
+pub mod cascade;
+pub mod ftaftsmc;
+pub mod law;
+pub mod math;
+pub mod model;
+
+pub use cascade::{Cascade, CascadeConfig, CascadeSettings, Controller, MassAdaptation, Telemetry};
+pub use ftaftsmc::{FtaftsmcAxis, FtaftsmcGains};
+pub use law::{AxisLaw, GainError};
+pub use model::{Command, QuadState, QuadrotorParams, Reference};
