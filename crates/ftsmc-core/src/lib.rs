@@ -22,6 +22,8 @@ pub mod ftaftsmc;
 pub mod law;
 pub mod math;
 pub mod model;
+pub mod ranftsmc;
+pub mod tsm_sta;
 
 pub use cascade::{Cascade, CascadeConfig, CascadeSettings, Controller, MassAdaptation, Telemetry};
 pub use ftaftsmc::{FtaftsmcAxis, FtaftsmcGains};

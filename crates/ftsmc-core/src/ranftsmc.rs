@@ -1,0 +1,1 @@
+//! RANFTSMC (placeholder, being written).

@@ -1,0 +1,1 @@
+//! TSM-STA (placeholder, being written).
