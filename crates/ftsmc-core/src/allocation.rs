@@ -2,8 +2,8 @@
 //! body axes): thrust and torques ⇄ squared rotor speeds, and the residual
 //! rotor speed `Ω̄ = ω1 − ω2 + ω3 − ω4` of the gyroscopic term.
 
-use crate::model::{Command, QuadrotorParams};
 use crate::math::sqrt;
+use crate::model::{Command, QuadrotorParams};
 
 /// Thrust and torques produced by squared rotor speeds `w = ω²` (rad²/s²), Eq. 2:
 /// `U1 = bΣw`, `u2 = b l (w4 − w2)`, `u3 = b l (w3 − w1)`, `u4 = d (w1 − w2 + w3 − w4)`.

@@ -201,6 +201,8 @@ pub struct Cascade<L: AxisLaw> {
     alpha_hat: f64,
     last_command: Command,
     telemetry: Telemetry,
+    /// `sin(max_tilt)`, the clamp of the asin arguments of Eq. 52.
+    tilt_limit: f64,
 }
 
 impl<L: AxisLaw> Cascade<L> {
@@ -214,6 +216,7 @@ impl<L: AxisLaw> Cascade<L> {
             alpha_hat: config.mass_adaptation.alpha_hat0,
             last_command: hover,
             telemetry: Telemetry { alpha_hat: config.mass_adaptation.alpha_hat0, ..Telemetry::default() },
+            tilt_limit: crate::math::sin(config.settings.max_tilt),
         }
     }
 
@@ -225,7 +228,12 @@ impl<L: AxisLaw> Cascade<L> {
     /// Desired roll and pitch from the virtual controls (Eq. 52 corrected:
     /// θ_d divides by cos φ_d), asin arguments clamped to `±sin(max_tilt)`.
     pub fn desired_roll_pitch(ux: f64, uy: f64, yaw_d: f64, max_tilt: f64) -> [f64; 2] {
-        let limit = crate::math::sin(max_tilt);
+        Self::desired_roll_pitch_limited(ux, uy, yaw_d, crate::math::sin(max_tilt))
+    }
+
+    /// [`Cascade::desired_roll_pitch`] with the clamp `limit = sin(max_tilt)` precomputed.
+    #[inline]
+    pub fn desired_roll_pitch_limited(ux: f64, uy: f64, yaw_d: f64, limit: f64) -> [f64; 2] {
         let (s_psi, c_psi) = sin_cos(yaw_d);
         let roll = asin((ux * s_psi - uy * c_psi).clamp(-limit, limit));
         let pitch = asin(((ux * c_psi + uy * s_psi) / cos(roll)).clamp(-limit, limit));
@@ -294,7 +302,7 @@ impl<L: AxisLaw> Controller for Cascade<L> {
         let thrust_for_inversion = thrust.max(1e-3 * m * g);
         let ux = m * accel[0] / thrust_for_inversion;
         let uy = m * accel[1] / thrust_for_inversion;
-        let demand = Self::desired_roll_pitch(ux, uy, reference.yaw, self.config.settings.max_tilt);
+        let demand = Self::desired_roll_pitch_limited(ux, uy, reference.yaw, self.tilt_limit);
         let (att_ref, att_rate, att_accel) = self.attitude_reference(demand, dt);
         let reference_attitude = [att_ref[0], att_ref[1], reference.yaw];
         let reference_rate = [att_rate[0], att_rate[1], reference.yaw_rate];
@@ -372,7 +380,8 @@ mod tests {
             FtaftsmcAxis::new(FtaftsmcGains::PAPER_ROLL_PITCH),
             FtaftsmcAxis::new(FtaftsmcGains::PAPER_YAW),
         ];
-        let config = CascadeConfig { model: QuadrotorParams::default(), settings, mass_adaptation: MassAdaptation::PAPER };
+        let config =
+            CascadeConfig { model: QuadrotorParams::default(), settings, mass_adaptation: MassAdaptation::PAPER };
         Cascade::new(config, laws)
     }
 

@@ -203,22 +203,32 @@ pub fn gain_shaping(g: &FtaftsmcGains, e: f64, e_dot: f64) -> (f64, f64) {
     let decay = exp(-g.aleph2 * pow_abs(e, g.aleph3));
     let den = g.aleph1 + (1.0 - g.aleph1) * decay;
     let y = 1.0 / den;
-    let y_dot = (1.0 - g.aleph1) * decay * g.aleph2 * g.aleph3 * pow_abs_minus_one(e, g.aleph3) * e_dot * sign(e)
-        / (den * den);
+    let y_dot =
+        (1.0 - g.aleph1) * decay * g.aleph2 * g.aleph3 * pow_abs_minus_one(e, g.aleph3) * e_dot * sign(e) / (den * den);
     (y, y_dot)
+}
+
+/// `κ1 = (2 − p) ε^(p−1)`, `κ2 = (p − 1) ε^(p−2)` (Eq. 9).
+#[inline]
+pub fn kappa(g: &FtaftsmcGains) -> [f64; 2] {
+    [(2.0 - g.p) * pow_abs(g.epsilon, g.p - 1.0), (g.p - 1.0) * pow_abs(g.epsilon, g.p - 2.0)]
 }
 
 /// `S_Δ(e)` and `Ṡ_Δ` (Eq. 7, 9, 12): `sig^p(e)` outside `|e| ≤ ε`, the
 /// quadratic `κ1 e + κ2 sig²(e)` inside, matching value and slope at `|e| = ε`.
 #[inline]
 pub fn nonsingular_term(g: &FtaftsmcGains, e: f64, e_dot: f64) -> (f64, f64) {
+    nonsingular_term_with(g, kappa(g), e, e_dot)
+}
+
+/// [`nonsingular_term`] with precomputed `[κ1, κ2]`.
+#[inline]
+pub fn nonsingular_term_with(g: &FtaftsmcGains, [kappa1, kappa2]: [f64; 2], e: f64, e_dot: f64) -> (f64, f64) {
     let ae = e.abs();
     if ae > g.epsilon {
         let pow_p = pow_abs(e, g.p);
         (pow_p * sign(e), g.p * e_dot * pow_p / ae)
     } else {
-        let kappa1 = (2.0 - g.p) * pow_abs(g.epsilon, g.p - 1.0);
-        let kappa2 = (g.p - 1.0) * pow_abs(g.epsilon, g.p - 2.0);
         (kappa1 * e + kappa2 * sig(e, 2.0), kappa1 * e_dot + 2.0 * kappa2 * ae * e_dot)
     }
 }
@@ -226,22 +236,21 @@ pub fn nonsingular_term(g: &FtaftsmcGains, e: f64, e_dot: f64) -> (f64, f64) {
 /// Evaluate the fixed-time sliding surface (Eq. 5) and `ϖ` (Eq. 13).
 #[inline]
 pub fn sliding_surface(g: &FtaftsmcGains, e: f64, e_dot: f64) -> SurfaceTerms {
+    sliding_surface_with(g, kappa(g), e, e_dot)
+}
+
+/// [`sliding_surface`] with precomputed `[κ1, κ2]` (see [`kappa`]).
+#[inline]
+pub fn sliding_surface_with(g: &FtaftsmcGains, kappa: [f64; 2], e: f64, e_dot: f64) -> SurfaceTerms {
     let (y, y_dot) = gain_shaping(g, e, e_dot);
-    let (s_delta, s_delta_dot) = nonsingular_term(g, e, e_dot);
+    let (s_delta, s_delta_dot) = nonsingular_term_with(g, kappa, e, e_dot);
     let pow_q = pow_abs(e, g.q);
     // λ sig^q(e) + γ S_Δ + η e
     let shape = g.lambda * pow_q * sign(e) + g.gamma * s_delta + g.eta * e;
     // d/dt of the same bracket: λ q |e|^(q−1) ė + γ Ṡ_Δ + η ė
     let pow_q_minus_one = if e == 0.0 { pow_abs_minus_one(e, g.q) } else { pow_q / e.abs() };
     let shape_dot = g.lambda * g.q * pow_q_minus_one * e_dot + g.gamma * s_delta_dot + g.eta * e_dot;
-    SurfaceTerms {
-        y,
-        y_dot,
-        s_delta,
-        s_delta_dot,
-        s: e_dot + y * shape,
-        varpi: -y_dot * shape - y * shape_dot,
-    }
+    SurfaceTerms { y, y_dot, s_delta, s_delta_dot, s: e_dot + y * shape, varpi: -y_dot * shape - y * shape_dot }
 }
 
 /// `ϖ2` (Eq. 15): `−[λ2 sig^q2(S) + γ2 sig^p2(S) + η2 S + δ̂/(2ξ²) S]`.
@@ -267,12 +276,20 @@ pub struct FtaftsmcAxis {
     pub last: SurfaceTerms,
     /// `ϖ2` of the last update (Eq. 15).
     pub last_reaching: f64,
+    /// `[κ1, κ2]` of Eq. 9, computed once from the gains.
+    kappa: [f64; 2],
 }
 
 impl FtaftsmcAxis {
     /// A channel with δ̂ = `gains.delta_hat0`.
     pub fn new(gains: FtaftsmcGains) -> Self {
-        Self { gains, delta_hat: gains.delta_hat0, last: SurfaceTerms::default(), last_reaching: 0.0 }
+        Self {
+            gains,
+            delta_hat: gains.delta_hat0,
+            last: SurfaceTerms::default(),
+            last_reaching: 0.0,
+            kappa: kappa(&gains),
+        }
     }
 }
 
@@ -283,7 +300,7 @@ impl AxisLaw for FtaftsmcAxis {
     /// (Eq. 18–20, 56–58 before model cancellation).
     #[inline]
     fn update(&mut self, e: f64, e_dot: f64, dt: f64) -> f64 {
-        let terms = sliding_surface(&self.gains, e, e_dot);
+        let terms = sliding_surface_with(&self.gains, self.kappa, e, e_dot);
         let reaching = reaching_law(&self.gains, terms.s, self.delta_hat);
         self.delta_hat += dt * delta_hat_rate(&self.gains, terms.s, self.delta_hat);
         self.last = terms;
@@ -386,7 +403,9 @@ mod tests {
 
     #[test]
     fn surface_is_finite_at_zero_and_huge_errors() {
-        for g in [FtaftsmcGains::PAPER_XY, FtaftsmcGains::PAPER_Z, FtaftsmcGains::PAPER_ROLL_PITCH, FtaftsmcGains::PAPER_YAW] {
+        for g in
+            [FtaftsmcGains::PAPER_XY, FtaftsmcGains::PAPER_Z, FtaftsmcGains::PAPER_ROLL_PITCH, FtaftsmcGains::PAPER_YAW]
+        {
             for &(e, ed) in &[(0.0, 0.0), (0.0, 1.0), (100.0, -100.0), (-100.0, 0.0), (1e-300, 0.0)] {
                 let mut axis = FtaftsmcAxis::new(g);
                 let u = axis.update(e, ed, 1e-3);
@@ -408,7 +427,9 @@ mod tests {
 
     #[test]
     fn paper_gains_pass_and_bad_gains_name_the_field() {
-        for g in [FtaftsmcGains::PAPER_XY, FtaftsmcGains::PAPER_Z, FtaftsmcGains::PAPER_ROLL_PITCH, FtaftsmcGains::PAPER_YAW] {
+        for g in
+            [FtaftsmcGains::PAPER_XY, FtaftsmcGains::PAPER_Z, FtaftsmcGains::PAPER_ROLL_PITCH, FtaftsmcGains::PAPER_YAW]
+        {
             g.check().unwrap();
         }
         let err = FtaftsmcGains { p: 1.2, ..FtaftsmcGains::PAPER_Z }.check().unwrap_err();

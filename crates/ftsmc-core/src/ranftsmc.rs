@@ -1,1 +1,271 @@
-//! RANFTSMC (placeholder, being written).
+//! RANFTSMC — robust adaptive nonsingular fast terminal sliding-mode control
+//! (Labbadi & Cherkaoui, ISA Trans. 2020; the paper's ref. [19]) on one
+//! channel, as fixed by SPEC §3:
+//!
+//! ```text
+//! σ    = e + b1 sig^α(e) + b2 sig^β(ė),                      1 < β < 2, α > β
+//! v_eq = −(1/(β b2)) |ė|^(2−β) (1 + α b1 |e|^(α−1)) sign(ė)
+//! v_sw = −c σ − (â0 + â1|e| + â2|ė| + h) sign(σ)
+//! dâ0/dt = μ0 |σ| |ė|^(β−1),  dâ1/dt = μ1 |σ| |e| |ė|^(β−1),  dâ2/dt = μ2 |σ| |ė|^β
+//! ```
+//!
+//! The commanded acceleration is `q̈_d + v_eq + v_sw` (model terms cancelled
+//! by the cascade). Since `α, β > 1`, the powers `|e|^(α−1)` and `|ė|^(β−1)`
+//! vanish at zero and every term stays finite.
+
+use crate::law::{check_non_negative, check_open, check_positive, AxisLaw, GainError};
+use crate::math::{pow_abs, pow_abs_minus_one, sig, sign, tanh};
+
+/// Gains of one RANFTSMC channel (published table, SPEC §3).
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Deserialize, serde::Serialize))]
+#[cfg_attr(feature = "serde", serde(deny_unknown_fields))]
+pub struct RanftsmcGains {
+    /// b1 > 0: weight of `sig^α(e)` in σ.
+    pub b1: f64,
+    /// b2 > 0: weight of `sig^β(ė)` in σ.
+    pub b2: f64,
+    /// c > 0: linear reaching gain.
+    pub c: f64,
+    /// β in (1, 2): exponent of ė in σ.
+    pub beta: f64,
+    /// α > β: exponent of e in σ.
+    pub alpha: f64,
+    /// h ≥ 0: constant switching gain.
+    pub h: f64,
+    /// μ0 ≥ 0: adaptation rate of â0.
+    pub mu0: f64,
+    /// μ1 ≥ 0: adaptation rate of â1.
+    pub mu1: f64,
+    /// μ2 ≥ 0: adaptation rate of â2.
+    pub mu2: f64,
+    /// â0(0) ≥ 0 (default 0).
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub a0_hat0: f64,
+    /// â1(0) ≥ 0 (default 0).
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub a1_hat0: f64,
+    /// â2(0) ≥ 0 (default 0).
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub a2_hat0: f64,
+    /// Boundary layer φ ≥ 0 of the switching term: when > 0, `sign(σ)` is
+    /// replaced by `tanh(σ/φ)` (default 0: the discontinuous law).
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub sign_smoothing: f64,
+}
+
+impl RanftsmcGains {
+    /// Published position-loop gains.
+    pub const PAPER_POSITION: Self = Self {
+        b1: 0.03,
+        b2: 0.8,
+        c: 1.21,
+        beta: 5.0 / 3.0,
+        alpha: 2.0,
+        h: 0.5,
+        mu0: 0.5,
+        mu1: 0.001,
+        mu2: 0.01,
+        a0_hat0: 0.0,
+        a1_hat0: 0.0,
+        a2_hat0: 0.0,
+        sign_smoothing: 0.0,
+    };
+
+    /// Published attitude-loop gains.
+    pub const PAPER_ATTITUDE: Self = Self {
+        b1: 8.7406,
+        b2: 0.4838,
+        c: 11.7180,
+        beta: 1.0885,
+        alpha: 1.2,
+        h: 0.5,
+        mu0: 0.0118,
+        mu1: 6.2942e-4,
+        mu2: 0.01,
+        a0_hat0: 0.0,
+        a1_hat0: 0.0,
+        a2_hat0: 0.0,
+        sign_smoothing: 0.0,
+    };
+
+    /// Reject gains outside the ranges the method requires.
+    pub fn check(&self) -> Result<(), GainError> {
+        check_positive("b1", self.b1)?;
+        check_positive("b2", self.b2)?;
+        check_positive("c", self.c)?;
+        check_open("beta", self.beta, 1.0, 2.0, "1 < beta < 2")?;
+        check_open("alpha", self.alpha, self.beta, f64::INFINITY, "alpha > beta")?;
+        check_non_negative("h", self.h)?;
+        check_non_negative("mu0", self.mu0)?;
+        check_non_negative("mu1", self.mu1)?;
+        check_non_negative("mu2", self.mu2)?;
+        check_non_negative("a0_hat0", self.a0_hat0)?;
+        check_non_negative("a1_hat0", self.a1_hat0)?;
+        check_non_negative("a2_hat0", self.a2_hat0)?;
+        check_non_negative("sign_smoothing", self.sign_smoothing)
+    }
+}
+
+/// Nonsingular fast terminal surface `σ = e + b1 sig^α(e) + b2 sig^β(ė)`.
+#[inline]
+pub fn sliding_surface(g: &RanftsmcGains, e: f64, e_dot: f64) -> f64 {
+    e + g.b1 * sig(e, g.alpha) + g.b2 * sig(e_dot, g.beta)
+}
+
+/// Equivalent part `−(1/(β b2)) |ė|^(2−β) (1 + α b1 |e|^(α−1)) sign(ė)`, channel units/s².
+#[inline]
+pub fn equivalent_law(g: &RanftsmcGains, e: f64, e_dot: f64) -> f64 {
+    -(1.0 / (g.beta * g.b2))
+        * pow_abs(e_dot, 2.0 - g.beta)
+        * (1.0 + g.alpha * g.b1 * pow_abs_minus_one(e, g.alpha))
+        * sign(e_dot)
+}
+
+/// `sign(σ)`, or `tanh(σ/φ)` with a boundary layer φ > 0.
+#[inline]
+pub fn switching_sign(g: &RanftsmcGains, sigma: f64) -> f64 {
+    if g.sign_smoothing > 0.0 {
+        tanh(sigma / g.sign_smoothing)
+    } else {
+        sign(sigma)
+    }
+}
+
+/// One RANFTSMC channel: gains and the adaptive gains `[â0, â1, â2]`.
+#[derive(Clone, Copy, Debug)]
+pub struct RanftsmcAxis {
+    /// Gains.
+    pub gains: RanftsmcGains,
+    /// `[â0, â1, â2]`.
+    pub a_hat: [f64; 3],
+    /// σ of the last update.
+    pub sigma: f64,
+}
+
+impl RanftsmcAxis {
+    /// A channel with `â = [a0_hat0, a1_hat0, a2_hat0]`.
+    pub fn new(gains: RanftsmcGains) -> Self {
+        Self { gains, a_hat: [gains.a0_hat0, gains.a1_hat0, gains.a2_hat0], sigma: 0.0 }
+    }
+}
+
+impl AxisLaw for RanftsmcAxis {
+    const NAME: &'static str = "ranftsmc";
+
+    /// Returns `v_eq + v_sw`; then `â += dt · dâ/dt`.
+    #[inline]
+    fn update(&mut self, e: f64, e_dot: f64, dt: f64) -> f64 {
+        let g = &self.gains;
+        let sigma = sliding_surface(g, e, e_dot);
+        let [a0, a1, a2] = self.a_hat;
+        let (ae, aed) = (e.abs(), e_dot.abs());
+        let v = equivalent_law(g, e, e_dot) - g.c * sigma - (a0 + a1 * ae + a2 * aed + g.h) * switching_sign(g, sigma);
+        let ed_beta_minus_one = pow_abs_minus_one(e_dot, g.beta);
+        let abs_sigma = sigma.abs();
+        self.a_hat[0] += dt * g.mu0 * abs_sigma * ed_beta_minus_one;
+        self.a_hat[1] += dt * g.mu1 * abs_sigma * ae * ed_beta_minus_one;
+        self.a_hat[2] += dt * g.mu2 * abs_sigma * pow_abs(e_dot, g.beta);
+        self.sigma = sigma;
+        v
+    }
+
+    fn sliding_variable(&self) -> f64 {
+        self.sigma
+    }
+
+    fn estimates(&self) -> [f64; 3] {
+        self.a_hat
+    }
+
+    fn reset(&mut self) {
+        *self = Self::new(self.gains);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use approx::assert_relative_eq;
+
+    #[test]
+    fn finite_at_zero_and_for_large_errors() {
+        for g in [RanftsmcGains::PAPER_POSITION, RanftsmcGains::PAPER_ATTITUDE] {
+            for &(e, ed) in &[(0.0, 0.0), (0.0, 1.0), (1.0, 0.0), (100.0, -100.0), (-100.0, 0.0), (1e-300, 0.0)] {
+                let mut a = RanftsmcAxis::new(g);
+                let v = a.update(e, ed, 1e-3);
+                assert!(v.is_finite() && a.a_hat.iter().all(|x| x.is_finite()), "e={e} ė={ed}: {v}");
+            }
+        }
+    }
+
+    #[test]
+    fn one_step_matches_hand_computation() {
+        let g = RanftsmcGains { a0_hat0: 0.2, a1_hat0: 0.1, a2_hat0: 0.05, ..RanftsmcGains::PAPER_POSITION };
+        let (e, ed, dt) = (0.4f64, -0.3f64, 1e-3);
+        let (b1, b2, c, beta, alpha, h) = (0.03, 0.8, 1.21, 5.0 / 3.0, 2.0, 0.5);
+        let sigma = e + b1 * e.abs().powf(alpha) * e.signum() + b2 * ed.abs().powf(beta) * ed.signum();
+        let v_eq = -(1.0 / (beta * b2))
+            * ed.abs().powf(2.0 - beta)
+            * (1.0 + alpha * b1 * e.abs().powf(alpha - 1.0))
+            * ed.signum();
+        let v_sw = -c * sigma - (0.2 + 0.1 * e.abs() + 0.05 * ed.abs() + h) * sigma.signum();
+        let mut axis = RanftsmcAxis::new(g);
+        let v = axis.update(e, ed, dt);
+        assert_relative_eq!(v, v_eq + v_sw, epsilon = 1e-12);
+        assert_relative_eq!(axis.sigma, sigma, epsilon = 1e-14);
+        assert_relative_eq!(axis.a_hat[0], 0.2 + dt * 0.5 * sigma.abs() * ed.abs().powf(beta - 1.0), epsilon = 1e-14);
+        assert_relative_eq!(
+            axis.a_hat[1],
+            0.1 + dt * 0.001 * sigma.abs() * e.abs() * ed.abs().powf(beta - 1.0),
+            epsilon = 1e-14
+        );
+        assert_relative_eq!(axis.a_hat[2], 0.05 + dt * 0.01 * sigma.abs() * ed.abs().powf(beta), epsilon = 1e-14);
+    }
+
+    fn double_integrator_settling(g: RanftsmcGains, e0: f64, t_max: f64) -> Option<f64> {
+        let mut axis = RanftsmcAxis::new(g);
+        let dt = 1e-3;
+        let (mut e, mut ed) = (e0, 0.0);
+        let mut last_outside = 0.0;
+        let n = (t_max / dt) as usize;
+        for k in 0..n {
+            let v = axis.update(e, ed, dt);
+            if e.abs() > 0.02 * e0.abs() {
+                last_outside = k as f64 * dt;
+            }
+            e += ed * dt + 0.5 * v * dt * dt;
+            ed += v * dt;
+        }
+        (last_outside < t_max - 1.0).then_some(last_outside)
+    }
+
+    #[test]
+    fn published_gains_settle_a_double_integrator() {
+        let pos = double_integrator_settling(RanftsmcGains::PAPER_POSITION, 1.0, 15.0).expect("position settles");
+        assert!(pos < 8.0, "{pos}");
+        let att = double_integrator_settling(RanftsmcGains::PAPER_ATTITUDE, 0.5, 5.0).expect("attitude settles");
+        assert!(att < 2.0, "{att}");
+    }
+
+    #[test]
+    fn bad_gains_name_the_field() {
+        let bad = |g: RanftsmcGains| g.check().unwrap_err().field;
+        let p = RanftsmcGains::PAPER_POSITION;
+        assert_eq!(bad(RanftsmcGains { beta: 2.5, ..p }), "beta");
+        assert_eq!(bad(RanftsmcGains { alpha: 1.5, ..p }), "alpha");
+        assert_eq!(bad(RanftsmcGains { c: -1.0, ..p }), "c");
+        assert_eq!(bad(RanftsmcGains { sign_smoothing: -0.1, ..p }), "sign_smoothing");
+        p.check().unwrap();
+        RanftsmcGains::PAPER_ATTITUDE.check().unwrap();
+    }
+
+    #[test]
+    fn smoothing_makes_the_law_continuous_across_sigma_zero() {
+        let g = RanftsmcGains { sign_smoothing: 0.05, ..RanftsmcGains::PAPER_POSITION };
+        let at = |e: f64| RanftsmcAxis::new(g).update(e, 0.0, 1e-3);
+        assert!((at(1e-6) - at(-1e-6)).abs() < 1e-3);
+        let hard = |e: f64| RanftsmcAxis::new(RanftsmcGains::PAPER_POSITION).update(e, 0.0, 1e-3);
+        assert!((hard(1e-6) - hard(-1e-6)).abs() > 0.9, "the default law switches");
+    }
+}

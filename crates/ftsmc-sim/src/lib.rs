@@ -1,1 +1,21 @@
+//! # ftsmc-sim
+//!
+//! Everything around the control laws of `ftsmc-core`: the quadrotor plant of
+//! paper Eq. 1 ([`plant`]), time signals for references and disturbances
+//! ([`signal`]), scenario files ([`scenario`]), the zero-order-hold RK4 run
+//! loop ([`simulate`]), metrics ([`metrics`]) and the controller registry
+//! ([`registry`]).
+#![warn(missing_docs)]
 
+pub mod fixed_time;
+pub mod metrics;
+pub mod montecarlo;
+pub mod plant;
+pub mod registry;
+pub mod scenario;
+pub mod signal;
+pub mod simulate;
+pub mod tuning;
+
+pub use scenario::{Scenario, ScenarioError};
+pub use simulate::{simulate, ExitStatus, RunOptions, RunOutput};

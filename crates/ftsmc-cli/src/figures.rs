@@ -1,0 +1,287 @@
+//! The paper's nine figures (and a few companions) from recorded runs.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::Result;
+use ftsmc_sim::registry::label;
+use ftsmc_sim::simulate::RunOutput;
+
+use crate::plot::{controller_color, write_3d, write_figure, Figure, Panel, Series, Series3};
+
+/// What a panel shows: recorded column, shared reference column, per-controller
+/// reference column, title and y label.
+struct PanelSpec<'a> {
+    column: &'a str,
+    shared_reference: Option<&'a str>,
+    own_reference: Option<&'a str>,
+    title: &'a str,
+    y_label: &'a str,
+}
+
+fn series(run: &RunOutput, column: &str, label: String, dashed: bool) -> Series {
+    Series {
+        label,
+        xs: run.recording.column("t").to_vec(),
+        ys: run.recording.column(column).to_vec(),
+        color: controller_color(&run.controller),
+        dashed,
+    }
+}
+
+fn comparison(title: &str, runs: &[&RunOutput], specs: &[PanelSpec], columns: usize) -> Figure {
+    let panels = specs
+        .iter()
+        .map(|spec| {
+            let mut s: Vec<Series> = Vec::new();
+            if let (Some(col), Some(first)) = (spec.shared_reference, runs.first()) {
+                s.push(Series {
+                    label: "reference".into(),
+                    xs: first.recording.column("t").to_vec(),
+                    ys: first.recording.column(col).to_vec(),
+                    color: controller_color("reference"),
+                    dashed: true,
+                });
+            }
+            for run in runs {
+                s.push(series(run, spec.column, label(&run.controller).to_string(), false));
+                if let Some(col) = spec.own_reference {
+                    s.push(series(run, col, format!("{} reference", label(&run.controller)), true));
+                }
+            }
+            Panel {
+                title: spec.title.into(),
+                x_label: "time (s)".into(),
+                y_label: spec.y_label.into(),
+                series: s,
+                log_x: false,
+                log_y: false,
+            }
+        })
+        .collect();
+    Figure { title: title.into(), panels, columns }
+}
+
+fn attitude_specs<'a>() -> [PanelSpec<'a>; 3] {
+    [
+        PanelSpec {
+            column: "phi",
+            shared_reference: None,
+            own_reference: Some("phi_ref"),
+            title: "roll φ",
+            y_label: "φ (rad)",
+        },
+        PanelSpec {
+            column: "theta",
+            shared_reference: None,
+            own_reference: Some("theta_ref"),
+            title: "pitch θ",
+            y_label: "θ (rad)",
+        },
+        PanelSpec {
+            column: "psi",
+            shared_reference: Some("psi_ref"),
+            own_reference: None,
+            title: "yaw ψ",
+            y_label: "ψ (rad)",
+        },
+    ]
+}
+
+fn position_specs<'a>() -> [PanelSpec<'a>; 3] {
+    [
+        PanelSpec { column: "x", shared_reference: Some("x_ref"), own_reference: None, title: "x", y_label: "x (m)" },
+        PanelSpec { column: "y", shared_reference: Some("y_ref"), own_reference: None, title: "y", y_label: "y (m)" },
+        PanelSpec { column: "z", shared_reference: Some("z_ref"), own_reference: None, title: "z", y_label: "z (m)" },
+    ]
+}
+
+fn control_specs<'a>() -> [PanelSpec<'a>; 4] {
+    [
+        PanelSpec {
+            column: "thrust",
+            shared_reference: None,
+            own_reference: None,
+            title: "thrust U1",
+            y_label: "U1 (N)",
+        },
+        PanelSpec {
+            column: "roll_torque",
+            shared_reference: None,
+            own_reference: None,
+            title: "roll torque u2",
+            y_label: "u2 (N·m)",
+        },
+        PanelSpec {
+            column: "pitch_torque",
+            shared_reference: None,
+            own_reference: None,
+            title: "pitch torque u3",
+            y_label: "u3 (N·m)",
+        },
+        PanelSpec {
+            column: "yaw_torque",
+            shared_reference: None,
+            own_reference: None,
+            title: "yaw torque u4",
+            y_label: "u4 (N·m)",
+        },
+    ]
+}
+
+/// Adaptive states of one controller: one panel per channel and estimate.
+fn adaptive_figure(title: &str, run: &RunOutput, estimate_names: &[(&str, usize)]) -> Figure {
+    let mut panels = Vec::new();
+    for axis in ["x", "y", "z", "phi", "theta", "psi"] {
+        let mut s = Vec::new();
+        for (name, k) in estimate_names {
+            let mut one = series(run, &format!("est_{axis}_{k}"), format!("{name} ({axis})"), false);
+            if estimate_names.len() > 1 {
+                one.color = crate::plot::controller_color(&format!("{}-{k}", run.controller));
+            }
+            s.push(one);
+        }
+        panels.push(Panel {
+            title: format!("{axis} channel"),
+            x_label: "time (s)".into(),
+            y_label: "estimate".into(),
+            series: s,
+            log_x: false,
+            log_y: false,
+        });
+    }
+    Figure { title: title.into(), panels, columns: 3 }
+}
+
+/// Figures 1–4 (scenario 1): attitude, controls, adaptive gains, position.
+pub fn scenario_1(runs: &[&RunOutput], dir: &Path) -> Result<Vec<PathBuf>> {
+    let mut out = Vec::new();
+    out.extend(write_figure(
+        &comparison("Fig. 1 — attitude tracking (scenario 1)", runs, &attitude_specs(), 3),
+        &dir.join("fig1-attitude-scenario1"),
+    )?);
+    out.extend(write_figure(
+        &comparison("Fig. 2 — thrust and torques (scenario 1)", runs, &control_specs(), 2),
+        &dir.join("fig2-controls-scenario1"),
+    )?);
+    for run in runs {
+        match run.controller.as_str() {
+            "ftaftsmc" => out.extend(write_figure(
+                &adaptive_figure("Fig. 3 — FTAFTSMC adaptive gains δ̂ (Eq. 17), scenario 1", run, &[("δ̂", 0)]),
+                &dir.join("fig3-adaptive-gains-scenario1"),
+            )?),
+            "ranftsmc" => out.extend(write_figure(
+                &adaptive_figure(
+                    "RANFTSMC adaptive gains â0, â1, â2 (scenario 1)",
+                    run,
+                    &[("â0", 0), ("â1", 1), ("â2", 2)],
+                ),
+                &dir.join("fig3b-ranftsmc-gains-scenario1"),
+            )?),
+            _ => {}
+        }
+    }
+    out.extend(write_figure(
+        &comparison("Fig. 4 — position tracking (scenario 1)", runs, &position_specs(), 3),
+        &dir.join("fig4-position-scenario1"),
+    )?);
+    Ok(out)
+}
+
+/// Figures 5–9 (scenario 2): inertia, position, mass estimate, attitude, 3-D.
+pub fn scenario_2(runs: &[&RunOutput], no_mass: Option<&RunOutput>, dir: &Path) -> Result<Vec<PathBuf>> {
+    let mut out = Vec::new();
+    let Some(first) = runs.first() else { return Ok(out) };
+    let inertia_panels = (1..=3)
+        .map(|i| Panel {
+            title: format!("I{i}(t)"),
+            x_label: "time (s)".into(),
+            y_label: format!("I{i} (kg·m²)"),
+            series: vec![Series {
+                label: format!("plant I{i}"),
+                xs: first.recording.column("t").to_vec(),
+                ys: first.recording.column(&format!("inertia_{i}")).to_vec(),
+                color: controller_color("reference"),
+                dashed: false,
+            }],
+            log_x: false,
+            log_y: false,
+        })
+        .collect();
+    out.extend(write_figure(
+        &Figure { title: "Fig. 5 — moments of inertia (scenario 2)".into(), panels: inertia_panels, columns: 3 },
+        &dir.join("fig5-inertia-scenario2"),
+    )?);
+    out.extend(write_figure(
+        &comparison("Fig. 6 — position tracking (scenario 2)", runs, &position_specs(), 3),
+        &dir.join("fig6-position-scenario2"),
+    )?);
+    let mut mass = vec![Series {
+        label: "true mass".into(),
+        xs: first.recording.column("t").to_vec(),
+        ys: first.recording.column("mass_true").to_vec(),
+        color: controller_color("reference"),
+        dashed: true,
+    }];
+    for run in runs.iter().copied().filter(|r| r.controller == "ftaftsmc").chain(no_mass) {
+        mass.push(series(run, "mass_estimate", format!("α̂·m, {}", label(&run.controller)), false));
+    }
+    out.extend(write_figure(
+        &Figure {
+            title: "Fig. 7 — mass estimate α̂·m against the true mass (scenario 2)".into(),
+            panels: vec![Panel {
+                title: "mass".into(),
+                x_label: "time (s)".into(),
+                y_label: "mass (kg)".into(),
+                series: mass,
+                log_x: false,
+                log_y: false,
+            }],
+            columns: 1,
+        },
+        &dir.join("fig7-mass-estimate-scenario2"),
+    )?);
+    out.extend(write_figure(
+        &comparison("Fig. 8 — attitude tracking (scenario 2)", runs, &attitude_specs(), 3),
+        &dir.join("fig8-attitude-scenario2"),
+    )?);
+    let points = |run: &RunOutput, cols: [&str; 3]| -> Vec<[f64; 3]> {
+        let [a, b, c] = cols.map(|n| run.recording.column(n));
+        (0..a.len()).map(|i| [a[i], b[i], c[i]]).collect()
+    };
+    let mut s3 = vec![Series3 {
+        label: "reference".into(),
+        points: points(first, ["x_ref", "y_ref", "z_ref"]),
+        color: controller_color("reference"),
+        dashed: true,
+    }];
+    for run in runs {
+        s3.push(Series3 {
+            label: label(&run.controller).into(),
+            points: points(run, ["x", "y", "z"]),
+            color: controller_color(&run.controller),
+            dashed: false,
+        });
+    }
+    out.extend(write_3d("Fig. 9 — 3-D trajectory (scenario 2)", &s3, &dir.join("fig9-trajectory-3d-scenario2"))?);
+    Ok(out)
+}
+
+/// Position, attitude and control figures for any scenario (`ftsmc run`).
+pub fn generic(runs: &[&RunOutput], dir: &Path) -> Result<Vec<PathBuf>> {
+    let Some(first) = runs.first() else { return Ok(Vec::new()) };
+    let name = &first.scenario;
+    let mut out = Vec::new();
+    out.extend(write_figure(
+        &comparison(&format!("position tracking ({name})"), runs, &position_specs(), 3),
+        &dir.join("position"),
+    )?);
+    out.extend(write_figure(
+        &comparison(&format!("attitude tracking ({name})"), runs, &attitude_specs(), 3),
+        &dir.join("attitude"),
+    )?);
+    out.extend(write_figure(
+        &comparison(&format!("thrust and torques ({name})"), runs, &control_specs(), 2),
+        &dir.join("controls"),
+    )?);
+    Ok(out)
+}

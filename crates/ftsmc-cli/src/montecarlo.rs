@@ -1,0 +1,154 @@
+//! `ftsmc montecarlo`: randomised batches in parallel, `runs.csv`,
+//! `summary.json` and box plots.
+
+use std::path::Path;
+use std::time::Instant;
+
+use anyhow::{Context, Result};
+use ftsmc_sim::montecarlo::{run_batch, summarize, McRun, MonteCarloSpec, SAMPLED_COLUMNS};
+use ftsmc_sim::registry::label;
+use ftsmc_sim::scenario::Scenario;
+use ftsmc_sim::simulate::ExitStatus;
+use indicatif::{ProgressBar, ProgressStyle};
+use serde_json::{json, Map, Value};
+
+use crate::output::{format_number, write_atomic};
+use crate::plot::{controller_color, write_boxplots, BoxGroup, BoxPanel};
+
+/// `runs.csv` text: one row per (run, controller), in run order.
+pub fn runs_csv(rows: &[McRun]) -> Result<Vec<u8>> {
+    let mut w = csv::Writer::from_writer(Vec::new());
+    let metric_names: Vec<String> =
+        rows.first().map(|r| r.metrics.flat().into_iter().map(|(n, _)| n).collect()).unwrap_or_default();
+    let mut header: Vec<String> =
+        ["run", "seed", "controller", "exit", "diverged_at"].iter().map(|s| s.to_string()).collect();
+    header.extend(SAMPLED_COLUMNS.iter().map(|s| s.to_string()));
+    header.extend(metric_names.iter().cloned());
+    w.write_record(&header)?;
+    for r in rows {
+        let diverged_at = match r.exit {
+            ExitStatus::Diverged { time, .. } => format_number(time),
+            ExitStatus::Completed => String::new(),
+        };
+        let mut rec =
+            vec![r.index.to_string(), r.seed.to_string(), r.controller.clone(), r.exit.to_string(), diverged_at];
+        rec.extend(r.sampled.iter().map(|v| format_number(*v)));
+        let flat = r.metrics.flat();
+        for name in &metric_names {
+            rec.push(flat.iter().find(|(n, _)| n == name).map_or(String::new(), |(_, v)| format_number(*v)));
+        }
+        w.write_record(&rec)?;
+    }
+    w.into_inner().map_err(|e| anyhow::anyhow!("csv: {e}"))
+}
+
+/// Run a batch and write its outputs.
+pub fn run(
+    scenario: &Scenario,
+    controllers: &[String],
+    runs: u64,
+    seed: u64,
+    threads: Option<usize>,
+    out: &Path,
+    figures: bool,
+) -> Result<()> {
+    let spec = scenario.montecarlo.clone().unwrap_or_else(|| {
+        eprintln!("note: {} has no [montecarlo] section; runs differ only in their seeds (drag noise)", scenario.name);
+        MonteCarloSpec::default()
+    });
+    let mut builder = rayon::ThreadPoolBuilder::new();
+    if let Some(t) = threads {
+        builder = builder.num_threads(t);
+    }
+    let pool = builder.build().context("cannot start the thread pool")?;
+    let bar = ProgressBar::new(runs * controllers.len() as u64);
+    bar.set_style(
+        ProgressStyle::with_template(
+            "{spinner} [{elapsed_precise}] {bar:30} {pos}/{len} flights ({per_sec}, eta {eta})",
+        )
+        .expect("valid template"),
+    );
+    let started = Instant::now();
+    let rows = pool
+        .install(|| run_batch(scenario, &spec, controllers, runs, seed, &|| bar.inc(1)))
+        .map_err(|known| anyhow::anyhow!("unknown controller (known: {known})"))?;
+    bar.finish_and_clear();
+    let elapsed = started.elapsed().as_secs_f64();
+
+    write_atomic(&out.join("runs.csv"), &runs_csv(&rows)?)?;
+    let summaries = summarize(&rows, controllers);
+    let mut per_controller = Map::new();
+    for (name, s) in &summaries {
+        per_controller.insert(name.clone(), serde_json::to_value(s)?);
+    }
+    let summary = json!({
+        "scenario": scenario.name,
+        "runs": runs,
+        "master_seed": seed,
+        "controllers": Value::Object(per_controller),
+    });
+    write_atomic(&out.join("summary.json"), serde_json::to_string_pretty(&summary)?.as_bytes())?;
+
+    println!("Monte Carlo: {} × {} runs of {} (seed {seed})\n", controllers.len(), runs, scenario.name);
+    println!("| controller | success | diverged | ISE x median [p5, p95] | ISE y | ISE z | ISE ψ | worst ISE z |");
+    println!("|---|---|---|---|---|---|---|---|");
+    for (name, s) in &summaries {
+        let cell = |m: &str| {
+            s.metrics.get(m).map_or("—".to_string(), |st| format!("{:.4} [{:.4}, {:.4}]", st.median, st.p5, st.p95))
+        };
+        println!(
+            "| {} | {:.1} % | {} | {} | {} | {} | {} | {} |",
+            label(name),
+            100.0 * s.success_rate,
+            s.diverged,
+            cell("ise_x"),
+            cell("ise_y"),
+            cell("ise_z"),
+            cell("ise_psi"),
+            s.metrics.get("ise_z").map_or("—".into(), |st| format!("{:.4}", st.worst))
+        );
+    }
+    if figures {
+        let panels: Vec<BoxPanel> = ["x", "y", "z", "psi"]
+            .iter()
+            .map(|axis| BoxPanel {
+                title: format!("ISE {axis}"),
+                y_label: "ISE (log scale; whiskers p5–p95)".into(),
+                groups: controllers
+                    .iter()
+                    .map(|c| BoxGroup {
+                        label: label(c).into(),
+                        values: rows
+                            .iter()
+                            .filter(|r| &r.controller == c && r.exit.is_completed())
+                            .map(|r| match *axis {
+                                "x" => r.metrics.ise.x,
+                                "y" => r.metrics.ise.y,
+                                "z" => r.metrics.ise.z,
+                                _ => r.metrics.ise.psi,
+                            })
+                            .collect(),
+                        color: controller_color(c),
+                    })
+                    .collect(),
+                log_y: true,
+            })
+            .collect();
+        let rates: Vec<String> =
+            summaries.iter().map(|(n, s)| format!("{} {:.1} %", label(n), 100.0 * s.success_rate)).collect();
+        write_boxplots(
+            &format!("Monte Carlo, {} runs of {} — success rate: {}", runs, scenario.name, rates.join(", ")),
+            &panels,
+            2,
+            &out.join("montecarlo-ise"),
+        )?;
+    }
+    println!(
+        "\n{} flights in {elapsed:.2} s ({:.0} flights/s); wrote {}/runs.csv, summary.json{}",
+        rows.len(),
+        rows.len() as f64 / elapsed.max(1e-9),
+        out.display(),
+        if figures { ", montecarlo-ise.{svg,png}" } else { "" }
+    );
+    Ok(())
+}

@@ -1,0 +1,267 @@
+//! Performance metrics of SPEC §5, accumulated online at the control rate:
+//! ISE, IAE, ITAE, RMS, maximum error after the transient, 2 % settling time
+//! per channel; control energy and chattering index per control signal.
+//!
+//! Integrals use the left rectangle rule on the control-rate samples (the
+//! command is a zero-order hold, so this is exact for it; for the errors the
+//! difference to the trapezoid rule is O(dt)).
+
+use serde::{Deserialize, Serialize};
+
+use crate::scenario::AxisSet;
+
+/// One value per control signal `U1, u2, u3, u4`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Deserialize, Serialize)]
+pub struct SignalSet<T> {
+    /// Total thrust U1.
+    pub thrust: T,
+    /// Roll torque u2.
+    pub roll_torque: T,
+    /// Pitch torque u3.
+    pub pitch_torque: T,
+    /// Yaw torque u4.
+    pub yaw_torque: T,
+}
+
+impl<T: Copy> SignalSet<T> {
+    /// From `[U1, u2, u3, u4]`.
+    pub fn from_array(a: [T; 4]) -> Self {
+        Self { thrust: a[0], roll_torque: a[1], pitch_torque: a[2], yaw_torque: a[3] }
+    }
+    /// As `[U1, u2, u3, u4]`.
+    pub fn to_array(&self) -> [T; 4] {
+        [self.thrust, self.roll_torque, self.pitch_torque, self.yaw_torque]
+    }
+    /// Names as used in outputs.
+    pub const NAMES: [&'static str; 4] = ["thrust", "roll_torque", "pitch_torque", "yaw_torque"];
+}
+
+/// All metrics of one run. Channel errors are `x − x_d`, …, `φ − φ_ref`,
+/// `θ − θ_ref` (the cascade's attitude reference), `ψ − ψ_d`.
+#[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
+pub struct Metrics {
+    /// ∫ e² dt (Table 3), units² · s.
+    pub ise: AxisSet<f64>,
+    /// ∫ |e| dt, units · s.
+    pub iae: AxisSet<f64>,
+    /// ∫ t |e| dt, units · s².
+    pub itae: AxisSet<f64>,
+    /// sqrt(ISE / duration), units.
+    pub rms: AxisSet<f64>,
+    /// max |e| for t ≥ `simulation.steady_state_after`, units.
+    pub max_error_after: AxisSet<f64>,
+    /// Time after which |e| stays within the band (2 % of |e(0)|, at least
+    /// `settling_floor`), s; `None` if still outside at the end.
+    pub settling_time: AxisSet<Option<f64>>,
+    /// ∫ u² dt per control signal (N²·s, (N·m)²·s).
+    pub control_energy: SignalSet<f64>,
+    /// Chattering index: total variation Σ|u_k − u_{k−1}| per second of run
+    /// (N/s, N·m/s).
+    pub chattering: SignalSet<f64>,
+    /// ∫ e² dt restricted to `simulation.metrics_window` (when set).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub ise_window: Option<AxisSet<f64>>,
+    /// Simulated time covered, s.
+    pub duration: f64,
+}
+
+impl Metrics {
+    /// Every metric as a named scalar (`ise_x`, …, `settling_time_psi`
+    /// (NaN when not settled), `control_energy_thrust`, …), in a fixed order:
+    /// the columns of Monte Carlo tables.
+    pub fn flat(&self) -> Vec<(String, f64)> {
+        let mut out = Vec::with_capacity(64);
+        let names = ["x", "y", "z", "phi", "theta", "psi"];
+        let mut axes = |prefix: &str, a: &AxisSet<f64>| {
+            for (n, v) in names.iter().zip(a.to_array()) {
+                out.push((format!("{prefix}_{n}"), v));
+            }
+        };
+        axes("ise", &self.ise);
+        axes("iae", &self.iae);
+        axes("itae", &self.itae);
+        axes("rms", &self.rms);
+        axes("max_error_after", &self.max_error_after);
+        let settling = self.settling_time.to_array().map(|v| v.unwrap_or(f64::NAN));
+        for (n, v) in names.iter().zip(settling) {
+            out.push((format!("settling_time_{n}"), v));
+        }
+        if let Some(w) = &self.ise_window {
+            for (n, v) in names.iter().zip(w.to_array()) {
+                out.push((format!("ise_window_{n}"), v));
+            }
+        }
+        for (n, v) in SignalSet::<f64>::NAMES.iter().zip(self.control_energy.to_array()) {
+            out.push((format!("control_energy_{n}"), v));
+        }
+        for (n, v) in SignalSet::<f64>::NAMES.iter().zip(self.chattering.to_array()) {
+            out.push((format!("chattering_{n}"), v));
+        }
+        out.push(("duration".into(), self.duration));
+        out
+    }
+}
+
+/// Online accumulator of [`Metrics`].
+#[derive(Clone, Debug)]
+pub struct MetricsAccumulator {
+    dt: f64,
+    band_fraction: f64,
+    band_floor: f64,
+    steady_after: f64,
+    window: Option<[f64; 2]>,
+    ise_window: [f64; 6],
+    started: bool,
+    band: [f64; 6],
+    ise: [f64; 6],
+    iae: [f64; 6],
+    itae: [f64; 6],
+    max_after: [f64; 6],
+    last_outside: [Option<f64>; 6],
+    energy: [f64; 4],
+    variation: [f64; 4],
+    last_u: [f64; 4],
+    time: f64,
+}
+
+impl MetricsAccumulator {
+    /// New accumulator for samples every `dt` s.
+    pub fn new(dt: f64, band_fraction: f64, band_floor: f64, steady_after: f64) -> Self {
+        Self {
+            dt,
+            band_fraction,
+            band_floor,
+            steady_after,
+            window: None,
+            ise_window: [0.0; 6],
+            started: false,
+            band: [0.0; 6],
+            ise: [0.0; 6],
+            iae: [0.0; 6],
+            itae: [0.0; 6],
+            max_after: [0.0; 6],
+            last_outside: [None; 6],
+            energy: [0.0; 4],
+            variation: [0.0; 4],
+            last_u: [0.0; 4],
+            time: 0.0,
+        }
+    }
+
+    /// Also accumulate ISE over `[start, end]` (s).
+    pub fn with_window(mut self, window: Option<[f64; 2]>) -> Self {
+        self.window = window;
+        self
+    }
+
+    /// Add the sample at time `t` (s): channel errors and the command
+    /// `[U1, u2, u3, u4]` held over the following period.
+    #[inline]
+    pub fn observe(&mut self, t: f64, errors: &[f64; 6], u: &[f64; 4]) {
+        if !self.started {
+            for i in 0..6 {
+                self.band[i] = (self.band_fraction * errors[i].abs()).max(self.band_floor);
+            }
+            self.last_u = *u;
+            self.started = true;
+        }
+        let dt = self.dt;
+        for i in 0..6 {
+            let e = errors[i];
+            let a = e.abs();
+            self.ise[i] += e * e * dt;
+            self.iae[i] += a * dt;
+            self.itae[i] += t * a * dt;
+            if let Some([start, end]) = self.window {
+                if t >= start && t <= end {
+                    self.ise_window[i] += e * e * dt;
+                }
+            }
+            if t >= self.steady_after && a > self.max_after[i] {
+                self.max_after[i] = a;
+            }
+            if a > self.band[i] {
+                self.last_outside[i] = Some(t);
+            }
+        }
+        for j in 0..4 {
+            self.energy[j] += u[j] * u[j] * dt;
+            self.variation[j] += (u[j] - self.last_u[j]).abs();
+        }
+        self.last_u = *u;
+        self.time = t + dt;
+    }
+
+    /// Final metrics over the observed time.
+    pub fn finish(&self) -> Metrics {
+        let duration = self.time;
+        let axes = |a: [f64; 6]| AxisSet { x: a[0], y: a[1], z: a[2], phi: a[3], theta: a[4], psi: a[5] };
+        let settled: [Option<f64>; 6] = core::array::from_fn(|i| match self.last_outside[i] {
+            None => Some(0.0),
+            Some(t) if t + self.dt < duration - 0.5 * self.dt => Some(t + self.dt),
+            Some(_) => None,
+        });
+        let rms = self.ise.map(|v| if duration > 0.0 { (v / duration).sqrt() } else { 0.0 });
+        let per_second = self.variation.map(|v| if duration > 0.0 { v / duration } else { 0.0 });
+        Metrics {
+            ise: axes(self.ise),
+            iae: axes(self.iae),
+            itae: axes(self.itae),
+            rms: axes(rms),
+            max_error_after: axes(self.max_after),
+            settling_time: AxisSet {
+                x: settled[0],
+                y: settled[1],
+                z: settled[2],
+                phi: settled[3],
+                theta: settled[4],
+                psi: settled[5],
+            },
+            control_energy: SignalSet::from_array(self.energy),
+            chattering: SignalSet::from_array(per_second),
+            ise_window: self.window.map(|_| axes(self.ise_window)),
+            duration,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use approx::assert_relative_eq;
+
+    #[test]
+    fn exponential_decay_metrics_match_closed_forms() {
+        // e(t) = e^{−t} on every axis for 20 s at 1 kHz.
+        let dt = 1e-3;
+        let mut acc = MetricsAccumulator::new(dt, 0.02, 1e-3, 5.0);
+        let n = 20_000;
+        for k in 0..n {
+            let t = k as f64 * dt;
+            let e = (-t).exp();
+            acc.observe(t, &[e; 6], &[1.0, 0.0, (k % 2) as f64, 0.0]);
+        }
+        let m = acc.finish();
+        assert_relative_eq!(m.ise.x, 0.5, epsilon = 1e-3);
+        assert_relative_eq!(m.iae.y, 1.0, epsilon = 1e-3);
+        assert_relative_eq!(m.itae.z, 1.0, epsilon = 2e-3);
+        assert_relative_eq!(m.max_error_after.psi, (-5.0f64).exp(), epsilon = 1e-6);
+        // |e| < 0.02 from t = ln 50 ≈ 3.912 s on.
+        let ts = m.settling_time.x.unwrap();
+        assert!((ts - 50f64.ln()).abs() < 2e-3, "{ts}");
+        assert_relative_eq!(m.control_energy.thrust, 20.0, epsilon = 1e-9);
+        // Pitch torque alternates 0/1 every sample: variation 1 per sample.
+        assert_relative_eq!(m.chattering.pitch_torque, (n - 1) as f64 / 20.0, epsilon = 1e-9);
+        assert_eq!(m.chattering.thrust, 0.0);
+    }
+
+    #[test]
+    fn not_settled_when_outside_at_the_end() {
+        let dt = 0.01;
+        let mut acc = MetricsAccumulator::new(dt, 0.02, 1e-3, 0.0);
+        for k in 0..100 {
+            acc.observe(k as f64 * dt, &[1.0; 6], &[0.0; 4]);
+        }
+        assert_eq!(acc.finish().settling_time.x, None);
+    }
+}

@@ -1,0 +1,303 @@
+//! Time signals with analytic first and second derivatives: the building
+//! blocks of references, disturbances and parameter variations in scenario
+//! files. A [`Signal`] is a sum of [`Term`]s, optionally active only inside
+//! a time window.
+
+use serde::{Deserialize, Serialize};
+
+/// One additive term of a [`Signal`]. In TOML: an inline table with a
+/// `type` key, e.g. `{ type = "sine", amplitude = 0.5, omega = 0.4 }`.
+#[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
+#[serde(tag = "type", rename_all = "kebab-case", deny_unknown_fields)]
+pub enum Term {
+    /// `value` for all t.
+    Constant {
+        /// Value (units of the signal).
+        value: f64,
+    },
+    /// 0 before `time`, `height` from `time` on (derivatives 0; the impulse
+    /// at the switching instant is not represented).
+    Step {
+        /// Switching time, s.
+        time: f64,
+        /// Step height (units of the signal).
+        height: f64,
+    },
+    /// `amplitude · sin(ω t + phase)`, ω given as `omega` (rad/s) or `frequency` (Hz).
+    Sine {
+        /// Amplitude (units of the signal).
+        amplitude: f64,
+        /// Angular frequency ω, rad/s (give this or `frequency`).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        omega: Option<f64>,
+        /// Frequency f, Hz (ω = 2πf; give this or `omega`).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        frequency: Option<f64>,
+        /// Phase, rad (default 0).
+        #[serde(default)]
+        phase: f64,
+    },
+    /// `amplitude · cos(ω t + phase)`, ω given as `omega` (rad/s) or `frequency` (Hz).
+    Cosine {
+        /// Amplitude (units of the signal).
+        amplitude: f64,
+        /// Angular frequency ω, rad/s (give this or `frequency`).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        omega: Option<f64>,
+        /// Frequency f, Hz (ω = 2πf; give this or `omega`).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        frequency: Option<f64>,
+        /// Phase, rad (default 0).
+        #[serde(default)]
+        phase: f64,
+    },
+    /// `Σ_k coefficients[k] · t^k` (ramps, parabolas, helix climb).
+    Polynomial {
+        /// Coefficients from degree 0 upward.
+        coefficients: Vec<f64>,
+    },
+}
+
+/// Value and two time derivatives of a signal at one instant.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Sample {
+    /// Value.
+    pub value: f64,
+    /// First derivative (per s).
+    pub rate: f64,
+    /// Second derivative (per s²).
+    pub acceleration: f64,
+}
+
+impl core::ops::AddAssign for Sample {
+    fn add_assign(&mut self, o: Self) {
+        self.value += o.value;
+        self.rate += o.rate;
+        self.acceleration += o.acceleration;
+    }
+}
+
+impl Term {
+    /// Angular frequency of a periodic term, rad/s (None when neither or both
+    /// of `omega` and `frequency` are given — rejected by validation).
+    pub fn angular_frequency(&self) -> Option<f64> {
+        match self {
+            Term::Sine { omega, frequency, .. } | Term::Cosine { omega, frequency, .. } => match (omega, frequency) {
+                (Some(w), None) => Some(*w),
+                (None, Some(f)) => Some(2.0 * core::f64::consts::PI * f),
+                _ => None,
+            },
+            _ => None,
+        }
+    }
+
+    /// Evaluate at time `t` (s).
+    pub fn sample(&self, t: f64) -> Sample {
+        match self {
+            Term::Constant { value } => Sample { value: *value, ..Sample::default() },
+            Term::Step { time, height } => {
+                Sample { value: if t >= *time { *height } else { 0.0 }, ..Sample::default() }
+            }
+            Term::Sine { amplitude, phase, .. } => {
+                let w = self.angular_frequency().unwrap_or(0.0);
+                let (s, c) = (w * t + phase).sin_cos();
+                Sample { value: amplitude * s, rate: amplitude * w * c, acceleration: -amplitude * w * w * s }
+            }
+            Term::Cosine { amplitude, phase, .. } => {
+                let w = self.angular_frequency().unwrap_or(0.0);
+                let (s, c) = (w * t + phase).sin_cos();
+                Sample { value: amplitude * c, rate: -amplitude * w * s, acceleration: -amplitude * w * w * c }
+            }
+            Term::Polynomial { coefficients } => {
+                let mut out = Sample::default();
+                // Horner for value and both derivatives.
+                for &c in coefficients.iter().rev() {
+                    out.acceleration = out.acceleration * t + 2.0 * out.rate;
+                    out.rate = out.rate * t + out.value;
+                    out.value = out.value * t + c;
+                }
+                out
+            }
+        }
+    }
+}
+
+/// A sum of terms, active only inside `window = [start, end]` (s) when given
+/// (inclusive at both ends; zero outside).
+#[derive(Clone, Debug, Default, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct Signal {
+    /// Additive terms.
+    #[serde(default)]
+    pub terms: Vec<Term>,
+    /// Active window `[start, end]`, s; always active when absent.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub window: Option<[f64; 2]>,
+}
+
+impl Signal {
+    /// A constant signal.
+    pub fn constant(value: f64) -> Self {
+        Self { terms: vec![Term::Constant { value }], window: None }
+    }
+
+    /// True when the signal has no terms (identically zero).
+    pub fn is_zero(&self) -> bool {
+        self.terms.is_empty()
+    }
+
+    /// Evaluate value and derivatives at `t` (s).
+    pub fn sample(&self, t: f64) -> Sample {
+        if let Some([start, end]) = self.window {
+            if t < start || t > end {
+                return Sample::default();
+            }
+        }
+        let mut out = Sample::default();
+        for term in &self.terms {
+            out += term.sample(t);
+        }
+        out
+    }
+
+    /// Value only, at `t` (s).
+    pub fn value(&self, t: f64) -> f64 {
+        self.sample(t).value
+    }
+
+    /// Check every term and the window; errors name the sub-key.
+    pub fn check(&self) -> Result<(), (String, String, &'static str)> {
+        if let Some([start, end]) = self.window {
+            if !(start.is_finite() && end.is_finite()) || end < start {
+                return Err(("window".into(), format!("[{start}, {end}]"), "a window [start, end] with start <= end"));
+            }
+        }
+        for (k, term) in self.terms.iter().enumerate() {
+            let key = |field: &str| format!("terms[{k}].{field}");
+            let finite = |field: &str, v: f64| {
+                if v.is_finite() {
+                    Ok(())
+                } else {
+                    Err((key(field), v.to_string(), "a finite number"))
+                }
+            };
+            match term {
+                Term::Constant { value } => finite("value", *value)?,
+                Term::Step { time, height } => {
+                    finite("time", *time)?;
+                    finite("height", *height)?;
+                }
+                Term::Sine { amplitude, omega, frequency, phase }
+                | Term::Cosine { amplitude, omega, frequency, phase } => {
+                    finite("amplitude", *amplitude)?;
+                    finite("phase", *phase)?;
+                    match (omega, frequency) {
+                        (Some(w), None) => finite("omega", *w)?,
+                        (None, Some(f)) => finite("frequency", *f)?,
+                        (None, None) => {
+                            return Err((
+                                key("omega"),
+                                "missing".into(),
+                                "exactly one of `omega` (rad/s) or `frequency` (Hz)",
+                            ))
+                        }
+                        (Some(w), Some(f)) => {
+                            return Err((
+                                key("frequency"),
+                                format!("omega = {w}, frequency = {f}"),
+                                "exactly one of `omega` (rad/s) or `frequency` (Hz)",
+                            ))
+                        }
+                    }
+                }
+                Term::Polynomial { coefficients } => {
+                    for (i, c) in coefficients.iter().enumerate() {
+                        finite(&format!("coefficients[{i}]"), *c)?;
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use approx::assert_relative_eq;
+
+    #[test]
+    fn terms_evaluate_to_their_formulas() {
+        let sine = Term::Sine { amplitude: 0.5, omega: Some(0.4), frequency: None, phase: 0.0 };
+        let s = sine.sample(2.0);
+        assert_relative_eq!(s.value, 0.5 * (0.8f64).sin(), epsilon = 1e-15);
+        assert_relative_eq!(s.rate, 0.5 * 0.4 * (0.8f64).cos(), epsilon = 1e-15);
+        assert_relative_eq!(s.acceleration, -0.5 * 0.16 * (0.8f64).sin(), epsilon = 1e-15);
+
+        let hz = Term::Sine { amplitude: 0.15, omega: None, frequency: Some(0.5), phase: 0.0 };
+        assert_relative_eq!(
+            hz.sample(0.3).value,
+            0.15 * (2.0 * std::f64::consts::PI * 0.5 * 0.3).sin(),
+            epsilon = 1e-15
+        );
+
+        let cosine = Term::Cosine { amplitude: 1.0, omega: Some(0.5), frequency: None, phase: 0.0 };
+        assert_relative_eq!(cosine.sample(1.0).value, (0.5f64).cos(), epsilon = 1e-15);
+        assert_relative_eq!(cosine.sample(1.0).rate, -0.5 * (0.5f64).sin(), epsilon = 1e-15);
+
+        let poly = Term::Polynomial { coefficients: vec![1.0, 0.1, 0.3] };
+        let p = poly.sample(2.0);
+        assert_relative_eq!(p.value, 1.0 + 0.2 + 1.2, epsilon = 1e-15);
+        assert_relative_eq!(p.rate, 0.1 + 2.0 * 0.3 * 2.0, epsilon = 1e-15);
+        assert_relative_eq!(p.acceleration, 0.6, epsilon = 1e-15);
+
+        let step = Term::Step { time: 1.0, height: 2.0 };
+        assert_eq!(step.sample(0.999).value, 0.0);
+        assert_eq!(step.sample(1.0).value, 2.0);
+    }
+
+    #[test]
+    fn window_switches_the_sum_on_and_off() {
+        let d = Signal {
+            terms: vec![
+                Term::Constant { value: 0.2 },
+                Term::Sine { amplitude: 0.3, omega: Some(1.3), frequency: None, phase: 0.0 },
+            ],
+            window: Some([10.0, 40.0]),
+        };
+        assert_eq!(d.value(9.99), 0.0);
+        assert_relative_eq!(d.value(20.0), 0.2 + 0.3 * (26.0f64).sin(), epsilon = 1e-15);
+        assert_eq!(d.value(40.01), 0.0);
+    }
+
+    #[test]
+    fn derivatives_match_finite_differences() {
+        let sig = Signal {
+            terms: vec![
+                Term::Sine { amplitude: 1.0, omega: Some(0.5), frequency: None, phase: 0.3 },
+                Term::Cosine { amplitude: 0.7, omega: None, frequency: Some(0.2), phase: 0.0 },
+                Term::Polynomial { coefficients: vec![1.0, 0.1, -0.02, 0.001] },
+            ],
+            window: None,
+        };
+        let h = 1e-5;
+        for &t in &[0.0, 1.7, 12.0] {
+            let s = sig.sample(t);
+            let fd1 = (sig.value(t + h) - sig.value(t - h)) / (2.0 * h);
+            let fd2 = (sig.sample(t + h).rate - sig.sample(t - h).rate) / (2.0 * h);
+            assert!((fd1 - s.rate).abs() < 1e-7);
+            assert!((fd2 - s.acceleration).abs() < 1e-7);
+        }
+    }
+
+    #[test]
+    fn check_rejects_inverted_window_and_ambiguous_frequency() {
+        let inverted = Signal { terms: vec![], window: Some([40.0, 10.0]) };
+        assert_eq!(inverted.check().unwrap_err().0, "window");
+        let both = Signal {
+            terms: vec![Term::Sine { amplitude: 1.0, omega: Some(1.0), frequency: Some(1.0), phase: 0.0 }],
+            window: None,
+        };
+        assert_eq!(both.check().unwrap_err().0, "terms[0].frequency");
+    }
+}

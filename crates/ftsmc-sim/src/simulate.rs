@@ -1,0 +1,446 @@
+//! The run loop: a controller on its own clock (zero-order hold at the
+//! control period), the plant integrated by RK4 between control ticks
+//! (restarting at each tick, where the input jumps), metrics accumulated
+//! online and an optional time series recorded at a lower rate.
+//!
+//! A run that diverges is an outcome ([`ExitStatus::Diverged`] with the
+//! reason and time), never a panic.
+
+use ftsmc_core::allocation::{forces_from_squared_speeds, residual_speed, rotor_speeds};
+use ftsmc_core::cascade::Controller;
+use ftsmc_core::model::{Command, QuadState, QuadrotorParams, Reference};
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{Distribution, StandardNormal};
+use serde::{Deserialize, Serialize};
+
+use crate::metrics::{Metrics, MetricsAccumulator};
+use crate::plant::{derivative, rk4_step};
+use crate::scenario::Scenario;
+
+/// Why a run stopped early.
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize, Serialize)]
+#[serde(rename_all = "kebab-case", tag = "reason")]
+pub enum Divergence {
+    /// A state or command component became NaN or infinite.
+    NonFinite,
+    /// |φ| or |θ| exceeded `simulation.max_tilt`.
+    Tilt {
+        /// The angle reached, rad.
+        angle: f64,
+    },
+    /// A position error exceeded `simulation.max_position_error`.
+    PositionError {
+        /// The error reached, m.
+        error: f64,
+    },
+}
+
+/// How a run ended.
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize, Serialize)]
+#[serde(rename_all = "kebab-case", tag = "status")]
+pub enum ExitStatus {
+    /// Ran for the whole duration.
+    Completed,
+    /// Stopped at `time` (s) for `divergence`.
+    Diverged {
+        /// What went wrong.
+        divergence: Divergence,
+        /// Simulated time at which it was detected, s.
+        time: f64,
+    },
+}
+
+impl ExitStatus {
+    /// True for [`ExitStatus::Completed`].
+    pub fn is_completed(&self) -> bool {
+        matches!(self, ExitStatus::Completed)
+    }
+}
+
+impl core::fmt::Display for ExitStatus {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            ExitStatus::Completed => write!(f, "completed"),
+            ExitStatus::Diverged { divergence, time } => match divergence {
+                Divergence::NonFinite => write!(f, "diverged: non-finite state at t = {time:.3} s"),
+                Divergence::Tilt { angle } => write!(f, "diverged: tilt {angle:.3} rad at t = {time:.3} s"),
+                Divergence::PositionError { error } => {
+                    write!(f, "diverged: position error {error:.3} m at t = {time:.3} s")
+                }
+            },
+        }
+    }
+}
+
+/// Column names of a [`Recording`], in order.
+pub fn recording_columns() -> Vec<String> {
+    let mut names: Vec<String> = [
+        "t",
+        "x",
+        "y",
+        "z",
+        "phi",
+        "theta",
+        "psi",
+        "vx",
+        "vy",
+        "vz",
+        "phi_rate",
+        "theta_rate",
+        "psi_rate",
+        "x_ref",
+        "y_ref",
+        "z_ref",
+        "phi_ref",
+        "theta_ref",
+        "psi_ref",
+        "phi_demand",
+        "theta_demand",
+        "thrust",
+        "roll_torque",
+        "pitch_torque",
+        "yaw_torque",
+    ]
+    .iter()
+    .map(|s| s.to_string())
+    .collect();
+    for axis in ftsmc_core::cascade::channel::NAMES {
+        names.push(format!("s_{axis}"));
+    }
+    for axis in ftsmc_core::cascade::channel::NAMES {
+        for k in 0..ftsmc_core::law::MAX_ESTIMATES {
+            names.push(format!("est_{axis}_{k}"));
+        }
+    }
+    for n in ["alpha_hat", "mass_estimate", "mass_true", "inertia_1", "inertia_2", "inertia_3"] {
+        names.push(n.to_string());
+    }
+    for axis in ftsmc_core::cascade::channel::NAMES {
+        names.push(format!("d_{axis}"));
+    }
+    names
+}
+
+/// Time series of a run, column-major.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Recording {
+    /// Column names ([`recording_columns`]).
+    pub names: Vec<String>,
+    /// One vector per column, all the same length.
+    pub columns: Vec<Vec<f64>>,
+}
+
+impl Recording {
+    fn new() -> Self {
+        let names = recording_columns();
+        let columns = vec![Vec::new(); names.len()];
+        Self { names, columns }
+    }
+
+    /// The column called `name` (empty slice if unknown).
+    pub fn column(&self, name: &str) -> &[f64] {
+        self.names.iter().position(|n| n == name).map(|i| self.columns[i].as_slice()).unwrap_or(&[])
+    }
+
+    /// Number of rows.
+    pub fn len(&self) -> usize {
+        self.columns.first().map_or(0, Vec::len)
+    }
+
+    /// True when no row was recorded.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+}
+
+/// Result of one flight.
+#[derive(Clone, Debug)]
+pub struct RunOutput {
+    /// Controller name.
+    pub controller: String,
+    /// Scenario name.
+    pub scenario: String,
+    /// How the run ended.
+    pub exit: ExitStatus,
+    /// Metrics up to the end (or divergence).
+    pub metrics: Metrics,
+    /// Time series (empty when recording is off).
+    pub recording: Recording,
+    /// Control steps executed.
+    pub steps: u64,
+}
+
+/// Plant-side variations of a scenario evaluated in time: payload, inertia
+/// variation, drag noise and disturbances. The controller never sees these.
+pub struct Environment<'a> {
+    scenario: &'a Scenario,
+    drag_rngs: Option<[ChaCha8Rng; 6]>,
+    drag_factor: [f64; 6],
+}
+
+impl<'a> Environment<'a> {
+    /// Drag noise streams are derived from `scenario.seed`: stream `k` for
+    /// coefficient `k` (K_f1x, K_f1y, K_f1z, K_f2x, K_f2y, K_f2z).
+    pub fn new(scenario: &'a Scenario) -> Self {
+        let drag_rngs = scenario.drag_noise.map(|_| {
+            core::array::from_fn(|k| {
+                let mut rng = ChaCha8Rng::seed_from_u64(scenario.seed);
+                rng.set_stream(1 + k as u64);
+                rng
+            })
+        });
+        Self { scenario, drag_rngs, drag_factor: [1.0; 6] }
+    }
+
+    /// Draw the drag multipliers for the next control period.
+    pub fn next_period(&mut self) {
+        if let (Some(rngs), Some(noise)) = (&mut self.drag_rngs, self.scenario.drag_noise) {
+            for (factor, rng) in self.drag_factor.iter_mut().zip(rngs.iter_mut()) {
+                let w: f64 = StandardNormal.sample(rng);
+                *factor = (1.0 + noise.std * w).max(0.0);
+            }
+        }
+    }
+
+    /// Drag multipliers of the current period.
+    pub fn drag_factor(&self) -> [f64; 6] {
+        self.drag_factor
+    }
+
+    /// The smooth time-varying plant inputs at `t` (s): true mass, inertia
+    /// and disturbances (drag noise is per control period and kept apart).
+    #[inline]
+    pub fn time_varying(&self, t: f64) -> TimeVarying {
+        let s = self.scenario;
+        let base = s.actual_plant.unwrap_or(s.plant);
+        let mut mass = base.mass;
+        if let Some(payload) = &s.payload {
+            mass += payload.added_mass(t);
+        }
+        let mut inertia = base.inertia;
+        if let Some(var) = &s.inertia_variation {
+            let scale = 1.0 + var.value(t);
+            for i in &mut inertia {
+                *i *= scale;
+            }
+        }
+        TimeVarying { mass, inertia, disturbance: s.disturbance.at(t) }
+    }
+
+    /// Plant parameters for given time-varying inputs and the current
+    /// period's drag noise.
+    #[inline]
+    pub fn params_with(&self, tv: &TimeVarying) -> QuadrotorParams {
+        let s = self.scenario;
+        let mut p = s.actual_plant.unwrap_or(s.plant);
+        p.mass = tv.mass;
+        p.inertia = tv.inertia;
+        for i in 0..3 {
+            p.drag_translational[i] *= self.drag_factor[i];
+            p.drag_rotational[i] *= self.drag_factor[3 + i];
+        }
+        p
+    }
+
+    /// Plant parameters at time `t` (s).
+    #[inline]
+    pub fn params(&self, t: f64) -> QuadrotorParams {
+        self.params_with(&self.time_varying(t))
+    }
+
+    /// Disturbances `[D_x … D_ψ]` at `t`.
+    #[inline]
+    pub fn disturbance(&self, t: f64) -> [f64; 6] {
+        self.scenario.disturbance.at(t)
+    }
+}
+
+/// Mass (kg), inertia (kg·m²) and disturbances (m/s², rad/s²) at one instant.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct TimeVarying {
+    /// True mass, kg.
+    pub mass: f64,
+    /// True `[I1, I2, I3]`, kg·m².
+    pub inertia: [f64; 3],
+    /// `[D_x, D_y, D_z, D_φ, D_θ, D_ψ]`.
+    pub disturbance: [f64; 6],
+}
+
+impl TimeVarying {
+    /// Linear interpolation `a + w (b − a)`.
+    #[inline]
+    pub fn lerp(a: &Self, b: &Self, w: f64) -> Self {
+        let l = |x: f64, y: f64| x + w * (y - x);
+        Self {
+            mass: l(a.mass, b.mass),
+            inertia: core::array::from_fn(|i| l(a.inertia[i], b.inertia[i])),
+            disturbance: core::array::from_fn(|i| l(a.disturbance[i], b.disturbance[i])),
+        }
+    }
+}
+
+/// The reference of `scenario` at time `t`.
+#[inline]
+pub fn reference_at(scenario: &Scenario, t: f64) -> Reference {
+    let r = &scenario.reference;
+    let (x, y, z, psi) = (r.x.sample(t), r.y.sample(t), r.z.sample(t), r.psi.sample(t));
+    Reference {
+        position: [x.value, y.value, z.value],
+        velocity: [x.rate, y.rate, z.rate],
+        acceleration: [x.acceleration, y.acceleration, z.acceleration],
+        yaw: psi.value,
+        yaw_rate: psi.rate,
+        yaw_acceleration: psi.acceleration,
+    }
+}
+
+/// Options of one run.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RunOptions {
+    /// Record the time series at `simulation.record_rate`.
+    pub record: bool,
+}
+
+impl Default for RunOptions {
+    fn default() -> Self {
+        Self { record: true }
+    }
+}
+
+fn realise(command: &Command, plant: &QuadrotorParams, max_rotor_speed: Option<f64>) -> (Command, f64) {
+    let omega = rotor_speeds(plant, command, max_rotor_speed.unwrap_or(f64::INFINITY));
+    let applied = match max_rotor_speed {
+        Some(_) => forces_from_squared_speeds(plant, &omega.map(|o| o * o)),
+        None => *command,
+    };
+    (applied, residual_speed(&omega))
+}
+
+/// Fly `controller` through `scenario`.
+pub fn simulate(scenario: &Scenario, controller: &mut dyn Controller, options: RunOptions) -> RunOutput {
+    let sim = &scenario.simulation;
+    let dt = scenario.control_period();
+    let steps = (scenario.duration / dt).round() as u64;
+    let h = dt / sim.substeps as f64;
+    let record_every = if options.record && sim.record_rate > 0.0 {
+        ((sim.control_rate / sim.record_rate).round() as u64).max(1)
+    } else {
+        0
+    };
+
+    let mut env = Environment::new(scenario);
+    let mut x = scenario.initial_state.state().to_array();
+    let mut metrics = MetricsAccumulator::new(dt, sim.settling_band, sim.settling_floor, sim.steady_state_after)
+        .with_window(sim.metrics_window);
+    let mut recording = if record_every > 0 { Recording::new() } else { Recording::default() };
+    if let Some(per_row) = steps.checked_div(record_every) {
+        let rows = (per_row + 1) as usize;
+        for c in &mut recording.columns {
+            c.reserve(rows);
+        }
+    }
+    let mut exit = ExitStatus::Completed;
+    let mut executed = 0;
+
+    // Time-varying plant inputs are evaluated once per substep boundary and
+    // interpolated linearly inside the substep (RK4 stage times); this keeps
+    // the integration second-order in the inputs' time variation while
+    // evaluating each sinusoid once per substep instead of four times.
+    let mut tv_now = env.time_varying(0.0);
+    let mut reference = reference_at(scenario, 0.0);
+    for k in 0..steps {
+        let t = k as f64 * dt;
+        let state = QuadState::from_array(&x);
+        let command = controller.update(&state, &reference, dt);
+        let telemetry = *controller.telemetry();
+        env.next_period();
+        let plant_now = env.params_with(&tv_now);
+        let (applied, omega_bar) = realise(&command, &plant_now, sim.max_rotor_speed);
+
+        let mut errors = [0.0; 6];
+        for i in 0..3 {
+            errors[i] = x[i] - reference.position[i];
+        }
+        errors[3] = x[3] - telemetry.attitude_reference[0];
+        errors[4] = x[4] - telemetry.attitude_reference[1];
+        errors[5] = x[5] - reference.yaw;
+        let u = [applied.thrust, applied.torque[0], applied.torque[1], applied.torque[2]];
+        if !(u.iter().all(|v| v.is_finite())) {
+            exit = ExitStatus::Diverged { divergence: Divergence::NonFinite, time: t };
+            break;
+        }
+        metrics.observe(t, &errors, &u);
+
+        if record_every > 0 && k % record_every == 0 {
+            let mut row = Vec::with_capacity(recording.names.len());
+            row.push(t);
+            row.extend_from_slice(&x);
+            row.extend_from_slice(&reference.position);
+            row.extend_from_slice(&telemetry.attitude_reference);
+            row.extend_from_slice(&telemetry.attitude_demand);
+            row.extend_from_slice(&u);
+            row.extend_from_slice(&telemetry.sliding);
+            for est in &telemetry.estimates {
+                row.extend_from_slice(est);
+            }
+            row.push(telemetry.alpha_hat);
+            row.push(telemetry.alpha_hat * scenario.plant.mass);
+            row.push(plant_now.mass);
+            row.extend_from_slice(&plant_now.inertia);
+            row.extend_from_slice(&tv_now.disturbance);
+            for (col, v) in recording.columns.iter_mut().zip(row) {
+                col.push(v);
+            }
+        }
+
+        // Plant between ticks: RK4 substeps with the command held.
+        for j in 0..sim.substeps {
+            let t0 = t + j as f64 * h;
+            let tv_next = env.time_varying(t0 + h);
+            let (a, b, env_ref) = (tv_now, tv_next, &env);
+            let f = |tau: f64, s: &[f64; 12]| {
+                let tv = TimeVarying::lerp(&a, &b, (tau - t0) / h);
+                derivative(s, &applied, omega_bar, &env_ref.params_with(&tv), &tv.disturbance)
+            };
+            x = rk4_step(f, t0, &x, h);
+            tv_now = tv_next;
+        }
+        executed = k + 1;
+
+        let t_next = (k + 1) as f64 * dt;
+        reference = reference_at(scenario, t_next);
+        if let Some(divergence) = check_divergence(scenario, &x, &reference) {
+            exit = ExitStatus::Diverged { divergence, time: t_next };
+            break;
+        }
+    }
+
+    RunOutput {
+        controller: controller.name().to_string(),
+        scenario: scenario.name.clone(),
+        exit,
+        metrics: metrics.finish(),
+        recording,
+        steps: executed,
+    }
+}
+
+fn check_divergence(scenario: &Scenario, x: &[f64; 12], reference: &Reference) -> Option<Divergence> {
+    if x.iter().any(|v| !v.is_finite()) {
+        return Some(Divergence::NonFinite);
+    }
+    let sim = &scenario.simulation;
+    for &angle in &x[3..5] {
+        if angle.abs() > sim.max_tilt {
+            return Some(Divergence::Tilt { angle });
+        }
+    }
+    for i in 0..3 {
+        let error = (x[i] - reference.position[i]).abs();
+        if error > sim.max_position_error {
+            return Some(Divergence::PositionError { error });
+        }
+    }
+    None
+}
