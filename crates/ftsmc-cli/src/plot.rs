@@ -162,7 +162,7 @@ fn render(
 pub fn write_figure(fig: &Figure, stem: &Path) -> Result<Vec<PathBuf>> {
     let columns = fig.columns.max(1);
     let rows = fig.panels.len().div_ceil(columns).max(1);
-    let size = (560 * columns as u32, 70 + 400 * rows as u32);
+    let size = ((560 * columns as u32).max(1000), 70 + 400 * rows as u32);
     render(stem, size, |root| draw_figure(root, fig), |root| draw_figure(root, fig))
 }
 
@@ -296,7 +296,10 @@ where
         .draw()
         .map_err(plot_err)?;
     for s in &panel.series {
-        let style = ShapeStyle { color: s.color.to_rgba(), filled: false, stroke_width: 2 };
+        // Thick polylines get long miter spikes at sharp reversals: draw
+        // chattering signals one pixel wide.
+        let width = if is_noisy(&s.ys) { 1 } else { 2 };
+        let style = ShapeStyle { color: s.color.to_rgba(), filled: false, stroke_width: width };
         let mut labelled = false;
         for seg in segments(s, panel.log_x, panel.log_y) {
             let anno = if s.dashed {
@@ -317,10 +320,46 @@ where
         .background_style(WHITE.mix(0.85))
         .border_style(RGBColor(120, 120, 120))
         .label_font((FAMILY, 13))
-        .position(SeriesLabelPosition::UpperRight)
+        .position(legend_position(panel))
         .draw()
         .map_err(plot_err)?;
     Ok(())
+}
+
+/// More than 10 % of interior samples are local extrema: a chattering signal.
+fn is_noisy(ys: &[f64]) -> bool {
+    let turns = ys.windows(3).filter(|w| (w[1] - w[0]) * (w[2] - w[1]) < 0.0).count();
+    ys.len() > 50 && turns * 10 > ys.len()
+}
+
+/// Put the legend in the right-hand corner where the data of the last
+/// third of the x range is not: low when the curves end high, and so on.
+fn legend_position(panel: &Panel) -> SeriesLabelPosition {
+    let finite = |v: &&f64| v.is_finite();
+    let (lo, hi) = panel
+        .series
+        .iter()
+        .flat_map(|s| s.ys.iter().filter(finite))
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &v| (l.min(v), h.max(v)));
+    if !(hi > lo) {
+        return SeriesLabelPosition::UpperRight;
+    }
+    let mut upper = 0usize;
+    let mut total = 0usize;
+    for s in &panel.series {
+        let n = s.ys.len();
+        for &y in s.ys[2 * n / 3..].iter().filter(finite) {
+            total += 1;
+            if (y - lo) / (hi - lo) > 0.55 {
+                upper += 1;
+            }
+        }
+    }
+    if total > 0 && upper * 2 > total {
+        SeriesLabelPosition::LowerRight
+    } else {
+        SeriesLabelPosition::UpperRight
+    }
 }
 
 /// A 3-D trajectory plot (reference dashed), axes in metres.
@@ -347,14 +386,16 @@ fn draw_3d<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, title: &str, series
         .max_light_lines(4)
         .draw()
         .map_err(plot_err)?;
-    for s in series {
+    // Flights first, references (dashed) on top.
+    let ordered = series.iter().filter(|s| !s.dashed).chain(series.iter().filter(|s| s.dashed));
+    for s in ordered {
         // Plot (x, z, y) so that altitude is vertical.
         let pts: Vec<(f64, f64, f64)> =
             s.points.iter().filter(|p| p.iter().all(|v| v.is_finite())).map(|p| (p[0], p[2], p[1])).collect();
         if pts.is_empty() {
             continue;
         }
-        let style = ShapeStyle { color: s.color.to_rgba(), filled: false, stroke_width: 2 };
+        let style = ShapeStyle { color: s.color.to_rgba(), filled: false, stroke_width: if s.dashed { 1 } else { 2 } };
         let step = pts.len().div_ceil(MAX_POINTS).max(1);
         let pts: Vec<(f64, f64, f64)> = pts.into_iter().step_by(step).collect();
         let c = s.color;
