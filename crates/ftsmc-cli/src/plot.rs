@@ -341,7 +341,7 @@ fn legend_position(panel: &Panel) -> SeriesLabelPosition {
         .iter()
         .flat_map(|s| s.ys.iter().filter(finite))
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &v| (l.min(v), h.max(v)));
-    if !(hi > lo) {
+    if hi.partial_cmp(&lo) != Some(std::cmp::Ordering::Greater) {
         return SeriesLabelPosition::UpperRight;
     }
     let mut upper = 0usize;
