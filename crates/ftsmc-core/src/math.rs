@@ -81,6 +81,8 @@ dispatch!(/// `x^y` (real power).
     powf(x, y) => powf, pow);
 dispatch!(/// Square root.
     sqrt(x) => sqrt, sqrt);
+dispatch!(/// Cube root.
+    cbrt(x) => cbrt, cbrt);
 dispatch!(/// Natural exponential.
     exp(x) => exp, exp);
 dispatch!(/// Sine (rad).

@@ -154,18 +154,29 @@ impl AxisLaw for RanftsmcAxis {
     const NAME: &'static str = "ranftsmc";
 
     /// Returns `v_eq + v_sw`; then `â += dt · dâ/dt`.
+    ///
+    /// All five fractional powers come from two: `|e|^(α−1)` and `|ė|^(β−1)`
+    /// (`sig^α(e) = e |e|^(α−1)`, `|ė|^β = |ė| |ė|^(β−1)`,
+    /// `|ė|^(2−β) = |ė|² / |ė|^β`), which halves the cost of the law.
     #[inline]
     fn update(&mut self, e: f64, e_dot: f64, dt: f64) -> f64 {
         let g = &self.gains;
-        let sigma = sliding_surface(g, e, e_dot);
-        let [a0, a1, a2] = self.a_hat;
         let (ae, aed) = (e.abs(), e_dot.abs());
-        let v = equivalent_law(g, e, e_dot) - g.c * sigma - (a0 + a1 * ae + a2 * aed + g.h) * switching_sign(g, sigma);
+        let e_alpha_minus_one = pow_abs_minus_one(e, g.alpha);
         let ed_beta_minus_one = pow_abs_minus_one(e_dot, g.beta);
+        let ed_beta = aed * ed_beta_minus_one;
+        // σ = e + b1 sig^α(e) + b2 sig^β(ė)
+        let sigma = e + g.b1 * e * e_alpha_minus_one + g.b2 * ed_beta * sign(e_dot);
+        // |ė|^(2−β) = |ė|² / |ė|^β (0 at ė = 0 since β < 2)
+        let ed_two_minus_beta = if aed > 0.0 { aed * aed / ed_beta } else { 0.0 };
+        let v_eq =
+            -(1.0 / (g.beta * g.b2)) * ed_two_minus_beta * (1.0 + g.alpha * g.b1 * e_alpha_minus_one) * sign(e_dot);
+        let [a0, a1, a2] = self.a_hat;
+        let v = v_eq - g.c * sigma - (a0 + a1 * ae + a2 * aed + g.h) * switching_sign(g, sigma);
         let abs_sigma = sigma.abs();
         self.a_hat[0] += dt * g.mu0 * abs_sigma * ed_beta_minus_one;
         self.a_hat[1] += dt * g.mu1 * abs_sigma * ae * ed_beta_minus_one;
-        self.a_hat[2] += dt * g.mu2 * abs_sigma * pow_abs(e_dot, g.beta);
+        self.a_hat[2] += dt * g.mu2 * abs_sigma * ed_beta;
         self.sigma = sigma;
         v
     }
@@ -246,6 +257,24 @@ mod tests {
         assert!(pos < 8.0, "{pos}");
         let att = double_integrator_settling(RanftsmcGains::PAPER_ATTITUDE, 0.5, 5.0).expect("attitude settles");
         assert!(att < 2.0, "{att}");
+    }
+
+    #[test]
+    fn fast_update_equals_the_textbook_formulas() {
+        // The update shares powers between terms; it must equal the
+        // formula-by-formula evaluation (sliding_surface, equivalent_law).
+        for g in [RanftsmcGains::PAPER_POSITION, RanftsmcGains::PAPER_ATTITUDE] {
+            for &(e, ed) in &[(0.3, -0.7), (-2.0, 0.01), (1e-4, 3.0), (0.0, -0.5), (0.8, 0.0)] {
+                let mut axis = RanftsmcAxis::new(g);
+                let v = axis.update(e, ed, 1e-3);
+                let sigma = sliding_surface(&g, e, ed);
+                let want = equivalent_law(&g, e, ed) - g.c * sigma - g.h * switching_sign(&g, sigma);
+                assert!((v - want).abs() <= 1e-12 * (1.0 + want.abs()), "{v} vs {want}");
+                assert!((axis.sigma - sigma).abs() <= 1e-14 * (1.0 + sigma.abs()));
+                let rate2 = g.mu2 * sigma.abs() * pow_abs(ed, g.beta);
+                assert!((axis.a_hat[2] - 1e-3 * rate2).abs() <= 1e-15 * (1.0 + rate2));
+            }
+        }
     }
 
     #[test]

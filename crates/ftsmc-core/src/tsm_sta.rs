@@ -16,7 +16,7 @@
 //! negative power of ė anywhere (the surface is nonsingular).
 
 use crate::law::{check_non_negative, check_positive, AxisLaw, GainError};
-use crate::math::{pow_abs, sig, sign, sqrt, tanh};
+use crate::math::{sig, sign, sqrt, tanh};
 
 /// Gains of one TSM-STA channel.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -105,6 +105,28 @@ pub fn switching_sign(g: &TsmStaGains, s: f64) -> f64 {
     }
 }
 
+/// `x^(1/q)` for `x ≥ 0` (cube root when `q = 3`).
+#[inline]
+fn qth_root(x: f64, q: f64) -> f64 {
+    if q == 3.0 {
+        crate::math::cbrt(x)
+    } else if q == 1.0 {
+        x
+    } else {
+        crate::math::powf(x, 1.0 / q)
+    }
+}
+
+/// `x^n` for a small non-negative integer `n` by repeated multiplication.
+#[inline]
+fn powi(x: f64, n: i32) -> f64 {
+    let mut out = 1.0;
+    for _ in 0..n {
+        out *= x;
+    }
+    out
+}
+
 /// One TSM-STA channel: gains, the super-twisting integral state ν, last s.
 #[derive(Clone, Copy, Debug)]
 pub struct TsmStaAxis {
@@ -131,9 +153,14 @@ impl AxisLaw for TsmStaAxis {
     fn update(&mut self, e: f64, e_dot: f64, dt: f64) -> f64 {
         let g = &self.gains;
         let ratio = g.p / g.q;
-        let s = sliding_surface(g, e, e_dot);
+        // Both powers of |ė| (p/q and 2 − p/q) from one q-th root r = |ė|^(1/q):
+        // |ė|^(p/q) = r^p, |ė|^(2−p/q) = r^(2q−p) (p, q are small odd integers).
+        let root = qth_root(e_dot.abs(), g.q);
+        let ed_ratio = powi(root, g.p as i32);
+        let ed_two_minus_ratio = powi(root, (2.0 * g.q - g.p) as i32);
+        let s = e + ed_ratio * sign(e_dot) / g.lambda;
         let sw = switching_sign(g, s);
-        let v = -g.lambda / ratio * pow_abs(e_dot, 2.0 - ratio) * sign(e_dot) - g.k1 * sqrt(s.abs()) * sw + self.nu;
+        let v = -g.lambda / ratio * ed_two_minus_ratio * sign(e_dot) - g.k1 * sqrt(s.abs()) * sw + self.nu;
         self.nu -= dt * g.k2 * sw;
         self.s = s;
         v
@@ -155,6 +182,7 @@ impl AxisLaw for TsmStaAxis {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::math::pow_abs;
     use approx::assert_relative_eq;
 
     #[test]
@@ -198,6 +226,19 @@ mod tests {
         let fd = (s1 - axis.s) / h;
         let want = (5.0 / (1.7 * 3.0)) * ed.abs().powf(5.0 / 3.0 - 1.0) * w;
         assert!((fd - want).abs() < 1e-5, "{fd} vs {want}");
+    }
+
+    #[test]
+    fn root_based_powers_equal_the_formulas() {
+        let g = TsmStaGains::DEFAULT_ATTITUDE;
+        for &(e, ed) in &[(0.3, -0.7), (-2.0, 0.01), (1e-4, 30.0), (0.0, -0.5), (0.8, 0.0)] {
+            let mut axis = TsmStaAxis::new(g);
+            let v = axis.update(e, ed, 1e-3);
+            let s = sliding_surface(&g, e, ed);
+            let want = -g.lambda * 0.6 * pow_abs(ed, 1.0 / 3.0) * sign(ed) - g.k1 * s.abs().sqrt() * sign(s);
+            assert!((v - want).abs() <= 1e-12 * (1.0 + want.abs()), "{v} vs {want}");
+            assert!((axis.s - s).abs() <= 1e-12 * (1.0 + s.abs()));
+        }
     }
 
     #[test]
