@@ -112,12 +112,16 @@ pub fn run(
         let panels: Vec<BoxPanel> = ["x", "y", "z", "psi"]
             .iter()
             .map(|axis| BoxPanel {
-                title: format!("ISE {axis}"),
+                title: format!("ISE {}", if *axis == "psi" { "ψ" } else { axis }),
                 y_label: "ISE (log scale; whiskers p5–p95)".into(),
                 groups: controllers
                     .iter()
                     .map(|c| BoxGroup {
-                        label: label(c).into(),
+                        label: format!(
+                            "{} ({:.0} % ok)",
+                            label(c),
+                            100.0 * summaries.iter().find(|(n, _)| n == c).map_or(0.0, |(_, s)| s.success_rate)
+                        ),
                         values: rows
                             .iter()
                             .filter(|r| &r.controller == c && r.exit.is_completed())
@@ -134,10 +138,8 @@ pub fn run(
                 log_y: true,
             })
             .collect();
-        let rates: Vec<String> =
-            summaries.iter().map(|(n, s)| format!("{} {:.1} %", label(n), 100.0 * s.success_rate)).collect();
         write_boxplots(
-            &format!("Monte Carlo, {} runs of {} — success rate: {}", runs, scenario.name, rates.join(", ")),
+            &format!("Monte Carlo — {} runs of {} (completed runs)", runs, scenario.name),
             &panels,
             2,
             &out.join("montecarlo-ise"),

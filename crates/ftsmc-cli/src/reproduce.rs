@@ -67,6 +67,15 @@ fn write_runs(runs: &[RunOutput], out: &Path) -> Result<()> {
     Ok(())
 }
 
+/// Four decimals, or scientific notation for small non-zero values.
+pub fn num(v: f64) -> String {
+    if v != 0.0 && v.abs() < 1e-3 {
+        format!("{v:.3e}")
+    } else {
+        format!("{v:.4}")
+    }
+}
+
 fn find<'a>(runs: &'a [RunOutput], scenario: &str, key: &str) -> Option<&'a RunOutput> {
     runs.iter().find(|r| r.scenario == scenario && r.controller == key)
 }
@@ -190,27 +199,27 @@ pub fn metrics_table(runs: &[&RunOutput], title: &str, windowed: bool) -> String
         let m = &run.metrics;
         let _ = write!(
             md,
-            "| {} | {} | {:.4} | {:.4} | {:.4} | {:.4} | {:.4} | {:.4} | {:.4} | {:.4} | {} | {} | {} | {} | {:.4} | {:.3} | {:.4} |",
+            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {:.3} | {:.4} |",
             label(&run.controller),
             run.exit,
-            m.ise.x,
-            m.ise.y,
-            m.ise.z,
-            m.ise.psi,
-            m.iae.x,
-            m.iae.y,
-            m.iae.z,
-            m.iae.psi,
+            num(m.ise.x),
+            num(m.ise.y),
+            num(m.ise.z),
+            num(m.ise.psi),
+            num(m.iae.x),
+            num(m.iae.y),
+            num(m.iae.z),
+            num(m.iae.psi),
             settle(&m.settling_time, "x"),
             settle(&m.settling_time, "y"),
             settle(&m.settling_time, "z"),
             settle(&m.settling_time, "psi"),
-            m.max_error_after.z,
+            num(m.max_error_after.z),
             m.chattering.thrust,
             m.chattering.roll_torque,
         );
         if windowed {
-            let _ = write!(md, " {} |", m.ise_window.as_ref().map_or("—".into(), |w| format!("{:.4}", w.z)));
+            let _ = write!(md, " {} |", m.ise_window.as_ref().map_or("—".into(), |w| num(w.z)));
         }
         md.push('\n');
     }
@@ -332,15 +341,20 @@ pub fn reproduce(out: &Path, figures: bool) -> Result<()> {
     if let (Some(f), Some(a), Some(b)) = (z_window("ftaftsmc"), z_window("ranftsmc"), z_window("tsm-sta")) {
         let _ = writeln!(
             report,
-            "- Scenario 2: FTAFTSMC tracks z best under payload and disturbances, 10–40 s (paper: yes): **{}** — z ISE {f:.4} vs RANFTSMC {a:.4}, TSM-STA {b:.4}",
-            if f < a && f < b { "confirmed" } else { "not confirmed" }
+            "- Scenario 2: FTAFTSMC tracks z best under payload and disturbances, 10–40 s (paper: yes): **{}** — z ISE {} vs RANFTSMC {}, TSM-STA {}",
+            if f < a && f < b { "confirmed" } else { "not confirmed" },
+            num(f),
+            num(a),
+            num(b)
         );
     }
     if let (Some(f), Some(n)) = (z_window("ftaftsmc"), z_window("ftaftsmc-no-mass")) {
         let _ = writeln!(
             report,
-            "- Scenario 2: the mass adaptation improves z tracking (paper: yes): **{}** — z ISE 10–40 s {f:.4} with, {n:.4} without",
-            if f < n { "confirmed" } else { "not confirmed" }
+            "- Scenario 2: the mass adaptation improves z tracking (paper: yes): **{}** — z ISE 10–40 s {} with, {} without",
+            if f < n { "confirmed" } else { "not confirmed" },
+            num(f),
+            num(n)
         );
     }
     let elapsed = started.elapsed().as_secs_f64();
