@@ -91,6 +91,12 @@ pub struct MassAdaptation {
     /// α̂(0) > 0 (default 1: nominal mass).
     #[cfg_attr(feature = "serde", serde(default = "one"))]
     pub alpha_hat0: f64,
+    /// Use the estimated mass in the horizontal virtual controls,
+    /// `u_x = α̂ m a_x / U1` (default false: Remark 2 as SPEC fixes it,
+    /// `u_x = m a_x / U1`, which leaves x and y uncompensated; see
+    /// docs/paper-errata.md E12).
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub compensate_horizontal: bool,
 }
 
 #[cfg(feature = "serde")]
@@ -100,9 +106,11 @@ fn one() -> f64 {
 
 impl MassAdaptation {
     /// Table 5 values, enabled.
-    pub const PAPER: Self = Self { enabled: true, beta1: 0.8, beta2: 0.01, alpha_hat0: 1.0 };
+    pub const PAPER: Self =
+        Self { enabled: true, beta1: 0.8, beta2: 0.01, alpha_hat0: 1.0, compensate_horizontal: false };
     /// No adaptation (`U1 = u1`).
-    pub const OFF: Self = Self { enabled: false, beta1: 0.8, beta2: 0.01, alpha_hat0: 1.0 };
+    pub const OFF: Self =
+        Self { enabled: false, beta1: 0.8, beta2: 0.01, alpha_hat0: 1.0, compensate_horizontal: false };
 
     /// Range checks (β1, β2 > 0, α̂(0) > 0).
     pub fn check(&self) -> Result<(), GainError> {
@@ -292,6 +300,7 @@ impl<L: AxisLaw> Controller for Cascade<L> {
         // Mass adaptation (§3.2, Eq. 44): U1 = α̂ u1.
         let ma = self.config.mass_adaptation;
         let thrust = if ma.enabled { self.alpha_hat * nominal_thrust } else { nominal_thrust };
+        let horizontal_mass = if ma.enabled && ma.compensate_horizontal { self.alpha_hat * m } else { m };
         if ma.enabled {
             let s_z = self.laws[2].sliding_variable();
             let rate = -ma.beta1 * (s_z * nominal_thrust * tilt_cos / m + ma.beta2 * self.alpha_hat);
@@ -300,8 +309,8 @@ impl<L: AxisLaw> Controller for Cascade<L> {
 
         // Remark 2: u_x = m a_x / U1, u_y = m a_y / U1; guard U1 → 0.
         let thrust_for_inversion = thrust.max(1e-3 * m * g);
-        let ux = m * accel[0] / thrust_for_inversion;
-        let uy = m * accel[1] / thrust_for_inversion;
+        let ux = horizontal_mass * accel[0] / thrust_for_inversion;
+        let uy = horizontal_mass * accel[1] / thrust_for_inversion;
         let demand = Self::desired_roll_pitch_limited(ux, uy, reference.yaw, self.tilt_limit);
         let (att_ref, att_rate, att_accel) = self.attitude_reference(demand, dt);
         let reference_attitude = [att_ref[0], att_ref[1], reference.yaw];
@@ -396,6 +405,28 @@ mod tests {
             let [r, p] = Cascade::<FtaftsmcAxis>::desired_roll_pitch(ux, uy, psi, 1.2);
             assert!((r - phi).abs() < 1e-12 && (p - theta).abs() < 1e-12, "{r} {p}");
         }
+    }
+
+    #[test]
+    fn horizontal_compensation_uses_the_estimated_mass() {
+        // With α̂ = 1.5 and the same commanded acceleration, the SPEC form
+        // asks for a tilt 1.5 times smaller than the compensated form.
+        let state = QuadState::default();
+        let reference = Reference { position: [0.1, 0.0, 0.0], ..Reference::default() };
+        let demand = |compensate: bool| {
+            let ma = MassAdaptation { alpha_hat0: 1.5, compensate_horizontal: compensate, ..MassAdaptation::PAPER };
+            let mut c = paper_ftaftsmc(CascadeSettings {
+                attitude_derivatives: AttitudeDerivatives::Zero,
+                ..CascadeSettings::default()
+            });
+            c.config.mass_adaptation = ma;
+            c.alpha_hat = 1.5;
+            c.update(&state, &reference, 1e-3);
+            c.telemetry().attitude_demand[1]
+        };
+        let (spec, compensated) = (demand(false), demand(true));
+        assert!(spec != 0.0);
+        assert!((compensated.sin() / spec.sin() - 1.5).abs() < 1e-9, "{spec} {compensated}");
     }
 
     #[test]

@@ -167,3 +167,17 @@ fn controller_runs_directly_without_the_registry() {
     assert_eq!(c.name(), "ftaftsmc");
     assert!(out.exit.is_completed());
 }
+
+#[test]
+fn each_baseline_settles_scenario_1_within_8_s_with_default_gains() {
+    let s = paper_1();
+    for name in ["ranftsmc", "tsm-sta"] {
+        let run = registry::run(name, &s, RunOptions { record: false }).unwrap();
+        assert!(run.exit.is_completed(), "{name}: {}", run.exit);
+        let st = &run.metrics.settling_time;
+        for (axis, t) in [("x", st.x), ("y", st.y), ("z", st.z), ("psi", st.psi)] {
+            let t = t.unwrap_or_else(|| panic!("{name}: {axis} did not settle"));
+            assert!(t < 8.0, "{name}: {axis} settles at {t} s");
+        }
+    }
+}
