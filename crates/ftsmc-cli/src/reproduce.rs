@@ -81,26 +81,11 @@ fn find<'a>(runs: &'a [RunOutput], scenario: &str, key: &str) -> Option<&'a RunO
 }
 
 fn axis_value(m: &ftsmc_sim::scenario::AxisSet<f64>, axis: &str) -> f64 {
-    match axis {
-        "x" => m.x,
-        "y" => m.y,
-        "z" => m.z,
-        "phi" => m.phi,
-        "theta" => m.theta,
-        _ => m.psi,
-    }
+    m.get(axis).copied().unwrap_or(f64::NAN)
 }
 
 fn settle(m: &ftsmc_sim::scenario::AxisSet<Option<f64>>, axis: &str) -> String {
-    let v = match axis {
-        "x" => m.x,
-        "y" => m.y,
-        "z" => m.z,
-        "phi" => m.phi,
-        "theta" => m.theta,
-        _ => m.psi,
-    };
-    v.map_or("not settled".into(), |t| format!("{t:.2}"))
+    m.get(axis).copied().flatten().map_or("not settled".into(), |t| format!("{t:.2}"))
 }
 
 /// Table 3 side by side with the verdicts, as Markdown; also a JSON record.

@@ -102,6 +102,11 @@ impl<T> AxisSet<T> {
         [("x", &self.x), ("y", &self.y), ("z", &self.z), ("phi", &self.phi), ("theta", &self.theta), ("psi", &self.psi)]
     }
 
+    /// The value of channel `axis` (`"x"`, `"y"`, `"z"`, `"phi"`, `"theta"`, `"psi"`).
+    pub fn get(&self, axis: &str) -> Option<&T> {
+        self.named().into_iter().find(|(n, _)| *n == axis).map(|(_, v)| v)
+    }
+
     /// Same position gains on x, y, z and attitude gains on φ, θ, ψ.
     pub fn split(position: T, attitude: T) -> Self
     where
