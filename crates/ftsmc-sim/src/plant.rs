@@ -1,6 +1,7 @@
 //! The quadrotor plant of paper Eq. 1–2 with the errata of SPEC §1, as a
 //! pure derivative function `ẋ = f(x, U, Ω̄, params, D)`.
 
+use ftsmc_core::math::sin_cos;
 use ftsmc_core::model::{Command, QuadrotorParams};
 
 /// Index of each component in the 12-element state array
@@ -38,9 +39,9 @@ pub fn derivative(
     disturbance: &[f64; 6],
 ) -> [f64; 12] {
     let [_, _, _, phi, theta, psi, vx, vy, vz, dphi, dtheta, dpsi] = *x;
-    let (sphi, cphi) = phi.sin_cos();
-    let (stheta, ctheta) = theta.sin_cos();
-    let (spsi, cpsi) = psi.sin_cos();
+    let (sphi, cphi) = sin_cos(phi);
+    let (stheta, ctheta) = sin_cos(theta);
+    let (spsi, cpsi) = sin_cos(psi);
     let m = p.mass;
     let thrust_accel = command.thrust / m;
     let [kx, ky, kz] = p.drag_translational;

@@ -3,6 +3,7 @@
 //! files. A [`Signal`] is a sum of [`Term`]s, optionally active only inside
 //! a time window.
 
+use ftsmc_core::math::sin_cos;
 use serde::{Deserialize, Serialize};
 
 /// One additive term of a [`Signal`]. In TOML: an inline table with a
@@ -100,12 +101,12 @@ impl Term {
             }
             Term::Sine { amplitude, phase, .. } => {
                 let w = self.angular_frequency().unwrap_or(0.0);
-                let (s, c) = (w * t + phase).sin_cos();
+                let (s, c) = sin_cos(w * t + phase);
                 Sample { value: amplitude * s, rate: amplitude * w * c, acceleration: -amplitude * w * w * s }
             }
             Term::Cosine { amplitude, phase, .. } => {
                 let w = self.angular_frequency().unwrap_or(0.0);
-                let (s, c) = (w * t + phase).sin_cos();
+                let (s, c) = sin_cos(w * t + phase);
                 Sample { value: amplitude * c, rate: -amplitude * w * s, acceleration: -amplitude * w * w * c }
             }
             Term::Polynomial { coefficients } => {

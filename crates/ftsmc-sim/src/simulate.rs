@@ -353,7 +353,7 @@ pub fn simulate(scenario: &Scenario, controller: &mut dyn Controller, options: R
         let t = k as f64 * dt;
         let state = QuadState::from_array(&x);
         let command = controller.update(&state, &reference, dt);
-        let telemetry = *controller.telemetry();
+        let telemetry = controller.telemetry();
         env.next_period();
         let plant_now = env.params_with(&tv_now);
         let (applied, omega_bar) = realise(&command, &plant_now, sim.max_rotor_speed);
