@@ -6,7 +6,7 @@ use std::path::Path;
 
 use anyhow::Result;
 use ftsmc_core::cascade::channel::NAMES;
-use ftsmc_sim::fixed_time::{worst, ChannelTimes, Sampling, SweepSettings};
+use ftsmc_sim::fixed_time::{cascade_channel, worst, ChannelTimes, Sampling, SweepSettings, CASCADE_CHANNELS};
 use ftsmc_sim::registry::{self, label};
 use ftsmc_sim::scenario::Scenario;
 use rayon::prelude::*;
@@ -204,7 +204,108 @@ pub fn run(scenario: &Scenario, controllers: &[String], settings: &SweepSettings
             &out.join(stem),
         )?;
     }
+    let cascade_md = cascade_sweep(scenario, controllers, settings, out)?;
+    let md = format!("{md}\n{cascade_md}");
+    write_atomic(&out.join("fixed-time.md"), md.as_bytes())?;
     println!("{md}");
-    println!("wrote {}/fixed-time.csv, fixed-time.md, fixed-time.json, fixed-time-reaching.{{svg,png}}, fixed-time-settling.{{svg,png}}", out.display());
+    println!(
+        "wrote {}/fixed-time.csv, fixed-time-cascade.csv, fixed-time.md, fixed-time.json, fixed-time-reaching.{{svg,png}}, fixed-time-settling.{{svg,png}}, fixed-time-cascade.{{svg,png}}",
+        out.display()
+    );
     Ok(())
+}
+
+/// The same sweep through the full cascade and plant for the channels that
+/// need no tilt (z and ψ), 30 s per flight.
+fn cascade_sweep(scenario: &Scenario, controllers: &[String], settings: &SweepSettings, out: &Path) -> Result<String> {
+    let settings = SweepSettings { t_max: 30.0, ..settings.clone() };
+    let mut plan = Vec::new();
+    for c in controllers {
+        for &axis in &CASCADE_CHANNELS {
+            for &m in &settings.magnitudes {
+                for sign in [1.0, -1.0] {
+                    plan.push((c.clone(), axis, sign * m));
+                }
+            }
+        }
+    }
+    let bar = indicatif::ProgressBar::new(plan.len() as u64);
+    let points: Vec<(String, usize, ChannelTimes)> = plan
+        .par_iter()
+        .map(|(c, axis, e0)| {
+            let t = cascade_channel(c, scenario, *axis, *e0, &settings).map_err(anyhow::Error::msg);
+            bar.inc(1);
+            t.map(|t| (c.clone(), *axis, t))
+        })
+        .collect::<Result<_>>()?;
+    bar.finish_and_clear();
+
+    let mut w = csv::Writer::from_writer(Vec::new());
+    w.write_record(["controller", "channel", "e0", "reaching_time", "settling_time", "diverged_at"])?;
+    let o = |v: Option<f64>| v.map_or(String::new(), format_number);
+    for (c, axis, t) in &points {
+        w.write_record([
+            c.clone(),
+            NAMES[*axis].to_string(),
+            format_number(t.e0),
+            o(t.reaching_time),
+            o(t.settling_time),
+            o(t.diverged_at),
+        ])?;
+    }
+    write_atomic(&out.join("fixed-time-cascade.csv"), &w.into_inner().map_err(|e| anyhow::anyhow!("csv: {e}"))?)?;
+
+    let cell = |c: &str, axis: usize, m: f64| {
+        let pts: Vec<&ChannelTimes> =
+            points.iter().filter(|(pc, pa, t)| pc == c && *pa == axis && t.e0.abs() == m).map(|(_, _, t)| t).collect();
+        if pts.iter().any(|t| t.diverged_at.is_some()) {
+            "diverged".to_string()
+        } else {
+            worst(pts.iter().map(|t| t.settling_time)).map_or("not settled".into(), |v| format!("{v:.2}"))
+        }
+    };
+    let shown: Vec<f64> = settings.magnitudes.iter().copied().step_by(3).collect();
+    let mut md = String::new();
+    let _ = writeln!(
+        md,
+        "### Full cascade and plant (z and ψ need no tilt): 2 % settling time (s), worst of ±e0, {} s per flight\n",
+        settings.t_max
+    );
+    let header: Vec<String> = shown.iter().map(|m| format!("{m:.0e}")).collect();
+    let _ = writeln!(md, "| controller | channel | {} |", header.join(" | "));
+    let _ = writeln!(md, "|---|---|{}", "---|".repeat(shown.len()));
+    let mut panels = Vec::new();
+    for &axis in &CASCADE_CHANNELS {
+        let mut series = Vec::new();
+        for c in controllers {
+            let cells: Vec<String> = shown.iter().map(|&m| cell(c, axis, m)).collect();
+            let _ = writeln!(md, "| {} | {} | {} |", label(c), NAMES[axis], cells.join(" | "));
+            let ys: Vec<f64> =
+                settings.magnitudes.iter().map(|&m| cell(c, axis, m).parse::<f64>().unwrap_or(f64::NAN)).collect();
+            series.push(Series {
+                label: label(c).into(),
+                xs: settings.magnitudes.clone(),
+                ys,
+                color: controller_color(c),
+                dashed: false,
+            });
+        }
+        panels.push(Panel {
+            title: format!("{} channel, full cascade", NAMES[axis]),
+            x_label: "|e(0)| (m or rad)".into(),
+            y_label: "2 % settling time (s)".into(),
+            series,
+            log_x: true,
+            log_y: false,
+        });
+    }
+    write_figure(
+        &Figure {
+            title: "Fixed-time check through the full cascade (gaps: not settled or diverged)".into(),
+            panels,
+            columns: 2,
+        },
+        &out.join("fixed-time-cascade"),
+    )?;
+    Ok(md)
 }

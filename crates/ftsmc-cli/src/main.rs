@@ -134,8 +134,19 @@ fn check_names(names: &[String]) -> Result<()> {
     Ok(())
 }
 
-fn main() -> Result<()> {
-    let cli = Cli::parse();
+fn main() -> std::process::ExitCode {
+    match run(Cli::parse()) {
+        Ok(()) => std::process::ExitCode::SUCCESS,
+        Err(err) => {
+            // `{:#}` prints the whole context chain on one line and, unlike
+            // returning the error from main, never a stack backtrace.
+            eprintln!("error: {err:#}");
+            std::process::ExitCode::FAILURE
+        }
+    }
+}
+
+fn run(cli: Cli) -> Result<()> {
     match cli.command {
         Command::Reproduce { out, no_figures } => reproduce::reproduce(&out, !no_figures),
         Command::Run { scenario, controller, out, no_figures } => {

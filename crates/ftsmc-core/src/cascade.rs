@@ -10,7 +10,7 @@
 //! gyroscopic and drag terms (Eq. 56–58, corrected).
 
 use crate::allocation::{residual_speed, rotor_speeds};
-use crate::law::{check_non_negative, check_open, check_positive, AxisLaw, GainError, MAX_ESTIMATES};
+use crate::law::{check_open, check_positive, AxisLaw, GainError, MAX_ESTIMATES};
 use crate::math::{asin, cos, sin_cos};
 use crate::model::{Command, QuadState, QuadrotorParams, Reference};
 
@@ -97,6 +97,11 @@ pub struct MassAdaptation {
     /// docs/paper-errata.md E12).
     #[cfg_attr(feature = "serde", serde(default))]
     pub compensate_horizontal: bool,
+    /// Optional projection of α̂ onto `[min, max]` after each update (not in
+    /// the paper; default none). Without it Eq. 44 winds α̂ up whenever the
+    /// computed u1 is negative, e.g. during a fast descent.
+    #[cfg_attr(feature = "serde", serde(default, skip_serializing_if = "Option::is_none"))]
+    pub alpha_hat_bounds: Option<[f64; 2]>,
 }
 
 #[cfg(feature = "serde")]
@@ -106,18 +111,34 @@ fn one() -> f64 {
 
 impl MassAdaptation {
     /// Table 5 values, enabled.
-    pub const PAPER: Self =
-        Self { enabled: true, beta1: 0.8, beta2: 0.01, alpha_hat0: 1.0, compensate_horizontal: false };
+    pub const PAPER: Self = Self {
+        enabled: true,
+        beta1: 0.8,
+        beta2: 0.01,
+        alpha_hat0: 1.0,
+        compensate_horizontal: false,
+        alpha_hat_bounds: None,
+    };
     /// No adaptation (`U1 = u1`).
-    pub const OFF: Self =
-        Self { enabled: false, beta1: 0.8, beta2: 0.01, alpha_hat0: 1.0, compensate_horizontal: false };
+    pub const OFF: Self = Self { enabled: false, ..Self::PAPER };
 
     /// Range checks (β1, β2 > 0, α̂(0) > 0).
     pub fn check(&self) -> Result<(), GainError> {
         check_positive("beta1", self.beta1)?;
         check_positive("beta2", self.beta2)?;
         check_positive("alpha_hat0", self.alpha_hat0)?;
-        check_non_negative("alpha_hat0", self.alpha_hat0)
+        if let Some([lo, hi]) = self.alpha_hat_bounds {
+            check_positive("alpha_hat_bounds[0]", lo)?;
+            check_open("alpha_hat_bounds[1]", hi, lo, f64::INFINITY, "alpha_hat_bounds[1] > alpha_hat_bounds[0]")?;
+            if !(self.alpha_hat0 >= lo && self.alpha_hat0 <= hi) {
+                return Err(GainError {
+                    field: "alpha_hat0",
+                    value: self.alpha_hat0,
+                    expected: "alpha_hat0 inside alpha_hat_bounds",
+                });
+            }
+        }
+        Ok(())
     }
 }
 
@@ -305,6 +326,9 @@ impl<L: AxisLaw> Controller for Cascade<L> {
             let s_z = self.laws[2].sliding_variable();
             let rate = -ma.beta1 * (s_z * nominal_thrust * tilt_cos / m + ma.beta2 * self.alpha_hat);
             self.alpha_hat += dt * rate;
+            if let Some([lo, hi]) = ma.alpha_hat_bounds {
+                self.alpha_hat = self.alpha_hat.clamp(lo, hi);
+            }
         }
 
         // Remark 2: u_x = m a_x / U1, u_y = m a_y / U1; guard U1 → 0.

@@ -10,6 +10,8 @@
 use ftsmc_core::law::AxisLaw;
 use serde::Serialize;
 
+use crate::scenario::Scenario;
+
 /// Settings of a sweep.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SweepSettings {
@@ -229,4 +231,57 @@ mod tests {
         assert_eq!(m.len(), 16);
         assert!((m[0] - 1e-3).abs() < 1e-15 && (m[15] - 100.0).abs() < 1e-9);
     }
+}
+
+/// Channels the full cascade can sweep over large initial errors: altitude
+/// and yaw need no tilt (x and y would hit the tilt clamp).
+pub const CASCADE_CHANNELS: [usize; 2] = [2, 5];
+
+/// Fly the *full* cascade and plant of `base` (references held at zero, all
+/// plant-side variations kept) from an initial error `e0` on channel `axis`
+/// (2 = z, 5 = ψ), for `settings.t_max` seconds at the scenario's control
+/// rate; reaching: first `|S_axis| ≤ settings.reaching_band`; settling from
+/// the run's 2 % settling metric.
+pub fn cascade_channel(
+    controller: &str,
+    base: &Scenario,
+    axis: usize,
+    e0: f64,
+    settings: &SweepSettings,
+) -> Result<ChannelTimes, String> {
+    let mut s = base.clone();
+    s.duration = settings.t_max;
+    s.reference = crate::scenario::ReferenceSignals::default();
+    s.initial_state = crate::scenario::InitialState::default();
+    match axis {
+        2 => s.initial_state.position[2] = e0,
+        5 => s.initial_state.attitude[2] = e0,
+        _ => return Err(format!("channel {axis} cannot be swept through the cascade (only z = 2 and ψ = 5)")),
+    }
+    s.simulation.record_rate = s.simulation.control_rate;
+    // Settle to 2 % of |e0| however small e0 is.
+    s.simulation.settling_band = settings.settling_fraction;
+    s.simulation.settling_floor = 1e-12;
+    s.simulation.max_position_error = s.simulation.max_position_error.max(10.0 * e0.abs());
+    let run = crate::registry::run(controller, &s, crate::simulate::RunOptions::default())?;
+    let name = ftsmc_core::cascade::channel::NAMES[axis];
+    let t = run.recording.column("t");
+    let sv = run.recording.column(&format!("s_{name}"));
+    // The recorded S is the controller's value at each tick.
+    let reaching = t.iter().zip(sv).find(|(_, s)| s.abs() <= settings.reaching_band).map(|(t, _)| *t);
+    let settling = match run.exit {
+        crate::simulate::ExitStatus::Completed => *run.metrics.settling_time.get(name).unwrap_or(&None),
+        _ => None,
+    };
+    let diverged_at = match run.exit {
+        crate::simulate::ExitStatus::Diverged { time, .. } => Some(time),
+        _ => None,
+    };
+    Ok(ChannelTimes {
+        e0,
+        s0: sv.first().copied().unwrap_or(f64::NAN),
+        reaching_time: reaching,
+        settling_time: settling,
+        diverged_at,
+    })
 }

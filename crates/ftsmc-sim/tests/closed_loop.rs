@@ -181,3 +181,29 @@ fn each_baseline_settles_scenario_1_within_8_s_with_default_gains() {
         }
     }
 }
+
+#[test]
+fn mass_adaptation_winds_up_on_a_large_descent_unless_projected() {
+    // 10 m above the reference: the computed u1 is negative for a while and
+    // Eq. 44 drives α̂ far from any physical mass ratio; the z loop's gain
+    // grows with it and the sampled loop diverges. Projecting α̂ onto
+    // [0.5, 3] (opt-in `alpha_hat_bounds`) keeps the flight.
+    let mut s = paper_1();
+    s.duration = 6.0;
+    s.reference.x = Signal::default();
+    s.reference.y = Signal::default();
+    s.reference.z = Signal::default();
+    s.reference.psi = Signal::default();
+    s.initial_state.position = [0.0, 0.0, 10.0];
+    let paper_law = registry::run("ftaftsmc", &s, RunOptions::default()).unwrap();
+    let peak = paper_law.recording.column("alpha_hat").iter().fold(0.0f64, |m, v| m.max(*v));
+    println!("paper law: {}, peak α̂ {peak:.2}", paper_law.exit);
+    assert!(peak > 10.0, "α̂ peaked at {peak}");
+    assert!(!paper_law.exit.is_completed());
+
+    s.ftaftsmc.mass_adaptation.alpha_hat_bounds = Some([0.5, 3.0]);
+    let projected = registry::run("ftaftsmc", &s, RunOptions::default()).unwrap();
+    assert!(projected.exit.is_completed(), "{}", projected.exit);
+    assert!(projected.recording.column("alpha_hat").iter().all(|a| (0.5..=3.0).contains(a)));
+    assert!(projected.metrics.settling_time.z.is_some_and(|t| t < 4.0), "{:?}", projected.metrics.settling_time.z);
+}

@@ -132,4 +132,12 @@ fn bad_building_blocks_name_the_key_and_value() {
         "montecarlo.mass.high",
     );
     rejects(&PAPER_SCENARIO_2.replace("{ dist = \"log-normal\", mu = 0.0,", "{ dist = \"gamma\", mu = 0.0,"), "gamma");
+    rejects(
+        &PAPER_SCENARIO_2.replace("alpha_hat0 = 1.0\n", "alpha_hat0 = 1.0\nalpha_hat_bounds = [2.0, 1.0]\n"),
+        "ftaftsmc.mass_adaptation.alpha_hat_bounds[1]",
+    );
+    rejects(
+        &PAPER_SCENARIO_2.replace("alpha_hat0 = 1.0\n", "alpha_hat0 = 1.0\nalpha_hat_bounds = [1.5, 3.0]\n"),
+        "ftaftsmc.mass_adaptation.alpha_hat0",
+    );
 }
