@@ -188,51 +188,6 @@ pub fn worst(times: impl IntoIterator<Item = Option<f64>>) -> Option<f64> {
     worst
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use ftsmc_core::ftaftsmc::{FtaftsmcAxis, FtaftsmcGains};
-
-    #[test]
-    fn ftaftsmc_reaching_times_stay_under_the_eq38_bound_on_every_channel() {
-        // The theorem: with exact cancellation Ṡ = ϖ2, and for δ̂ ≥ 0
-        // |S| reaches zero before 1/(λ2(q2−1)) + 1/(γ2(1−p2)), in continuous time.
-        let settings = SweepSettings::default();
-        for gains in
-            [FtaftsmcGains::PAPER_XY, FtaftsmcGains::PAPER_Z, FtaftsmcGains::PAPER_ROLL_PITCH, FtaftsmcGains::PAPER_YAW]
-        {
-            let bound = gains.reaching_time_bound();
-            let times = sweep(&FtaftsmcAxis::new(gains), &settings, Sampling::Continuous);
-            for t in &times {
-                let r = t.reaching_time.unwrap_or_else(|| panic!("e0 = {} never reached", t.e0));
-                assert!(r <= bound, "e0 = {}: reaching {r} s > bound {bound} s", t.e0);
-            }
-            let w = worst(times.iter().map(|t| t.reaching_time)).unwrap();
-            assert!(w > 0.0, "the sweep must include initial conditions off the surface");
-        }
-    }
-
-    #[test]
-    fn sampled_ftaftsmc_settles_small_and_moderate_errors_quickly() {
-        // At 1 kHz the x channel settles every |e0| ≤ 1 m within the bound of
-        // the reaching phase plus a few seconds of sliding.
-        let settings =
-            SweepSettings { magnitudes: SweepSettings::log_magnitudes(-3, 0, 2), ..SweepSettings::default() };
-        let times = sweep(&FtaftsmcAxis::new(FtaftsmcGains::PAPER_XY), &settings, Sampling::Sampled);
-        for t in times {
-            let s = t.settling_time.unwrap_or_else(|| panic!("e0 = {} did not settle", t.e0));
-            assert!(s < 10.0, "e0 = {}: settled at {s}", t.e0);
-        }
-    }
-
-    #[test]
-    fn log_magnitudes_cover_the_decades() {
-        let m = SweepSettings::log_magnitudes(-3, 2, 3);
-        assert_eq!(m.len(), 16);
-        assert!((m[0] - 1e-3).abs() < 1e-15 && (m[15] - 100.0).abs() < 1e-9);
-    }
-}
-
 /// Channels the full cascade can sweep over large initial errors: altitude
 /// and yaw need no tilt (x and y would hit the tilt clamp).
 pub const CASCADE_CHANNELS: [usize; 2] = [2, 5];
@@ -284,4 +239,49 @@ pub fn cascade_channel(
         settling_time: settling,
         diverged_at,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use ftsmc_core::ftaftsmc::{FtaftsmcAxis, FtaftsmcGains};
+
+    #[test]
+    fn ftaftsmc_reaching_times_stay_under_the_eq38_bound_on_every_channel() {
+        // The theorem: with exact cancellation Ṡ = ϖ2, and for δ̂ ≥ 0
+        // |S| reaches zero before 1/(λ2(q2−1)) + 1/(γ2(1−p2)), in continuous time.
+        let settings = SweepSettings::default();
+        for gains in
+            [FtaftsmcGains::PAPER_XY, FtaftsmcGains::PAPER_Z, FtaftsmcGains::PAPER_ROLL_PITCH, FtaftsmcGains::PAPER_YAW]
+        {
+            let bound = gains.reaching_time_bound();
+            let times = sweep(&FtaftsmcAxis::new(gains), &settings, Sampling::Continuous);
+            for t in &times {
+                let r = t.reaching_time.unwrap_or_else(|| panic!("e0 = {} never reached", t.e0));
+                assert!(r <= bound, "e0 = {}: reaching {r} s > bound {bound} s", t.e0);
+            }
+            let w = worst(times.iter().map(|t| t.reaching_time)).unwrap();
+            assert!(w > 0.0, "the sweep must include initial conditions off the surface");
+        }
+    }
+
+    #[test]
+    fn sampled_ftaftsmc_settles_small_and_moderate_errors_quickly() {
+        // At 1 kHz the x channel settles every |e0| ≤ 1 m within the bound of
+        // the reaching phase plus a few seconds of sliding.
+        let settings =
+            SweepSettings { magnitudes: SweepSettings::log_magnitudes(-3, 0, 2), ..SweepSettings::default() };
+        let times = sweep(&FtaftsmcAxis::new(FtaftsmcGains::PAPER_XY), &settings, Sampling::Sampled);
+        for t in times {
+            let s = t.settling_time.unwrap_or_else(|| panic!("e0 = {} did not settle", t.e0));
+            assert!(s < 10.0, "e0 = {}: settled at {s}", t.e0);
+        }
+    }
+
+    #[test]
+    fn log_magnitudes_cover_the_decades() {
+        let m = SweepSettings::log_magnitudes(-3, 2, 3);
+        assert_eq!(m.len(), 16);
+        assert!((m[0] - 1e-3).abs() < 1e-15 && (m[15] - 100.0).abs() < 1e-9);
+    }
 }
