@@ -4,7 +4,13 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 fn ftsmc(args: &[&str], cwd: &Path) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_ftsmc")).args(args).current_dir(cwd).output().expect("binary runs")
+    // RUST_BACKTRACE=1: errors must stay one readable line even then.
+    Command::new(env!("CARGO_BIN_EXE_ftsmc"))
+        .args(args)
+        .current_dir(cwd)
+        .env("RUST_BACKTRACE", "1")
+        .output()
+        .expect("binary runs")
 }
 
 fn temp_dir(name: &str) -> PathBuf {
@@ -66,7 +72,8 @@ fn a_bad_scenario_file_is_a_clear_error_not_a_panic() {
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("bad.toml") && err.contains("ftaftsmc.x.p") && err.contains("1.2"), "{err}");
-    assert!(!err.contains("panicked"), "{err}");
+    assert!(!err.contains("panicked") && !err.contains("backtrace"), "{err}");
+    assert!(err.starts_with("error: "), "{err}");
     assert!(!dir.join("res").exists(), "a failed run must not leave output");
 
     std::fs::write(dir.join("typo.toml"), "name = \"t\"\nduration = 1.0\n[plant]\nmas = 1.0\n").unwrap();
