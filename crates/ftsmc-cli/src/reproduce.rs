@@ -166,13 +166,14 @@ pub fn table_3(runs: &[RunOutput], scenario: &str) -> (String, Value) {
 }
 
 /// A per-run metric table (ISE, IAE, settling, max error after, chattering).
-pub fn metrics_table(runs: &[&RunOutput], title: &str, windowed: bool) -> String {
+/// `steady_after` (s) is the scenario's `simulation.steady_state_after`.
+pub fn metrics_table(runs: &[&RunOutput], title: &str, windowed: bool, steady_after: f64) -> String {
     let mut md = String::new();
     let _ = writeln!(md, "### {title}\n");
     let _ = writeln!(
         md,
         "| controller | exit | ISE x | ISE y | ISE z | ISE ψ | IAE x | IAE y | IAE z | IAE ψ | settle x (s) | settle y | settle z | settle ψ | max err z after {}s | chattering U1 (N/s) | chattering u2 (N·m/s) |{}",
-        runs.first().map_or(5.0, |r| if r.metrics.duration > 0.0 { 5.0 } else { 0.0 }),
+        steady_after,
         if windowed { " ISE z window |" } else { "" }
     );
     let _ = writeln!(
@@ -287,7 +288,7 @@ pub fn reproduce(out: &Path, figures: bool) -> Result<()> {
     report.push('\n');
 
     let s1_runs: Vec<&RunOutput> = runs.iter().filter(|r| r.scenario == s1.name).collect();
-    report.push_str(&metrics_table(&s1_runs, "Scenario 1 — all metrics", false));
+    report.push_str(&metrics_table(&s1_runs, "Scenario 1 — all metrics", false, s1.simulation.steady_state_after));
     report.push('\n');
     report.push_str(&limit_cycle_table(&s1_runs, 10.0));
     report.push('\n');
@@ -320,7 +321,12 @@ pub fn reproduce(out: &Path, figures: bool) -> Result<()> {
     report.push('\n');
 
     let s2_runs: Vec<&RunOutput> = runs.iter().filter(|r| r.scenario == s2.name).collect();
-    report.push_str(&metrics_table(&s2_runs, "Scenario 2 — all metrics (window = 10–40 s)", true));
+    report.push_str(&metrics_table(
+        &s2_runs,
+        "Scenario 2 — all metrics (window = 10–40 s)",
+        true,
+        s2.simulation.steady_state_after,
+    ));
     report.push('\n');
     let z_window = |key: &str| find(&runs, &s2.name, key).and_then(|r| r.metrics.ise_window.as_ref().map(|w| w.z));
     if let (Some(f), Some(a), Some(b)) = (z_window("ftaftsmc"), z_window("ranftsmc"), z_window("tsm-sta")) {
@@ -380,7 +386,8 @@ pub fn run_scenario(scenario: &Scenario, names: &[String], out: &Path, figures: 
     write_runs(&runs, out)?;
     let refs: Vec<&RunOutput> = runs.iter().collect();
     let windowed = scenario.simulation.metrics_window.is_some();
-    let table = metrics_table(&refs, &format!("{} — metrics", scenario.name), windowed);
+    let table =
+        metrics_table(&refs, &format!("{} — metrics", scenario.name), windowed, scenario.simulation.steady_state_after);
     let summary = summary_json(&refs, Map::new());
     write_atomic(&out.join(&scenario.name).join("summary.json"), serde_json::to_string_pretty(&summary)?.as_bytes())?;
     if figures {
