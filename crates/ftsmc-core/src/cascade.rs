@@ -483,6 +483,72 @@ mod tests {
         Cascade::new(config, laws).unwrap()
     }
 
+    fn paper_config(settings: CascadeSettings, mass_adaptation: MassAdaptation) -> CascadeConfig {
+        CascadeConfig { model: QuadrotorParams::default(), settings, mass_adaptation }
+    }
+
+    fn paper_laws() -> [FtaftsmcAxis; 6] {
+        paper_ftaftsmc(CascadeSettings::default()).laws
+    }
+
+    /// Issue 9: a NaN `max_tilt` reached `f64::clamp(NaN, NaN)` in
+    /// `Cascade::update` and panicked; `Cascade::new` now refuses it.
+    #[test]
+    fn new_rejects_a_nan_max_tilt_and_unchecked_does_not_panic() {
+        let settings = CascadeSettings { max_tilt: f64::NAN, ..CascadeSettings::default() };
+        let err = Cascade::new(paper_config(settings, MassAdaptation::PAPER), paper_laws()).unwrap_err();
+        assert_eq!(err.field, "max_tilt");
+        let mut c = Cascade::new_unchecked(paper_config(settings, MassAdaptation::PAPER), paper_laws());
+        let reference = Reference { position: [0.3, -0.2, 1.0], ..Reference::default() };
+        c.update(&QuadState::default(), &reference, 1e-3);
+    }
+
+    /// Issue 9: inverted `alpha_hat_bounds` reached `f64::clamp(lo, hi)` with
+    /// `lo > hi` and panicked; `Cascade::new` now refuses them.
+    #[test]
+    fn new_rejects_inverted_alpha_hat_bounds_and_unchecked_does_not_panic() {
+        for bounds in [[2.0, 0.5], [f64::NAN, 2.0], [0.5, f64::NAN]] {
+            let ma = MassAdaptation { alpha_hat_bounds: Some(bounds), ..MassAdaptation::PAPER };
+            let err = Cascade::new(paper_config(CascadeSettings::default(), ma), paper_laws()).unwrap_err();
+            assert!(err.field.starts_with("alpha_hat_bounds"), "{err}");
+            let mut c = Cascade::new_unchecked(paper_config(CascadeSettings::default(), ma), paper_laws());
+            let reference = Reference { position: [0.0, 0.0, 1.0], ..Reference::default() };
+            c.update(&QuadState::default(), &reference, 1e-3);
+        }
+    }
+
+    #[test]
+    fn new_rejects_bad_law_gains_and_model() {
+        let mut laws = paper_laws();
+        laws[4] = FtaftsmcAxis::new(FtaftsmcGains { xi: 0.0, ..FtaftsmcGains::PAPER_ROLL_PITCH });
+        let err = Cascade::new(paper_config(CascadeSettings::default(), MassAdaptation::PAPER), laws).unwrap_err();
+        assert_eq!(err.field, "xi");
+        let config = CascadeConfig {
+            model: QuadrotorParams { mass: f64::NAN, ..QuadrotorParams::default() },
+            ..paper_config(CascadeSettings::default(), MassAdaptation::PAPER)
+        };
+        assert_eq!(Cascade::new(config, paper_laws()).unwrap_err().field, "mass");
+    }
+
+    /// A non-finite measurement gives a NaN command (the simulator reports
+    /// divergence) and leaves α̂, the filter and the law states unchanged.
+    #[test]
+    fn a_non_finite_state_does_not_poison_the_cascade() {
+        let mut c = paper_ftaftsmc(CascadeSettings::default());
+        let reference = Reference { position: [0.5, -0.5, 1.0], ..Reference::default() };
+        for _ in 0..20 {
+            c.update(&QuadState::default(), &reference, 1e-3);
+        }
+        let before = (c.alpha_hat(), c.laws.map(|l| l.delta_hat), c.filter.map(|f| (f.value, f.rate)));
+        let bad = QuadState { velocity: [0.0, f64::NAN, 0.0], ..QuadState::default() };
+        let cmd = c.update(&bad, &reference, 1e-3);
+        assert!(cmd.thrust.is_nan() && cmd.torque.iter().all(|t| t.is_nan()));
+        let after = (c.alpha_hat(), c.laws.map(|l| l.delta_hat), c.filter.map(|f| (f.value, f.rate)));
+        assert_eq!(before, after);
+        let cmd = c.update(&QuadState::default(), &reference, 1e-3);
+        assert!(cmd.thrust.is_finite() && cmd.torque.iter().all(|t| t.is_finite()));
+    }
+
     #[test]
     fn desired_attitude_inverts_eq2_exactly() {
         for &(phi, theta, psi) in &[(0.1, -0.2, 0.3), (-0.3, 0.25, -1.2), (0.0, 0.4, 2.0)] {
