@@ -370,13 +370,7 @@ impl AxisLaw for FtaftsmcAxis {
         let terms = sliding_surface_with(&self.gains, self.kappa, e, e_dot);
         let reaching = reaching_law(&self.gains, terms.s, self.delta_hat);
         let delta_hat = self.delta_hat + dt * delta_hat_rate(&self.gains, terms.s, self.delta_hat);
-        self.delta_hat = if delta_hat > STATE_LIMIT {
-            STATE_LIMIT
-        } else if delta_hat < 0.0 {
-            0.0
-        } else {
-            delta_hat
-        };
+        self.delta_hat = delta_hat.clamp(0.0, STATE_LIMIT);
         self.last = terms;
         self.last_reaching = reaching;
         terms.varpi + reaching

@@ -1,6 +1,6 @@
 //! The per-axis control-law interface shared by every controller of ftsmc.
 //!
-//! All three controllers of the paper (FTAFTSMC, RANFTSMC [19], TSM-STA [2])
+//! All three controllers of the paper (FTAFTSMC, RANFTSMC \[19\], TSM-STA \[2\])
 //! have the same structure on each of the six channels x, y, z, φ, θ, ψ: from
 //! the tracking error `e = q − q_d` and its rate `ė` they compute a feedback
 //! acceleration `v_fb` so that the commanded acceleration is
@@ -49,7 +49,7 @@ pub(crate) fn check_closed(
     hi: f64,
     expected: &'static str,
 ) -> Result<(), GainError> {
-    if value.is_finite() && value >= lo && value <= hi {
+    if (lo..=hi).contains(&value) {
         Ok(())
     } else {
         Err(GainError { field, value, expected })
@@ -64,7 +64,7 @@ pub(crate) fn check_left_open(
     hi: f64,
     expected: &'static str,
 ) -> Result<(), GainError> {
-    if value.is_finite() && value > lo && value <= hi {
+    if value > lo && value <= hi {
         Ok(())
     } else {
         Err(GainError { field, value, expected })
@@ -73,7 +73,7 @@ pub(crate) fn check_left_open(
 
 /// Check `0 < value <= GAIN_MAX` for a gain that multiplies other terms.
 pub(crate) fn check_gain(field: &'static str, value: f64) -> Result<(), GainError> {
-    if value.is_finite() && value > 0.0 && value <= GAIN_MAX {
+    if value > 0.0 && value <= GAIN_MAX {
         Ok(())
     } else {
         Err(GainError { field, value, expected: "0 < value <= 1e6 (larger overflows the law's products in f64)" })
@@ -82,7 +82,7 @@ pub(crate) fn check_gain(field: &'static str, value: f64) -> Result<(), GainErro
 
 /// Check `0 <= value <= GAIN_MAX` for a gain that may be switched off.
 pub(crate) fn check_gain_or_zero(field: &'static str, value: f64) -> Result<(), GainError> {
-    if value.is_finite() && value >= 0.0 && value <= GAIN_MAX {
+    if (0.0..=GAIN_MAX).contains(&value) {
         Ok(())
     } else {
         Err(GainError { field, value, expected: "0 <= value <= 1e6 (larger overflows the law's products in f64)" })

@@ -1,5 +1,5 @@
 //! RANFTSMC — robust adaptive nonsingular fast terminal sliding-mode control
-//! (Labbadi & Cherkaoui, ISA Trans. 2020; the paper's ref. [19]) on one
+//! (Labbadi & Cherkaoui, ISA Trans. 2020; the paper's ref. \[19\]) on one
 //! channel, as fixed by SPEC §3:
 //!
 //! ```text

@@ -1,5 +1,5 @@
 //! TSM-STA — nonsingular terminal sliding surface with a super-twisting
-//! reaching law (the paper's ref. [2]; that paper is not available, so this is
+//! reaching law (the paper's ref. \[2\]; that paper is not available, so this is
 //! the standard form fixed by SPEC §3) on one channel:
 //!
 //! ```text
@@ -131,7 +131,7 @@ impl TsmStaGains {
             let ratio = self.p / self.q;
             ratio > 1.0 && ratio < 2.0
         };
-        valid.then(|| (self.p as u32, (2.0 * self.q - self.p) as u32))
+        valid.then_some((self.p as u32, (2.0 * self.q - self.p) as u32))
     }
 }
 
