@@ -10,7 +10,9 @@
 //! gyroscopic and drag terms (Eq. 56–58, corrected).
 
 use crate::allocation::{residual_speed, rotor_speeds};
-use crate::law::{check_open, check_positive, AxisLaw, GainError, MAX_ESTIMATES};
+use crate::law::{
+    check_gain, check_left_open, check_open, saturate, AxisLaw, GainError, INPUT_LIMIT, MAX_ESTIMATES, STATE_LIMIT,
+};
 use crate::math::{asin, cos, sin_cos};
 use crate::model::{Command, QuadState, QuadrotorParams, Reference};
 
@@ -69,10 +71,11 @@ impl Default for CascadeSettings {
 }
 
 impl CascadeSettings {
-    /// Range checks.
+    /// Range checks: ω_n and ζ in `(0, 1e6]` (the filter forms ω_n² times
+    /// states up to 1e100), `0 < max_tilt < π/2` (NaN rejected).
     pub fn check(&self) -> Result<(), GainError> {
-        check_positive("command_filter.natural_frequency", self.command_filter.natural_frequency)?;
-        check_positive("command_filter.damping", self.command_filter.damping)?;
+        check_gain("command_filter.natural_frequency", self.command_filter.natural_frequency)?;
+        check_gain("command_filter.damping", self.command_filter.damping)?;
         check_open("max_tilt", self.max_tilt, 0.0, core::f64::consts::FRAC_PI_2, "0 < max_tilt < π/2")
     }
 }
@@ -122,14 +125,29 @@ impl MassAdaptation {
     /// No adaptation (`U1 = u1`).
     pub const OFF: Self = Self { enabled: false, ..Self::PAPER };
 
-    /// Range checks (β1, β2 > 0, α̂(0) > 0).
+    /// Range checks: β1, β2 in `(0, 1e6]`, α̂(0) in `(0, 1e100]`, and when
+    /// given `0 < alpha_hat_bounds[0] < alpha_hat_bounds[1] <= 1e100` with
+    /// α̂(0) inside (NaN and inverted bounds rejected). α̂ is saturated at
+    /// ±1e100 ([`crate::law::STATE_LIMIT`]) in any case.
     pub fn check(&self) -> Result<(), GainError> {
-        check_positive("beta1", self.beta1)?;
-        check_positive("beta2", self.beta2)?;
-        check_positive("alpha_hat0", self.alpha_hat0)?;
+        check_gain("beta1", self.beta1)?;
+        check_gain("beta2", self.beta2)?;
+        check_left_open(
+            "alpha_hat0",
+            self.alpha_hat0,
+            0.0,
+            STATE_LIMIT,
+            "0 < alpha_hat0 <= 1e100 (alpha_hat is saturated at 1e100)",
+        )?;
         if let Some([lo, hi]) = self.alpha_hat_bounds {
-            check_positive("alpha_hat_bounds[0]", lo)?;
-            check_open("alpha_hat_bounds[1]", hi, lo, f64::INFINITY, "alpha_hat_bounds[1] > alpha_hat_bounds[0]")?;
+            check_open("alpha_hat_bounds[0]", lo, 0.0, STATE_LIMIT, "0 < alpha_hat_bounds[0] < 1e100")?;
+            check_left_open(
+                "alpha_hat_bounds[1]",
+                hi,
+                lo,
+                STATE_LIMIT,
+                "alpha_hat_bounds[0] < alpha_hat_bounds[1] <= 1e100",
+            )?;
             if !(self.alpha_hat0 >= lo && self.alpha_hat0 <= hi) {
                 return Err(GainError {
                     field: "alpha_hat0",
@@ -235,8 +253,32 @@ pub struct Cascade<L: AxisLaw> {
 }
 
 impl<L: AxisLaw> Cascade<L> {
-    /// Build from a configuration and the six channel laws `[x, y, z, φ, θ, ψ]`.
-    pub fn new(config: CascadeConfig, laws: [L; 6]) -> Self {
+    /// Build from a configuration and the six channel laws `[x, y, z, φ, θ, ψ]`,
+    /// after validating everything: the nominal model
+    /// ([`QuadrotorParams::check`]), the settings ([`CascadeSettings::check`],
+    /// e.g. a NaN `max_tilt`), the mass adaptation ([`MassAdaptation::check`],
+    /// e.g. inverted `alpha_hat_bounds`) and the gains of each law
+    /// ([`AxisLaw::check_gains`]). The first problem found is returned.
+    ///
+    /// With a configuration accepted here, [`Controller::update`] returns a
+    /// finite command for every finite state, reference and
+    /// `0 <= dt <= DT_MAX`, and a NaN command, with every internal state
+    /// left unchanged, when any of them is not finite.
+    pub fn new(config: CascadeConfig, laws: [L; 6]) -> Result<Self, GainError> {
+        config.model.check()?;
+        config.settings.check()?;
+        config.mass_adaptation.check()?;
+        for law in &laws {
+            law.check_gains()?;
+        }
+        Ok(Self::new_unchecked(config, laws))
+    }
+
+    /// [`Cascade::new`] without validation. Never panics, whatever the
+    /// configuration (a NaN `max_tilt` or inverted `alpha_hat_bounds` give
+    /// NaN or meaningless commands instead); the finiteness guarantee of
+    /// [`Cascade::new`] holds only for configurations it would accept.
+    pub fn new_unchecked(config: CascadeConfig, laws: [L; 6]) -> Self {
         let hover = Command { thrust: config.model.mass * config.model.gravity, torque: [0.0; 3] };
         Self {
             config,
@@ -264,8 +306,9 @@ impl<L: AxisLaw> Cascade<L> {
     #[inline]
     pub fn desired_roll_pitch_limited(ux: f64, uy: f64, yaw_d: f64, limit: f64) -> [f64; 2] {
         let (s_psi, c_psi) = sin_cos(yaw_d);
-        let roll = asin((ux * s_psi - uy * c_psi).clamp(-limit, limit));
-        let pitch = asin(((ux * c_psi + uy * s_psi) / cos(roll)).clamp(-limit, limit));
+        // `saturate`, not `f64::clamp`: it does not panic on a NaN limit.
+        let roll = asin(saturate(ux * s_psi - uy * c_psi, limit));
+        let pitch = asin(saturate((ux * c_psi + uy * s_psi) / cos(roll), limit));
         [roll, pitch]
     }
 
@@ -287,9 +330,10 @@ impl<L: AxisLaw> Cascade<L> {
                     value[i] = f.value;
                     rate[i] = f.rate;
                     accel[i] = a;
-                    // Semi-implicit Euler on the control clock.
-                    f.rate += dt * a;
-                    f.value += dt * f.rate;
+                    // Semi-implicit Euler on the control clock, states
+                    // saturated so that an unstable ω_n·dt stays finite.
+                    f.rate = saturate(f.rate + dt * a, STATE_LIMIT);
+                    f.value = saturate(f.value + dt * f.rate, STATE_LIMIT);
                 }
                 (value, rate, accel)
             }
@@ -302,7 +346,22 @@ impl<L: AxisLaw> Controller for Cascade<L> {
         L::NAME
     }
 
+    /// See [`Cascade::new`] for the finiteness contract. Guards, all no-ops
+    /// on meaningful inputs: commanded accelerations and the angular rates
+    /// used in the cancellation terms clamped to `±INPUT_LIMIT`; `S_z` in
+    /// Eq. 44, α̂ and the command-filter states saturated to `±STATE_LIMIT`.
     fn update(&mut self, state: &QuadState, reference: &Reference, dt: f64) -> Command {
+        if !(dt.is_finite()
+            && state.to_array().iter().all(|v| v.is_finite())
+            && reference.position.iter().all(|v| v.is_finite())
+            && reference.velocity.iter().all(|v| v.is_finite())
+            && reference.acceleration.iter().all(|v| v.is_finite())
+            && reference.yaw.is_finite()
+            && reference.yaw_rate.is_finite()
+            && reference.yaw_acceleration.is_finite())
+        {
+            return Command { thrust: f64::NAN, torque: [f64::NAN; 3] };
+        }
         let model = self.config.model;
         let m = model.mass;
         let g = model.gravity;
@@ -312,7 +371,7 @@ impl<L: AxisLaw> Controller for Cascade<L> {
         for i in 0..3 {
             let e = state.position[i] - reference.position[i];
             let e_dot = state.velocity[i] - reference.velocity[i];
-            accel[i] = reference.acceleration[i] + self.laws[i].update(e, e_dot, dt);
+            accel[i] = saturate(reference.acceleration[i] + self.laws[i].update(e, e_dot, dt), INPUT_LIMIT);
         }
         let [phi, theta, _] = state.attitude;
         let tilt_cos = (cos(phi) * cos(theta)).max(MIN_TILT_COSINE);
@@ -323,12 +382,18 @@ impl<L: AxisLaw> Controller for Cascade<L> {
         let thrust = if ma.enabled { self.alpha_hat * nominal_thrust } else { nominal_thrust };
         let horizontal_mass = if ma.enabled && ma.compensate_horizontal { self.alpha_hat * m } else { m };
         if ma.enabled {
-            let s_z = self.laws[2].sliding_variable();
+            let s_z = saturate(self.laws[2].sliding_variable(), STATE_LIMIT);
             let rate = -ma.beta1 * (s_z * nominal_thrust * tilt_cos / m + ma.beta2 * self.alpha_hat);
             self.alpha_hat += dt * rate;
             if let Some([lo, hi]) = ma.alpha_hat_bounds {
-                self.alpha_hat = self.alpha_hat.clamp(lo, hi);
+                // Not `f64::clamp`, which panics on NaN or inverted bounds.
+                if self.alpha_hat < lo {
+                    self.alpha_hat = lo;
+                } else if self.alpha_hat > hi {
+                    self.alpha_hat = hi;
+                }
             }
+            self.alpha_hat = saturate(self.alpha_hat, STATE_LIMIT);
         }
 
         // Remark 2: u_x = m a_x / U1, u_y = m a_y / U1; guard U1 → 0.
@@ -346,9 +411,9 @@ impl<L: AxisLaw> Controller for Cascade<L> {
         for i in 0..3 {
             let e = state.attitude[i] - reference_attitude[i];
             let e_dot = state.angular_rate[i] - reference_rate[i];
-            angular_accel[i] = reference_accel[i] + self.laws[3 + i].update(e, e_dot, dt);
+            angular_accel[i] = saturate(reference_accel[i] + self.laws[3 + i].update(e, e_dot, dt), INPUT_LIMIT);
         }
-        let [p, q, r] = state.angular_rate;
+        let [p, q, r] = state.angular_rate.map(|w| saturate(w, INPUT_LIMIT));
         let [i1, i2, i3] = model.inertia;
         let [k1, k2, k3] = model.drag_rotational;
         let omega_bar = residual_speed(&rotor_speeds(&model, &self.last_command, f64::INFINITY));
@@ -415,7 +480,73 @@ mod tests {
         ];
         let config =
             CascadeConfig { model: QuadrotorParams::default(), settings, mass_adaptation: MassAdaptation::PAPER };
-        Cascade::new(config, laws)
+        Cascade::new(config, laws).unwrap()
+    }
+
+    fn paper_config(settings: CascadeSettings, mass_adaptation: MassAdaptation) -> CascadeConfig {
+        CascadeConfig { model: QuadrotorParams::default(), settings, mass_adaptation }
+    }
+
+    fn paper_laws() -> [FtaftsmcAxis; 6] {
+        paper_ftaftsmc(CascadeSettings::default()).laws
+    }
+
+    /// Issue 9: a NaN `max_tilt` reached `f64::clamp(NaN, NaN)` in
+    /// `Cascade::update` and panicked; `Cascade::new` now refuses it.
+    #[test]
+    fn new_rejects_a_nan_max_tilt_and_unchecked_does_not_panic() {
+        let settings = CascadeSettings { max_tilt: f64::NAN, ..CascadeSettings::default() };
+        let err = Cascade::new(paper_config(settings, MassAdaptation::PAPER), paper_laws()).unwrap_err();
+        assert_eq!(err.field, "max_tilt");
+        let mut c = Cascade::new_unchecked(paper_config(settings, MassAdaptation::PAPER), paper_laws());
+        let reference = Reference { position: [0.3, -0.2, 1.0], ..Reference::default() };
+        c.update(&QuadState::default(), &reference, 1e-3);
+    }
+
+    /// Issue 9: inverted `alpha_hat_bounds` reached `f64::clamp(lo, hi)` with
+    /// `lo > hi` and panicked; `Cascade::new` now refuses them.
+    #[test]
+    fn new_rejects_inverted_alpha_hat_bounds_and_unchecked_does_not_panic() {
+        for bounds in [[2.0, 0.5], [f64::NAN, 2.0], [0.5, f64::NAN]] {
+            let ma = MassAdaptation { alpha_hat_bounds: Some(bounds), ..MassAdaptation::PAPER };
+            let err = Cascade::new(paper_config(CascadeSettings::default(), ma), paper_laws()).unwrap_err();
+            assert!(err.field.starts_with("alpha_hat_bounds"), "{err}");
+            let mut c = Cascade::new_unchecked(paper_config(CascadeSettings::default(), ma), paper_laws());
+            let reference = Reference { position: [0.0, 0.0, 1.0], ..Reference::default() };
+            c.update(&QuadState::default(), &reference, 1e-3);
+        }
+    }
+
+    #[test]
+    fn new_rejects_bad_law_gains_and_model() {
+        let mut laws = paper_laws();
+        laws[4] = FtaftsmcAxis::new(FtaftsmcGains { xi: 0.0, ..FtaftsmcGains::PAPER_ROLL_PITCH });
+        let err = Cascade::new(paper_config(CascadeSettings::default(), MassAdaptation::PAPER), laws).unwrap_err();
+        assert_eq!(err.field, "xi");
+        let config = CascadeConfig {
+            model: QuadrotorParams { mass: f64::NAN, ..QuadrotorParams::default() },
+            ..paper_config(CascadeSettings::default(), MassAdaptation::PAPER)
+        };
+        assert_eq!(Cascade::new(config, paper_laws()).unwrap_err().field, "mass");
+    }
+
+    /// A non-finite measurement gives a NaN command (the simulator reports
+    /// divergence) and leaves α̂, the filter and the law states unchanged.
+    #[test]
+    fn a_non_finite_state_does_not_poison_the_cascade() {
+        let mut c = paper_ftaftsmc(CascadeSettings::default());
+        let reference = Reference { position: [0.5, -0.5, 1.0], ..Reference::default() };
+        for _ in 0..20 {
+            c.update(&QuadState::default(), &reference, 1e-3);
+        }
+        let before = (c.alpha_hat(), c.laws.map(|l| l.delta_hat), c.filter.map(|f| (f.value, f.rate)));
+        let bad = QuadState { velocity: [0.0, f64::NAN, 0.0], ..QuadState::default() };
+        let cmd = c.update(&bad, &reference, 1e-3);
+        assert!(cmd.thrust.is_nan() && cmd.torque.iter().all(|t| t.is_nan()));
+        let after = (c.alpha_hat(), c.laws.map(|l| l.delta_hat), c.filter.map(|f| (f.value, f.rate)));
+        assert_eq!(before, after);
+        let cmd = c.update(&QuadState::default(), &reference, 1e-3);
+        assert!(cmd.thrust.is_finite() && cmd.torque.iter().all(|t| t.is_finite()));
     }
 
     #[test]

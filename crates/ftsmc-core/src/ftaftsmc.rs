@@ -5,8 +5,11 @@
 //!
 //! Notation: `sig^a(v) = |v|^a sign(v)`; `e = q − q_d`, `ė = q̇ − q̇_d`.
 
-use crate::law::{check_finite, check_non_negative, check_open, check_positive, AxisLaw, GainError};
-use crate::math::{exp, pow_abs, pow_abs_minus_one, sig, sign};
+use crate::law::{
+    check_closed, check_gain, check_initial_state, check_left_open, check_open, inputs_finite, saturate, AxisLaw,
+    GainError, INPUT_LIMIT, STATE_LIMIT,
+};
+use crate::math::{exp, pow_abs, pow_abs_minus_one, pow_abs_sat, sig, sign};
 
 /// Gains of one FTAFTSMC channel (paper Tables 4 and 5).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -53,29 +56,64 @@ pub struct FtaftsmcGains {
 }
 
 impl FtaftsmcGains {
-    /// Reject gains outside the ranges stated under Eq. 9 and Eq. 16–17.
+    /// Reject gains outside the ranges stated under Eq. 9 and Eq. 16–17,
+    /// tightened to where every term of the law is finite in f64 (each
+    /// error's `expected` says why):
+    ///
+    /// | gain | range |
+    /// |---|---|
+    /// | λ, γ, η, ℵ2, λ2, γ2, η2, α1, α2 | `(0, 1e6]` |
+    /// | q, q2 | `(1, 10]` |
+    /// | p, p2 | `(0, 1)` |
+    /// | ℵ1 | `[1e-6, 1]` |
+    /// | ℵ3 | `[1, 100]` |
+    /// | ε | `[1e-9, 1e6]` |
+    /// | ξ | `[1e-6, 1e6]` |
+    /// | δ̂(0) | `[0, 1e100]` |
     pub fn check(&self) -> Result<(), GainError> {
-        check_positive("lambda", self.lambda)?;
-        check_positive("gamma", self.gamma)?;
-        check_positive("eta", self.eta)?;
-        check_open("q", self.q, 1.0, f64::INFINITY, "q > 1")?;
+        check_gain("lambda", self.lambda)?;
+        check_gain("gamma", self.gamma)?;
+        check_gain("eta", self.eta)?;
+        check_left_open("q", self.q, 1.0, 10.0, "1 < q <= 10 (|e|^q must stay finite for |e| <= 1e12)")?;
         check_open("p", self.p, 0.0, 1.0, "0 < p < 1")?;
-        if !(self.aleph1.is_finite() && self.aleph1 > 0.0 && self.aleph1 <= 1.0) {
-            return Err(GainError { field: "aleph1", value: self.aleph1, expected: "0 < aleph1 <= 1" });
-        }
-        check_positive("aleph2", self.aleph2)?;
-        check_positive("aleph3", self.aleph3)?;
-        check_positive("epsilon", self.epsilon)?;
-        check_positive("lambda2", self.lambda2)?;
-        check_positive("gamma2", self.gamma2)?;
-        check_positive("eta2", self.eta2)?;
-        check_open("q2", self.q2, 1.0, f64::INFINITY, "q2 > 1")?;
+        check_closed(
+            "aleph1",
+            self.aleph1,
+            1e-6,
+            1.0,
+            "1e-6 <= aleph1 <= 1 (Y <= 1/aleph1 multiplies every surface term; smaller overflows them)",
+        )?;
+        check_gain("aleph2", self.aleph2)?;
+        check_closed(
+            "aleph3",
+            self.aleph3,
+            1.0,
+            100.0,
+            "1 <= aleph3 <= 100 (smaller makes |e|^(aleph3-1) in Eq. 11 singular at e = 0; \
+             larger only saturates Y)",
+        )?;
+        check_closed(
+            "epsilon",
+            self.epsilon,
+            1e-9,
+            1e6,
+            "1e-9 <= epsilon <= 1e6 (kappa2 = (p-1) epsilon^(p-2) of Eq. 9 overflows for smaller epsilon)",
+        )?;
+        check_gain("lambda2", self.lambda2)?;
+        check_gain("gamma2", self.gamma2)?;
+        check_gain("eta2", self.eta2)?;
+        check_left_open("q2", self.q2, 1.0, 10.0, "1 < q2 <= 10 (|S|^q2 must stay finite)")?;
         check_open("p2", self.p2, 0.0, 1.0, "0 < p2 < 1")?;
-        check_positive("xi", self.xi)?;
-        check_positive("alpha1", self.alpha1)?;
-        check_positive("alpha2", self.alpha2)?;
-        check_non_negative("delta_hat0", self.delta_hat0)?;
-        check_finite("delta_hat0", self.delta_hat0)
+        check_closed(
+            "xi",
+            self.xi,
+            1e-6,
+            1e6,
+            "1e-6 <= xi <= 1e6 (Eq. 15, 17 divide by 2 xi^2, which underflows to 0 for smaller xi)",
+        )?;
+        check_gain("alpha1", self.alpha1)?;
+        check_gain("alpha2", self.alpha2)?;
+        check_initial_state("delta_hat0", self.delta_hat0)
     }
 
     /// Table 5, x and y channels (ε = 0.05).
@@ -203,8 +241,10 @@ pub fn gain_shaping(g: &FtaftsmcGains, e: f64, e_dot: f64) -> (f64, f64) {
     let decay = exp(-g.aleph2 * pow_abs(e, g.aleph3));
     let den = g.aleph1 + (1.0 - g.aleph1) * decay;
     let y = 1.0 / den;
-    let y_dot =
-        (1.0 - g.aleph1) * decay * g.aleph2 * g.aleph3 * pow_abs_minus_one(e, g.aleph3) * e_dot * sign(e) / (den * den);
+    // When |e|^ℵ3 overflows, decay is 0 and |e|^(ℵ3−1) may be ∞: the limit
+    // of their product is 0 (the exponential wins), not 0·∞ = NaN.
+    let pow = if decay == 0.0 { 0.0 } else { pow_abs_minus_one(e, g.aleph3) };
+    let y_dot = (1.0 - g.aleph1) * decay * g.aleph2 * g.aleph3 * pow * e_dot * sign(e) / (den * den);
     (y, y_dot)
 }
 
@@ -253,10 +293,15 @@ pub fn sliding_surface_with(g: &FtaftsmcGains, kappa: [f64; 2], e: f64, e_dot: f
     SurfaceTerms { y, y_dot, s_delta, s_delta_dot, s: e_dot + y * shape, varpi: -y_dot * shape - y * shape_dot }
 }
 
-/// `ϖ2` (Eq. 15): `−[λ2 sig^q2(S) + γ2 sig^p2(S) + η2 S + δ̂/(2ξ²) S]`.
+/// `ϖ2` (Eq. 15): `−[λ2 sig^q2(S) + γ2 sig^p2(S) + η2 S + δ̂/(2ξ²) S]`,
+/// channel units per s². `|S|^q2` is saturated at
+/// [`crate::law::POWER_LIMIT`] so that it never overflows.
 #[inline]
 pub fn reaching_law(g: &FtaftsmcGains, s: f64, delta_hat: f64) -> f64 {
-    -(g.lambda2 * sig(s, g.q2) + g.gamma2 * sig(s, g.p2) + g.eta2 * s + delta_hat / (2.0 * g.xi * g.xi) * s)
+    -(g.lambda2 * pow_abs_sat(s, g.q2) * sign(s)
+        + g.gamma2 * sig(s, g.p2)
+        + g.eta2 * s
+        + delta_hat / (2.0 * g.xi * g.xi) * s)
 }
 
 /// `dδ̂/dt = α1 (S²/(2ξ²) − α2 δ̂)` (Eq. 17).
@@ -281,7 +326,20 @@ pub struct FtaftsmcAxis {
 }
 
 impl FtaftsmcAxis {
-    /// A channel with δ̂ = `gains.delta_hat0`.
+    /// A channel with δ̂ = `gains.delta_hat0`, after validating the gains
+    /// ([`FtaftsmcGains::check`]).
+    pub fn try_new(gains: FtaftsmcGains) -> Result<Self, GainError> {
+        gains.check()?;
+        Ok(Self::new(gains))
+    }
+
+    /// A channel with δ̂ = `gains.delta_hat0`, **without** validating the
+    /// gains (`new_unchecked` semantics, kept infallible for `const`-like
+    /// use and hot loops): the caller must have run
+    /// [`FtaftsmcGains::check`] (scenario files do) or use
+    /// [`FtaftsmcAxis::try_new`]. Out-of-range gains never panic but may
+    /// give non-finite commands. [`crate::cascade::Cascade::new`] checks
+    /// the gains of the laws it is given.
     pub fn new(gains: FtaftsmcGains) -> Self {
         Self {
             gains,
@@ -298,11 +356,21 @@ impl AxisLaw for FtaftsmcAxis {
 
     /// Returns `ϖ + ϖ2` (Eq. 13 + Eq. 15), so that `q̈_cmd = q̈_d + ϖ + ϖ2`
     /// (Eq. 18–20, 56–58 before model cancellation).
+    ///
+    /// Guards (no-ops on every meaningful input, see [`AxisLaw::update`]):
+    /// NaN and no state change for a non-finite input; `e`, `ė` clamped to
+    /// `±INPUT_LIMIT`; δ̂ projected onto `[0, STATE_LIMIT]` (δ̂ estimates
+    /// Λ² ≥ 0, and Euler keeps it ≥ 0 anyway while `dt α1 α2 ≤ 1`).
     #[inline]
     fn update(&mut self, e: f64, e_dot: f64, dt: f64) -> f64 {
+        if !inputs_finite(e, e_dot, dt) {
+            return f64::NAN;
+        }
+        let (e, e_dot) = (saturate(e, INPUT_LIMIT), saturate(e_dot, INPUT_LIMIT));
         let terms = sliding_surface_with(&self.gains, self.kappa, e, e_dot);
         let reaching = reaching_law(&self.gains, terms.s, self.delta_hat);
-        self.delta_hat += dt * delta_hat_rate(&self.gains, terms.s, self.delta_hat);
+        let delta_hat = self.delta_hat + dt * delta_hat_rate(&self.gains, terms.s, self.delta_hat);
+        self.delta_hat = delta_hat.clamp(0.0, STATE_LIMIT);
         self.last = terms;
         self.last_reaching = reaching;
         terms.varpi + reaching
@@ -318,6 +386,10 @@ impl AxisLaw for FtaftsmcAxis {
 
     fn reset(&mut self) {
         *self = Self::new(self.gains);
+    }
+
+    fn check_gains(&self) -> Result<(), GainError> {
+        self.gains.check()
     }
 }
 

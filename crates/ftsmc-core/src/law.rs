@@ -1,6 +1,6 @@
 //! The per-axis control-law interface shared by every controller of ftsmc.
 //!
-//! All three controllers of the paper (FTAFTSMC, RANFTSMC [19], TSM-STA [2])
+//! All three controllers of the paper (FTAFTSMC, RANFTSMC \[19\], TSM-STA \[2\])
 //! have the same structure on each of the six channels x, y, z, φ, θ, ψ: from
 //! the tracking error `e = q − q_d` and its rate `ė` they compute a feedback
 //! acceleration `v_fb` so that the commanded acceleration is
@@ -41,9 +41,113 @@ pub(crate) fn check_open(
     }
 }
 
-/// Check `value > 0` and finite.
-pub(crate) fn check_positive(field: &'static str, value: f64) -> Result<(), GainError> {
-    check_open(field, value, 0.0, f64::INFINITY, "a finite value > 0")
+/// Check `lo <= value <= hi` (both bounds finite).
+pub(crate) fn check_closed(
+    field: &'static str,
+    value: f64,
+    lo: f64,
+    hi: f64,
+    expected: &'static str,
+) -> Result<(), GainError> {
+    if (lo..=hi).contains(&value) {
+        Ok(())
+    } else {
+        Err(GainError { field, value, expected })
+    }
+}
+
+/// Check `lo < value <= hi`.
+pub(crate) fn check_left_open(
+    field: &'static str,
+    value: f64,
+    lo: f64,
+    hi: f64,
+    expected: &'static str,
+) -> Result<(), GainError> {
+    if value > lo && value <= hi {
+        Ok(())
+    } else {
+        Err(GainError { field, value, expected })
+    }
+}
+
+/// Check `0 < value <= GAIN_MAX` for a gain that multiplies other terms.
+pub(crate) fn check_gain(field: &'static str, value: f64) -> Result<(), GainError> {
+    if value > 0.0 && value <= GAIN_MAX {
+        Ok(())
+    } else {
+        Err(GainError { field, value, expected: "0 < value <= 1e6 (larger overflows the law's products in f64)" })
+    }
+}
+
+/// Check `0 <= value <= GAIN_MAX` for a gain that may be switched off.
+pub(crate) fn check_gain_or_zero(field: &'static str, value: f64) -> Result<(), GainError> {
+    if (0.0..=GAIN_MAX).contains(&value) {
+        Ok(())
+    } else {
+        Err(GainError { field, value, expected: "0 <= value <= 1e6 (larger overflows the law's products in f64)" })
+    }
+}
+
+/// Check `0 <= value <= STATE_LIMIT` for the initial value of an adaptive state.
+pub(crate) fn check_initial_state(field: &'static str, value: f64) -> Result<(), GainError> {
+    check_closed(field, value, 0.0, STATE_LIMIT, "0 <= value <= 1e100 (adaptive states are saturated at 1e100)")
+}
+
+/// Largest gain accepted by the `check()` functions (1e6). With every gain
+/// at most this, the inputs clamped to [`INPUT_LIMIT`] and the states to
+/// [`STATE_LIMIT`], every product the laws form stays below ~1e290, so the
+/// commands are finite. The paper's gains are all below 20.
+pub const GAIN_MAX: f64 = 1e6;
+
+/// Smallest value accepted for a gain the laws divide by (`b2` of RANFTSMC,
+/// `lambda` of TSM-STA, `xi` of FTAFTSMC, `aleph1`): 1e-6.
+pub const GAIN_MIN_DIVISOR: f64 = 1e-6;
+
+/// Errors and error rates (`e`, `ė`, channel units: m, m/s, rad, rad/s) and
+/// the commanded accelerations of the cascade are clamped to `±INPUT_LIMIT`
+/// = ±1e12 before use. No physical flight gets near (the simulator declares
+/// divergence at a 100 m error by default), so this is a no-op on every
+/// meaningful input; it keeps every power of the laws finite in f64 for
+/// inputs up to ±f64::MAX.
+pub const INPUT_LIMIT: f64 = 1e12;
+
+/// Adaptive and internal states (δ̂ of FTAFTSMC, `â` of RANFTSMC, ν of
+/// TSM-STA, α̂ and the command filter of the cascade) are saturated to
+/// `±STATE_LIMIT` = ±1e100 after each update, so they stay finite and bounded
+/// whatever the (finite) inputs. The paper's runs stay below 10.
+pub const STATE_LIMIT: f64 = 1e100;
+
+/// Largest control period `dt` (s) for which finiteness is guaranteed
+/// (legal range `0 <= dt <= DT_MAX`; `dt = 0` evaluates without advancing
+/// the states).
+pub const DT_MAX: f64 = 1e3;
+
+/// Saturating powers (see [`crate::math::pow_abs_sat`]) never return more
+/// than this (1e100).
+pub const POWER_LIMIT: f64 = 1e100;
+
+/// `x` clamped to `[-limit, limit]`, propagating NaN, never panicking (unlike
+/// `f64::clamp`, which panics on a NaN bound). Bit-identical to `x` inside
+/// the range.
+#[inline]
+pub fn saturate(x: f64, limit: f64) -> f64 {
+    if x > limit {
+        limit
+    } else if x < -limit {
+        -limit
+    } else {
+        x
+    }
+}
+
+/// True when `e`, `ė` and `dt` are all finite. Every law returns NaN and
+/// leaves its states untouched when this is false, so one bad measurement
+/// is reported as divergence by the caller and does not poison the
+/// adaptive states.
+#[inline]
+pub fn inputs_finite(e: f64, e_dot: f64, dt: f64) -> bool {
+    e.is_finite() && e_dot.is_finite() && dt.is_finite()
 }
 
 /// Check `value >= 0` and finite.
@@ -52,15 +156,6 @@ pub(crate) fn check_non_negative(field: &'static str, value: f64) -> Result<(), 
         Ok(())
     } else {
         Err(GainError { field, value, expected: "a finite value >= 0" })
-    }
-}
-
-/// Check that `value` is finite.
-pub(crate) fn check_finite(field: &'static str, value: f64) -> Result<(), GainError> {
-    if value.is_finite() {
-        Ok(())
-    } else {
-        Err(GainError { field, value, expected: "a finite number" })
     }
 }
 
@@ -80,6 +175,12 @@ pub trait AxisLaw {
     /// current adaptive states, then advance those states by one control
     /// period `dt` (s) with explicit Euler (the adaptive laws run on the
     /// control clock).
+    ///
+    /// Contract, for gains that pass `check()`: for every finite `e`,
+    /// `e_dot` and `0 <= dt <= DT_MAX` the result and the states are
+    /// finite (inputs are clamped to [`INPUT_LIMIT`], states saturated to
+    /// [`STATE_LIMIT`]). If `e`, `e_dot` or `dt` is not finite the result is
+    /// NaN and the law is left exactly as it was before the call.
     fn update(&mut self, e: f64, e_dot: f64, dt: f64) -> f64;
 
     /// Sliding variable evaluated in the last [`AxisLaw::update`].
@@ -92,4 +193,8 @@ pub trait AxisLaw {
 
     /// Restore the initial adaptive / internal states.
     fn reset(&mut self);
+
+    /// Validate the law's gains (the gain struct's `check()`); used by
+    /// [`crate::cascade::Cascade::new`].
+    fn check_gains(&self) -> Result<(), GainError>;
 }

@@ -29,6 +29,19 @@ pub fn pow_abs(x: f64, a: f64) -> f64 {
     }
 }
 
+/// `min(|x|^a, POWER_LIMIT)`: [`pow_abs`] saturated at
+/// [`crate::law::POWER_LIMIT`] (1e100), so that it never overflows to
+/// infinity; identical to [`pow_abs`] below the limit.
+#[inline]
+pub fn pow_abs_sat(x: f64, a: f64) -> f64 {
+    let v = pow_abs(x, a);
+    if v > crate::law::POWER_LIMIT {
+        crate::law::POWER_LIMIT
+    } else {
+        v
+    }
+}
+
 /// `sign(x)`: −1, 0 or +1 (0 at exactly 0, unlike `f64::signum`).
 #[inline]
 pub fn sign(x: f64) -> f64 {

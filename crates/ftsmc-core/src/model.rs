@@ -1,7 +1,7 @@
 //! Quadrotor physical parameters (paper Table 2, corrected) and the plain
 //! data types that cross the controller boundary: state, reference, command.
 
-use crate::law::{check_positive, GainError};
+use crate::law::{check_closed, check_gain, check_gain_or_zero, GainError};
 
 /// Physical parameters of the quadrotor (paper Table 2 with the errata of
 /// `docs/paper-errata.md`). The controller holds a nominal copy; the plant
@@ -48,25 +48,55 @@ impl Default for QuadrotorParams {
 }
 
 impl QuadrotorParams {
-    /// Reject non-physical values (mass, inertia, coefficients must be > 0;
-    /// drag ≥ 0).
+    /// Reject non-physical values, with ranges bounded to where the
+    /// cascade's cancellation terms are finite in f64 (mass, inertia and
+    /// coefficients multiply accelerations up to 1e12 and rates up to 1e12;
+    /// the rotor allocation divides by `b`, `b l` and `d`):
+    ///
+    /// | parameter | range |
+    /// |---|---|
+    /// | mass (kg) | `[1e-6, 1e6]` |
+    /// | gravity (m/s²) | `[1e-3, 1e3]` (the cascade divides by `1e-3 m g`) |
+    /// | inertia (kg·m²) | `(0, 1e6]` |
+    /// | rotor inertia, drag coefficients | `[0, 1e6]` |
+    /// | lift coefficient b, yaw drag coefficient d | `[1e-12, 1e6]` |
+    /// | arm length l (m) | `[1e-6, 1e6]` |
     pub fn check(&self) -> Result<(), GainError> {
-        check_positive("mass", self.mass)?;
-        check_positive("gravity", self.gravity)?;
+        check_closed(
+            "mass",
+            self.mass,
+            1e-6,
+            1e6,
+            "1e-6 <= mass <= 1e6 kg (outside, the cascade's products overflow)",
+        )?;
+        check_closed(
+            "gravity",
+            self.gravity,
+            1e-3,
+            1e3,
+            "1e-3 <= gravity <= 1e3 m/s^2 (the cascade divides by 1e-3 m g)",
+        )?;
         const INERTIA: [&str; 3] = ["inertia[0]", "inertia[1]", "inertia[2]"];
         for (name, &value) in INERTIA.iter().zip(&self.inertia) {
-            check_positive(name, value)?;
+            check_gain(name, value)?;
         }
-        crate::law::check_non_negative("rotor_inertia", self.rotor_inertia)?;
+        check_gain_or_zero("rotor_inertia", self.rotor_inertia)?;
         const DT: [&str; 3] = ["drag_translational[0]", "drag_translational[1]", "drag_translational[2]"];
         const DR: [&str; 3] = ["drag_rotational[0]", "drag_rotational[1]", "drag_rotational[2]"];
         for i in 0..3 {
-            crate::law::check_non_negative(DT[i], self.drag_translational[i])?;
-            crate::law::check_non_negative(DR[i], self.drag_rotational[i])?;
+            check_gain_or_zero(DT[i], self.drag_translational[i])?;
+            check_gain_or_zero(DR[i], self.drag_rotational[i])?;
         }
-        check_positive("lift_coefficient", self.lift_coefficient)?;
-        check_positive("yaw_drag_coefficient", self.yaw_drag_coefficient)?;
-        check_positive("arm_length", self.arm_length)
+        const COEFFICIENT: &str = "1e-12 <= value <= 1e6 (the rotor allocation divides by it)";
+        check_closed("lift_coefficient", self.lift_coefficient, 1e-12, 1e6, COEFFICIENT)?;
+        check_closed("yaw_drag_coefficient", self.yaw_drag_coefficient, 1e-12, 1e6, COEFFICIENT)?;
+        check_closed(
+            "arm_length",
+            self.arm_length,
+            1e-6,
+            1e6,
+            "1e-6 <= arm_length <= 1e6 m (the allocation divides by b l)",
+        )
     }
 
     /// Hover rotor speed `sqrt(m g / (4 b))`, rad/s (≈ 247 rad/s by default).

@@ -1,5 +1,5 @@
 //! RANFTSMC — robust adaptive nonsingular fast terminal sliding-mode control
-//! (Labbadi & Cherkaoui, ISA Trans. 2020; the paper's ref. [19]) on one
+//! (Labbadi & Cherkaoui, ISA Trans. 2020; the paper's ref. \[19\]) on one
 //! channel, as fixed by SPEC §3:
 //!
 //! ```text
@@ -13,7 +13,10 @@
 //! by the cascade). Since `α, β > 1`, the powers `|e|^(α−1)` and `|ė|^(β−1)`
 //! vanish at zero and every term stays finite.
 
-use crate::law::{check_non_negative, check_open, check_positive, AxisLaw, GainError};
+use crate::law::{
+    check_closed, check_gain, check_gain_or_zero, check_initial_state, check_left_open, check_non_negative, check_open,
+    inputs_finite, saturate, AxisLaw, GainError, INPUT_LIMIT, STATE_LIMIT,
+};
 use crate::math::{pow_abs, pow_abs_minus_one, sig, sign, tanh};
 
 /// Gains of one RANFTSMC channel (published table, SPEC §3).
@@ -89,20 +92,37 @@ impl RanftsmcGains {
         sign_smoothing: 0.0,
     };
 
-    /// Reject gains outside the ranges the method requires.
+    /// Reject gains outside the ranges the method requires, tightened to
+    /// where every term is finite in f64 (each error's `expected` says why):
+    ///
+    /// | gain | range |
+    /// |---|---|
+    /// | b1, c | `(0, 1e6]` |
+    /// | b2 | `[1e-6, 1e6]` (v_eq divides by β b2) |
+    /// | β | `(1, 2)` |
+    /// | α | `(β, 10]` |
+    /// | h, μ0, μ1, μ2 | `[0, 1e6]` |
+    /// | â0(0), â1(0), â2(0) | `[0, 1e100]` |
+    /// | sign_smoothing | `[0, ∞)`, finite |
     pub fn check(&self) -> Result<(), GainError> {
-        check_positive("b1", self.b1)?;
-        check_positive("b2", self.b2)?;
-        check_positive("c", self.c)?;
+        check_gain("b1", self.b1)?;
+        check_closed("b2", self.b2, 1e-6, 1e6, "1e-6 <= b2 <= 1e6 (v_eq divides by beta b2; outside, it overflows)")?;
+        check_gain("c", self.c)?;
         check_open("beta", self.beta, 1.0, 2.0, "1 < beta < 2")?;
-        check_open("alpha", self.alpha, self.beta, f64::INFINITY, "alpha > beta")?;
-        check_non_negative("h", self.h)?;
-        check_non_negative("mu0", self.mu0)?;
-        check_non_negative("mu1", self.mu1)?;
-        check_non_negative("mu2", self.mu2)?;
-        check_non_negative("a0_hat0", self.a0_hat0)?;
-        check_non_negative("a1_hat0", self.a1_hat0)?;
-        check_non_negative("a2_hat0", self.a2_hat0)?;
+        check_left_open(
+            "alpha",
+            self.alpha,
+            self.beta,
+            10.0,
+            "beta < alpha <= 10 (|e|^alpha must stay finite for |e| <= 1e12)",
+        )?;
+        check_gain_or_zero("h", self.h)?;
+        check_gain_or_zero("mu0", self.mu0)?;
+        check_gain_or_zero("mu1", self.mu1)?;
+        check_gain_or_zero("mu2", self.mu2)?;
+        check_initial_state("a0_hat0", self.a0_hat0)?;
+        check_initial_state("a1_hat0", self.a1_hat0)?;
+        check_initial_state("a2_hat0", self.a2_hat0)?;
         check_non_negative("sign_smoothing", self.sign_smoothing)
     }
 }
@@ -143,8 +163,25 @@ pub struct RanftsmcAxis {
     pub sigma: f64,
 }
 
+/// Below this `|ė|` the update computes `|ė|^(2−β)` with its own power
+/// instead of `|ė|² / |ė|^β`: for `|ė| ≤ 6.8e-195` (β = 5/3) both `|ė|²`
+/// and `|ė|^β` underflow to 0 and the quotient is `0/0 = NaN`. At and above
+/// 1e-100 both are normal numbers, so the shared-power shortcut is exact to
+/// rounding there.
+const SHARED_POWER_MIN: f64 = 1e-100;
+
 impl RanftsmcAxis {
-    /// A channel with `â = [a0_hat0, a1_hat0, a2_hat0]`.
+    /// A channel with `â = [a0_hat0, a1_hat0, a2_hat0]`, after validating the
+    /// gains ([`RanftsmcGains::check`]).
+    pub fn try_new(gains: RanftsmcGains) -> Result<Self, GainError> {
+        gains.check()?;
+        Ok(Self::new(gains))
+    }
+
+    /// A channel with `â = [a0_hat0, a1_hat0, a2_hat0]`, **without**
+    /// validating the gains (`new_unchecked` semantics): the caller must have
+    /// run [`RanftsmcGains::check`] or use [`RanftsmcAxis::try_new`].
+    /// Out-of-range gains never panic but may give non-finite commands.
     pub fn new(gains: RanftsmcGains) -> Self {
         Self { gains, a_hat: [gains.a0_hat0, gains.a1_hat0, gains.a2_hat0], sigma: 0.0 }
     }
@@ -158,8 +195,17 @@ impl AxisLaw for RanftsmcAxis {
     /// All five fractional powers come from two: `|e|^(α−1)` and `|ė|^(β−1)`
     /// (`sig^α(e) = e |e|^(α−1)`, `|ė|^β = |ė| |ė|^(β−1)`,
     /// `|ė|^(2−β) = |ė|² / |ė|^β`), which halves the cost of the law.
+    ///
+    /// Guards (no-ops on every meaningful input, see [`AxisLaw::update`]):
+    /// NaN and no state change for a non-finite input; `e`, `ė` clamped to
+    /// `±INPUT_LIMIT`; `|ė|^(2−β)` computed directly for `|ė| < 1e-100`;
+    /// `â` saturated at `STATE_LIMIT` (the adaptation has no leakage).
     #[inline]
     fn update(&mut self, e: f64, e_dot: f64, dt: f64) -> f64 {
+        if !inputs_finite(e, e_dot, dt) {
+            return f64::NAN;
+        }
+        let (e, e_dot) = (saturate(e, INPUT_LIMIT), saturate(e_dot, INPUT_LIMIT));
         let g = &self.gains;
         let (ae, aed) = (e.abs(), e_dot.abs());
         let e_alpha_minus_one = pow_abs_minus_one(e, g.alpha);
@@ -167,16 +213,23 @@ impl AxisLaw for RanftsmcAxis {
         let ed_beta = aed * ed_beta_minus_one;
         // σ = e + b1 sig^α(e) + b2 sig^β(ė)
         let sigma = e + g.b1 * e * e_alpha_minus_one + g.b2 * ed_beta * sign(e_dot);
-        // |ė|^(2−β) = |ė|² / |ė|^β (0 at ė = 0 since β < 2)
-        let ed_two_minus_beta = if aed > 0.0 { aed * aed / ed_beta } else { 0.0 };
+        // |ė|^(2−β) = |ė|² / |ė|^β (0 at ė = 0 since β < 2); for tiny |ė|
+        // the quotient would be 0/0, so take the power directly.
+        let ed_two_minus_beta = if aed >= SHARED_POWER_MIN {
+            aed * aed / ed_beta
+        } else if aed > 0.0 {
+            pow_abs(e_dot, 2.0 - g.beta)
+        } else {
+            0.0
+        };
         let v_eq =
             -(1.0 / (g.beta * g.b2)) * ed_two_minus_beta * (1.0 + g.alpha * g.b1 * e_alpha_minus_one) * sign(e_dot);
         let [a0, a1, a2] = self.a_hat;
         let v = v_eq - g.c * sigma - (a0 + a1 * ae + a2 * aed + g.h) * switching_sign(g, sigma);
         let abs_sigma = sigma.abs();
-        self.a_hat[0] += dt * g.mu0 * abs_sigma * ed_beta_minus_one;
-        self.a_hat[1] += dt * g.mu1 * abs_sigma * ae * ed_beta_minus_one;
-        self.a_hat[2] += dt * g.mu2 * abs_sigma * ed_beta;
+        self.a_hat[0] = saturate(self.a_hat[0] + dt * g.mu0 * abs_sigma * ed_beta_minus_one, STATE_LIMIT);
+        self.a_hat[1] = saturate(self.a_hat[1] + dt * g.mu1 * abs_sigma * ae * ed_beta_minus_one, STATE_LIMIT);
+        self.a_hat[2] = saturate(self.a_hat[2] + dt * g.mu2 * abs_sigma * ed_beta, STATE_LIMIT);
         self.sigma = sigma;
         v
     }
@@ -191,6 +244,10 @@ impl AxisLaw for RanftsmcAxis {
 
     fn reset(&mut self) {
         *self = Self::new(self.gains);
+    }
+
+    fn check_gains(&self) -> Result<(), GainError> {
+        self.gains.check()
     }
 }
 

@@ -1,5 +1,5 @@
 //! TSM-STA — nonsingular terminal sliding surface with a super-twisting
-//! reaching law (the paper's ref. [2]; that paper is not available, so this is
+//! reaching law (the paper's ref. \[2\]; that paper is not available, so this is
 //! the standard form fixed by SPEC §3) on one channel:
 //!
 //! ```text
@@ -15,8 +15,16 @@
 //! the super-twisting algorithm acting on `s` through a positive gain, and no
 //! negative power of ė anywhere (the surface is nonsingular).
 
-use crate::law::{check_non_negative, check_positive, AxisLaw, GainError};
-use crate::math::{sig, sign, sqrt, tanh};
+use crate::law::{
+    check_closed, check_gain, check_non_negative, inputs_finite, saturate, AxisLaw, GainError, INPUT_LIMIT, STATE_LIMIT,
+};
+use crate::math::{pow_abs, sig, sign, sqrt, tanh};
+
+/// Largest `p` and `q` accepted (99): an update computes `|ė|^(p/q)` and
+/// `|ė|^(2−p/q)` by `p` and `2q − p` multiplications, so the bound keeps one
+/// update O(1) (≤ 2·99 multiplications); two-digit odd integers already
+/// approximate any ratio in (1, 2) within 1 %. The paper uses 5/3.
+pub const MAX_EXPONENT_INTEGER: f64 = 99.0;
 
 /// Gains of one TSM-STA channel.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -25,9 +33,13 @@ use crate::math::{sig, sign, sqrt, tanh};
 pub struct TsmStaGains {
     /// λ > 0: surface gain (units make `s` an error).
     pub lambda: f64,
-    /// p: odd positive integer, numerator of the exponent p/q.
+    /// p: odd integer in `[1, 99]`, numerator of the exponent p/q. Stored as
+    /// f64 (scenario files may write `5.0`), but [`TsmStaGains::check`]
+    /// rejects any value that is not exactly such an integer: it is never
+    /// rounded or truncated.
     pub p: f64,
-    /// q: odd positive integer, denominator of the exponent p/q (1 < p/q < 2).
+    /// q: odd integer in `[1, 99]`, denominator of the exponent p/q
+    /// (1 < p/q < 2); validated like `p`.
     pub q: f64,
     /// k1 > 0: proportional super-twisting gain.
     pub k1: f64,
@@ -39,8 +51,10 @@ pub struct TsmStaGains {
     pub sign_smoothing: f64,
 }
 
-fn is_odd_positive_integer(v: f64) -> bool {
-    v.is_finite() && v >= 1.0 && v == (v as i64) as f64 && (v as i64) % 2 == 1
+/// `v` is an odd integer in `[1, MAX_EXPONENT_INTEGER]` (checked before any
+/// conversion, so nothing is truncated).
+fn is_odd_integer_in_range(v: f64) -> bool {
+    v.is_finite() && (1.0..=MAX_EXPONENT_INTEGER).contains(&v) && v == (v as i64) as f64 && (v as i64) % 2 == 1
 }
 
 impl TsmStaGains {
@@ -70,22 +84,54 @@ impl TsmStaGains {
         sign_smoothing: 0.0,
     };
 
-    /// Reject gains outside the ranges the method requires.
+    /// Reject gains outside the ranges the method requires, tightened to
+    /// where the law is finite in f64 and one update is O(1):
+    ///
+    /// | gain | range |
+    /// |---|---|
+    /// | λ | `[1e-6, 1e6]` (the surface divides by λ) |
+    /// | p, q | odd integers in `[1, 99]` with `1 < p/q < 2` |
+    /// | k1, k2 | `(0, 1e6]` |
+    /// | sign_smoothing | `[0, ∞)`, finite |
     pub fn check(&self) -> Result<(), GainError> {
-        check_positive("lambda", self.lambda)?;
-        if !is_odd_positive_integer(self.p) {
-            return Err(GainError { field: "p", value: self.p, expected: "an odd positive integer" });
+        check_closed(
+            "lambda",
+            self.lambda,
+            1e-6,
+            1e6,
+            "1e-6 <= lambda <= 1e6 (s divides by lambda; outside, it overflows)",
+        )?;
+        if !is_odd_integer_in_range(self.p) {
+            return Err(GainError {
+                field: "p",
+                value: self.p,
+                expected: "an odd integer 1 <= p <= 99 (one update costs p multiplications)",
+            });
         }
-        if !is_odd_positive_integer(self.q) {
-            return Err(GainError { field: "q", value: self.q, expected: "an odd positive integer" });
+        if !is_odd_integer_in_range(self.q) {
+            return Err(GainError {
+                field: "q",
+                value: self.q,
+                expected: "an odd integer 1 <= q <= 99 (one update costs 2q multiplications)",
+            });
         }
         let ratio = self.p / self.q;
         if !(ratio > 1.0 && ratio < 2.0) {
             return Err(GainError { field: "p", value: self.p, expected: "1 < p/q < 2" });
         }
-        check_positive("k1", self.k1)?;
-        check_positive("k2", self.k2)?;
+        check_gain("k1", self.k1)?;
+        check_gain("k2", self.k2)?;
         check_non_negative("sign_smoothing", self.sign_smoothing)
+    }
+
+    /// `(p, 2q − p)` as integers when `p` and `q` are valid (odd integers in
+    /// `[1, 99]`, `1 < p/q < 2`), else `None`.
+    fn integer_exponents(&self) -> Option<(u32, u32)> {
+        let valid = is_odd_integer_in_range(self.p) && is_odd_integer_in_range(self.q) && {
+            let ratio = self.p / self.q;
+            ratio > 1.0 && ratio < 2.0
+        };
+        valid.then_some((self.p as u32, (2.0 * self.q - self.p) as u32))
     }
 }
 
@@ -119,7 +165,7 @@ fn qth_root(x: f64, q: f64) -> f64 {
 
 /// `x^n` for a small non-negative integer `n` by repeated multiplication.
 #[inline]
-fn powi(x: f64, n: i32) -> f64 {
+fn powi(x: f64, n: u32) -> f64 {
     let mut out = 1.0;
     for _ in 0..n {
         out *= x;
@@ -136,12 +182,27 @@ pub struct TsmStaAxis {
     pub nu: f64,
     /// s of the last update.
     pub s: f64,
+    /// `(p, 2q − p)` as integers when the gains are valid; `None` (general
+    /// real powers) otherwise, so that an unchecked `p = 2999999999` is
+    /// neither truncated nor looped over.
+    exponents: Option<(u32, u32)>,
 }
 
 impl TsmStaAxis {
-    /// A channel with ν = 0.
+    /// A channel with ν = 0, after validating the gains ([`TsmStaGains::check`]).
+    pub fn try_new(gains: TsmStaGains) -> Result<Self, GainError> {
+        gains.check()?;
+        Ok(Self::new(gains))
+    }
+
+    /// A channel with ν = 0, **without** validating the gains
+    /// (`new_unchecked` semantics): the caller must have run
+    /// [`TsmStaGains::check`] or use [`TsmStaAxis::try_new`]. Out-of-range
+    /// gains never panic and never make an update slow (p, q outside the
+    /// checked range use real powers instead of repeated multiplication),
+    /// but may give non-finite commands.
     pub fn new(gains: TsmStaGains) -> Self {
-        Self { gains, nu: 0.0, s: 0.0 }
+        Self { gains, nu: 0.0, s: 0.0, exponents: gains.integer_exponents() }
     }
 }
 
@@ -149,19 +210,31 @@ impl AxisLaw for TsmStaAxis {
     const NAME: &'static str = "tsm-sta";
 
     /// Returns `v_fb`; then `ν += dt · (−k2 sign(s))`.
+    ///
+    /// Guards (no-ops on every meaningful input, see [`AxisLaw::update`]):
+    /// NaN and no state change for a non-finite input; `e`, `ė` clamped to
+    /// `±INPUT_LIMIT`; ν saturated to `±STATE_LIMIT`.
     #[inline]
     fn update(&mut self, e: f64, e_dot: f64, dt: f64) -> f64 {
+        if !inputs_finite(e, e_dot, dt) {
+            return f64::NAN;
+        }
+        let (e, e_dot) = (saturate(e, INPUT_LIMIT), saturate(e_dot, INPUT_LIMIT));
         let g = &self.gains;
         let ratio = g.p / g.q;
-        // Both powers of |ė| (p/q and 2 − p/q) from one q-th root r = |ė|^(1/q):
-        // |ė|^(p/q) = r^p, |ė|^(2−p/q) = r^(2q−p) (p, q are small odd integers).
-        let root = qth_root(e_dot.abs(), g.q);
-        let ed_ratio = powi(root, g.p as i32);
-        let ed_two_minus_ratio = powi(root, (2.0 * g.q - g.p) as i32);
+        let (ed_ratio, ed_two_minus_ratio) = match self.exponents {
+            // Both powers of |ė| (p/q and 2 − p/q) from one q-th root r = |ė|^(1/q):
+            // |ė|^(p/q) = r^p, |ė|^(2−p/q) = r^(2q−p) (p, q are small odd integers).
+            Some((p, two_q_minus_p)) => {
+                let root = qth_root(e_dot.abs(), g.q);
+                (powi(root, p), powi(root, two_q_minus_p))
+            }
+            None => (pow_abs(e_dot, ratio), pow_abs(e_dot, 2.0 - ratio)),
+        };
         let s = e + ed_ratio * sign(e_dot) / g.lambda;
         let sw = switching_sign(g, s);
         let v = -g.lambda / ratio * ed_two_minus_ratio * sign(e_dot) - g.k1 * sqrt(s.abs()) * sw + self.nu;
-        self.nu -= dt * g.k2 * sw;
+        self.nu = saturate(self.nu - dt * g.k2 * sw, STATE_LIMIT);
         self.s = s;
         v
     }
@@ -176,6 +249,10 @@ impl AxisLaw for TsmStaAxis {
 
     fn reset(&mut self) {
         *self = Self::new(self.gains);
+    }
+
+    fn check_gains(&self) -> Result<(), GainError> {
+        self.gains.check()
     }
 }
 

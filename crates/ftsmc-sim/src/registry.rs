@@ -61,15 +61,15 @@ pub fn build(name: &str, scenario: &Scenario) -> Result<BoxedController, String>
                 ma.enabled = false;
             }
             let laws = scenario.ftaftsmc.gains().to_array().map(FtaftsmcAxis::new);
-            Box::new(Cascade::new(config(ma), laws))
+            Box::new(Cascade::new(config(ma), laws).map_err(|e| e.to_string())?)
         }
         "ranftsmc" => {
             let laws = scenario.ranftsmc.to_array().map(RanftsmcAxis::new);
-            Box::new(Cascade::new(config(MassAdaptation::OFF), laws))
+            Box::new(Cascade::new(config(MassAdaptation::OFF), laws).map_err(|e| e.to_string())?)
         }
         "tsm-sta" => {
             let laws = scenario.tsm_sta.to_array().map(TsmStaAxis::new);
-            Box::new(Cascade::new(config(MassAdaptation::OFF), laws))
+            Box::new(Cascade::new(config(MassAdaptation::OFF), laws).map_err(|e| e.to_string())?)
         }
         _ => unreachable!("check_name accepted an unhandled name"),
     })

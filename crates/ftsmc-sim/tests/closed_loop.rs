@@ -162,7 +162,7 @@ fn controller_runs_directly_without_the_registry() {
     let s = paper_1();
     let gains = s.ftaftsmc.gains().to_array();
     let config = CascadeConfig { model: s.plant, settings: s.cascade, mass_adaptation: MassAdaptation::PAPER };
-    let mut c = Cascade::new(config, gains.map(FtaftsmcAxis::new));
+    let mut c = Cascade::new(config, gains.map(FtaftsmcAxis::new)).unwrap();
     let out = simulate(&s, &mut c, RunOptions { record: false });
     assert_eq!(c.name(), "ftaftsmc");
     assert!(out.exit.is_completed());
