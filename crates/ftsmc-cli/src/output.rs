@@ -32,7 +32,8 @@
 //! leaves only a hidden `.<name>.tmp-…` (or, if killed between the two
 //! renames, `.<name>.old-…`) folder beside the destination; the next
 //! successful run into the same destination deletes such leftovers older
-//! than [`STALE_AFTER`].
+//! than [`STALE_AFTER`] whose process no longer exists (on Linux; elsewhere
+//! the age alone decides).
 
 use std::ffi::OsString;
 use std::path::{Component, Path, PathBuf};
@@ -103,14 +104,15 @@ impl ResultDir {
                     dest.display(),
                     probe.display()
                 ),
-                Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+                // Missing (or below a file: ENOTDIR): look further up; any
+                // other problem surfaces when the folders are created.
+                Err(_) => {
                     missing.push(probe.clone());
                     match probe.parent() {
                         Some(p) if !p.as_os_str().is_empty() => probe = p.to_path_buf(),
                         _ => break,
                     }
                 }
-                Err(e) => return Err(e).with_context(|| format!("cannot write to `{}`", dest.display())),
             }
         }
         let mut created = Vec::new();
@@ -223,7 +225,7 @@ fn carry_nested_results(old: &Path, new: &Path) {
 }
 
 /// Delete `.<name>.tmp-*` / `.<name>.old-*` folders in `parent` older than
-/// [`STALE_AFTER`] (left by a killed run).
+/// [`STALE_AFTER`] whose process is gone (left by a killed run).
 fn remove_stale(parent: &Path, name: &std::ffi::OsStr) {
     let Ok(entries) = std::fs::read_dir(parent) else { return };
     let name = name.to_string_lossy();
@@ -231,7 +233,11 @@ fn remove_stale(parent: &Path, name: &std::ffi::OsStr) {
     for entry in entries.flatten() {
         let file_name = entry.file_name();
         let file_name = file_name.to_string_lossy();
-        if !prefixes.iter().any(|p| file_name.starts_with(p.as_str())) {
+        let Some(rest) = prefixes.iter().find_map(|p| file_name.strip_prefix(p.as_str())) else { continue };
+        // A long run's staging folder can be old while it is still flying:
+        // keep it while its process (`<pid>-<nanos>`) is alive (Linux /proc).
+        let pid = rest.split('-').next().unwrap_or("");
+        if !pid.is_empty() && Path::new("/proc").join(pid).exists() {
             continue;
         }
         let old_enough = entry
@@ -354,4 +360,125 @@ pub fn summary_json(runs: &[&RunOutput], extra: Map<String, Value>) -> Value {
     root.insert("scenarios".into(), Value::Object(scenarios));
     root.extend(extra);
     Value::Object(root)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn temp(name: &str) -> PathBuf {
+        let d = std::env::temp_dir().join(format!("ftsmc-output-{name}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&d);
+        std::fs::create_dir_all(&d).unwrap();
+        d
+    }
+
+    /// Names in `dir`, sorted.
+    fn names(dir: &Path) -> Vec<String> {
+        let mut v: Vec<String> =
+            std::fs::read_dir(dir).unwrap().flatten().map(|e| e.file_name().to_string_lossy().into_owned()).collect();
+        v.sort();
+        v
+    }
+
+    #[test]
+    fn a_failed_write_removes_the_staging_folder_and_keeps_the_old_result() {
+        let root = temp("fail");
+        let dest = root.join("res");
+        std::fs::create_dir_all(&dest).unwrap();
+        std::fs::write(dest.join("old.csv"), "old").unwrap();
+        {
+            let dir = ResultDir::begin(&dest).unwrap();
+            dir.write("a.csv", b"1,2\n").unwrap();
+            // Fails midway, like a full disk: `a.csv` is a file, not a folder.
+            assert!(dir.write("a.csv/b.csv", b"x").is_err());
+            assert_eq!(names(&root).len(), 2, "staging exists while writing: {:?}", names(&root));
+        }
+        assert_eq!(names(&root), ["res"], "staging folder left behind");
+        assert_eq!(names(&dest), ["old.csv"]);
+        std::fs::remove_dir_all(&root).ok();
+    }
+
+    #[test]
+    fn a_failed_transaction_removes_the_folders_it_created() {
+        let root = temp("created");
+        let dest = root.join("a/b/res");
+        drop(ResultDir::begin(&dest).unwrap());
+        assert!(names(&root).is_empty(), "{:?}", names(&root));
+        std::fs::remove_dir_all(&root).ok();
+    }
+
+    #[test]
+    fn commit_replaces_the_whole_folder_but_keeps_nested_results_of_other_commands() {
+        let root = temp("commit");
+        let dest = root.join("res");
+        std::fs::create_dir_all(dest.join("montecarlo")).unwrap();
+        std::fs::create_dir_all(dest.join("paper-scenario-1")).unwrap();
+        std::fs::write(dest.join("montecarlo/summary.json"), "{}").unwrap();
+        std::fs::write(dest.join("junk.csv"), "stale").unwrap();
+        std::fs::write(dest.join("paper-scenario-1/stale.csv"), "stale").unwrap();
+        let dir = ResultDir::begin(&dest).unwrap();
+        dir.write("paper-scenario-1/new.csv", b"new").unwrap();
+        dir.write("summary.json", b"{}").unwrap();
+        dir.commit().unwrap();
+        assert_eq!(names(&root), ["res"], "no staging or old folder left");
+        assert_eq!(names(&dest), ["montecarlo", "paper-scenario-1", "summary.json"]);
+        assert_eq!(names(&dest.join("paper-scenario-1")), ["new.csv"]);
+        std::fs::remove_dir_all(&root).ok();
+    }
+
+    #[test]
+    fn a_destination_under_a_regular_file_is_refused_and_nothing_is_written() {
+        let root = temp("refuse");
+        std::fs::write(root.join("file"), "x").unwrap();
+        let err = ResultDir::begin(&root.join("file/sub/res")).unwrap_err().to_string();
+        assert!(err.contains("is not a directory"), "{err}");
+        assert!(ResultDir::begin(&root.join("file")).is_err(), "an existing file as destination");
+        assert!(ResultDir::begin(Path::new(".")).is_err());
+        assert_eq!(names(&root), ["file"]);
+        std::fs::remove_dir_all(&root).ok();
+    }
+
+    #[test]
+    fn stale_staging_folders_of_a_killed_run_are_removed_by_the_next_commit() {
+        let root = temp("stale");
+        let stale = root.join(".res.tmp-4194305-1"); // above Linux pid_max
+        let fresh = root.join(".res.tmp-4194305-2");
+        let other = root.join(".other.tmp-4194305-1");
+        for d in [&stale, &fresh, &other] {
+            std::fs::create_dir_all(d).unwrap();
+            std::fs::write(d.join("x.csv"), "partial").unwrap();
+        }
+        let two_hours_ago = SystemTime::now() - Duration::from_secs(7200);
+        for d in [&stale, &other] {
+            std::fs::File::open(d).unwrap().set_modified(two_hours_ago).unwrap();
+        }
+        let dir = ResultDir::begin(&root.join("res")).unwrap();
+        dir.write("summary.json", b"{}").unwrap();
+        dir.commit().unwrap();
+        // The stale one goes; a fresh one may belong to a concurrent run,
+        // and another destination's is not ours to touch.
+        assert_eq!(names(&root), [".other.tmp-4194305-1", ".res.tmp-4194305-2", "res"]);
+        // An old staging folder of a live process (a long run) stays.
+        let live = root.join(format!(".res.tmp-{}-3", std::process::id()));
+        std::fs::create_dir_all(&live).unwrap();
+        std::fs::File::open(&live).unwrap().set_modified(two_hours_ago).unwrap();
+        ResultDir::begin(&root.join("res")).unwrap().commit().unwrap();
+        assert!(live.exists());
+        std::fs::remove_dir_all(&root).ok();
+    }
+
+    #[test]
+    fn error_lines_are_single_and_bounded() {
+        let toml = "deep.toml: TOML parse error at line 1, column 85\n  |\n1 | a = [[[[[[[[\n  |     ^\ncannot recurse further; max recursion depth met\n";
+        assert_eq!(
+            one_line(toml, 300),
+            "deep.toml: TOML parse error at line 1, column 85 | cannot recurse further; max recursion depth met"
+        );
+        let long = "x".repeat(100_000);
+        let cut = one_line(&long, 300);
+        assert_eq!(cut.chars().count(), 300);
+        assert!(cut.ends_with('…'));
+        assert_eq!(one_line("a\tb\u{1b}[31m", 300), "a b [31m");
+    }
 }

@@ -450,3 +450,46 @@ pub fn run_scenario(scenario: &Scenario, names: &[String], out: &Path, figures: 
     );
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Scenario 1 with `max_rotor_speed = 1000`: FTAFTSMC diverges at
+    /// 0.64 s, the others complete (6 s are enough to pass the 5 s mark).
+    fn diverged_runs() -> (Scenario, Vec<RunOutput>) {
+        let mut s = Scenario::paper_scenarios().remove(0);
+        s.simulation.max_rotor_speed = Some(1000.0);
+        s.duration = 6.0;
+        let jobs: Vec<Job> =
+            s.controllers.iter().map(|n| Job { scenario: s.clone(), controller: n.clone(), key: n.clone() }).collect();
+        let runs = fly(&jobs).unwrap();
+        (s, runs)
+    }
+
+    #[test]
+    fn a_diverged_run_shows_dashes_and_its_exit_status_in_every_table() {
+        let (s, runs) = diverged_runs();
+        let ft = find(&runs, &s.name, "ftaftsmc").unwrap();
+        assert!(!ft.exit.is_completed(), "{}", ft.exit);
+        assert!(ft.metrics.max_error_after.z.is_none());
+        let (t3, record) = table_3(&runs, &s.name);
+        let x_row = t3.lines().find(|l| l.starts_with("| x |")).unwrap();
+        assert!(x_row.contains("— (diverged at 0.64 s)"), "{x_row}");
+        assert!(!x_row.contains(&format!("{:.4}", ft.metrics.ise.x)), "{x_row}");
+        assert!(!t3.contains("**confirmed**"), "no claim confirmed by a diverged run:\n{t3}");
+        assert!(t3.contains("**not comparable**"), "{t3}");
+        assert!(record.get("headline").is_none());
+        assert_eq!(record["x"]["ours"]["ftaftsmc"].as_f64(), Some(ft.metrics.ise.x), "JSON keeps the number");
+        assert!(record["x"]["diverged"]["ftaftsmc"].is_number());
+
+        let refs: Vec<&RunOutput> = runs.iter().collect();
+        let table = metrics_table(&refs, "t", false, s.simulation.steady_state_after);
+        let row = table.lines().find(|l| l.starts_with("| FTAFTSMC")).unwrap();
+        assert!(row.contains("diverged") && row.contains("0.639"), "{row}");
+        assert_eq!(row.matches("| — ").count(), 15, "{row}");
+        assert!(!row.contains(&num(ft.metrics.ise.x)), "{row}");
+        let ok_row = table.lines().find(|l| l.starts_with("| RANFTSMC")).unwrap();
+        assert!(!ok_row.contains('—'), "a completed run keeps its numbers: {ok_row}");
+    }
+}
