@@ -160,10 +160,7 @@ pub fn run(scenario: &Scenario, controllers: &[String], settings: &SweepSettings
             }));
         }
     }
-    dir.write(
-        "fixed-time.json",
-        serde_json::to_string_pretty(&json!({ "channels": json_rows }))?.as_bytes(),
-    )?;
+    dir.write("fixed-time.json", serde_json::to_string_pretty(&json!({ "channels": json_rows }))?.as_bytes())?;
 
     // Figures: reaching (continuous) and settling (sampled) against |e0|.
     for (sampling, field, stem, what) in [

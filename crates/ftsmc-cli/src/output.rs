@@ -99,11 +99,7 @@ impl ResultDir {
         loop {
             match std::fs::metadata(&probe) {
                 Ok(meta) if meta.is_dir() => break,
-                Ok(_) => bail!(
-                    "cannot write to `{}`: `{}` is not a directory",
-                    dest.display(),
-                    probe.display()
-                ),
+                Ok(_) => bail!("cannot write to `{}`: `{}` is not a directory", dest.display(), probe.display()),
                 // Missing (or below a file: ENOTDIR): look further up; any
                 // other problem surfaces when the folders are created.
                 Err(_) => {
@@ -216,7 +212,8 @@ fn carry_nested_results(old: &Path, new: &Path) {
     let Ok(entries) = std::fs::read_dir(old) else { return };
     for entry in entries.flatten() {
         let path = entry.path();
-        let is_result = path.is_dir() && (path.join("summary.json").is_file() || path.join("fixed-time.json").is_file());
+        let is_result =
+            path.is_dir() && (path.join("summary.json").is_file() || path.join("fixed-time.json").is_file());
         let target = new.join(entry.file_name());
         if is_result && std::fs::symlink_metadata(&target).is_err() {
             let _ = std::fs::rename(&path, &target);
@@ -293,8 +290,7 @@ pub fn one_line(text: &str, max: usize) -> String {
         let rest = line.trim_start().trim_start_matches(|c: char| c.is_ascii_digit()).trim_start();
         rest.starts_with('|') && rest.len() < line.len()
     };
-    let parts: Vec<&str> =
-        text.lines().filter(|l| !l.trim().is_empty() && !is_snippet(l)).map(str::trim).collect();
+    let parts: Vec<&str> = text.lines().filter(|l| !l.trim().is_empty() && !is_snippet(l)).map(str::trim).collect();
     let joined = parts.join(" | ");
     let joined: String = joined.chars().map(|c| if c.is_control() { ' ' } else { c }).collect();
     if joined.chars().count() <= max {

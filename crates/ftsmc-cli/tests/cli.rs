@@ -135,9 +135,11 @@ fn help_names_the_commands() {
 /// Scenario 1 with `max_rotor_speed = 1000` (FTAFTSMC diverges at 0.64 s),
 /// shortened to 6 s (the others still pass the 5 s steady-state mark).
 fn diverging_scenario() -> String {
-    scenario_text("paper-scenario-1.toml")
-        .replacen("[simulation]", "[simulation]\nmax_rotor_speed = 1000", 1)
-        .replacen("duration = 20.0", "duration = 6.0", 1)
+    scenario_text("paper-scenario-1.toml").replacen("[simulation]", "[simulation]\nmax_rotor_speed = 1000", 1).replacen(
+        "duration = 20.0",
+        "duration = 6.0",
+        1,
+    )
 }
 
 #[test]

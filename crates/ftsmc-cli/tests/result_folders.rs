@@ -51,7 +51,10 @@ fn a_bad_out_is_refused_before_any_flight_and_nothing_is_written() {
         let out = ftsmc(args, &dir);
         let err = String::from_utf8_lossy(&out.stderr);
         assert!(!out.status.success(), "{args:?}");
-        assert!(err.starts_with("error: ") && err.contains("file") && err.contains("not a directory"), "{args:?}: {err}");
+        assert!(
+            err.starts_with("error: ") && err.contains("file") && err.contains("not a directory"),
+            "{args:?}: {err}"
+        );
         // `reproduce` announces its flights on stderr; nothing was flown or printed.
         assert!(!err.contains("flying"), "{args:?}: {err}");
         assert!(out.stdout.is_empty(), "{args:?}: {}", String::from_utf8_lossy(&out.stdout));
