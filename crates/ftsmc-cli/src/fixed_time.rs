@@ -12,7 +12,7 @@ use ftsmc_sim::scenario::Scenario;
 use rayon::prelude::*;
 use serde_json::json;
 
-use crate::output::{format_number, write_atomic};
+use crate::output::{format_number, ResultDir};
 use crate::plot::{controller_color, write_figure, Figure, Panel, Series};
 
 struct Row {
@@ -26,8 +26,19 @@ fn opt(v: Option<f64>) -> String {
     v.map_or("—".into(), |v| format!("{v:.3}"))
 }
 
+/// Reaching time of one point, or `— (diverged at t s)`.
+fn reach_cell(t: Option<&ChannelTimes>) -> String {
+    match t {
+        Some(ChannelTimes { diverged_at: Some(at), reaching_time: None, .. }) => format!("— (diverged at {at:.2} s)"),
+        Some(t) => opt(t.reaching_time),
+        None => opt(None),
+    }
+}
+
 /// Run the sweep and write `fixed-time.csv`, `fixed-time.md`, `fixed-time.json` and figures.
 pub fn run(scenario: &Scenario, controllers: &[String], settings: &SweepSettings, out: &Path) -> Result<()> {
+    // Refuse a bad --out before any flight; write into a staging folder.
+    let dir = ResultDir::begin(out)?;
     let mut plan = Vec::new();
     for c in controllers {
         for axis in 0..6 {
@@ -77,7 +88,7 @@ pub fn run(scenario: &Scenario, controllers: &[String], settings: &SweepSettings
             ])?;
         }
     }
-    write_atomic(&out.join("fixed-time.csv"), &w.into_inner().map_err(|e| anyhow::anyhow!("csv: {e}"))?)?;
+    dir.write("fixed-time.csv", &w.into_inner().map_err(|e| anyhow::anyhow!("csv: {e}"))?)?;
 
     // Summary table.
     let mut md = String::new();
@@ -107,7 +118,13 @@ pub fn run(scenario: &Scenario, controllers: &[String], settings: &SweepSettings
             let wset = worst(samp.times.iter().filter(|t| t.diverged_at.is_none()).map(|t| t.settling_time));
             let diverge_from =
                 samp.times.iter().filter(|t| t.diverged_at.is_some()).map(|t| t.e0.abs()).fold(f64::INFINITY, f64::min);
+            // A continuous flight that diverged has no reaching time; say so
+            // instead of "not reached".
+            let cont_diverge_from =
+                cont.times.iter().filter(|t| t.diverged_at.is_some()).map(|t| t.e0.abs()).fold(f64::INFINITY, f64::min);
+            let cont_diverged = cont_diverge_from.is_finite();
             let within = match (bound, wc) {
+                (_, None) if cont_diverged => "**no — diverged**",
                 (Some(b), Some(w)) => {
                     if w <= b {
                         "yes"
@@ -118,21 +135,23 @@ pub fn run(scenario: &Scenario, controllers: &[String], settings: &SweepSettings
                 (Some(_), None) => "**no — not reached**",
                 (None, _) => "no bound",
             };
-            let first = cont.times.first().and_then(|t| t.reaching_time);
-            let last = cont.times.iter().rev().find(|t| t.e0 > 0.0).and_then(|t| t.reaching_time);
             let _ = writeln!(
                 md,
                 "| {} | {} | {} | {} | {} | {} | {} | {} | {} → {} |",
                 label(c),
                 NAMES[axis],
                 opt(bound),
-                wc.map_or("not reached".into(), |v| format!("{v:.3}")),
+                match wc {
+                    Some(v) => format!("{v:.3}"),
+                    None if cont_diverged => format!("— (diverged from |e0| = {cont_diverge_from:.3e})"),
+                    None => "not reached".into(),
+                },
                 within,
                 ws.map_or("not reached".into(), |v| format!("{v:.3}")),
                 wset.map_or("not settled".into(), |v| format!("{v:.3}")),
                 if diverge_from.is_finite() { format!("{diverge_from:.3e}") } else { "never".into() },
-                opt(first),
-                opt(last),
+                reach_cell(cont.times.first()),
+                reach_cell(cont.times.iter().rev().find(|t| t.e0 > 0.0)),
             );
             json_rows.push(json!({
                 "controller": c, "channel": NAMES[axis], "bound": bound,
@@ -141,11 +160,7 @@ pub fn run(scenario: &Scenario, controllers: &[String], settings: &SweepSettings
             }));
         }
     }
-    write_atomic(&out.join("fixed-time.md"), md.as_bytes())?;
-    write_atomic(
-        &out.join("fixed-time.json"),
-        serde_json::to_string_pretty(&json!({ "channels": json_rows }))?.as_bytes(),
-    )?;
+    dir.write("fixed-time.json", serde_json::to_string_pretty(&json!({ "channels": json_rows }))?.as_bytes())?;
 
     // Figures: reaching (continuous) and settling (sampled) against |e0|.
     for (sampling, field, stem, what) in [
@@ -201,12 +216,13 @@ pub fn run(scenario: &Scenario, controllers: &[String], settings: &SweepSettings
                 panels,
                 columns: 3,
             },
-            &out.join(stem),
+            &dir.path().join(stem),
         )?;
     }
-    let cascade_md = cascade_sweep(scenario, controllers, settings, out)?;
+    let cascade_md = cascade_sweep(scenario, controllers, settings, &dir)?;
     let md = format!("{md}\n{cascade_md}");
-    write_atomic(&out.join("fixed-time.md"), md.as_bytes())?;
+    dir.write("fixed-time.md", md.as_bytes())?;
+    dir.commit()?;
     println!("{md}");
     println!(
         "wrote {}/fixed-time.csv, fixed-time-cascade.csv, fixed-time.md, fixed-time.json, fixed-time-reaching.{{svg,png}}, fixed-time-settling.{{svg,png}}, fixed-time-cascade.{{svg,png}}",
@@ -217,7 +233,12 @@ pub fn run(scenario: &Scenario, controllers: &[String], settings: &SweepSettings
 
 /// The same sweep through the full cascade and plant for the channels that
 /// need no tilt (z and ψ), 30 s per flight.
-fn cascade_sweep(scenario: &Scenario, controllers: &[String], settings: &SweepSettings, out: &Path) -> Result<String> {
+fn cascade_sweep(
+    scenario: &Scenario,
+    controllers: &[String],
+    settings: &SweepSettings,
+    dir: &ResultDir,
+) -> Result<String> {
     let settings = SweepSettings { t_max: 30.0, ..settings.clone() };
     let mut plan = Vec::new();
     for c in controllers {
@@ -253,13 +274,14 @@ fn cascade_sweep(scenario: &Scenario, controllers: &[String], settings: &SweepSe
             o(t.diverged_at),
         ])?;
     }
-    write_atomic(&out.join("fixed-time-cascade.csv"), &w.into_inner().map_err(|e| anyhow::anyhow!("csv: {e}"))?)?;
+    dir.write("fixed-time-cascade.csv", &w.into_inner().map_err(|e| anyhow::anyhow!("csv: {e}"))?)?;
 
     let cell = |c: &str, axis: usize, m: f64| {
         let pts: Vec<&ChannelTimes> =
             points.iter().filter(|(pc, pa, t)| pc == c && *pa == axis && t.e0.abs() == m).map(|(_, _, t)| t).collect();
-        if pts.iter().any(|t| t.diverged_at.is_some()) {
-            "diverged".to_string()
+        let first_divergence = pts.iter().filter_map(|t| t.diverged_at).fold(f64::INFINITY, f64::min);
+        if first_divergence.is_finite() {
+            format!("— (diverged at {first_divergence:.2} s)")
         } else {
             worst(pts.iter().map(|t| t.settling_time)).map_or("not settled".into(), |v| format!("{v:.2}"))
         }
@@ -305,7 +327,7 @@ fn cascade_sweep(scenario: &Scenario, controllers: &[String], settings: &SweepSe
             panels,
             columns: 2,
         },
-        &out.join("fixed-time-cascade"),
+        &dir.path().join("fixed-time-cascade"),
     )?;
     Ok(md)
 }

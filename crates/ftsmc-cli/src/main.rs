@@ -138,9 +138,11 @@ fn main() -> std::process::ExitCode {
     match run(Cli::parse()) {
         Ok(()) => std::process::ExitCode::SUCCESS,
         Err(err) => {
-            // `{:#}` prints the whole context chain on one line and, unlike
-            // returning the error from main, never a stack backtrace.
-            eprintln!("error: {err:#}");
+            // `{:#}` prints the whole context chain and, unlike returning
+            // the error from main, never a stack backtrace; `one_line` keeps
+            // it one bounded line (a parser's multi-line source snippet of
+            // a huge line would otherwise print hundreds of KiB).
+            eprintln!("error: {}", output::one_line(&format!("{err:#}"), output::MAX_ERROR_CHARS));
             std::process::ExitCode::FAILURE
         }
     }

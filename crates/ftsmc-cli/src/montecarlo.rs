@@ -1,21 +1,26 @@
 //! `ftsmc montecarlo`: randomised batches in parallel, `runs.csv`,
 //! `summary.json` and box plots.
 
+use std::fmt::Write as _;
 use std::path::Path;
 use std::time::Instant;
 
 use anyhow::{Context, Result};
-use ftsmc_sim::montecarlo::{run_batch, summarize, McRun, MonteCarloSpec, SAMPLED_COLUMNS};
+use ftsmc_sim::montecarlo::{run_batch, summarize, ControllerSummary, McRun, MonteCarloSpec, SAMPLED_COLUMNS};
 use ftsmc_sim::registry::label;
 use ftsmc_sim::scenario::Scenario;
 use ftsmc_sim::simulate::ExitStatus;
 use indicatif::{ProgressBar, ProgressStyle};
 use serde_json::{json, Map, Value};
 
-use crate::output::{format_number, write_atomic};
+use crate::output::{format_number, ResultDir};
 use crate::plot::{controller_color, write_boxplots, BoxGroup, BoxPanel};
 
-/// `runs.csv` text: one row per (run, controller), in run order.
+/// `runs.csv` text: one row per (run, controller), in run order. The
+/// integral metrics of a diverged row cover `[0, duration]` (its last
+/// column) and the `completed` column says whether that is the whole
+/// scenario; `max_error_after_*` is empty when the run ended before
+/// `steady_state_after` (`settling_time_*` is `NaN` when not settled).
 pub fn runs_csv(rows: &[McRun]) -> Result<Vec<u8>> {
     let mut w = csv::Writer::from_writer(Vec::new());
     let metric_names: Vec<String> =
@@ -24,6 +29,7 @@ pub fn runs_csv(rows: &[McRun]) -> Result<Vec<u8>> {
         ["run", "seed", "controller", "exit", "diverged_at"].iter().map(|s| s.to_string()).collect();
     header.extend(SAMPLED_COLUMNS.iter().map(|s| s.to_string()));
     header.extend(metric_names.iter().cloned());
+    header.push("completed".into());
     w.write_record(&header)?;
     for r in rows {
         let diverged_at = match r.exit {
@@ -34,12 +40,46 @@ pub fn runs_csv(rows: &[McRun]) -> Result<Vec<u8>> {
             vec![r.index.to_string(), r.seed.to_string(), r.controller.clone(), r.exit.to_string(), diverged_at];
         rec.extend(r.sampled.iter().map(|v| format_number(*v)));
         let flat = r.metrics.flat();
+        let after = &r.metrics.max_error_after;
         for name in &metric_names {
-            rec.push(flat.iter().find(|(n, _)| n == name).map_or(String::new(), |(_, v)| format_number(*v)));
+            let not_reached = name.starts_with("max_error_after_") && after.to_array().iter().all(Option::is_none);
+            rec.push(match flat.iter().find(|(n, _)| n == name) {
+                Some((_, v)) if !not_reached => format_number(*v),
+                _ => String::new(),
+            });
         }
+        rec.push(r.exit.is_completed().to_string());
         w.write_record(&rec)?;
     }
     w.into_inner().map_err(|e| anyhow::anyhow!("csv: {e}"))
+}
+
+/// The printed table: statistics over the completed runs (a diverged run's
+/// integrals cover a shorter span and would look better), with the count of
+/// diverged runs; `— (all N diverged)` when none completed.
+pub fn mc_table(summaries: &[(String, ControllerSummary)]) -> String {
+    let mut md = String::new();
+    md.push_str("| controller | success | diverged | ISE x median [p5, p95] | ISE y | ISE z | ISE ψ | worst ISE z |\n");
+    md.push_str("|---|---|---|---|---|---|---|---|");
+    for (name, s) in summaries {
+        let none = || if s.diverged > 0 { format!("— (all {} diverged)", s.diverged) } else { "—".to_string() };
+        let cell = |m: &str| {
+            s.metrics.get(m).map_or_else(none, |st| format!("{:.4} [{:.4}, {:.4}]", st.median, st.p5, st.p95))
+        };
+        let _ = write!(
+            md,
+            "\n| {} | {:.1} % | {} | {} | {} | {} | {} | {} |",
+            label(name),
+            100.0 * s.success_rate,
+            s.diverged,
+            cell("ise_x"),
+            cell("ise_y"),
+            cell("ise_z"),
+            cell("ise_psi"),
+            s.metrics.get("ise_z").map_or_else(none, |st| format!("{:.4}", st.worst))
+        );
+    }
+    md
 }
 
 /// Run a batch and write its outputs.
@@ -52,6 +92,8 @@ pub fn run(
     out: &Path,
     figures: bool,
 ) -> Result<()> {
+    // Refuse a bad --out before any flight.
+    let dir = ResultDir::begin(out)?;
     let spec = scenario.montecarlo.clone().unwrap_or_else(|| {
         eprintln!("note: {} has no [montecarlo] section; runs differ only in their seeds (drag noise)", scenario.name);
         MonteCarloSpec::default()
@@ -75,7 +117,7 @@ pub fn run(
     bar.finish_and_clear();
     let elapsed = started.elapsed().as_secs_f64();
 
-    write_atomic(&out.join("runs.csv"), &runs_csv(&rows)?)?;
+    dir.write("runs.csv", &runs_csv(&rows)?)?;
     let summaries = summarize(&rows, controllers);
     let mut per_controller = Map::new();
     for (name, s) in &summaries {
@@ -87,27 +129,8 @@ pub fn run(
         "master_seed": seed,
         "controllers": Value::Object(per_controller),
     });
-    write_atomic(&out.join("summary.json"), serde_json::to_string_pretty(&summary)?.as_bytes())?;
+    dir.write("summary.json", serde_json::to_string_pretty(&summary)?.as_bytes())?;
 
-    println!("Monte Carlo: {} × {} runs of {} (seed {seed})\n", controllers.len(), runs, scenario.name);
-    println!("| controller | success | diverged | ISE x median [p5, p95] | ISE y | ISE z | ISE ψ | worst ISE z |");
-    println!("|---|---|---|---|---|---|---|---|");
-    for (name, s) in &summaries {
-        let cell = |m: &str| {
-            s.metrics.get(m).map_or("—".to_string(), |st| format!("{:.4} [{:.4}, {:.4}]", st.median, st.p5, st.p95))
-        };
-        println!(
-            "| {} | {:.1} % | {} | {} | {} | {} | {} | {} |",
-            label(name),
-            100.0 * s.success_rate,
-            s.diverged,
-            cell("ise_x"),
-            cell("ise_y"),
-            cell("ise_z"),
-            cell("ise_psi"),
-            s.metrics.get("ise_z").map_or("—".into(), |st| format!("{:.4}", st.worst))
-        );
-    }
     if figures {
         let panels: Vec<BoxPanel> = ["x", "y", "z", "psi"]
             .iter()
@@ -142,9 +165,13 @@ pub fn run(
             &format!("Monte Carlo — {} runs of {} (completed runs)", runs, scenario.name),
             &panels,
             2,
-            &out.join("montecarlo-ise"),
+            &dir.path().join("montecarlo-ise"),
         )?;
     }
+    dir.commit()?;
+
+    println!("Monte Carlo: {} × {} runs of {} (seed {seed})\n", controllers.len(), runs, scenario.name);
+    println!("{}", mc_table(&summaries));
     println!(
         "\n{} flights in {elapsed:.2} s ({:.0} flights/s); wrote {}/runs.csv, summary.json{}",
         rows.len(),

@@ -1,24 +1,305 @@
-//! Output files: atomic writes (temporary file + rename, so an interrupted
-//! run never leaves a half-written result), per-run CSV time series and the
-//! JSON summary.
+//! Output files: whole result folders ([`ResultDir`]), per-run CSV time
+//! series and the JSON summary.
+//!
+//! # Result folders are whole
+//!
+//! Every command writes its results into a *staging* folder beside the
+//! destination, `.<name>.tmp-<pid>-<nanos>` (hidden, unique per process and
+//! start time), and only when every file is complete swaps it into place:
+//! the old destination (if any) is renamed to `.<name>.old-<pid>-<nanos>`,
+//! the staging folder is renamed to the destination, and the old folder is
+//! deleted. A reader therefore sees the whole old result or the whole new
+//! one, never a mix, and no file of an older run survives beside the new
+//! ones. (Between the two renames — microseconds — the destination does not
+//! exist at all.) The one exception is nested results of *other* commands:
+//! a sub-folder of the old destination that holds its own `summary.json` or
+//! `fixed-time.json` (e.g. `results/montecarlo` from `ftsmc montecarlo`)
+//! and that the new result does not contain is moved into the new folder
+//! before the swap, so `ftsmc reproduce` does not delete a Monte Carlo batch.
+//!
+//! On every error path (a flight fails, a write fails — disk full included —
+//! or a figure cannot be rendered) the staging folder is removed by a drop
+//! guard, and directories created only for it are removed again.
+//!
+//! The destination is checked before any flight: the nearest existing
+//! ancestor must be a directory and the staging folder must be creatable
+//! in it, so a bad `--out` is refused before any work.
+//!
+//! **Concurrency** (unique names, no lock): two runs into the same folder
+//! each write their own staging folder; each commit is a rename swap, so the
+//! run that finishes last wins and the folder is exactly its whole output —
+//! never one run's CSV beside the other's summary. A run killed with SIGKILL
+//! leaves only a hidden `.<name>.tmp-…` (or, if killed between the two
+//! renames, `.<name>.old-…`) folder beside the destination; the next
+//! successful run into the same destination deletes such leftovers older
+//! than [`STALE_AFTER`] whose process no longer exists (on Linux; elsewhere
+//! the age alone decides).
 
-use std::path::{Path, PathBuf};
+use std::ffi::OsString;
+use std::path::{Component, Path, PathBuf};
+use std::time::{Duration, SystemTime, UNIX_EPOCH};
 
-use anyhow::{Context, Result};
+use anyhow::{bail, Context, Result};
 use ftsmc_sim::simulate::{Recording, RunOutput};
 use serde_json::{json, Map, Value};
 
-/// Write `bytes` to `path` atomically (write `path.tmp`, then rename).
-pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
+/// Leftover staging / old folders older than this are deleted by the next
+/// successful run into the same destination.
+pub const STALE_AFTER: Duration = Duration::from_secs(3600);
+
+/// How often a commit retries when a concurrent run puts a folder back in
+/// place between our two renames.
+const COMMIT_ATTEMPTS: usize = 100;
+
+/// A result folder being written: files go into a hidden staging folder
+/// beside `dest`; [`ResultDir::commit`] swaps it into place; dropping it
+/// uncommitted removes the staging folder.
+#[derive(Debug)]
+pub struct ResultDir {
+    dest: PathBuf,
+    staging: PathBuf,
+    /// Directories created for the staging folder (deepest last), removed
+    /// again if they are still empty when the transaction fails.
+    created: Vec<PathBuf>,
+    committed: bool,
+}
+
+fn unique_suffix() -> String {
+    let nanos = SystemTime::now().duration_since(UNIX_EPOCH).map_or(0, |d| d.as_nanos());
+    format!("{}-{nanos}", std::process::id())
+}
+
+fn hidden_name(name: &std::ffi::OsStr, kind: &str) -> OsString {
+    let mut s = OsString::from(".");
+    s.push(name);
+    s.push(format!(".{kind}-{}", unique_suffix()));
+    s
+}
+
+impl ResultDir {
+    /// Start a result folder for `dest`: check it can be written and create
+    /// the staging folder. Call before doing any work.
+    pub fn begin(dest: &Path) -> Result<Self> {
+        let name = match dest.components().next_back() {
+            Some(Component::Normal(n)) => n.to_owned(),
+            _ => bail!("output folder `{}` must end in a folder name (not `.`, `..` or `/`)", dest.display()),
+        };
+        let parent = match dest.parent() {
+            Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+            _ => PathBuf::from("."),
+        };
+        if let Ok(meta) = std::fs::symlink_metadata(dest) {
+            if !meta.is_dir() {
+                bail!("output folder `{}` exists and is not a directory", dest.display());
+            }
+        }
+        // The nearest existing ancestor must be a directory.
+        let mut missing = Vec::new();
+        let mut probe = parent.clone();
+        loop {
+            match std::fs::metadata(&probe) {
+                Ok(meta) if meta.is_dir() => break,
+                Ok(_) => bail!("cannot write to `{}`: `{}` is not a directory", dest.display(), probe.display()),
+                // Missing (or below a file: ENOTDIR): look further up; any
+                // other problem surfaces when the folders are created.
+                Err(_) => {
+                    missing.push(probe.clone());
+                    match probe.parent() {
+                        Some(p) if !p.as_os_str().is_empty() => probe = p.to_path_buf(),
+                        _ => break,
+                    }
+                }
+            }
+        }
+        let mut created = Vec::new();
+        for dir in missing.into_iter().rev() {
+            match std::fs::create_dir(&dir) {
+                Ok(()) => created.push(dir),
+                Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {}
+                Err(e) => {
+                    remove_created(&created);
+                    return Err(e).with_context(|| format!("cannot create {}", dir.display()));
+                }
+            }
+        }
+        let staging = parent.join(hidden_name(&name, "tmp"));
+        if let Err(e) = std::fs::create_dir(&staging) {
+            remove_created(&created);
+            return Err(e).with_context(|| format!("cannot write to `{}`", dest.display()));
+        }
+        Ok(Self { dest: dest.to_path_buf(), staging, created, committed: false })
+    }
+
+    /// The staging folder: write every file of the result below it.
+    pub fn path(&self) -> &Path {
+        &self.staging
+    }
+
+    /// Write `bytes` to `rel` (relative to the result folder), creating
+    /// sub-folders as needed.
+    pub fn write(&self, rel: impl AsRef<Path>, bytes: &[u8]) -> Result<()> {
+        write_file(&self.staging.join(rel), bytes)
+    }
+
+    /// Swap the staging folder into place (see the module docs).
+    pub fn commit(mut self) -> Result<()> {
+        let parent = self.staging.parent().map(Path::to_path_buf).unwrap_or_else(|| PathBuf::from("."));
+        let name = self.dest.file_name().map(ToOwned::to_owned).unwrap_or_default();
+        let mut olds = Vec::new();
+        let mut attempt = 0;
+        loop {
+            attempt += 1;
+            if std::fs::symlink_metadata(&self.dest).is_ok() {
+                let old = parent.join(hidden_name(&name, "old"));
+                match std::fs::rename(&self.dest, &old) {
+                    Ok(()) => {
+                        carry_nested_results(&old, &self.staging);
+                        olds.push(old);
+                    }
+                    // A concurrent run moved it away first.
+                    Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
+                    Err(e) => {
+                        return Err(e).with_context(|| format!("cannot move the old {} aside", self.dest.display()))
+                    }
+                }
+            }
+            match std::fs::rename(&self.staging, &self.dest) {
+                Ok(()) => break,
+                // A concurrent run put its result in place between our renames: move that aside too.
+                Err(_) if attempt < COMMIT_ATTEMPTS && std::fs::symlink_metadata(&self.dest).is_ok() => continue,
+                Err(e) => {
+                    // Put the old result back if nothing took its place.
+                    if let Some(old) = olds.pop() {
+                        let _ = std::fs::rename(&old, &self.dest);
+                    }
+                    for old in &olds {
+                        let _ = std::fs::remove_dir_all(old);
+                    }
+                    return Err(e).with_context(|| {
+                        format!("cannot move {} into place as {}", self.staging.display(), self.dest.display())
+                    });
+                }
+            }
+        }
+        self.committed = true;
+        for old in &olds {
+            let _ = std::fs::remove_dir_all(old);
+        }
+        remove_stale(&parent, &name);
+        Ok(())
+    }
+}
+
+impl Drop for ResultDir {
+    fn drop(&mut self) {
+        if !self.committed {
+            let _ = std::fs::remove_dir_all(&self.staging);
+            remove_created(&self.created);
+        }
+    }
+}
+
+/// Remove directories we created (deepest first) if they are still empty.
+fn remove_created(created: &[PathBuf]) {
+    for dir in created.iter().rev() {
+        let _ = std::fs::remove_dir(dir);
+    }
+}
+
+/// Move sub-folders of `old` that are another command's whole result (they
+/// hold `summary.json` or `fixed-time.json`) and that `new` lacks into `new`.
+fn carry_nested_results(old: &Path, new: &Path) {
+    let Ok(entries) = std::fs::read_dir(old) else { return };
+    for entry in entries.flatten() {
+        let path = entry.path();
+        let is_result =
+            path.is_dir() && (path.join("summary.json").is_file() || path.join("fixed-time.json").is_file());
+        let target = new.join(entry.file_name());
+        if is_result && std::fs::symlink_metadata(&target).is_err() {
+            let _ = std::fs::rename(&path, &target);
+        }
+    }
+}
+
+/// Delete `.<name>.tmp-*` / `.<name>.old-*` folders in `parent` older than
+/// [`STALE_AFTER`] whose process is gone (left by a killed run).
+fn remove_stale(parent: &Path, name: &std::ffi::OsStr) {
+    let Ok(entries) = std::fs::read_dir(parent) else { return };
+    let name = name.to_string_lossy();
+    let prefixes = [format!(".{name}.tmp-"), format!(".{name}.old-")];
+    for entry in entries.flatten() {
+        let file_name = entry.file_name();
+        let file_name = file_name.to_string_lossy();
+        let Some(rest) = prefixes.iter().find_map(|p| file_name.strip_prefix(p.as_str())) else { continue };
+        // A long run's staging folder can be old while it is still flying:
+        // keep it while its process (`<pid>-<nanos>`) is alive (Linux /proc).
+        let pid = rest.split('-').next().unwrap_or("");
+        if !pid.is_empty() && Path::new("/proc").join(pid).exists() {
+            continue;
+        }
+        let old_enough = entry
+            .metadata()
+            .and_then(|m| m.modified())
+            .ok()
+            .and_then(|t| t.elapsed().ok())
+            .is_some_and(|age| age >= STALE_AFTER);
+        if old_enough && entry.path().is_dir() {
+            let _ = std::fs::remove_dir_all(entry.path());
+        }
+    }
+}
+
+/// Write `bytes` to `path`, creating its parent folders; a partly written
+/// file (disk full) is removed before the error is returned.
+fn write_file(path: &Path, bytes: &[u8]) -> Result<()> {
     if let Some(parent) = path.parent() {
         std::fs::create_dir_all(parent).with_context(|| format!("cannot create directory {}", parent.display()))?;
     }
+    if let Err(e) = std::fs::write(path, bytes) {
+        let _ = std::fs::remove_file(path);
+        return Err(e).with_context(|| format!("cannot write {}", path.display()));
+    }
+    Ok(())
+}
+
+/// Write `bytes` to `path` (temporary file + rename). Commands write inside
+/// a [`ResultDir`] staging folder, which is what makes results whole; this
+/// only keeps a single file from being seen half-written. The temporary
+/// file is removed when writing fails.
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
     let mut tmp = path.as_os_str().to_owned();
     tmp.push(".tmp");
     let tmp = PathBuf::from(tmp);
-    std::fs::write(&tmp, bytes).with_context(|| format!("cannot write {}", tmp.display()))?;
-    std::fs::rename(&tmp, path).with_context(|| format!("cannot rename {} to {}", tmp.display(), path.display()))?;
+    write_file(&tmp, bytes)?;
+    if let Err(e) = std::fs::rename(&tmp, path) {
+        let _ = std::fs::remove_file(&tmp);
+        return Err(e).with_context(|| format!("cannot rename {} to {}", tmp.display(), path.display()));
+    }
     Ok(())
+}
+
+/// Longest error message `main` prints, in characters.
+pub const MAX_ERROR_CHARS: usize = 300;
+
+/// One line of at most `max` characters for the terminal: lines of a
+/// multi-line message (the TOML parser's source snippet) are joined with
+/// ` | `, snippet lines (`12 | text`, `   |   ^`) are dropped, and the result
+/// is cut at `max` characters with `…`.
+pub fn one_line(text: &str, max: usize) -> String {
+    let is_snippet = |line: &str| {
+        let rest = line.trim_start().trim_start_matches(|c: char| c.is_ascii_digit()).trim_start();
+        rest.starts_with('|') && rest.len() < line.len()
+    };
+    let parts: Vec<&str> = text.lines().filter(|l| !l.trim().is_empty() && !is_snippet(l)).map(str::trim).collect();
+    let joined = parts.join(" | ");
+    let joined: String = joined.chars().map(|c| if c.is_control() { ' ' } else { c }).collect();
+    if joined.chars().count() <= max {
+        joined
+    } else {
+        let mut cut: String = joined.chars().take(max.saturating_sub(1)).collect();
+        cut.push('…');
+        cut
+    }
 }
 
 /// The time series of a run as CSV text (header = column names).
@@ -45,7 +326,8 @@ pub fn format_number(v: f64) -> String {
     }
 }
 
-/// Metrics and exit status of one run as a JSON object.
+/// Metrics and exit status of one run as a JSON object, with `covered`
+/// (`[0, t_end]`, s: the span the integral metrics cover) and `completed`.
 pub fn run_json(run: &RunOutput) -> Value {
     let mut obj = match serde_json::to_value(&run.metrics) {
         Ok(Value::Object(m)) => m,
@@ -54,6 +336,10 @@ pub fn run_json(run: &RunOutput) -> Value {
     obj.insert("exit".into(), json!(run.exit.to_string()));
     obj.insert("exit_status".into(), serde_json::to_value(run.exit).unwrap_or(Value::Null));
     obj.insert("steps".into(), json!(run.steps));
+    // The span the integral metrics (ISE, IAE, ITAE, RMS, energy,
+    // chattering) cover: shorter than the scenario for a diverged run.
+    obj.insert("covered".into(), json!(run.metrics.covered()));
+    obj.insert("completed".into(), json!(run.exit.is_completed()));
     Value::Object(obj)
 }
 
@@ -70,4 +356,125 @@ pub fn summary_json(runs: &[&RunOutput], extra: Map<String, Value>) -> Value {
     root.insert("scenarios".into(), Value::Object(scenarios));
     root.extend(extra);
     Value::Object(root)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn temp(name: &str) -> PathBuf {
+        let d = std::env::temp_dir().join(format!("ftsmc-output-{name}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&d);
+        std::fs::create_dir_all(&d).unwrap();
+        d
+    }
+
+    /// Names in `dir`, sorted.
+    fn names(dir: &Path) -> Vec<String> {
+        let mut v: Vec<String> =
+            std::fs::read_dir(dir).unwrap().flatten().map(|e| e.file_name().to_string_lossy().into_owned()).collect();
+        v.sort();
+        v
+    }
+
+    #[test]
+    fn a_failed_write_removes_the_staging_folder_and_keeps_the_old_result() {
+        let root = temp("fail");
+        let dest = root.join("res");
+        std::fs::create_dir_all(&dest).unwrap();
+        std::fs::write(dest.join("old.csv"), "old").unwrap();
+        {
+            let dir = ResultDir::begin(&dest).unwrap();
+            dir.write("a.csv", b"1,2\n").unwrap();
+            // Fails midway, like a full disk: `a.csv` is a file, not a folder.
+            assert!(dir.write("a.csv/b.csv", b"x").is_err());
+            assert_eq!(names(&root).len(), 2, "staging exists while writing: {:?}", names(&root));
+        }
+        assert_eq!(names(&root), ["res"], "staging folder left behind");
+        assert_eq!(names(&dest), ["old.csv"]);
+        std::fs::remove_dir_all(&root).ok();
+    }
+
+    #[test]
+    fn a_failed_transaction_removes_the_folders_it_created() {
+        let root = temp("created");
+        let dest = root.join("a/b/res");
+        drop(ResultDir::begin(&dest).unwrap());
+        assert!(names(&root).is_empty(), "{:?}", names(&root));
+        std::fs::remove_dir_all(&root).ok();
+    }
+
+    #[test]
+    fn commit_replaces_the_whole_folder_but_keeps_nested_results_of_other_commands() {
+        let root = temp("commit");
+        let dest = root.join("res");
+        std::fs::create_dir_all(dest.join("montecarlo")).unwrap();
+        std::fs::create_dir_all(dest.join("paper-scenario-1")).unwrap();
+        std::fs::write(dest.join("montecarlo/summary.json"), "{}").unwrap();
+        std::fs::write(dest.join("junk.csv"), "stale").unwrap();
+        std::fs::write(dest.join("paper-scenario-1/stale.csv"), "stale").unwrap();
+        let dir = ResultDir::begin(&dest).unwrap();
+        dir.write("paper-scenario-1/new.csv", b"new").unwrap();
+        dir.write("summary.json", b"{}").unwrap();
+        dir.commit().unwrap();
+        assert_eq!(names(&root), ["res"], "no staging or old folder left");
+        assert_eq!(names(&dest), ["montecarlo", "paper-scenario-1", "summary.json"]);
+        assert_eq!(names(&dest.join("paper-scenario-1")), ["new.csv"]);
+        std::fs::remove_dir_all(&root).ok();
+    }
+
+    #[test]
+    fn a_destination_under_a_regular_file_is_refused_and_nothing_is_written() {
+        let root = temp("refuse");
+        std::fs::write(root.join("file"), "x").unwrap();
+        let err = ResultDir::begin(&root.join("file/sub/res")).unwrap_err().to_string();
+        assert!(err.contains("is not a directory"), "{err}");
+        assert!(ResultDir::begin(&root.join("file")).is_err(), "an existing file as destination");
+        assert!(ResultDir::begin(Path::new(".")).is_err());
+        assert_eq!(names(&root), ["file"]);
+        std::fs::remove_dir_all(&root).ok();
+    }
+
+    #[test]
+    fn stale_staging_folders_of_a_killed_run_are_removed_by_the_next_commit() {
+        let root = temp("stale");
+        let stale = root.join(".res.tmp-4194305-1"); // above Linux pid_max
+        let fresh = root.join(".res.tmp-4194305-2");
+        let other = root.join(".other.tmp-4194305-1");
+        for d in [&stale, &fresh, &other] {
+            std::fs::create_dir_all(d).unwrap();
+            std::fs::write(d.join("x.csv"), "partial").unwrap();
+        }
+        let two_hours_ago = SystemTime::now() - Duration::from_secs(7200);
+        for d in [&stale, &other] {
+            std::fs::File::open(d).unwrap().set_modified(two_hours_ago).unwrap();
+        }
+        let dir = ResultDir::begin(&root.join("res")).unwrap();
+        dir.write("summary.json", b"{}").unwrap();
+        dir.commit().unwrap();
+        // The stale one goes; a fresh one may belong to a concurrent run,
+        // and another destination's is not ours to touch.
+        assert_eq!(names(&root), [".other.tmp-4194305-1", ".res.tmp-4194305-2", "res"]);
+        // An old staging folder of a live process (a long run) stays.
+        let live = root.join(format!(".res.tmp-{}-3", std::process::id()));
+        std::fs::create_dir_all(&live).unwrap();
+        std::fs::File::open(&live).unwrap().set_modified(two_hours_ago).unwrap();
+        ResultDir::begin(&root.join("res")).unwrap().commit().unwrap();
+        assert!(live.exists());
+        std::fs::remove_dir_all(&root).ok();
+    }
+
+    #[test]
+    fn error_lines_are_single_and_bounded() {
+        let toml = "deep.toml: TOML parse error at line 1, column 85\n  |\n1 | a = [[[[[[[[\n  |     ^\ncannot recurse further; max recursion depth met\n";
+        assert_eq!(
+            one_line(toml, 300),
+            "deep.toml: TOML parse error at line 1, column 85 | cannot recurse further; max recursion depth met"
+        );
+        let long = "x".repeat(100_000);
+        let cut = one_line(&long, 300);
+        assert_eq!(cut.chars().count(), 300);
+        assert!(cut.ends_with('…'));
+        assert_eq!(one_line("a\tb\u{1b}[31m", 300), "a b [31m");
+    }
 }

@@ -14,7 +14,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
 use serde_json::{json, Map, Value};
 
-use crate::output::{recording_csv, summary_json, write_atomic};
+use crate::output::{recording_csv, summary_json, ResultDir};
 
 /// Paper Table 3 (scenario 1 ISE): `(state, [RANFTSMC, TSM-STA, FTAFTSMC])`.
 pub const PAPER_TABLE_3: [(&str, [f64; 3]); 4] = [
@@ -59,12 +59,22 @@ pub fn fly(jobs: &[Job]) -> Result<Vec<RunOutput>> {
     out
 }
 
-fn write_runs(runs: &[RunOutput], out: &Path) -> Result<()> {
+/// Write each run's CSV to `<scenario>/<controller>.csv` (or, with
+/// `flat`, `<controller>.csv`) inside the result folder.
+fn write_runs(runs: &[RunOutput], dir: &ResultDir, flat: bool) -> Result<()> {
     for run in runs {
-        let path = out.join(&run.scenario).join(format!("{}.csv", run.controller));
-        write_atomic(&path, &recording_csv(&run.recording)?)?;
+        let file = format!("{}.csv", run.controller);
+        let rel = if flat { Path::new(&file).to_path_buf() } else { Path::new(&run.scenario).join(&file) };
+        dir.write(rel, &recording_csv(&run.recording)?)?;
     }
     Ok(())
+}
+
+/// The cell shown instead of a metric of a run that did not complete: its
+/// integrals cover a shorter span, so a number would look better than a
+/// completed run's.
+pub fn not_comparable(run: &RunOutput) -> String {
+    format!("— ({})", run.exit.short())
 }
 
 /// Four decimals, or scientific notation for small non-zero values.
@@ -85,6 +95,7 @@ fn axis_value(m: &ftsmc_sim::scenario::AxisSet<f64>, axis: &str) -> f64 {
 }
 
 fn settle(m: &ftsmc_sim::scenario::AxisSet<Option<f64>>, axis: &str) -> String {
+    // (For a completed run; a diverged one shows `—`.)
     m.get(axis).copied().flatten().map_or("not settled".into(), |t| format!("{t:.2}"))
 }
 
@@ -103,32 +114,48 @@ pub fn table_3(runs: &[RunOutput], scenario: &str) -> (String, Value) {
     let mut record = Map::new();
     for (axis, paper) in PAPER_TABLE_3 {
         let ours_v: Vec<Option<f64>> = ours.iter().map(|r| r.map(|r| axis_value(&r.metrics.ise, axis))).collect();
+        // Only completed runs are ranked and compared; a diverged run's ISE
+        // covers a shorter span (kept in the JSON record, with `completed`).
+        let ours_c: Vec<Option<f64>> =
+            ours.iter().zip(&ours_v).map(|(r, v)| v.filter(|_| r.is_some_and(|r| r.exit.is_completed()))).collect();
+        let diverged: Vec<&RunOutput> = ours.iter().flatten().copied().filter(|r| !r.exit.is_completed()).collect();
         let rank = |vals: &[Option<f64>]| -> String {
             let mut idx: Vec<usize> = (0..3).filter(|&i| vals[i].is_some()).collect();
             idx.sort_by(|&a, &b| vals[a].unwrap().total_cmp(&vals[b].unwrap()));
             idx.iter().map(|&i| label(order[i]).split(' ').next().unwrap_or("")).collect::<Vec<_>>().join(" < ")
         };
         let paper_opt: Vec<Option<f64>> = paper.iter().map(|v| Some(*v)).collect();
-        let cell = |v: Option<f64>| v.map_or("—".to_string(), |v| format!("{v:.4}"));
+        let cell = |i: usize| match ours[i] {
+            Some(r) if !r.exit.is_completed() => not_comparable(r),
+            _ => ours_c[i].map_or("—".to_string(), |v| format!("{v:.4}")),
+        };
         let shown = if axis == "psi" { "ψ" } else { axis };
         let _ = writeln!(
             md,
             "| {shown} | {} | {} | {} | {} | {} | {} | {} | {} |",
             paper[0],
-            cell(ours_v[0]),
+            cell(0),
             paper[1],
-            cell(ours_v[1]),
+            cell(1),
             paper[2],
-            cell(ours_v[2]),
+            cell(2),
             rank(&paper_opt),
-            rank(&ours_v)
+            rank(&ours_c)
         );
-        record.insert(
-            axis.into(),
-            json!({"paper": {"ranftsmc": paper[0], "tsm-sta": paper[1], "ftaftsmc": paper[2]},
-                   "ours": {"ranftsmc": ours_v[0], "tsm-sta": ours_v[1], "ftaftsmc": ours_v[2]}}),
-        );
-        if let (Some(a), Some(b), Some(f)) = (ours_v[0], ours_v[1], ours_v[2]) {
+        let mut entry = json!({"paper": {"ranftsmc": paper[0], "tsm-sta": paper[1], "ftaftsmc": paper[2]},
+                   "ours": {"ranftsmc": ours_v[0], "tsm-sta": ours_v[1], "ftaftsmc": ours_v[2]}});
+        if !diverged.is_empty() {
+            entry["diverged"] = diverged.iter().map(|r| (r.controller.clone(), json!(r.exit.diverged_at()))).collect();
+        }
+        record.insert(axis.into(), entry);
+        if !diverged.is_empty() {
+            let who: Vec<String> =
+                diverged.iter().map(|r| format!("{} {}", label(&r.controller), r.exit.short())).collect();
+            verdicts.push(format!(
+                "- FTAFTSMC has the lowest {shown} ISE (paper: yes): **not comparable** — {}",
+                who.join(", ")
+            ));
+        } else if let (Some(a), Some(b), Some(f)) = (ours_c[0], ours_c[1], ours_c[2]) {
             let best = f < a && f < b;
             verdicts.push(format!(
                 "- FTAFTSMC has the lowest {shown} ISE (paper: yes): **{}** (ours {f:.4} vs {a:.4}, {b:.4})",
@@ -183,6 +210,15 @@ pub fn metrics_table(runs: &[&RunOutput], title: &str, windowed: bool, steady_af
     );
     for run in runs {
         let m = &run.metrics;
+        if !run.exit.is_completed() {
+            // Integrals over a shorter span would look better than a
+            // completed run's: show `—` beside the exit status (the numbers
+            // stay in the JSON, with `covered` and `completed`).
+            let cells = if windowed { 16 } else { 15 };
+            let _ = write!(md, "| {} | {} |{}", label(&run.controller), run.exit, " — |".repeat(cells));
+            md.push('\n');
+            continue;
+        }
         let _ = write!(
             md,
             "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {:.3} | {:.4} |",
@@ -200,7 +236,7 @@ pub fn metrics_table(runs: &[&RunOutput], title: &str, windowed: bool, steady_af
             settle(&m.settling_time, "y"),
             settle(&m.settling_time, "z"),
             settle(&m.settling_time, "psi"),
-            num(m.max_error_after.z),
+            m.max_error_after.z.map_or("—".into(), num),
             m.chattering.thrust,
             m.chattering.roll_torque,
         );
@@ -277,9 +313,12 @@ pub fn reproduce(out: &Path, figures: bool) -> Result<()> {
     }
     jobs.push(Job { scenario: s2.clone(), controller: "ftaftsmc-no-mass".into(), key: "ftaftsmc-no-mass".into() });
 
+    // Refuse a bad --out before any flight; everything goes into a staging
+    // folder that replaces `out` whole at the end.
+    let dir = ResultDir::begin(out)?;
     eprintln!("flying {} runs ({} and {}) …", jobs.len(), s1.name, s2.name);
     let runs = fly(&jobs)?;
-    write_runs(&runs, out)?;
+    write_runs(&runs, &dir, false)?;
 
     let mut report = String::new();
     let _ = writeln!(report, "# ftsmc reproduce — results\n");
@@ -328,7 +367,11 @@ pub fn reproduce(out: &Path, figures: bool) -> Result<()> {
         s2.simulation.steady_state_after,
     ));
     report.push('\n');
-    let z_window = |key: &str| find(&runs, &s2.name, key).and_then(|r| r.metrics.ise_window.as_ref().map(|w| w.z));
+    let z_window = |key: &str| {
+        find(&runs, &s2.name, key)
+            .filter(|r| r.exit.is_completed())
+            .and_then(|r| r.metrics.ise_window.as_ref().map(|w| w.z))
+    };
     if let (Some(f), Some(a), Some(b)) = (z_window("ftaftsmc"), z_window("ranftsmc"), z_window("tsm-sta")) {
         let _ = writeln!(
             report,
@@ -354,18 +397,19 @@ pub fn reproduce(out: &Path, figures: bool) -> Result<()> {
     extra.insert("table3".into(), t3_json);
     let all: Vec<&RunOutput> = runs.iter().collect();
     let summary = summary_json(&all, extra);
-    write_atomic(&out.join("summary.json"), serde_json::to_string_pretty(&summary)?.as_bytes())?;
+    dir.write("summary.json", serde_json::to_string_pretty(&summary)?.as_bytes())?;
 
     if figures {
-        let dir = out.join("figures");
+        let fig_dir = dir.path().join("figures");
         let s1_main: Vec<&RunOutput> =
             s1_runs.iter().copied().filter(|r| s1.controllers.contains(&r.controller)).collect();
         let s2_main: Vec<&RunOutput> =
             s2_runs.iter().copied().filter(|r| s2.controllers.contains(&r.controller)).collect();
-        crate::figures::scenario_1(&s1_main, &dir)?;
-        crate::figures::scenario_2(&s2_main, find(&runs, &s2.name, "ftaftsmc-no-mass"), &dir)?;
+        crate::figures::scenario_1(&s1_main, &fig_dir)?;
+        crate::figures::scenario_2(&s2_main, find(&runs, &s2.name, "ftaftsmc-no-mass"), &fig_dir)?;
     }
-    write_atomic(&out.join("report.md"), report.as_bytes())?;
+    dir.write("report.md", report.as_bytes())?;
+    dir.commit()?;
     println!("{report}");
     println!(
         "wrote {}/summary.json, report.md, per-run CSV under {}/<scenario>/{}; {} flights in {:.2} s",
@@ -380,19 +424,23 @@ pub fn reproduce(out: &Path, figures: bool) -> Result<()> {
 
 /// `ftsmc run`.
 pub fn run_scenario(scenario: &Scenario, names: &[String], out: &Path, figures: bool) -> Result<()> {
+    // `out/<name>/` is the result folder: checked before any flight,
+    // written in staging, swapped into place whole.
+    let dir = ResultDir::begin(&out.join(&scenario.name))?;
     let jobs: Vec<Job> =
         names.iter().map(|n| Job { scenario: scenario.clone(), controller: n.clone(), key: n.clone() }).collect();
     let runs = fly(&jobs)?;
-    write_runs(&runs, out)?;
+    write_runs(&runs, &dir, true)?;
     let refs: Vec<&RunOutput> = runs.iter().collect();
     let windowed = scenario.simulation.metrics_window.is_some();
     let table =
         metrics_table(&refs, &format!("{} — metrics", scenario.name), windowed, scenario.simulation.steady_state_after);
     let summary = summary_json(&refs, Map::new());
-    write_atomic(&out.join(&scenario.name).join("summary.json"), serde_json::to_string_pretty(&summary)?.as_bytes())?;
+    dir.write("summary.json", serde_json::to_string_pretty(&summary)?.as_bytes())?;
     if figures {
-        crate::figures::generic(&refs, &out.join(&scenario.name).join("figures"))?;
+        crate::figures::generic(&refs, &dir.path().join("figures"))?;
     }
+    dir.commit()?;
     println!("{table}");
     println!(
         "wrote {}/{}/ (CSV per controller, summary.json{})",
@@ -401,4 +449,47 @@ pub fn run_scenario(scenario: &Scenario, names: &[String], out: &Path, figures: 
         if figures { ", figures" } else { "" }
     );
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Scenario 1 with `max_rotor_speed = 1000`: FTAFTSMC diverges at
+    /// 0.64 s, the others complete (6 s are enough to pass the 5 s mark).
+    fn diverged_runs() -> (Scenario, Vec<RunOutput>) {
+        let mut s = Scenario::paper_scenarios().remove(0);
+        s.simulation.max_rotor_speed = Some(1000.0);
+        s.duration = 6.0;
+        let jobs: Vec<Job> =
+            s.controllers.iter().map(|n| Job { scenario: s.clone(), controller: n.clone(), key: n.clone() }).collect();
+        let runs = fly(&jobs).unwrap();
+        (s, runs)
+    }
+
+    #[test]
+    fn a_diverged_run_shows_dashes_and_its_exit_status_in_every_table() {
+        let (s, runs) = diverged_runs();
+        let ft = find(&runs, &s.name, "ftaftsmc").unwrap();
+        assert!(!ft.exit.is_completed(), "{}", ft.exit);
+        assert!(ft.metrics.max_error_after.z.is_none());
+        let (t3, record) = table_3(&runs, &s.name);
+        let x_row = t3.lines().find(|l| l.starts_with("| x |")).unwrap();
+        assert!(x_row.contains("— (diverged at 0.64 s)"), "{x_row}");
+        assert!(!x_row.contains(&format!("{:.4}", ft.metrics.ise.x)), "{x_row}");
+        assert!(!t3.contains("**confirmed**"), "no claim confirmed by a diverged run:\n{t3}");
+        assert!(t3.contains("**not comparable**"), "{t3}");
+        assert!(record.get("headline").is_none());
+        assert_eq!(record["x"]["ours"]["ftaftsmc"].as_f64(), Some(ft.metrics.ise.x), "JSON keeps the number");
+        assert!(record["x"]["diverged"]["ftaftsmc"].is_number());
+
+        let refs: Vec<&RunOutput> = runs.iter().collect();
+        let table = metrics_table(&refs, "t", false, s.simulation.steady_state_after);
+        let row = table.lines().find(|l| l.starts_with("| FTAFTSMC")).unwrap();
+        assert!(row.contains("diverged") && row.contains("0.639"), "{row}");
+        assert_eq!(row.matches("| — ").count(), 15, "{row}");
+        assert!(!row.contains(&num(ft.metrics.ise.x)), "{row}");
+        let ok_row = table.lines().find(|l| l.starts_with("| RANFTSMC")).unwrap();
+        assert!(!ok_row.contains('—'), "a completed run keeps its numbers: {ok_row}");
+    }
 }

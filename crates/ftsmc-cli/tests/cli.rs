@@ -131,3 +131,95 @@ fn help_names_the_commands() {
         assert!(text.contains(cmd), "{cmd} missing from --help:\n{text}");
     }
 }
+
+/// Scenario 1 with `max_rotor_speed = 1000` (FTAFTSMC diverges at 0.64 s),
+/// shortened to 6 s (the others still pass the 5 s steady-state mark).
+fn diverging_scenario() -> String {
+    scenario_text("paper-scenario-1.toml").replacen("[simulation]", "[simulation]\nmax_rotor_speed = 1000", 1).replacen(
+        "duration = 20.0",
+        "duration = 6.0",
+        1,
+    )
+}
+
+#[test]
+fn a_diverged_run_is_marked_in_the_table_and_the_json() {
+    let dir = temp_dir("diverged");
+    let text = diverging_scenario();
+    assert!(text.contains("max_rotor_speed = 1000") && text.contains("duration = 6.0"));
+    std::fs::write(dir.join("s.toml"), text).unwrap();
+    let out = ftsmc(&["run", "s.toml", "--out", "res", "--no-figures"], &dir);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let row = stdout.lines().find(|l| l.starts_with("| FTAFTSMC")).expect("FTAFTSMC row");
+    assert!(row.contains("diverged") && row.contains("0.639 s"), "{row}");
+    assert!(row.contains("| — |") && !row.contains("0.4862"), "no ISE number for a diverged run: {row}");
+    let ok = stdout.lines().find(|l| l.starts_with("| RANFTSMC")).unwrap();
+    assert!(ok.contains("completed") && !ok.contains('—'), "{ok}");
+
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("res/paper-scenario-1/summary.json")).unwrap()).unwrap();
+    let ft = &summary["scenarios"]["paper-scenario-1"]["ftaftsmc"];
+    assert_eq!(ft["completed"], false);
+    assert!(ft["max_error_after"]["z"].is_null(), "{}", ft["max_error_after"]);
+    let covered = ft["covered"].as_array().unwrap();
+    assert_eq!(covered[0].as_f64(), Some(0.0));
+    assert!((covered[1].as_f64().unwrap() - 0.639).abs() < 1e-9, "{covered:?}");
+    assert!(ft["ise"]["x"].as_f64().unwrap() > 0.0, "the JSON keeps the numbers");
+    let ran = &summary["scenarios"]["paper-scenario-1"]["ranftsmc"];
+    assert_eq!(ran["completed"], true);
+    assert!(ran["max_error_after"]["z"].is_number());
+    assert!((ran["covered"][1].as_f64().unwrap() - 6.0).abs() < 1e-9, "{}", ran["covered"]);
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn montecarlo_marks_diverged_rows_and_leaves_after_t_metrics_empty() {
+    let dir = temp_dir("mc-diverged");
+    std::fs::write(dir.join("s.toml"), diverging_scenario().replacen("duration = 6.0", "duration = 2.0", 1)).unwrap();
+    let out = ftsmc(&["montecarlo", "s.toml", "--runs", "2", "--out", "mc", "--no-figures"], &dir);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let row = stdout.lines().find(|l| l.starts_with("| FTAFTSMC")).unwrap();
+    assert!(row.contains("— (all 2 diverged)"), "{row}");
+    let csv = std::fs::read_to_string(dir.join("mc/runs.csv")).unwrap();
+    let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    for line in csv.lines().skip(1) {
+        let f: Vec<&str> = line.split(',').collect();
+        // 2 s < steady_state_after = 5 s: never reached, so empty, not 0.
+        assert_eq!(f[col("max_error_after_z")], "", "{line}");
+        let diverged = f[col("controller")] == "ftaftsmc";
+        assert_eq!(f[col("completed")], if diverged { "false" } else { "true" }, "{line}");
+        assert_eq!(f[col("duration")], if diverged { "0.639" } else { "2" }, "{line}");
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn an_io_error_names_its_cause_once() {
+    let dir = temp_dir("io");
+    std::fs::create_dir_all(dir.join("adir.toml")).unwrap();
+    let out = ftsmc(&["run", "adir.toml", "--out", "res"], &dir);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success() && err.contains("adir.toml"), "{err}");
+    assert!(err.matches("os error").count() <= 1, "cause repeated: {err}");
+    assert!(err.matches("directory").count() <= 1, "cause repeated: {err}");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn a_deeply_nested_file_gives_one_short_error_line() {
+    let dir = temp_dir("nested");
+    std::fs::write(dir.join("deep.toml"), format!("a = {}\n", "[".repeat(10_000))).unwrap();
+    std::fs::write(dir.join("long.toml"), format!("name = \"{}\n", "x".repeat(300_000))).unwrap();
+    for file in ["deep.toml", "long.toml"] {
+        let out = ftsmc(&["run", file, "--out", "res"], &dir);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success());
+        assert_eq!(err.lines().count(), 1, "{file}: one line, got {} bytes", err.len());
+        assert!(err.chars().count() <= 320, "{file}: {} chars", err.chars().count());
+        assert!(err.starts_with("error: ") && err.contains(file) && err.contains("line 1, column"), "{err}");
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -48,8 +48,9 @@ pub struct Metrics {
     pub itae: AxisSet<f64>,
     /// sqrt(ISE / duration), units.
     pub rms: AxisSet<f64>,
-    /// max |e| for t ≥ `simulation.steady_state_after`, units.
-    pub max_error_after: AxisSet<f64>,
+    /// max |e| for t ≥ `simulation.steady_state_after`, units; `None`
+    /// (JSON `null`) when the run ended before `steady_state_after`.
+    pub max_error_after: AxisSet<Option<f64>>,
     /// Time after which |e| stays within the band (2 % of |e(0)|, at least
     /// `settling_floor`), s; `None` if still outside at the end.
     pub settling_time: AxisSet<Option<f64>>,
@@ -61,14 +62,22 @@ pub struct Metrics {
     /// ∫ e² dt restricted to `simulation.metrics_window` (when set).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub ise_window: Option<AxisSet<f64>>,
-    /// Simulated time covered, s.
+    /// Simulated time covered, s: every integral above is over
+    /// `[0, duration]`, which is shorter than the scenario for a run that
+    /// diverged.
     pub duration: f64,
 }
 
 impl Metrics {
-    /// Every metric as a named scalar (`ise_x`, …, `settling_time_psi`
-    /// (NaN when not settled), `control_energy_thrust`, …), in a fixed order:
-    /// the columns of Monte Carlo tables.
+    /// The time span `[0, t_end]` (s) the integral metrics cover.
+    pub fn covered(&self) -> [f64; 2] {
+        [0.0, self.duration]
+    }
+
+    /// Every metric as a named scalar (`ise_x`, …, `max_error_after_psi`
+    /// (NaN when the run ended before `steady_state_after`),
+    /// `settling_time_psi` (NaN when not settled), `control_energy_thrust`,
+    /// …), in a fixed order: the columns of Monte Carlo tables.
     pub fn flat(&self) -> Vec<(String, f64)> {
         let mut out = Vec::with_capacity(64);
         let names = ["x", "y", "z", "phi", "theta", "psi"];
@@ -81,7 +90,10 @@ impl Metrics {
         axes("iae", &self.iae);
         axes("itae", &self.itae);
         axes("rms", &self.rms);
-        axes("max_error_after", &self.max_error_after);
+        let after = self.max_error_after.to_array().map(|v| v.unwrap_or(f64::NAN));
+        for (n, v) in names.iter().zip(after) {
+            out.push((format!("max_error_after_{n}"), v));
+        }
         let settling = self.settling_time.to_array().map(|v| v.unwrap_or(f64::NAN));
         for (n, v) in names.iter().zip(settling) {
             out.push((format!("settling_time_{n}"), v));
@@ -117,6 +129,8 @@ pub struct MetricsAccumulator {
     iae: [f64; 6],
     itae: [f64; 6],
     max_after: [f64; 6],
+    /// A sample at or after `steady_after` was observed.
+    reached_after: bool,
     last_outside: [Option<f64>; 6],
     energy: [f64; 4],
     variation: [f64; 4],
@@ -140,6 +154,7 @@ impl MetricsAccumulator {
             iae: [0.0; 6],
             itae: [0.0; 6],
             max_after: [0.0; 6],
+            reached_after: false,
             last_outside: [None; 6],
             energy: [0.0; 4],
             variation: [0.0; 4],
@@ -166,6 +181,8 @@ impl MetricsAccumulator {
             self.started = true;
         }
         let dt = self.dt;
+        let after = t >= self.steady_after;
+        self.reached_after |= after;
         for i in 0..6 {
             let e = errors[i];
             let a = e.abs();
@@ -177,7 +194,7 @@ impl MetricsAccumulator {
                     self.ise_window[i] += e * e * dt;
                 }
             }
-            if t >= self.steady_after && a > self.max_after[i] {
+            if after && a > self.max_after[i] {
                 self.max_after[i] = a;
             }
             if a > self.band[i] {
@@ -208,7 +225,10 @@ impl MetricsAccumulator {
             iae: axes(self.iae),
             itae: axes(self.itae),
             rms: axes(rms),
-            max_error_after: axes(self.max_after),
+            max_error_after: {
+                let after = self.max_after.map(|v| self.reached_after.then_some(v));
+                AxisSet { x: after[0], y: after[1], z: after[2], phi: after[3], theta: after[4], psi: after[5] }
+            },
             settling_time: AxisSet {
                 x: settled[0],
                 y: settled[1],
@@ -245,7 +265,8 @@ mod tests {
         assert_relative_eq!(m.ise.x, 0.5, epsilon = 1e-3);
         assert_relative_eq!(m.iae.y, 1.0, epsilon = 1e-3);
         assert_relative_eq!(m.itae.z, 1.0, epsilon = 2e-3);
-        assert_relative_eq!(m.max_error_after.psi, (-5.0f64).exp(), epsilon = 1e-6);
+        assert_relative_eq!(m.max_error_after.psi.unwrap(), (-5.0f64).exp(), epsilon = 1e-6);
+        assert_eq!(m.covered(), [0.0, 20.0]);
         // |e| < 0.02 from t = ln 50 ≈ 3.912 s on.
         let ts = m.settling_time.x.unwrap();
         assert!((ts - 50f64.ln()).abs() < 2e-3, "{ts}");
@@ -263,5 +284,21 @@ mod tests {
             acc.observe(k as f64 * dt, &[1.0; 6], &[0.0; 4]);
         }
         assert_eq!(acc.finish().settling_time.x, None);
+    }
+
+    #[test]
+    fn max_error_after_is_none_when_the_run_ended_before_it() {
+        let dt = 0.01;
+        // Steady state from 5 s, but only 0.64 s observed (a diverged run).
+        let mut acc = MetricsAccumulator::new(dt, 0.02, 1e-3, 5.0);
+        for k in 0..64 {
+            acc.observe(k as f64 * dt, &[0.5; 6], &[0.0; 4]);
+        }
+        let m = acc.finish();
+        assert_eq!(m.max_error_after.z, None);
+        assert!((m.covered()[1] - 0.64).abs() < 1e-12);
+        let flat = m.flat();
+        let z = flat.iter().find(|(n, _)| n == "max_error_after_z").unwrap().1;
+        assert!(z.is_nan());
     }
 }

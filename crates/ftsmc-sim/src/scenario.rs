@@ -39,7 +39,7 @@ pub const PAPER_SCENARIOS: [(&str, &str); 2] =
 #[derive(Debug, thiserror::Error)]
 pub enum ScenarioError {
     /// The file could not be read.
-    #[error("cannot read scenario file {path}: {source}")]
+    #[error("cannot read scenario file {path}")]
     Io {
         /// File path.
         path: String,

@@ -56,6 +56,22 @@ impl ExitStatus {
     pub fn is_completed(&self) -> bool {
         matches!(self, ExitStatus::Completed)
     }
+
+    /// Simulated time at which the run diverged (`None` if it completed).
+    pub fn diverged_at(&self) -> Option<f64> {
+        match self {
+            ExitStatus::Completed => None,
+            ExitStatus::Diverged { time, .. } => Some(*time),
+        }
+    }
+
+    /// Short form for table cells: `completed` or `diverged at 0.64 s`.
+    pub fn short(&self) -> String {
+        match self.diverged_at() {
+            None => "completed".into(),
+            Some(t) => format!("diverged at {t:.2} s"),
+        }
+    }
 }
 
 impl core::fmt::Display for ExitStatus {

@@ -1,0 +1,106 @@
+//! Result folders are whole: a bad `--out` is refused before any flight,
+//! stale files of an older run never survive, and two runs into one folder
+//! leave exactly one run's whole output.
+
+use std::collections::BTreeSet;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output, Stdio};
+
+fn ftsmc(args: &[&str], cwd: &Path) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_ftsmc")).args(args).current_dir(cwd).output().expect("binary runs")
+}
+
+fn temp_dir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("ftsmc-folders-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// Every name in `dir` (hidden ones included), sorted.
+fn names(dir: &Path) -> BTreeSet<String> {
+    std::fs::read_dir(dir).unwrap().flatten().map(|e| e.file_name().to_string_lossy().into_owned()).collect()
+}
+
+#[test]
+fn stale_files_of_an_older_run_are_gone() {
+    let dir = temp_dir("stale");
+    let folder = dir.join("res/paper-scenario-1");
+    std::fs::create_dir_all(&folder).unwrap();
+    std::fs::write(folder.join("junk.csv"), "t,x\n0,1\n").unwrap();
+    std::fs::write(folder.join("tsm-sta.csv"), "from an older run").unwrap();
+    let out = ftsmc(&["run", "paper-scenario-1", "-c", "ftaftsmc", "--out", "res", "--no-figures"], &dir);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let expected: BTreeSet<String> = ["ftaftsmc.csv", "summary.json"].map(String::from).into();
+    assert_eq!(names(&folder), expected);
+    assert_eq!(names(&dir.join("res")), ["paper-scenario-1".to_string()].into(), "no staging or old folder left");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn a_bad_out_is_refused_before_any_flight_and_nothing_is_written() {
+    let dir = temp_dir("badout");
+    std::fs::write(dir.join("file"), "a regular file").unwrap();
+    let cases: [&[&str]; 4] = [
+        &["reproduce", "--out", "file/res", "--no-figures"],
+        &["run", "paper-scenario-1", "--out", "file/res", "--no-figures"],
+        &["montecarlo", "paper-scenario-2", "--runs", "2", "--out", "file/mc", "--no-figures"],
+        &["fixed-time", "--controllers", "ftaftsmc", "--per-decade", "1", "--out", "file/ft"],
+    ];
+    for args in cases {
+        let out = ftsmc(args, &dir);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{args:?}");
+        assert!(
+            err.starts_with("error: ") && err.contains("file") && err.contains("not a directory"),
+            "{args:?}: {err}"
+        );
+        // `reproduce` announces its flights on stderr; nothing was flown or printed.
+        assert!(!err.contains("flying"), "{args:?}: {err}");
+        assert!(out.stdout.is_empty(), "{args:?}: {}", String::from_utf8_lossy(&out.stdout));
+        assert_eq!(names(&dir), ["file".to_string()].into(), "{args:?}");
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn concurrent_runs_into_one_folder_leave_one_whole_result() {
+    let dir = temp_dir("concurrent");
+    // Two different runs of the same scenario name into the same folder.
+    let a: &[&str] = &["run", "paper-scenario-1", "-c", "ftaftsmc", "--out", "res", "--no-figures"];
+    let b: &[&str] = &["run", "paper-scenario-1", "-c", "ranftsmc,tsm-sta", "--out", "res", "--no-figures"];
+    let folder = dir.join("res/paper-scenario-1");
+    for round in 0..4 {
+        let spawn = |args: &[&str]| {
+            Command::new(env!("CARGO_BIN_EXE_ftsmc"))
+                .args(args)
+                .current_dir(&dir)
+                .stdout(Stdio::null())
+                .stderr(Stdio::piped())
+                .spawn()
+                .unwrap()
+        };
+        // Alternate which one starts first.
+        let (first, second) = if round % 2 == 0 { (a, b) } else { (b, a) };
+        let p1 = spawn(first);
+        let p2 = spawn(second);
+        for p in [p1, p2] {
+            let out = p.wait_with_output().unwrap();
+            assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        }
+        let summary: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(folder.join("summary.json")).unwrap()).unwrap();
+        let controllers: BTreeSet<String> =
+            summary["scenarios"]["paper-scenario-1"].as_object().unwrap().keys().cloned().collect();
+        let mut expected: BTreeSet<String> = controllers.iter().map(|c| format!("{c}.csv")).collect();
+        expected.insert("summary.json".into());
+        assert_eq!(names(&folder), expected, "round {round}: the files must be exactly those of one run");
+        assert!(
+            controllers == ["ftaftsmc".to_string()].into()
+                || controllers == ["ranftsmc".to_string(), "tsm-sta".to_string()].into(),
+            "{controllers:?}"
+        );
+        assert_eq!(names(&dir.join("res")), ["paper-scenario-1".to_string()].into(), "round {round}");
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
