@@ -117,8 +117,15 @@ impl core::fmt::Display for LimitError {
 impl std::error::Error for LimitError {}
 
 /// The names of the limits, in [`Limits`] order.
-pub const KEYS: [&str; 7] =
-    ["max_steps", "max_samples", "max_output_bytes", "max_flights", "max_sweep_points", "max_threads", "max_scenario_bytes"];
+pub const KEYS: [&str; 7] = [
+    "max_steps",
+    "max_samples",
+    "max_output_bytes",
+    "max_flights",
+    "max_sweep_points",
+    "max_threads",
+    "max_scenario_bytes",
+];
 
 impl Limits {
     /// The limits with their keys, in [`KEYS`] order.

@@ -232,14 +232,16 @@ impl MonteCarloSpec {
     /// `Err((key, value, expected))`; the key names the distribution.
     pub fn check_against(&self, base: &Scenario) -> Result<(), (String, String, String)> {
         use crate::scenario::show;
+        // After `check`, every support is finite (never NaN), so plain comparisons suffice.
         self.check().map_err(|(k, v, e)| (k, show(v), e.to_string()))?;
         let range = |(lo, hi): (f64, f64)| format!("draws in [{}, {}]", show(lo), show(hi));
-        let err = |name: &str, d: &Dist, expected: String| Err((format!("montecarlo.{name}"), range(d.support()), expected));
+        let err =
+            |name: &str, d: &Dist, expected: String| Err((format!("montecarlo.{name}"), range(d.support()), expected));
         let truth = base.actual_plant.unwrap_or(base.plant);
         let mut mass_low = truth.mass;
         if let Some(d) = &self.mass {
             let (lo, _) = d.support();
-            if !(lo > 0.0) {
+            if lo <= 0.0 {
                 return err("mass", d, "a true mass > 0 (give the distribution a `low` > 0)".into());
             }
             mass_low = lo;
@@ -250,7 +252,7 @@ impl MonteCarloSpec {
             }
             (Some(d), Some(_)) => {
                 let (lo, _) = d.support();
-                if !(mass_low + lo.min(0.0) > 0.0) {
+                if mass_low + lo.min(0.0) <= 0.0 {
                     return err(
                         "payload_mass",
                         d,
@@ -260,7 +262,7 @@ impl MonteCarloSpec {
             }
             (None, Some(p)) => {
                 if let Some(d) = &self.mass {
-                    if !(mass_low + p.mass.min(0.0) > 0.0) {
+                    if mass_low + p.mass.min(0.0) <= 0.0 {
                         return err(
                             "mass",
                             d,
@@ -273,14 +275,14 @@ impl MonteCarloSpec {
         }
         if let Some(d) = &self.inertia_factor {
             let (lo, hi) = d.support();
-            if !(lo > 0.0) || truth.inertia.iter().any(|i| !(i * hi).is_finite()) {
+            if lo <= 0.0 || truth.inertia.iter().any(|i| !(i * hi).is_finite()) {
                 return err("inertia_factor", d, "factors > 0 with finite scaled inertia".into());
             }
         }
         if let Some(d) = &self.drag_factor {
             let (lo, hi) = d.support();
             let drag = truth.drag_translational.iter().chain(&truth.drag_rotational);
-            if !(lo >= 0.0) || drag.into_iter().any(|k| !(k * hi).is_finite()) {
+            if lo < 0.0 || drag.into_iter().any(|k| !(k * hi).is_finite()) {
                 return err("drag_factor", d, "factors >= 0 with finite scaled drag".into());
             }
         }
@@ -300,7 +302,8 @@ impl MonteCarloSpec {
                     format!("offsets keeping |roll|, |pitch| < simulation.max_tilt = {}", show(tilt)),
                 );
             }
-            if !(base.initial_state.attitude[2] + lo).is_finite() || !(base.initial_state.attitude[2] + hi).is_finite() {
+            if !(base.initial_state.attitude[2] + lo).is_finite() || !(base.initial_state.attitude[2] + hi).is_finite()
+            {
                 return err("initial_attitude_offset", d, "offsets giving a finite initial yaw".into());
             }
         }

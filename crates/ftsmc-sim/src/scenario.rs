@@ -579,8 +579,9 @@ pub fn read_scenario_text(path: &Path, limits: &Limits) -> Result<String, Scenar
     if bytes.len() as u64 > max {
         return Err(too_big(bytes.len() as u64));
     }
-    String::from_utf8(bytes).map_err(|e| {
-        ScenarioError::File { path: shown.clone(), message: format!("not UTF-8 text (invalid byte at offset {})", e.utf8_error().valid_up_to()) }
+    String::from_utf8(bytes).map_err(|e| ScenarioError::File {
+        path: shown.clone(),
+        message: format!("not UTF-8 text (invalid byte at offset {})", e.utf8_error().valid_up_to()),
     })
 }
 
@@ -698,9 +699,7 @@ impl Scenario {
     pub fn from_file_with_limits(path: &Path, overrides: &[String]) -> Result<Self, ScenarioError> {
         let shown = path.display().to_string();
         let mut limits = Limits::default();
-        limits
-            .apply_overrides(overrides)
-            .map_err(|message| ScenarioError::Parse { path: shown.clone(), message })?;
+        limits.apply_overrides(overrides).map_err(|message| ScenarioError::Parse { path: shown.clone(), message })?;
         let text = read_scenario_text(path, &limits)?;
         Self::from_toml_str_with_limits(&text, &shown, overrides)
     }
@@ -814,11 +813,7 @@ impl Scenario {
         }
         for (i, a) in init.attitude[..2].iter().enumerate() {
             if a.abs() >= sim.max_tilt {
-                return Err(invalid(
-                    format!("initial_state.attitude[{i}]"),
-                    show(*a),
-                    "|angle| < simulation.max_tilt",
-                ));
+                return Err(invalid(format!("initial_state.attitude[{i}]"), show(*a), "|angle| < simulation.max_tilt"));
             }
         }
         let signal = |prefix: String, s: &Signal| {
@@ -849,11 +844,7 @@ impl Scenario {
                 (Some(t2), Some(tau)) => {
                     finite("payload.decay_start", t2)?;
                     if t2 < p.start {
-                        return Err(invalid(
-                            "payload.decay_start".into(),
-                            show(t2),
-                            "decay_start >= payload.start",
-                        ));
+                        return Err(invalid("payload.decay_start".into(), show(t2), "decay_start >= payload.start"));
                     }
                     positive("payload.tau", tau)?;
                 }
@@ -895,7 +886,8 @@ impl Scenario {
         if let Some(mc) = &self.montecarlo {
             mc.check_against(self).map_err(|(key, value, expected)| invalid(key, value, &expected))?;
         }
-        self.check_cost(self.controllers.len()).map_err(|limit| ScenarioError::Limit { path: path.to_string(), limit })?;
+        self.check_cost(self.controllers.len())
+            .map_err(|limit| ScenarioError::Limit { path: path.to_string(), limit })?;
         Ok(())
     }
 

@@ -172,7 +172,11 @@ impl Signal {
     pub fn check(&self) -> Result<(), (String, String, &'static str)> {
         if let Some([start, end]) = self.window {
             if !(start.is_finite() && end.is_finite()) || end < start {
-                return Err(("window".into(), format!("[{}, {}]", show(start), show(end)), "a window [start, end] with start <= end"));
+                return Err((
+                    "window".into(),
+                    format!("[{}, {}]", show(start), show(end)),
+                    "a window [start, end] with start <= end",
+                ));
             }
         }
         for (k, term) in self.terms.iter().enumerate() {

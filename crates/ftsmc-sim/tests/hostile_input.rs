@@ -224,9 +224,18 @@ fn monte_carlo_parameters_must_be_finite() {
         ("mass = { dist = \"uniform\", low = 0.5, high = inf }", "montecarlo.mass.high"),
         ("mass = { dist = \"uniform\", low = -inf, high = 1.0 }", "montecarlo.mass.low"),
         ("drag_factor = { dist = \"normal\", mean = nan, std = 0.1 }", "montecarlo.drag_factor.mean"),
-        ("drag_factor = { dist = \"normal\", mean = 1.0, std = 0.1, low = 0.0, high = inf }", "montecarlo.drag_factor.high"),
-        ("disturbance_phase = { dist = \"uniform\", low = -1.7e308, high = 1.7e308 }", "montecarlo.disturbance_phase.high"),
-        ("disturbance_amplitude = { dist = \"normal\", mean = 0.0, std = 1e307 }", "montecarlo.disturbance_amplitude.std"),
+        (
+            "drag_factor = { dist = \"normal\", mean = 1.0, std = 0.1, low = 0.0, high = inf }",
+            "montecarlo.drag_factor.high",
+        ),
+        (
+            "disturbance_phase = { dist = \"uniform\", low = -1.7e308, high = 1.7e308 }",
+            "montecarlo.disturbance_phase.high",
+        ),
+        (
+            "disturbance_amplitude = { dist = \"normal\", mean = 0.0, std = 1e307 }",
+            "montecarlo.disturbance_amplitude.std",
+        ),
         ("inertia_factor = { dist = \"log-normal\", mu = 1000.0, sigma = 0.1 }", "montecarlo.inertia_factor.mu"),
         ("inertia_factor = { dist = \"log-normal\", mu = 0.0, sigma = 30.0 }", "montecarlo.inertia_factor.mu"),
     ] {
@@ -235,7 +244,9 @@ fn monte_carlo_parameters_must_be_finite() {
         assert!(!msg.contains("000000000000"), "abbreviated: {msg}");
     }
     // A finite `high` clamp makes a wide log-normal's draws finite.
-    accepted(&format!("{MC}inertia_factor = {{ dist = \"log-normal\", mu = 0.0, sigma = 30.0, low = 0.5, high = 2.0 }}\n"));
+    accepted(&format!(
+        "{MC}inertia_factor = {{ dist = \"log-normal\", mu = 0.0, sigma = 30.0, low = 0.5, high = 2.0 }}\n"
+    ));
 }
 
 #[test]
@@ -247,7 +258,10 @@ fn monte_carlo_draws_stay_in_the_physical_ranges() {
         ("payload_mass = { dist = \"uniform\", low = -1.0, high = 0.5 }", "montecarlo.payload_mass"),
         ("inertia_factor = { dist = \"uniform\", low = 0.0, high = 2.0 }", "montecarlo.inertia_factor"),
         ("drag_factor = { dist = \"normal\", mean = 1.0, std = 0.5 }", "montecarlo.drag_factor"),
-        ("initial_attitude_offset = { dist = \"uniform\", low = -2.0, high = 2.0 }", "montecarlo.initial_attitude_offset"),
+        (
+            "initial_attitude_offset = { dist = \"uniform\", low = -2.0, high = 2.0 }",
+            "montecarlo.initial_attitude_offset",
+        ),
     ] {
         let msg = refused(&format!("{MC}{dist}\n"));
         assert!(msg.contains(&format!("`{key}`")), "{dist}: {msg}");
