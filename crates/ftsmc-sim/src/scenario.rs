@@ -152,18 +152,18 @@ pub mod exact_array {
     }
 }
 
-/// Fixed-size arrays of `ftsmc-core` structs read from scenario files, with
-/// their lengths: `(table, key, length)`. Those structs derive serde's own
-/// `[f64; N]`, which ignores extra elements, so their lengths are checked on
-/// the TOML tree before deserializing.
-const CORE_ARRAYS: [(&str, &str, usize); 7] = [
-    ("plant", "inertia", 3),
-    ("plant", "drag_translational", 3),
-    ("plant", "drag_rotational", 3),
-    ("actual_plant", "inertia", 3),
-    ("actual_plant", "drag_translational", 3),
-    ("actual_plant", "drag_rotational", 3),
-    ("cascade", "alpha_hat_bounds", 2),
+/// Fixed-size arrays of `ftsmc-core` structs read from scenario files, as
+/// `(dotted path, length)`. Those structs derive serde's own `[f64; N]`,
+/// which ignores extra elements, so their lengths are checked on the TOML
+/// tree before deserializing.
+const CORE_ARRAYS: [(&str, usize); 7] = [
+    ("plant.inertia", 3),
+    ("plant.drag_translational", 3),
+    ("plant.drag_rotational", 3),
+    ("actual_plant.inertia", 3),
+    ("actual_plant.drag_translational", 3),
+    ("actual_plant.drag_rotational", 3),
+    ("ftaftsmc.mass_adaptation.alpha_hat_bounds", 2),
 ];
 
 /// Longest scenario `name`, characters.
@@ -588,12 +588,14 @@ pub fn read_scenario_text(path: &Path, limits: &Limits) -> Result<String, Scenar
 /// Lengths of the `ftsmc-core` arrays ([`CORE_ARRAYS`]) in the TOML text.
 fn check_core_array_lengths(text: &str) -> Result<(), String> {
     let root: toml::Table = toml::from_str(text).map_err(|e| parse_message(text, &e))?;
-    for (table, key, len) in CORE_ARRAYS {
-        if let Some(toml::Value::Array(a)) = root.get(table).and_then(|t| t.get(key)) {
+    for (path, len) in CORE_ARRAYS {
+        let mut parts = path.split('.');
+        let first = parts.next().and_then(|k| root.get(k));
+        let value = parts.fold(first, |v, k| v.and_then(|v| v.get(k)));
+        if let Some(toml::Value::Array(a)) = value {
             if a.len() != len {
                 return Err(format!(
-                    "`{table}.{key}` has {} elements: invalid length {}, expected an array of exactly {len} numbers",
-                    a.len(),
+                    "`{path}`: invalid length {}, expected an array of exactly {len} numbers",
                     a.len()
                 ));
             }

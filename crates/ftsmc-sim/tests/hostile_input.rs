@@ -202,8 +202,15 @@ fn arrays_of_the_wrong_length_are_refused() {
     // Arrays of ftsmc-core structs: checked on the TOML tree.
     let msg = refused("[plant]\ninertia = [0.004, 0.004, 0.008, 5.0]\n");
     assert!(msg.contains("plant.inertia") && msg.contains("exactly 3"), "{msg}");
-    refused("[actual_plant]\ndrag_rotational = [0.0, 0.0]\n");
-    refused("[cascade]\nalpha_hat_bounds = [0.5, 2.0, 3.0]\n");
+    let msg = refused(
+        "[ftaftsmc.mass_adaptation]\nenabled = true\nbeta1 = 0.8\nbeta2 = 0.01\nalpha_hat_bounds = [0.5, 2.0, 3.0]\n",
+    );
+    assert!(msg.contains("ftaftsmc.mass_adaptation.alpha_hat_bounds") && msg.contains("exactly 2"), "{msg}");
+    let msg = refused("[actual_plant]\ndrag_rotational = [0.0, 0.0]\n");
+    assert!(msg.contains("drag_rotational") && msg.contains("invalid length 2"), "{msg}");
+    let msg = refused("[actual_plant]\ndrag_translational = [0.0, 0.0, 0.0, 1.0]\n");
+    assert!(msg.contains("actual_plant.drag_translational") && msg.contains("invalid length 4"), "{msg}");
+    accepted("[ftaftsmc.mass_adaptation]\nenabled = true\nbeta1 = 0.8\nbeta2 = 0.01\nalpha_hat_bounds = [0.5, 2.0]\n");
     let s = accepted("[initial_state]\nposition = [0.5, 0.25, 0.0]\n[simulation]\nmetrics_window = [0.0, 1.0]\n");
     assert_eq!(s.initial_state.position, [0.5, 0.25, 0.0]);
 }
