@@ -58,6 +58,10 @@ enum Command {
         /// Skip figure rendering.
         #[arg(long)]
         no_figures: bool,
+        /// Raise a cost limit, e.g. `--limit max_steps=1e10` (repeatable; keys: max_steps, max_samples,
+        /// max_output_bytes, max_flights, max_sweep_points, max_threads, max_scenario_bytes; see docs/scenarios.md).
+        #[arg(long = "limit", value_name = "KEY=VALUE")]
+        limit: Vec<String>,
     },
     /// Measure reaching and settling times against the initial error (1e-3 … 1e2) beside the paper's fixed-time bound.
     FixedTime {
@@ -73,6 +77,10 @@ enum Command {
         /// Output directory.
         #[arg(long, default_value = "results/fixed-time")]
         out: PathBuf,
+        /// Raise a cost limit, e.g. `--limit max_steps=1e10` (repeatable; keys: max_steps, max_samples,
+        /// max_output_bytes, max_flights, max_sweep_points, max_threads, max_scenario_bytes; see docs/scenarios.md).
+        #[arg(long = "limit", value_name = "KEY=VALUE")]
+        limit: Vec<String>,
     },
     /// Fly N randomised copies of a scenario (its [montecarlo] section) with each controller, in parallel.
     Montecarlo {
@@ -96,6 +104,10 @@ enum Command {
         /// Skip the box-plot figure.
         #[arg(long)]
         no_figures: bool,
+        /// Raise a cost limit, e.g. `--limit max_steps=1e10` (repeatable; keys: max_steps, max_samples,
+        /// max_output_bytes, max_flights, max_sweep_points, max_threads, max_scenario_bytes; see docs/scenarios.md).
+        #[arg(long = "limit", value_name = "KEY=VALUE")]
+        limit: Vec<String>,
     },
     /// Rerun the documented TSM-STA gain procedure (match RANFTSMC's scenario-1 settling times) and print the gains as TOML.
     TuneTsmSta {
@@ -114,14 +126,20 @@ enum Command {
 
 /// Load a scenario from a file path or a built-in name.
 pub fn load_scenario(arg: &str) -> Result<Scenario> {
+    load_scenario_with_limits(arg, &[])
+}
+
+/// [`load_scenario`] with `--limit KEY=VALUE` overrides applied before the
+/// scenario is priced (they win over its `[limits]`).
+pub fn load_scenario_with_limits(arg: &str, limits: &[String]) -> Result<Scenario> {
     let path = PathBuf::from(arg);
     if path.exists() {
-        return Ok(Scenario::from_file(&path)?);
+        return Ok(Scenario::from_file_with_limits(&path, limits)?);
     }
     let wanted = arg.trim_end_matches(".toml");
     for (file, text) in PAPER_SCENARIOS {
         if file.trim_end_matches(".toml") == wanted {
-            return Ok(Scenario::from_toml_str(text, file)?);
+            return Ok(Scenario::from_toml_str_with_limits(text, file, limits)?);
         }
     }
     bail!("no scenario file `{arg}` (and it is not a built-in scenario: paper-scenario-1, paper-scenario-2, ftaftsmc-tuned-scenario-1)")
@@ -151,16 +169,25 @@ fn main() -> std::process::ExitCode {
 fn run(cli: Cli) -> Result<()> {
     match cli.command {
         Command::Reproduce { out, no_figures } => reproduce::reproduce(&out, !no_figures),
-        Command::Run { scenario, controller, out, no_figures } => {
-            let scenario = load_scenario(&scenario)?;
+        Command::Run { scenario, controller, out, no_figures, limit } => {
+            let scenario = load_scenario_with_limits(&scenario, &limit)?;
             let names = if controller.is_empty() { scenario.controllers.clone() } else { controller };
             check_names(&names)?;
+            scenario.check_cost(names.len())?;
             reproduce::run_scenario(&scenario, &names, &out, !no_figures)
         }
-        Command::FixedTime { scenario, controllers, per_decade, out } => {
-            let scenario = load_scenario(&scenario)?;
+        Command::FixedTime { scenario, controllers, per_decade, out, limit } => {
+            let scenario = load_scenario_with_limits(&scenario, &limit)?;
             check_names(&controllers)?;
             anyhow::ensure!(per_decade >= 1, "--per-decade must be at least 1");
+            ftsmc_sim::limits::check_sweep(&scenario.limits, ftsmc_sim::limits::sweep_points(5, per_decade as u64))?;
+            let sim = &scenario.simulation;
+            let t_max = ftsmc_sim::fixed_time::SweepSettings::default().t_max;
+            scenario.limits.ensure(
+                "max_steps",
+                "integration steps per sweep flight (60 s × control_rate × substeps)",
+                t_max * sim.control_rate * f64::from(sim.substeps),
+            )?;
             let settings = ftsmc_sim::fixed_time::SweepSettings {
                 magnitudes: ftsmc_sim::fixed_time::SweepSettings::log_magnitudes(-3, 2, per_decade),
                 dt: scenario.control_period(),
@@ -168,12 +195,16 @@ fn run(cli: Cli) -> Result<()> {
             };
             fixed_time::run(&scenario, &controllers, &settings, &out)
         }
-        Command::Montecarlo { scenario, runs, seed, threads, controllers, out, no_figures } => {
-            let scenario = load_scenario(&scenario)?;
+        Command::Montecarlo { scenario, runs, seed, threads, controllers, out, no_figures, limit } => {
+            let scenario = load_scenario_with_limits(&scenario, &limit)?;
             let names = if controllers.is_empty() { scenario.controllers.clone() } else { controllers };
             check_names(&names)?;
             anyhow::ensure!(runs >= 1, "--runs must be at least 1");
             anyhow::ensure!(threads != Some(0), "--threads must be at least 1");
+            ftsmc_sim::limits::check_batch(&scenario, runs, names.len())?;
+            if let Some(n) = threads {
+                ftsmc_sim::limits::check_threads(&scenario.limits, n)?;
+            }
             montecarlo::run(&scenario, &names, runs, seed.unwrap_or(scenario.seed), threads, &out, !no_figures)
         }
         Command::TuneTsmSta { scenario } => {

@@ -4,10 +4,12 @@
 //! paper Eq. 1 ([`plant`]), time signals for references and disturbances
 //! ([`signal`]), scenario files ([`scenario`]), the zero-order-hold RK4 run
 //! loop ([`simulate`]), metrics ([`metrics`]) and the controller registry
-//! ([`registry`]).
+//! ([`registry`]), and the cost limits every request is checked against
+//! before any flight ([`limits`]).
 #![warn(missing_docs)]
 
 pub mod fixed_time;
+pub mod limits;
 pub mod metrics;
 pub mod montecarlo;
 pub mod plant;

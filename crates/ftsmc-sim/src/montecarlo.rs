@@ -81,12 +81,23 @@ impl Dist {
         }
     }
 
-    /// Range check; `Err((field, value, expected))`.
+    /// Range check: finite parameters (`inf`/`nan` are refused, also as
+    /// clamps), `high >= low`, a `uniform` whose width `high - low` is
+    /// finite, and draws that are always finite ([`Dist::support`]);
+    /// `Err((field, value, expected))`.
     pub fn check(&self) -> Result<(), (&'static str, f64, &'static str)> {
         let finite = |f: &'static str, v: f64| if v.is_finite() { Ok(()) } else { Err((f, v, "a finite number")) };
-        let bounds = |low: Option<f64>, high: Option<f64>| match (low, high) {
-            (Some(l), Some(h)) if h < l => Err(("high", h, "high >= low")),
-            _ => Ok(()),
+        let bounds = |low: Option<f64>, high: Option<f64>| {
+            if let Some(l) = low {
+                finite("low", l)?;
+            }
+            if let Some(h) = high {
+                finite("high", h)?;
+            }
+            match (low, high) {
+                (Some(l), Some(h)) if h < l => Err(("high", h, "high >= low")),
+                _ => Ok(()),
+            }
         };
         match *self {
             Dist::Uniform { low, high } => {
@@ -95,6 +106,9 @@ impl Dist {
                 if high < low {
                     return Err(("high", high, "high >= low"));
                 }
+                if !(high - low).is_finite() {
+                    return Err(("high", high, "a range whose width high - low is finite (below ~1.8e308)"));
+                }
             }
             Dist::Normal { mean, std, low, high } => {
                 finite("mean", mean)?;
@@ -102,6 +116,10 @@ impl Dist {
                     return Err(("std", std, "a finite value >= 0"));
                 }
                 bounds(low, high)?;
+                let (lo, hi) = self.support();
+                if !(lo.is_finite() && hi.is_finite()) {
+                    return Err(("std", std, "a std whose draws stay finite (mean ± 40 std below ~1.8e308)"));
+                }
             }
             Dist::LogNormal { mu, sigma, low, high } => {
                 finite("mu", mu)?;
@@ -109,9 +127,39 @@ impl Dist {
                     return Err(("sigma", sigma, "a finite value >= 0"));
                 }
                 bounds(low, high)?;
+                let (_, hi) = self.support();
+                if !hi.is_finite() {
+                    return Err((
+                        "mu",
+                        mu,
+                        "mu + 40 sigma <= 709 (exp of larger values is infinite), or a finite `high` clamp",
+                    ));
+                }
             }
         }
         Ok(())
+    }
+
+    /// The interval `[lo, hi]` every draw lies in, after the optional
+    /// clamps: `[low, high]` for `uniform`; mean ± 40 std for `normal` and
+    /// exp(mu ± 40 sigma) for `log-normal` (the normal generator never
+    /// produces more than ~14 standard deviations), clamped like a draw.
+    /// Validation checks this interval against the parameter's physical range.
+    pub fn support(&self) -> (f64, f64) {
+        const Z: f64 = 40.0;
+        let clamp = |v: f64, low: Option<f64>, high: Option<f64>| {
+            let v = low.map_or(v, |l| v.max(l));
+            high.map_or(v, |h| v.min(h))
+        };
+        match *self {
+            Dist::Uniform { low, high } => (low, high),
+            Dist::Normal { mean, std, low, high } => {
+                (clamp(mean - Z * std, low, high), clamp(mean + Z * std, low, high))
+            }
+            Dist::LogNormal { mu, sigma, low, high } => {
+                (clamp((mu - Z * sigma).exp(), low, high), clamp((mu + Z * sigma).exp(), low, high))
+            }
+        }
     }
 }
 
@@ -170,6 +218,93 @@ impl MonteCarloSpec {
         for (name, d) in self.named() {
             if let Some(d) = d {
                 d.check().map_err(|(f, v, e)| (format!("montecarlo.{name}.{f}"), v, e))?;
+            }
+        }
+        Ok(())
+    }
+
+    /// [`MonteCarloSpec::check`], then every draw against the physical range
+    /// of the value it replaces in `base` — the same ranges as fixed values —
+    /// using each distribution's [`Dist::support`]: a true mass > 0 (with the
+    /// payload, whose draws need a `[payload]`), inertia factor > 0, drag
+    /// factor >= 0, finite scaled inertia / drag / initial position, and an
+    /// initial roll and pitch inside `simulation.max_tilt`.
+    /// `Err((key, value, expected))`; the key names the distribution.
+    pub fn check_against(&self, base: &Scenario) -> Result<(), (String, String, String)> {
+        use crate::scenario::show;
+        // After `check`, every support is finite (never NaN), so plain comparisons suffice.
+        self.check().map_err(|(k, v, e)| (k, show(v), e.to_string()))?;
+        let range = |(lo, hi): (f64, f64)| format!("draws in [{}, {}]", show(lo), show(hi));
+        let err =
+            |name: &str, d: &Dist, expected: String| Err((format!("montecarlo.{name}"), range(d.support()), expected));
+        let truth = base.actual_plant.unwrap_or(base.plant);
+        let mut mass_low = truth.mass;
+        if let Some(d) = &self.mass {
+            let (lo, _) = d.support();
+            if lo <= 0.0 {
+                return err("mass", d, "a true mass > 0 (give the distribution a `low` > 0)".into());
+            }
+            mass_low = lo;
+        }
+        match (&self.payload_mass, &base.payload) {
+            (Some(d), None) => {
+                return err("payload_mass", d, "a [payload] section to replace the mass of (there is none)".into())
+            }
+            (Some(d), Some(_)) => {
+                let (lo, _) = d.support();
+                if mass_low + lo.min(0.0) <= 0.0 {
+                    return err(
+                        "payload_mass",
+                        d,
+                        format!("payload draws > -(smallest true mass {}) so the mass stays > 0", show(mass_low)),
+                    );
+                }
+            }
+            (None, Some(p)) => {
+                if let Some(d) = &self.mass {
+                    if mass_low + p.mass.min(0.0) <= 0.0 {
+                        return err(
+                            "mass",
+                            d,
+                            format!("true masses > -payload.mass = {} so the mass stays > 0", show(-p.mass)),
+                        );
+                    }
+                }
+            }
+            (None, None) => {}
+        }
+        if let Some(d) = &self.inertia_factor {
+            let (lo, hi) = d.support();
+            if lo <= 0.0 || truth.inertia.iter().any(|i| !(i * hi).is_finite()) {
+                return err("inertia_factor", d, "factors > 0 with finite scaled inertia".into());
+            }
+        }
+        if let Some(d) = &self.drag_factor {
+            let (lo, hi) = d.support();
+            let drag = truth.drag_translational.iter().chain(&truth.drag_rotational);
+            if lo < 0.0 || drag.into_iter().any(|k| !(k * hi).is_finite()) {
+                return err("drag_factor", d, "factors >= 0 with finite scaled drag".into());
+            }
+        }
+        if let Some(d) = &self.initial_position_offset {
+            let (lo, hi) = d.support();
+            if base.initial_state.position.iter().any(|p| !((p + lo).is_finite() && (p + hi).is_finite())) {
+                return err("initial_position_offset", d, "offsets giving a finite initial position".into());
+            }
+        }
+        if let Some(d) = &self.initial_attitude_offset {
+            let (lo, hi) = d.support();
+            let tilt = base.simulation.max_tilt;
+            if base.initial_state.attitude[..2].iter().any(|a| !((a + lo).abs() < tilt && (a + hi).abs() < tilt)) {
+                return err(
+                    "initial_attitude_offset",
+                    d,
+                    format!("offsets keeping |roll|, |pitch| < simulation.max_tilt = {}", show(tilt)),
+                );
+            }
+            if !(base.initial_state.attitude[2] + lo).is_finite() || !(base.initial_state.attitude[2] + hi).is_finite()
+            {
+                return err("initial_attitude_offset", d, "offsets giving a finite initial yaw".into());
             }
         }
         Ok(())

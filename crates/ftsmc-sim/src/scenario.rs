@@ -13,7 +13,173 @@ use ftsmc_core::ranftsmc::RanftsmcGains;
 use ftsmc_core::tsm_sta::TsmStaGains;
 use serde::{Deserialize, Serialize};
 
+use crate::limits::{LimitError, Limits};
 use crate::signal::Signal;
+
+/// Longest value echoed in an error message, characters (longer ones are
+/// cut and end in `…`).
+pub const MAX_SHOWN_CHARS: usize = 40;
+
+/// A number for an error message: the ordinary decimal form when it is
+/// short (`0.74`, `-3`), scientific otherwise (`1e308`, `5e-324`, never 309
+/// digits), at most [`MAX_SHOWN_CHARS`] characters.
+pub fn show(v: f64) -> String {
+    let plain = v.to_string();
+    if plain.len() <= 24 && (v == 0.0 || (1e-4..1e6).contains(&v.abs())) {
+        plain
+    } else {
+        show_str(&format!("{v:e}"))
+    }
+}
+
+/// Longest parser message kept in an error, characters.
+const MAX_PARSE_MESSAGE_CHARS: usize = 300;
+
+/// A TOML error as one bounded line: `TOML parse error at line L, column C (`source line`): message`
+/// (the parser's own text spans several lines and quotes the source line).
+fn parse_message(text: &str, e: &toml::de::Error) -> String {
+    let mut message: String = e.message().split_whitespace().collect::<Vec<_>>().join(" ");
+    if message.chars().count() > MAX_PARSE_MESSAGE_CHARS {
+        message = message.chars().take(MAX_PARSE_MESSAGE_CHARS - 1).collect();
+        message.push('…');
+    }
+    match e.span() {
+        Some(span) => {
+            let before = &text.as_bytes()[..span.start.min(text.len())];
+            let line = before.iter().filter(|&&b| b == b'\n').count() + 1;
+            let column = before.iter().rev().take_while(|&&b| b != b'\n').count() + 1;
+            let source = text.lines().nth(line - 1).unwrap_or("").trim();
+            format!("TOML parse error at line {line}, column {column} (`{}`): {message}", show_str(source))
+        }
+        None => format!("TOML parse error: {message}"),
+    }
+}
+
+/// A piece of user text for an error message: control characters escaped,
+/// at most [`MAX_SHOWN_CHARS`] characters (then `…`).
+pub fn show_str(s: &str) -> String {
+    let escaped: String = s.chars().flat_map(char::escape_debug).collect();
+    if escaped.chars().count() <= MAX_SHOWN_CHARS {
+        escaped
+    } else {
+        let mut cut: String = escaped.chars().take(MAX_SHOWN_CHARS - 1).collect();
+        cut.push('…');
+        cut
+    }
+}
+
+/// `#[serde(with = "exact_array")]` for fixed-size arrays in scenario files:
+/// serde's own `[T; N]` reads the first N elements and, in TOML, silently
+/// ignores the rest (`position = [0.5, 0.25, 0.0, 99.0, "junk", [1]]` was a
+/// valid position). This reads the whole array and errors on too few or too
+/// many elements, naming the length found and the length wanted.
+pub mod exact_array {
+    use core::fmt;
+    use core::marker::PhantomData;
+
+    use serde::de::{self, IgnoredAny, SeqAccess, Visitor};
+    use serde::{Deserialize, Deserializer, Serialize, Serializer};
+
+    struct Exact<T, const N: usize>(PhantomData<T>);
+
+    impl<'de, T: Deserialize<'de>, const N: usize> Visitor<'de> for Exact<T, N> {
+        type Value = [T; N];
+
+        fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+            write!(f, "an array of exactly {N} numbers")
+        }
+
+        fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<[T; N], A::Error> {
+            let mut items = Vec::with_capacity(N);
+            while items.len() < N {
+                match seq.next_element::<T>()? {
+                    Some(v) => items.push(v),
+                    None => return Err(de::Error::invalid_length(items.len(), &self)),
+                }
+            }
+            let mut extra = 0usize;
+            while seq.next_element::<IgnoredAny>()?.is_some() {
+                extra += 1;
+            }
+            if extra > 0 {
+                return Err(de::Error::invalid_length(N + extra, &self));
+            }
+            items.try_into().map_err(|_| de::Error::invalid_length(N, &self))
+        }
+    }
+
+    /// Serialize as an ordinary array.
+    pub fn serialize<S: Serializer, T: Serialize, const N: usize>(v: &[T; N], s: S) -> Result<S::Ok, S::Error> {
+        v.as_slice().serialize(s)
+    }
+
+    /// Deserialize exactly `N` elements.
+    pub fn deserialize<'de, D: Deserializer<'de>, T: Deserialize<'de>, const N: usize>(
+        d: D,
+    ) -> Result<[T; N], D::Error> {
+        d.deserialize_seq(Exact::<T, N>(PhantomData))
+    }
+
+    /// The same for an optional array (`#[serde(default, with = "exact_array::option")]`).
+    pub mod option {
+        use super::*;
+
+        struct Wrap<T, const N: usize>([T; N]);
+
+        impl<'de, T: Deserialize<'de>, const N: usize> Deserialize<'de> for Wrap<T, N> {
+            fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+                super::deserialize(d).map(Wrap)
+            }
+        }
+
+        /// Serialize as an ordinary optional array.
+        pub fn serialize<S: Serializer, T: Serialize, const N: usize>(
+            v: &Option<[T; N]>,
+            s: S,
+        ) -> Result<S::Ok, S::Error> {
+            match v {
+                Some(a) => s.serialize_some(a.as_slice()),
+                None => s.serialize_none(),
+            }
+        }
+
+        /// Deserialize `Some` of exactly `N` elements.
+        pub fn deserialize<'de, D: Deserializer<'de>, T: Deserialize<'de>, const N: usize>(
+            d: D,
+        ) -> Result<Option<[T; N]>, D::Error> {
+            Option::<Wrap<T, N>>::deserialize(d).map(|o| o.map(|w| w.0))
+        }
+    }
+}
+
+/// Fixed-size arrays of `ftsmc-core` structs read from scenario files, as
+/// `(dotted path, length)`. Those structs derive serde's own `[f64; N]`,
+/// which ignores extra elements, so their lengths are checked on the TOML
+/// tree before deserializing.
+const CORE_ARRAYS: [(&str, usize); 7] = [
+    ("plant.inertia", 3),
+    ("plant.drag_translational", 3),
+    ("plant.drag_rotational", 3),
+    ("actual_plant.inertia", 3),
+    ("actual_plant.drag_translational", 3),
+    ("actual_plant.drag_rotational", 3),
+    ("ftaftsmc.mass_adaptation.alpha_hat_bounds", 2),
+];
+
+/// Longest scenario `name`, characters.
+pub const MAX_NAME_CHARS: usize = 64;
+
+/// A scenario `name` is used as a directory name under `--out`, so it must
+/// be one plain file-name component: 1–64 characters from `A–Z a–z 0–9 . _ -`,
+/// not starting with `.` (so never `.`, `..` or a hidden file).
+pub fn check_name(name: &str) -> Result<(), &'static str> {
+    let ok_chars = name.chars().all(|c| c.is_ascii_alphanumeric() || matches!(c, '.' | '_' | '-'));
+    if name.is_empty() || name.len() > MAX_NAME_CHARS || !ok_chars || name.starts_with('.') {
+        Err("1-64 characters from A-Z a-z 0-9 . _ - not starting with `.` (the name is a directory under --out)")
+    } else {
+        Ok(())
+    }
+}
 
 /// The paper's scenario 1 (SPEC §4), as shipped in `scenarios/paper-scenario-1.toml`.
 pub const PAPER_SCENARIO_1: &str = include_str!("../../../scenarios/paper-scenario-1.toml");
@@ -65,6 +231,22 @@ pub enum ScenarioError {
         value: String,
         /// What is allowed.
         expected: String,
+    },
+    /// The file is not a regular file, or too large to be a scenario.
+    #[error("{path}: {message}")]
+    File {
+        /// File path.
+        path: String,
+        /// What is wrong.
+        message: String,
+    },
+    /// The scenario costs more than its limits allow (see [`crate::limits`]).
+    #[error("{path}: {limit}")]
+    Limit {
+        /// File path.
+        path: String,
+        /// The limit exceeded, the amount requested and how to raise it.
+        limit: LimitError,
     },
     /// A controller name that is not in the registry.
     #[error("{path}: unknown controller `{name}` (known: {known})")]
@@ -167,7 +349,7 @@ pub struct SimulationSettings {
     /// "Steady state" starts here for the max-error metric, s (default 5).
     pub steady_state_after: f64,
     /// Optional `[start, end]` window (s) for an extra windowed ISE metric.
-    #[serde(skip_serializing_if = "Option::is_none")]
+    #[serde(skip_serializing_if = "Option::is_none", with = "exact_array::option")]
     pub metrics_window: Option<[f64; 2]>,
     /// Rotor speed limit, rad/s (default: none, ideal actuators). When set,
     /// the commanded thrust and torques are realised through rotor speeds
@@ -198,12 +380,16 @@ impl Default for SimulationSettings {
 #[serde(deny_unknown_fields, default)]
 pub struct InitialState {
     /// `[x, y, z]`, m.
+    #[serde(with = "exact_array")]
     pub position: [f64; 3],
     /// `[φ, θ, ψ]`, rad.
+    #[serde(with = "exact_array")]
     pub attitude: [f64; 3],
     /// `[ẋ, ẏ, ż]`, m/s.
+    #[serde(with = "exact_array")]
     pub velocity: [f64; 3],
     /// `[φ̇, θ̇, ψ̇]`, rad/s.
+    #[serde(with = "exact_array")]
     pub angular_rate: [f64; 3],
 }
 
@@ -358,6 +544,66 @@ fn default_controllers() -> Vec<String> {
     crate::registry::PAPER_CONTROLLERS.iter().map(|s| s.to_string()).collect()
 }
 
+/// Read a scenario file's text, refusing anything but a regular file of at
+/// most `limits.max_scenario_bytes` bytes. The type and size are checked on
+/// the metadata before the file is opened (a FIFO would block `open`), and
+/// the read itself is bounded, so `/dev/zero`, a FIFO, a directory or a
+/// file that grows while being read are refused without reading them.
+pub fn read_scenario_text(path: &Path, limits: &Limits) -> Result<String, ScenarioError> {
+    use std::io::Read as _;
+    let shown = path.display().to_string();
+    let io = |source| ScenarioError::Io { path: shown.clone(), source };
+    let not_regular = |meta: &std::fs::Metadata| {
+        let kind = if meta.is_dir() { "a directory" } else { "not a regular file (a device, FIFO or socket)" };
+        ScenarioError::File { path: shown.clone(), message: format!("{kind}; a scenario must be a regular file") }
+    };
+    let max = limits.max_scenario_bytes.min(u64::MAX as f64) as u64;
+    let too_big = |bytes: u64| ScenarioError::Limit {
+        path: shown.clone(),
+        limit: crate::limits::check_file_size(limits, bytes).expect_err("over the limit"),
+    };
+    let meta = std::fs::metadata(path).map_err(io)?;
+    if !meta.is_file() {
+        return Err(not_regular(&meta));
+    }
+    if meta.len() > max {
+        return Err(too_big(meta.len()));
+    }
+    let file = std::fs::File::open(path).map_err(io)?;
+    let meta = file.metadata().map_err(io)?;
+    if !meta.is_file() {
+        return Err(not_regular(&meta));
+    }
+    let mut bytes = Vec::new();
+    file.take(max.saturating_add(1)).read_to_end(&mut bytes).map_err(io)?;
+    if bytes.len() as u64 > max {
+        return Err(too_big(bytes.len() as u64));
+    }
+    String::from_utf8(bytes).map_err(|e| ScenarioError::File {
+        path: shown.clone(),
+        message: format!("not UTF-8 text (invalid byte at offset {})", e.utf8_error().valid_up_to()),
+    })
+}
+
+/// Lengths of the `ftsmc-core` arrays ([`CORE_ARRAYS`]) in the TOML text.
+fn check_core_array_lengths(text: &str) -> Result<(), String> {
+    let root: toml::Table = toml::from_str(text).map_err(|e| parse_message(text, &e))?;
+    for (path, len) in CORE_ARRAYS {
+        let mut parts = path.split('.');
+        let first = parts.next().and_then(|k| root.get(k));
+        let value = parts.fold(first, |v, k| v.and_then(|v| v.get(k)));
+        if let Some(toml::Value::Array(a)) = value {
+            if a.len() != len {
+                return Err(format!(
+                    "`{path}`: invalid length {}, expected an array of exactly {len} numbers",
+                    a.len()
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
 /// A complete scenario (see `docs/scenarios.md` for the file format).
 #[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
@@ -418,22 +664,46 @@ pub struct Scenario {
     /// Distributions for `ftsmc montecarlo` (ignored by single runs).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub montecarlo: Option<crate::montecarlo::MonteCarloSpec>,
+    /// Cost limits (see [`crate::limits`]); every key optional.
+    #[serde(default, skip_serializing_if = "is_default_limits")]
+    pub limits: Limits,
+}
+
+fn is_default_limits(l: &Limits) -> bool {
+    *l == Limits::default()
 }
 
 impl Scenario {
     /// Parse and validate TOML text; `path` is used in error messages.
     pub fn from_toml_str(text: &str, path: &str) -> Result<Self, ScenarioError> {
-        let scenario: Scenario = toml::from_str(text)
-            .map_err(|e| ScenarioError::Parse { path: path.to_string(), message: e.to_string() })?;
+        Self::from_toml_str_with_limits(text, path, &[])
+    }
+
+    /// Parse TOML text, apply command-line limit overrides (`KEY=VALUE`,
+    /// see [`Limits::apply_overrides`]; they win over the file's `[limits]`)
+    /// and validate.
+    pub fn from_toml_str_with_limits(text: &str, path: &str, overrides: &[String]) -> Result<Self, ScenarioError> {
+        let parse_error = |message: String| ScenarioError::Parse { path: path.to_string(), message };
+        let mut scenario: Scenario = toml::from_str(text).map_err(|e| parse_error(parse_message(text, &e)))?;
+        check_core_array_lengths(text).map_err(parse_error)?;
+        scenario.limits.apply_overrides(overrides).map_err(parse_error)?;
         scenario.validate(path)?;
         Ok(scenario)
     }
 
     /// Read, parse and validate a scenario file.
     pub fn from_file(path: &Path) -> Result<Self, ScenarioError> {
+        Self::from_file_with_limits(path, &[])
+    }
+
+    /// [`Scenario::from_file`] with command-line limit overrides (which may
+    /// raise `max_scenario_bytes`).
+    pub fn from_file_with_limits(path: &Path, overrides: &[String]) -> Result<Self, ScenarioError> {
         let shown = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|source| ScenarioError::Io { path: shown.clone(), source })?;
-        Self::from_toml_str(&text, &shown)
+        let mut limits = Limits::default();
+        limits.apply_overrides(overrides).map_err(|message| ScenarioError::Parse { path: shown.clone(), message })?;
+        let text = read_scenario_text(path, &limits)?;
+        Self::from_toml_str_with_limits(&text, &shown, overrides)
     }
 
     /// The built-in paper scenarios, parsed.
@@ -457,39 +727,48 @@ impl Scenario {
             value,
             expected: expected.to_string(),
         };
-        let gain =
-            |prefix: &str, e: GainError| invalid(format!("{prefix}.{}", e.field), e.value.to_string(), e.expected);
+        let gain = |prefix: &str, e: GainError| invalid(format!("{prefix}.{}", e.field), show(e.value), e.expected);
         let positive = |key: &str, v: f64| {
             if v.is_finite() && v > 0.0 {
                 Ok(())
             } else {
-                Err(invalid(key.to_string(), v.to_string(), "a finite value > 0"))
+                Err(invalid(key.to_string(), show(v), "a finite value > 0"))
             }
         };
         let non_negative = |key: &str, v: f64| {
             if v.is_finite() && v >= 0.0 {
                 Ok(())
             } else {
-                Err(invalid(key.to_string(), v.to_string(), "a finite value >= 0"))
+                Err(invalid(key.to_string(), show(v), "a finite value >= 0"))
             }
         };
         let finite = |key: &str, v: f64| {
             if v.is_finite() {
                 Ok(())
             } else {
-                Err(invalid(key.to_string(), v.to_string(), "a finite number"))
+                Err(invalid(key.to_string(), show(v), "a finite number"))
             }
         };
 
-        if self.name.trim().is_empty() {
-            return Err(invalid("name".into(), format!("{:?}", self.name), "a non-empty name"));
+        if let Err(rule) = check_name(&self.name) {
+            return Err(invalid("name".into(), format!("\"{}\"", show_str(&self.name)), rule));
         }
-        if self.name.contains(['/', '\\']) {
-            return Err(invalid("name".into(), format!("{:?}", self.name), "a name without path separators"));
+        if self.controllers.is_empty() {
+            return Err(invalid("controllers".into(), "[]".into(), "at least one controller name"));
+        }
+        if let Err((key, v)) = self.limits.check() {
+            return Err(invalid(format!("limits.{key}"), show(v), "a number > 0"));
         }
         positive("duration", self.duration)?;
         let sim = &self.simulation;
         positive("simulation.control_rate", sim.control_rate)?;
+        if (self.duration / self.control_period()).round() < 1.0 {
+            return Err(invalid(
+                "duration".into(),
+                show(self.duration),
+                &format!("at least one control period (>= 1/control_rate = {} s)", show(self.control_period())),
+            ));
+        }
         if sim.substeps == 0 {
             return Err(invalid("simulation.substeps".into(), "0".into(), "an integer >= 1"));
         }
@@ -497,7 +776,7 @@ impl Scenario {
         if sim.record_rate > sim.control_rate {
             return Err(invalid(
                 "simulation.record_rate".into(),
-                sim.record_rate.to_string(),
+                show(sim.record_rate),
                 "a rate <= simulation.control_rate",
             ));
         }
@@ -510,7 +789,7 @@ impl Scenario {
             if !(start.is_finite() && end.is_finite() && start <= end) {
                 return Err(invalid(
                     "simulation.metrics_window".into(),
-                    format!("[{start}, {end}]"),
+                    format!("[{}, {}]", show(start), show(end)),
                     "a window [start, end] with start <= end",
                 ));
             }
@@ -518,16 +797,10 @@ impl Scenario {
         if let Some(w) = sim.max_rotor_speed {
             positive("simulation.max_rotor_speed", w)?;
         }
-        if self.duration * sim.control_rate > 1e9 {
-            return Err(invalid("duration".into(), self.duration.to_string(), "at most 1e9 control steps"));
-        }
 
         self.plant.check().map_err(|e| gain("plant", e))?;
         if let Some(p) = &self.actual_plant {
             p.check().map_err(|e| gain("actual_plant", e))?;
-        }
-        if let Some(mc) = &self.montecarlo {
-            mc.check().map_err(|(key, value, expected)| invalid(key, value.to_string(), expected))?;
         }
         let init = &self.initial_state;
         for (name, v) in [
@@ -542,11 +815,7 @@ impl Scenario {
         }
         for (i, a) in init.attitude[..2].iter().enumerate() {
             if a.abs() >= sim.max_tilt {
-                return Err(invalid(
-                    format!("initial_state.attitude[{i}]"),
-                    a.to_string(),
-                    "|angle| < simulation.max_tilt",
-                ));
+                return Err(invalid(format!("initial_state.attitude[{i}]"), show(*a), "|angle| < simulation.max_tilt"));
             }
         }
         let signal = |prefix: String, s: &Signal| {
@@ -561,19 +830,23 @@ impl Scenario {
         }
         if let Some(p) = &self.payload {
             finite("payload.mass", p.mass)?;
-            if p.mass <= -self.plant.mass {
-                return Err(invalid("payload.mass".into(), p.mass.to_string(), "a mass change > −plant.mass"));
+            let (true_mass, which) = match &self.actual_plant {
+                Some(a) => (a.mass, "actual_plant.mass"),
+                None => (self.plant.mass, "plant.mass"),
+            };
+            if p.mass <= -true_mass {
+                return Err(invalid(
+                    "payload.mass".into(),
+                    show(p.mass),
+                    &format!("a mass change > -{which} = -{} (the true mass must stay > 0)", show(true_mass)),
+                ));
             }
             finite("payload.start", p.start)?;
             match (p.decay_start, p.tau) {
                 (Some(t2), Some(tau)) => {
                     finite("payload.decay_start", t2)?;
                     if t2 < p.start {
-                        return Err(invalid(
-                            "payload.decay_start".into(),
-                            t2.to_string(),
-                            "decay_start >= payload.start",
-                        ));
+                        return Err(invalid("payload.decay_start".into(), show(t2), "decay_start >= payload.start"));
                     }
                     positive("payload.tau", tau)?;
                 }
@@ -581,7 +854,7 @@ impl Scenario {
                     return Err(invalid(
                         "payload.tau".into(),
                         "missing".into(),
-                        &format!("a time constant > 0 (decay_start = {t2} is set)"),
+                        &format!("a time constant > 0 (decay_start = {} is set)", show(t2)),
                     ))
                 }
                 (None, Some(tau)) => positive("payload.tau", tau)?,
@@ -612,6 +885,19 @@ impl Scenario {
                 known,
             })?;
         }
+        if let Some(mc) = &self.montecarlo {
+            mc.check_against(self).map_err(|(key, value, expected)| invalid(key, value, &expected))?;
+        }
+        self.check_cost(self.controllers.len())
+            .map_err(|limit| ScenarioError::Limit { path: path.to_string(), limit })?;
         Ok(())
+    }
+
+    /// Price one flight with each of `n_controllers` controllers (steps
+    /// including substeps, recorded rows, output bytes) against
+    /// [`Scenario::limits`]; called by [`Scenario::validate`] with the
+    /// scenario's own controller list.
+    pub fn check_cost(&self, n_controllers: usize) -> Result<crate::limits::Cost, LimitError> {
+        crate::limits::check_flight(self, n_controllers)
     }
 }

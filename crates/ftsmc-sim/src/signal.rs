@@ -6,6 +6,8 @@
 use ftsmc_core::math::sin_cos;
 use serde::{Deserialize, Serialize};
 
+use crate::scenario::show;
+
 /// One additive term of a [`Signal`]. In TOML: an inline table with a
 /// `type` key, e.g. `{ type = "sine", amplitude = 0.5, omega = 0.4 }`.
 #[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
@@ -132,7 +134,7 @@ pub struct Signal {
     #[serde(default)]
     pub terms: Vec<Term>,
     /// Active window `[start, end]`, s; always active when absent.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(default, skip_serializing_if = "Option::is_none", with = "crate::scenario::exact_array::option")]
     pub window: Option<[f64; 2]>,
 }
 
@@ -170,7 +172,11 @@ impl Signal {
     pub fn check(&self) -> Result<(), (String, String, &'static str)> {
         if let Some([start, end]) = self.window {
             if !(start.is_finite() && end.is_finite()) || end < start {
-                return Err(("window".into(), format!("[{start}, {end}]"), "a window [start, end] with start <= end"));
+                return Err((
+                    "window".into(),
+                    format!("[{}, {}]", show(start), show(end)),
+                    "a window [start, end] with start <= end",
+                ));
             }
         }
         for (k, term) in self.terms.iter().enumerate() {
@@ -179,7 +185,7 @@ impl Signal {
                 if v.is_finite() {
                     Ok(())
                 } else {
-                    Err((key(field), v.to_string(), "a finite number"))
+                    Err((key(field), show(v), "a finite number"))
                 }
             };
             match term {

@@ -1,0 +1,245 @@
+//! Every hostile or nonsensical request is refused before any work: under a
+//! time limit, with a non-zero exit code, a one-line `error:` message naming
+//! the key or limit, and nothing written under `--out`.
+
+use std::path::PathBuf;
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+/// Longest time a refusal may take (they take milliseconds).
+const TIME_LIMIT: Duration = Duration::from_secs(20);
+
+fn temp_dir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("ftsmc-refusals-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// Run `ftsmc args… --out <dir>/out/sub` in a fresh directory (with
+/// `s.toml` = `scenario` when given) and check the refusal: in time,
+/// non-zero exit, one `error:` line containing every `expected` string,
+/// nothing under `<dir>/out`.
+fn refused(test: &str, args: &[&str], scenario: Option<&str>, expected: &[&str]) {
+    let dir = temp_dir(test);
+    if let Some(text) = scenario {
+        std::fs::write(dir.join("s.toml"), text).unwrap();
+    }
+    let out = dir.join("out").join("sub");
+    let stdout = std::fs::File::create(dir.join("stdout.txt")).unwrap();
+    let stderr = std::fs::File::create(dir.join("stderr.txt")).unwrap();
+    let mut child = Command::new(env!("CARGO_BIN_EXE_ftsmc"))
+        .args(args)
+        .arg("--out")
+        .arg(&out)
+        .current_dir(&dir)
+        .env("RUST_BACKTRACE", "1")
+        .stdin(Stdio::null())
+        .stdout(stdout)
+        .stderr(stderr)
+        .spawn()
+        .expect("binary runs");
+    let started = Instant::now();
+    let status = loop {
+        if let Some(status) = child.try_wait().unwrap() {
+            break status;
+        }
+        if started.elapsed() > TIME_LIMIT {
+            let _ = child.kill();
+            let _ = child.wait();
+            panic!("{test}: `ftsmc {}` still running after {TIME_LIMIT:?}: not refused", args.join(" "));
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    };
+    let err = std::fs::read_to_string(dir.join("stderr.txt")).unwrap();
+    assert!(!status.success(), "{test}: must fail, got {status}; stderr: {err}");
+    assert_eq!(status.code(), Some(1), "{test}: an error exit, not a crash/abort; stderr: {err}");
+    let lines: Vec<&str> = err.lines().collect();
+    assert_eq!(lines.len(), 1, "{test}: one line on stderr:\n{err}");
+    assert!(lines[0].starts_with("error: ") && lines[0].len() < 600, "{test}: {err}");
+    for e in expected {
+        assert!(lines[0].contains(e), "{test}: `{e}` missing from: {err}");
+    }
+    let written: Vec<_> = std::fs::read_dir(dir.join("out")).map(|rd| rd.flatten().collect()).unwrap_or_default();
+    assert!(written.is_empty(), "{test}: files written under --out: {written:?}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+fn run_refused(test: &str, extra: &str, expected: &[&str]) {
+    let text = format!("name = \"t\"\nduration = 1.0\n{extra}");
+    refused(test, &["run", "s.toml"], Some(&text), expected);
+}
+
+fn montecarlo_refused(test: &str, dist: &str, expected: &[&str]) {
+    let text = format!("name = \"t\"\nduration = 1.0\n[payload]\nmass = 0.2\nstart = 0.0\n[montecarlo]\n{dist}\n");
+    refused(test, &["montecarlo", "s.toml", "--runs", "2"], Some(&text), expected);
+}
+
+// ---- command-line values ------------------------------------------------
+
+#[test]
+fn runs_that_overflow_a_vector() {
+    refused("runs-max", &["montecarlo", "paper-scenario-2", "--runs", "18446744073709551615"], None, &["max_flights"]);
+}
+
+#[test]
+fn runs_that_exhaust_memory() {
+    refused(
+        "runs-1e12",
+        &["montecarlo", "paper-scenario-2", "--runs", "1000000000000"],
+        None,
+        &["max_flights", "--limit"],
+    );
+}
+
+#[test]
+fn a_million_threads() {
+    refused(
+        "threads",
+        &["montecarlo", "paper-scenario-2", "--runs", "1", "--threads", "1000000"],
+        None,
+        &["max_threads"],
+    );
+}
+
+#[test]
+fn per_decade_that_overflows() {
+    refused("per-decade-max", &["fixed-time", "--per-decade", "18446744073709551615"], None, &["max_sweep_points"]);
+}
+
+#[test]
+fn per_decade_that_never_ends() {
+    refused("per-decade-1e8", &["fixed-time", "--per-decade", "100000000"], None, &["max_sweep_points"]);
+}
+
+#[test]
+fn an_unknown_limit_key() {
+    refused("limit-key", &["run", "paper-scenario-1", "--limit", "max_stepz=1"], None, &["max_stepz"]);
+}
+
+// ---- scenario cost --------------------------------------------------------
+
+#[test]
+fn a_billion_substeps() {
+    run_refused("substeps", "[simulation]\nsubsteps = 1000000000\n", &["max_steps", "substeps"]);
+}
+
+#[test]
+fn a_gigahertz_control_rate() {
+    run_refused("control-rate", "[simulation]\ncontrol_rate = 1e9\n", &["max_steps"]);
+}
+
+#[test]
+fn a_million_seconds() {
+    refused("duration-1e6", &["run", "s.toml"], Some("name = \"t\"\nduration = 1e6\n"), &["max_steps"]);
+}
+
+#[test]
+fn megahertz_recording_for_1000_seconds() {
+    let text = "name = \"t\"\nduration = 1000.0\n[simulation]\ncontrol_rate = 1e6\nrecord_rate = 1e6\n";
+    refused("record-mhz", &["run", "s.toml"], Some(text), &["max_steps"]);
+    // With the step limit raised explicitly, the recording itself is refused.
+    refused("record-mhz-raised", &["run", "s.toml", "--limit", "max_steps=1e12"], Some(text), &["max_samples"]);
+}
+
+// ---- scenario files -------------------------------------------------------
+
+#[test]
+fn dev_zero() {
+    refused("dev-zero", &["run", "/dev/zero"], None, &["/dev/zero", "regular file"]);
+}
+
+#[test]
+fn a_fifo() {
+    let dir = temp_dir("fifo-holder");
+    let fifo = dir.join("fifo.toml");
+    assert!(Command::new("mkfifo").arg(&fifo).status().expect("mkfifo runs").success());
+    refused("fifo", &["run", fifo.to_str().unwrap()], None, &["regular file"]);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn a_scenario_named_dot_dot() {
+    refused("name", &["run", "s.toml"], Some("name = \"..\"\nduration = 1.0\n"), &["`name`"]);
+}
+
+// ---- meaningless runs -------------------------------------------------------
+
+#[test]
+fn a_duration_below_one_control_period() {
+    refused("duration-tiny", &["run", "s.toml"], Some("name = \"t\"\nduration = 5e-324\n"), &["duration", "5e-324"]);
+}
+
+#[test]
+fn no_controllers() {
+    run_refused("no-controllers", "controllers = []\n", &["controllers"]);
+}
+
+#[test]
+fn extra_array_elements() {
+    run_refused(
+        "extra-elements",
+        "[initial_state]\nposition = [0.5, 0.25, 0.0, 99.0, \"junk\", [1]]\n",
+        &["position", "invalid length 6"],
+    );
+}
+
+#[test]
+fn payload_against_the_true_plant() {
+    run_refused(
+        "payload",
+        "[actual_plant]\nmass = 0.3\n[payload]\nmass = -0.5\nstart = 0.0\n",
+        &["payload.mass", "actual_plant.mass"],
+    );
+}
+
+#[test]
+fn infinite_monte_carlo_bounds() {
+    // A clamp of `inf` (or `nan`) used to be accepted; a uniform's bounds already were checked.
+    montecarlo_refused(
+        "mc-inf",
+        "mass = { dist = \"normal\", mean = 0.74, std = 0.05, low = 0.5, high = inf }",
+        &["montecarlo.mass.high"],
+    );
+    montecarlo_refused(
+        "mc-nan",
+        "mass = { dist = \"normal\", mean = 0.74, std = 0.05, low = nan, high = 1.0 }",
+        &["montecarlo.mass.low"],
+    );
+}
+
+#[test]
+fn an_overflowing_uniform() {
+    montecarlo_refused(
+        "mc-overflow",
+        "disturbance_phase = { dist = \"uniform\", low = -1.7e308, high = 1.7e308 }",
+        &["montecarlo.disturbance_phase.high", "1.7e308"],
+    );
+}
+
+#[test]
+fn a_log_normal_with_infinite_draws() {
+    montecarlo_refused(
+        "mc-lognormal",
+        "inertia_factor = { dist = \"log-normal\", mu = 1000.0, sigma = 0.1 }",
+        &["montecarlo.inertia_factor.mu"],
+    );
+}
+
+#[test]
+fn a_negative_mass_draw() {
+    montecarlo_refused("mc-mass", "mass = { dist = \"uniform\", low = -0.5, high = 1.0 }", &["`montecarlo.mass`"]);
+}
+
+#[test]
+fn payload_draws_against_the_true_plant() {
+    let text = "name = \"t\"\nduration = 1.0\n[actual_plant]\nmass = 0.3\n[payload]\nmass = 0.2\nstart = 0.0\n\
+                [montecarlo]\npayload_mass = { dist = \"uniform\", low = -0.5, high = 0.5 }\n";
+    refused("mc-payload", &["montecarlo", "s.toml", "--runs", "2"], Some(text), &["montecarlo.payload_mass"]);
+}
+
+#[test]
+fn limits_given_on_the_command_line_win_over_the_defaults() {
+    // Paper scenario 1 is 2e4 steps: a lowered limit refuses it, naming the flag.
+    refused("limit-lowered", &["run", "paper-scenario-1", "--limit", "max_steps=1000"], None, &["max_steps = 1000"]);
+}

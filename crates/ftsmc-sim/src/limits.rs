@@ -1,0 +1,312 @@
+//! Cost limits: every request is priced before any flight and refused when
+//! it is above a documented, generous limit, so a typo (`duration = 1e6`,
+//! `--runs 1000000000000`, `substeps = 1e9`) fails in milliseconds with a
+//! message instead of hanging, exhausting memory or panicking.
+//!
+//! Every limit can be raised explicitly, either in the scenario file
+//!
+//! ```toml
+//! [limits]
+//! max_steps = 1e10
+//! ```
+//!
+//! or on the command line (`ftsmc run my.toml --limit max_steps=1e10`; the
+//! command line wins over the file). The defaults are chosen so that every
+//! request under them finishes in minutes to hours on a laptop and fits in a
+//! few GB of memory and disk; see `docs/scenarios.md`.
+//!
+//! All amounts are computed in `f64`, so no request — however large — can
+//! overflow while being priced.
+
+use serde::{Deserialize, Serialize};
+
+/// Default [`Limits::max_steps`]: 2·10⁸ RK4 steps per flight (about 4 min
+/// at ~0.8 M steps/s; 250× paper scenario 2).
+pub const DEFAULT_MAX_STEPS: f64 = 2e8;
+/// Default [`Limits::max_samples`]: 10⁶ recorded rows per flight
+/// (10 000 s at the default 100 Hz; ~0.5 GB in memory).
+pub const DEFAULT_MAX_SAMPLES: f64 = 1e6;
+/// Default [`Limits::max_output_bytes`]: 2 GB of estimated output per command.
+pub const DEFAULT_MAX_OUTPUT_BYTES: f64 = 2e9;
+/// Default [`Limits::max_flights`]: 10⁶ flights (runs × controllers) per Monte Carlo batch.
+pub const DEFAULT_MAX_FLIGHTS: f64 = 1e6;
+/// Default [`Limits::max_sweep_points`]: 1000 initial-error magnitudes per fixed-time sweep.
+pub const DEFAULT_MAX_SWEEP_POINTS: f64 = 1000.0;
+/// Default [`Limits::max_scenario_bytes`]: 1 MiB (the paper scenarios are ~8 KiB).
+pub const DEFAULT_MAX_SCENARIO_BYTES: f64 = 1024.0 * 1024.0;
+/// Estimated bytes of one CSV value (digits, sign, exponent, separator).
+pub const BYTES_PER_VALUE: f64 = 20.0;
+/// Estimated CSV columns of one Monte Carlo row (`runs.csv`: identifiers,
+/// sampled values and metrics).
+pub const MONTE_CARLO_COLUMNS: f64 = 64.0;
+
+/// Default [`Limits::max_threads`]: 4 × the available cores, at least 256.
+pub fn default_max_threads() -> f64 {
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    (4 * cores).max(256) as f64
+}
+
+/// The cost limits of one command. In a scenario: the optional `[limits]`
+/// table (every key optional); on the command line: `--limit KEY=VALUE`.
+/// Values are numbers (`1e10` is fine) and must be > 0.
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Limits {
+    /// RK4 integration steps per flight, substeps included:
+    /// `duration × control_rate × substeps` (default 2e8).
+    pub max_steps: f64,
+    /// Recorded time-series rows per flight: `duration × record_rate`
+    /// (default 1e6). The recording is reserved up front, so this also
+    /// bounds memory (rows × ~70 columns × 8 bytes).
+    pub max_samples: f64,
+    /// Estimated bytes written by one command (CSV time series of every
+    /// controller, or `runs.csv` of a batch), at ~20 bytes per value (default 2e9).
+    pub max_output_bytes: f64,
+    /// Flights in a Monte Carlo batch: `--runs` × controllers (default 1e6).
+    pub max_flights: f64,
+    /// Initial-error magnitudes of `ftsmc fixed-time`: `5 × --per-decade + 1` (default 1000).
+    pub max_sweep_points: f64,
+    /// Worker threads of `ftsmc montecarlo --threads` (default 4 × cores, at least 256).
+    pub max_threads: f64,
+    /// Size of a scenario file, bytes (default 1 MiB). A file is read before
+    /// its `[limits]` are known, so only `--limit max_scenario_bytes=…` raises this.
+    pub max_scenario_bytes: f64,
+}
+
+impl Default for Limits {
+    fn default() -> Self {
+        Self {
+            max_steps: DEFAULT_MAX_STEPS,
+            max_samples: DEFAULT_MAX_SAMPLES,
+            max_output_bytes: DEFAULT_MAX_OUTPUT_BYTES,
+            max_flights: DEFAULT_MAX_FLIGHTS,
+            max_sweep_points: DEFAULT_MAX_SWEEP_POINTS,
+            max_threads: default_max_threads(),
+            max_scenario_bytes: DEFAULT_MAX_SCENARIO_BYTES,
+        }
+    }
+}
+
+/// A request above a limit.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LimitError {
+    /// The limit's key, e.g. `max_steps`.
+    pub key: &'static str,
+    /// What was priced, e.g. `integration steps per flight (duration × control_rate × substeps)`.
+    pub what: String,
+    /// The amount requested.
+    pub requested: f64,
+    /// The limit in force.
+    pub allowed: f64,
+}
+
+impl core::fmt::Display for LimitError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        let key = self.key;
+        write!(
+            f,
+            "refused before running: {} = {} exceeds the limit {key} = {}; to allow it, raise the limit with \
+             `[limits] {key} = <n>` in the scenario or `--limit {key}=<n>` on the command line",
+            self.what,
+            crate::scenario::show(self.requested),
+            crate::scenario::show(self.allowed),
+        )
+    }
+}
+
+impl std::error::Error for LimitError {}
+
+/// The names of the limits, in [`Limits`] order.
+pub const KEYS: [&str; 7] = [
+    "max_steps",
+    "max_samples",
+    "max_output_bytes",
+    "max_flights",
+    "max_sweep_points",
+    "max_threads",
+    "max_scenario_bytes",
+];
+
+impl Limits {
+    /// The limits with their keys, in [`KEYS`] order.
+    pub fn named(&self) -> [(&'static str, f64); 7] {
+        [
+            ("max_steps", self.max_steps),
+            ("max_samples", self.max_samples),
+            ("max_output_bytes", self.max_output_bytes),
+            ("max_flights", self.max_flights),
+            ("max_sweep_points", self.max_sweep_points),
+            ("max_threads", self.max_threads),
+            ("max_scenario_bytes", self.max_scenario_bytes),
+        ]
+    }
+
+    fn slot(&mut self, key: &str) -> Option<&mut f64> {
+        Some(match key {
+            "max_steps" => &mut self.max_steps,
+            "max_samples" => &mut self.max_samples,
+            "max_output_bytes" => &mut self.max_output_bytes,
+            "max_flights" => &mut self.max_flights,
+            "max_sweep_points" => &mut self.max_sweep_points,
+            "max_threads" => &mut self.max_threads,
+            "max_scenario_bytes" => &mut self.max_scenario_bytes,
+            _ => return None,
+        })
+    }
+
+    /// Every limit is a number > 0 (infinity allowed: no limit);
+    /// `Err((key, value))` names the first that is not.
+    pub fn check(&self) -> Result<(), (&'static str, f64)> {
+        for (key, v) in self.named() {
+            if v.is_nan() || v <= 0.0 {
+                return Err((key, v));
+            }
+        }
+        Ok(())
+    }
+
+    /// Apply command-line overrides `KEY=VALUE` (e.g. `max_steps=1e10`).
+    pub fn apply_overrides(&mut self, overrides: &[String]) -> Result<(), String> {
+        for item in overrides {
+            let Some((key, value)) = item.split_once('=') else {
+                return Err(format!("--limit {}: expected KEY=VALUE, e.g. max_steps=1e10", abbreviate(item)));
+            };
+            let key = key.trim();
+            let value: f64 = value.trim().parse().map_err(|_| {
+                format!("--limit {}: the value is not a number (e.g. max_steps=1e10)", abbreviate(item))
+            })?;
+            if value.is_nan() || value <= 0.0 {
+                return Err(format!("--limit {}: the value must be > 0", abbreviate(item)));
+            }
+            let slot = self
+                .slot(key)
+                .ok_or_else(|| format!("--limit {}: unknown limit (known: {})", abbreviate(item), KEYS.join(", ")))?;
+            *slot = value;
+        }
+        Ok(())
+    }
+
+    /// `Err` when `requested > limit` (or is NaN).
+    pub fn ensure(&self, key: &'static str, what: impl Into<String>, requested: f64) -> Result<(), LimitError> {
+        let allowed = self.named().into_iter().find(|(k, _)| *k == key).map_or(0.0, |(_, v)| v);
+        if requested <= allowed {
+            Ok(())
+        } else {
+            Err(LimitError { key, what: what.into(), requested, allowed })
+        }
+    }
+}
+
+fn abbreviate(s: &str) -> String {
+    crate::scenario::show_str(s)
+}
+
+/// The priced cost of flying a scenario once with each of `n` controllers.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Cost {
+    /// Control periods per flight (`round(duration × control_rate)`).
+    pub control_steps: f64,
+    /// RK4 steps per flight (`control_steps × substeps`).
+    pub integration_steps: f64,
+    /// Recorded rows per flight (0 when `record_rate = 0`).
+    pub samples: f64,
+    /// Estimated CSV bytes of all `n` recordings.
+    pub output_bytes: f64,
+}
+
+/// Price one flight of `scenario` (recording on) with each of `n_controllers`
+/// controllers and compare with its [`Limits`]. The same arithmetic as the
+/// run loop (`simulate.rs`), in `f64` so it cannot overflow.
+pub fn check_flight(scenario: &crate::Scenario, n_controllers: usize) -> Result<Cost, LimitError> {
+    let sim = &scenario.simulation;
+    let limits = &scenario.limits;
+    let control_steps = (scenario.duration * sim.control_rate).round();
+    let integration_steps = control_steps * f64::from(sim.substeps);
+    limits.ensure(
+        "max_steps",
+        "integration steps per flight (duration × control_rate × substeps)",
+        integration_steps,
+    )?;
+    let samples = if sim.record_rate > 0.0 {
+        let every = (sim.control_rate / sim.record_rate).round().max(1.0);
+        (control_steps / every).floor() + 1.0
+    } else {
+        0.0
+    };
+    limits.ensure("max_samples", "recorded rows per flight (duration × record_rate)", samples)?;
+    let columns = crate::simulate::recording_columns().len() as f64;
+    let output_bytes = samples * columns * BYTES_PER_VALUE * n_controllers.max(1) as f64;
+    limits.ensure(
+        "max_output_bytes",
+        format!(
+            "estimated time-series output in bytes (rows × {columns} columns × {BYTES_PER_VALUE} bytes × \
+             {n_controllers} controllers)"
+        ),
+        output_bytes,
+    )?;
+    Ok(Cost { control_steps, integration_steps, samples, output_bytes })
+}
+
+/// Price a Monte Carlo batch of `runs` runs × `n_controllers` controllers
+/// (flights are not recorded, so only the step count per flight counts
+/// besides the number of flights and the size of `runs.csv`).
+pub fn check_batch(scenario: &crate::Scenario, runs: u64, n_controllers: usize) -> Result<(), LimitError> {
+    let limits = &scenario.limits;
+    let flights = runs as f64 * n_controllers as f64;
+    limits.ensure("max_flights", "flights in the batch (--runs × controllers)", flights)?;
+    limits.ensure(
+        "max_output_bytes",
+        format!("estimated runs.csv size in bytes (flights × {MONTE_CARLO_COLUMNS} columns × {BYTES_PER_VALUE} bytes)"),
+        flights * MONTE_CARLO_COLUMNS * BYTES_PER_VALUE,
+    )?;
+    let sim = &scenario.simulation;
+    let steps = (scenario.duration * sim.control_rate).round() * f64::from(sim.substeps);
+    limits.ensure("max_steps", "integration steps per flight (duration × control_rate × substeps)", steps)
+}
+
+/// Number of magnitudes of a fixed-time sweep over `decades` decades with
+/// `per_decade` points each (`decades × per_decade + 1`), in `f64`.
+pub fn sweep_points(decades: u32, per_decade: u64) -> f64 {
+    f64::from(decades) * per_decade as f64 + 1.0
+}
+
+/// Refuse a fixed-time sweep of more than `max_sweep_points` magnitudes.
+pub fn check_sweep(limits: &Limits, points: f64) -> Result<(), LimitError> {
+    limits.ensure("max_sweep_points", "fixed-time sweep magnitudes (5 decades × --per-decade + 1)", points)
+}
+
+/// Refuse more than `max_threads` worker threads.
+pub fn check_threads(limits: &Limits, threads: usize) -> Result<(), LimitError> {
+    limits.ensure("max_threads", "worker threads (--threads)", threads as f64)
+}
+
+/// Refuse a scenario file larger than `max_scenario_bytes`.
+pub fn check_file_size(limits: &Limits, bytes: u64) -> Result<(), LimitError> {
+    limits.ensure("max_scenario_bytes", "scenario file size in bytes", bytes as f64)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn overrides_parse_and_reject_nonsense() {
+        let mut l = Limits::default();
+        l.apply_overrides(&["max_steps=1e10".into(), " max_threads = 8 ".into()]).unwrap();
+        assert_eq!((l.max_steps, l.max_threads), (1e10, 8.0));
+        assert!(l.apply_overrides(&["max_steps".into()]).is_err());
+        assert!(l.apply_overrides(&["max_stepz=1".into()]).is_err());
+        assert!(l.apply_overrides(&["max_steps=-1".into()]).is_err());
+        assert!(l.apply_overrides(&["max_steps=nan".into()]).is_err());
+        assert!(l.apply_overrides(&["max_steps=inf".into()]).is_ok());
+    }
+
+    #[test]
+    fn errors_name_the_limit_and_how_to_raise_it() {
+        let e = Limits::default().ensure("max_steps", "steps", 1e300).unwrap_err().to_string();
+        assert!(e.contains("max_steps = 2e8") && e.contains("1e300") && e.contains("--limit max_steps="), "{e}");
+        assert!(check_threads(&Limits::default(), 1_000_000).is_err());
+        assert!(check_sweep(&Limits::default(), sweep_points(5, u64::MAX)).is_err());
+        assert!(check_sweep(&Limits::default(), sweep_points(5, 3)).is_ok());
+    }
+}
