@@ -187,7 +187,7 @@ pub fn run(scenario: &Scenario, controllers: &[String], settings: &SweepSettings
                 }
                 Panel {
                     title: format!("{} channel", NAMES[axis]),
-                    x_label: "|e(0)| (channel units)".into(),
+                    x_label: format!("|e(0)| ({})", if axis < 3 { "m" } else { "rad" }),
                     y_label: "time (s)".into(),
                     series,
                     log_x: true,
