@@ -138,9 +138,12 @@ fn adaptive_figure(title: &str, run: &RunOutput, estimates: &[Estimate], y_name:
         let attitude = matches!(axis, "phi" | "theta" | "psi");
         let mut s = Vec::new();
         for &(label, k, color, pos_unit, att_unit) in estimates {
-            let unit = if attitude { att_unit } else { pos_unit };
-            // With several estimates the units go in the legend, one per estimate.
-            let label = if estimates.len() > 1 { format!("{label} ({unit})") } else { label.to_string() };
+            // With several estimates the units go in the legend, one entry per estimate.
+            let label = match (estimates.len(), pos_unit == att_unit) {
+                (1, _) => label.to_string(),
+                (_, true) => format!("{label} ({pos_unit})"),
+                _ => format!("{label} ({pos_unit}; {att_unit} on φ, θ, ψ)"),
+            };
             let mut one = series(run, &format!("est_{axis}_{k}"), label, false);
             one.color = color;
             s.push(one);

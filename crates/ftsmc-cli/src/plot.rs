@@ -466,7 +466,7 @@ impl Axis {
 }
 
 fn axis_ticks(lo: f64, hi: f64, log: bool, target: usize) -> Ticks {
-    let mut t = if log { ticks::log(lo, hi) } else { ticks::linear(lo, hi, target) };
+    let mut t = if log { ticks::log(lo, hi, (target * 2 / 3).max(3)) } else { ticks::linear(lo, hi, target) };
     let keep: Vec<bool> = t.values.iter().map(|v| *v >= lo && *v <= hi).collect();
     let mut k = keep.iter();
     t.labels.retain(|_| *k.next().unwrap());
@@ -499,7 +499,7 @@ fn frame(
     let top = if title.is_empty() { lk.tick * 1.0 } else { lk.panel_title * 1.7 };
     let bottom = lk.tick_len + bottom_lines as f64 * lk.tick * 1.2 + lk.tick * 0.3 + lk.label * 1.5;
     let est_h = h - top - bottom;
-    let yt = axis_ticks(y_range.0, y_range.1, y_range.2, ((est_h / (lk.tick * 3.0)) as usize).clamp(3, 7));
+    let yt = axis_ticks(y_range.0, y_range.1, y_range.2, ((est_h / (lk.tick * 2.6)) as usize).clamp(4, 8));
     let ytw = yt.labels.iter().map(|l| text_width(l, lk.tick)).fold(0.0, f64::max);
     let ylab = if y_label.is_empty() { 0.0 } else { lk.label * 1.5 };
     let left = lk.pad * 0.5 + ylab + ytw + lk.tick_len + lk.tick * 0.35;
@@ -675,7 +675,7 @@ pub fn write_3d(title: &str, series: &[Series3], stem: &Path) -> Result<Vec<Path
         range(series.iter().flat_map(|s| s.points.iter().map(move |p| p[k])), false).unwrap_or((-1.0, 1.0))
     };
     let ranges = [axis(0), axis(1), axis(2)];
-    let ticks: Vec<Ticks> = ranges.iter().map(|&(lo, hi)| axis_ticks(lo, hi, false, 4)).collect();
+    let ticks: Vec<Ticks> = ranges.iter().map(|&(lo, hi)| axis_ticks(lo, hi, false, 5)).collect();
     // Orthographic view: yaw about the vertical axis, then pitch.
     let (yaw, pitch) = (0.7f64, 0.45f64);
     let norm = |k: usize, v: f64| 2.0 * (v - ranges[k].0) / (ranges[k].1 - ranges[k].0) - 1.0;
@@ -799,16 +799,32 @@ fn percentile(sorted: &[f64], q: f64) -> f64 {
     sorted[((q * sorted.len() as f64).ceil() as usize).clamp(1, sorted.len()) - 1]
 }
 
-/// Greedy word wrap of `s` to `width` at `size`.
+/// Word wrap of `s` to `width` at `size`: whole if it fits, else a
+/// parenthesised tail ("(100 % ok)") on its own line, then greedy by words.
 fn wrap(s: &str, width: f64, size: f64) -> Vec<String> {
+    if text_width(s, size) <= width {
+        return vec![s.to_string()];
+    }
+    let parts: Vec<&str> = match s.find(" (") {
+        Some(i) => vec![&s[..i], &s[i + 1..]],
+        None => vec![s],
+    };
     let mut lines: Vec<String> = Vec::new();
-    for word in s.split(' ') {
-        match lines.last_mut() {
-            Some(l) if text_width(&format!("{l} {word}"), size) <= width => {
-                l.push(' ');
-                l.push_str(word);
+    for part in parts {
+        if text_width(part, size) <= width {
+            lines.push(part.to_string());
+            continue;
+        }
+        let start = lines.len();
+        for word in part.split(' ') {
+            let joinable = lines.len() > start;
+            match lines.last_mut() {
+                Some(l) if joinable && text_width(&format!("{l} {word}"), size) <= width => {
+                    l.push(' ');
+                    l.push_str(word);
+                }
+                _ => lines.push(word.to_string()),
             }
-            _ => lines.push(word.to_string()),
         }
     }
     lines
@@ -851,8 +867,8 @@ fn draw_box_panel(svg: &mut Svg, rect: (f64, f64, f64, f64), panel: &BoxPanel, l
         .collect();
     let n = panel.groups.len().max(1);
     // Category labels wrapped to their slot (estimate the slot from the panel width).
-    let slot = (rect.2 - lk.tick * 6.0 - lk.label * 2.0) / n as f64;
-    let labels: Vec<Vec<String>> = panel.groups.iter().map(|g| wrap(&g.label, slot * 0.92, lk.tick)).collect();
+    let slot = (rect.2 - lk.tick * 4.0 - lk.label * 1.5 - lk.pad * 2.3) / n as f64;
+    let labels: Vec<Vec<String>> = panel.groups.iter().map(|g| wrap(&g.label, slot * 0.98, lk.tick)).collect();
     let lines = labels.iter().map(Vec::len).max().unwrap_or(1).max(1);
     let Some((y0, y1)) = range(stats.iter().flatten().flat_map(|s| s.iter().copied()), panel.log_y) else {
         let f = frame(rect, &panel.title, "", None, (0.0, 1.0, false), lines, lk);

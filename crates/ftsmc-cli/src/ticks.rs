@@ -151,8 +151,9 @@ pub fn linear(lo: f64, hi: f64, target: usize) -> Ticks {
     Ticks { values, labels, note, minor: Vec::new() }
 }
 
-/// Ticks on a logarithmic axis over `[lo, hi]` (both > 0).
-pub fn log(lo: f64, hi: f64) -> Ticks {
+/// Ticks on a logarithmic axis over `[lo, hi]` (both > 0): decades, or
+/// within less than two decades at most about `max_labels` labels.
+pub fn log(lo: f64, hi: f64, max_labels: usize) -> Ticks {
     let (a, b) = (lo.log10(), hi.log10());
     let d0 = (a - 1e-9).ceil() as i32;
     let d1 = (b + 1e-9).floor() as i32;
@@ -171,23 +172,26 @@ pub fn log(lo: f64, hi: f64) -> Ticks {
         let labels = values.iter().map(|v| format!("10{}", superscript(v.log10().round() as i32))).collect();
         return Ticks { values, labels, note: None, minor };
     }
-    // Less than two decades: label 1, 2, 5 × 10ⁿ (or every minor tick).
-    let mut values: Vec<f64> = minor
-        .iter()
-        .copied()
-        .chain((d0..=d1).map(|d| 10f64.powi(d)))
-        .filter(|v| {
-            let m = (v / 10f64.powf(v.log10().floor())).round();
-            m == 1.0 || m == 2.0 || m == 5.0
-        })
-        .collect();
-    values.sort_by(f64::total_cmp);
-    values.dedup();
-    if values.len() < 3 {
-        values = minor.iter().copied().chain((d0..=d1).map(|d| 10f64.powi(d))).collect();
-        values.sort_by(f64::total_cmp);
-        values.dedup();
+    // Less than two decades: add mantissas by priority (1; 2, 5; 3; 4, 6, 8;
+    // 7, 9) while at most `max_labels` fit.
+    let mut candidates: Vec<f64> = minor.iter().copied().chain((d0..=d1).map(|d| 10f64.powi(d))).collect();
+    candidates.sort_by(f64::total_cmp);
+    let class = |v: f64| match (v / 10f64.powf((v.log10() + 1e-9).floor())).round() as i32 {
+        1 => 0,
+        2 | 5 => 1,
+        3 => 2,
+        4 | 6 | 8 => 3,
+        _ => 4,
+    };
+    let mut values: Vec<f64> = Vec::new();
+    for c in 0..5 {
+        let more: Vec<f64> = candidates.iter().copied().filter(|v| class(*v) == c).collect();
+        if values.len() >= 3 && values.len() + more.len() > max_labels.max(3) {
+            break;
+        }
+        values.extend(more);
     }
+    values.sort_by(f64::total_cmp);
     if values.len() < 2 {
         return linear(lo, hi, 4);
     }
@@ -243,12 +247,14 @@ mod tests {
 
     #[test]
     fn log_ticks() {
-        let t = log(1e-3, 100.0);
+        let t = log(1e-3, 100.0, 6);
         assert_eq!(t.labels.first().unwrap(), "10⁻³");
         assert_eq!(t.labels.last().unwrap(), "10²");
-        let t = log(0.013, 0.09);
+        let t = log(0.013, 0.09, 5);
         assert!(t.labels.len() >= 2, "{t:?}");
         assert!(t.labels.contains(&"0.02".to_string()), "{t:?}");
+        let t = log(0.55, 2.5, 4);
+        assert_eq!(t.labels, ["0.6", "0.8", "1", "2"]);
         assert_eq!(general(2e-5), "2×10⁻⁵");
         assert_eq!(general(0.5), "0.5");
     }
