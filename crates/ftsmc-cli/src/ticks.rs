@@ -140,6 +140,7 @@ pub fn linear(lo: f64, hi: f64, target: usize) -> Ticks {
         (None, e) => Some(format!("×10{}", superscript(e))),
         (Some((o, d)), e) => {
             let os = fixed(o.abs(), d);
+            let os = if os.contains('.') { os.trim_end_matches('0').trim_end_matches('.') } else { &os };
             let sign = if o < 0.0 { "−" } else { "+" };
             if e == 0 {
                 Some(format!("{sign} {os}"))
