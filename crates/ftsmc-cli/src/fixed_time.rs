@@ -292,7 +292,7 @@ fn cascade_sweep(scenario: &Scenario, controllers: &[String], settings: &SweepSe
         }
         panels.push(Panel {
             title: format!("{} channel, full cascade", NAMES[axis]),
-            x_label: "|e(0)| (m or rad)".into(),
+            x_label: format!("|e(0)| ({})", if axis < 3 { "m" } else { "rad" }),
             y_label: "2 % settling time (s)".into(),
             series,
             log_x: true,

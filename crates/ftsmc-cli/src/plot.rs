@@ -303,12 +303,8 @@ fn draw_legend(svg: &mut Svg, entries: &[Entry], x: f64, y: f64, width: f64, lk:
         let cy = y + lk.legend * 0.25 + (r as f64 + 0.5) * lk.legend * 1.55;
         for &i in row {
             let e = &entries[i];
-            let stroke = Stroke {
-                color: e.color,
-                width: lk.line * 1.15,
-                dash: e.dashed.then_some(lk.dash),
-                opacity: 1.0,
-            };
+            let stroke =
+                Stroke { color: e.color, width: lk.line * 1.15, dash: e.dashed.then_some(lk.dash), opacity: 1.0 };
             svg.line(cx, cy, cx + sample_len(lk), cy, &stroke);
             if e.marker {
                 svg.circle(cx + sample_len(lk) / 2.0, cy, lk.marker * 1.1, e.color, None);
@@ -529,8 +525,7 @@ fn draw_panel(svg: &mut Svg, rect: (f64, f64, f64, f64), panel: &Panel, lk: &Loo
     let clip = svg.clip_rect(f.x, f.y, f.w, f.h);
     // Chattering signals first (thin, translucent; the most agitated at the
     // bottom), then lines, then dashed references on top.
-    let noisy: Vec<bool> =
-        panel.series.iter().map(|s| chatters(s, panel, (y1 - y0) * 0.004)).collect();
+    let noisy: Vec<bool> = panel.series.iter().map(|s| chatters(s, panel, (y1 - y0) * 0.004)).collect();
     let mut order: Vec<(usize, f64)> = panel
         .series
         .iter()
@@ -671,9 +666,8 @@ pub fn write_3d(title: &str, series: &[Series3], stem: &Path) -> Result<Vec<Path
     draw_title(&mut svg, title, width, &lk);
     draw_legend(&mut svg, &entries, lk.pad, title_h, inner, &lk);
 
-    let axis = |k: usize| {
-        range(series.iter().flat_map(|s| s.points.iter().map(move |p| p[k])), false).unwrap_or((-1.0, 1.0))
-    };
+    let axis =
+        |k: usize| range(series.iter().flat_map(|s| s.points.iter().map(move |p| p[k])), false).unwrap_or((-1.0, 1.0));
     let ranges = [axis(0), axis(1), axis(2)];
     let ticks: Vec<Ticks> = ranges.iter().map(|&(lo, hi)| axis_ticks(lo, hi, false, 5)).collect();
     // Orthographic view: yaw about the vertical axis, then pitch.
@@ -752,7 +746,8 @@ pub fn write_3d(title: &str, series: &[Series3], stem: &Path) -> Result<Vec<Path
             let p = to_px(at(norm(k, *v)));
             let q = (p.0 + out.0 * lk.tick_len * 1.6, p.1 + out.1 * lk.tick_len * 1.6);
             svg.line(p.0, p.1, q.0, q.1, &ink);
-            let font = Font { valign: if out.1 > 0.5 { VAlign::Top } else { VAlign::Center }, ..Font::new(lk.tick, anchor) };
+            let font =
+                Font { valign: if out.1 > 0.5 { VAlign::Top } else { VAlign::Center }, ..Font::new(lk.tick, anchor) };
             svg.text(q.0 + out.0 * lk.tick * 0.3, q.1 + out.1 * lk.tick * 0.2, l, &font);
         }
         let mid = to_px(at(0.0));

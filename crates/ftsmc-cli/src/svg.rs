@@ -128,9 +128,8 @@ fn metrics() -> &'static Metrics {
     M.get_or_init(|| {
         let face = ttf_parser::Face::parse(FONT, 0).expect("embedded font parses");
         let units_per_em = f64::from(face.units_per_em());
-        let adv = |c: char| {
-            face.glyph_index(c).and_then(|g| face.glyph_hor_advance(g)).map(|a| f64::from(a) / units_per_em)
-        };
+        let adv =
+            |c: char| face.glyph_index(c).and_then(|g| face.glyph_hor_advance(g)).map(|a| f64::from(a) / units_per_em);
         let fallback = adv('n').unwrap_or(0.6);
         let mut advance: Vec<(char, f64)> = (' '..='~').filter_map(|c| adv(c).map(|a| (c, a))).collect();
         for c in "φθψδαâ̂·–—−×⁰¹²³⁴⁵⁶⁷⁸⁹⁻µ%°ωΩ".chars() {
@@ -223,14 +222,21 @@ impl Svg {
             }
         });
         let stroke = stroke.map_or(String::new(), |s| s.attrs().replacen("fill=\"none\" ", "", 1));
-        let _ =
-            writeln!(self.buf, r#"<rect x="{}" y="{}" width="{}" height="{}" {fill} {stroke}/>"#, n(x), n(y), n(w), n(h));
+        let _ = writeln!(
+            self.buf,
+            r#"<rect x="{}" y="{}" width="{}" height="{}" {fill} {stroke}/>"#,
+            n(x),
+            n(y),
+            n(w),
+            n(h)
+        );
     }
 
     /// A filled circle.
     pub fn circle(&mut self, cx: f64, cy: f64, r: f64, fill: Rgb, clip: Option<&str>) {
         let clip = clip.map_or(String::new(), |c| format!(r#" clip-path="url(#{c})""#));
-        let _ = writeln!(self.buf, r#"<circle cx="{}" cy="{}" r="{}" fill="{}"{clip}/>"#, n(cx), n(cy), n(r), fill.hex());
+        let _ =
+            writeln!(self.buf, r#"<circle cx="{}" cy="{}" r="{}" fill="{}"{clip}/>"#, n(cx), n(cy), n(r), fill.hex());
     }
 
     /// Text at (x, y).

@@ -57,8 +57,7 @@ fn check_pair(stem: &Path) -> (u32, u32) {
     let svg = std::fs::read_to_string(&svg_path).unwrap_or_else(|e| panic!("{}: {e}", svg_path.display()));
     assert!(svg.len() > 1000 && svg.trim_end().ends_with("</svg>"), "{}", svg_path.display());
     let pix = Pixmap::load_png(&png_path).unwrap_or_else(|e| panic!("{}: {e}", png_path.display()));
-    let colours: HashSet<[u8; 4]> =
-        pix.pixels().iter().map(|p| [p.red(), p.green(), p.blue(), p.alpha()]).collect();
+    let colours: HashSet<[u8; 4]> = pix.pixels().iter().map(|p| [p.red(), p.green(), p.blue(), p.alpha()]).collect();
     assert!(colours.len() > 50, "{} looks blank: {} colours", png_path.display(), colours.len());
     let ((w, h), unit) = svg_size(&svg);
     let scale = match unit.as_str() {
