@@ -118,7 +118,7 @@ pub fn linear(lo: f64, hi: f64, target: usize) -> Ticks {
     // An engineering power of ten when the labels would be long.
     let exp3 = if offset.is_some() {
         3 * (step.log10() / 3.0).floor() as i32
-    } else if shifted_mag >= 1e5 || shifted_mag < 1e-2 {
+    } else if !(1e-2..1e5).contains(&shifted_mag) {
         3 * (shifted_mag.log10() / 3.0).floor() as i32
     } else {
         0
