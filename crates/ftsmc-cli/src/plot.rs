@@ -669,7 +669,10 @@ pub fn write_3d(title: &str, series: &[Series3], stem: &Path) -> Result<Vec<Path
     let axis =
         |k: usize| range(series.iter().flat_map(|s| s.points.iter().map(move |p| p[k])), false).unwrap_or((-1.0, 1.0));
     let ranges = [axis(0), axis(1), axis(2)];
-    let ticks: Vec<Ticks> = ranges.iter().map(|&(lo, hi)| axis_ticks(lo, hi, false, 5)).collect();
+    // Fewer ticks on a small box: the edges are foreshortened.
+    let box_w = inner - 2.0 * (lk.tick * 5.5 + lk.label * 1.5);
+    let target = ((box_w / (lk.tick * 6.0)) as usize).clamp(3, 5);
+    let ticks: Vec<Ticks> = ranges.iter().map(|&(lo, hi)| axis_ticks(lo, hi, false, target)).collect();
     // Orthographic view: yaw about the vertical axis, then pitch.
     let (yaw, pitch) = (0.7f64, 0.45f64);
     let norm = |k: usize, v: f64| 2.0 * (v - ranges[k].0) / (ranges[k].1 - ranges[k].0) - 1.0;
@@ -751,7 +754,7 @@ pub fn write_3d(title: &str, series: &[Series3], stem: &Path) -> Result<Vec<Path
             svg.text(q.0 + out.0 * lk.tick * 0.3, q.1 + out.1 * lk.tick * 0.2, l, &font);
         }
         let mid = to_px(at(0.0));
-        let d = lk.tick * 3.2 + lk.label * 0.6;
+        let d = lk.tick * 3.6 + lk.label * 0.9;
         let name = match &t.note {
             Some(n) => format!("{name}  {n}"),
             None => name.to_string(),
