@@ -6,7 +6,7 @@ use anyhow::Result;
 use ftsmc_sim::registry::label;
 use ftsmc_sim::simulate::RunOutput;
 
-use crate::plot::{controller_color, write_3d, write_figure, Figure, Panel, Series, Series3};
+use crate::plot::{controller_color, write_3d, write_figure, Figure, Panel, Rgb, Series, Series3};
 
 /// What a panel shows: recorded column, shared reference column, per-controller
 /// reference column, title and y label.
@@ -128,22 +128,34 @@ fn control_specs<'a>() -> [PanelSpec<'a>; 4] {
     ]
 }
 
-/// Adaptive states of one controller: one panel per channel and estimate.
-fn adaptive_figure(title: &str, run: &RunOutput, estimate_names: &[(&str, usize)]) -> Figure {
+/// Adaptive states of one controller: one panel per channel; each estimate
+/// is `(legend label, index, colour, units on position channels, units on attitude channels)`.
+type Estimate<'a> = (&'a str, usize, crate::plot::Rgb, &'a str, &'a str);
+
+fn adaptive_figure(title: &str, run: &RunOutput, estimates: &[Estimate], y_name: &str) -> Figure {
     let mut panels = Vec::new();
-    for axis in ["x", "y", "z", "phi", "theta", "psi"] {
+    for (axis, name) in [("x", "x"), ("y", "y"), ("z", "z"), ("phi", "φ"), ("theta", "θ"), ("psi", "ψ")] {
+        let attitude = matches!(axis, "phi" | "theta" | "psi");
         let mut s = Vec::new();
-        for (name, k) in estimate_names {
-            let mut one = series(run, &format!("est_{axis}_{k}"), format!("{name} ({axis})"), false);
-            if estimate_names.len() > 1 {
-                one.color = crate::plot::controller_color(&format!("{}-{k}", run.controller));
-            }
+        for &(label, k, color, pos_unit, att_unit) in estimates {
+            // With several estimates the units go in the legend, one entry per estimate.
+            let label = match (estimates.len(), pos_unit == att_unit) {
+                (1, _) => label.to_string(),
+                (_, true) => format!("{label} ({pos_unit})"),
+                _ => format!("{label} ({pos_unit}; {att_unit} on φ, θ, ψ)"),
+            };
+            let mut one = series(run, &format!("est_{axis}_{k}"), label, false);
+            one.color = color;
             s.push(one);
         }
+        let y_label = match estimates {
+            [(_, _, _, pos_unit, att_unit)] => format!("{y_name} ({})", if attitude { att_unit } else { pos_unit }),
+            _ => y_name.to_string(),
+        };
         panels.push(Panel {
-            title: format!("{axis} channel"),
+            title: format!("{name} channel"),
             x_label: "time (s)".into(),
-            y_label: "estimate".into(),
+            y_label,
             series: s,
             log_x: false,
             log_y: false,
@@ -166,14 +178,26 @@ pub fn scenario_1(runs: &[&RunOutput], dir: &Path) -> Result<Vec<PathBuf>> {
     for run in runs {
         match run.controller.as_str() {
             "ftaftsmc" => out.extend(write_figure(
-                &adaptive_figure("Fig. 3 — FTAFTSMC adaptive gains δ̂ (Eq. 17), scenario 1", run, &[("δ̂", 0)]),
+                // δ̂ estimates δ = Λ², the square of the disturbance bound (an acceleration).
+                &adaptive_figure(
+                    "Fig. 3 — FTAFTSMC adaptive gains δ̂ (Eq. 17), scenario 1",
+                    run,
+                    &[("δ̂", 0, controller_color("ftaftsmc"), "m²/s⁴", "rad²/s⁴")],
+                    "δ̂",
+                ),
                 &dir.join("fig3-adaptive-gains-scenario1"),
             )?),
             "ranftsmc" => out.extend(write_figure(
                 &adaptive_figure(
                     "RANFTSMC adaptive gains â0, â1, â2 (scenario 1)",
                     run,
-                    &[("â0", 0), ("â1", 1), ("â2", 2)],
+                    // v = … − (â0 + â1|e| + â2|ė| + h) sign(σ): every term is an acceleration.
+                    &[
+                        ("â0", 0, controller_color("ranftsmc"), "m/s²", "rad/s²"),
+                        ("â1", 1, Rgb(148, 103, 189), "1/s²", "1/s²"),
+                        ("â2", 2, Rgb(70, 70, 70), "1/s", "1/s"),
+                    ],
+                    "â0, â1, â2",
                 ),
                 &dir.join("fig3b-ranftsmc-gains-scenario1"),
             )?),
@@ -197,7 +221,7 @@ pub fn scenario_2(runs: &[&RunOutput], no_mass: Option<&RunOutput>, dir: &Path) 
             x_label: "time (s)".into(),
             y_label: format!("I{i} (kg·m²)"),
             series: vec![Series {
-                label: format!("plant I{i}"),
+                label: "plant (true value)".into(),
                 xs: first.recording.column("t").to_vec(),
                 ys: first.recording.column(&format!("inertia_{i}")).to_vec(),
                 color: controller_color("reference"),

@@ -202,7 +202,7 @@ pub fn run(scenario: &Scenario, controllers: &[String], settings: &SweepSettings
                 }
                 Panel {
                     title: format!("{} channel", NAMES[axis]),
-                    x_label: "|e(0)| (channel units)".into(),
+                    x_label: format!("|e(0)| ({})", if axis < 3 { "m" } else { "rad" }),
                     y_label: "time (s)".into(),
                     series,
                     log_x: true,
@@ -314,7 +314,7 @@ fn cascade_sweep(
         }
         panels.push(Panel {
             title: format!("{} channel, full cascade", NAMES[axis]),
-            x_label: "|e(0)| (m or rad)".into(),
+            x_label: format!("|e(0)| ({})", if axis < 3 { "m" } else { "rad" }),
             y_label: "2 % settling time (s)".into(),
             series,
             log_x: true,

@@ -7,7 +7,10 @@ mod fixed_time;
 mod montecarlo;
 mod output;
 mod plot;
+mod raster;
 mod reproduce;
+mod svg;
+mod ticks;
 
 use std::path::PathBuf;
 
@@ -32,6 +35,10 @@ Write your own scenario as a TOML file (start from `ftsmc scenario paper-scenari
 struct Cli {
     #[command(subcommand)]
     command: Command,
+    /// Figure style: `screen` (readable at 100 %) or `paper` (3.5/7 in wide, 8 pt text, 300 dpi PNG, SVG in pt).
+    /// Default: $FTSMC_FIGURE_STYLE, else screen.
+    #[arg(long, global = true, value_enum)]
+    style: Option<plot::Style>,
 }
 
 #[derive(Subcommand)]
@@ -153,7 +160,11 @@ fn check_names(names: &[String]) -> Result<()> {
 }
 
 fn main() -> std::process::ExitCode {
-    match run(Cli::parse()) {
+    let cli = Cli::parse();
+    if let Some(style) = cli.style {
+        plot::set_style(style);
+    }
+    match run(cli) {
         Ok(()) => std::process::ExitCode::SUCCESS,
         Err(err) => {
             // `{:#}` prints the whole context chain and, unlike returning

@@ -136,7 +136,7 @@ pub fn run(
             .iter()
             .map(|axis| BoxPanel {
                 title: format!("ISE {}", if *axis == "psi" { "ψ" } else { axis }),
-                y_label: "ISE (log scale; whiskers p5–p95)".into(),
+                y_label: format!("ISE ({}), log scale", if *axis == "psi" { "rad²·s" } else { "m²·s" }),
                 groups: controllers
                     .iter()
                     .map(|c| BoxGroup {
@@ -162,7 +162,7 @@ pub fn run(
             })
             .collect();
         write_boxplots(
-            &format!("Monte Carlo — {} runs of {} (completed runs)", runs, scenario.name),
+            &format!("Monte Carlo — {} runs of {} (completed runs; boxes q1–q3, whiskers p5–p95)", runs, scenario.name),
             &panels,
             2,
             &dir.path().join("montecarlo-ise"),

@@ -1,27 +1,129 @@
-//! Figures as SVG and PNG with plotters, using an embedded font (DejaVu Sans)
-//! so that no system font is needed. Every figure is written atomically.
+//! Figures: each is written once as SVG (crate::svg) and the PNG is that SVG
+//! rasterised by resvg (crate::raster), so the two always agree. The only
+//! font is the embedded DejaVu Sans. Legends sit above the panels, outside
+//! the data; legend samples are dashed and marked like their lines; tick
+//! labels use an offset/power of ten on tiny ranges (crate::ticks);
+//! chattering signals are drawn first, thin and translucent.
+//!
+//! Two styles ([`Style`]): `screen` (readable at 100 %, text ≥ 14 px) and
+//! `paper` (3.5 in or 7 in wide, text ≥ 8 pt, PNG at 300 dpi, SVG in pt).
 
 use std::path::{Path, PathBuf};
-use std::sync::Once;
+use std::sync::atomic::{AtomicU8, Ordering};
 
-use anyhow::{anyhow, Context, Result};
-use plotters::coord::ranged1d::{AsRangedCoord, Ranged, ValueFormatter};
-use plotters::coord::Shift;
-use plotters::prelude::*;
-use plotters::style::text_anchor::{HPos, Pos, VPos};
+use anyhow::{Context, Result};
 
-const FONT: &[u8] = include_bytes!("../assets/DejaVuSans.ttf");
-const FAMILY: &str = "sans-serif";
+pub use crate::svg::Rgb;
+use crate::svg::{text_width, Anchor, Font, Stroke, Svg, VAlign};
+use crate::ticks::{self, Ticks};
+
 /// Points drawn per series at most; min/max per bucket keep spikes visible.
-const MAX_POINTS: usize = 4000;
+const MAX_POINTS: usize = 3000;
+/// A line with at most this many points gets a marker at each point.
+const MARKER_POINTS: usize = 40;
 
-fn ensure_font() {
-    static ONCE: Once = Once::new();
-    ONCE.call_once(|| {
-        // The font is compiled in; failure would be a build defect.
-        plotters::style::register_font(FAMILY, FontStyle::Normal, FONT)
-            .unwrap_or_else(|_| panic!("embedded font is not a valid TrueType file"));
-    });
+/// Figure style.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum Style {
+    /// Sized for a screen: text ≥ 14 px at 100 %, PNG at 1 px per SVG px.
+    #[default]
+    Screen,
+    /// Journal sizes: 3.5 in (one column) or 7 in (two columns) wide, text ≥ 8 pt, PNG at 300 dpi.
+    Paper,
+}
+
+static STYLE: AtomicU8 = AtomicU8::new(0);
+
+/// Set the style of every figure written from now on.
+pub fn set_style(style: Style) {
+    STYLE.store(if style == Style::Paper { 2 } else { 1 }, Ordering::Relaxed);
+}
+
+/// The style in force: [`set_style`], else `FTSMC_FIGURE_STYLE` (screen|paper), else screen.
+pub fn style() -> Style {
+    match STYLE.load(Ordering::Relaxed) {
+        1 => Style::Screen,
+        2 => Style::Paper,
+        _ => match std::env::var("FTSMC_FIGURE_STYLE").map(|v| v.trim().to_ascii_lowercase()).as_deref() {
+            Ok("paper") => Style::Paper,
+            _ => Style::Screen,
+        },
+    }
+}
+
+/// Sizes of one style, in its user unit (px or pt).
+struct Look {
+    unit: &'static str,
+    /// Device pixels per CSS px for the PNG.
+    render_scale: f32,
+    dpi: Option<u32>,
+    narrow: f64,
+    wide: f64,
+    aspect: f64,
+    aspect_single: f64,
+    title: f64,
+    panel_title: f64,
+    label: f64,
+    tick: f64,
+    legend: f64,
+    line: f64,
+    thin: f64,
+    dash: [f64; 2],
+    frame: f64,
+    grid: f64,
+    tick_len: f64,
+    pad: f64,
+    marker: f64,
+}
+
+fn look() -> Look {
+    match style() {
+        Style::Screen => Look {
+            unit: "px",
+            render_scale: 1.0,
+            dpi: None,
+            narrow: 820.0,
+            wide: 1440.0,
+            aspect: 0.7,
+            aspect_single: 0.6,
+            title: 22.0,
+            panel_title: 17.0,
+            label: 16.0,
+            tick: 15.0,
+            legend: 15.0,
+            line: 1.8,
+            thin: 0.8,
+            dash: [7.0, 4.0],
+            frame: 1.0,
+            grid: 0.8,
+            tick_len: 5.0,
+            pad: 12.0,
+            marker: 3.2,
+        },
+        Style::Paper => Look {
+            unit: "pt",
+            // 300 dpi: 300/72 device pixels per pt, and 1 pt = 4/3 CSS px.
+            render_scale: 300.0 / 96.0,
+            dpi: Some(300),
+            narrow: 252.0,
+            wide: 504.0,
+            aspect: 0.78,
+            aspect_single: 0.72,
+            title: 0.0,
+            panel_title: 9.0,
+            label: 8.5,
+            tick: 8.0,
+            legend: 8.0,
+            line: 1.0,
+            thin: 0.45,
+            dash: [3.2, 1.8],
+            frame: 0.5,
+            grid: 0.35,
+            tick_len: 2.5,
+            pad: 4.0,
+            marker: 1.6,
+        },
+    }
 }
 
 /// One line on a panel. `xs` and `ys` have the same length; non-finite
@@ -34,7 +136,7 @@ pub struct Series {
     /// Ordinates.
     pub ys: Vec<f64>,
     /// Line colour.
-    pub color: RGBColor,
+    pub color: Rgb,
     /// Dashed (references, bounds) or solid.
     pub dashed: bool,
 }
@@ -57,7 +159,7 @@ pub struct Panel {
 
 /// A grid of panels with an overall title.
 pub struct Figure {
-    /// Figure title.
+    /// Figure title (screen style only; a paper figure has a caption instead).
     pub title: String,
     /// Panels, row-major.
     pub panels: Vec<Panel>,
@@ -72,19 +174,19 @@ pub struct Series3 {
     /// Points `[x, y, z]`, m.
     pub points: Vec<[f64; 3]>,
     /// Colour.
-    pub color: RGBColor,
+    pub color: Rgb,
     /// Dashed (reference) or solid.
     pub dashed: bool,
 }
 
 /// One box of a box plot.
 pub struct BoxGroup {
-    /// Category label.
+    /// Category label (wrapped at spaces to fit under its box).
     pub label: String,
     /// Sample values.
     pub values: Vec<f64>,
     /// Colour.
-    pub color: RGBColor,
+    pub color: Rgb,
 }
 
 /// A box-plot panel: one box per group (box q1–q3, median line, whiskers p5–p95).
@@ -100,23 +202,23 @@ pub struct BoxPanel {
 }
 
 /// The colour of a controller, the same in every figure.
-pub fn controller_color(name: &str) -> RGBColor {
+pub fn controller_color(name: &str) -> Rgb {
     match name {
-        "ftaftsmc" => RGBColor(31, 119, 180),
-        "ranftsmc" => RGBColor(255, 127, 14),
-        "tsm-sta" => RGBColor(44, 160, 44),
-        "ftaftsmc-no-mass" => RGBColor(148, 103, 189),
-        "ftaftsmc-tuned" => RGBColor(23, 190, 207),
-        "ftaftsmc-zero-derivatives" => RGBColor(140, 86, 75),
-        "reference" => RGBColor(0, 0, 0),
+        "ftaftsmc" => Rgb(31, 119, 180),
+        "ranftsmc" => Rgb(255, 127, 14),
+        "tsm-sta" => Rgb(44, 160, 44),
+        "ftaftsmc-no-mass" => Rgb(148, 103, 189),
+        "ftaftsmc-tuned" => Rgb(23, 190, 207),
+        "ftaftsmc-zero-derivatives" => Rgb(140, 86, 75),
+        "reference" => Rgb(0, 0, 0),
         other => {
-            const PALETTE: [RGBColor; 6] = [
-                RGBColor(214, 39, 40),
-                RGBColor(227, 119, 194),
-                RGBColor(127, 127, 127),
-                RGBColor(188, 189, 34),
-                RGBColor(140, 86, 75),
-                RGBColor(23, 190, 207),
+            const PALETTE: [Rgb; 6] = [
+                Rgb(214, 39, 40),
+                Rgb(227, 119, 194),
+                Rgb(127, 127, 127),
+                Rgb(188, 189, 34),
+                Rgb(140, 86, 75),
+                Rgb(23, 190, 207),
             ];
             let hash = other.bytes().fold(5381u32, |h, b| h.wrapping_mul(33) ^ u32::from(b));
             PALETTE[hash as usize % PALETTE.len()]
@@ -124,66 +226,131 @@ pub fn controller_color(name: &str) -> RGBColor {
     }
 }
 
-fn plot_err<E: std::fmt::Debug>(e: E) -> anyhow::Error {
-    anyhow!("plotting failed: {e:?}")
-}
+const INK: Rgb = Rgb(40, 40, 40);
+const GRID: Rgb = Rgb(228, 228, 228);
+const MINOR_GRID: Rgb = Rgb(242, 242, 242);
 
-/// Render with both backends to `<stem>.svg` and `<stem>.png`, atomically.
-fn render(
-    stem: &Path,
-    size: (u32, u32),
-    draw_svg: impl Fn(DrawingArea<SVGBackend, Shift>) -> Result<()>,
-    draw_png: impl Fn(DrawingArea<BitMapBackend, Shift>) -> Result<()>,
-) -> Result<Vec<PathBuf>> {
-    ensure_font();
+/// Write `<stem>.svg` and its rasterisation `<stem>.png`, each atomically.
+fn write(stem: &Path, svg: String, lk: &Look) -> Result<Vec<PathBuf>> {
     if let Some(dir) = stem.parent() {
         std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
     }
     let svg_path = stem.with_extension("svg");
     let png_path = stem.with_extension("png");
-    let mut svg = String::new();
-    {
-        let root = SVGBackend::with_string(&mut svg, size).into_drawing_area();
-        draw_svg(root.clone())?;
-        root.present().map_err(plot_err)?;
-    }
+    let png = crate::raster::png_from_svg(&svg, lk.render_scale, lk.dpi)
+        .with_context(|| format!("cannot render {}", png_path.display()))?;
     crate::output::write_atomic(&svg_path, svg.as_bytes())?;
-    let tmp_png = stem.with_extension("tmp.png");
-    {
-        let root = BitMapBackend::new(&tmp_png, size).into_drawing_area();
-        draw_png(root.clone())?;
-        root.present().map_err(plot_err).with_context(|| format!("cannot write {}", tmp_png.display()))?;
-    }
-    std::fs::rename(&tmp_png, &png_path).with_context(|| format!("cannot rename to {}", png_path.display()))?;
+    crate::output::write_atomic(&png_path, &png)?;
     Ok(vec![svg_path, png_path])
 }
 
+// ---------------------------------------------------------------- legend
+
+/// A legend entry: a line sample (dashed/marked like its line) and a label.
+struct Entry {
+    label: String,
+    color: Rgb,
+    dashed: bool,
+    marker: bool,
+}
+
+fn has_markers(s: &Series) -> bool {
+    !s.dashed && s.xs.iter().zip(&s.ys).filter(|(x, y)| x.is_finite() && y.is_finite()).count() <= MARKER_POINTS
+}
+
+/// One entry per distinct label, in order of first appearance.
+fn entries_of<'a>(series: impl Iterator<Item = &'a Series>) -> Vec<Entry> {
+    let mut out: Vec<Entry> = Vec::new();
+    for s in series {
+        if s.label.is_empty() || out.iter().any(|e| e.label == s.label) {
+            continue;
+        }
+        out.push(Entry { label: s.label.clone(), color: s.color, dashed: s.dashed, marker: has_markers(s) });
+    }
+    out
+}
+
+/// Rows of entry indices that fit in `width`, and the legend's height.
+fn legend_rows(entries: &[Entry], width: f64, lk: &Look) -> (Vec<Vec<usize>>, f64) {
+    let mut rows: Vec<Vec<usize>> = Vec::new();
+    let mut used = 0.0;
+    for (i, e) in entries.iter().enumerate() {
+        let w = entry_width(e, lk);
+        if rows.is_empty() || used + w > width {
+            rows.push(Vec::new());
+            used = 0.0;
+        }
+        rows.last_mut().unwrap().push(i);
+        used += w;
+    }
+    let h = if rows.is_empty() { 0.0 } else { rows.len() as f64 * lk.legend * 1.55 + lk.legend * 0.5 };
+    (rows, h)
+}
+
+fn sample_len(lk: &Look) -> f64 {
+    lk.legend * 2.6
+}
+
+fn entry_width(e: &Entry, lk: &Look) -> f64 {
+    sample_len(lk) + lk.legend * 0.45 + text_width(&e.label, lk.legend) + lk.legend * 1.5
+}
+
+fn draw_legend(svg: &mut Svg, entries: &[Entry], x: f64, y: f64, width: f64, lk: &Look) -> f64 {
+    let (rows, h) = legend_rows(entries, width, lk);
+    for (r, row) in rows.iter().enumerate() {
+        let total: f64 = row.iter().map(|&i| entry_width(&entries[i], lk)).sum::<f64>() - lk.legend * 1.5;
+        let mut cx = x + (width - total).max(0.0) / 2.0;
+        let cy = y + lk.legend * 0.25 + (r as f64 + 0.5) * lk.legend * 1.55;
+        for &i in row {
+            let e = &entries[i];
+            let stroke =
+                Stroke { color: e.color, width: lk.line * 1.15, dash: e.dashed.then_some(lk.dash), opacity: 1.0 };
+            svg.line(cx, cy, cx + sample_len(lk), cy, &stroke);
+            if e.marker {
+                svg.circle(cx + sample_len(lk) / 2.0, cy, lk.marker * 1.1, e.color, None);
+            }
+            let tx = cx + sample_len(lk) + lk.legend * 0.45;
+            svg.text(tx, cy, &e.label, &Font::new(lk.legend, Anchor::Start));
+            cx += entry_width(e, lk);
+        }
+    }
+    h
+}
+
+fn draw_title(svg: &mut Svg, title: &str, width: f64, lk: &Look) -> f64 {
+    if lk.title <= 0.0 || title.is_empty() {
+        return lk.pad * 0.5;
+    }
+    let f = Font { bold: false, ..Font::new(lk.title, Anchor::Middle) };
+    svg.text(width / 2.0, lk.title * 0.95, title, &f);
+    lk.title * 1.8
+}
+
+// ---------------------------------------------------------------- figures
+
 /// Write `fig` to `<stem>.svg` and `<stem>.png`.
 pub fn write_figure(fig: &Figure, stem: &Path) -> Result<Vec<PathBuf>> {
+    let lk = look();
     let columns = fig.columns.max(1);
     let rows = fig.panels.len().div_ceil(columns).max(1);
-    let size = ((560 * columns as u32).max(1000), 70 + 400 * rows as u32);
-    render(stem, size, |root| draw_figure(root, fig), |root| draw_figure(root, fig))
-}
-
-fn title_and_body<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, title: &str) -> Result<DrawingArea<DB, Shift>> {
-    root.fill(&WHITE).map_err(plot_err)?;
-    let (top, body) = root.split_vertically(60);
-    let (w, _) = top.dim_in_pixel();
-    let style = TextStyle::from((FAMILY, 26).into_font()).pos(Pos::new(HPos::Center, VPos::Center));
-    top.draw_text(title, &style, (w as i32 / 2, 30)).map_err(plot_err)?;
-    Ok(body)
-}
-
-fn draw_figure<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, fig: &Figure) -> Result<()> {
-    let body = title_and_body(&root, &fig.title)?;
-    let columns = fig.columns.max(1);
-    let rows = fig.panels.len().div_ceil(columns).max(1);
-    let areas = body.split_evenly((rows, columns));
-    for (panel, area) in fig.panels.iter().zip(areas) {
-        draw_panel(&area, panel)?;
+    let width = if columns == 1 { lk.narrow } else { lk.wide };
+    let entries = entries_of(fig.panels.iter().flat_map(|p| p.series.iter()));
+    let inner = width - 2.0 * lk.pad;
+    let (_, legend_h) = legend_rows(&entries, inner, &lk);
+    let title_h = if lk.title > 0.0 && !fig.title.is_empty() { lk.title * 1.8 } else { lk.pad * 0.5 };
+    let panel_w = inner / columns as f64;
+    let panel_h = panel_w * if columns == 1 { lk.aspect_single } else { lk.aspect };
+    let height = (title_h + legend_h + rows as f64 * panel_h + lk.pad).ceil();
+    let mut svg = Svg::new(width, height, lk.unit);
+    draw_title(&mut svg, &fig.title, width, &lk);
+    draw_legend(&mut svg, &entries, lk.pad, title_h, inner, &lk);
+    for (i, panel) in fig.panels.iter().enumerate() {
+        let (r, c) = (i / columns, i % columns);
+        let x = lk.pad + c as f64 * panel_w;
+        let y = title_h + legend_h + r as f64 * panel_h;
+        draw_panel(&mut svg, (x, y, panel_w, panel_h), panel, &lk);
     }
-    Ok(())
+    write(stem, svg.finish(), &lk)
 }
 
 /// Finite range of values (positive only on a log axis), padded by 5 %.
@@ -249,315 +416,492 @@ fn segments(s: &Series, log_x: bool, log_y: bool) -> Vec<Vec<(f64, f64)>> {
     out
 }
 
-fn draw_panel<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, panel: &Panel) -> Result<()> {
+/// Chattering as drawn: more than 150 reversals, each larger than `tol`,
+/// among the decimated points: drawn opaque it would fill the plot as a solid band.
+fn chatters(s: &Series, panel: &Panel, tol: f64) -> bool {
+    let mut reversals = 0;
+    for seg in segments(s, panel.log_x, panel.log_y) {
+        let mut dir = 0.0;
+        let mut anchor = seg.first().map_or(0.0, |p| p.1);
+        for &(_, y) in &seg[1..] {
+            let d = y - anchor;
+            if d.abs() > tol {
+                if dir * d < 0.0 {
+                    reversals += 1;
+                }
+                dir = d.signum();
+                anchor = y;
+            }
+        }
+    }
+    reversals > 150
+}
+
+/// Total variation per sample, ignoring non-finite values.
+fn variation(ys: &[f64]) -> f64 {
+    let tv: f64 = ys.windows(2).map(|w| (w[1] - w[0]).abs()).filter(|d| d.is_finite()).sum();
+    tv / ys.len().max(1) as f64
+}
+
+/// A data → drawing coordinate map for one axis.
+#[derive(Clone, Copy)]
+struct Axis {
+    lo: f64,
+    hi: f64,
+    log: bool,
+    /// Drawing coordinate of `lo` and of `hi`.
+    a: f64,
+    b: f64,
+}
+
+impl Axis {
+    fn map(&self, v: f64) -> f64 {
+        let t = |v: f64| if self.log { v.log10() } else { v };
+        self.a + (t(v) - t(self.lo)) / (t(self.hi) - t(self.lo)) * (self.b - self.a)
+    }
+}
+
+fn axis_ticks(lo: f64, hi: f64, log: bool, target: usize) -> Ticks {
+    let mut t = if log { ticks::log(lo, hi, (target * 2 / 3).max(3)) } else { ticks::linear(lo, hi, target) };
+    let keep: Vec<bool> = t.values.iter().map(|v| *v >= lo && *v <= hi).collect();
+    let mut k = keep.iter();
+    t.labels.retain(|_| *k.next().unwrap());
+    t.values.retain(|v| *v >= lo && *v <= hi);
+    t
+}
+
+/// The plot rectangle of a panel and its axes, after laying out labels.
+struct Frame {
+    x: f64,
+    y: f64,
+    w: f64,
+    h: f64,
+    xt: Ticks,
+    yt: Ticks,
+}
+
+/// Lay out a panel in `rect`: title on top, y label and tick labels to the
+/// left, x tick labels and label below.
+fn frame(
+    rect: (f64, f64, f64, f64),
+    title: &str,
+    y_label: &str,
+    x_range: Option<(f64, f64, bool)>,
+    y_range: (f64, f64, bool),
+    bottom_lines: usize,
+    lk: &Look,
+) -> Frame {
+    let (x, y, w, h) = rect;
+    let top = if title.is_empty() { lk.tick * 1.0 } else { lk.panel_title * 1.7 };
+    let bottom = lk.tick_len + bottom_lines as f64 * lk.tick * 1.2 + lk.tick * 0.3 + lk.label * 1.5;
+    let est_h = h - top - bottom;
+    let yt = axis_ticks(y_range.0, y_range.1, y_range.2, ((est_h / (lk.tick * 2.6)) as usize).clamp(4, 8));
+    let ytw = yt.labels.iter().map(|l| text_width(l, lk.tick)).fold(0.0, f64::max);
+    let ylab = if y_label.is_empty() { 0.0 } else { lk.label * 1.5 };
+    let left = lk.pad * 0.5 + ylab + ytw + lk.tick_len + lk.tick * 0.35;
+    let right = lk.pad * 1.8;
+    let pw = w - left - right;
+    let xt = match x_range {
+        Some((lo, hi, log)) => axis_ticks(lo, hi, log, ((pw / (lk.tick * 5.0)) as usize).clamp(3, 8)),
+        None => Ticks { values: vec![], labels: vec![], note: None, minor: vec![] },
+    };
+    Frame { x: x + left, y: y + top, w: pw, h: h - top - bottom, xt, yt }
+}
+
+fn draw_panel(svg: &mut Svg, rect: (f64, f64, f64, f64), panel: &Panel, lk: &Look) {
     let xr = range(panel.series.iter().flat_map(|s| s.xs.iter().copied()), panel.log_x);
     let yr = range(panel.series.iter().flat_map(|s| s.ys.iter().copied()), panel.log_y);
     let (Some((x0, x1)), Some((y0, y1))) = (xr, yr) else {
-        let mut chart = ChartBuilder::on(area)
-            .caption(&panel.title, (FAMILY, 20))
-            .margin(12)
-            .build_cartesian_2d(0.0..1.0, 0.0..1.0)
-            .map_err(plot_err)?;
-        chart.configure_mesh().disable_mesh().draw().map_err(plot_err)?;
-        chart.draw_series(std::iter::once(Text::new("no data", (0.4, 0.5), (FAMILY, 18)))).map_err(plot_err)?;
-        return Ok(());
+        let f = frame(rect, &panel.title, "", None, (0.0, 1.0, false), 1, lk);
+        svg.rect(f.x, f.y, f.w, f.h, None, Some(&Stroke::solid(INK, lk.frame)));
+        svg.text(f.x + f.w / 2.0, f.y + f.h / 2.0, "no data", &Font::new(lk.label, Anchor::Middle));
+        draw_panel_title(svg, &f, &panel.title, None, lk);
+        return;
     };
-    match (panel.log_x, panel.log_y) {
-        (false, false) => draw_in(area, panel, x0..x1, y0..y1),
-        (true, false) => draw_in(area, panel, (x0..x1).log_scale(), y0..y1),
-        (false, true) => draw_in(area, panel, x0..x1, (y0..y1).log_scale()),
-        (true, true) => draw_in(area, panel, (x0..x1).log_scale(), (y0..y1).log_scale()),
-    }
-}
-
-fn draw_in<DB, X, Y>(area: &DrawingArea<DB, Shift>, panel: &Panel, x: X, y: Y) -> Result<()>
-where
-    DB: DrawingBackend,
-    X: AsRangedCoord<Value = f64>,
-    Y: AsRangedCoord<Value = f64>,
-    X::CoordDescType: Ranged<ValueType = f64> + ValueFormatter<f64>,
-    Y::CoordDescType: Ranged<ValueType = f64> + ValueFormatter<f64>,
-{
-    let mut chart = ChartBuilder::on(area)
-        .caption(&panel.title, (FAMILY, 20))
-        .margin(12)
-        .x_label_area_size(45)
-        .y_label_area_size(75)
-        .build_cartesian_2d(x, y)
-        .map_err(plot_err)?;
-    chart
-        .configure_mesh()
-        .x_desc(panel.x_label.as_str())
-        .y_desc(panel.y_label.as_str())
-        .axis_desc_style((FAMILY, 16))
-        .label_style((FAMILY, 13))
-        .light_line_style(RGBColor(235, 235, 235))
-        .bold_line_style(RGBColor(205, 205, 205))
-        .draw()
-        .map_err(plot_err)?;
-    for s in &panel.series {
-        // Thick polylines get long miter spikes at sharp reversals: draw
-        // chattering signals one pixel wide.
-        let width = if is_noisy(&s.ys) { 1 } else { 2 };
-        let style = ShapeStyle { color: s.color.to_rgba(), filled: false, stroke_width: width };
-        let mut labelled = false;
-        for seg in segments(s, panel.log_x, panel.log_y) {
-            let anno = if s.dashed {
-                chart.draw_series(DashedLineSeries::new(seg, 8, 5, style)).map_err(plot_err)?
-            } else {
-                chart.draw_series(LineSeries::new(seg, style)).map_err(plot_err)?
-            };
-            if !labelled {
-                let c = s.color;
-                anno.label(s.label.as_str())
-                    .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(3)));
-                labelled = true;
-            }
-        }
-    }
-    chart
-        .configure_series_labels()
-        .background_style(WHITE.mix(0.85))
-        .border_style(RGBColor(120, 120, 120))
-        .label_font((FAMILY, 13))
-        .position(legend_position(panel))
-        .draw()
-        .map_err(plot_err)?;
-    Ok(())
-}
-
-/// More than 10 % of interior samples are local extrema: a chattering signal.
-fn is_noisy(ys: &[f64]) -> bool {
-    let turns = ys.windows(3).filter(|w| (w[1] - w[0]) * (w[2] - w[1]) < 0.0).count();
-    ys.len() > 50 && turns * 10 > ys.len()
-}
-
-/// Put the legend in the right-hand corner where the data of the last
-/// third of the x range is not: low when the curves end high, and so on.
-fn legend_position(panel: &Panel) -> SeriesLabelPosition {
-    let finite = |v: &&f64| v.is_finite();
-    let (lo, hi) = panel
+    let f = frame(rect, &panel.title, &panel.y_label, Some((x0, x1, panel.log_x)), (y0, y1, panel.log_y), 1, lk);
+    let ax = Axis { lo: x0, hi: x1, log: panel.log_x, a: f.x, b: f.x + f.w };
+    let ay = Axis { lo: y0, hi: y1, log: panel.log_y, a: f.y + f.h, b: f.y };
+    draw_grid(svg, &f, Some(&ax), &ay, lk);
+    let clip = svg.clip_rect(f.x, f.y, f.w, f.h);
+    // Chattering signals first (thin, translucent; the most agitated at the
+    // bottom), then lines, then dashed references on top.
+    let noisy: Vec<bool> = panel.series.iter().map(|s| chatters(s, panel, (y1 - y0) * 0.004)).collect();
+    let mut order: Vec<(usize, f64)> = panel
         .series
         .iter()
-        .flat_map(|s| s.ys.iter().filter(finite))
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &v| (l.min(v), h.max(v)));
-    if hi.partial_cmp(&lo) != Some(std::cmp::Ordering::Greater) {
-        return SeriesLabelPosition::UpperRight;
-    }
-    let mut upper = 0usize;
-    let mut total = 0usize;
-    for s in &panel.series {
-        let n = s.ys.len();
-        for &y in s.ys[2 * n / 3..].iter().filter(finite) {
-            total += 1;
-            if (y - lo) / (hi - lo) > 0.55 {
-                upper += 1;
+        .enumerate()
+        .map(|(i, s)| {
+            let rank = if noisy[i] {
+                -variation(&s.ys)
+            } else if s.dashed {
+                f64::MAX
+            } else {
+                f64::MAX / 2.0
+            };
+            (i, rank)
+        })
+        .collect();
+    order.sort_by(|a, b| a.1.total_cmp(&b.1));
+    let order: Vec<(&Series, bool)> = order.iter().map(|&(i, _)| (&panel.series[i], noisy[i])).collect();
+    for (s, noisy) in order {
+        let stroke = Stroke {
+            color: s.color,
+            width: if noisy { lk.thin } else { lk.line },
+            dash: s.dashed.then_some(lk.dash),
+            opacity: if noisy { 0.45 } else { 1.0 },
+        };
+        let markers = has_markers(s);
+        for seg in segments(s, panel.log_x, panel.log_y) {
+            let pts: Vec<(f64, f64)> = seg.iter().map(|&(x, y)| (ax.map(x), ay.map(y))).collect();
+            svg.polyline(&pts, &stroke, Some(&clip));
+            if markers {
+                for &(px, py) in &pts {
+                    svg.circle(px, py, lk.marker, s.color, Some(&clip));
+                }
             }
         }
     }
-    if total > 0 && upper * 2 > total {
-        SeriesLabelPosition::LowerRight
-    } else {
-        SeriesLabelPosition::UpperRight
+    draw_axes(svg, &f, Some(&ax), &ay, lk);
+    draw_x_label(svg, &f, &panel.x_label, 1, lk);
+    draw_y_label(svg, &f, rect.0, &panel.y_label, lk);
+    draw_panel_title(svg, &f, &panel.title, f.yt.note.as_deref(), lk);
+}
+
+fn draw_grid(svg: &mut Svg, f: &Frame, ax: Option<&Axis>, ay: &Axis, lk: &Look) {
+    let minor = Stroke::solid(MINOR_GRID, lk.grid);
+    let major = Stroke::solid(GRID, lk.grid);
+    if let Some(ax) = ax {
+        for &v in f.xt.minor.iter().filter(|v| **v >= ax.lo && **v <= ax.hi) {
+            let px = ax.map(v);
+            svg.line(px, f.y, px, f.y + f.h, &minor);
+        }
+        for &v in &f.xt.values {
+            let px = ax.map(v);
+            svg.line(px, f.y, px, f.y + f.h, &major);
+        }
+    }
+    for &v in f.yt.minor.iter().filter(|v| **v >= ay.lo && **v <= ay.hi) {
+        let py = ay.map(v);
+        svg.line(f.x, py, f.x + f.w, py, &minor);
+    }
+    for &v in &f.yt.values {
+        let py = ay.map(v);
+        svg.line(f.x, py, f.x + f.w, py, &major);
     }
 }
 
-/// A 3-D trajectory plot (reference dashed), axes in metres.
-pub fn write_3d(title: &str, series: &[Series3], stem: &Path) -> Result<Vec<PathBuf>> {
-    render(stem, (1100, 900), |root| draw_3d(root, title, series), |root| draw_3d(root, title, series))
+fn draw_axes(svg: &mut Svg, f: &Frame, ax: Option<&Axis>, ay: &Axis, lk: &Look) {
+    let ink = Stroke::solid(INK, lk.frame);
+    svg.rect(f.x, f.y, f.w, f.h, None, Some(&ink));
+    let tf = Font::new(lk.tick, Anchor::End);
+    for (v, l) in f.yt.values.iter().zip(&f.yt.labels) {
+        let py = ay.map(*v);
+        svg.line(f.x - lk.tick_len, py, f.x, py, &ink);
+        svg.text(f.x - lk.tick_len - lk.tick * 0.3, py, l, &tf);
+    }
+    if let Some(ax) = ax {
+        let tf = Font { valign: VAlign::Top, ..Font::new(lk.tick, Anchor::Middle) };
+        for (v, l) in f.xt.values.iter().zip(&f.xt.labels) {
+            let px = ax.map(*v);
+            svg.line(px, f.y + f.h, px, f.y + f.h + lk.tick_len, &ink);
+            svg.text(px, f.y + f.h + lk.tick_len + lk.tick * 0.3, l, &tf);
+        }
+    }
 }
 
-fn draw_3d<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, title: &str, series: &[Series3]) -> Result<()> {
-    let body = title_and_body(&root, title)?;
+fn draw_x_label(svg: &mut Svg, f: &Frame, label: &str, lines: usize, lk: &Look) {
+    let y = f.y + f.h + lk.tick_len + lines as f64 * lk.tick * 1.2 + lk.tick * 0.3 + lk.label * 0.2;
+    let font = Font { valign: VAlign::Top, ..Font::new(lk.label, Anchor::Middle) };
+    svg.text(f.x + f.w / 2.0, y, label, &font);
+    if let Some(note) = &f.xt.note {
+        let font = Font { valign: VAlign::Top, ..Font::new(lk.tick, Anchor::End) };
+        svg.text(f.x + f.w, y, note, &font);
+    }
+}
+
+fn draw_y_label(svg: &mut Svg, f: &Frame, left: f64, label: &str, lk: &Look) {
+    let font = Font { rotate: -90.0, valign: VAlign::Top, ..Font::new(lk.label, Anchor::Middle) };
+    svg.text(left + lk.pad * 0.5, f.y + f.h / 2.0, label, &font);
+}
+
+/// Panel title centred over the plot; the y tick note ("×10⁻⁶ + 2") at its
+/// top-left corner, the title moved right if they would touch.
+fn draw_panel_title(svg: &mut Svg, f: &Frame, title: &str, note: Option<&str>, lk: &Look) {
+    let baseline = f.y - lk.tick * 0.45;
+    let mut note_end = f.x - f64::INFINITY;
+    if let Some(note) = note {
+        let font = Font { valign: VAlign::Baseline, ..Font::new(lk.tick, Anchor::Start) };
+        svg.text(f.x, baseline, note, &font);
+        note_end = f.x + text_width(note, lk.tick) + lk.tick;
+    }
+    if title.is_empty() {
+        return;
+    }
+    let tw = text_width(title, lk.panel_title);
+    let centre = f.x + f.w / 2.0;
+    let font = Font { valign: VAlign::Baseline, ..Font::new(lk.panel_title, Anchor::Middle) };
+    if centre - tw / 2.0 >= note_end {
+        svg.text(centre, baseline, title, &font);
+    } else {
+        svg.text(note_end, baseline, title, &Font { anchor: Anchor::Start, ..font });
+    }
+}
+
+// ---------------------------------------------------------------- 3-D
+
+/// A 3-D trajectory plot (reference dashed), axes in metres, altitude up.
+pub fn write_3d(title: &str, series: &[Series3], stem: &Path) -> Result<Vec<PathBuf>> {
+    let lk = look();
+    let width = lk.narrow;
+    let inner = width - 2.0 * lk.pad;
+    let entries: Vec<Entry> = series
+        .iter()
+        .map(|s| Entry { label: s.label.clone(), color: s.color, dashed: s.dashed, marker: false })
+        .collect();
+    let (_, legend_h) = legend_rows(&entries, inner, &lk);
+    let title_h = if lk.title > 0.0 && !title.is_empty() { lk.title * 1.8 } else { lk.pad * 0.5 };
+    let plot_h = inner * 0.82;
+    let height = (title_h + legend_h + plot_h + lk.pad).ceil();
+    let mut svg = Svg::new(width, height, lk.unit);
+    draw_title(&mut svg, title, width, &lk);
+    draw_legend(&mut svg, &entries, lk.pad, title_h, inner, &lk);
+
     let axis =
         |k: usize| range(series.iter().flat_map(|s| s.points.iter().map(move |p| p[k])), false).unwrap_or((-1.0, 1.0));
-    let ((x0, x1), (y0, y1), (z0, z1)) = (axis(0), axis(1), axis(2));
-    let mut chart = ChartBuilder::on(&body).margin(20).build_cartesian_3d(x0..x1, z0..z1, y0..y1).map_err(plot_err)?;
-    chart.with_projection(|mut p| {
-        p.pitch = 0.45;
-        p.yaw = 0.7;
-        p.scale = 0.85;
-        p.into_matrix()
-    });
-    chart
-        .configure_axes()
-        .label_style((FAMILY, 14))
-        .light_grid_style(RGBColor(225, 225, 225))
-        .max_light_lines(4)
-        .draw()
-        .map_err(plot_err)?;
+    let ranges = [axis(0), axis(1), axis(2)];
+    // Fewer ticks on a small box: the edges are foreshortened.
+    let box_w = inner - 2.0 * (lk.tick * 5.5 + lk.label * 1.5);
+    let target = ((box_w / (lk.tick * 6.0)) as usize).clamp(3, 5);
+    let ticks: Vec<Ticks> = ranges.iter().map(|&(lo, hi)| axis_ticks(lo, hi, false, target)).collect();
+    // Orthographic view: yaw about the vertical axis, then pitch.
+    let (yaw, pitch) = (0.7f64, 0.45f64);
+    let norm = |k: usize, v: f64| 2.0 * (v - ranges[k].0) / (ranges[k].1 - ranges[k].0) - 1.0;
+    let project = |n: [f64; 3]| {
+        let u = n[0] * yaw.cos() - n[1] * yaw.sin();
+        let depth = n[0] * yaw.sin() + n[1] * yaw.cos();
+        let v = n[2] * pitch.cos() * 0.9 + depth * pitch.sin();
+        (u, v)
+    };
+    let mut corners = Vec::new();
+    for a in [-1.0, 1.0] {
+        for b in [-1.0, 1.0] {
+            for c in [-1.0, 1.0] {
+                corners.push(project([a, b, c]));
+            }
+        }
+    }
+    let (umin, umax) = corners.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), p| (l.min(p.0), h.max(p.0)));
+    let (vmin, vmax) = corners.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), p| (l.min(p.1), h.max(p.1)));
+    // Room for tick and axis labels around the box.
+    let margin_x = lk.tick * 5.5 + lk.label * 1.5;
+    let margin_y = lk.tick * 2.5 + lk.label * 1.5;
+    let (bx, by) = (lk.pad + margin_x, title_h + legend_h + lk.tick);
+    let (bw, bh) = (inner - 2.0 * margin_x, plot_h - margin_y - lk.tick);
+    let s = (bw / (umax - umin)).min(bh / (vmax - vmin));
+    let ox = bx + (bw - s * (umax - umin)) / 2.0;
+    let oy = by + (bh - s * (vmax - vmin)) / 2.0;
+    let to_px = |n: [f64; 3]| {
+        let (u, v) = project(n);
+        (ox + (u - umin) * s, oy + (vmax - v) * s)
+    };
+    let grid = Stroke::solid(GRID, lk.grid);
+    let ink = Stroke::solid(INK, lk.frame);
+    // Back planes: floor z = −1, walls x = +1 and y = +1, with grid lines.
+    for (k, t) in ticks.iter().enumerate() {
+        for &v in &t.values {
+            let nv = norm(k, v);
+            let lines: Vec<([f64; 3], [f64; 3])> = match k {
+                0 => vec![([nv, -1.0, -1.0], [nv, 1.0, -1.0]), ([nv, 1.0, -1.0], [nv, 1.0, 1.0])],
+                1 => vec![([-1.0, nv, -1.0], [1.0, nv, -1.0]), ([1.0, nv, -1.0], [1.0, nv, 1.0])],
+                _ => vec![([1.0, -1.0, nv], [1.0, 1.0, nv]), ([-1.0, 1.0, nv], [1.0, 1.0, nv])],
+            };
+            for (a, b) in lines {
+                let (p, q) = (to_px(a), to_px(b));
+                svg.line(p.0, p.1, q.0, q.1, &grid);
+            }
+        }
+    }
+    for (a, b) in [
+        ([-1.0, -1.0, -1.0], [1.0, -1.0, -1.0]),
+        ([1.0, -1.0, -1.0], [1.0, 1.0, -1.0]),
+        ([1.0, 1.0, -1.0], [-1.0, 1.0, -1.0]),
+        ([-1.0, 1.0, -1.0], [-1.0, -1.0, -1.0]),
+        ([1.0, -1.0, -1.0], [1.0, -1.0, 1.0]),
+        ([1.0, 1.0, -1.0], [1.0, 1.0, 1.0]),
+        ([-1.0, 1.0, -1.0], [-1.0, 1.0, 1.0]),
+        ([1.0, -1.0, 1.0], [1.0, 1.0, 1.0]),
+        ([-1.0, 1.0, 1.0], [1.0, 1.0, 1.0]),
+    ] {
+        let (p, q) = (to_px(a), to_px(b));
+        svg.line(p.0, p.1, q.0, q.1, &ink);
+    }
+    // Tick labels on the front floor edges (x, y) and the left vertical edge (z).
+    let edge_label = |svg: &mut Svg, k: usize, at: &dyn Fn(f64) -> [f64; 3], out: (f64, f64), name: &str| {
+        let t = &ticks[k];
+        let anchor = if out.0 < -0.3 {
+            Anchor::End
+        } else if out.0 > 0.3 {
+            Anchor::Start
+        } else {
+            Anchor::Middle
+        };
+        for (v, l) in t.values.iter().zip(&t.labels) {
+            let p = to_px(at(norm(k, *v)));
+            let q = (p.0 + out.0 * lk.tick_len * 1.6, p.1 + out.1 * lk.tick_len * 1.6);
+            svg.line(p.0, p.1, q.0, q.1, &ink);
+            let font =
+                Font { valign: if out.1 > 0.5 { VAlign::Top } else { VAlign::Center }, ..Font::new(lk.tick, anchor) };
+            svg.text(q.0 + out.0 * lk.tick * 0.3, q.1 + out.1 * lk.tick * 0.2, l, &font);
+        }
+        let mid = to_px(at(0.0));
+        let d = lk.tick * 3.6 + lk.label * 0.9;
+        let name = match &t.note {
+            Some(n) => format!("{name}  {n}"),
+            None => name.to_string(),
+        };
+        let font = Font { valign: VAlign::Center, ..Font::new(lk.label, Anchor::Middle) };
+        let (lx, ly) = (mid.0 + out.0 * d, mid.1 + out.1 * d);
+        if k == 2 {
+            svg.text(lx, ly, &name, &Font { rotate: -90.0, ..font });
+        } else {
+            svg.text(lx, ly, &name, &font);
+        }
+    };
+    // Outward directions on screen: perpendicular-ish to each edge, away from the box.
+    let (c, sn) = (yaw.cos(), yaw.sin());
+    edge_label(&mut svg, 0, &|v| [v, -1.0, -1.0], (sn * 0.6, 0.8), "x (m)");
+    edge_label(&mut svg, 1, &|v| [-1.0, v, -1.0], (-c * 0.9, 0.45), "y (m)");
+    edge_label(&mut svg, 2, &|v| [-1.0, 1.0, v], (-1.0, 0.0), "z (m)");
     // Flights first, references (dashed) on top.
     let ordered = series.iter().filter(|s| !s.dashed).chain(series.iter().filter(|s| s.dashed));
     for s in ordered {
-        // Plot (x, z, y) so that altitude is vertical.
-        let pts: Vec<(f64, f64, f64)> =
-            s.points.iter().filter(|p| p.iter().all(|v| v.is_finite())).map(|p| (p[0], p[2], p[1])).collect();
-        if pts.is_empty() {
-            continue;
-        }
-        let style = ShapeStyle { color: s.color.to_rgba(), filled: false, stroke_width: if s.dashed { 1 } else { 2 } };
+        let pts: Vec<[f64; 3]> = s.points.iter().copied().filter(|p| p.iter().all(|v| v.is_finite())).collect();
         let step = pts.len().div_ceil(MAX_POINTS).max(1);
-        let pts: Vec<(f64, f64, f64)> = pts.into_iter().step_by(step).collect();
-        let c = s.color;
-        if s.dashed {
-            let dash = (pts.len() / 120).max(2);
-            let mut first = true;
-            for chunk in pts.chunks(dash).step_by(2) {
-                let anno = chart.draw_series(LineSeries::new(chunk.to_vec(), style)).map_err(plot_err)?;
-                if first {
-                    anno.label(s.label.as_str())
-                        .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(3)));
-                    first = false;
-                }
-            }
-        } else {
-            chart
-                .draw_series(LineSeries::new(pts, style))
-                .map_err(plot_err)?
-                .label(s.label.as_str())
-                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(3)));
-        }
+        let px: Vec<(f64, f64)> =
+            pts.iter().step_by(step).map(|p| to_px([norm(0, p[0]), norm(1, p[1]), norm(2, p[2])])).collect();
+        let stroke = Stroke {
+            color: s.color,
+            width: if s.dashed { lk.line * 0.9 } else { lk.line },
+            dash: s.dashed.then_some(lk.dash),
+            opacity: 1.0,
+        };
+        svg.polyline(&px, &stroke, None);
     }
-    chart
-        .configure_series_labels()
-        .background_style(WHITE.mix(0.85))
-        .border_style(RGBColor(120, 120, 120))
-        .label_font((FAMILY, 15))
-        .position(SeriesLabelPosition::UpperLeft)
-        .draw()
-        .map_err(plot_err)?;
-    let (w, h) = body.dim_in_pixel();
-    let note = TextStyle::from((FAMILY, 15).into_font()).pos(Pos::new(HPos::Right, VPos::Bottom));
-    body.draw_text("axes: x (m) horizontal, y (m) depth, z (m) vertical", &note, (w as i32 - 20, h as i32 - 10))
-        .map_err(plot_err)?;
-    Ok(())
+    write(stem, svg.finish(), &lk)
 }
+
+// ---------------------------------------------------------------- box plots
 
 /// Nearest-rank percentile of sorted values.
 fn percentile(sorted: &[f64], q: f64) -> f64 {
     sorted[((q * sorted.len() as f64).ceil() as usize).clamp(1, sorted.len()) - 1]
 }
 
+/// Word wrap of `s` to `width` at `size`: whole if it fits, else a
+/// parenthesised tail ("(100 % ok)") on its own line, then greedy by words.
+fn wrap(s: &str, width: f64, size: f64) -> Vec<String> {
+    if text_width(s, size) <= width {
+        return vec![s.to_string()];
+    }
+    let parts: Vec<&str> = match s.find(" (") {
+        Some(i) => vec![&s[..i], &s[i + 1..]],
+        None => vec![s],
+    };
+    let mut lines: Vec<String> = Vec::new();
+    for part in parts {
+        if text_width(part, size) <= width {
+            lines.push(part.to_string());
+            continue;
+        }
+        let start = lines.len();
+        for word in part.split(' ') {
+            let joinable = lines.len() > start;
+            match lines.last_mut() {
+                Some(l) if joinable && text_width(&format!("{l} {word}"), size) <= width => {
+                    l.push(' ');
+                    l.push_str(word);
+                }
+                _ => lines.push(word.to_string()),
+            }
+        }
+    }
+    lines
+}
+
 /// Box plots, one panel per [`BoxPanel`].
 pub fn write_boxplots(title: &str, panels: &[BoxPanel], columns: usize, stem: &Path) -> Result<Vec<PathBuf>> {
+    let lk = look();
     let columns = columns.max(1);
     let rows = panels.len().div_ceil(columns).max(1);
-    let size = (600 * columns as u32, 70 + 420 * rows as u32);
-    render(stem, size, |root| draw_boxes(root, title, panels, columns), |root| draw_boxes(root, title, panels, columns))
-}
-
-fn draw_boxes<DB: DrawingBackend>(
-    root: DrawingArea<DB, Shift>,
-    title: &str,
-    panels: &[BoxPanel],
-    columns: usize,
-) -> Result<()> {
-    let body = title_and_body(&root, title)?;
-    let rows = panels.len().div_ceil(columns).max(1);
-    for (panel, area) in panels.iter().zip(body.split_evenly((rows, columns))) {
-        let stats: Vec<Option<[f64; 5]>> = panel
-            .groups
-            .iter()
-            .map(|g| {
-                let mut v: Vec<f64> =
-                    g.values.iter().copied().filter(|x| x.is_finite() && (!panel.log_y || *x > 0.0)).collect();
-                if v.is_empty() {
-                    return None;
-                }
-                v.sort_by(f64::total_cmp);
-                Some([
-                    percentile(&v, 0.05),
-                    percentile(&v, 0.25),
-                    percentile(&v, 0.5),
-                    percentile(&v, 0.75),
-                    percentile(&v, 0.95),
-                ])
-            })
-            .collect();
-        let n = panel.groups.len().max(1);
-        let x = -0.5..(n as f64 - 0.5);
-        let Some((y0, y1)) = range(stats.iter().flatten().flat_map(|s| s.iter().copied()), panel.log_y) else {
-            draw_panel(
-                &area,
-                &Panel {
-                    title: panel.title.clone(),
-                    x_label: String::new(),
-                    y_label: String::new(),
-                    series: vec![],
-                    log_x: false,
-                    log_y: false,
-                },
-            )?;
-            continue;
-        };
-        if panel.log_y {
-            draw_box_panel(&area, panel, &stats, x, (y0..y1).log_scale())?;
-        } else {
-            draw_box_panel(&area, panel, &stats, x, y0..y1)?;
-        }
+    let width = if columns == 1 { lk.narrow } else { lk.wide };
+    let inner = width - 2.0 * lk.pad;
+    let title_h = if lk.title > 0.0 && !title.is_empty() { lk.title * 1.8 } else { lk.pad * 0.5 };
+    let panel_w = inner / columns as f64;
+    let panel_h = panel_w * if columns == 1 { lk.aspect_single } else { lk.aspect };
+    let height = (title_h + rows as f64 * panel_h + lk.pad).ceil();
+    let mut svg = Svg::new(width, height, lk.unit);
+    draw_title(&mut svg, title, width, &lk);
+    for (i, panel) in panels.iter().enumerate() {
+        let (r, c) = (i / columns, i % columns);
+        let rect = (lk.pad + c as f64 * panel_w, title_h + r as f64 * panel_h, panel_w, panel_h);
+        draw_box_panel(&mut svg, rect, panel, &lk);
     }
-    Ok(())
+    write(stem, svg.finish(), &lk)
 }
 
-fn draw_box_panel<DB, Y>(
-    area: &DrawingArea<DB, Shift>,
-    panel: &BoxPanel,
-    stats: &[Option<[f64; 5]>],
-    x: std::ops::Range<f64>,
-    y: Y,
-) -> Result<()>
-where
-    DB: DrawingBackend,
-    Y: AsRangedCoord<Value = f64>,
-    Y::CoordDescType: Ranged<ValueType = f64> + ValueFormatter<f64>,
-{
-    let labels: Vec<String> = panel.groups.iter().map(|g| g.label.clone()).collect();
-    let mut chart = ChartBuilder::on(area)
-        .caption(&panel.title, (FAMILY, 20))
-        .margin(12)
-        .x_label_area_size(40)
-        .y_label_area_size(75)
-        .build_cartesian_2d(x, y)
-        .map_err(plot_err)?;
-    chart
-        .configure_mesh()
-        .disable_x_mesh()
-        .x_labels(labels.len().max(1))
-        .x_label_formatter(&|v: &f64| {
-            let i = v.round();
-            if (v - i).abs() < 1e-6 && i >= 0.0 {
-                labels.get(i as usize).cloned().unwrap_or_default()
-            } else {
-                String::new()
+fn draw_box_panel(svg: &mut Svg, rect: (f64, f64, f64, f64), panel: &BoxPanel, lk: &Look) {
+    let stats: Vec<Option<[f64; 5]>> = panel
+        .groups
+        .iter()
+        .map(|g| {
+            let mut v: Vec<f64> =
+                g.values.iter().copied().filter(|x| x.is_finite() && (!panel.log_y || *x > 0.0)).collect();
+            if v.is_empty() {
+                return None;
             }
+            v.sort_by(f64::total_cmp);
+            Some([0.05, 0.25, 0.5, 0.75, 0.95].map(|q| percentile(&v, q)))
         })
-        .y_desc(panel.y_label.as_str())
-        .axis_desc_style((FAMILY, 15))
-        .label_style((FAMILY, 13))
-        .light_line_style(RGBColor(235, 235, 235))
-        .draw()
-        .map_err(plot_err)?;
-    for (i, (g, s)) in panel.groups.iter().zip(stats).enumerate() {
+        .collect();
+    let n = panel.groups.len().max(1);
+    // Category labels wrapped to their slot (estimate the slot from the panel width).
+    let slot = (rect.2 - lk.tick * 4.0 - lk.label * 1.5 - lk.pad * 2.3) / n as f64;
+    let labels: Vec<Vec<String>> = panel.groups.iter().map(|g| wrap(&g.label, slot * 0.98, lk.tick)).collect();
+    let lines = labels.iter().map(Vec::len).max().unwrap_or(1).max(1);
+    let Some((y0, y1)) = range(stats.iter().flatten().flat_map(|s| s.iter().copied()), panel.log_y) else {
+        let f = frame(rect, &panel.title, "", None, (0.0, 1.0, false), lines, lk);
+        svg.rect(f.x, f.y, f.w, f.h, None, Some(&Stroke::solid(INK, lk.frame)));
+        svg.text(f.x + f.w / 2.0, f.y + f.h / 2.0, "no data", &Font::new(lk.label, Anchor::Middle));
+        draw_panel_title(svg, &f, &panel.title, None, lk);
+        return;
+    };
+    let mut f = frame(rect, &panel.title, &panel.y_label, None, (y0, y1, panel.log_y), lines, lk);
+    // x label row is not used by box plots: give it to the plot.
+    f.h += lk.label * 1.5;
+    let ay = Axis { lo: y0, hi: y1, log: panel.log_y, a: f.y + f.h, b: f.y };
+    draw_grid(svg, &f, None, &ay, lk);
+    let slot = f.w / n as f64;
+    for (i, (g, s)) in panel.groups.iter().zip(&stats).enumerate() {
+        let cx = f.x + (i as f64 + 0.5) * slot;
+        let font = Font { valign: VAlign::Top, ..Font::new(lk.tick, Anchor::Middle) };
+        for (k, line) in labels[i].iter().enumerate() {
+            svg.text(cx, f.y + f.h + lk.tick_len + lk.tick * (0.3 + 1.2 * k as f64), line, &font);
+        }
         let Some([p5, q1, med, q3, p95]) = *s else { continue };
-        let xi = i as f64;
-        let c = g.color;
-        chart
-            .draw_series(std::iter::once(Rectangle::new([(xi - 0.25, q1), (xi + 0.25, q3)], c.mix(0.35).filled())))
-            .map_err(plot_err)?;
-        chart
-            .draw_series(std::iter::once(Rectangle::new([(xi - 0.25, q1), (xi + 0.25, q3)], c.stroke_width(2))))
-            .map_err(plot_err)?;
-        for seg in [
-            vec![(xi - 0.25, med), (xi + 0.25, med)],
-            vec![(xi, q3), (xi, p95)],
-            vec![(xi, q1), (xi, p5)],
-            vec![(xi - 0.1, p95), (xi + 0.1, p95)],
-            vec![(xi - 0.1, p5), (xi + 0.1, p5)],
-        ] {
-            chart.draw_series(std::iter::once(PathElement::new(seg, c.stroke_width(2)))).map_err(plot_err)?;
+        let half = slot * 0.22;
+        let (yq1, yq3) = (ay.map(q1), ay.map(q3));
+        let edge = Stroke::solid(g.color, lk.line);
+        svg.rect(cx - half, yq3, 2.0 * half, (yq1 - yq3).max(lk.frame), Some((g.color, 0.3)), Some(&edge));
+        let ym = ay.map(med);
+        svg.line(cx - half, ym, cx + half, ym, &Stroke::solid(g.color, lk.line * 1.6));
+        for (a, b) in [(q3, p95), (q1, p5)] {
+            svg.line(cx, ay.map(a), cx, ay.map(b), &edge);
+            svg.line(cx - half * 0.45, ay.map(b), cx + half * 0.45, ay.map(b), &edge);
         }
     }
-    Ok(())
+    draw_axes(svg, &f, None, &ay, lk);
+    draw_y_label(svg, &f, rect.0, &panel.y_label, lk);
+    draw_panel_title(svg, &f, &panel.title, f.yt.note.as_deref(), lk);
 }
 
 #[cfg(test)]
@@ -575,7 +919,7 @@ mod tests {
         let dir = tmp_dir("fig");
         let t: Vec<f64> = (0..20_000).map(|k| k as f64 * 1e-3).collect();
         let fig = Figure {
-            title: "test φ θ ψ".into(),
+            title: "test φ θ ψ δ̂".into(),
             panels: vec![
                 Panel {
                     title: "lines".into(),
@@ -615,6 +959,8 @@ mod tests {
         for f in &files {
             assert!(std::fs::metadata(f).unwrap().len() > 1000, "{}", f.display());
         }
+        let svg = std::fs::read_to_string(&files[0]).unwrap();
+        assert!(svg.contains("stroke-dasharray"), "dashed lines are real dashes");
         let boxes = write_boxplots(
             "boxes",
             &[BoxPanel {
@@ -637,7 +983,7 @@ mod tests {
             &[Series3 {
                 label: "r".into(),
                 points: vec![[0.0, 0.0, 0.0], [1.0, 1.0, 1.0]],
-                color: RGBColor(0, 0, 0),
+                color: Rgb(0, 0, 0),
                 dashed: true,
             }],
             &dir.join("s3"),
@@ -656,12 +1002,19 @@ mod tests {
             label: String::new(),
             xs: (0..n).map(|i| i as f64).collect(),
             ys,
-            color: RGBColor(0, 0, 0),
+            color: Rgb(0, 0, 0),
             dashed: false,
         };
         let seg = segments(&s, false, false);
         let pts: usize = seg.iter().map(Vec::len).sum();
         assert!(pts <= MAX_POINTS + 2, "{pts}");
         assert!(seg.iter().flatten().any(|p| p.1 == 10.0));
+    }
+
+    #[test]
+    fn wrap_fits_words() {
+        let lines = wrap("RANFTSMC [19] (100 % ok)", 90.0, 15.0);
+        assert!(lines.len() >= 2, "{lines:?}");
+        assert_eq!(lines.join(" "), "RANFTSMC [19] (100 % ok)");
     }
 }
