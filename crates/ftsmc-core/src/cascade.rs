@@ -29,7 +29,28 @@ pub enum AttitudeDerivatives {
     Zero,
 }
 
-/// Second-order command filter `r̈ = ω_n²(u − r) − 2ζω_n ṙ`.
+/// Where the attitude command filter starts (the paper does not say; see
+/// docs/paper-errata.md and docs/results.md, "Command filter").
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "serde", derive(serde::Deserialize, serde::Serialize))]
+#[cfg_attr(feature = "serde", serde(rename_all = "kebab-case"))]
+pub enum FilterInit {
+    /// `r(0) = φ_d(0), θ_d(0)`, `ṙ(0) = 0`: the filter starts at the first
+    /// Eq. 52 demand, so the inner loop sees the whole initial attitude
+    /// demand as an error at once (default: the published numbers of
+    /// docs/results.md were produced this way).
+    #[default]
+    FirstDemand,
+    /// `r(0) = φ(0), θ(0)`, `ṙ(0) = φ̇(0), θ̇(0)` (the measured attitude and
+    /// its rate): the filter starts at the vehicle and slews towards the
+    /// demand at its own bandwidth, so the attitude error starts at zero.
+    VehicleAttitude,
+}
+
+/// Second-order command filter `r̈ = ω_n²(u − r) − 2ζω_n ṙ`, stepped on the
+/// control clock with semi-implicit (symplectic) Euler,
+/// `ṙ_{k+1} = ṙ_k + dt r̈_k`, `r_{k+1} = r_k + dt ṙ_{k+1}`; the reference
+/// used at tick k is `(r_k, ṙ_k, r̈_k)`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Deserialize, serde::Serialize))]
 #[cfg_attr(feature = "serde", serde(deny_unknown_fields))]
@@ -58,6 +79,12 @@ pub struct CascadeSettings {
     /// Maximum desired tilt, rad: the asin arguments of Eq. 52 are clamped to
     /// `±sin(max_tilt)` (default 0.6 rad ≈ 34°).
     pub max_tilt: f64,
+    /// Initial state of the command filter, `"first-demand"` (default) or
+    /// `"vehicle-attitude"` (rad and rad/s of the measured roll and pitch at
+    /// the first control tick). Ignored with `attitude_derivatives = "zero"`.
+    /// The default reproduces the published Table 3; docs/results.md reports
+    /// Table 3 under both.
+    pub filter_init: FilterInit,
 }
 
 impl Default for CascadeSettings {
@@ -66,6 +93,7 @@ impl Default for CascadeSettings {
             attitude_derivatives: AttitudeDerivatives::CommandFilter,
             command_filter: CommandFilterParams::default(),
             max_tilt: 0.6,
+            filter_init: FilterInit::FirstDemand,
         }
     }
 }
@@ -73,6 +101,8 @@ impl Default for CascadeSettings {
 impl CascadeSettings {
     /// Range checks: ω_n and ζ in `(0, 1e6]` (the filter forms ω_n² times
     /// states up to 1e100), `0 < max_tilt < π/2` (NaN rejected).
+    /// `filter_init` has no range: every variant is valid, and a misspelt
+    /// one is refused when the scenario is parsed.
     pub fn check(&self) -> Result<(), GainError> {
         check_gain("command_filter.natural_frequency", self.command_filter.natural_frequency)?;
         check_gain("command_filter.damping", self.command_filter.damping)?;
@@ -312,7 +342,7 @@ impl<L: AxisLaw> Cascade<L> {
         [roll, pitch]
     }
 
-    fn attitude_reference(&mut self, demand: [f64; 2], dt: f64) -> ([f64; 2], [f64; 2], [f64; 2]) {
+    fn attitude_reference(&mut self, demand: [f64; 2], state: &QuadState, dt: f64) -> ([f64; 2], [f64; 2], [f64; 2]) {
         match self.config.settings.attitude_derivatives {
             AttitudeDerivatives::Zero => (demand, [0.0; 2], [0.0; 2]),
             AttitudeDerivatives::CommandFilter => {
@@ -324,7 +354,14 @@ impl<L: AxisLaw> Cascade<L> {
                 for i in 0..2 {
                     let f = &mut self.filter[i];
                     if !f.initialised {
-                        *f = FilterState { value: demand[i], rate: 0.0, initialised: true };
+                        *f = match self.config.settings.filter_init {
+                            FilterInit::FirstDemand => FilterState { value: demand[i], rate: 0.0, initialised: true },
+                            FilterInit::VehicleAttitude => FilterState {
+                                value: saturate(state.attitude[i], STATE_LIMIT),
+                                rate: saturate(state.angular_rate[i], STATE_LIMIT),
+                                initialised: true,
+                            },
+                        };
                     }
                     let a = wn * wn * (demand[i] - f.value) - 2.0 * zeta * wn * f.rate;
                     value[i] = f.value;
@@ -401,7 +438,7 @@ impl<L: AxisLaw> Controller for Cascade<L> {
         let ux = horizontal_mass * accel[0] / thrust_for_inversion;
         let uy = horizontal_mass * accel[1] / thrust_for_inversion;
         let demand = Self::desired_roll_pitch_limited(ux, uy, reference.yaw, self.tilt_limit);
-        let (att_ref, att_rate, att_accel) = self.attitude_reference(demand, dt);
+        let (att_ref, att_rate, att_accel) = self.attitude_reference(demand, state, dt);
         let reference_attitude = [att_ref[0], att_ref[1], reference.yaw];
         let reference_rate = [att_rate[0], att_rate[1], reference.yaw_rate];
         let reference_accel = [att_accel[0], att_accel[1], reference.yaw_acceleration];
@@ -582,6 +619,38 @@ mod tests {
         let (spec, compensated) = (demand(false), demand(true));
         assert!(spec != 0.0);
         assert!((compensated.sin() / spec.sin() - 1.5).abs() < 1e-9, "{spec} {compensated}");
+    }
+
+    /// The filter's first output is the first Eq. 52 demand by default, and
+    /// the vehicle's roll and pitch (and rates) with `vehicle-attitude`.
+    #[test]
+    fn command_filter_starts_at_first_demand_or_vehicle_attitude() {
+        let state = QuadState { attitude: [0.05, -0.03, 0.0], angular_rate: [0.2, -0.1, 0.0], ..QuadState::default() };
+        let reference = Reference { position: [1.0, -1.0, 1.0], ..Reference::default() };
+        let mut c = paper_ftaftsmc(CascadeSettings::default());
+        assert_eq!(CascadeSettings::default().filter_init, FilterInit::FirstDemand);
+        c.update(&state, &reference, 1e-3);
+        let t = *c.telemetry();
+        assert!(t.attitude_demand.iter().all(|d| d.abs() > 0.1), "{:?}", t.attitude_demand);
+        assert_eq!(&t.attitude_reference[..2], &t.attitude_demand[..]);
+        assert_eq!(&t.attitude_reference_rate[..2], &[0.0, 0.0]);
+
+        let settings = CascadeSettings { filter_init: FilterInit::VehicleAttitude, ..CascadeSettings::default() };
+        let mut c = paper_ftaftsmc(settings);
+        c.update(&state, &reference, 1e-3);
+        let t = *c.telemetry();
+        assert_eq!(&t.attitude_reference[..2], &state.attitude[..2]);
+        assert_eq!(&t.attitude_reference_rate[..2], &state.angular_rate[..2]);
+        // It then moves towards the demand, and starts again after a reset.
+        let first = t.attitude_reference[0];
+        for _ in 0..50 {
+            c.update(&state, &reference, 1e-3);
+        }
+        let t2 = *c.telemetry();
+        assert!((t2.attitude_reference[0] - t2.attitude_demand[0]).abs() < (first - t.attitude_demand[0]).abs());
+        c.reset();
+        c.update(&state, &reference, 1e-3);
+        assert_eq!(&c.telemetry().attitude_reference[..2], &state.attitude[..2]);
     }
 
     #[test]

@@ -7,7 +7,7 @@
 
 use crate::law::{
     check_closed, check_gain, check_initial_state, check_left_open, check_open, inputs_finite, saturate, AxisLaw,
-    GainError, INPUT_LIMIT, STATE_LIMIT,
+    ContinuousRhs, GainError, INPUT_LIMIT, STATE_LIMIT,
 };
 use crate::math::{exp, pow_abs, pow_abs_minus_one, pow_abs_sat, sig, sign};
 
@@ -390,6 +390,20 @@ impl AxisLaw for FtaftsmcAxis {
 
     fn check_gains(&self) -> Result<(), GainError> {
         self.gains.check()
+    }
+
+    /// `v = ϖ + ϖ2(S, δ̂)`, `dδ̂/dt` of Eq. 17 (the `[0, STATE_LIMIT]`
+    /// projection of [`AxisLaw::update`] is not applied: Eq. 17 keeps δ̂ ≥ 0
+    /// from δ̂ ≥ 0 by itself).
+    fn continuous_rhs(&self, e: f64, e_dot: f64, estimates: [f64; 3]) -> Option<ContinuousRhs> {
+        let (e, e_dot) = (saturate(e, INPUT_LIMIT), saturate(e_dot, INPUT_LIMIT));
+        let terms = sliding_surface_with(&self.gains, self.kappa, e, e_dot);
+        let delta_hat = estimates[0];
+        Some(ContinuousRhs {
+            v: terms.varpi + reaching_law(&self.gains, terms.s, delta_hat),
+            s: terms.s,
+            estimates_rate: [delta_hat_rate(&self.gains, terms.s, delta_hat), 0.0, 0.0],
+        })
     }
 }
 

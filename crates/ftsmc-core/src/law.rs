@@ -162,6 +162,19 @@ pub(crate) fn check_non_negative(field: &'static str, value: f64) -> Result<(), 
 /// Maximum number of adaptive / internal states an axis law exposes.
 pub const MAX_ESTIMATES: usize = 3;
 
+/// The continuous-time form of a law at one point (see
+/// [`AxisLaw::continuous_rhs`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ContinuousRhs {
+    /// Feedback acceleration `v_fb` (as returned by [`AxisLaw::update`]).
+    pub v: f64,
+    /// Sliding variable (as returned by [`AxisLaw::sliding_variable`]).
+    pub s: f64,
+    /// Time derivatives of the adaptive / internal states, in the order of
+    /// [`AxisLaw::estimates`] (unused slots 0), per second.
+    pub estimates_rate: [f64; MAX_ESTIMATES],
+}
+
 /// A single-channel sliding-mode law: error in, feedback acceleration out.
 ///
 /// Implementations hold only their gains and their adaptive / integral
@@ -197,4 +210,18 @@ pub trait AxisLaw {
     /// Validate the law's gains (the gain struct's `check()`); used by
     /// [`crate::cascade::Cascade::new`].
     fn check_gains(&self) -> Result<(), GainError>;
+
+    /// The law as an ODE, for high-order integrators of the closed loop
+    /// (the fixed-time analysis): `v_fb`, `S` and `d/dt` of the adaptive
+    /// states at `(e, ė)` with the adaptive states set to `estimates`,
+    /// leaving `self` unchanged. [`AxisLaw::update`] is explicit Euler on
+    /// exactly these rates (plus its saturation guards).
+    ///
+    /// The default returns `None` (the law does not expose its rates); the
+    /// caller then has to hold the adaptive states over a step and advance
+    /// them with [`AxisLaw::update`].
+    fn continuous_rhs(&self, e: f64, e_dot: f64, estimates: [f64; MAX_ESTIMATES]) -> Option<ContinuousRhs> {
+        let _ = (e, e_dot, estimates);
+        None
+    }
 }

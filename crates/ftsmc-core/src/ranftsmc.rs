@@ -15,7 +15,7 @@
 
 use crate::law::{
     check_closed, check_gain, check_gain_or_zero, check_initial_state, check_left_open, check_non_negative, check_open,
-    inputs_finite, saturate, AxisLaw, GainError, INPUT_LIMIT, STATE_LIMIT,
+    inputs_finite, saturate, AxisLaw, ContinuousRhs, GainError, INPUT_LIMIT, STATE_LIMIT,
 };
 use crate::math::{pow_abs, pow_abs_minus_one, sig, sign, tanh};
 
@@ -248,6 +248,26 @@ impl AxisLaw for RanftsmcAxis {
 
     fn check_gains(&self) -> Result<(), GainError> {
         self.gains.check()
+    }
+
+    /// `v` and σ exactly as [`AxisLaw::update`] computes them with
+    /// `â = estimates`; `dâ/dt = [μ0 |σ| |ė|^(β−1), μ1 |σ| |e| |ė|^(β−1), μ2 |σ| |ė|^β]`.
+    fn continuous_rhs(&self, e: f64, e_dot: f64, estimates: [f64; 3]) -> Option<ContinuousRhs> {
+        let mut at = Self { a_hat: estimates, ..*self };
+        let v = at.update(e, e_dot, 0.0);
+        let (e, e_dot) = (saturate(e, INPUT_LIMIT), saturate(e_dot, INPUT_LIMIT));
+        let g = &self.gains;
+        let abs_sigma = at.sigma.abs();
+        let ed_beta_minus_one = pow_abs_minus_one(e_dot, g.beta);
+        Some(ContinuousRhs {
+            v,
+            s: at.sigma,
+            estimates_rate: [
+                g.mu0 * abs_sigma * ed_beta_minus_one,
+                g.mu1 * abs_sigma * e.abs() * ed_beta_minus_one,
+                g.mu2 * abs_sigma * e_dot.abs() * ed_beta_minus_one,
+            ],
+        })
     }
 }
 

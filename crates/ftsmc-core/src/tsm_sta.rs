@@ -16,7 +16,8 @@
 //! negative power of ė anywhere (the surface is nonsingular).
 
 use crate::law::{
-    check_closed, check_gain, check_non_negative, inputs_finite, saturate, AxisLaw, GainError, INPUT_LIMIT, STATE_LIMIT,
+    check_closed, check_gain, check_non_negative, inputs_finite, saturate, AxisLaw, ContinuousRhs, GainError,
+    INPUT_LIMIT, STATE_LIMIT,
 };
 use crate::math::{pow_abs, sig, sign, sqrt, tanh};
 
@@ -253,6 +254,15 @@ impl AxisLaw for TsmStaAxis {
 
     fn check_gains(&self) -> Result<(), GainError> {
         self.gains.check()
+    }
+
+    /// `v` and s exactly as [`AxisLaw::update`] computes them with
+    /// `ν = estimates[0]`; `dν/dt = −k2 sign(s)` (or `tanh(s/φ)`).
+    fn continuous_rhs(&self, e: f64, e_dot: f64, estimates: [f64; 3]) -> Option<ContinuousRhs> {
+        let mut at = Self { nu: estimates[0], ..*self };
+        let v = at.update(e, e_dot, 0.0);
+        let rate = -self.gains.k2 * switching_sign(&self.gains, at.s);
+        Some(ContinuousRhs { v, s: at.s, estimates_rate: [rate, 0.0, 0.0] })
     }
 }
 

@@ -6,7 +6,8 @@
 //! and the next finite input gives a finite command again.
 
 use ftsmc_core::cascade::{
-    AttitudeDerivatives, Cascade, CascadeConfig, CascadeSettings, CommandFilterParams, Controller, MassAdaptation,
+    AttitudeDerivatives, Cascade, CascadeConfig, CascadeSettings, CommandFilterParams, Controller, FilterInit,
+    MassAdaptation,
 };
 use ftsmc_core::ftaftsmc::{FtaftsmcAxis, FtaftsmcGains};
 use ftsmc_core::law::{AxisLaw, DT_MAX};
@@ -215,13 +216,14 @@ fn model() -> impl Strategy<Value = QuadrotorParams> {
 }
 
 fn settings() -> impl Strategy<Value = CascadeSettings> {
-    (any::<bool>(), gain(), gain(), (1e-9f64..core::f64::consts::FRAC_PI_2)).prop_map(|(filter, wn, zeta, tilt)| {
-        CascadeSettings {
+    (any::<bool>(), gain(), gain(), (1e-9f64..core::f64::consts::FRAC_PI_2), any::<bool>()).prop_map(
+        |(filter, wn, zeta, tilt, from_vehicle)| CascadeSettings {
             attitude_derivatives: if filter { AttitudeDerivatives::CommandFilter } else { AttitudeDerivatives::Zero },
             command_filter: CommandFilterParams { natural_frequency: wn, damping: zeta },
             max_tilt: tilt,
-        }
-    })
+            filter_init: if from_vehicle { FilterInit::VehicleAttitude } else { FilterInit::FirstDemand },
+        },
+    )
 }
 
 fn mass_adaptation() -> impl Strategy<Value = MassAdaptation> {
