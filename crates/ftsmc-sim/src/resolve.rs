@@ -282,7 +282,7 @@ fn load_chain(source: Source<'_>, limits: &Limits) -> Result<Chain, ScenarioErro
                 path: layers[0].shown.clone(),
                 message: format!(
                     "`extends` chain longer than {MAX_EXTENDS_DEPTH} files: {}",
-                    show_str(&chain_names(&next_shown))
+                    chain_names(&next_shown)
                 ),
             });
         }
@@ -406,7 +406,7 @@ pub fn unit_slip_warnings(s: &Scenario) -> Vec<Warning> {
     let mut out = Vec::new();
     let mut warn = |key: String, value: String, message: String| out.push(Warning { key, value, message });
     let degrees = |v: f64| {
-        format!("angles are in radians (|angle| > 2π; if degrees were meant, {} ° = {} rad)", show(v), show(v.to_radians()))
+        format!("angles are in radians (|angle| > 2π; if degrees were meant, {}° = {:.4} rad)", show(v), v.to_radians())
     };
     for (i, a) in s.initial_state.attitude.iter().enumerate() {
         if a.abs() > TWO_PI {
