@@ -76,11 +76,10 @@ pub fn built_in(name: &str) -> Option<(&'static str, &'static str)> {
 /// Dotted keys whose values are replaced whole instead of merged.
 fn is_atomic(path: &str) -> bool {
     let mut parts = path.split('.');
-    match (parts.next(), parts.next(), parts.next()) {
-        (Some("inertia_variation"), None, _) => true,
-        (Some("reference" | "disturbance" | "montecarlo"), Some(_), None) => true,
-        _ => false,
-    }
+    matches!(
+        (parts.next(), parts.next(), parts.next()),
+        (Some("inertia_variation"), None, _) | (Some("reference" | "disturbance" | "montecarlo"), Some(_), None)
+    )
 }
 
 /// Record `file` as the writer of `path` and of everything below it.
@@ -280,10 +279,7 @@ fn load_chain(source: Source<'_>, limits: &Limits) -> Result<Chain, ScenarioErro
         if layers.len() >= MAX_EXTENDS_DEPTH {
             return Err(ScenarioError::Parse {
                 path: layers[0].shown.clone(),
-                message: format!(
-                    "`extends` chain longer than {MAX_EXTENDS_DEPTH} files: {}",
-                    chain_names(&next_shown)
-                ),
+                message: format!("`extends` chain longer than {MAX_EXTENDS_DEPTH} files: {}", chain_names(&next_shown)),
             });
         }
         (shown, text, dir, id) = (next_shown, next_text, next_dir, next_id);
@@ -320,9 +316,7 @@ pub fn load(source: Source<'_>, overrides: &[String]) -> Result<Loaded, Scenario
         Source::Text { path, .. } => path.to_string(),
     };
     let mut limits = Limits::default();
-    limits
-        .apply_overrides(overrides)
-        .map_err(|message| ScenarioError::Parse { path: top_name.clone(), message })?;
+    limits.apply_overrides(overrides).map_err(|message| ScenarioError::Parse { path: top_name.clone(), message })?;
     let mut chain = load_chain(source, &limits)?;
 
     let mut merged = defaults();

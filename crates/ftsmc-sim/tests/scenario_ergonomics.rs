@@ -176,9 +176,12 @@ fn a_bare_number_or_a_single_term_is_a_signal() {
         .unwrap_err()
         .to_string();
     assert!(msg.contains("unknown field `trems`"), "{msg}");
-    let msg = Scenario::from_toml_str("name = \"b\"\nduration = 1.0\n[reference]\nz = { type = \"sine\", amplitude = 1 }\n", "b.toml")
-        .unwrap_err()
-        .to_string();
+    let msg = Scenario::from_toml_str(
+        "name = \"b\"\nduration = 1.0\n[reference]\nz = { type = \"sine\", amplitude = 1 }\n",
+        "b.toml",
+    )
+    .unwrap_err()
+    .to_string();
     assert!(msg.contains("reference.z") && msg.contains("omega"), "{msg}");
 }
 
@@ -199,7 +202,11 @@ fn check_derivatives(w: &Waypoints, times: &[f64]) {
         let fd1 = (w.sample(t + h).value - w.sample(t - h).value) / (2.0 * h);
         let fd2 = (w.sample(t + h).rate - w.sample(t - h).rate) / (2.0 * h);
         assert!((fd1 - s.rate).abs() < 1e-6 * (1.0 + s.rate.abs()), "rate at {t}: {fd1} vs {}", s.rate);
-        assert!((fd2 - s.acceleration).abs() < 1e-5 * (1.0 + s.acceleration.abs()), "acc at {t}: {fd2} vs {}", s.acceleration);
+        assert!(
+            (fd2 - s.acceleration).abs() < 1e-5 * (1.0 + s.acceleration.abs()),
+            "acc at {t}: {fd2} vs {}",
+            s.acceleration
+        );
     }
 }
 
@@ -302,7 +309,9 @@ fn piecewise_switches_signals_at_until() {
 
     let bad = |pieces: &str| {
         Scenario::from_toml_str(
-            &format!("name = \"pw\"\nduration = 1.0\n[reference]\nz = {{ type = \"piecewise\", pieces = [{pieces}] }}\n"),
+            &format!(
+                "name = \"pw\"\nduration = 1.0\n[reference]\nz = {{ type = \"piecewise\", pieces = [{pieces}] }}\n"
+            ),
             "pw.toml",
         )
         .unwrap_err()
@@ -322,15 +331,22 @@ fn unit_slip_warnings_fire_and_name_file_key_and_value() {
     let cases = [
         ("[initial_state]\nattitude = [0.0, 0.0, 45.0]\n", "`initial_state.attitude[2]` = 45"),
         ("[reference]\npsi = 45.0\n", "`reference.psi.terms[0].value` = 45"),
-        ("[reference]\npsi = { type = \"sine\", amplitude = 90.0, omega = 1.0 }\n", "`reference.psi.terms[0].amplitude` = 90"),
+        (
+            "[reference]\npsi = { type = \"sine\", amplitude = 90.0, omega = 1.0 }\n",
+            "`reference.psi.terms[0].amplitude` = 90",
+        ),
         ("[reference]\npsi = { type = \"waypoints\", t = [0, 1], value = [0, 180] }\n", "value[1]` = 180"),
         ("[payload]\nmass = 370.0\nstart = 1.0\n", "`payload.mass` = 370 kg"),
         ("[payload]\nmass = 0.3\nstart = 30.0\n", "`payload.start` = 30 s"),
-        ("[disturbance.y]\nwindow = [25.0, 30.0]\nterms = [{ type = \"constant\", value = 1.0 }]\n", "`disturbance.y.window` = [25, 30]"),
+        (
+            "[disturbance.y]\nwindow = [25.0, 30.0]\nterms = [{ type = \"constant\", value = 1.0 }]\n",
+            "`disturbance.y.window` = [25, 30]",
+        ),
         ("[inertia_variation]\nwindow = [21.0, 30.0]\n", "`inertia_variation.window`"),
     ];
     for (i, (extra, want)) in cases.iter().enumerate() {
-        let file = write(&dir, &format!("w{i}.toml"), &format!("extends = \"paper-scenario-1\"\nname = \"w\"\n{extra}"));
+        let file =
+            write(&dir, &format!("w{i}.toml"), &format!("extends = \"paper-scenario-1\"\nname = \"w\"\n{extra}"));
         let loaded = Scenario::load_with_warnings(&file, &[]).unwrap();
         assert_eq!(loaded.warnings.len(), 1, "{extra}: {:?}", loaded.warnings);
         let w = &loaded.warnings[0];
