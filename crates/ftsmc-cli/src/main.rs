@@ -140,14 +140,19 @@ pub fn load_scenario(arg: &str) -> Result<Scenario> {
 /// scenario is priced (they win over its `[limits]`).
 pub fn load_scenario_with_limits(arg: &str, limits: &[String]) -> Result<Scenario> {
     let path = PathBuf::from(arg);
-    if path.exists() {
-        return Ok(Scenario::from_file_with_limits(&path, limits)?);
-    }
-    let wanted = arg.trim_end_matches(".toml");
-    for (file, text) in PAPER_SCENARIOS {
-        if file.trim_end_matches(".toml") == wanted {
-            return Ok(Scenario::from_toml_str_with_limits(text, file, limits)?);
+    let loaded = if path.exists() {
+        Some(Scenario::load_with_warnings(&path, limits)?)
+    } else {
+        match ftsmc_sim::resolve::built_in(arg) {
+            Some((file, text)) => Some(Scenario::from_toml_str_with_warnings(text, file, limits)?),
+            None => None,
         }
+    };
+    if let Some(loaded) = loaded {
+        for warning in &loaded.warnings {
+            eprintln!("warning: {warning}");
+        }
+        return Ok(loaded.scenario);
     }
     bail!("no scenario file `{arg}` (and it is not a built-in scenario: paper-scenario-1, paper-scenario-2, ftaftsmc-tuned-scenario-1)")
 }

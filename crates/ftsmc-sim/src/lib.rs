@@ -14,10 +14,12 @@ pub mod metrics;
 pub mod montecarlo;
 pub mod plant;
 pub mod registry;
+pub mod resolve;
 pub mod scenario;
 pub mod signal;
 pub mod simulate;
 pub mod tuning;
+pub mod waypoints;
 
 pub use scenario::{Scenario, ScenarioError};
 pub use simulate::{simulate, ExitStatus, RunOptions, RunOutput};

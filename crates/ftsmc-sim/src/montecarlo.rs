@@ -364,7 +364,7 @@ impl MonteCarloSpec {
             &mut s.disturbance.theta,
             &mut s.disturbance.psi,
         ] {
-            for term in &mut signal.terms {
+            signal.for_each_leaf_term_mut(&mut |term| {
                 match term {
                     Term::Constant { value } => *value *= amplitude,
                     Term::Step { height, .. } => *height *= amplitude,
@@ -380,8 +380,10 @@ impl MonteCarloSpec {
                         }
                     }
                     Term::Polynomial { coefficients } => coefficients.iter_mut().for_each(|c| *c *= amplitude),
+                    Term::Waypoints(w) => w.scale(amplitude),
+                    Term::Piecewise { .. } => {} // never a leaf
                 }
-            }
+            });
         }
         if let Some(d) = &self.initial_position_offset {
             let mut rng = stream(6);

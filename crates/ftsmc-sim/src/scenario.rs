@@ -37,7 +37,7 @@ const MAX_PARSE_MESSAGE_CHARS: usize = 300;
 
 /// A TOML error as one bounded line: `TOML parse error at line L, column C (`source line`): message`
 /// (the parser's own text spans several lines and quotes the source line).
-fn parse_message(text: &str, e: &toml::de::Error) -> String {
+pub(crate) fn parse_message(text: &str, e: &toml::de::Error) -> String {
     let mut message: String = e.message().split_whitespace().collect::<Vec<_>>().join(" ");
     if message.chars().count() > MAX_PARSE_MESSAGE_CHARS {
         message = message.chars().take(MAX_PARSE_MESSAGE_CHARS - 1).collect();
@@ -585,18 +585,18 @@ pub fn read_scenario_text(path: &Path, limits: &Limits) -> Result<String, Scenar
     })
 }
 
-/// Lengths of the `ftsmc-core` arrays ([`CORE_ARRAYS`]) in the TOML text.
-fn check_core_array_lengths(text: &str) -> Result<(), String> {
-    let root: toml::Table = toml::from_str(text).map_err(|e| parse_message(text, &e))?;
+/// Lengths of the `ftsmc-core` arrays ([`CORE_ARRAYS`]) in the resolved
+/// TOML table: `Err((dotted path, message))`.
+pub(crate) fn check_core_array_lengths(root: &toml::Table) -> Result<(), (String, String)> {
     for (path, len) in CORE_ARRAYS {
         let mut parts = path.split('.');
         let first = parts.next().and_then(|k| root.get(k));
         let value = parts.fold(first, |v, k| v.and_then(|v| v.get(k)));
         if let Some(toml::Value::Array(a)) = value {
             if a.len() != len {
-                return Err(format!(
-                    "`{path}`: invalid length {}, expected an array of exactly {len} numbers",
-                    a.len()
+                return Err((
+                    path.to_string(),
+                    format!("`{path}`: invalid length {}, expected an array of exactly {len} numbers", a.len()),
                 ));
             }
         }
@@ -674,7 +674,8 @@ fn is_default_limits(l: &Limits) -> bool {
 }
 
 impl Scenario {
-    /// Parse and validate TOML text; `path` is used in error messages.
+    /// Parse and validate TOML text; `path` is used in error messages (and
+    /// relative `extends` paths resolve against its directory).
     pub fn from_toml_str(text: &str, path: &str) -> Result<Self, ScenarioError> {
         Self::from_toml_str_with_limits(text, path, &[])
     }
@@ -683,12 +684,17 @@ impl Scenario {
     /// see [`Limits::apply_overrides`]; they win over the file's `[limits]`)
     /// and validate.
     pub fn from_toml_str_with_limits(text: &str, path: &str, overrides: &[String]) -> Result<Self, ScenarioError> {
-        let parse_error = |message: String| ScenarioError::Parse { path: path.to_string(), message };
-        let mut scenario: Scenario = toml::from_str(text).map_err(|e| parse_error(parse_message(text, &e)))?;
-        check_core_array_lengths(text).map_err(parse_error)?;
-        scenario.limits.apply_overrides(overrides).map_err(parse_error)?;
-        scenario.validate(path)?;
-        Ok(scenario)
+        Ok(Self::from_toml_str_with_warnings(text, path, overrides)?.scenario)
+    }
+
+    /// [`Scenario::from_toml_str_with_limits`], also returning the files of
+    /// the `extends` chain and the unit-slip warnings (see [`crate::resolve`]).
+    pub fn from_toml_str_with_warnings(
+        text: &str,
+        path: &str,
+        overrides: &[String],
+    ) -> Result<crate::resolve::Loaded, ScenarioError> {
+        crate::resolve::load(crate::resolve::Source::Text { text, path }, overrides)
     }
 
     /// Read, parse and validate a scenario file.
@@ -697,13 +703,25 @@ impl Scenario {
     }
 
     /// [`Scenario::from_file`] with command-line limit overrides (which may
-    /// raise `max_scenario_bytes`).
+    /// raise `max_scenario_bytes`, for every file of an `extends` chain).
     pub fn from_file_with_limits(path: &Path, overrides: &[String]) -> Result<Self, ScenarioError> {
-        let shown = path.display().to_string();
-        let mut limits = Limits::default();
-        limits.apply_overrides(overrides).map_err(|message| ScenarioError::Parse { path: shown.clone(), message })?;
-        let text = read_scenario_text(path, &limits)?;
-        Self::from_toml_str_with_limits(&text, &shown, overrides)
+        Ok(Self::load_with_warnings(path, overrides)?.scenario)
+    }
+
+    /// [`Scenario::from_file_with_limits`], also returning the files of the
+    /// `extends` chain and the unit-slip warnings (see [`crate::resolve`]).
+    pub fn load_with_warnings(path: &Path, overrides: &[String]) -> Result<crate::resolve::Loaded, ScenarioError> {
+        crate::resolve::load(crate::resolve::Source::File(path), overrides)
+    }
+
+    /// Likely unit slips in this scenario (angles beyond 2π, a payload above
+    /// 10× the vehicle mass, windows starting after the end of the run), as
+    /// `` `key` = value: why `` lines without a file name.
+    pub fn warnings(&self) -> Vec<String> {
+        crate::resolve::unit_slip_warnings(self)
+            .into_iter()
+            .map(|w| format!("`{}` = {}: {}", w.key, w.value, w.message))
+            .collect()
     }
 
     /// The built-in paper scenarios, parsed.

@@ -2,11 +2,22 @@
 //! blocks of references, disturbances and parameter variations in scenario
 //! files. A [`Signal`] is a sum of [`Term`]s, optionally active only inside
 //! a time window.
+//!
+//! In a scenario file a signal is written as
+//!
+//! - a bare number: a constant (`z = 1.0`);
+//! - a single term: `{ type = "sine", amplitude = 0.5, omega = 0.4 }`,
+//!   including `{ type = "waypoints", … }` and `{ type = "piecewise", … }`;
+//! - the full form: `{ terms = [ …terms… ], window = [start, end] }`.
+//!
+//! All three mean the same thing as the full form with that one term, and
+//! serialize as the full form.
 
 use ftsmc_core::math::sin_cos;
 use serde::{Deserialize, Serialize};
 
 use crate::scenario::show;
+use crate::waypoints::Waypoints;
 
 /// One additive term of a [`Signal`]. In TOML: an inline table with a
 /// `type` key, e.g. `{ type = "sine", amplitude = 0.5, omega = 0.4 }`.
@@ -59,6 +70,30 @@ pub enum Term {
         /// Coefficients from degree 0 upward.
         coefficients: Vec<f64>,
     },
+    /// Waypoints `t = […]`, `value = […]` joined by C² quintic segments
+    /// (see [`crate::waypoints`]); holds the first value before `t[0]` and
+    /// the last after `t[N]`.
+    Waypoints(Waypoints),
+    /// A sequence of time windows, each with its own signal: piece `k` is
+    /// active from the previous piece's `until` (inclusive; −∞ for the first)
+    /// to its own `until` (exclusive; +∞ for the last, which has none). Each
+    /// piece's signal is evaluated at the absolute time t. Nothing is
+    /// continuous at the switching times unless the pieces happen to agree.
+    Piecewise {
+        /// The pieces in time order.
+        pieces: Vec<Piece>,
+    },
+}
+
+/// One time window of a [`Term::Piecewise`].
+#[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct Piece {
+    /// End of this piece, s (exclusive); absent on the last piece only.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub until: Option<f64>,
+    /// The signal during this piece (any signal form, nested pieces included).
+    pub signal: Signal,
 }
 
 /// Value and two time derivatives of a signal at one instant.
@@ -121,14 +156,19 @@ impl Term {
                 }
                 out
             }
+            Term::Waypoints(w) => w.sample(t),
+            Term::Piecewise { pieces } => {
+                let active = pieces.iter().find(|p| p.until.is_none_or(|until| t < until));
+                active.map_or_else(Sample::default, |p| p.signal.sample(t))
+            }
         }
     }
 }
 
 /// A sum of terms, active only inside `window = [start, end]` (s) when given
-/// (inclusive at both ends; zero outside).
-#[derive(Clone, Debug, Default, PartialEq, Deserialize, Serialize)]
-#[serde(deny_unknown_fields)]
+/// (inclusive at both ends; zero outside). Deserializes from a bare number,
+/// a single term or the full table (see the module documentation).
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
 pub struct Signal {
     /// Additive terms.
     #[serde(default)]
@@ -138,7 +178,53 @@ pub struct Signal {
     pub window: Option<[f64; 2]>,
 }
 
+/// The full table form of a [`Signal`].
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SignalTable {
+    #[serde(default)]
+    terms: Vec<Term>,
+    #[serde(default, with = "crate::scenario::exact_array::option")]
+    window: Option<[f64; 2]>,
+}
+
+impl<'de> Deserialize<'de> for Signal {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        use serde::de::Error;
+        let value = toml::Value::deserialize(d)?;
+        let inner = |e: toml::de::Error| D::Error::custom(e.message().trim());
+        match value {
+            toml::Value::Float(v) => Ok(Signal::constant(v)),
+            toml::Value::Integer(v) => Ok(Signal::constant(v as f64)),
+            toml::Value::Table(t) if t.contains_key("type") => {
+                let term = Term::deserialize(toml::Value::Table(t)).map_err(inner)?;
+                Ok(Signal { terms: vec![term], window: None })
+            }
+            toml::Value::Table(t) => {
+                let table = SignalTable::deserialize(toml::Value::Table(t)).map_err(inner)?;
+                Ok(Signal { terms: table.terms, window: table.window })
+            }
+            other => Err(D::Error::custom(format!(
+                "invalid signal {}: expected a number (a constant), a term {{ type = \"…\", … }} or a table \
+                 {{ terms = […], window = [start, end] }}",
+                crate::scenario::show_str(&other.to_string())
+            ))),
+        }
+    }
+}
+
 impl Signal {
+    /// Call `f` on every term that is not a [`Term::Piecewise`], in order,
+    /// descending into the pieces of piecewise terms.
+    pub fn for_each_leaf_term_mut(&mut self, f: &mut dyn FnMut(&mut Term)) {
+        for term in &mut self.terms {
+            match term {
+                Term::Piecewise { pieces } => pieces.iter_mut().for_each(|p| p.signal.for_each_leaf_term_mut(f)),
+                other => f(other),
+            }
+        }
+    }
+
     /// A constant signal.
     pub fn constant(value: f64) -> Self {
         Self { terms: vec![Term::Constant { value }], window: None }
@@ -220,6 +306,31 @@ impl Signal {
                 Term::Polynomial { coefficients } => {
                     for (i, c) in coefficients.iter().enumerate() {
                         finite(&format!("coefficients[{i}]"), *c)?;
+                    }
+                }
+                Term::Waypoints(w) => w.check().map_err(|(k, v, e)| (key(&k), v, e))?,
+                Term::Piecewise { pieces } => {
+                    if pieces.is_empty() {
+                        return Err((key("pieces"), "[]".into(), "at least one piece"));
+                    }
+                    let last = pieces.len() - 1;
+                    let mut previous = f64::NEG_INFINITY;
+                    for (j, piece) in pieces.iter().enumerate() {
+                        let until_key = key(&format!("pieces[{j}].until"));
+                        match piece.until {
+                            None if j < last => {
+                                return Err((until_key, "missing".into(), "an end time on every piece but the last"))
+                            }
+                            Some(u) if j == last => {
+                                return Err((until_key, show(u), "no `until` on the last piece (it lasts to the end)"))
+                            }
+                            Some(u) if !(u.is_finite() && u > previous) => {
+                                return Err((until_key, show(u), "finite, strictly increasing end times"))
+                            }
+                            Some(u) => previous = u,
+                            None => {}
+                        }
+                        piece.signal.check().map_err(|(k, v, e)| (key(&format!("pieces[{j}].signal.{k}")), v, e))?;
                     }
                 }
             }

@@ -1,0 +1,464 @@
+//! Resolving a scenario file: `extends` chains, the deep merge over the
+//! defaults, errors that name the file a key was written in, and warnings
+//! for likely unit slips.
+//!
+//! # Resolution
+//!
+//! A scenario is the TOML value of the built-in defaults (every key of
+//! [`Scenario`] with its default, as serialized), overlaid with the files of
+//! its `extends` chain from the deepest base up to the file itself:
+//!
+//! - tables merge key by key, recursively, so `[ftaftsmc.z]` with only
+//!   `lambda = 3.0` changes that one gain and keeps the other seventeen;
+//! - arrays and scalars replace;
+//! - a **signal** (`reference.*`, `disturbance.*`, `inertia_variation`)
+//!   and a Monte Carlo distribution (`montecarlo.*`) are replaced whole: a
+//!   partial merge of two signals (the base's `terms` with your `window`, or
+//!   a step with your waypoints) would silently add them up.
+//!
+//! The merged table is then deserialized with every struct's
+//! `deny_unknown_fields`, so a misspelt key in any file of the chain is
+//! still an error that names it, and `name`/`duration` must be set by some
+//! file of the chain.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use serde::Deserialize;
+
+use crate::limits::Limits;
+use crate::scenario::{read_scenario_text, show, show_str, Scenario, ScenarioError, BUILT_IN_SCENARIOS};
+use crate::signal::{Signal, Term};
+
+/// Longest `extends` chain, files (the file itself included).
+pub const MAX_EXTENDS_DEPTH: usize = 16;
+
+/// Where the first file of a chain comes from.
+#[derive(Clone, Copy, Debug)]
+pub enum Source<'a> {
+    /// A file on disk (read with the regular-file and size checks).
+    File(&'a Path),
+    /// TOML text; `path` names it in messages and, when it has a parent
+    /// directory, relative `extends` paths resolve against that directory
+    /// (otherwise against the current directory).
+    Text {
+        /// The TOML text.
+        text: &'a str,
+        /// Its name in messages.
+        path: &'a str,
+    },
+}
+
+/// A loaded scenario, the files it was resolved from and its warnings.
+#[derive(Clone, Debug)]
+pub struct Loaded {
+    /// The validated scenario.
+    pub scenario: Scenario,
+    /// The files of the chain, the scenario's own first, its deepest base last.
+    pub files: Vec<String>,
+    /// Likely unit slips, one line each, naming file, key and value.
+    pub warnings: Vec<String>,
+}
+
+struct Layer {
+    shown: String,
+    text: String,
+    table: toml::Table,
+}
+
+/// The built-in scenario called `name` (`paper-scenario-1`, with or without
+/// `.toml`), as `(file name, text)`.
+pub fn built_in(name: &str) -> Option<(&'static str, &'static str)> {
+    let wanted = name.strip_suffix(".toml").unwrap_or(name);
+    BUILT_IN_SCENARIOS.iter().copied().find(|(file, _)| file.strip_suffix(".toml") == Some(wanted))
+}
+
+/// Dotted keys whose values are replaced whole instead of merged.
+fn is_atomic(path: &str) -> bool {
+    let mut parts = path.split('.');
+    matches!(
+        (parts.next(), parts.next(), parts.next()),
+        (Some("inertia_variation"), None, _) | (Some("reference" | "disturbance" | "montecarlo"), Some(_), None)
+    )
+}
+
+/// Record `file` as the writer of `path` and of everything below it.
+fn record(value: &toml::Value, path: &str, file: usize, origin: &mut BTreeMap<String, usize>) {
+    origin.insert(path.to_string(), file);
+    if let toml::Value::Table(t) = value {
+        for (k, v) in t {
+            record(v, &format!("{path}.{k}"), file, origin);
+        }
+    }
+}
+
+/// Overlay `top` on `base`: tables merge key by key (except [`is_atomic`]
+/// ones), everything else replaces.
+fn merge(base: &mut toml::Table, top: toml::Table, prefix: &str, file: usize, origin: &mut BTreeMap<String, usize>) {
+    for (key, value) in top {
+        let path = if prefix.is_empty() { key.clone() } else { format!("{prefix}.{key}") };
+        origin.insert(path.clone(), file);
+        match (base.get_mut(&key), value) {
+            (Some(toml::Value::Table(b)), toml::Value::Table(t)) if !is_atomic(&path) => {
+                merge(b, t, &path, file, origin);
+            }
+            (_, value) => {
+                origin.retain(|k, _| !k.starts_with(&format!("{path}.")));
+                record(&value, &path, file, origin);
+                base.insert(key, value);
+            }
+        }
+    }
+}
+
+/// The defaults of every key as a TOML table (without `name`/`duration`,
+/// which have none).
+fn defaults() -> toml::Table {
+    let minimal: Scenario = toml::from_str("name = \"defaults\"\nduration = 1.0").expect("defaults deserialize");
+    let mut table = toml::Table::try_from(&minimal).expect("defaults serialize");
+    table.remove("name");
+    table.remove("duration");
+    table
+}
+
+/// Line and column of the deepest key of `path` found in `text`.
+fn locate(text: &str, path: &str) -> Option<(usize, usize)> {
+    let doc = toml::de::DeTable::parse(text).ok()?;
+    let mut table = doc.get_ref();
+    let mut span = None;
+    for part in path.split('.') {
+        let key = part.split('[').next().unwrap_or(part);
+        let Some((k, v)) = table.iter().find(|(k, _)| k.get_ref().as_ref() == key) else { break };
+        span = Some(k.span());
+        match v.get_ref().as_table() {
+            Some(t) => table = t,
+            None => break,
+        }
+    }
+    let start = span?.start.min(text.len());
+    let before = &text.as_bytes()[..start];
+    let line = before.iter().filter(|&&b| b == b'\n').count() + 1;
+    let column = before.iter().rev().take_while(|&&b| b != b'\n').count() + 1;
+    Some((line, column))
+}
+
+struct Chain {
+    layers: Vec<Layer>,
+    origin: BTreeMap<String, usize>,
+}
+
+impl Chain {
+    /// The layer that wrote `path` (longest written prefix), else the top file.
+    fn writer(&self, path: &str) -> usize {
+        let clean: String = {
+            // `a.b[2].c` -> `a.b.c` for the lookup.
+            let mut out = String::new();
+            let mut depth = 0;
+            for c in path.chars() {
+                match c {
+                    '[' => depth += 1,
+                    ']' => depth -= 1,
+                    _ if depth == 0 => out.push(c),
+                    _ => {}
+                }
+            }
+            out
+        };
+        let mut prefix = clean.as_str();
+        loop {
+            if let Some(&i) = self.origin.get(prefix) {
+                return i;
+            }
+            match prefix.rfind('.') {
+                Some(dot) => prefix = &prefix[..dot],
+                None => return 0,
+            }
+        }
+    }
+
+    /// How to name layer `i` in a message.
+    fn shown(&self, i: usize) -> String {
+        if i == 0 {
+            self.layers[0].shown.clone()
+        } else {
+            format!("{} (extended by {})", self.layers[i].shown, self.layers[0].shown)
+        }
+    }
+
+    /// An error at dotted `path`: the file that wrote it, with line and
+    /// column when the key is found in its text.
+    fn parse_error(&self, path: &str, message: &str) -> ScenarioError {
+        let i = self.writer(path);
+        let layer = &self.layers[i];
+        let message = match (path.is_empty(), locate(&layer.text, path)) {
+            (false, Some((line, column))) => {
+                let source = layer.text.lines().nth(line - 1).unwrap_or("").trim();
+                format!("TOML parse error at line {line}, column {column} (`{}`): {message}", show_str(source))
+            }
+            _ => message.to_string(),
+        };
+        ScenarioError::Parse { path: self.shown(i), message }
+    }
+}
+
+/// Load the chain starting at `source`.
+fn load_chain(source: Source<'_>, limits: &Limits) -> Result<Chain, ScenarioError> {
+    let (mut shown, mut text, mut dir, mut id) = match source {
+        Source::File(path) => {
+            let text = read_scenario_text(path, limits)?;
+            let id = std::fs::canonicalize(path).unwrap_or_else(|_| path.to_path_buf()).display().to_string();
+            (path.display().to_string(), text, path.parent().map(Path::to_path_buf), id)
+        }
+        Source::Text { text, path } => {
+            let dir = Path::new(path).parent().map(Path::to_path_buf);
+            (path.to_string(), text.to_string(), dir, format!("text:{path}"))
+        }
+    };
+    let mut layers: Vec<Layer> = Vec::new();
+    let mut ids: Vec<String> = Vec::new();
+    loop {
+        let mut table: toml::Table = toml::from_str(&text).map_err(|e| ScenarioError::Parse {
+            path: shown.clone(),
+            message: crate::scenario::parse_message(&text, &e),
+        })?;
+        let extends = table.remove("extends");
+        ids.push(id);
+        layers.push(Layer { shown: shown.clone(), text, table });
+        let Some(extends) = extends else { break };
+        let toml::Value::String(target) = extends else {
+            return Err(ScenarioError::Parse {
+                path: shown,
+                message: format!(
+                    "`extends` = {} is invalid (expected a string: a built-in scenario name or a path relative to \
+                     this file)",
+                    show_str(&extends.to_string())
+                ),
+            });
+        };
+        let chain_names = |last: &str| {
+            let mut names: Vec<String> = layers.iter().map(|l| l.shown.clone()).collect();
+            names.push(last.to_string());
+            names.join(" → ")
+        };
+        let (next_shown, next_text, next_dir, next_id) = match built_in(&target) {
+            Some((file, text)) if !target.contains(['/', '\\']) => {
+                (file.to_string(), text.to_string(), None, format!("built-in:{file}"))
+            }
+            _ => {
+                let path: PathBuf = dir.as_deref().unwrap_or(Path::new("")).join(&target);
+                let next_shown = path.display().to_string();
+                if !path.exists() {
+                    let known: Vec<&str> =
+                        BUILT_IN_SCENARIOS.iter().map(|(f, _)| f.strip_suffix(".toml").unwrap_or(f)).collect();
+                    return Err(ScenarioError::Parse {
+                        path: shown,
+                        message: format!(
+                            "`extends` = \"{}\": no file {} (relative paths are relative to the extending file) \
+                             and not a built-in scenario ({})",
+                            show_str(&target),
+                            show_str(&next_shown),
+                            known.join(", ")
+                        ),
+                    });
+                }
+                let next_id = std::fs::canonicalize(&path).unwrap_or_else(|_| path.clone()).display().to_string();
+                if !ids.contains(&next_id) && layers.len() < MAX_EXTENDS_DEPTH {
+                    let text = read_scenario_text(&path, limits)?;
+                    (next_shown, text, path.parent().map(Path::to_path_buf), next_id)
+                } else {
+                    (next_shown, String::new(), None, next_id)
+                }
+            }
+        };
+        if ids.contains(&next_id) {
+            return Err(ScenarioError::Parse {
+                path: layers[0].shown.clone(),
+                message: format!("`extends` cycle: {}", chain_names(&next_shown)),
+            });
+        }
+        if layers.len() >= MAX_EXTENDS_DEPTH {
+            return Err(ScenarioError::Parse {
+                path: layers[0].shown.clone(),
+                message: format!("`extends` chain longer than {MAX_EXTENDS_DEPTH} files: {}", chain_names(&next_shown)),
+            });
+        }
+        (shown, text, dir, id) = (next_shown, next_text, next_dir, next_id);
+    }
+    Ok(Chain { layers, origin: BTreeMap::new() })
+}
+
+/// The key path (`in `a.b``) of a deserialization error, plus the unknown
+/// field's name when the error is about one.
+fn error_path(e: &toml::de::Error) -> String {
+    let display = e.to_string();
+    let mut path = display
+        .lines()
+        .rev()
+        .find_map(|l| l.strip_prefix("in `").and_then(|l| l.strip_suffix('`')))
+        .unwrap_or("")
+        .to_string();
+    if let Some(rest) = e.message().strip_prefix("unknown field `") {
+        if let Some(field) = rest.split('`').next() {
+            if !path.is_empty() {
+                path.push('.');
+            }
+            path.push_str(field);
+        }
+    }
+    path
+}
+
+/// Resolve, deserialize and validate the scenario at `source`, with
+/// command-line limit overrides (see [`Limits::apply_overrides`]).
+pub fn load(source: Source<'_>, overrides: &[String]) -> Result<Loaded, ScenarioError> {
+    let top_name = match source {
+        Source::File(p) => p.display().to_string(),
+        Source::Text { path, .. } => path.to_string(),
+    };
+    let mut limits = Limits::default();
+    limits.apply_overrides(overrides).map_err(|message| ScenarioError::Parse { path: top_name.clone(), message })?;
+    let mut chain = load_chain(source, &limits)?;
+
+    let mut merged = defaults();
+    let layers: Vec<toml::Table> = chain.layers.iter().map(|l| l.table.clone()).collect();
+    for (i, table) in layers.into_iter().enumerate().rev() {
+        merge(&mut merged, table, "", i, &mut chain.origin);
+    }
+
+    crate::scenario::check_core_array_lengths(&merged).map_err(|(path, message)| chain.parse_error(&path, &message))?;
+    let mut scenario = Scenario::deserialize(merged).map_err(|e| {
+        let path = error_path(&e);
+        let mut message: String = e.message().split_whitespace().collect::<Vec<_>>().join(" ");
+        if e.message().starts_with("missing field") {
+            let key = if path.is_empty() { String::new() } else { format!(" in `{path}`") };
+            message = if chain.layers.len() > 1 {
+                format!("{message}{key} (set by no file of the `extends` chain)")
+            } else {
+                format!("{message}{key}")
+            };
+        }
+        chain.parse_error(&path, &message)
+    })?;
+    scenario.limits.apply_overrides(overrides).map_err(|message| ScenarioError::Parse { path: top_name, message })?;
+    scenario.validate(&chain.layers[0].shown).map_err(|e| match e {
+        ScenarioError::Invalid { key, value, expected, .. } => {
+            ScenarioError::Invalid { path: chain.shown(chain.writer(&key)), key, value, expected }
+        }
+        other => other,
+    })?;
+    let warnings = unit_slip_warnings(&scenario)
+        .into_iter()
+        .map(|w| format!("{}: `{}` = {}: {}", chain.shown(chain.writer(&w.key)), w.key, w.value, w.message))
+        .collect();
+    Ok(Loaded { scenario, files: chain.layers.iter().map(|l| l.shown.clone()).collect(), warnings })
+}
+
+/// A likely unit slip: valid, but probably not what was meant.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Warning {
+    /// Dotted key, e.g. `initial_state.attitude[2]`.
+    pub key: String,
+    /// The value, as shown.
+    pub value: String,
+    /// Why it looks wrong.
+    pub message: String,
+}
+
+const TWO_PI: f64 = 2.0 * core::f64::consts::PI;
+
+/// Angle-valued parts of a yaw reference: constants, step heights,
+/// amplitudes, waypoint values and polynomial offsets (not slopes, so a
+/// yaw ramp that turns several times does not warn).
+fn angle_levels(signal: &Signal, prefix: &str, out: &mut Vec<(String, f64)>) {
+    for (k, term) in signal.terms.iter().enumerate() {
+        let key = |f: &str| format!("{prefix}.terms[{k}].{f}");
+        match term {
+            Term::Constant { value } => out.push((key("value"), *value)),
+            Term::Step { height, .. } => out.push((key("height"), *height)),
+            Term::Sine { amplitude, .. } | Term::Cosine { amplitude, .. } => out.push((key("amplitude"), *amplitude)),
+            Term::Polynomial { coefficients } => {
+                if let Some(c) = coefficients.first() {
+                    out.push((key("coefficients[0]"), *c));
+                }
+            }
+            Term::Waypoints(w) => {
+                out.extend(w.values().iter().enumerate().map(|(i, v)| (key(&format!("value[{i}]")), *v)));
+            }
+            Term::Piecewise { pieces } => {
+                for (j, p) in pieces.iter().enumerate() {
+                    angle_levels(&p.signal, &key(&format!("pieces[{j}].signal")), out);
+                }
+            }
+        }
+    }
+}
+
+/// Warnings for values that are valid but look like unit slips: angles
+/// beyond 2π (degrees for radians), a payload above 10× the vehicle's
+/// mass (grams, or a typo), windows that start after the end of the run.
+pub fn unit_slip_warnings(s: &Scenario) -> Vec<Warning> {
+    let mut out = Vec::new();
+    let mut warn = |key: String, value: String, message: String| out.push(Warning { key, value, message });
+    let degrees = |v: f64| {
+        format!("angles are in radians (|angle| > 2π; if degrees were meant, {}° = {:.4} rad)", show(v), v.to_radians())
+    };
+    for (i, a) in s.initial_state.attitude.iter().enumerate() {
+        if a.abs() > TWO_PI {
+            warn(format!("initial_state.attitude[{i}]"), show(*a), degrees(*a));
+        }
+    }
+    let mut levels = Vec::new();
+    angle_levels(&s.reference.psi, "reference.psi", &mut levels);
+    for (key, v) in levels {
+        if v.abs() > TWO_PI {
+            warn(key, show(v), degrees(v));
+        }
+    }
+    if let Some(p) = &s.payload {
+        let (mass, which) = match &s.actual_plant {
+            Some(a) => (a.mass, "actual_plant.mass"),
+            None => (s.plant.mass, "plant.mass"),
+        };
+        if p.mass > 10.0 * mass {
+            warn(
+                "payload.mass".into(),
+                format!("{} kg", show(p.mass)),
+                format!("more than 10 × the vehicle's mass ({which} = {} kg); masses are in kg", show(mass)),
+            );
+        }
+        if p.start > s.duration {
+            warn(
+                "payload.start".into(),
+                format!("{} s", show(p.start)),
+                format!("after the end of the run (duration = {} s): the payload never acts", show(s.duration)),
+            );
+        }
+    }
+    let after_end = |start: f64| start > s.duration;
+    let mut windows: Vec<(String, &Signal)> =
+        s.disturbance.named().into_iter().map(|(n, sig)| (format!("disturbance.{n}"), sig)).collect();
+    if let Some(v) = &s.inertia_variation {
+        windows.push(("inertia_variation".into(), v));
+    }
+    for (name, sig) in windows {
+        if let Some([start, end]) = sig.window {
+            if after_end(start) {
+                warn(
+                    format!("{name}.window"),
+                    format!("[{}, {}]", show(start), show(end)),
+                    format!("starts after the end of the run (duration = {} s): it never acts", show(s.duration)),
+                );
+            }
+        }
+    }
+    if let Some([start, end]) = s.simulation.metrics_window {
+        if after_end(start) {
+            warn(
+                "simulation.metrics_window".into(),
+                format!("[{}, {}]", show(start), show(end)),
+                format!("starts after the end of the run (duration = {} s): its ISE is 0", show(s.duration)),
+            );
+        }
+    }
+    out
+}
