@@ -18,6 +18,7 @@ pub mod scenario;
 pub mod signal;
 pub mod simulate;
 pub mod tuning;
+pub mod vehicle;
 
 pub use scenario::{Scenario, ScenarioError};
 pub use simulate::{simulate, ExitStatus, RunOptions, RunOutput};
