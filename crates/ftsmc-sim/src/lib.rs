@@ -8,6 +8,7 @@
 //! before any flight ([`limits`]).
 #![warn(missing_docs)]
 
+pub mod actuators;
 pub mod fixed_time;
 pub mod limits;
 pub mod metrics;
