@@ -359,7 +359,7 @@ impl Mixer {
         let mut thrust_range = [0.0f64, f64::INFINITY];
         for row in &inverse {
             let c = row[0];
-            if !(c > 0.0) {
+            if c.is_nan() || c <= 0.0 {
                 return Err(GainError {
                     field: "allocation",
                     value: c,

@@ -587,8 +587,8 @@ pub fn try_to_quad_state(x: &RigidBodyState) -> Result<QuadState, GimbalLock> {
 }
 
 /// As [`try_to_quad_state`], but never fails: within [`GIMBAL_LOCK_COS`] of
-/// the singularity `cos θ` is clamped to `±GIMBAL_LOCK_COS` (sign of cos θ,
-/// + at exactly 0), so the Euler rates stay finite (large, up to ~1e6 × ‖Ω‖)
+/// the singularity `cos θ` is clamped to `±GIMBAL_LOCK_COS` (the sign of
+/// cos θ; positive at exactly 0), so the Euler rates stay finite (large, up to ~1e6 × ‖Ω‖)
 /// rather than infinite. A controller flying there has already lost its
 /// Euler-angle model; use [`try_to_quad_state`] to detect it.
 pub fn to_quad_state(x: &RigidBodyState) -> QuadState {
