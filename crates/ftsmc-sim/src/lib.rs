@@ -8,6 +8,7 @@
 //! before any flight ([`limits`]).
 #![warn(missing_docs)]
 
+pub mod actuators;
 pub mod fixed_time;
 pub mod limits;
 pub mod metrics;
@@ -19,6 +20,7 @@ pub mod scenario;
 pub mod signal;
 pub mod simulate;
 pub mod tuning;
+pub mod vehicle;
 pub mod waypoints;
 
 pub use scenario::{Scenario, ScenarioError};

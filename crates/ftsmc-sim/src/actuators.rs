@@ -1,0 +1,443 @@
+//! Actuators: rotor speed limits, first-order motor lag with separate
+//! spin-up and spin-down time constants, optional motor-speed noise, and the
+//! mixer that turns a commanded thrust and torques into rotor speed commands
+//! under saturation.
+//!
+//! The pieces, in the order a run loop would use them each control period:
+//!
+//! 1. [`Mixer::mix`]: [`Command`] → rotor speed commands within
+//!    `[ω_min, ω_max]`, plus the command actually achievable ([`MixerOutput`]).
+//! 2. [`Motors::speeds_after`] / [`Motors::advance`]: the rotor speeds follow
+//!    the commands through the lag, integrated exactly.
+//! 3. [`Motors::sample_noise`] / [`Motors::with_noise`]: optional Gaussian
+//!    noise on the speeds the plant sees, drawn from a generator the caller
+//!    owns ([`motor_noise_rng`]).
+//!
+//! [`ActuatorParams::default`] is the ideal actuator (no limits, no lag, no
+//! noise), under which the mixer reproduces the paper's Eq. 2 allocation.
+
+use ftsmc_core::law::GainError;
+use ftsmc_core::model::{Command, QuadrotorParams};
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{Distribution, StandardNormal};
+use serde::{Deserialize, Serialize};
+
+/// ChaCha stream of the motor-speed noise generator. The run loop's drag
+/// noise uses streams 1–6 of the scenario seed (`simulate.rs`); motors use
+/// this one, so turning motor noise on or off changes no other stream.
+pub const MOTOR_NOISE_STREAM: u64 = 16;
+
+/// The motor-noise generator of a run: `ChaCha8Rng` seeded with the run's
+/// seed, stream [`MOTOR_NOISE_STREAM`].
+pub fn motor_noise_rng(seed: u64) -> ChaCha8Rng {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    rng.set_stream(MOTOR_NOISE_STREAM);
+    rng
+}
+
+/// How the motor-noise standard deviation is expressed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum NoiseScale {
+    /// σ in rad/s: `ω_noisy = ω + σ z`.
+    Absolute,
+    /// σ as a fraction of the current speed: `ω_noisy = ω (1 + σ z)`.
+    Relative,
+}
+
+/// Gaussian motor-speed noise, drawn once per control period and per rotor
+/// (`z ~ N(0, 1)`), added to the lagged speed and clamped to the limits.
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct MotorNoise {
+    /// Standard deviation σ: rad/s ([`NoiseScale::Absolute`]) or a fraction
+    /// ([`NoiseScale::Relative`]). RotorPy's Hummingbird uses 50 rad/s absolute
+    /// (`hummingbird_params.py`, `motor_noise_std`).
+    pub std: f64,
+    /// Absolute or relative σ.
+    pub scale: NoiseScale,
+}
+
+/// Motor limits, lag and noise. Defaults: the ideal actuator — no limits
+/// (`ω_min = 0`, `ω_max = ∞`), no lag (τ = 0), no noise.
+///
+/// Real vehicle classes (see `docs` of [`ActuatorParams::crazyflie`],
+/// [`ActuatorParams::hummingbird`], [`ActuatorParams::px4_x500`]).
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ActuatorParams {
+    /// Lowest rotor speed ω_min, rad/s (default 0).
+    pub min_rotor_speed: f64,
+    /// Highest rotor speed ω_max, rad/s (default ∞: `inf` in TOML).
+    pub max_rotor_speed: f64,
+    /// Spin-up time constant τ_up, s, used while `ω_cmd > ω` (default 0: no lag).
+    pub time_constant_up: f64,
+    /// Spin-down time constant τ_down, s, used while `ω_cmd ≤ ω` (default 0: no lag).
+    pub time_constant_down: f64,
+    /// Motor-speed noise (default none).
+    pub noise: Option<MotorNoise>,
+}
+
+impl Default for ActuatorParams {
+    fn default() -> Self {
+        Self {
+            min_rotor_speed: 0.0,
+            max_rotor_speed: f64::INFINITY,
+            time_constant_up: 0.0,
+            time_constant_down: 0.0,
+            noise: None,
+        }
+    }
+}
+
+fn closed(field: &'static str, value: f64, lo: f64, hi: f64, expected: &'static str) -> Result<(), GainError> {
+    if (lo..=hi).contains(&value) {
+        Ok(())
+    } else {
+        Err(GainError { field, value, expected })
+    }
+}
+
+impl ActuatorParams {
+    /// Crazyflie 2.0 motors as RotorPy `crazyflie_params.py` gives them:
+    /// τ = 0.072 s both ways (Eschmann et al. 2024), ω in `[0, 2500]` rad/s, no noise.
+    pub fn crazyflie() -> Self {
+        Self { max_rotor_speed: 2500.0, time_constant_up: 0.072, time_constant_down: 0.072, ..Self::default() }
+    }
+
+    /// AscTec Hummingbird motors as RotorPy `hummingbird_params.py` gives
+    /// them: τ = 0.005 s both ways, ω in `[0, 1500]` rad/s, noise σ = 50 rad/s absolute.
+    pub fn hummingbird() -> Self {
+        Self {
+            max_rotor_speed: 1500.0,
+            time_constant_up: 0.005,
+            time_constant_down: 0.005,
+            noise: Some(MotorNoise { std: 50.0, scale: NoiseScale::Absolute }),
+            ..Self::default()
+        }
+    }
+
+    /// PX4 x500 (2.0 kg) motors of the Gazebo model (PX4-gazebo-models
+    /// `models/x500/model.sdf`, `MulticopterMotorModel`): τ_up 0.0125 s,
+    /// τ_down 0.025 s, ω_max 1000 rad/s (older `sitl_gazebo` versions had
+    /// 1100), ω_min 0, no noise.
+    pub fn px4_x500() -> Self {
+        Self { max_rotor_speed: 1000.0, time_constant_up: 0.0125, time_constant_down: 0.025, ..Self::default() }
+    }
+
+    /// Reject non-physical values:
+    ///
+    /// | parameter | range |
+    /// |---|---|
+    /// | `min_rotor_speed` (rad/s) | `[0, 1e6]` |
+    /// | `max_rotor_speed` (rad/s) | `> min_rotor_speed`, may be ∞ |
+    /// | time constants (s) | `[0, 1e3]` |
+    /// | noise σ | `[0, 1e6]` rad/s absolute, `[0, 10]` relative |
+    pub fn check(&self) -> Result<(), GainError> {
+        closed("min_rotor_speed", self.min_rotor_speed, 0.0, 1e6, "0 <= min_rotor_speed <= 1e6 rad/s")?;
+        if self.max_rotor_speed.is_nan() || self.max_rotor_speed <= self.min_rotor_speed {
+            return Err(GainError {
+                field: "max_rotor_speed",
+                value: self.max_rotor_speed,
+                expected: "max_rotor_speed > min_rotor_speed (rad/s; inf for no limit)",
+            });
+        }
+        closed("time_constant_up", self.time_constant_up, 0.0, 1e3, "0 <= time_constant_up <= 1e3 s (0: no lag)")?;
+        closed(
+            "time_constant_down",
+            self.time_constant_down,
+            0.0,
+            1e3,
+            "0 <= time_constant_down <= 1e3 s (0: no lag)",
+        )?;
+        if let Some(noise) = self.noise {
+            match noise.scale {
+                NoiseScale::Absolute => closed("noise.std", noise.std, 0.0, 1e6, "0 <= std <= 1e6 rad/s")?,
+                NoiseScale::Relative => closed("noise.std", noise.std, 0.0, 10.0, "0 <= std <= 10 (fraction)")?,
+            }
+        }
+        Ok(())
+    }
+
+    /// Clamp a rotor speed to `[ω_min, ω_max]`.
+    pub fn clamp_speed(&self, omega: f64) -> f64 {
+        omega.clamp(self.min_rotor_speed, self.max_rotor_speed)
+    }
+}
+
+/// The four motors' speeds and their lag.
+///
+/// The lag `ω̇ = (ω_cmd − ω)/τ` is integrated **exactly** over any interval
+/// `dt` with the command held: `ω(t+dt) = ω_cmd + (ω(t) − ω_cmd) e^{−dt/τ}`,
+/// τ = τ_up if `ω_cmd > ω(t)` and τ_down otherwise. With the command held
+/// the speed moves monotonically towards it, so the choice of τ cannot
+/// change within the interval and the formula is exact for any step size;
+/// τ = 0 means `ω(t+dt) = ω_cmd` at once. Commands are clamped to the
+/// limits first, and the speed stays inside them.
+///
+/// The rotor speeds inside a plant integration step are available in closed
+/// form ([`Motors::speeds_after`]), so a run loop can evaluate them at each
+/// RK4 stage instead of holding them over the step.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Motors {
+    params: ActuatorParams,
+    speeds: [f64; 4],
+}
+
+impl Motors {
+    /// Motors at `initial` speeds (rad/s, clamped to the limits).
+    pub fn new(params: &ActuatorParams, initial: [f64; 4]) -> Self {
+        Self { params: *params, speeds: initial.map(|w| params.clamp_speed(w)) }
+    }
+
+    /// The parameters.
+    pub fn params(&self) -> &ActuatorParams {
+        &self.params
+    }
+
+    /// Current (noise-free) rotor speeds, rad/s.
+    pub fn speeds(&self) -> [f64; 4] {
+        self.speeds
+    }
+
+    /// Rotor speeds `dt ≥ 0` seconds from now with `command` (rad/s) held,
+    /// without changing the motors.
+    pub fn speeds_after(&self, command: &[f64; 4], dt: f64) -> [f64; 4] {
+        let p = &self.params;
+        core::array::from_fn(|i| {
+            let target = p.clamp_speed(command[i]);
+            let now = self.speeds[i];
+            let tau = if target > now { p.time_constant_up } else { p.time_constant_down };
+            if tau == 0.0 {
+                target
+            } else {
+                target + (now - target) * (-dt / tau).exp()
+            }
+        })
+    }
+
+    /// Advance the motors by `h` seconds with `command` (rad/s) held.
+    pub fn advance(&mut self, command: &[f64; 4], h: f64) {
+        self.speeds = self.speeds_after(command, h);
+    }
+
+    /// Draw one standard-normal sample per rotor (rotors 1..4 in order) for
+    /// the next period's noise; all zeros, **without touching `rng`**, when
+    /// the noise is off.
+    pub fn sample_noise(&self, rng: &mut ChaCha8Rng) -> [f64; 4] {
+        match self.params.noise {
+            Some(_) => core::array::from_fn(|_| StandardNormal.sample(rng)),
+            None => [0.0; 4],
+        }
+    }
+
+    /// Speeds with the noise `z` (from [`Motors::sample_noise`]) applied and
+    /// clamped to the limits, rad/s; `speeds` unchanged when noise is off.
+    pub fn with_noise(&self, speeds: &[f64; 4], z: &[f64; 4]) -> [f64; 4] {
+        match self.params.noise {
+            None => *speeds,
+            Some(noise) => core::array::from_fn(|i| {
+                let w = match noise.scale {
+                    NoiseScale::Absolute => speeds[i] + noise.std * z[i],
+                    NoiseScale::Relative => speeds[i] * (1.0 + noise.std * z[i]),
+                };
+                self.params.clamp_speed(w)
+            }),
+        }
+    }
+}
+
+/// What the mixer made of a command.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MixerOutput {
+    /// The command asked for (non-finite components replaced by 0).
+    pub commanded: Command,
+    /// The command the rotor speeds produce (within rounding): equal to
+    /// `commanded` unless `saturated`.
+    pub applied: Command,
+    /// Rotor speed commands ω_1..ω_4, rad/s, within `[ω_min, ω_max]`.
+    pub rotor_speeds: [f64; 4],
+    /// `true` when `applied` differs from `commanded`.
+    pub saturated: bool,
+}
+
+/// Turns thrust and torques into rotor speeds under the rotor limits.
+///
+/// With `u = [U1, u2, u3, u4]` (N, N·m) and the allocation `u = A w`
+/// (`w_i = ω_i²`), the squared speeds are `w = A⁻¹ u`. When every `w_i` lies
+/// in `[ω_min², ω_max²]` the command is feasible and is applied unchanged.
+/// Otherwise the mixer gives up authority in a fixed priority, **thrust,
+/// then roll/pitch, then yaw**:
+///
+/// 1. Thrust: `U1` is clipped to the range it can have with zero torques
+///    (`[max_i ω_min²/c_i, min_i ω_max²/c_i]`, `c = A⁻¹ e_1`; for a
+///    symmetric vehicle `[4 k_f ω_min², 4 k_f ω_max²]`). It is changed only
+///    when it is infeasible by itself.
+/// 2. Roll and pitch: scaled together by the largest `s_rp ∈ [0, 1]` that
+///    keeps every `w_i` in range with that thrust and no yaw torque (the
+///    direction of the tilting torque is kept).
+/// 3. Yaw: scaled by the largest `s_y ∈ [0, 1]` that keeps every `w_i` in
+///    range on top of steps 1–2.
+///
+/// Each step is the exact maximisation of one scale factor over an interval
+/// (the squared speeds are affine in it), so the result is the
+/// lexicographic optimum for this priority: thrust and roll/pitch are kept
+/// exactly whenever that is possible, yaw is the first to give way. (PX4's
+/// "airmode" instead lowers collective thrust to keep roll/pitch authority
+/// near full throttle; not implemented.) Non-finite command components are
+/// treated as 0 and flag the output as saturated.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Mixer {
+    allocation: [[f64; 4]; 4],
+    inverse: [[f64; 4]; 4],
+    w_min: f64,
+    w_max: f64,
+    thrust_range: [f64; 2],
+}
+
+/// Inverse of a 4×4 matrix by Gauss–Jordan elimination with partial
+/// pivoting; `None` if a pivot is below `1e-12` of the largest entry.
+fn invert4(a: &[[f64; 4]; 4]) -> Option<[[f64; 4]; 4]> {
+    let scale = a.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
+    if !scale.is_normal() {
+        return None;
+    }
+    let mut m = *a;
+    let mut inv = [[0.0; 4]; 4];
+    for i in 0..4 {
+        inv[i][i] = 1.0;
+    }
+    for col in 0..4 {
+        let pivot = (col..4).max_by(|&r, &s| m[r][col].abs().total_cmp(&m[s][col].abs()))?;
+        if m[pivot][col].abs() < 1e-12 * scale {
+            return None;
+        }
+        m.swap(col, pivot);
+        inv.swap(col, pivot);
+        let d = m[col][col];
+        for k in 0..4 {
+            m[col][k] /= d;
+            inv[col][k] /= d;
+        }
+        for r in 0..4 {
+            if r != col {
+                let f = m[r][col];
+                for k in 0..4 {
+                    m[r][k] -= f * m[col][k];
+                    inv[r][k] -= f * inv[col][k];
+                }
+            }
+        }
+    }
+    Some(inv)
+}
+
+/// Paper Eq. 2 as a matrix (`[U1, u2, u3, u4]ᵀ = A [ω1², .., ω4²]ᵀ`).
+pub fn paper_allocation_matrix(p: &QuadrotorParams) -> [[f64; 4]; 4] {
+    let b = p.lift_coefficient;
+    let bl = b * p.arm_length;
+    let d = p.yaw_drag_coefficient;
+    [[b, b, b, b], [0.0, -bl, 0.0, bl], [-bl, 0.0, bl, 0.0], [d, -d, d, -d]]
+}
+
+impl Mixer {
+    /// A mixer for the allocation `u = A w` (rows U1, u2, u3, u4; columns
+    /// rotors 1..4; e.g. `RigidBodyParams::allocation_matrix` or
+    /// [`paper_allocation_matrix`]) and the rotor limits of `actuators`.
+    /// Errors if the limits are invalid, `A` is singular, or some rotor does
+    /// not carry a positive share of the thrust.
+    pub fn new(allocation: [[f64; 4]; 4], actuators: &ActuatorParams) -> Result<Self, GainError> {
+        actuators.check()?;
+        let inverse = invert4(&allocation).ok_or(GainError {
+            field: "allocation",
+            value: allocation[0][0],
+            expected: "an invertible allocation matrix",
+        })?;
+        let w_min = actuators.min_rotor_speed * actuators.min_rotor_speed;
+        let w_max = actuators.max_rotor_speed * actuators.max_rotor_speed;
+        let mut thrust_range = [0.0f64, f64::INFINITY];
+        for row in &inverse {
+            let c = row[0];
+            if c.is_nan() || c <= 0.0 {
+                return Err(GainError {
+                    field: "allocation",
+                    value: c,
+                    expected: "every rotor carries a positive share of the thrust",
+                });
+            }
+            thrust_range[0] = thrust_range[0].max(w_min / c);
+            thrust_range[1] = thrust_range[1].min(w_max / c);
+        }
+        if thrust_range[0] > thrust_range[1] {
+            return Err(GainError {
+                field: "min_rotor_speed",
+                value: actuators.min_rotor_speed,
+                expected: "a speed range wide enough for some torque-free thrust",
+            });
+        }
+        Ok(Self { allocation, inverse, w_min, w_max, thrust_range })
+    }
+
+    /// The mixer of paper Eq. 2 ([`paper_allocation_matrix`]).
+    pub fn for_paper(p: &QuadrotorParams, actuators: &ActuatorParams) -> Result<Self, GainError> {
+        Self::new(paper_allocation_matrix(p), actuators)
+    }
+
+    /// Collective thrust range with zero torques `[U1_min, U1_max]`, N.
+    pub fn thrust_range(&self) -> [f64; 2] {
+        self.thrust_range
+    }
+
+    /// Thrust and torques of squared rotor speeds (`A w`).
+    pub fn forces(&self, squared_speeds: &[f64; 4]) -> Command {
+        let row = |k: usize| (0..4).map(|i| self.allocation[k][i] * squared_speeds[i]).sum::<f64>();
+        Command { thrust: row(0), torque: [row(1), row(2), row(3)] }
+    }
+
+    fn squared(&self, u: &[f64; 4]) -> [f64; 4] {
+        core::array::from_fn(|i| (0..4).map(|k| self.inverse[i][k] * u[k]).sum())
+    }
+
+    /// Largest `s ∈ [0, 1]` with `base + s·dir` inside `[w_min, w_max]`
+    /// (`base` feasible up to rounding).
+    fn max_scale(&self, base: &[f64; 4], dir: &[f64; 4]) -> f64 {
+        let mut s = 1.0f64;
+        for i in 0..4 {
+            if dir[i] > 0.0 {
+                s = s.min((self.w_max - base[i]) / dir[i]);
+            } else if dir[i] < 0.0 {
+                s = s.min((self.w_min - base[i]) / dir[i]);
+            }
+        }
+        s.max(0.0)
+    }
+
+    /// Rotor speed commands for `command` under the documented priority.
+    pub fn mix(&self, command: &Command) -> MixerOutput {
+        let finite = |v: f64| if v.is_finite() { v } else { 0.0 };
+        let commanded = Command { thrust: finite(command.thrust), torque: command.torque.map(finite) };
+        let all_finite = commanded == *command;
+        let u = [commanded.thrust, commanded.torque[0], commanded.torque[1], commanded.torque[2]];
+        let w = self.squared(&u);
+        let speeds = |w: &[f64; 4]| w.map(|wi| wi.clamp(self.w_min, self.w_max).sqrt());
+        if all_finite && w.iter().all(|&wi| wi >= self.w_min && wi <= self.w_max) {
+            return MixerOutput { commanded, applied: commanded, rotor_speeds: speeds(&w), saturated: false };
+        }
+        let column = |k: usize, scale: f64| -> [f64; 4] { core::array::from_fn(|i| self.inverse[i][k] * scale) };
+        let thrust = commanded.thrust.clamp(self.thrust_range[0], self.thrust_range[1]);
+        let base = column(0, thrust);
+        let rp = {
+            let (a, b) = (column(1, u[1]), column(2, u[2]));
+            core::array::from_fn(|i| a[i] + b[i])
+        };
+        let s_rp = self.max_scale(&base, &rp);
+        let base: [f64; 4] = core::array::from_fn(|i| base[i] + s_rp * rp[i]);
+        let yaw = column(3, u[3]);
+        let s_y = self.max_scale(&base, &yaw);
+        let w: [f64; 4] = core::array::from_fn(|i| base[i] + s_y * yaw[i]);
+        let applied = Command { thrust, torque: [s_rp * u[1], s_rp * u[2], s_y * u[3]] };
+        let saturated = !all_finite || applied != commanded;
+        MixerOutput { commanded, applied, rotor_speeds: speeds(&w), saturated }
+    }
+}

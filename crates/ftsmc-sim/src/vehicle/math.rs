@@ -1,0 +1,121 @@
+//! Minimal 3-vector, 3×3-matrix and quaternion helpers for the truth models
+//! (nalgebra is not a dependency: the models need a dozen operations).
+//!
+//! Quaternions are `[w, x, y, z]` (scalar first, Hamilton product).
+
+pub(crate) type Vec3 = [f64; 3];
+pub(crate) type Mat3 = [[f64; 3]; 3];
+pub(crate) type Quat = [f64; 4];
+
+#[inline]
+pub(crate) fn add(a: Vec3, b: Vec3) -> Vec3 {
+    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
+}
+
+#[inline]
+pub(crate) fn sub(a: Vec3, b: Vec3) -> Vec3 {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+
+#[inline]
+pub(crate) fn dot(a: Vec3, b: Vec3) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+#[inline]
+pub(crate) fn cross(a: Vec3, b: Vec3) -> Vec3 {
+    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+}
+
+#[inline]
+pub(crate) fn norm(a: Vec3) -> f64 {
+    dot(a, a).sqrt()
+}
+
+#[inline]
+pub(crate) fn mat_vec(m: &Mat3, v: Vec3) -> Vec3 {
+    [dot(m[0], v), dot(m[1], v), dot(m[2], v)]
+}
+
+/// `mᵀ v`.
+#[inline]
+pub(crate) fn mat_t_vec(m: &Mat3, v: Vec3) -> Vec3 {
+    [
+        m[0][0] * v[0] + m[1][0] * v[1] + m[2][0] * v[2],
+        m[0][1] * v[0] + m[1][1] * v[1] + m[2][1] * v[2],
+        m[0][2] * v[0] + m[1][2] * v[1] + m[2][2] * v[2],
+    ]
+}
+
+pub(crate) fn det3(m: &Mat3) -> f64 {
+    m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
+        + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0])
+}
+
+/// Inverse by the adjugate; `None` when the determinant is not a normal
+/// positive or negative number.
+pub(crate) fn inverse3(m: &Mat3) -> Option<Mat3> {
+    let det = det3(m);
+    if !det.is_normal() {
+        return None;
+    }
+    let c = |r0: usize, c0: usize, r1: usize, c1: usize| m[r0][c0] * m[r1][c1] - m[r0][c1] * m[r1][c0];
+    let adj = [
+        [c(1, 1, 2, 2), -c(0, 1, 2, 2), c(0, 1, 1, 2)],
+        [-c(1, 0, 2, 2), c(0, 0, 2, 2), -c(0, 0, 1, 2)],
+        [c(1, 0, 2, 1), -c(0, 0, 2, 1), c(0, 0, 1, 1)],
+    ];
+    Some(adj.map(|row| row.map(|v| v / det)))
+}
+
+/// Rotation matrix of a unit quaternion (body → world: `v_w = R v_b`).
+#[inline]
+pub(crate) fn rotation(q: Quat) -> Mat3 {
+    let [w, x, y, z] = q;
+    [
+        [1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y - w * z), 2.0 * (x * z + w * y)],
+        [2.0 * (x * y + w * z), 1.0 - 2.0 * (x * x + z * z), 2.0 * (y * z - w * x)],
+        [2.0 * (x * z - w * y), 2.0 * (y * z + w * x), 1.0 - 2.0 * (x * x + y * y)],
+    ]
+}
+
+/// `q̇ = ½ q ⊗ (0, Ω)` for body rates Ω.
+#[inline]
+pub(crate) fn quat_derivative(q: Quat, omega: Vec3) -> Quat {
+    let [w, x, y, z] = q;
+    let [p, r1, r2] = omega;
+    [
+        0.5 * (-x * p - y * r1 - z * r2),
+        0.5 * (w * p + y * r2 - z * r1),
+        0.5 * (w * r1 + z * p - x * r2),
+        0.5 * (w * r2 + x * r1 - y * p),
+    ]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn inverse_times_matrix_is_identity() {
+        let m = [[2.0, 0.1, -0.3], [0.1, 3.0, 0.2], [-0.3, 0.2, 4.0]];
+        let inv = inverse3(&m).unwrap();
+        for i in 0..3 {
+            for j in 0..3 {
+                let e: f64 = (0..3).map(|k| m[i][k] * inv[k][j]).sum();
+                assert!((e - if i == j { 1.0 } else { 0.0 }).abs() < 1e-14);
+            }
+        }
+        assert!(inverse3(&[[1.0, 2.0, 3.0], [2.0, 4.0, 6.0], [0.0, 0.0, 1.0]]).is_none());
+    }
+
+    #[test]
+    fn rotation_of_a_quarter_turn_about_z() {
+        let h = core::f64::consts::FRAC_PI_4;
+        let r = rotation([h.cos(), 0.0, 0.0, h.sin()]);
+        let v = mat_vec(&r, [1.0, 0.0, 0.0]);
+        assert!((v[0]).abs() < 1e-15 && (v[1] - 1.0).abs() < 1e-15);
+        let back = mat_t_vec(&r, v);
+        assert!((back[0] - 1.0).abs() < 1e-15);
+    }
+}

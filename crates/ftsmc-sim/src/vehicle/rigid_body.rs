@@ -1,0 +1,623 @@
+//! Rigid-body truth model: Newton–Euler dynamics with quaternion attitude,
+//! body rates, per-rotor forces and RotorPy-style aerodynamics.
+//!
+//! # Conventions
+//!
+//! - World frame: x, y horizontal, **z up** (gravity `−g ẑ`), as the paper
+//!   plant ([`crate::plant`]).
+//! - Body frame: x forward, y left, z up (thrust along `+z_b`).
+//! - Attitude: unit quaternion `q = [w, x, y, z]` (scalar first, Hamilton
+//!   product) rotating body vectors into the world: `v_w = R(q) v_b`.
+//!   Kinematics `q̇ = ½ q ⊗ (0, Ω)`.
+//! - Ω: body rates (rad/s) expressed in the body frame.
+//! - Euler angles: Z-Y-X (yaw ψ, then pitch θ, then roll φ),
+//!   `R = R_z(ψ) R_y(θ) R_x(φ)`, the convention of the paper's Eq. 1 (its
+//!   thrust direction is the third column of this `R`).
+//! - Rotors: numbering, positions and spin directions of paper Eq. 2
+//!   ([`ftsmc_core::allocation`]), see [`Configuration`] and [`Spin`].
+//!
+//! # State
+//!
+//! `[p (3), v (3), q (4), Ω (3)]` = 13 numbers, world position (m), world
+//! velocity (m/s), quaternion, body rates (rad/s); see [`index`]. The array
+//! goes through the generic [`crate::plant::rk4_step`].
+//!
+//! # Equations (body wrench in the body frame)
+//!
+//! ```text
+//! ṗ = v
+//! v̇ = (R F_b + F_ext)/m − g ẑ
+//! q̇ = ½ q ⊗ (0, Ω)
+//! Ω̇ = J⁻¹ (M_b + τ_ext − Ω × (J Ω) − Ω × h_r)
+//!
+//! v_a = Rᵀ(v − w)                       air-relative velocity, body frame
+//! v_i = v_a + Ω × r_i                    local air velocity at rotor i
+//! T_i = k_f ω_i² ẑ                       thrust
+//! H_i = −ω_i diag(k_d, k_d, k_z) v_i     rotor drag (H force)
+//! D   = −‖v_a‖ diag(c_D) v_a             parasitic drag
+//! F_b = Σ (T_i + H_i) + D
+//! M_b = Σ r_i × (T_i + H_i) − Σ s_i k_m ω_i² ẑ
+//! h_r = J_r Σ s_i ω_i ẑ                  rotor angular momentum
+//! ```
+//!
+//! `s_i = +1` for a rotor spinning counter-clockwise seen from above (spin
+//! vector `+z_b`), −1 clockwise. The reaction (drag) torque a rotor puts on
+//! the body opposes its spin, hence `−s_i k_m ω_i²`. The aerodynamic terms
+//! are those of RotorPy `multirotor.py` (`compute_body_wrench`; translational
+//! lift and flapping moments are not modelled). The torque `J_r Σ s_i ω̇_i ẑ`
+//! from rotor acceleration is neglected (the rotor speeds are an input).
+//!
+//! # The gyroscopic sign against the paper plant
+//!
+//! The paper's yaw allocation `u4 = d(ω1² − ω2² + ω3² − ω4²)` makes rotors 1
+//! and 3 put a `+z` reaction torque on the body, so they spin clockwise
+//! (`s = [−1, +1, −1, +1]`) and `h_r = −J_r Ω̄ ẑ` with `Ω̄ = ω1 − ω2 + ω3 − ω4`.
+//! The paper plant (errata E5) uses `h_r = +J_r Ω̄ ẑ`; its gyroscopic torques
+//! therefore have the opposite sign to this model's. The test
+//! `gyroscopic_torque_is_opposite_to_the_paper_plant` pins this down.
+
+use ftsmc_core::law::GainError;
+use ftsmc_core::model::{QuadState, QuadrotorParams};
+use serde::{Deserialize, Serialize};
+
+use super::math::{
+    add, cross, det3, inverse3, mat_t_vec, mat_vec, norm, quat_derivative, rotation, sub, Mat3, Quat, Vec3,
+};
+use crate::plant::rk4_step;
+
+/// Length of the rigid-body state array.
+pub const STATE_LEN: usize = 13;
+
+/// The rigid-body state `[p, v, q, Ω]` (see [`index`]).
+pub type RigidBodyState = [f64; STATE_LEN];
+
+/// Index of the first component of each block of [`RigidBodyState`].
+pub mod index {
+    /// World position `[x, y, z]`, m.
+    pub const POSITION: usize = 0;
+    /// World velocity `[ẋ, ẏ, ż]`, m/s.
+    pub const VELOCITY: usize = 3;
+    /// Attitude quaternion `[w, x, y, z]` (body → world).
+    pub const QUATERNION: usize = 6;
+    /// Body rates `[p, q, r]`, rad/s.
+    pub const BODY_RATES: usize = 10;
+}
+
+/// Rotor layout. Both keep the numbering and spin pattern of paper Eq. 2
+/// (rotors 1 and 3 on one diagonal, 2 and 4 on the other).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Configuration {
+    /// "+" layout of paper Eq. 2: rotor 1 at `(l, 0)`, 2 at `(0, −l)`,
+    /// 3 at `(−l, 0)`, 4 at `(0, l)` (body x, y), so that
+    /// `u2 = b l (ω4² − ω2²)` and `u3 = b l (ω3² − ω1²)`.
+    Plus,
+    /// "×" layout: the "+" layout turned by +45° about z: rotor 1 at
+    /// `l(1, 1)/√2`, 2 at `l(1, −1)/√2`, 3 at `l(−1, −1)/√2`, 4 at
+    /// `l(−1, 1)/√2` — RotorPy's `crazyflie_params.py` / `hummingbird_params.py` layout.
+    Cross,
+}
+
+/// Spin direction of a rotor, seen from above (from `+z_b`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Spin {
+    /// Counter-clockwise: spin vector `+z_b`, reaction torque on the body `−z_b`.
+    Ccw,
+    /// Clockwise: spin vector `−z_b`, reaction torque on the body `+z_b`.
+    Cw,
+}
+
+impl Spin {
+    /// `s_i`: +1 counter-clockwise, −1 clockwise.
+    pub fn sign(self) -> f64 {
+        match self {
+            Spin::Ccw => 1.0,
+            Spin::Cw => -1.0,
+        }
+    }
+}
+
+/// Spin directions implied by paper Eq. 2's yaw row `u4 = d(ω1² − ω2² + ω3² − ω4²)`:
+/// rotors 1 and 3 turn the body counter-clockwise, so they spin clockwise.
+pub const PAPER_SPIN: [Spin; 4] = [Spin::Cw, Spin::Ccw, Spin::Cw, Spin::Ccw];
+
+/// Physical parameters of the rigid-body model. Defaults: the paper vehicle
+/// ([`RigidBodyParams::from_paper`] of `QuadrotorParams::default()`, aerodynamics off).
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct RigidBodyParams {
+    /// Mass m, kg (default 0.74, paper Table 2).
+    pub mass: f64,
+    /// Gravitational acceleration g, m/s² (default 9.81).
+    pub gravity: f64,
+    /// Inertia matrix J about the centre of mass in body axes, kg·m²;
+    /// symmetric positive definite (default `diag(3.827e-3, 3.827e-3, 7.6566e-3)`, paper Table 2).
+    pub inertia: [[f64; 3]; 3],
+    /// Distance l from the centre of mass to each rotor hub, m (default 0.21, ftsmc's paper choice).
+    pub arm_length: f64,
+    /// Rotor layout (default `plus`, paper Eq. 2).
+    pub configuration: Configuration,
+    /// Spin direction of rotors 1..4 (default `["cw", "ccw", "cw", "ccw"]`, [`PAPER_SPIN`]).
+    pub spin: [Spin; 4],
+    /// Thrust coefficient k_f (per rotor `T = k_f ω²`), N·s²/rad²
+    /// (default 2.9842e-5, paper b).
+    pub thrust_coefficient: f64,
+    /// Drag-torque coefficient k_m (per rotor `|Q| = k_m ω²`), N·m·s²/rad²
+    /// (default 3.2320e-7, paper d).
+    pub moment_coefficient: f64,
+    /// Rotor (plus motor rotor) inertia J_r about its spin axis, kg·m² (default 2.8385e-5, paper Table 2).
+    pub rotor_inertia: f64,
+    /// Parasitic drag coefficients `[c_Dx, c_Dy, c_Dz]` in body axes, N·s²/m²
+    /// (default 0; RotorPy Hummingbird: `[0.5e-2, 0.5e-2, 1e-2]`).
+    pub parasitic_drag: [f64; 3],
+    /// In-plane rotor drag coefficient k_d, N·s²/(m·rad) (default 0; RotorPy
+    /// Crazyflie 1.02506e-6, Hummingbird 1.19e-4).
+    pub rotor_drag_xy: f64,
+    /// Axial rotor drag (induced inflow) coefficient k_z, N·s²/(m·rad)
+    /// (default 0; RotorPy Crazyflie 7.553e-7, Hummingbird 2.32e-4).
+    pub rotor_drag_z: f64,
+}
+
+impl Default for RigidBodyParams {
+    fn default() -> Self {
+        Self::from_paper(&QuadrotorParams::default())
+    }
+}
+
+fn diag(d: [f64; 3]) -> Mat3 {
+    [[d[0], 0.0, 0.0], [0.0, d[1], 0.0], [0.0, 0.0, d[2]]]
+}
+
+fn closed(field: &'static str, value: f64, lo: f64, hi: f64, expected: &'static str) -> Result<(), GainError> {
+    if (lo..=hi).contains(&value) {
+        Ok(())
+    } else {
+        Err(GainError { field, value, expected })
+    }
+}
+
+impl RigidBodyParams {
+    /// The paper vehicle: `k_f = b`, `k_m = d`, J_r, l, mass, gravity and the
+    /// diagonal inertia of `p`, "+" layout with [`PAPER_SPIN`]; aerodynamics
+    /// off (the paper's linear drags `K_f1`, `K_f2` have no counterpart here).
+    /// With these, small angles and `J_r = 0`, the model agrees with
+    /// [`crate::plant::derivative`] (see the module docs for the gyroscopic sign).
+    pub fn from_paper(p: &QuadrotorParams) -> Self {
+        Self {
+            mass: p.mass,
+            gravity: p.gravity,
+            inertia: diag(p.inertia),
+            arm_length: p.arm_length,
+            configuration: Configuration::Plus,
+            spin: PAPER_SPIN,
+            thrust_coefficient: p.lift_coefficient,
+            moment_coefficient: p.yaw_drag_coefficient,
+            rotor_inertia: p.rotor_inertia,
+            parasitic_drag: [0.0; 3],
+            rotor_drag_xy: 0.0,
+            rotor_drag_z: 0.0,
+        }
+    }
+
+    /// Crazyflie 2.0 as RotorPy `rotorpy/vehicles/crazyflie_params.py` gives
+    /// it (Forster 2015 system identification): m 0.03 kg, J diag(1.43e-5,
+    /// 1.43e-5, 2.89e-5) kg·m², l 0.043 m "×", k_f 2.3e-8, k_m 7.8e-10,
+    /// k_d 1.02506e-6, k_z 7.553e-7, c_D 0. RotorPy has no rotor inertia;
+    /// J_r is 0 here.
+    pub fn crazyflie() -> Self {
+        Self {
+            mass: 0.03,
+            gravity: 9.81,
+            inertia: diag([1.43e-5, 1.43e-5, 2.89e-5]),
+            arm_length: 0.043,
+            configuration: Configuration::Cross,
+            spin: PAPER_SPIN,
+            thrust_coefficient: 2.3e-8,
+            moment_coefficient: 7.8e-10,
+            rotor_inertia: 0.0,
+            parasitic_drag: [0.0; 3],
+            rotor_drag_xy: 1.02506e-6,
+            rotor_drag_z: 7.553e-7,
+        }
+    }
+
+    /// AscTec Hummingbird as RotorPy `rotorpy/vehicles/hummingbird_params.py`
+    /// gives it: m 0.5 kg, J diag(3.65e-3, 3.68e-3, 7.03e-3) kg·m², l 0.17 m
+    /// "×", k_f 5.57e-6, k_m 1.36e-7, k_d 1.19e-4, k_z 2.32e-4,
+    /// c_D (0.5e-2, 0.5e-2, 1e-2). J_r is 0 (not in RotorPy).
+    pub fn hummingbird() -> Self {
+        Self {
+            mass: 0.5,
+            gravity: 9.81,
+            inertia: diag([3.65e-3, 3.68e-3, 7.03e-3]),
+            arm_length: 0.17,
+            configuration: Configuration::Cross,
+            spin: PAPER_SPIN,
+            thrust_coefficient: 5.57e-6,
+            moment_coefficient: 1.36e-7,
+            rotor_inertia: 0.0,
+            parasitic_drag: [0.5e-2, 0.5e-2, 1e-2],
+            rotor_drag_xy: 1.19e-4,
+            rotor_drag_z: 2.32e-4,
+        }
+    }
+
+    /// Reject non-physical values:
+    ///
+    /// | parameter | range |
+    /// |---|---|
+    /// | mass (kg) | `[1e-6, 1e6]` |
+    /// | gravity (m/s²) | `[0, 1e3]` |
+    /// | inertia (kg·m²) | finite, symmetric (to 1e-12 relative), positive definite |
+    /// | arm length (m) | `[1e-6, 1e6]` |
+    /// | thrust, moment coefficients | `[1e-12, 1e6]` (the mixer divides by them) |
+    /// | rotor inertia, drag coefficients | `[0, 1e6]` |
+    pub fn check(&self) -> Result<(), GainError> {
+        closed("mass", self.mass, 1e-6, 1e6, "1e-6 <= mass <= 1e6 kg")?;
+        closed("gravity", self.gravity, 0.0, 1e3, "0 <= gravity <= 1e3 m/s^2")?;
+        const NAMES: [[&str; 3]; 3] = [
+            ["inertia[0][0]", "inertia[0][1]", "inertia[0][2]"],
+            ["inertia[1][0]", "inertia[1][1]", "inertia[1][2]"],
+            ["inertia[2][0]", "inertia[2][1]", "inertia[2][2]"],
+        ];
+        let j = &self.inertia;
+        let scale = j[0][0].abs().max(j[1][1].abs()).max(j[2][2].abs());
+        for r in 0..3 {
+            for c in 0..3 {
+                closed(NAMES[r][c], j[r][c], -1e6, 1e6, "a finite inertia entry, |J_ij| <= 1e6 kg m^2")?;
+                if c > r && (j[r][c] - j[c][r]).abs() > 1e-12 * scale {
+                    return Err(GainError {
+                        field: NAMES[r][c],
+                        value: j[r][c],
+                        expected: "a symmetric inertia matrix (J_ij = J_ji)",
+                    });
+                }
+            }
+        }
+        const PD: &str = "a positive definite inertia matrix (leading minors > 0)";
+        let minor2 = j[0][0] * j[1][1] - j[0][1] * j[1][0];
+        if j[0][0] <= 0.0 {
+            return Err(GainError { field: "inertia[0][0]", value: j[0][0], expected: PD });
+        }
+        if minor2 <= 0.0 {
+            return Err(GainError { field: "inertia[1][1]", value: j[1][1], expected: PD });
+        }
+        if det3(j) <= 0.0 || inverse3(j).is_none() {
+            return Err(GainError { field: "inertia[2][2]", value: j[2][2], expected: PD });
+        }
+        closed("arm_length", self.arm_length, 1e-6, 1e6, "1e-6 <= arm_length <= 1e6 m")?;
+        const COEF: &str = "1e-12 <= value <= 1e6 (the mixer divides by it)";
+        closed("thrust_coefficient", self.thrust_coefficient, 1e-12, 1e6, COEF)?;
+        closed("moment_coefficient", self.moment_coefficient, 1e-12, 1e6, COEF)?;
+        const NONNEG: &str = "0 <= value <= 1e6";
+        closed("rotor_inertia", self.rotor_inertia, 0.0, 1e6, NONNEG)?;
+        const CD: [&str; 3] = ["parasitic_drag[0]", "parasitic_drag[1]", "parasitic_drag[2]"];
+        for (name, &v) in CD.iter().zip(&self.parasitic_drag) {
+            closed(name, v, 0.0, 1e6, NONNEG)?;
+        }
+        closed("rotor_drag_xy", self.rotor_drag_xy, 0.0, 1e6, NONNEG)?;
+        closed("rotor_drag_z", self.rotor_drag_z, 0.0, 1e6, NONNEG)
+    }
+
+    /// Rotor hub positions `r_i` in body axes, m (all in the plane z_b = 0).
+    pub fn rotor_positions(&self) -> [[f64; 3]; 4] {
+        let l = self.arm_length;
+        match self.configuration {
+            Configuration::Plus => [[l, 0.0, 0.0], [0.0, -l, 0.0], [-l, 0.0, 0.0], [0.0, l, 0.0]],
+            Configuration::Cross => {
+                let a = l * core::f64::consts::FRAC_1_SQRT_2;
+                [[a, a, 0.0], [a, -a, 0.0], [-a, -a, 0.0], [-a, a, 0.0]]
+            }
+        }
+    }
+
+    /// Static allocation matrix `A` (aerodynamics off): `[U1, u2, u3, u4]ᵀ = A [ω1², ω2², ω3², ω4²]ᵀ`
+    /// with U1 in N and torques in N·m. For the paper vehicle it is paper Eq. 2
+    /// ([`ftsmc_core::allocation::forces_from_squared_speeds`]).
+    pub fn allocation_matrix(&self) -> [[f64; 4]; 4] {
+        let r = self.rotor_positions();
+        let kf = self.thrust_coefficient;
+        let km = self.moment_coefficient;
+        let mut a = [[0.0; 4]; 4];
+        for i in 0..4 {
+            a[0][i] = kf;
+            a[1][i] = kf * r[i][1]; // (r × k_f ẑ)_x = r_y k_f
+            a[2][i] = -kf * r[i][0]; // (r × k_f ẑ)_y = −r_x k_f
+            a[3][i] = -self.spin[i].sign() * km;
+        }
+        a
+    }
+
+    /// Rotor speed at which the four rotors together carry the weight, rad/s:
+    /// `sqrt(m g / (4 k_f))`.
+    pub fn hover_rotor_speed(&self) -> f64 {
+        (self.mass * self.gravity / (4.0 * self.thrust_coefficient)).sqrt()
+    }
+}
+
+/// Inputs held constant over an integration step.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct RigidBodyInput {
+    /// Rotor speeds `ω_i ≥ 0`, rad/s (magnitudes; the direction is [`RigidBodyParams::spin`]).
+    pub rotor_speeds: [f64; 4],
+    /// Wind velocity w in the world frame, m/s.
+    pub wind: [f64; 3],
+    /// External force in the world frame (disturbance, payload), N.
+    pub force: [f64; 3],
+    /// External torque in the body frame, N·m.
+    pub torque: [f64; 3],
+}
+
+/// Force and moment in the body frame.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Wrench {
+    /// Force, N (body frame).
+    pub force: [f64; 3],
+    /// Moment about the centre of mass, N·m (body frame).
+    pub torque: [f64; 3],
+}
+
+/// The rigid-body model: checked parameters with the inertia inverse and the
+/// rotor geometry precomputed.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RigidBody {
+    params: RigidBodyParams,
+    inertia_inv: Mat3,
+    rotors: [Vec3; 4],
+    spin: [f64; 4],
+}
+
+impl RigidBody {
+    /// Check the parameters and precompute.
+    pub fn new(params: RigidBodyParams) -> Result<Self, GainError> {
+        params.check()?;
+        let inertia_inv = inverse3(&params.inertia).expect("checked positive definite");
+        Ok(Self { params, inertia_inv, rotors: params.rotor_positions(), spin: params.spin.map(Spin::sign) })
+    }
+
+    /// The parameters.
+    pub fn params(&self) -> &RigidBodyParams {
+        &self.params
+    }
+
+    /// Rotor and aerodynamic wrench in the body frame at a state (without
+    /// gravity, external inputs or the gyroscopic terms).
+    pub fn body_wrench(&self, x: &RigidBodyState, input: &RigidBodyInput) -> Wrench {
+        let p = &self.params;
+        let q = quaternion(x);
+        let v = block(x, index::VELOCITY);
+        let omega = block(x, index::BODY_RATES);
+        let r = rotation(q);
+        let v_air = mat_t_vec(&r, sub(v, input.wind));
+        let aero = p.rotor_drag_xy != 0.0 || p.rotor_drag_z != 0.0;
+        let mut force = [0.0; 3];
+        let mut torque = [0.0; 3];
+        for i in 0..4 {
+            let w = input.rotor_speeds[i];
+            let mut f = [0.0, 0.0, p.thrust_coefficient * w * w];
+            if aero {
+                let vi = add(v_air, cross(omega, self.rotors[i]));
+                f[0] -= w * p.rotor_drag_xy * vi[0];
+                f[1] -= w * p.rotor_drag_xy * vi[1];
+                f[2] -= w * p.rotor_drag_z * vi[2];
+            }
+            force = add(force, f);
+            torque = add(torque, cross(self.rotors[i], f));
+            torque[2] -= self.spin[i] * p.moment_coefficient * w * w;
+        }
+        let cd = p.parasitic_drag;
+        if cd != [0.0; 3] {
+            let speed = norm(v_air);
+            force[0] -= speed * cd[0] * v_air[0];
+            force[1] -= speed * cd[1] * v_air[1];
+            force[2] -= speed * cd[2] * v_air[2];
+        }
+        Wrench { force, torque }
+    }
+
+    /// Rotor angular momentum `h_r = J_r Σ s_i ω_i ẑ` (body frame), kg·m²/s.
+    pub fn rotor_momentum(&self, rotor_speeds: &[f64; 4]) -> [f64; 3] {
+        let s: f64 = (0..4).map(|i| self.spin[i] * rotor_speeds[i]).sum();
+        [0.0, 0.0, self.params.rotor_inertia * s]
+    }
+
+    /// Time derivative of the state (module docs for the equations).
+    pub fn derivative(&self, x: &RigidBodyState, input: &RigidBodyInput) -> RigidBodyState {
+        let p = &self.params;
+        let q = quaternion(x);
+        let omega = block(x, index::BODY_RATES);
+        let r = rotation(q);
+        let wrench = self.body_wrench(x, input);
+        let f_world = add(mat_vec(&r, wrench.force), input.force);
+        let acc = [f_world[0] / p.mass, f_world[1] / p.mass, f_world[2] / p.mass - p.gravity];
+        let j_omega = mat_vec(&p.inertia, omega);
+        let h_r = self.rotor_momentum(&input.rotor_speeds);
+        let m = sub(add(wrench.torque, input.torque), cross(omega, add(j_omega, h_r)));
+        let omega_dot = mat_vec(&self.inertia_inv, m);
+        let q_dot = quat_derivative(q, omega);
+        let mut d = [0.0; STATE_LEN];
+        d[0..3].copy_from_slice(&x[3..6]);
+        d[3..6].copy_from_slice(&acc);
+        d[6..10].copy_from_slice(&q_dot);
+        d[10..13].copy_from_slice(&omega_dot);
+        d
+    }
+
+    /// One RK4 step of `h` seconds with the inputs held, without renormalising
+    /// the quaternion (for tests of the integrator's own norm drift).
+    pub fn step_unnormalized(&self, x: &RigidBodyState, input: &RigidBodyInput, h: f64) -> RigidBodyState {
+        rk4_step(|_, s| self.derivative(s, input), 0.0, x, h)
+    }
+
+    /// One RK4 step of `h` seconds with the inputs held, then the quaternion
+    /// renormalised to unit length. RK4 does not preserve `‖q‖` exactly (its
+    /// drift per step is of order `(h‖Ω‖)⁵`, below 1e-12 over thousands of
+    /// steps at 1 kHz); renormalising keeps the rotation matrix orthonormal to
+    /// rounding over any horizon, and changes the attitude by no more than the
+    /// drift it removes.
+    pub fn step(&self, x: &RigidBodyState, input: &RigidBodyInput, h: f64) -> RigidBodyState {
+        let mut next = self.step_unnormalized(x, input, h);
+        normalize_quaternion(&mut next);
+        next
+    }
+
+    /// World-frame angular momentum of the body (rotors included):
+    /// `R (J Ω + h_r)`, kg·m²/s.
+    pub fn angular_momentum_world(&self, x: &RigidBodyState, rotor_speeds: &[f64; 4]) -> [f64; 3] {
+        let omega = block(x, index::BODY_RATES);
+        let body = add(mat_vec(&self.params.inertia, omega), self.rotor_momentum(rotor_speeds));
+        mat_vec(&rotation(quaternion(x)), body)
+    }
+
+    /// Rotational kinetic energy of the body `½ Ωᵀ J Ω`, J.
+    pub fn rotational_energy(&self, x: &RigidBodyState) -> f64 {
+        let omega = block(x, index::BODY_RATES);
+        0.5 * super::math::dot(omega, mat_vec(&self.params.inertia, omega))
+    }
+}
+
+fn block(x: &RigidBodyState, start: usize) -> Vec3 {
+    [x[start], x[start + 1], x[start + 2]]
+}
+
+fn quaternion(x: &RigidBodyState) -> Quat {
+    let i = index::QUATERNION;
+    [x[i], x[i + 1], x[i + 2], x[i + 3]]
+}
+
+/// Scale the quaternion block of `x` to unit length (left unchanged if its
+/// norm is zero or not finite).
+pub fn normalize_quaternion(x: &mut RigidBodyState) {
+    let i = index::QUATERNION;
+    let n = (x[i] * x[i] + x[i + 1] * x[i + 1] + x[i + 2] * x[i + 2] + x[i + 3] * x[i + 3]).sqrt();
+    if n.is_normal() {
+        for k in i..i + 4 {
+            x[k] /= n;
+        }
+    }
+}
+
+/// Rotation matrix (body → world) of a unit quaternion `[w, x, y, z]`.
+pub fn rotation_matrix(q: &[f64; 4]) -> [[f64; 3]; 3] {
+    rotation(*q)
+}
+
+/// Unit quaternion `[w, x, y, z]` of Z-Y-X Euler angles `[φ, θ, ψ]` (rad):
+/// `q = q_z(ψ) ⊗ q_y(θ) ⊗ q_x(φ)`, so `R(q) = R_z(ψ) R_y(θ) R_x(φ)`.
+pub fn euler_to_quaternion(euler: &[f64; 3]) -> [f64; 4] {
+    let (sr, cr) = (0.5 * euler[0]).sin_cos();
+    let (sp, cp) = (0.5 * euler[1]).sin_cos();
+    let (sy, cy) = (0.5 * euler[2]).sin_cos();
+    [cr * cp * cy + sr * sp * sy, sr * cp * cy - cr * sp * sy, cr * sp * cy + sr * cp * sy, cr * cp * sy - sr * sp * cy]
+}
+
+/// Z-Y-X Euler angles `[φ, θ, ψ]` (rad) of a unit quaternion: φ, ψ in
+/// `(−π, π]`, θ in `[−π/2, π/2]`. At θ = ±π/2 (gimbal lock) only φ ∓ ψ is
+/// defined; the split returned there is whatever `atan2` gives and is not
+/// continuous. `q` and `−q` give the same angles.
+pub fn quaternion_to_euler(q: &[f64; 4]) -> [f64; 3] {
+    let [w, x, y, z] = *q;
+    let phi = (2.0 * (w * x + y * z)).atan2(1.0 - 2.0 * (x * x + y * y));
+    let theta = (2.0 * (w * y - x * z)).clamp(-1.0, 1.0).asin();
+    let psi = (2.0 * (w * z + x * y)).atan2(1.0 - 2.0 * (y * y + z * z));
+    [phi, theta, psi]
+}
+
+/// Body rates `Ω = [p, q, r]` (rad/s) from Z-Y-X Euler rates at `euler`:
+///
+/// ```text
+/// p = φ̇ − ψ̇ sθ
+/// q = θ̇ cφ + ψ̇ cθ sφ
+/// r = −θ̇ sφ + ψ̇ cθ cφ
+/// ```
+///
+/// Defined everywhere.
+pub fn euler_rates_to_body_rates(euler: &[f64; 3], euler_rates: &[f64; 3]) -> [f64; 3] {
+    let (sphi, cphi) = euler[0].sin_cos();
+    let (stheta, ctheta) = euler[1].sin_cos();
+    let [dphi, dtheta, dpsi] = *euler_rates;
+    [dphi - dpsi * stheta, dtheta * cphi + dpsi * ctheta * sphi, -dtheta * sphi + dpsi * ctheta * cphi]
+}
+
+/// Smallest `|cos θ|` at which [`body_rates_to_euler_rates`] answers
+/// (|θ| within about 1e-6 rad of π/2 is refused).
+pub const GIMBAL_LOCK_COS: f64 = 1e-6;
+
+/// The Euler-rate map is singular at θ = ±π/2.
+#[derive(Clone, Copy, Debug, PartialEq, thiserror::Error)]
+#[error("gimbal lock: pitch θ = {theta} rad has |cos θ| < {GIMBAL_LOCK_COS}; Euler rates are undefined")]
+pub struct GimbalLock {
+    /// The pitch angle θ, rad.
+    pub theta: f64,
+}
+
+/// Z-Y-X Euler rates `[φ̇, θ̇, ψ̇]` (rad/s) from body rates Ω at `euler`:
+///
+/// ```text
+/// φ̇ = p + (q sφ + r cφ) tθ
+/// θ̇ = q cφ − r sφ
+/// ψ̇ = (q sφ + r cφ) / cθ
+/// ```
+///
+/// Errors with [`GimbalLock`] when `|cos θ| < GIMBAL_LOCK_COS`.
+pub fn body_rates_to_euler_rates(euler: &[f64; 3], body_rates: &[f64; 3]) -> Result<[f64; 3], GimbalLock> {
+    let ctheta = euler[1].cos();
+    if ctheta.abs() < GIMBAL_LOCK_COS {
+        return Err(GimbalLock { theta: euler[1] });
+    }
+    Ok(euler_rates_with_cos(euler, body_rates, ctheta))
+}
+
+fn euler_rates_with_cos(euler: &[f64; 3], body_rates: &[f64; 3], ctheta: f64) -> [f64; 3] {
+    let (sphi, cphi) = euler[0].sin_cos();
+    let stheta = euler[1].sin();
+    let [p, q, r] = *body_rates;
+    let a = q * sphi + r * cphi;
+    [p + a * stheta / ctheta, q * cphi - r * sphi, a / ctheta]
+}
+
+/// The Euler state the paper's controllers were designed for: position,
+/// velocity, Z-Y-X angles ([`quaternion_to_euler`]) and Euler rates
+/// ([`body_rates_to_euler_rates`]). Errors with [`GimbalLock`] at θ = ±π/2.
+pub fn try_to_quad_state(x: &RigidBodyState) -> Result<QuadState, GimbalLock> {
+    let attitude = quaternion_to_euler(&quaternion(x));
+    let angular_rate = body_rates_to_euler_rates(&attitude, &block(x, index::BODY_RATES))?;
+    Ok(QuadState { position: block(x, index::POSITION), attitude, velocity: block(x, index::VELOCITY), angular_rate })
+}
+
+/// As [`try_to_quad_state`], but never fails: within [`GIMBAL_LOCK_COS`] of
+/// the singularity `cos θ` is clamped to `±GIMBAL_LOCK_COS` (the sign of
+/// cos θ; positive at exactly 0), so the Euler rates stay finite (large, up to ~1e6 × ‖Ω‖)
+/// rather than infinite. A controller flying there has already lost its
+/// Euler-angle model; use [`try_to_quad_state`] to detect it.
+pub fn to_quad_state(x: &RigidBodyState) -> QuadState {
+    let attitude = quaternion_to_euler(&quaternion(x));
+    let c = attitude[1].cos();
+    let c = if c.abs() >= GIMBAL_LOCK_COS {
+        c
+    } else if c < 0.0 {
+        -GIMBAL_LOCK_COS
+    } else {
+        GIMBAL_LOCK_COS
+    };
+    QuadState {
+        position: block(x, index::POSITION),
+        attitude,
+        velocity: block(x, index::VELOCITY),
+        angular_rate: euler_rates_with_cos(&attitude, &block(x, index::BODY_RATES), c),
+    }
+}
+
+/// Rigid-body state of an Euler state (quaternion from the angles, body
+/// rates from the Euler rates).
+pub fn from_quad_state(s: &QuadState) -> RigidBodyState {
+    let q = euler_to_quaternion(&s.attitude);
+    let omega = euler_rates_to_body_rates(&s.attitude, &s.angular_rate);
+    let mut x = [0.0; STATE_LEN];
+    x[0..3].copy_from_slice(&s.position);
+    x[3..6].copy_from_slice(&s.velocity);
+    x[6..10].copy_from_slice(&q);
+    x[10..13].copy_from_slice(&omega);
+    x
+}
