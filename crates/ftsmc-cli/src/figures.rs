@@ -129,12 +129,12 @@ fn control_specs<'a>() -> [PanelSpec<'a>; 4] {
 }
 
 /// Adaptive states of one controller: one panel per channel and estimate.
-fn adaptive_figure(title: &str, run: &RunOutput, estimate_names: &[(&str, usize)]) -> Figure {
+fn adaptive_figure(title: &str, run: &RunOutput, estimate_names: &[(&str, &str)]) -> Figure {
     let mut panels = Vec::new();
     for axis in ["x", "y", "z", "phi", "theta", "psi"] {
         let mut s = Vec::new();
-        for (name, k) in estimate_names {
-            let mut one = series(run, &format!("est_{axis}_{k}"), format!("{name} ({axis})"), false);
+        for (k, (name, column)) in estimate_names.iter().enumerate() {
+            let mut one = series(run, &format!("{column}_{axis}"), format!("{name} ({axis})"), false);
             if estimate_names.len() > 1 {
                 one.color = crate::plot::controller_color(&format!("{}-{k}", run.controller));
             }
@@ -166,14 +166,14 @@ pub fn scenario_1(runs: &[&RunOutput], dir: &Path) -> Result<Vec<PathBuf>> {
     for run in runs {
         match run.controller.as_str() {
             "ftaftsmc" => out.extend(write_figure(
-                &adaptive_figure("Fig. 3 — FTAFTSMC adaptive gains δ̂ (Eq. 17), scenario 1", run, &[("δ̂", 0)]),
+                &adaptive_figure("Fig. 3 — FTAFTSMC adaptive gains δ̂ (Eq. 17), scenario 1", run, &[("δ̂", "delta_hat")]),
                 &dir.join("fig3-adaptive-gains-scenario1"),
             )?),
             "ranftsmc" => out.extend(write_figure(
                 &adaptive_figure(
                     "RANFTSMC adaptive gains â0, â1, â2 (scenario 1)",
                     run,
-                    &[("â0", 0), ("â1", 1), ("â2", 2)],
+                    &[("â0", "a_hat0"), ("â1", "a_hat1"), ("â2", "a_hat2")],
                 ),
                 &dir.join("fig3b-ranftsmc-gains-scenario1"),
             )?),

@@ -16,7 +16,8 @@
 //! negative power of ė anywhere (the surface is nonsingular).
 
 use crate::law::{
-    check_closed, check_gain, check_non_negative, inputs_finite, saturate, AxisLaw, GainError, INPUT_LIMIT, STATE_LIMIT,
+    check_closed, check_gain, check_non_negative, inputs_finite, saturate, AxisLaw, GainError, INPUT_LIMIT,
+    MAX_ESTIMATES, STATE_LIMIT,
 };
 use crate::math::{pow_abs, sig, sign, sqrt, tanh};
 
@@ -208,6 +209,7 @@ impl TsmStaAxis {
 
 impl AxisLaw for TsmStaAxis {
     const NAME: &'static str = "tsm-sta";
+    const ESTIMATE_NAMES: [&'static str; MAX_ESTIMATES] = ["nu", "", ""];
 
     /// Returns `v_fb`; then `ν += dt · (−k2 sign(s))`.
     ///
