@@ -308,8 +308,9 @@ pub fn recording_csv(rec: &Recording) -> Vec<u8> {
     rec.to_csv()
 }
 
-/// Shortest round-trip decimal form, as in the time series (Ryū: `0.3`,
-/// `1.0`, `2.5e-7`; `NaN`, `inf` spelled as pandas reads them).
+/// Shortest round-trip decimal form, as in the time series (`0.3`, `1.0`,
+/// `2.5e-7`; `NaN`, `inf` spelled as pandas reads them; see
+/// [`ftsmc_sim::simulate::push_number`]).
 pub fn format_number(v: f64) -> String {
     let mut out = Vec::with_capacity(24);
     ftsmc_sim::simulate::push_number(&mut out, v);

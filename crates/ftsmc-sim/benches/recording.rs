@@ -7,7 +7,7 @@
 //! - `scenario-2/no-recording`: metrics only (`RunOptions { record: false }`);
 //! - `scenario-2/recording`: the time series kept in memory;
 //! - `scenario-2/recording+csv`: and serialised to CSV bytes, as `ftsmc run`
-//!   writes it ([`Recording::to_csv`]: Ryū into one byte buffer);
+//!   writes it ([`Recording::to_csv`]: zmij into one byte buffer);
 //! - `scenario-2/recording+legacy-csv`: the same rows through the writer
 //!   `ftsmc` used before (the `csv` crate, one `format!`ed `String` per number).
 //!
