@@ -129,22 +129,22 @@ fn control_specs<'a>() -> [PanelSpec<'a>; 4] {
 }
 
 /// Adaptive states of one controller: one panel per channel; each estimate
-/// is `(legend label, index, colour, units on position channels, units on attitude channels)`.
-type Estimate<'a> = (&'a str, usize, crate::plot::Rgb, &'a str, &'a str);
+/// is `(legend label, CSV column prefix (the column is `<prefix>_<axis>`), colour, units on position channels, units on attitude channels)`.
+type Estimate<'a> = (&'a str, &'a str, crate::plot::Rgb, &'a str, &'a str);
 
 fn adaptive_figure(title: &str, run: &RunOutput, estimates: &[Estimate], y_name: &str) -> Figure {
     let mut panels = Vec::new();
     for (axis, name) in [("x", "x"), ("y", "y"), ("z", "z"), ("phi", "φ"), ("theta", "θ"), ("psi", "ψ")] {
         let attitude = matches!(axis, "phi" | "theta" | "psi");
         let mut s = Vec::new();
-        for &(label, k, color, pos_unit, att_unit) in estimates {
+        for &(label, column, color, pos_unit, att_unit) in estimates {
             // With several estimates the units go in the legend, one entry per estimate.
             let label = match (estimates.len(), pos_unit == att_unit) {
                 (1, _) => label.to_string(),
                 (_, true) => format!("{label} ({pos_unit})"),
                 _ => format!("{label} ({pos_unit}; {att_unit} on φ, θ, ψ)"),
             };
-            let mut one = series(run, &format!("est_{axis}_{k}"), label, false);
+            let mut one = series(run, &format!("{column}_{axis}"), label, false);
             one.color = color;
             s.push(one);
         }
@@ -182,7 +182,7 @@ pub fn scenario_1(runs: &[&RunOutput], dir: &Path) -> Result<Vec<PathBuf>> {
                 &adaptive_figure(
                     "Fig. 3 — FTAFTSMC adaptive gains δ̂ (Eq. 17), scenario 1",
                     run,
-                    &[("δ̂", 0, controller_color("ftaftsmc"), "m²/s⁴", "rad²/s⁴")],
+                    &[("δ̂", "delta_hat", controller_color("ftaftsmc"), "m²/s⁴", "rad²/s⁴")],
                     "δ̂",
                 ),
                 &dir.join("fig3-adaptive-gains-scenario1"),
@@ -193,9 +193,9 @@ pub fn scenario_1(runs: &[&RunOutput], dir: &Path) -> Result<Vec<PathBuf>> {
                     run,
                     // v = … − (â0 + â1|e| + â2|ė| + h) sign(σ): every term is an acceleration.
                     &[
-                        ("â0", 0, controller_color("ranftsmc"), "m/s²", "rad/s²"),
-                        ("â1", 1, Rgb(148, 103, 189), "1/s²", "1/s²"),
-                        ("â2", 2, Rgb(70, 70, 70), "1/s", "1/s"),
+                        ("â0", "a_hat0", controller_color("ranftsmc"), "m/s²", "rad/s²"),
+                        ("â1", "a_hat1", Rgb(148, 103, 189), "1/s²", "1/s²"),
+                        ("â2", "a_hat2", Rgb(70, 70, 70), "1/s", "1/s"),
                     ],
                     "â0, â1, â2",
                 ),

@@ -302,28 +302,19 @@ pub fn one_line(text: &str, max: usize) -> String {
     }
 }
 
-/// The time series of a run as CSV text (header = column names).
-pub fn recording_csv(rec: &Recording) -> Result<Vec<u8>> {
-    let mut w = csv::Writer::from_writer(Vec::new());
-    w.write_record(&rec.names)?;
-    let mut row = Vec::with_capacity(rec.names.len());
-    for i in 0..rec.len() {
-        row.clear();
-        row.extend(rec.columns.iter().map(|c| format_number(c[i])));
-        w.write_record(&row)?;
-    }
-    w.into_inner().map_err(|e| anyhow::anyhow!("csv: {e}"))
+/// The time series of a run as CSV text (header = column names; see
+/// [`Recording::write_csv`] and docs/outputs.md).
+pub fn recording_csv(rec: &Recording) -> Vec<u8> {
+    rec.to_csv()
 }
 
-/// Shortest round-trip decimal form (`NaN`, `inf` spelled as pandas reads them).
+/// Shortest round-trip decimal form, as in the time series (`0.3`, `1.0`,
+/// `2.5e-7`; `NaN`, `inf` spelled as pandas reads them; see
+/// [`ftsmc_sim::simulate::push_number`]).
 pub fn format_number(v: f64) -> String {
-    if v.is_nan() {
-        "NaN".into()
-    } else if v.is_infinite() {
-        if v > 0.0 { "inf" } else { "-inf" }.into()
-    } else {
-        format!("{v}")
-    }
+    let mut out = Vec::with_capacity(24);
+    ftsmc_sim::simulate::push_number(&mut out, v);
+    String::from_utf8(out).unwrap_or_default()
 }
 
 /// Metrics and exit status of one run as a JSON object, with `covered`

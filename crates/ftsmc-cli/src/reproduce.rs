@@ -65,7 +65,7 @@ fn write_runs(runs: &[RunOutput], dir: &ResultDir, flat: bool) -> Result<()> {
     for run in runs {
         let file = format!("{}.csv", run.controller);
         let rel = if flat { Path::new(&file).to_path_buf() } else { Path::new(&run.scenario).join(&file) };
-        dir.write(rel, &recording_csv(&run.recording)?)?;
+        dir.write(rel, &recording_csv(&run.recording))?;
     }
     Ok(())
 }

@@ -252,6 +252,12 @@ pub trait Controller {
     fn update(&mut self, state: &QuadState, reference: &Reference, dt: f64) -> Command;
     /// Quantities computed at the last update.
     fn telemetry(&self) -> &Telemetry;
+    /// Names of the channel laws' [`Telemetry::estimates`] slots
+    /// ([`AxisLaw::ESTIMATE_NAMES`], `""` for an unused slot).
+    fn estimate_names(&self) -> [&'static str; MAX_ESTIMATES];
+    /// True when the mass adaptation of §3.2 is on, i.e.
+    /// [`Telemetry::alpha_hat`] changes (otherwise it stays at its initial value).
+    fn adapts_mass(&self) -> bool;
     /// Restore initial internal states.
     fn reset(&mut self);
 }
@@ -486,6 +492,14 @@ impl<L: AxisLaw> Controller for Cascade<L> {
 
     fn telemetry(&self) -> &Telemetry {
         &self.telemetry
+    }
+
+    fn estimate_names(&self) -> [&'static str; MAX_ESTIMATES] {
+        L::ESTIMATE_NAMES
+    }
+
+    fn adapts_mass(&self) -> bool {
+        self.config.mass_adaptation.enabled
     }
 
     fn reset(&mut self) {

@@ -7,7 +7,7 @@
 
 use crate::law::{
     check_closed, check_gain, check_initial_state, check_left_open, check_open, inputs_finite, saturate, AxisLaw,
-    ContinuousRhs, GainError, INPUT_LIMIT, STATE_LIMIT,
+    ContinuousRhs, GainError, INPUT_LIMIT, MAX_ESTIMATES, STATE_LIMIT,
 };
 use crate::math::{exp, pow_abs, pow_abs_minus_one, pow_abs_sat, sig, sign};
 
@@ -353,6 +353,7 @@ impl FtaftsmcAxis {
 
 impl AxisLaw for FtaftsmcAxis {
     const NAME: &'static str = "ftaftsmc";
+    const ESTIMATE_NAMES: [&'static str; MAX_ESTIMATES] = ["delta_hat", "", ""];
 
     /// Returns `ϖ + ϖ2` (Eq. 13 + Eq. 15), so that `q̈_cmd = q̈_d + ϖ + ϖ2`
     /// (Eq. 18–20, 56–58 before model cancellation).

@@ -183,6 +183,11 @@ pub trait AxisLaw {
     /// Short machine name used in scenario files and outputs (e.g. `"ftaftsmc"`).
     const NAME: &'static str;
 
+    /// Output names of the [`AxisLaw::estimates`] slots, `""` for an unused
+    /// slot: time-series columns are `<name>_<axis>` (e.g. `delta_hat_z`),
+    /// written only for the named slots (docs/outputs.md).
+    const ESTIMATE_NAMES: [&'static str; MAX_ESTIMATES];
+
     /// Compute the feedback acceleration for error `e` and error rate `e_dot`
     /// (units of the channel: m, m/s → m/s²; rad, rad/s → rad/s²) using the
     /// current adaptive states, then advance those states by one control

@@ -15,7 +15,7 @@
 
 use crate::law::{
     check_closed, check_gain, check_gain_or_zero, check_initial_state, check_left_open, check_non_negative, check_open,
-    inputs_finite, saturate, AxisLaw, ContinuousRhs, GainError, INPUT_LIMIT, STATE_LIMIT,
+    inputs_finite, saturate, AxisLaw, ContinuousRhs, GainError, INPUT_LIMIT, MAX_ESTIMATES, STATE_LIMIT,
 };
 use crate::math::{pow_abs, pow_abs_minus_one, sig, sign, tanh};
 
@@ -189,6 +189,7 @@ impl RanftsmcAxis {
 
 impl AxisLaw for RanftsmcAxis {
     const NAME: &'static str = "ranftsmc";
+    const ESTIMATE_NAMES: [&'static str; MAX_ESTIMATES] = ["a_hat0", "a_hat1", "a_hat2"];
 
     /// Returns `v_eq + v_sw`; then `â += dt · dâ/dt`.
     ///

@@ -17,7 +17,7 @@
 
 use crate::law::{
     check_closed, check_gain, check_non_negative, inputs_finite, saturate, AxisLaw, ContinuousRhs, GainError,
-    INPUT_LIMIT, STATE_LIMIT,
+    INPUT_LIMIT, MAX_ESTIMATES, STATE_LIMIT,
 };
 use crate::math::{pow_abs, sig, sign, sqrt, tanh};
 
@@ -209,6 +209,7 @@ impl TsmStaAxis {
 
 impl AxisLaw for TsmStaAxis {
     const NAME: &'static str = "tsm-sta";
+    const ESTIMATE_NAMES: [&'static str; MAX_ESTIMATES] = ["nu", "", ""];
 
     /// Returns `v_fb`; then `ν += dt · (−k2 sign(s))`.
     ///

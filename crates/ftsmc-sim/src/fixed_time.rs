@@ -481,6 +481,7 @@ mod tests {
 
     impl AxisLaw for Linear {
         const NAME: &'static str = "linear";
+        const ESTIMATE_NAMES: [&'static str; MAX_ESTIMATES] = ["", "", ""];
         fn update(&mut self, e: f64, e_dot: f64, _dt: f64) -> f64 {
             self.s = e_dot + self.c * e;
             -self.c * e_dot - self.k * self.s
@@ -512,6 +513,7 @@ mod tests {
 
     impl AxisLaw for Ramped {
         const NAME: &'static str = "ramped";
+        const ESTIMATE_NAMES: [&'static str; MAX_ESTIMATES] = ["z", "", ""];
         fn update(&mut self, e: f64, e_dot: f64, dt: f64) -> f64 {
             self.s = e_dot + self.c * e;
             let v = -self.c * e_dot - self.z * self.s;

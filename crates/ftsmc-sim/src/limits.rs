@@ -234,7 +234,7 @@ pub fn check_flight(scenario: &crate::Scenario, n_controllers: usize) -> Result<
         0.0
     };
     limits.ensure("max_samples", "recorded rows per flight (duration × record_rate)", samples)?;
-    let columns = crate::simulate::recording_columns().len() as f64;
+    let columns = crate::simulate::MAX_RECORDING_COLUMNS as f64;
     let output_bytes = samples * columns * BYTES_PER_VALUE * n_controllers.max(1) as f64;
     limits.ensure(
         "max_output_bytes",

@@ -8,6 +8,7 @@
 
 use ftsmc_core::allocation::{forces_from_squared_speeds, residual_speed, rotor_speeds};
 use ftsmc_core::cascade::Controller;
+use ftsmc_core::law::MAX_ESTIMATES;
 use ftsmc_core::model::{Command, QuadState, QuadrotorParams, Reference};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -89,8 +90,17 @@ impl core::fmt::Display for ExitStatus {
     }
 }
 
-/// Column names of a [`Recording`], in order.
-pub fn recording_columns() -> Vec<String> {
+/// Widest row of a [`Recording`]: every column of [`recording_columns`]
+/// with all estimate slots named and the mass adaptation on.
+pub const MAX_RECORDING_COLUMNS: usize = 1 + 12 + 3 + 3 + 2 + 4 + 4 + 4 + 1 + 6 + 6 * MAX_ESTIMATES + 2 + 4 + 6;
+
+/// Column names of a [`Recording`], in order (docs/outputs.md explains each):
+/// `t`, the state, the references, the commanded and applied inputs, rotor
+/// speeds, sliding variables, the named estimates `<name>_<axis>` of each
+/// channel law (`estimate_names`, e.g. `["delta_hat", "", ""]`; `""` slots
+/// are not written), `alpha_hat` and `mass_estimate` (only with mass
+/// adaptation, `adapts_mass`), true mass and inertia, disturbances.
+pub fn recording_columns(estimate_names: &[&str; MAX_ESTIMATES], adapts_mass: bool) -> Vec<String> {
     let mut names: Vec<String> = [
         "t",
         "x",
@@ -117,6 +127,15 @@ pub fn recording_columns() -> Vec<String> {
         "roll_torque",
         "pitch_torque",
         "yaw_torque",
+        "thrust_cmd",
+        "roll_torque_cmd",
+        "pitch_torque_cmd",
+        "yaw_torque_cmd",
+        "omega_1",
+        "omega_2",
+        "omega_3",
+        "omega_4",
+        "omega_bar",
     ]
     .iter()
     .map(|s| s.to_string())
@@ -125,11 +144,15 @@ pub fn recording_columns() -> Vec<String> {
         names.push(format!("s_{axis}"));
     }
     for axis in ftsmc_core::cascade::channel::NAMES {
-        for k in 0..ftsmc_core::law::MAX_ESTIMATES {
-            names.push(format!("est_{axis}_{k}"));
+        for name in estimate_names.iter().filter(|n| !n.is_empty()) {
+            names.push(format!("{name}_{axis}"));
         }
     }
-    for n in ["alpha_hat", "mass_estimate", "mass_true", "inertia_1", "inertia_2", "inertia_3"] {
+    if adapts_mass {
+        names.push("alpha_hat".into());
+        names.push("mass_estimate".into());
+    }
+    for n in ["mass_true", "inertia_1", "inertia_2", "inertia_3"] {
         names.push(n.to_string());
     }
     for axis in ftsmc_core::cascade::channel::NAMES {
@@ -148,10 +171,19 @@ pub struct Recording {
 }
 
 impl Recording {
-    fn new() -> Self {
-        let names = recording_columns();
+    /// An empty recording with these columns.
+    pub fn with_columns(names: Vec<String>) -> Self {
         let columns = vec![Vec::new(); names.len()];
         Self { names, columns }
+    }
+
+    /// Append one row (`row.len()` must equal the number of columns).
+    #[inline]
+    pub fn push_row(&mut self, row: &[f64]) {
+        debug_assert_eq!(row.len(), self.columns.len());
+        for (col, &v) in self.columns.iter_mut().zip(row) {
+            col.push(v);
+        }
     }
 
     /// The column called `name` (empty slice if unknown).
@@ -167,6 +199,95 @@ impl Recording {
     /// True when no row was recorded.
     pub fn is_empty(&self) -> bool {
         self.len() == 0
+    }
+
+    /// Append the time series as CSV to `out`: a header of the column
+    /// names, then one line per row, `,`-separated, `\n`-terminated, each
+    /// number in its shortest round-trip form ([`push_number`]). No
+    /// allocation per number or row (issue 10: the `csv` crate with a
+    /// `String` per number cost ~9,600 instructions per simulated step).
+    pub fn write_csv(&self, out: &mut Vec<u8>) {
+        // ~20 bytes per number (sign, 17 digits, point, separator).
+        out.reserve(self.names.iter().map(|n| n.len() + 1).sum::<usize>() + self.len() * self.columns.len() * 20);
+        for (j, name) in self.names.iter().enumerate() {
+            if j > 0 {
+                out.push(b',');
+            }
+            out.extend_from_slice(name.as_bytes());
+        }
+        out.push(b'\n');
+        let mut buffer = zmij::Buffer::new();
+        for i in 0..self.len() {
+            for (j, column) in self.columns.iter().enumerate() {
+                if j > 0 {
+                    out.push(b',');
+                }
+                push_number_with(&mut buffer, out, column[i]);
+            }
+            out.push(b'\n');
+        }
+    }
+
+    /// [`Recording::write_csv`] into a new buffer.
+    pub fn to_csv(&self) -> Vec<u8> {
+        let mut out = Vec::new();
+        self.write_csv(&mut out);
+        out
+    }
+}
+
+/// Append `v` to `out` in its shortest round-trip decimal form, parsing
+/// back to the same bits (`0.3`, `1.0`, `-2.5e-7`, `1.2e+16`: positional for
+/// decimal exponents −5…15, else scientific), or `NaN`, `inf`, `-inf` when
+/// not finite (spelled as pandas and MATLAB read them).
+///
+/// The digits come from `zmij` (Schubfach/yy; dtolnay's successor to `ryu`,
+/// the formatter serde_json uses, so summary.json prints numbers the same
+/// way): on a scenario-2 flight it needs ~220 instructions per number
+/// against ~360 for `ryu` and ~1,500 for `format!("{v}")` into a `String`.
+pub fn push_number(out: &mut Vec<u8>, v: f64) {
+    push_number_with(&mut zmij::Buffer::new(), out, v);
+}
+
+#[inline]
+fn push_number_with(buffer: &mut zmij::Buffer, out: &mut Vec<u8>, v: f64) {
+    if v.is_finite() {
+        out.extend_from_slice(buffer.format_finite(v).as_bytes());
+    } else if v.is_nan() {
+        out.extend_from_slice(b"NaN");
+    } else if v > 0.0 {
+        out.extend_from_slice(b"inf");
+    } else {
+        out.extend_from_slice(b"-inf");
+    }
+}
+
+/// One row of a [`Recording`] being assembled on the stack.
+struct Row {
+    values: [f64; MAX_RECORDING_COLUMNS],
+    len: usize,
+}
+
+impl Row {
+    #[inline]
+    fn new() -> Self {
+        Self { values: [0.0; MAX_RECORDING_COLUMNS], len: 0 }
+    }
+
+    #[inline]
+    fn push(&mut self, v: f64) {
+        self.values[self.len] = v;
+        self.len += 1;
+    }
+
+    #[inline]
+    fn extend(&mut self, vs: &[f64]) {
+        self.values[self.len..self.len + vs.len()].copy_from_slice(vs);
+        self.len += vs.len();
+    }
+
+    fn as_slice(&self) -> &[f64] {
+        &self.values[..self.len]
     }
 }
 
@@ -324,13 +445,16 @@ impl Default for RunOptions {
     }
 }
 
-fn realise(command: &Command, plant: &QuadrotorParams, max_rotor_speed: Option<f64>) -> (Command, f64) {
+/// The command as the rotors deliver it: the applied thrust and torques
+/// (after the rotor-speed limits, when set), the rotor speeds (rad/s) and
+/// their residual Ω̄.
+fn realise(command: &Command, plant: &QuadrotorParams, max_rotor_speed: Option<f64>) -> (Command, [f64; 4], f64) {
     let omega = rotor_speeds(plant, command, max_rotor_speed.unwrap_or(f64::INFINITY));
     let applied = match max_rotor_speed {
         Some(_) => forces_from_squared_speeds(plant, &omega.map(|o| o * o)),
         None => *command,
     };
-    (applied, residual_speed(&omega))
+    (applied, omega, residual_speed(&omega))
 }
 
 /// Fly `controller` through `scenario`.
@@ -349,7 +473,15 @@ pub fn simulate(scenario: &Scenario, controller: &mut dyn Controller, options: R
     let mut x = scenario.initial_state.state().to_array();
     let mut metrics = MetricsAccumulator::new(dt, sim.settling_band, sim.settling_floor, sim.steady_state_after)
         .with_window(sim.metrics_window);
-    let mut recording = if record_every > 0 { Recording::new() } else { Recording::default() };
+    let estimate_names = controller.estimate_names();
+    let adapts_mass = controller.adapts_mass();
+    let mut recording = if record_every > 0 {
+        Recording::with_columns(recording_columns(&estimate_names, adapts_mass))
+    } else {
+        Recording::default()
+    };
+    // The estimate slots written: (slot) for each named one.
+    let named_slots: Vec<usize> = (0..MAX_ESTIMATES).filter(|&k| !estimate_names[k].is_empty()).collect();
     if let Some(per_row) = steps.checked_div(record_every) {
         let rows = (per_row + 1) as usize;
         for c in &mut recording.columns {
@@ -372,7 +504,7 @@ pub fn simulate(scenario: &Scenario, controller: &mut dyn Controller, options: R
         let telemetry = controller.telemetry();
         env.next_period();
         let plant_now = env.params_with(&tv_now);
-        let (applied, omega_bar) = realise(&command, &plant_now, sim.max_rotor_speed);
+        let (applied, omega, omega_bar) = realise(&command, &plant_now, sim.max_rotor_speed);
 
         let mut errors = [0.0; 6];
         for i in 0..3 {
@@ -389,25 +521,30 @@ pub fn simulate(scenario: &Scenario, controller: &mut dyn Controller, options: R
         metrics.observe(t, &errors, &u);
 
         if record_every > 0 && k % record_every == 0 {
-            let mut row = Vec::with_capacity(recording.names.len());
+            let mut row = Row::new();
             row.push(t);
-            row.extend_from_slice(&x);
-            row.extend_from_slice(&reference.position);
-            row.extend_from_slice(&telemetry.attitude_reference);
-            row.extend_from_slice(&telemetry.attitude_demand);
-            row.extend_from_slice(&u);
-            row.extend_from_slice(&telemetry.sliding);
+            row.extend(&x);
+            row.extend(&reference.position);
+            row.extend(&telemetry.attitude_reference);
+            row.extend(&telemetry.attitude_demand);
+            row.extend(&u);
+            row.extend(&[command.thrust, command.torque[0], command.torque[1], command.torque[2]]);
+            row.extend(&omega);
+            row.push(omega_bar);
+            row.extend(&telemetry.sliding);
             for est in &telemetry.estimates {
-                row.extend_from_slice(est);
+                for &slot in &named_slots {
+                    row.push(est[slot]);
+                }
             }
-            row.push(telemetry.alpha_hat);
-            row.push(telemetry.alpha_hat * scenario.plant.mass);
+            if adapts_mass {
+                row.push(telemetry.alpha_hat);
+                row.push(telemetry.alpha_hat * scenario.plant.mass);
+            }
             row.push(plant_now.mass);
-            row.extend_from_slice(&plant_now.inertia);
-            row.extend_from_slice(&tv_now.disturbance);
-            for (col, v) in recording.columns.iter_mut().zip(row) {
-                col.push(v);
-            }
+            row.extend(&plant_now.inertia);
+            row.extend(&tv_now.disturbance);
+            recording.push_row(row.as_slice());
         }
 
         // Plant between ticks: RK4 substeps with the command held.

@@ -55,7 +55,7 @@ fn sliding_variable_obeys_the_reaching_law_when_the_model_is_exact() {
     let dt = s.control_period();
     for (axis, gains) in [("z", s.ftaftsmc.z), ("psi", s.ftaftsmc.psi)] {
         let sv = run.recording.column(&format!("s_{axis}"));
-        let dh = run.recording.column(&format!("est_{axis}_0"));
+        let dh = run.recording.column(&format!("delta_hat_{axis}"));
         let mut worst: f64 = 0.0;
         let mut scale: f64 = 0.0;
         for k in 1..sv.len() - 1 {
@@ -81,7 +81,7 @@ fn sliding_variable_mismatch_shrinks_with_the_control_period() {
         s.duration = 1.0;
         let run = registry::run("ftaftsmc", &s, RunOptions::default()).unwrap();
         let sv = run.recording.column("s_psi");
-        let dh = run.recording.column("est_psi_0");
+        let dh = run.recording.column("delta_hat_psi");
         let dt = 1.0 / rate;
         (1..sv.len() - 1)
             .map(|k| ((sv[k + 1] - sv[k]) / dt - reaching_law(&s.ftaftsmc.psi, sv[k], dh[k - 1])).abs())

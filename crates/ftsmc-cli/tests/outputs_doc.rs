@@ -1,0 +1,207 @@
+//! Column dictionary: every CSV column and every JSON key that `reproduce`,
+//! `run`, `montecarlo` and `fixed-time` write is named in docs/outputs.md,
+//! so adding an output without documenting it fails here.
+//!
+//! The doc's notation generalises names: `<axis>` (x … psi), `<signal>`
+//! (thrust … yaw_torque), `<scenario>`, `<controller>`, `<metric>` (a
+//! runs.csv metric column) and `[]` for array elements; a name counts as
+//! documented when it, or its generalised form, is the first cell of a
+//! table row (`| \`name\` | unit | meaning |`), not merely mentioned.
+
+use std::collections::BTreeSet;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use serde_json::Value;
+
+const AXES: [&str; 6] = ["x", "y", "z", "phi", "theta", "psi"];
+const SIGNALS: [&str; 4] = ["thrust", "roll_torque", "pitch_torque", "yaw_torque"];
+
+fn ftsmc(args: &[&str], cwd: &Path) {
+    let out = Command::new(env!("CARGO_BIN_EXE_ftsmc")).args(args).current_dir(cwd).output().expect("binary runs");
+    assert!(out.status.success(), "ftsmc {args:?}: {}", String::from_utf8_lossy(&out.stderr));
+}
+
+fn temp_dir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("ftsmc-outputs-doc-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// The names docs/outputs.md gives a table row of their own: the
+/// backticked first cell of each row.
+fn documented() -> BTreeSet<String> {
+    let doc = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("../../docs/outputs.md")).unwrap();
+    doc.lines()
+        .filter_map(|l| l.strip_prefix("| `"))
+        .filter_map(|rest| rest.split_once("` |").map(|(name, _)| name.to_string()))
+        .collect()
+}
+
+/// `name` with a trailing `_<axis>` or `_<signal>` generalised.
+fn generalised_column(name: &str) -> Option<String> {
+    for s in SIGNALS {
+        if let Some(prefix) = name.strip_suffix(&format!("_{s}")) {
+            return Some(format!("{prefix}_<signal>"));
+        }
+    }
+    for a in AXES {
+        if let Some(prefix) = name.strip_suffix(&format!("_{a}")) {
+            return Some(format!("{prefix}_<axis>"));
+        }
+    }
+    None
+}
+
+fn column_documented(doc: &BTreeSet<String>, name: &str) -> bool {
+    doc.contains(name) || generalised_column(name).is_some_and(|g| doc.contains(&g))
+}
+
+/// Headers of every `.csv` below `dir`, as (file, column).
+fn csv_columns(dir: &Path, out: &mut Vec<(PathBuf, String)>) {
+    for entry in std::fs::read_dir(dir).unwrap().flatten() {
+        let p = entry.path();
+        if p.is_dir() {
+            csv_columns(&p, out);
+        } else if p.extension().is_some_and(|e| e == "csv") {
+            let text = std::fs::read_to_string(&p).unwrap();
+            for name in text.lines().next().unwrap_or("").split(',') {
+                out.push((p.clone(), name.to_string()));
+            }
+        }
+    }
+}
+
+/// Dotted paths of every leaf of `v`, generalised: scenario and controller
+/// levels, Monte Carlo metric names, axis and signal names, array elements.
+fn key_paths(v: &Value, path: &mut Vec<String>, out: &mut BTreeSet<String>) {
+    match v {
+        Value::Object(map) => {
+            for (k, child) in map {
+                let depth = path.len();
+                let seg = match (path.first().map(String::as_str), depth) {
+                    (Some("scenarios"), 1) => "<scenario>".to_string(),
+                    (Some("scenarios"), 2) | (Some("controllers"), 1) => "<controller>".to_string(),
+                    (Some("controllers"), 3) if path[2] == "metrics" => "<metric>".to_string(),
+                    (Some("table3"), 3) => "<controller>".to_string(),
+                    _ if AXES.contains(&k.as_str()) => "<axis>".to_string(),
+                    _ if SIGNALS.contains(&k.as_str()) => "<signal>".to_string(),
+                    _ => k.clone(),
+                };
+                path.push(seg);
+                key_paths(child, path, out);
+                path.pop();
+            }
+        }
+        Value::Array(items) if items.iter().any(|i| i.is_object() || i.is_array()) => {
+            let last = path.pop().unwrap_or_default();
+            path.push(format!("{last}[]"));
+            for item in items {
+                key_paths(item, path, out);
+            }
+            path.pop();
+            path.push(last);
+        }
+        _ => {
+            out.insert(path.join("."));
+        }
+    }
+}
+
+fn json_paths(file: &Path) -> BTreeSet<String> {
+    let v: Value = serde_json::from_str(&std::fs::read_to_string(file).unwrap()).unwrap();
+    let mut out = BTreeSet::new();
+    key_paths(&v, &mut Vec::new(), &mut out);
+    out
+}
+
+#[test]
+fn every_csv_column_and_json_key_is_in_docs_outputs_md() {
+    let dir = temp_dir("all");
+    ftsmc(&["reproduce", "--no-figures", "--out", "repro"], &dir);
+    // A run that diverges (FTAFTSMC under a 1000 rad/s rotor limit tilts
+    // over at 0.64 s) writes the divergence keys too.
+    let scenario = Command::new(env!("CARGO_BIN_EXE_ftsmc")).args(["scenario", "paper-scenario-1"]).output().unwrap();
+    let text = String::from_utf8(scenario.stdout).unwrap();
+    assert!(text.contains("\nduration = 20.0"), "scenario text changed; adjust this test");
+    let text = text.replacen("\nduration = 20.0", "\nduration = 1.0", 1).replacen(
+        "[simulation]\n",
+        "[simulation]\nmax_rotor_speed = 1000.0\n",
+        1,
+    );
+    std::fs::write(dir.join("diverging.toml"), text).unwrap();
+    ftsmc(&["run", "diverging.toml", "--no-figures", "--out", "run"], &dir);
+    ftsmc(&["montecarlo", "paper-scenario-2", "--runs", "3", "--no-figures", "--out", "mc"], &dir);
+    ftsmc(&["fixed-time", "--per-decade", "1", "--out", "ft"], &dir);
+
+    let doc = documented();
+    let mut missing = BTreeSet::new();
+
+    let mut columns = Vec::new();
+    csv_columns(&dir, &mut columns);
+    let files: BTreeSet<String> =
+        columns.iter().map(|(f, _)| f.file_name().unwrap().to_string_lossy().into_owned()).collect();
+    for expected in ["ftaftsmc.csv", "ranftsmc.csv", "tsm-sta.csv", "runs.csv", "fixed-time.csv"] {
+        assert!(files.contains(expected), "{expected} not written: {files:?}");
+    }
+    for (file, name) in &columns {
+        if !column_documented(&doc, name) {
+            missing.insert(format!("column `{name}` of {}", file.display()));
+        }
+    }
+
+    let mut json_files = Vec::new();
+    for rel in ["repro/summary.json", "mc/summary.json", "ft/fixed-time.json"] {
+        json_files.push(dir.join(rel));
+    }
+    let run_summary = std::fs::read_dir(dir.join("run")).unwrap().flatten().next().unwrap().path().join("summary.json");
+    json_files.push(run_summary);
+    let mut all_paths = BTreeSet::new();
+    for file in &json_files {
+        for path in json_paths(file) {
+            if !doc.contains(&path) {
+                missing.insert(format!("key `{path}` of {}", file.display()));
+            }
+            all_paths.insert(path);
+        }
+    }
+    // The test must see what it claims to check.
+    for p in [
+        "scenarios.<scenario>.<controller>.exit_status.divergence.reason",
+        "scenarios.<scenario>.<controller>.ise_window.<axis>",
+        "table3.<axis>.ours.<controller>",
+        "controllers.<controller>.metrics.<metric>.median",
+        "channels[].bound",
+    ] {
+        assert!(all_paths.contains(p), "{p} not produced: {all_paths:?}");
+    }
+    // Monte Carlo metric names are runs.csv columns, documented there.
+    let mc: Value = serde_json::from_str(&std::fs::read_to_string(dir.join("mc/summary.json")).unwrap()).unwrap();
+    for (_, c) in mc["controllers"].as_object().unwrap() {
+        for metric in c["metrics"].as_object().unwrap().keys() {
+            if !column_documented(&doc, metric) {
+                missing.insert(format!("Monte Carlo metric `{metric}`"));
+            }
+        }
+    }
+    assert!(
+        missing.is_empty(),
+        "not documented in docs/outputs.md:\n{}",
+        missing.into_iter().collect::<Vec<_>>().join("\n")
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn generalisation_keeps_undocumented_names_undocumented() {
+    let doc = documented();
+    assert!(column_documented(&doc, "delta_hat_theta"));
+    assert!(column_documented(&doc, "control_energy_yaw_torque"));
+    assert!(column_documented(&doc, "omega_3"));
+    assert!(!column_documented(&doc, "est_x_0"));
+    assert!(!column_documented(&doc, "omega_5"));
+    assert!(!column_documented(&doc, "brand_new_x"));
+    // Mentioned in prose only is not enough.
+    assert!(!doc.contains("est_<axis>_0") && !doc.contains("<controller>"));
+}
