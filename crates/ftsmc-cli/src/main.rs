@@ -30,7 +30,11 @@ Start with `ftsmc reproduce`: it runs the paper's two scenarios with all three c
 Table 3 beside ours with a verdict on each claim, and writes CSV time series, summary.json and the nine figures \
 (SVG + PNG) under results/.\n\n\
 Write your own scenario as a TOML file (start from `ftsmc scenario paper-scenario-1 > my.toml`) and run it with \
-`ftsmc run my.toml`."
+`ftsmc run my.toml`.\n\n\
+Every command takes `--out DIR`, the parent folder of its results: `run`, `montecarlo` and `fixed-time` write \
+DIR/<scenario name>/ (defaults results, results/montecarlo, results/fixed-time); `reproduce` writes \
+DIR/<scenario name>/ for each paper scenario and its report beside them in DIR (default results). Each result \
+folder holds scenario.toml, the resolved scenario as flown: `ftsmc run DIR/<name>/scenario.toml` flies it again."
 )]
 struct Cli {
     #[command(subcommand)]
@@ -45,7 +49,7 @@ struct Cli {
 enum Command {
     /// Run both paper scenarios with every controller; print Table 3 beside the paper's; write CSV, JSON, figures.
     Reproduce {
-        /// Output directory.
+        /// Parent folder: writes OUT/<scenario>/ per paper scenario, and summary.json, report.md, figures/ in OUT.
         #[arg(long, default_value = "results")]
         out: PathBuf,
         /// Skip figure rendering (tables, CSV and JSON only).
@@ -57,9 +61,9 @@ enum Command {
         /// Scenario file (TOML), or the name of a built-in paper scenario.
         scenario: String,
         /// Controller(s) to run (repeat or comma-separate); default: the scenario's `controllers` list.
-        #[arg(long, short, value_delimiter = ',')]
-        controller: Vec<String>,
-        /// Output directory.
+        #[arg(long, short = 'c', alias = "controller", value_delimiter = ',')]
+        controllers: Vec<String>,
+        /// Parent folder: the results go to OUT/<scenario name>/.
         #[arg(long, default_value = "results")]
         out: PathBuf,
         /// Skip figure rendering.
@@ -75,13 +79,13 @@ enum Command {
         /// Scenario whose gains are used (file or built-in name).
         #[arg(long, default_value = "paper-scenario-1")]
         scenario: String,
-        /// Controllers to sweep (comma-separated).
-        #[arg(long, value_delimiter = ',', default_value = "ftaftsmc,ranftsmc,tsm-sta")]
+        /// Controller(s) to sweep (repeat or comma-separate); default: the scenario's `controllers` list.
+        #[arg(long, short = 'c', value_delimiter = ',')]
         controllers: Vec<String>,
         /// Log-spaced magnitudes per decade.
         #[arg(long, default_value_t = 3)]
         per_decade: usize,
-        /// Output directory.
+        /// Parent folder: the results go to OUT/<scenario name>/.
         #[arg(long, default_value = "results/fixed-time")]
         out: PathBuf,
         /// Raise a cost limit, e.g. `--limit max_steps=1e10` (repeatable; keys: max_steps, max_samples,
@@ -102,10 +106,10 @@ enum Command {
         /// Worker threads (default: all cores). Results do not depend on it.
         #[arg(long)]
         threads: Option<usize>,
-        /// Controllers (comma-separated; default: the scenario's list).
-        #[arg(long, value_delimiter = ',')]
+        /// Controller(s) to fly (repeat or comma-separate); default: the scenario's `controllers` list.
+        #[arg(long, short = 'c', value_delimiter = ',')]
         controllers: Vec<String>,
-        /// Output directory.
+        /// Parent folder: the results go to OUT/<scenario name>/.
         #[arg(long, default_value = "results/montecarlo")]
         out: PathBuf,
         /// Skip the box-plot figure.
@@ -122,9 +126,10 @@ enum Command {
         #[arg(long, default_value = "paper-scenario-1")]
         scenario: String,
     },
-    /// Print a built-in paper scenario as TOML (a starting point for your own).
+    /// Print a built-in scenario as TOML (a starting point for your own; `ftsmc list` describes them).
     Scenario {
-        /// `paper-scenario-1` or `paper-scenario-2`.
+        /// Built-in scenario name.
+        #[arg(value_parser = built_in_names())]
         name: String,
     },
     /// List controllers and built-in scenarios.
@@ -157,6 +162,11 @@ pub fn load_scenario_with_limits(arg: &str, limits: &[String]) -> Result<Scenari
     bail!("no scenario file `{arg}` (and it is not a built-in scenario: paper-scenario-1, paper-scenario-2, ftaftsmc-tuned-scenario-1)")
 }
 
+/// The built-in scenario names (file names without `.toml`), for `ftsmc scenario`.
+fn built_in_names() -> clap::builder::PossibleValuesParser {
+    clap::builder::PossibleValuesParser::new(PAPER_SCENARIOS.map(|(file, _)| file.trim_end_matches(".toml")))
+}
+
 fn check_names(names: &[String]) -> Result<()> {
     for name in names {
         registry::check_name(name).map_err(|known| anyhow::anyhow!("unknown controller `{name}` (known: {known})"))?;
@@ -185,16 +195,20 @@ fn main() -> std::process::ExitCode {
 fn run(cli: Cli) -> Result<()> {
     match cli.command {
         Command::Reproduce { out, no_figures } => reproduce::reproduce(&out, !no_figures),
-        Command::Run { scenario, controller, out, no_figures, limit } => {
-            let scenario = load_scenario_with_limits(&scenario, &limit)?;
-            let names = if controller.is_empty() { scenario.controllers.clone() } else { controller };
+        Command::Run { scenario, controllers, out, no_figures, limit } => {
+            let mut scenario = load_scenario_with_limits(&scenario, &limit)?;
+            let names = if controllers.is_empty() { scenario.controllers.clone() } else { controllers };
             check_names(&names)?;
             scenario.check_cost(names.len())?;
-            reproduce::run_scenario(&scenario, &names, &out, !no_figures)
+            // The resolved scenario (written as scenario.toml) lists what was flown.
+            scenario.controllers = names;
+            reproduce::run_scenario(&scenario, &out, !no_figures)
         }
         Command::FixedTime { scenario, controllers, per_decade, out, limit } => {
-            let scenario = load_scenario_with_limits(&scenario, &limit)?;
+            let mut scenario = load_scenario_with_limits(&scenario, &limit)?;
+            let controllers = if controllers.is_empty() { scenario.controllers.clone() } else { controllers };
             check_names(&controllers)?;
+            scenario.controllers = controllers.clone();
             anyhow::ensure!(per_decade >= 1, "--per-decade must be at least 1");
             ftsmc_sim::limits::check_sweep(&scenario.limits, ftsmc_sim::limits::sweep_points(5, per_decade as u64))?;
             let sim = &scenario.simulation;
@@ -212,7 +226,7 @@ fn run(cli: Cli) -> Result<()> {
             fixed_time::run(&scenario, &controllers, &settings, &out)
         }
         Command::Montecarlo { scenario, runs, seed, threads, controllers, out, no_figures, limit } => {
-            let scenario = load_scenario_with_limits(&scenario, &limit)?;
+            let mut scenario = load_scenario_with_limits(&scenario, &limit)?;
             let names = if controllers.is_empty() { scenario.controllers.clone() } else { controllers };
             check_names(&names)?;
             anyhow::ensure!(runs >= 1, "--runs must be at least 1");
@@ -221,7 +235,11 @@ fn run(cli: Cli) -> Result<()> {
             if let Some(n) = threads {
                 ftsmc_sim::limits::check_threads(&scenario.limits, n)?;
             }
-            montecarlo::run(&scenario, &names, runs, seed.unwrap_or(scenario.seed), threads, &out, !no_figures)
+            // The resolved scenario (scenario.toml) carries the master seed and
+            // the controllers flown, so re-running it gives the same batch.
+            scenario.seed = seed.unwrap_or(scenario.seed);
+            scenario.controllers = names;
+            montecarlo::run(&scenario, runs, threads, &out, !no_figures)
         }
         Command::TuneTsmSta { scenario } => {
             let scenario = load_scenario(&scenario)?;
@@ -244,30 +262,67 @@ fn run(cli: Cli) -> Result<()> {
             Ok(())
         }
         Command::Scenario { name } => {
-            let wanted = name.trim_end_matches(".toml");
             let text = PAPER_SCENARIOS
                 .iter()
-                .find(|(file, _)| file.trim_end_matches(".toml") == wanted)
+                .find(|(file, _)| file.trim_end_matches(".toml") == name)
                 .map(|(_, text)| *text)
-                .with_context(|| {
-                    format!(
-                        "no built-in scenario `{name}` (paper-scenario-1, paper-scenario-2, ftaftsmc-tuned-scenario-1)"
-                    )
-                })?;
+                .with_context(|| format!("no built-in scenario `{name}`"))?;
             print!("{text}");
             Ok(())
         }
         Command::List => {
-            println!("controllers:");
-            for (name, what) in registry::CONTROLLERS {
-                println!("  {name:<18} {what}");
-            }
-            println!("built-in scenarios:");
-            for (file, text) in PAPER_SCENARIOS {
-                let s = Scenario::from_toml_str(text, file)?;
-                println!("  {:<18} {}", s.name, s.description);
-            }
+            print!("{}", list_text()?);
             Ok(())
         }
+    }
+}
+
+/// `ftsmc list`: every controller of the registry and every built-in
+/// scenario (`BUILT_IN_SCENARIOS`), names in one aligned column.
+fn list_text() -> Result<String> {
+    let scenarios = PAPER_SCENARIOS
+        .iter()
+        .map(|(file, text)| {
+            let s = Scenario::from_toml_str(text, file)?;
+            Ok((file.trim_end_matches(".toml").to_string(), s.description))
+        })
+        .collect::<Result<Vec<_>>>()?;
+    let width = registry::CONTROLLERS
+        .iter()
+        .map(|(name, _)| name.chars().count())
+        .chain(scenarios.iter().map(|(name, _)| name.chars().count()))
+        .max()
+        .unwrap_or(0);
+    let mut text = String::from("controllers (-c/--controllers):\n");
+    for (name, what) in registry::CONTROLLERS {
+        text.push_str(&format!("  {name:<width$}  {what}\n"));
+    }
+    text.push_str("built-in scenarios (ftsmc run NAME, ftsmc scenario NAME):\n");
+    for (name, what) in &scenarios {
+        text.push_str(&format!("  {name:<width$}  {what}\n"));
+    }
+    Ok(text)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn list_names_every_built_in_scenario_in_one_aligned_column() {
+        let text = list_text().unwrap();
+        for (file, _) in PAPER_SCENARIOS {
+            assert!(text.contains(file.trim_end_matches(".toml")), "{file} missing:\n{text}");
+        }
+        let starts: Vec<usize> = text
+            .lines()
+            .filter(|l| l.starts_with("  "))
+            .map(|l| {
+                let name_end = 2 + l[2..].find(' ').unwrap();
+                name_end + l[name_end..].chars().take_while(|c| *c == ' ').count()
+            })
+            .collect();
+        assert_eq!(starts.len(), registry::CONTROLLERS.len() + PAPER_SCENARIOS.len());
+        assert!(starts.windows(2).all(|w| w[0] == w[1]), "descriptions not aligned:\n{text}");
     }
 }

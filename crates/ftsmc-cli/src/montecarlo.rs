@@ -1,7 +1,6 @@
 //! `ftsmc montecarlo`: randomised batches in parallel, `runs.csv`,
 //! `summary.json` and box plots.
 
-use std::fmt::Write as _;
 use std::path::Path;
 use std::time::Instant;
 
@@ -9,12 +8,13 @@ use anyhow::{Context, Result};
 use ftsmc_sim::montecarlo::{run_batch, summarize, ControllerSummary, McRun, MonteCarloSpec, SAMPLED_COLUMNS};
 use ftsmc_sim::registry::label;
 use ftsmc_sim::scenario::Scenario;
+use ftsmc_sim::simulate::planned_steps;
 use ftsmc_sim::simulate::ExitStatus;
-use indicatif::{ProgressBar, ProgressStyle};
 use serde_json::{json, Map, Value};
 
-use crate::output::{format_number, ResultDir};
+use crate::output::{format_number, provenance, ResultDir};
 use crate::plot::{controller_color, write_boxplots, BoxGroup, BoxPanel};
+use crate::reproduce::{num, steps_bar, Table};
 
 /// `runs.csv` text: one row per (run, controller), in run order. The
 /// integral metrics of a diverged row cover `[0, duration]` (its last
@@ -57,43 +57,51 @@ pub fn runs_csv(rows: &[McRun]) -> Result<Vec<u8>> {
 /// The printed table: statistics over the completed runs (a diverged run's
 /// integrals cover a shorter span and would look better), with the count of
 /// diverged runs; `— (all N diverged)` when none completed.
+///
+/// Two tables, each within 120 columns: success counts with the z and ψ
+/// statistics, then the x and y statistics (median [p5, p95]).
 pub fn mc_table(summaries: &[(String, ControllerSummary)]) -> String {
-    let mut md = String::new();
-    md.push_str("| controller | success | diverged | ISE x median [p5, p95] | ISE y | ISE z | ISE ψ | worst ISE z |\n");
-    md.push_str("|---|---|---|---|---|---|---|---|");
+    let stat_cell = |s: &ControllerSummary, m: &str| {
+        s.metrics.get(m).map_or_else(
+            || if s.diverged > 0 { format!("— (all {} diverged)", s.diverged) } else { "—".to_string() },
+            |st| format!("{} [{}, {}]", num(st.median), num(st.p5), num(st.p95)),
+        )
+    };
+    let mut a = Table::new([
+        "controller",
+        "success",
+        "diverged",
+        "ISE z median [p5, p95]",
+        "worst ISE z",
+        "ISE ψ median [p5, p95]",
+    ]);
+    let mut b = Table::new(["controller", "ISE x median [p5, p95]", "ISE y median [p5, p95]"]);
     for (name, s) in summaries {
-        let none = || if s.diverged > 0 { format!("— (all {} diverged)", s.diverged) } else { "—".to_string() };
-        let cell = |m: &str| {
-            s.metrics.get(m).map_or_else(none, |st| format!("{:.4} [{:.4}, {:.4}]", st.median, st.p5, st.p95))
-        };
-        let _ = write!(
-            md,
-            "\n| {} | {:.1} % | {} | {} | {} | {} | {} | {} |",
-            label(name),
-            100.0 * s.success_rate,
-            s.diverged,
-            cell("ise_x"),
-            cell("ise_y"),
-            cell("ise_z"),
-            cell("ise_psi"),
-            s.metrics.get("ise_z").map_or_else(none, |st| format!("{:.4}", st.worst))
-        );
+        a.row(vec![
+            label(name).to_string(),
+            format!("{:.1} %", 100.0 * s.success_rate),
+            s.diverged.to_string(),
+            stat_cell(s, "ise_z"),
+            s.metrics.get("ise_z").map_or_else(|| stat_cell(s, "ise_z"), |st| num(st.worst)),
+            stat_cell(s, "ise_psi"),
+        ]);
+        b.row(vec![label(name).to_string(), stat_cell(s, "ise_x"), stat_cell(s, "ise_y")]);
     }
+    let mut md = String::from("ISE ∫e² dt over the completed runs (m²·s; ψ rad²·s):\n\n");
+    md.push_str(&a.render());
+    md.push('\n');
+    md.push_str(&b.render());
     md
 }
 
-/// Run a batch and write its outputs.
-pub fn run(
-    scenario: &Scenario,
-    controllers: &[String],
-    runs: u64,
-    seed: u64,
-    threads: Option<usize>,
-    out: &Path,
-    figures: bool,
-) -> Result<()> {
+/// Run a batch of `scenario` (its `controllers`, master seed `seed`) and
+/// write its outputs to `out/<name>/`.
+pub fn run(scenario: &Scenario, runs: u64, threads: Option<usize>, out: &Path, figures: bool) -> Result<()> {
+    let controllers = &scenario.controllers;
+    let seed = scenario.seed;
+    let folder = out.join(&scenario.name);
     // Refuse a bad --out before any flight.
-    let dir = ResultDir::begin(out)?;
+    let dir = ResultDir::begin(&folder)?;
     let spec = scenario.montecarlo.clone().unwrap_or_else(|| {
         eprintln!("note: {} has no [montecarlo] section; runs differ only in their seeds (drag noise)", scenario.name);
         MonteCarloSpec::default()
@@ -103,21 +111,19 @@ pub fn run(
         builder = builder.num_threads(t);
     }
     let pool = builder.build().context("cannot start the thread pool")?;
-    let bar = ProgressBar::new(runs * controllers.len() as u64);
-    bar.set_style(
-        ProgressStyle::with_template(
-            "{spinner} [{elapsed_precise}] {bar:30} {pos}/{len} flights ({per_sec}, eta {eta})",
-        )
-        .expect("valid template"),
-    );
+    let flights = runs * controllers.len() as u64;
+    let bar = steps_bar(flights * planned_steps(scenario), flights);
     let started = Instant::now();
     let rows = pool
-        .install(|| run_batch(scenario, &spec, controllers, runs, seed, &|| bar.inc(1)))
+        .install(|| run_batch(scenario, &spec, controllers, runs, seed, &|n| bar.inc(n)))
         .map_err(|known| anyhow::anyhow!("unknown controller (known: {known})"))?;
     bar.finish_and_clear();
     let elapsed = started.elapsed().as_secs_f64();
 
     dir.write("runs.csv", &runs_csv(&rows)?)?;
+    // The resolved scenario, with the master seed and the controllers flown:
+    // `ftsmc montecarlo <out>/<name>/scenario.toml --runs N` repeats the batch.
+    let file = dir.write_scenario("scenario.toml", scenario, "scenario.toml")?;
     let summaries = summarize(&rows, controllers);
     let mut per_controller = Map::new();
     for (name, s) in &summaries {
@@ -128,6 +134,7 @@ pub fn run(
         "runs": runs,
         "master_seed": seed,
         "controllers": Value::Object(per_controller),
+        "provenance": provenance(&[file]),
     });
     dir.write("summary.json", serde_json::to_string_pretty(&summary)?.as_bytes())?;
 
@@ -173,10 +180,10 @@ pub fn run(
     println!("Monte Carlo: {} × {} runs of {} (seed {seed})\n", controllers.len(), runs, scenario.name);
     println!("{}", mc_table(&summaries));
     println!(
-        "\n{} flights in {elapsed:.2} s ({:.0} flights/s); wrote {}/runs.csv, summary.json{}",
+        "\n{} flights in {elapsed:.2} s ({:.0} flights/s); wrote {}/ (runs.csv, summary.json, scenario.toml{})",
         rows.len(),
         rows.len() as f64 / elapsed.max(1e-9),
-        out.display(),
+        folder.display(),
         if figures { ", montecarlo-ise.{svg,png}" } else { "" }
     );
     Ok(())

@@ -13,7 +13,8 @@
 //! ones. (Between the two renames — microseconds — the destination does not
 //! exist at all.) The one exception is nested results of *other* commands:
 //! a sub-folder of the old destination that holds its own `summary.json` or
-//! `fixed-time.json` (e.g. `results/montecarlo` from `ftsmc montecarlo`)
+//! `fixed-time.json`, or whose own sub-folders do (e.g. `results/montecarlo`,
+//! parent of `ftsmc montecarlo`'s `results/montecarlo/<scenario>/`),
 //! and that the new result does not contain is moved into the new folder
 //! before the swap, so `ftsmc reproduce` does not delete a Monte Carlo batch.
 //!
@@ -206,14 +207,26 @@ fn remove_created(created: &[PathBuf]) {
     }
 }
 
-/// Move sub-folders of `old` that are another command's whole result (they
-/// hold `summary.json` or `fixed-time.json`) and that `new` lacks into `new`.
+/// True when `dir` is another command's whole result (it holds
+/// `summary.json` or `fixed-time.json`) or, `depth` levels down, contains
+/// one (`results/montecarlo/<scenario>/`).
+fn holds_result(dir: &Path, depth: usize) -> bool {
+    if !dir.is_dir() {
+        return false;
+    }
+    if dir.join("summary.json").is_file() || dir.join("fixed-time.json").is_file() {
+        return true;
+    }
+    depth > 0 && std::fs::read_dir(dir).is_ok_and(|rd| rd.flatten().any(|e| holds_result(&e.path(), depth - 1)))
+}
+
+/// Move sub-folders of `old` that hold another command's whole result (see
+/// [`holds_result`]) and that `new` lacks into `new`.
 fn carry_nested_results(old: &Path, new: &Path) {
     let Ok(entries) = std::fs::read_dir(old) else { return };
     for entry in entries.flatten() {
         let path = entry.path();
-        let is_result =
-            path.is_dir() && (path.join("summary.json").is_file() || path.join("fixed-time.json").is_file());
+        let is_result = holds_result(&path, 1);
         let target = new.join(entry.file_name());
         if is_result && std::fs::symlink_metadata(&target).is_err() {
             let _ = std::fs::rename(&path, &target);
@@ -349,6 +362,125 @@ pub fn summary_json(runs: &[&RunOutput], extra: Map<String, Value>) -> Value {
     Value::Object(root)
 }
 
+/// The program version (`Cargo.toml`).
+pub const VERSION: &str = env!("CARGO_PKG_VERSION");
+
+/// The git commit the binary was built from (`<sha>`, `<sha>-dirty` when
+/// tracked files differed from it, `unknown` outside a git checkout; see
+/// `build.rs`).
+pub const GIT_COMMIT: &str = env!("FTSMC_GIT_COMMIT");
+
+/// The resolved scenario as written to `scenario.toml`: every field, with
+/// every default filled in (`toml::to_string`); loading it gives back an
+/// identical [`Scenario`](ftsmc_sim::scenario::Scenario).
+pub fn scenario_toml(scenario: &ftsmc_sim::scenario::Scenario) -> Result<String> {
+    toml::to_string(scenario).context("cannot write the scenario as TOML")
+}
+
+/// One scenario file written into a result folder, for the provenance record.
+#[derive(Clone, Debug)]
+pub struct ScenarioFile {
+    /// Path relative to the folder holding `summary.json`.
+    pub file: String,
+    /// SHA-256 of the file's bytes (hex), as `sha256sum` prints it.
+    pub sha256: String,
+    /// The scenario's seed (for a Monte Carlo batch, the master seed).
+    pub seed: u64,
+}
+
+impl ResultDir {
+    /// Write `scenario` (resolved) to `rel` and return its provenance record.
+    pub fn write_scenario(
+        &self,
+        rel: &str,
+        scenario: &ftsmc_sim::scenario::Scenario,
+        file_in_summary: &str,
+    ) -> Result<ScenarioFile> {
+        let text = scenario_toml(scenario)?;
+        self.write(rel, text.as_bytes())?;
+        Ok(ScenarioFile { file: file_in_summary.to_string(), sha256: sha256_hex(text.as_bytes()), seed: scenario.seed })
+    }
+}
+
+/// The `provenance` object of `summary.json` / `fixed-time.json`:
+/// `ftsmc_version`, `git_commit`, `command_line` (the arguments as given),
+/// and for one scenario `scenario_file`, `scenario_sha256` and `seed`; for
+/// several (`ftsmc reproduce`) a `scenarios` list of
+/// `{scenario_file, scenario_sha256, seed}`.
+pub fn provenance(files: &[ScenarioFile]) -> Value {
+    let mut p = Map::new();
+    p.insert("ftsmc_version".into(), json!(VERSION));
+    p.insert("git_commit".into(), json!(GIT_COMMIT));
+    p.insert("command_line".into(), json!(std::env::args().collect::<Vec<_>>()));
+    let entry = |f: &ScenarioFile| json!({"scenario_file": f.file, "scenario_sha256": f.sha256, "seed": f.seed});
+    match files {
+        [one] => {
+            if let Value::Object(m) = entry(one) {
+                p.extend(m);
+            }
+        }
+        many => {
+            p.insert("scenarios".into(), Value::Array(many.iter().map(entry).collect()));
+        }
+    }
+    Value::Object(p)
+}
+
+/// SHA-256 (FIPS 180-4) of `data` as lowercase hex.
+pub fn sha256_hex(data: &[u8]) -> String {
+    const K: [u32; 64] = [
+        0x428a2f98, 0x71374491, 0xb5c0fbcf, 0xe9b5dba5, 0x3956c25b, 0x59f111f1, 0x923f82a4, 0xab1c5ed5, 0xd807aa98,
+        0x12835b01, 0x243185be, 0x550c7dc3, 0x72be5d74, 0x80deb1fe, 0x9bdc06a7, 0xc19bf174, 0xe49b69c1, 0xefbe4786,
+        0x0fc19dc6, 0x240ca1cc, 0x2de92c6f, 0x4a7484aa, 0x5cb0a9dc, 0x76f988da, 0x983e5152, 0xa831c66d, 0xb00327c8,
+        0xbf597fc7, 0xc6e00bf3, 0xd5a79147, 0x06ca6351, 0x14292967, 0x27b70a85, 0x2e1b2138, 0x4d2c6dfc, 0x53380d13,
+        0x650a7354, 0x766a0abb, 0x81c2c92e, 0x92722c85, 0xa2bfe8a1, 0xa81a664b, 0xc24b8b70, 0xc76c51a3, 0xd192e819,
+        0xd6990624, 0xf40e3585, 0x106aa070, 0x19a4c116, 0x1e376c08, 0x2748774c, 0x34b0bcb5, 0x391c0cb3, 0x4ed8aa4a,
+        0x5b9cca4f, 0x682e6ff3, 0x748f82ee, 0x78a5636f, 0x84c87814, 0x8cc70208, 0x90befffa, 0xa4506ceb, 0xbef9a3f7,
+        0xc67178f2,
+    ];
+    let mut h: [u32; 8] =
+        [0x6a09e667, 0xbb67ae85, 0x3c6ef372, 0xa54ff53a, 0x510e527f, 0x9b05688c, 0x1f83d9ab, 0x5be0cd19];
+    let mut msg = data.to_vec();
+    let bits = (data.len() as u64).wrapping_mul(8);
+    msg.push(0x80);
+    while msg.len() % 64 != 56 {
+        msg.push(0);
+    }
+    msg.extend_from_slice(&bits.to_be_bytes());
+    for block in msg.chunks_exact(64) {
+        let mut w = [0u32; 64];
+        for (i, word) in block.chunks_exact(4).enumerate() {
+            w[i] = u32::from_be_bytes([word[0], word[1], word[2], word[3]]);
+        }
+        for i in 16..64 {
+            let s0 = w[i - 15].rotate_right(7) ^ w[i - 15].rotate_right(18) ^ (w[i - 15] >> 3);
+            let s1 = w[i - 2].rotate_right(17) ^ w[i - 2].rotate_right(19) ^ (w[i - 2] >> 10);
+            w[i] = w[i - 16].wrapping_add(s0).wrapping_add(w[i - 7]).wrapping_add(s1);
+        }
+        let [mut a, mut b, mut c, mut d, mut e, mut f, mut g, mut hh] = h;
+        for i in 0..64 {
+            let s1 = e.rotate_right(6) ^ e.rotate_right(11) ^ e.rotate_right(25);
+            let ch = (e & f) ^ (!e & g);
+            let t1 = hh.wrapping_add(s1).wrapping_add(ch).wrapping_add(K[i]).wrapping_add(w[i]);
+            let s0 = a.rotate_right(2) ^ a.rotate_right(13) ^ a.rotate_right(22);
+            let maj = (a & b) ^ (a & c) ^ (b & c);
+            let t2 = s0.wrapping_add(maj);
+            hh = g;
+            g = f;
+            f = e;
+            e = d.wrapping_add(t1);
+            d = c;
+            c = b;
+            b = a;
+            a = t1.wrapping_add(t2);
+        }
+        for (x, y) in h.iter_mut().zip([a, b, c, d, e, f, g, hh]) {
+            *x = x.wrapping_add(y);
+        }
+    }
+    h.iter().map(|x| format!("{x:08x}")).collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -399,9 +531,9 @@ mod tests {
     fn commit_replaces_the_whole_folder_but_keeps_nested_results_of_other_commands() {
         let root = temp("commit");
         let dest = root.join("res");
-        std::fs::create_dir_all(dest.join("montecarlo")).unwrap();
+        std::fs::create_dir_all(dest.join("montecarlo/paper-scenario-2")).unwrap();
         std::fs::create_dir_all(dest.join("paper-scenario-1")).unwrap();
-        std::fs::write(dest.join("montecarlo/summary.json"), "{}").unwrap();
+        std::fs::write(dest.join("montecarlo/paper-scenario-2/summary.json"), "{}").unwrap();
         std::fs::write(dest.join("junk.csv"), "stale").unwrap();
         std::fs::write(dest.join("paper-scenario-1/stale.csv"), "stale").unwrap();
         let dir = ResultDir::begin(&dest).unwrap();
@@ -453,6 +585,17 @@ mod tests {
         ResultDir::begin(&root.join("res")).unwrap().commit().unwrap();
         assert!(live.exists());
         std::fs::remove_dir_all(&root).ok();
+    }
+
+    #[test]
+    fn sha256_matches_the_standard_test_vectors() {
+        assert_eq!(sha256_hex(b""), "e3b0c44298fc1c149afbf4c8996fb92427ae41e4649b934ca495991b7852b855");
+        assert_eq!(sha256_hex(b"abc"), "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad");
+        assert_eq!(
+            sha256_hex(b"abcdbcdecdefdefgefghfghighijhijkijkljklmklmnlmnomnopnopq"),
+            "248d6a61d20638b8e5c026930c3e6039a33ce45964ff2167f6ecedd419db06c1"
+        );
+        assert_eq!(sha256_hex(&[b'a'; 1000]), "41edece42d63e8d9bf515a9ba6932e1c20cbc9f5a5d134645adb5db1b9737ea3");
     }
 
     #[test]

@@ -9,12 +9,12 @@ use anyhow::{anyhow, Result};
 use ftsmc_core::cascade::AttitudeDerivatives;
 use ftsmc_sim::registry::{self, label};
 use ftsmc_sim::scenario::Scenario;
-use ftsmc_sim::simulate::{RunOptions, RunOutput};
+use ftsmc_sim::simulate::{planned_steps, reference_at, RunOptions, RunOutput};
 use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
 use serde_json::{json, Map, Value};
 
-use crate::output::{recording_csv, summary_json, ResultDir};
+use crate::output::{provenance, recording_csv, summary_json, ResultDir};
 
 /// Paper Table 3 (scenario 1 ISE): `(state, [RANFTSMC, TSM-STA, FTAFTSMC])`.
 pub const PAPER_TABLE_3: [(&str, [f64; 3]); 4] = [
@@ -38,20 +38,34 @@ pub struct Job {
     pub key: String,
 }
 
-/// Fly all jobs in parallel (deterministic: each job is independent).
-pub fn fly(jobs: &[Job]) -> Result<Vec<RunOutput>> {
-    let bar = ProgressBar::new(jobs.len() as u64);
+/// A progress bar over `total` simulated control steps (on stderr; hidden
+/// when stderr is not a terminal).
+pub fn steps_bar(total: u64, flights: u64) -> ProgressBar {
+    let bar = ProgressBar::new(total);
     bar.set_style(
-        ProgressStyle::with_template("{spinner} [{elapsed_precise}] {bar:30} {pos}/{len} flights {msg}")
-            .expect("valid template"),
+        ProgressStyle::with_template(&format!(
+            "{{spinner}} [{{elapsed_precise}}] {{bar:30}} {{human_pos}}/{{human_len}} control steps of {flights} flight{} ({{percent}} %, eta {{eta}})",
+            if flights == 1 { "" } else { "s" }
+        ))
+        .expect("valid template"),
     );
+    bar
+}
+
+/// Fly all jobs in parallel (deterministic: each job is independent). The
+/// progress bar counts simulated control steps, updated from inside each
+/// flight.
+pub fn fly(jobs: &[Job]) -> Result<Vec<RunOutput>> {
+    let total = jobs.iter().map(|j| planned_steps(&j.scenario)).sum();
+    let bar = steps_bar(total, jobs.len() as u64);
+    let progress = |n: u64| bar.inc(n);
     let out: Result<Vec<RunOutput>> = jobs
         .par_iter()
         .map(|job| {
-            let mut run = registry::run(&job.controller, &job.scenario, RunOptions::default())
+            let options = RunOptions { progress: Some(&progress), ..Default::default() };
+            let mut run = registry::run(&job.controller, &job.scenario, options)
                 .map_err(|known| anyhow!("unknown controller `{}` (known: {known})", job.controller))?;
             run.controller = job.key.clone();
-            bar.inc(1);
             Ok(run)
         })
         .collect();
@@ -77,12 +91,63 @@ pub fn not_comparable(run: &RunOutput) -> String {
     format!("— ({})", run.exit.short())
 }
 
-/// Four decimals, or scientific notation for small non-zero values.
+/// Four decimals, or scientific notation for small non-zero values (below
+/// 1e-3) and large ones (1e6 and above).
 pub fn num(v: f64) -> String {
-    if v != 0.0 && v.abs() < 1e-3 {
+    if v != 0.0 && (v.abs() < 1e-3 || v.abs() >= 1e6) {
         format!("{v:.3e}")
     } else {
         format!("{v:.4}")
+    }
+}
+
+/// A Markdown table with every column padded to its widest cell, so it
+/// reads aligned on a console too.
+pub struct Table {
+    header: Vec<String>,
+    rows: Vec<Vec<String>>,
+}
+
+impl Table {
+    /// A table with these column headers.
+    pub fn new<S: Into<String>>(header: impl IntoIterator<Item = S>) -> Self {
+        Self { header: header.into_iter().map(Into::into).collect(), rows: Vec::new() }
+    }
+
+    /// Add a row (as many cells as headers).
+    pub fn row(&mut self, cells: Vec<String>) {
+        debug_assert_eq!(cells.len(), self.header.len());
+        self.rows.push(cells);
+    }
+
+    /// The Markdown text, one line per row, each ending in a newline (a `|`
+    /// inside a cell is escaped as `\|`).
+    pub fn render(&self) -> String {
+        let width = |s: &str| s.chars().count();
+        let escape = |cells: &[String]| cells.iter().map(|c| c.replace('|', "\\|")).collect::<Vec<_>>();
+        let header = escape(&self.header);
+        let rows: Vec<Vec<String>> = self.rows.iter().map(|r| escape(r)).collect();
+        let widths: Vec<usize> = (0..header.len())
+            .map(|i| rows.iter().map(|r| width(&r[i])).chain([width(&header[i]), 3]).max().unwrap_or(3))
+            .collect();
+        let line = |cells: &[String]| {
+            let mut l = String::from("|");
+            for (cell, w) in cells.iter().zip(&widths) {
+                let _ = write!(l, " {cell}{} |", " ".repeat(w - width(cell)));
+            }
+            l.push('\n');
+            l
+        };
+        let mut md = line(&header);
+        md.push('|');
+        for w in &widths {
+            let _ = write!(md, "{}|", "-".repeat(w + 2));
+        }
+        md.push('\n');
+        for r in &rows {
+            md.push_str(&line(r));
+        }
+        md
     }
 }
 
@@ -99,17 +164,25 @@ fn settle(m: &ftsmc_sim::scenario::AxisSet<Option<f64>>, axis: &str) -> String {
     m.get(axis).copied().flatten().map_or("not settled".into(), |t| format!("{t:.2}"))
 }
 
+/// `|e(0)|` of x, y, z, ψ in `scenario` (the metrics' initial errors).
+fn initial_errors(scenario: &Scenario) -> [f64; 4] {
+    let x = scenario.initial_state.state().to_array();
+    let r = reference_at(scenario, 0.0);
+    [(x[0] - r.position[0]).abs(), (x[1] - r.position[1]).abs(), (x[2] - r.position[2]).abs(), (x[5] - r.yaw).abs()]
+}
+
+/// The flights of one metrics table: each run with the scenario it flew.
+pub type Flown<'a> = (&'a RunOutput, &'a Scenario);
+
 /// Table 3 side by side with the verdicts, as Markdown; also a JSON record.
 pub fn table_3(runs: &[RunOutput], scenario: &str) -> (String, Value) {
     let order = ["ranftsmc", "tsm-sta", "ftaftsmc"];
     let ours: Vec<Option<&RunOutput>> = order.iter().map(|k| find(runs, scenario, k)).collect();
     let mut md = String::new();
     let _ = writeln!(md, "### Table 3 — ISE ∫e² dt, scenario 1 (lower is better): paper | ftsmc\n");
-    let _ = writeln!(
-        md,
-        "| state | RANFTSMC [19] paper | RANFTSMC ours | TSM-STA [2] paper | TSM-STA ours | FTAFTSMC paper | FTAFTSMC ours | ranking paper | ranking ours |"
-    );
-    let _ = writeln!(md, "|---|---|---|---|---|---|---|---|---|");
+    let mut values =
+        Table::new(["state", "RANFTSMC [19] paper", "ours", "TSM-STA [2] paper", "ours", "FTAFTSMC paper", "ours"]);
+    let mut ranking = Table::new(["state", "ranking paper", "ranking ours"]);
     let mut verdicts = Vec::new();
     let mut record = Map::new();
     for (axis, paper) in PAPER_TABLE_3 {
@@ -127,21 +200,19 @@ pub fn table_3(runs: &[RunOutput], scenario: &str) -> (String, Value) {
         let paper_opt: Vec<Option<f64>> = paper.iter().map(|v| Some(*v)).collect();
         let cell = |i: usize| match ours[i] {
             Some(r) if !r.exit.is_completed() => not_comparable(r),
-            _ => ours_c[i].map_or("—".to_string(), |v| format!("{v:.4}")),
+            _ => ours_c[i].map_or("—".to_string(), num),
         };
         let shown = if axis == "psi" { "ψ" } else { axis };
-        let _ = writeln!(
-            md,
-            "| {shown} | {} | {} | {} | {} | {} | {} | {} | {} |",
-            paper[0],
+        values.row(vec![
+            shown.to_string(),
+            paper[0].to_string(),
             cell(0),
-            paper[1],
+            paper[1].to_string(),
             cell(1),
-            paper[2],
+            paper[2].to_string(),
             cell(2),
-            rank(&paper_opt),
-            rank(&ours_c)
-        );
+        ]);
+        ranking.row(vec![shown.to_string(), rank(&paper_opt), rank(&ours_c)]);
         let mut entry = json!({"paper": {"ranftsmc": paper[0], "tsm-sta": paper[1], "ftaftsmc": paper[2]},
                    "ours": {"ranftsmc": ours_v[0], "tsm-sta": ours_v[1], "ftaftsmc": ours_v[2]}});
         if !diverged.is_empty() {
@@ -184,6 +255,9 @@ pub fn table_3(runs: &[RunOutput], scenario: &str) -> (String, Value) {
             }
         }
     }
+    md.push_str(&values.render());
+    md.push('\n');
+    md.push_str(&ranking.render());
     md.push('\n');
     for v in verdicts {
         md.push_str(&v);
@@ -192,58 +266,101 @@ pub fn table_3(runs: &[RunOutput], scenario: &str) -> (String, Value) {
     (md, Value::Object(record))
 }
 
-/// A per-run metric table (ISE, IAE, settling, max error after, chattering).
-/// `steady_after` (s) is the scenario's `simulation.steady_state_after`.
-pub fn metrics_table(runs: &[&RunOutput], title: &str, windowed: bool, steady_after: f64) -> String {
+/// The per-run metrics as four tables narrow enough for a 120-column
+/// console: ISE (with the scenario's window), IAE and the error after
+/// `steady_state_after`, settling times, and exit status with chattering.
+/// A diverged run shows `—` beside its exit status (its integrals cover a
+/// shorter span and would look better than a completed run's; the numbers
+/// stay in the JSON, with `covered` and `completed`). A settling time shows
+/// `—` for a channel that starts within the settling floor (nothing to
+/// settle from).
+pub fn metrics_table(runs: &[Flown], title: &str) -> String {
+    let Some((_, first)) = runs.first() else { return format!("### {title}\n\n(no runs)\n") };
+    let sim = &first.simulation;
+    let window = sim.metrics_window;
     let mut md = String::new();
     let _ = writeln!(md, "### {title}\n");
-    let _ = writeln!(
-        md,
-        "| controller | exit | ISE x | ISE y | ISE z | ISE ψ | IAE x | IAE y | IAE z | IAE ψ | settle x (s) | settle y | settle z | settle ψ | max err z after {}s | chattering U1 (N/s) | chattering u2 (N·m/s) |{}",
-        steady_after,
-        if windowed { " ISE z window |" } else { "" }
-    );
-    let _ = writeln!(
-        md,
-        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|{}",
-        if windowed { "---|" } else { "" }
-    );
-    for run in runs {
+    let dash = || "—".to_string();
+    let completed = |r: &RunOutput| r.exit.is_completed();
+
+    let mut header = vec!["controller".to_string()];
+    header.extend(["x", "y", "z", "ψ"].map(|a| format!("ISE {a}")));
+    if let Some([a, b]) = window {
+        header.push(format!("ISE z {a}–{b} s"));
+    }
+    let mut ise = Table::new(header);
+    let mut iae = Table::new([
+        "controller",
+        "IAE x",
+        "IAE y",
+        "IAE z",
+        "IAE ψ",
+        &format!("max err z after {} s", sim.steady_state_after),
+    ]);
+    let mut settling = Table::new(["controller", "settle x (s)", "settle y (s)", "settle z (s)", "settle ψ (s)"]);
+    let mut control = Table::new(["controller", "exit", "chattering U1 (N/s)", "chattering u2 (N·m/s)"]);
+    let mut notes = Vec::new();
+    let mut on_reference = false;
+    for (run, scenario) in runs {
         let m = &run.metrics;
-        if !run.exit.is_completed() {
-            // Integrals over a shorter span would look better than a
-            // completed run's: show `—` beside the exit status (the numbers
-            // stay in the JSON, with `covered` and `completed`).
-            let cells = if windowed { 16 } else { 15 };
-            let _ = write!(md, "| {} | {} |{}", label(&run.controller), run.exit, " — |".repeat(cells));
-            md.push('\n');
-            continue;
+        let name = label(&run.controller).to_string();
+        let ok = completed(run);
+        let v = |x: f64| if ok { num(x) } else { dash() };
+        let mut row = vec![name.clone(), v(m.ise.x), v(m.ise.y), v(m.ise.z), v(m.ise.psi)];
+        if window.is_some() {
+            row.push(if ok { m.ise_window.as_ref().map_or_else(dash, |w| num(w.z)) } else { dash() });
         }
-        let _ = write!(
-            md,
-            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {:.3} | {:.4} |",
-            label(&run.controller),
-            run.exit,
-            num(m.ise.x),
-            num(m.ise.y),
-            num(m.ise.z),
-            num(m.ise.psi),
-            num(m.iae.x),
-            num(m.iae.y),
-            num(m.iae.z),
-            num(m.iae.psi),
-            settle(&m.settling_time, "x"),
-            settle(&m.settling_time, "y"),
-            settle(&m.settling_time, "z"),
-            settle(&m.settling_time, "psi"),
-            m.max_error_after.z.map_or("—".into(), num),
-            m.chattering.thrust,
-            m.chattering.roll_torque,
-        );
-        if windowed {
-            let _ = write!(md, " {} |", m.ise_window.as_ref().map_or("—".into(), |w| num(w.z)));
+        ise.row(row);
+        iae.row(vec![
+            name.clone(),
+            v(m.iae.x),
+            v(m.iae.y),
+            v(m.iae.z),
+            v(m.iae.psi),
+            if ok { m.max_error_after.z.map_or_else(dash, num) } else { dash() },
+        ]);
+        let e0 = initial_errors(scenario);
+        let floor = scenario.simulation.settling_floor;
+        let mut row = vec![name.clone()];
+        for (i, axis) in ["x", "y", "z", "psi"].into_iter().enumerate() {
+            row.push(if !ok {
+                dash()
+            } else if e0[i] <= floor {
+                on_reference = true;
+                dash()
+            } else {
+                settle(&m.settling_time, axis)
+            });
         }
+        settling.row(row);
+        control.row(vec![name.clone(), run.exit.short(), v(m.chattering.thrust), v(m.chattering.roll_torque)]);
+        if !ok {
+            notes.push(format!("- {name}: {}; its metrics are `—` (they would cover a shorter span).", run.exit));
+        }
+    }
+    let units = "m²·s; ψ rad²·s";
+    let _ = writeln!(md, "ISE ∫e² dt ({units}):\n\n{}", ise.render());
+    let _ = writeln!(
+        md,
+        "IAE ∫|e| dt (m·s; ψ rad·s) and max |e_z| (m) after {} s:\n\n{}",
+        sim.steady_state_after,
+        iae.render()
+    );
+    let _ = writeln!(
+        md,
+        "Settling: |e| within {} % of |e(0)| (at least {}) from then on{}:\n\n{}",
+        100.0 * sim.settling_band,
+        sim.settling_floor,
+        if on_reference { "; — where the channel starts within that floor (nothing to settle)" } else { "" },
+        settling.render()
+    );
+    let _ = write!(md, "Exit status and chattering (total variation Σ|Δu| per second):\n\n{}", control.render());
+    if !notes.is_empty() {
         md.push('\n');
+        for n in notes {
+            md.push_str(&n);
+            md.push('\n');
+        }
     }
     md
 }
@@ -273,20 +390,25 @@ pub fn oscillation(run: &RunOutput, column: &str, from: f64) -> (f64, f64) {
 pub fn limit_cycle_table(runs: &[&RunOutput], from: f64) -> String {
     let mut md = String::new();
     let _ = writeln!(md, "### Steady oscillation (limit cycle) for t ≥ {from} s\n");
-    let _ = writeln!(md, "| controller | φ peak-to-peak (rad) | φ frequency (Hz) | θ peak-to-peak (rad) | u2 peak-to-peak (N·m) | U1 peak-to-peak (N) | x peak-to-peak (m) |");
-    let _ = writeln!(md, "|---|---|---|---|---|---|---|");
+    let _ = writeln!(md, "Peak-to-peak amplitudes, and the frequency of φ from crossings of its mean:\n");
+    let mut table = Table::new(["controller", "φ (rad)", "φ frequency (Hz)", "θ (rad)", "u2 (N·m)", "U1 (N)", "x (m)"]);
     for run in runs {
         let (phi, f) = oscillation(run, "phi", from);
         let (theta, _) = oscillation(run, "theta", from);
         let (u2, _) = oscillation(run, "roll_torque", from);
         let (u1, _) = oscillation(run, "thrust", from);
         let (x, _) = oscillation(run, "x", from);
-        let _ = writeln!(
-            md,
-            "| {} | {phi:.2e} | {f:.2} | {theta:.2e} | {u2:.2e} | {u1:.2e} | {x:.2e} |",
-            label(&run.controller)
-        );
+        table.row(vec![
+            label(&run.controller).to_string(),
+            format!("{phi:.2e}"),
+            format!("{f:.2}"),
+            format!("{theta:.2e}"),
+            format!("{u2:.2e}"),
+            format!("{u1:.2e}"),
+            format!("{x:.2e}"),
+        ]);
     }
+    md.push_str(&table.render());
     md
 }
 
@@ -319,6 +441,22 @@ pub fn reproduce(out: &Path, figures: bool) -> Result<()> {
     eprintln!("flying {} runs ({} and {}) …", jobs.len(), s1.name, s2.name);
     let runs = fly(&jobs)?;
     write_runs(&runs, &dir, false)?;
+    // The resolved scenarios as flown: `<scenario>/scenario.toml` for the
+    // paper scenarios, `<scenario>/<key>.scenario.toml` for a variant that
+    // flew a modified copy.
+    let mut files = Vec::new();
+    for s in [s1, s2] {
+        let rel = format!("{}/scenario.toml", s.name);
+        files.push(dir.write_scenario(&rel, s, &rel)?);
+    }
+    for job in &jobs {
+        let base = if job.scenario.name == s1.name { s1 } else { s2 };
+        if job.scenario != *base {
+            let rel = format!("{}/{}.scenario.toml", job.scenario.name, job.key);
+            files.push(dir.write_scenario(&rel, &job.scenario, &rel)?);
+        }
+    }
+    let flown: Vec<Flown> = runs.iter().zip(&jobs).map(|(r, j)| (r, &j.scenario)).collect();
 
     let mut report = String::new();
     let _ = writeln!(report, "# ftsmc reproduce — results\n");
@@ -327,7 +465,8 @@ pub fn reproduce(out: &Path, figures: bool) -> Result<()> {
     report.push('\n');
 
     let s1_runs: Vec<&RunOutput> = runs.iter().filter(|r| r.scenario == s1.name).collect();
-    report.push_str(&metrics_table(&s1_runs, "Scenario 1 — all metrics", false, s1.simulation.steady_state_after));
+    let s1_flown: Vec<Flown> = flown.iter().copied().filter(|(r, _)| r.scenario == s1.name).collect();
+    report.push_str(&metrics_table(&s1_flown, "Scenario 1 — all metrics"));
     report.push('\n');
     report.push_str(&limit_cycle_table(&s1_runs, 10.0));
     report.push('\n');
@@ -360,12 +499,8 @@ pub fn reproduce(out: &Path, figures: bool) -> Result<()> {
     report.push('\n');
 
     let s2_runs: Vec<&RunOutput> = runs.iter().filter(|r| r.scenario == s2.name).collect();
-    report.push_str(&metrics_table(
-        &s2_runs,
-        "Scenario 2 — all metrics (window = 10–40 s)",
-        true,
-        s2.simulation.steady_state_after,
-    ));
+    let s2_flown: Vec<Flown> = flown.iter().copied().filter(|(r, _)| r.scenario == s2.name).collect();
+    report.push_str(&metrics_table(&s2_flown, "Scenario 2 — all metrics"));
     report.push('\n');
     let z_window = |key: &str| {
         find(&runs, &s2.name, key)
@@ -395,6 +530,7 @@ pub fn reproduce(out: &Path, figures: bool) -> Result<()> {
 
     let mut extra = Map::new();
     extra.insert("table3".into(), t3_json);
+    extra.insert("provenance".into(), provenance(&files));
     let all: Vec<&RunOutput> = runs.iter().collect();
     let summary = summary_json(&all, extra);
     dir.write("summary.json", serde_json::to_string_pretty(&summary)?.as_bytes())?;
@@ -411,31 +547,35 @@ pub fn reproduce(out: &Path, figures: bool) -> Result<()> {
     dir.write("report.md", report.as_bytes())?;
     dir.commit()?;
     println!("{report}");
+    let o = out.display();
     println!(
-        "wrote {}/summary.json, report.md, per-run CSV under {}/<scenario>/{}; {} flights in {:.2} s",
-        out.display(),
-        out.display(),
-        if figures { ", figures under figures/" } else { "" },
+        "wrote {o}/summary.json, {o}/report.md, per-run CSV and scenario.toml under {o}/<scenario>/{}; {} flights in {:.2} s",
+        if figures { format!(", figures under {o}/figures/") } else { String::new() },
         runs.len(),
         elapsed
     );
     Ok(())
 }
 
-/// `ftsmc run`.
-pub fn run_scenario(scenario: &Scenario, names: &[String], out: &Path, figures: bool) -> Result<()> {
+/// `ftsmc run`: fly `scenario.controllers` and write `out/<name>/`.
+pub fn run_scenario(scenario: &Scenario, out: &Path, figures: bool) -> Result<()> {
     // `out/<name>/` is the result folder: checked before any flight,
     // written in staging, swapped into place whole.
     let dir = ResultDir::begin(&out.join(&scenario.name))?;
-    let jobs: Vec<Job> =
-        names.iter().map(|n| Job { scenario: scenario.clone(), controller: n.clone(), key: n.clone() }).collect();
+    let jobs: Vec<Job> = scenario
+        .controllers
+        .iter()
+        .map(|n| Job { scenario: scenario.clone(), controller: n.clone(), key: n.clone() })
+        .collect();
     let runs = fly(&jobs)?;
     write_runs(&runs, &dir, true)?;
+    let file = dir.write_scenario("scenario.toml", scenario, "scenario.toml")?;
     let refs: Vec<&RunOutput> = runs.iter().collect();
-    let windowed = scenario.simulation.metrics_window.is_some();
-    let table =
-        metrics_table(&refs, &format!("{} — metrics", scenario.name), windowed, scenario.simulation.steady_state_after);
-    let summary = summary_json(&refs, Map::new());
+    let flown: Vec<Flown> = runs.iter().map(|r| (r, scenario)).collect();
+    let table = metrics_table(&flown, &format!("{} — metrics", scenario.name));
+    let mut extra = Map::new();
+    extra.insert("provenance".into(), provenance(&[file]));
+    let summary = summary_json(&refs, extra);
     dir.write("summary.json", serde_json::to_string_pretty(&summary)?.as_bytes())?;
     if figures {
         crate::figures::generic(&refs, &dir.path().join("figures"))?;
@@ -443,10 +583,9 @@ pub fn run_scenario(scenario: &Scenario, names: &[String], out: &Path, figures: 
     dir.commit()?;
     println!("{table}");
     println!(
-        "wrote {}/{}/ (CSV per controller, summary.json{})",
-        out.display(),
-        scenario.name,
-        if figures { ", figures" } else { "" }
+        "wrote {}/ (CSV per controller, scenario.toml, summary.json{})",
+        out.join(&scenario.name).display(),
+        if figures { ", figures/" } else { "" }
     );
     Ok(())
 }
@@ -474,7 +613,7 @@ mod tests {
         assert!(!ft.exit.is_completed(), "{}", ft.exit);
         assert!(ft.metrics.max_error_after.z.is_none());
         let (t3, record) = table_3(&runs, &s.name);
-        let x_row = t3.lines().find(|l| l.starts_with("| x |")).unwrap();
+        let x_row = t3.lines().find(|l| l.starts_with("| x ")).unwrap();
         assert!(x_row.contains("— (diverged at 0.64 s)"), "{x_row}");
         assert!(!x_row.contains(&format!("{:.4}", ft.metrics.ise.x)), "{x_row}");
         assert!(!t3.contains("**confirmed**"), "no claim confirmed by a diverged run:\n{t3}");
@@ -483,13 +622,19 @@ mod tests {
         assert_eq!(record["x"]["ours"]["ftaftsmc"].as_f64(), Some(ft.metrics.ise.x), "JSON keeps the number");
         assert!(record["x"]["diverged"]["ftaftsmc"].is_number());
 
-        let refs: Vec<&RunOutput> = runs.iter().collect();
-        let table = metrics_table(&refs, "t", false, s.simulation.steady_state_after);
-        let row = table.lines().find(|l| l.starts_with("| FTAFTSMC")).unwrap();
-        assert!(row.contains("diverged") && row.contains("0.639"), "{row}");
-        assert_eq!(row.matches("| — ").count(), 15, "{row}");
-        assert!(!row.contains(&num(ft.metrics.ise.x)), "{row}");
-        let ok_row = table.lines().find(|l| l.starts_with("| RANFTSMC")).unwrap();
-        assert!(!ok_row.contains('—'), "a completed run keeps its numbers: {ok_row}");
+        let flown: Vec<Flown> = runs.iter().map(|r| (r, &s)).collect();
+        let table = metrics_table(&flown, "t");
+        let rows: Vec<&str> = table.lines().filter(|l| l.starts_with("| FTAFTSMC ")).collect();
+        assert_eq!(rows.len(), 4, "one row per table:\n{table}");
+        // 4 ISE + 5 IAE/max-error + 4 settling + 2 chattering cells.
+        let dashes: usize = rows.iter().map(|r| r.matches("| — ").count()).sum();
+        assert_eq!(dashes, 15, "{table}");
+        assert!(rows.iter().all(|r| !r.contains(&num(ft.metrics.ise.x))), "{table}");
+        assert!(rows[3].contains("diverged at 0.64 s"), "{}", rows[3]);
+        assert!(table.contains("FTAFTSMC: diverged: tilt") && table.contains("0.639 s"), "{table}");
+        for ok_row in table.lines().filter(|l| l.starts_with("| RANFTSMC")) {
+            assert!(!ok_row.contains('—'), "a completed run keeps its numbers: {ok_row}");
+        }
+        assert!(table.lines().all(|l| l.chars().count() <= 120), "{table}");
     }
 }

@@ -31,7 +31,7 @@ fn stale_files_of_an_older_run_are_gone() {
     std::fs::write(folder.join("tsm-sta.csv"), "from an older run").unwrap();
     let out = ftsmc(&["run", "paper-scenario-1", "-c", "ftaftsmc", "--out", "res", "--no-figures"], &dir);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    let expected: BTreeSet<String> = ["ftaftsmc.csv", "summary.json"].map(String::from).into();
+    let expected: BTreeSet<String> = ["ftaftsmc.csv", "scenario.toml", "summary.json"].map(String::from).into();
     assert_eq!(names(&folder), expected);
     assert_eq!(names(&dir.join("res")), ["paper-scenario-1".to_string()].into(), "no staging or old folder left");
     std::fs::remove_dir_all(&dir).ok();
@@ -94,6 +94,7 @@ fn concurrent_runs_into_one_folder_leave_one_whole_result() {
             summary["scenarios"]["paper-scenario-1"].as_object().unwrap().keys().cloned().collect();
         let mut expected: BTreeSet<String> = controllers.iter().map(|c| format!("{c}.csv")).collect();
         expected.insert("summary.json".into());
+        expected.insert("scenario.toml".into());
         assert_eq!(names(&folder), expected, "round {round}: the files must be exactly those of one run");
         assert!(
             controllers == ["ftaftsmc".to_string()].into()

@@ -23,7 +23,7 @@ fn flights(c: &mut Criterion) {
         group.bench_function(name, |b| {
             b.iter(|| {
                 let mut controller = registry::build(name, &scenario).unwrap();
-                black_box(simulate(&scenario, controller.as_mut(), RunOptions { record: false }))
+                black_box(simulate(&scenario, controller.as_mut(), RunOptions { record: false, ..Default::default() }))
             })
         });
     }

@@ -52,7 +52,7 @@ fn scenario_2(c: &mut Criterion) {
     group.sample_size(10);
     let fly = |record: bool| {
         let mut controller = registry::build("ftaftsmc", &scenario).unwrap();
-        simulate(&scenario, controller.as_mut(), RunOptions { record })
+        simulate(&scenario, controller.as_mut(), RunOptions { record, ..Default::default() })
     };
     group.bench_function("no-recording", |b| b.iter(|| black_box(fly(false))));
     group.bench_function("recording", |b| b.iter(|| black_box(fly(true))));

@@ -442,7 +442,9 @@ pub struct McRun {
 }
 
 /// Fly `runs` randomised copies of `base` with each controller, in parallel
-/// on the current rayon pool. `progress` is called once per finished flight.
+/// on the current rayon pool. `progress` receives control steps flown, from
+/// inside each flight ([`RunOptions::progress`]); a batch adds up to
+/// `runs × controllers × planned_steps(base)`.
 /// The output order is (run index, controller) whatever the thread count.
 pub fn run_batch(
     base: &Scenario,
@@ -450,7 +452,7 @@ pub fn run_batch(
     controllers: &[String],
     runs: u64,
     master_seed: u64,
-    progress: &(dyn Fn() + Sync),
+    progress: &(dyn Fn(u64) + Sync),
 ) -> Result<Vec<McRun>, String> {
     for name in controllers {
         crate::registry::check_name(name)?;
@@ -462,9 +464,8 @@ pub fn run_batch(
             controllers
                 .iter()
                 .map(|name| {
-                    let out = crate::registry::run(name, &scenario, RunOptions { record: false })
-                        .expect("controller names checked above");
-                    progress();
+                    let options = RunOptions { record: false, progress: Some(progress) };
+                    let out = crate::registry::run(name, &scenario, options).expect("controller names checked above");
                     McRun { index, seed, sampled, controller: name.clone(), exit: out.exit, metrics: out.metrics }
                 })
                 .collect()

@@ -432,17 +432,35 @@ pub fn reference_at(scenario: &Scenario, t: f64) -> Reference {
     }
 }
 
-/// Options of one run.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct RunOptions {
+/// Options of one run (construct with `RunOptions { record: false, ..Default::default() }`).
+#[derive(Clone, Copy)]
+pub struct RunOptions<'a> {
     /// Record the time series at `simulation.record_rate`.
     pub record: bool,
+    /// Called with the number of control steps flown since the last call,
+    /// every [`PROGRESS_EVERY`] steps and once at the end (the remainder of
+    /// the planned steps, so a diverged run still adds its planned total).
+    pub progress: Option<&'a (dyn Fn(u64) + Sync)>,
 }
 
-impl Default for RunOptions {
+/// Control steps between two [`RunOptions::progress`] calls.
+pub const PROGRESS_EVERY: u64 = 1000;
+
+impl Default for RunOptions<'_> {
     fn default() -> Self {
-        Self { record: true }
+        Self { record: true, progress: None }
     }
+}
+
+impl core::fmt::Debug for RunOptions<'_> {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.debug_struct("RunOptions").field("record", &self.record).field("progress", &self.progress.is_some()).finish()
+    }
+}
+
+/// Control steps a flight of `scenario` plans (its progress total).
+pub fn planned_steps(scenario: &Scenario) -> u64 {
+    (scenario.duration / scenario.control_period()).round() as u64
 }
 
 /// The command as the rotors deliver it: the applied thrust and torques
@@ -458,7 +476,7 @@ fn realise(command: &Command, plant: &QuadrotorParams, max_rotor_speed: Option<f
 }
 
 /// Fly `controller` through `scenario`.
-pub fn simulate(scenario: &Scenario, controller: &mut dyn Controller, options: RunOptions) -> RunOutput {
+pub fn simulate(scenario: &Scenario, controller: &mut dyn Controller, options: RunOptions<'_>) -> RunOutput {
     let sim = &scenario.simulation;
     let dt = scenario.control_period();
     let steps = (scenario.duration / dt).round() as u64;
@@ -560,6 +578,11 @@ pub fn simulate(scenario: &Scenario, controller: &mut dyn Controller, options: R
             tv_now = tv_next;
         }
         executed = k + 1;
+        if let Some(progress) = options.progress {
+            if executed % PROGRESS_EVERY == 0 {
+                progress(PROGRESS_EVERY);
+            }
+        }
 
         let t_next = (k + 1) as f64 * dt;
         reference = reference_at(scenario, t_next);
@@ -569,6 +592,9 @@ pub fn simulate(scenario: &Scenario, controller: &mut dyn Controller, options: R
         }
     }
 
+    if let Some(progress) = options.progress {
+        progress(steps - executed / PROGRESS_EVERY * PROGRESS_EVERY);
+    }
     RunOutput {
         controller: controller.name().to_string(),
         scenario: scenario.name.clone(),

@@ -39,7 +39,7 @@ pub struct TuningReport {
 }
 
 fn settling(scenario: &Scenario, name: &str) -> Result<[f64; 2], String> {
-    let run = crate::registry::run(name, scenario, RunOptions { record: false })?;
+    let run = crate::registry::run(name, scenario, RunOptions { record: false, ..Default::default() })?;
     if !run.exit.is_completed() {
         return Ok([f64::INFINITY; 2]);
     }

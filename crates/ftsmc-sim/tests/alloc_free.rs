@@ -102,7 +102,7 @@ fn control_update_and_simulation_loop_do_not_allocate() {
             s.duration = duration;
             let mut c = registry::build(name, &s).unwrap();
             allocations_of(|| {
-                std::hint::black_box(simulate(&s, c.as_mut(), RunOptions { record: false }));
+                std::hint::black_box(simulate(&s, c.as_mut(), RunOptions { record: false, ..Default::default() }));
             })
         };
         let (short, long) = (flight(1.0), flight(12.0));

@@ -14,7 +14,7 @@ fn paper_1() -> Scenario {
 #[test]
 fn scenario_1_settles_all_tracked_axes_within_5_s_with_printed_gains() {
     let s = paper_1();
-    let run = registry::run("ftaftsmc", &s, RunOptions { record: false }).unwrap();
+    let run = registry::run("ftaftsmc", &s, RunOptions { record: false, ..Default::default() }).unwrap();
     assert!(run.exit.is_completed(), "{}", run.exit);
     let st = &run.metrics.settling_time;
     for (axis, t) in [("x", st.x), ("y", st.y), ("z", st.z), ("psi", st.psi)] {
@@ -137,9 +137,9 @@ fn hover_with_mass_adaptation_stays_close_despite_the_leakage_term() {
 fn both_attitude_derivative_options_run_and_differ() {
     let mut s = paper_1();
     s.duration = 5.0;
-    let filtered = registry::run("ftaftsmc", &s, RunOptions { record: false }).unwrap();
+    let filtered = registry::run("ftaftsmc", &s, RunOptions { record: false, ..Default::default() }).unwrap();
     s.cascade.attitude_derivatives = AttitudeDerivatives::Zero;
-    let zero = registry::run("ftaftsmc", &s, RunOptions { record: false }).unwrap();
+    let zero = registry::run("ftaftsmc", &s, RunOptions { record: false, ..Default::default() }).unwrap();
     assert!(filtered.exit.is_completed() && zero.exit.is_completed());
     assert_ne!(filtered.metrics.ise.x, zero.metrics.ise.x);
 }
@@ -163,7 +163,7 @@ fn controller_runs_directly_without_the_registry() {
     let gains = s.ftaftsmc.gains().to_array();
     let config = CascadeConfig { model: s.plant, settings: s.cascade, mass_adaptation: MassAdaptation::PAPER };
     let mut c = Cascade::new(config, gains.map(FtaftsmcAxis::new)).unwrap();
-    let out = simulate(&s, &mut c, RunOptions { record: false });
+    let out = simulate(&s, &mut c, RunOptions { record: false, ..Default::default() });
     assert_eq!(c.name(), "ftaftsmc");
     assert!(out.exit.is_completed());
 }
@@ -172,7 +172,7 @@ fn controller_runs_directly_without_the_registry() {
 fn each_baseline_settles_scenario_1_within_8_s_with_default_gains() {
     let s = paper_1();
     for name in ["ranftsmc", "tsm-sta"] {
-        let run = registry::run(name, &s, RunOptions { record: false }).unwrap();
+        let run = registry::run(name, &s, RunOptions { record: false, ..Default::default() }).unwrap();
         assert!(run.exit.is_completed(), "{name}: {}", run.exit);
         let st = &run.metrics.settling_time;
         for (axis, t) in [("x", st.x), ("y", st.y), ("z", st.z), ("psi", st.psi)] {

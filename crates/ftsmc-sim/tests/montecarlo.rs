@@ -12,7 +12,7 @@ fn short_scenario() -> Scenario {
 fn batch(threads: usize, spec: &MonteCarloSpec, s: &Scenario) -> Vec<String> {
     let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
     let controllers = vec!["ftaftsmc".to_string(), "ranftsmc".to_string()];
-    let rows = pool.install(|| run_batch(s, spec, &controllers, 6, 42, &|| {})).unwrap();
+    let rows = pool.install(|| run_batch(s, spec, &controllers, 6, 42, &|_| {})).unwrap();
     rows.iter()
         .map(|r| format!("{} {} {} {:?} {:?} {}", r.index, r.seed, r.controller, r.sampled, r.metrics.flat(), r.exit))
         .collect()
@@ -39,7 +39,7 @@ fn a_diverging_run_is_reported_not_fatal() {
         ..MonteCarloSpec::default()
     };
     let controllers = vec!["ftaftsmc".to_string()];
-    let rows = run_batch(&s, &spec, &controllers, 8, 3, &|| {}).unwrap();
+    let rows = run_batch(&s, &spec, &controllers, 8, 3, &|_| {}).unwrap();
     assert_eq!(rows.len(), 8, "every run is a row");
     let diverged = rows.iter().filter(|r| !r.exit.is_completed()).count();
     assert!(diverged >= 1, "the batch must contain a diverged run");
