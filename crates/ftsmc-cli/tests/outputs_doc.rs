@@ -152,7 +152,8 @@ fn every_csv_column_and_json_key_is_in_docs_outputs_md() {
     }
 
     let mut json_files = Vec::new();
-    for rel in ["repro/summary.json", "mc/summary.json", "ft/fixed-time.json"] {
+    // `--out DIR` is the parent: montecarlo and fixed-time write `DIR/<scenario name>/`.
+    for rel in ["repro/summary.json", "mc/paper-scenario-2/summary.json", "ft/paper-scenario-1/fixed-time.json"] {
         json_files.push(dir.join(rel));
     }
     let run_summary = std::fs::read_dir(dir.join("run")).unwrap().flatten().next().unwrap().path().join("summary.json");
@@ -177,7 +178,7 @@ fn every_csv_column_and_json_key_is_in_docs_outputs_md() {
         assert!(all_paths.contains(p), "{p} not produced: {all_paths:?}");
     }
     // Monte Carlo metric names are runs.csv columns, documented there.
-    let mc: Value = serde_json::from_str(&std::fs::read_to_string(dir.join("mc/summary.json")).unwrap()).unwrap();
+    let mc: Value = serde_json::from_str(&std::fs::read_to_string(dir.join("mc/paper-scenario-2/summary.json")).unwrap()).unwrap();
     for (_, c) in mc["controllers"].as_object().unwrap() {
         for metric in c["metrics"].as_object().unwrap().keys() {
             if !column_documented(&doc, metric) {
