@@ -207,6 +207,25 @@ pub trait AxisLaw {
     /// Restore the initial adaptive / internal states.
     fn reset(&mut self);
 
+    /// Freeze (`true`) or release (`false`) the law's adaptive / integral
+    /// states (δ̂ of FTAFTSMC, `â` of RANFTSMC, ν of TSM-STA).
+    ///
+    /// While frozen, [`AxisLaw::update`] still computes its output from the
+    /// error and the *current* states, exactly as when released, but skips
+    /// the state increments, so the states hold their values; the finiteness
+    /// contract of [`AxisLaw::update`] is unchanged. Released (the initial
+    /// condition, and the state after [`AxisLaw::reset`]), `update` is
+    /// bit-identical to a law that was never frozen.
+    /// [`AxisLaw::continuous_rhs`] reports zero state rates while frozen.
+    ///
+    /// This is the anti-windup remedy of
+    /// [`crate::cascade::CascadeSettings::freeze_adaptation_on_saturation`]:
+    /// the cascade sets it on all six laws before each update. The default
+    /// does nothing (a law without adaptive states has nothing to freeze).
+    fn set_adaptation_frozen(&mut self, frozen: bool) {
+        let _ = frozen;
+    }
+
     /// Validate the law's gains (the gain struct's `check()`); used by
     /// [`crate::cascade::Cascade::new`].
     fn check_gains(&self) -> Result<(), GainError>;
