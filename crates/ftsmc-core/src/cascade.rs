@@ -8,10 +8,61 @@
 //! the desired roll and pitch (Eq. 52, corrected). Inner loop (attitude): the
 //! same kind of law on φ, θ, ψ, and torques that cancel the plant's coupling,
 //! gyroscopic and drag terms (Eq. 56–58, corrected).
+//!
+//! # Saturation remedies
+//!
+//! The paper assumes actuators that deliver any thrust and torque; its gains
+//! ask for a negative thrust and ±1.5 N·m torques at 6 Hz in scenario 1, and
+//! with a rotor-speed limit FTAFTSMC flips (issue 11). Four options of
+//! [`CascadeSettings`] and [`MassAdaptation`] make the cascade aware of
+//! saturation. Each is off or inert by default, and with the defaults the
+//! cascade is bit-identical to the paper's form (the paper scenarios print
+//! the same numbers).
+//!
+//! * **Tilt limit**, [`CascadeSettings::max_tilt`] (rad, always on, default
+//!   0.6 rad ≈ 34°): the asin arguments of Eq. 52 are clamped to
+//!   `±sin(max_tilt)`, so no horizontal demand asks for more than this tilt
+//!   and the vertical component of the thrust keeps at least `cos(max_tilt)`
+//!   of `U1`. It bounds the attitude *demand*, not the attitude.
+//! * **Thrust bound**, [`CascadeSettings::thrust_limits`] (N, `[min, max]`,
+//!   default none): `U1 = α̂ u1` (or `u1` without mass adaptation) is bounded
+//!   to `[min, max]` right after Eq. 44's scaling and *before* Remark 2, so
+//!   the virtual controls are `u_x = m a_x / U1_bounded` (`α̂ m a_x / …` with
+//!   `compensate_horizontal`): the attitude demanded is the one that gives
+//!   the commanded horizontal acceleration with the thrust the rotors will
+//!   really produce, not with a thrust they cannot give. When `max` clips,
+//!   the demanded tilt grows (up to `max_tilt`) to keep the horizontal
+//!   acceleration and the vertical one falls short; when `min` clips a
+//!   negative or tiny `u1`, the Remark 2 guard `U1 >= 1e-3 m g` applies as
+//!   before. The bounded `U1` is the command's thrust and the one used for
+//!   the rotor-speed estimate of the gyroscopic cancellation. Eq. 44 still
+//!   sees the unbounded `u1` (it is the paper's law). Set it to what the
+//!   mixer can give with some torque margin left, e.g. a fraction of
+//!   `4 k_f ω_max²`. [`Telemetry::thrust_limited`] reports when it clipped.
+//! * **α̂ projection**, [`MassAdaptation::alpha_hat_bounds`] (`[min, max]`,
+//!   default none): α̂ is projected onto the interval after each Eq. 44 step.
+//!   Without it Eq. 44 winds α̂ up whenever `u1` is negative (fast descents),
+//!   and the thrust `α̂ u1` follows it.
+//! * **Freezing the adaptation while the actuators saturate**,
+//!   [`CascadeSettings::freeze_adaptation_on_saturation`] (default false):
+//!   the simulator reports after each period whether its mixer could realise
+//!   the command ([`Controller::actuator_feedback`]); while the last report
+//!   is "saturated", each update holds δ̂ (FTAFTSMC, Eq. 17), `â` (RANFTSMC),
+//!   ν (TSM-STA's super-twisting integral: conditional-integration
+//!   anti-windup) and α̂ (Eq. 44; the `alpha_hat_bounds` projection is then
+//!   not applied either, α̂ simply keeps its value) through
+//!   [`AxisLaw::set_adaptation_frozen`]. The outputs still respond to the
+//!   error with the held states; only the state increments are skipped, so
+//!   the adaptive gains do not grow on errors the actuators cannot remove.
+//!   Only the simulator's report freezes: the thrust bound clipping `U1` by
+//!   itself does not. With no report, or reports of `false`, the cascade is
+//!   bit-identical to the option off. [`Telemetry::adaptation_frozen`]
+//!   reports when the states were held.
 
 use crate::allocation::{residual_speed, rotor_speeds};
 use crate::law::{
-    check_gain, check_left_open, check_open, saturate, AxisLaw, GainError, INPUT_LIMIT, MAX_ESTIMATES, STATE_LIMIT,
+    check_closed, check_gain, check_left_open, check_open, saturate, AxisLaw, GainError, INPUT_LIMIT, MAX_ESTIMATES,
+    STATE_LIMIT,
 };
 use crate::math::{asin, cos, sin_cos};
 use crate::model::{Command, QuadState, QuadrotorParams, Reference};
@@ -85,6 +136,22 @@ pub struct CascadeSettings {
     /// The default reproduces the published Table 3; docs/results.md reports
     /// Table 3 under both.
     pub filter_init: FilterInit,
+    /// Saturation remedy: bound the thrust command `U1` to `[min, max]`, N
+    /// (what the rotors can give, e.g. `4 k_f ω_min²` and `4 k_f ω_max²`),
+    /// *before* the attitude demand is computed from it, so that the demanded
+    /// tilt is the one that realises the horizontal acceleration with the
+    /// thrust that will really be produced. Default none (the paper: `U1`
+    /// unbounded, it may even be negative). Requires `0 <= min < max`, both
+    /// finite. See the module docs, "Saturation remedies".
+    #[cfg_attr(feature = "serde", serde(skip_serializing_if = "Option::is_none"))]
+    pub thrust_limits: Option<[f64; 2]>,
+    /// Saturation remedy: hold the adaptive states (δ̂ of FTAFTSMC, `â` of
+    /// RANFTSMC, ν of TSM-STA, and α̂ of the mass adaptation) during every
+    /// update that follows a [`Controller::actuator_feedback`] report of
+    /// saturation. Default false (the paper: the adaptive laws integrate
+    /// whatever the actuators do). See the module docs, "Saturation remedies".
+    #[cfg_attr(feature = "serde", serde(skip_serializing_if = "core::ops::Not::not"))]
+    pub freeze_adaptation_on_saturation: bool,
 }
 
 impl Default for CascadeSettings {
@@ -94,19 +161,28 @@ impl Default for CascadeSettings {
             command_filter: CommandFilterParams::default(),
             max_tilt: 0.6,
             filter_init: FilterInit::FirstDemand,
+            thrust_limits: None,
+            freeze_adaptation_on_saturation: false,
         }
     }
 }
 
 impl CascadeSettings {
     /// Range checks: ω_n and ζ in `(0, 1e6]` (the filter forms ω_n² times
-    /// states up to 1e100), `0 < max_tilt < π/2` (NaN rejected).
-    /// `filter_init` has no range: every variant is valid, and a misspelt
-    /// one is refused when the scenario is parsed.
+    /// states up to 1e100), `0 < max_tilt < π/2` (NaN rejected), and when
+    /// given `0 <= thrust_limits[0] < thrust_limits[1]`, both finite.
+    /// `filter_init` and `freeze_adaptation_on_saturation` have no range:
+    /// every value is valid, and a misspelt one is refused when the scenario
+    /// is parsed.
     pub fn check(&self) -> Result<(), GainError> {
         check_gain("command_filter.natural_frequency", self.command_filter.natural_frequency)?;
         check_gain("command_filter.damping", self.command_filter.damping)?;
-        check_open("max_tilt", self.max_tilt, 0.0, core::f64::consts::FRAC_PI_2, "0 < max_tilt < π/2")
+        check_open("max_tilt", self.max_tilt, 0.0, core::f64::consts::FRAC_PI_2, "0 < max_tilt < π/2")?;
+        if let Some([lo, hi]) = self.thrust_limits {
+            check_closed("thrust_limits[0]", lo, 0.0, f64::MAX, "0 <= thrust_limits[0], finite (N)")?;
+            check_open("thrust_limits[1]", hi, lo, f64::INFINITY, "thrust_limits[0] < thrust_limits[1], finite (N)")?;
+        }
+        Ok(())
     }
 }
 
@@ -241,6 +317,12 @@ pub struct Telemetry {
     pub nominal_thrust: f64,
     /// Mass ratio estimate α̂ (estimated mass = α̂ m).
     pub alpha_hat: f64,
+    /// The thrust bound ([`CascadeSettings::thrust_limits`]) changed `U1`
+    /// at this update.
+    pub thrust_limited: bool,
+    /// The adaptive states were held at this update
+    /// ([`CascadeSettings::freeze_adaptation_on_saturation`]).
+    pub adaptation_frozen: bool,
 }
 
 /// A complete quadrotor controller: state and reference in, command out.
@@ -254,6 +336,18 @@ pub trait Controller {
     fn telemetry(&self) -> &Telemetry;
     /// Restore initial internal states.
     fn reset(&mut self);
+    /// Actuator feedback: called by the simulator after it has mixed the
+    /// command of each control period into rotor speeds; `saturated` is true
+    /// when the mixer could not realise that command (a rotor limit was hit
+    /// and thrust or torque was given up). The report holds until the next
+    /// call and is cleared by [`Controller::reset`].
+    ///
+    /// The default ignores it. [`Cascade`] stores it and, with
+    /// [`CascadeSettings::freeze_adaptation_on_saturation`], holds its
+    /// adaptive states during the following updates while it is true.
+    fn actuator_feedback(&mut self, saturated: bool) {
+        let _ = saturated;
+    }
 }
 
 #[derive(Clone, Copy, Debug, Default)]
@@ -280,6 +374,8 @@ pub struct Cascade<L: AxisLaw> {
     telemetry: Telemetry,
     /// `sin(max_tilt)`, the clamp of the asin arguments of Eq. 52.
     tilt_limit: f64,
+    /// Last [`Controller::actuator_feedback`] report.
+    actuator_saturated: bool,
 }
 
 impl<L: AxisLaw> Cascade<L> {
@@ -318,12 +414,29 @@ impl<L: AxisLaw> Cascade<L> {
             last_command: hover,
             telemetry: Telemetry { alpha_hat: config.mass_adaptation.alpha_hat0, ..Telemetry::default() },
             tilt_limit: crate::math::sin(config.settings.max_tilt),
+            actuator_saturated: false,
         }
     }
 
     /// Current mass-ratio estimate α̂.
     pub fn alpha_hat(&self) -> f64 {
         self.alpha_hat
+    }
+
+    /// Last [`Controller::actuator_feedback`] report (false until the first).
+    pub fn actuator_saturated(&self) -> bool {
+        self.actuator_saturated
+    }
+
+    /// `thrust` bounded to `[lo, hi]` (no `f64::clamp`: never panics);
+    /// unchanged without bounds.
+    #[inline]
+    fn bound_thrust(thrust: f64, limits: Option<[f64; 2]>) -> f64 {
+        match limits {
+            Some([lo, _]) if thrust < lo => lo,
+            Some([_, hi]) if thrust > hi => hi,
+            _ => thrust,
+        }
     }
 
     /// Desired roll and pitch from the virtual controls (Eq. 52 corrected:
@@ -402,6 +515,15 @@ impl<L: AxisLaw> Controller for Cascade<L> {
         let model = self.config.model;
         let m = model.mass;
         let g = model.gravity;
+        let settings = self.config.settings;
+
+        // Saturation remedy: hold every adaptive state after a saturation
+        // report. Set on all six laws every update (a store), so a law
+        // replaced through the public `laws` field is still governed.
+        let frozen = settings.freeze_adaptation_on_saturation && self.actuator_saturated;
+        for law in &mut self.laws {
+            law.set_adaptation_frozen(frozen);
+        }
 
         // Outer loop: commanded accelerations (Eq. 18–20).
         let mut accel = [0.0; 3];
@@ -416,9 +538,12 @@ impl<L: AxisLaw> Controller for Cascade<L> {
 
         // Mass adaptation (§3.2, Eq. 44): U1 = α̂ u1.
         let ma = self.config.mass_adaptation;
-        let thrust = if ma.enabled { self.alpha_hat * nominal_thrust } else { nominal_thrust };
+        let unbounded_thrust = if ma.enabled { self.alpha_hat * nominal_thrust } else { nominal_thrust };
+        // Saturation remedy: U1 bounded to what the rotors can give, before
+        // Remark 2 uses it, so the attitude demand matches the real thrust.
+        let thrust = Self::bound_thrust(unbounded_thrust, settings.thrust_limits);
         let horizontal_mass = if ma.enabled && ma.compensate_horizontal { self.alpha_hat * m } else { m };
-        if ma.enabled {
+        if ma.enabled && !frozen {
             let s_z = saturate(self.laws[2].sliding_variable(), STATE_LIMIT);
             let rate = -ma.beta1 * (s_z * nominal_thrust * tilt_cos / m + ma.beta2 * self.alpha_hat);
             self.alpha_hat += dt * rate;
@@ -480,6 +605,8 @@ impl<L: AxisLaw> Controller for Cascade<L> {
             commanded_acceleration: accel,
             nominal_thrust,
             alpha_hat: self.alpha_hat,
+            thrust_limited: thrust != unbounded_thrust,
+            adaptation_frozen: frozen,
         };
         command
     }
@@ -496,7 +623,12 @@ impl<L: AxisLaw> Controller for Cascade<L> {
         self.filter = [FilterState::default(); 2];
         self.alpha_hat = self.config.mass_adaptation.alpha_hat0;
         self.last_command = hover;
+        self.actuator_saturated = false;
         self.telemetry = Telemetry { alpha_hat: self.alpha_hat, ..Telemetry::default() };
+    }
+
+    fn actuator_feedback(&mut self, saturated: bool) {
+        self.actuator_saturated = saturated;
     }
 }
 
