@@ -552,4 +552,17 @@ mod tests {
         // x, y: 1/(0.2·3) + 1/(2·0.8) = 1.6667 + 0.625
         assert_relative_eq!(FtaftsmcGains::PAPER_XY.reaching_time_bound(), 1.0 / 0.6 + 0.625, epsilon = 1e-12);
     }
+
+    /// Issue 11 item 6: δ̂ is held while frozen, released it is Eq. 17 again.
+    #[test]
+    fn freezing_holds_delta_hat_and_keeps_the_output() {
+        use crate::law::testing::{check_freeze, warmed};
+        for g in
+            [FtaftsmcGains::PAPER_XY, FtaftsmcGains::PAPER_Z, FtaftsmcGains::PAPER_ROLL_PITCH, FtaftsmcGains::PAPER_YAW]
+        {
+            let axis = warmed(FtaftsmcAxis::new(FtaftsmcGains { delta_hat0: 0.3, ..g }));
+            assert!(!axis.adaptation_frozen());
+            check_freeze(axis);
+        }
+    }
 }

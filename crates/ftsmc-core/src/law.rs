@@ -244,3 +244,70 @@ pub trait AxisLaw {
         None
     }
 }
+
+/// Shared checks of the law implementations.
+#[cfg(test)]
+pub(crate) mod testing {
+    use super::AxisLaw;
+
+    const INPUTS: [(f64, f64); 5] = [(0.4, -0.3), (-0.2, 0.5), (0.05, 0.0), (1.2, -0.8), (-0.7, 0.9)];
+    const DT: f64 = 1e-3;
+
+    fn bits<const N: usize>(x: [f64; N]) -> [u64; N] {
+        x.map(f64::to_bits)
+    }
+
+    /// [`AxisLaw::set_adaptation_frozen`] on `warm` (a law with non-trivial
+    /// states): frozen, the states hold bit for bit while the output is the
+    /// one computed with the held states and still follows the error;
+    /// released again, the law is bit-identical to one never frozen, and
+    /// its states move (so the first part is not vacuous);
+    /// [`AxisLaw::continuous_rhs`] gives zero rates while frozen.
+    pub(crate) fn check_freeze<L: AxisLaw + Clone>(warm: L) {
+        let held = warm.estimates();
+        let mut frozen = warm.clone();
+        frozen.set_adaptation_frozen(true);
+        let mut outputs = [0.0; INPUTS.len()];
+        for (k, &(e, e_dot)) in INPUTS.iter().enumerate() {
+            outputs[k] = frozen.update(e, e_dot, DT);
+            assert_eq!(bits(frozen.estimates()), bits(held), "state moved while frozen at step {k}");
+            // The output of a law at the held states, which `dt = 0` does not advance.
+            let want = warm.clone().update(e, e_dot, 0.0);
+            assert_eq!(outputs[k].to_bits(), want.to_bits(), "step {k}: {} vs {want}", outputs[k]);
+            if let (Some(f), Some(free)) = (frozen.continuous_rhs(e, e_dot, held), warm.continuous_rhs(e, e_dot, held))
+            {
+                assert_eq!(f.estimates_rate, [0.0; super::MAX_ESTIMATES]);
+                assert_eq!((f.v.to_bits(), f.s.to_bits()), (free.v.to_bits(), free.s.to_bits()));
+            }
+        }
+        assert!(outputs.windows(2).all(|w| w[0] != w[1]), "frozen output ignores the error: {outputs:?}");
+
+        let mut released = warm.clone();
+        released.set_adaptation_frozen(true);
+        released.set_adaptation_frozen(false);
+        let mut never = warm.clone();
+        for &(e, e_dot) in &INPUTS {
+            let (a, b) = (released.update(e, e_dot, DT), never.update(e, e_dot, DT));
+            assert_eq!(a.to_bits(), b.to_bits());
+            assert_eq!(bits(released.estimates()), bits(never.estimates()));
+            assert_eq!(released.sliding_variable().to_bits(), never.sliding_variable().to_bits());
+        }
+        assert_ne!(bits(never.estimates()), bits(held), "the states never move: the test is vacuous");
+
+        // `reset` releases.
+        frozen.reset();
+        let mut fresh = frozen.clone();
+        frozen.update(0.4, -0.3, DT);
+        fresh.set_adaptation_frozen(false);
+        fresh.update(0.4, -0.3, DT);
+        assert_eq!(bits(frozen.estimates()), bits(fresh.estimates()));
+    }
+
+    /// `law` after a few updates, so its states are not the initial ones.
+    pub(crate) fn warmed<L: AxisLaw>(mut law: L) -> L {
+        for &(e, e_dot) in INPUTS.iter().rev() {
+            law.update(e, e_dot, 10.0 * DT);
+        }
+        law
+    }
+}

@@ -395,4 +395,16 @@ mod tests {
         let hard = |e: f64| RanftsmcAxis::new(RanftsmcGains::PAPER_POSITION).update(e, 0.0, 1e-3);
         assert!((hard(1e-6) - hard(-1e-6)).abs() > 0.9, "the default law switches");
     }
+
+    /// Issue 11 item 6: `â` is held while frozen, released it adapts again.
+    #[test]
+    fn freezing_holds_a_hat_and_keeps_the_output() {
+        use crate::law::testing::{check_freeze, warmed};
+        for g in [RanftsmcGains::PAPER_POSITION, RanftsmcGains::PAPER_ATTITUDE] {
+            let g = RanftsmcGains { a0_hat0: 0.2, a1_hat0: 0.1, a2_hat0: 0.05, ..g };
+            let axis = warmed(RanftsmcAxis::new(g));
+            assert!(!axis.adaptation_frozen());
+            check_freeze(axis);
+        }
+    }
 }

@@ -386,4 +386,16 @@ mod tests {
             assert!(last_outside < limit, "settles at {last_outside}");
         }
     }
+
+    /// Issue 11 item 6: ν (the super-twisting integral) is held while
+    /// frozen, released it integrates again.
+    #[test]
+    fn freezing_holds_nu_and_keeps_the_output() {
+        use crate::law::testing::{check_freeze, warmed};
+        for g in [TsmStaGains::DEFAULT_POSITION, TsmStaGains::DEFAULT_ATTITUDE] {
+            let axis = warmed(TsmStaAxis::new(g));
+            assert!(!axis.adaptation_frozen() && axis.nu != 0.0);
+            check_freeze(axis);
+        }
+    }
 }
