@@ -795,4 +795,196 @@ mod tests {
         assert!((cmd.thrust - p.mass * p.gravity).abs() < 1e-12, "{}", cmd.thrust);
         assert!(cmd.torque.iter().all(|t| t.abs() < 1e-15));
     }
+
+    fn zero_derivatives(thrust_limits: Option<[f64; 2]>) -> CascadeSettings {
+        CascadeSettings { attitude_derivatives: AttitudeDerivatives::Zero, thrust_limits, ..CascadeSettings::default() }
+    }
+
+    /// Issue 11 item 6: the thrust bound acts on U1 before Remark 2, so the
+    /// attitude demand is computed from the bounded thrust (and Eq. 44 still
+    /// sees the unbounded u1).
+    #[test]
+    fn thrust_limits_bound_u1_and_the_attitude_demand_uses_the_bounded_u1() {
+        let m = QuadrotorParams::default().mass;
+        let g = QuadrotorParams::default().gravity;
+        let state = QuadState::default();
+        let climb = Reference { position: [1.0, -0.5, 5.0], yaw: 0.2, ..Reference::default() };
+        let step = |limits: Option<[f64; 2]>, reference: &Reference| {
+            let mut c = paper_ftaftsmc(zero_derivatives(limits));
+            let cmd = c.update(&state, reference, 1e-3);
+            (cmd, *c.telemetry(), c.alpha_hat())
+        };
+        let demand_for = |t: &Telemetry, thrust: f64, yaw: f64| {
+            let [ax, ay, _] = t.commanded_acceleration;
+            Cascade::<FtaftsmcAxis>::desired_roll_pitch(m * ax / thrust, m * ay / thrust, yaw, 0.6)
+        };
+
+        // Upper bound: a fast climb asks for more than the rotors give.
+        let (free, free_t, free_alpha) = step(None, &climb);
+        assert!(!free_t.thrust_limited);
+        let hi = 0.5 * free.thrust;
+        assert!(hi > m * g, "the climb must ask for more than hover: {}", free.thrust);
+        let (cmd, t, alpha) = step(Some([0.0, hi]), &climb);
+        assert_eq!(cmd.thrust.to_bits(), hi.to_bits());
+        assert!(t.thrust_limited);
+        assert_eq!(t.attitude_demand.map(f64::to_bits), demand_for(&t, hi, climb.yaw).map(f64::to_bits));
+        // Half the thrust: the demanded tilt grows to keep the horizontal acceleration.
+        assert_eq!(
+            free_t.attitude_demand.map(f64::to_bits),
+            demand_for(&free_t, free.thrust, climb.yaw).map(f64::to_bits)
+        );
+        for i in 0..2 {
+            assert!(t.attitude_demand[i].abs() > free_t.attitude_demand[i].abs(), "{t:?} {free_t:?}");
+        }
+        assert_eq!(
+            (t.nominal_thrust.to_bits(), alpha.to_bits()),
+            (free_t.nominal_thrust.to_bits(), free_alpha.to_bits())
+        );
+
+        // Lower bound: near hover, a minimum above the weight lifts U1.
+        let hover = Reference { position: [0.3, 0.2, 0.0], ..Reference::default() };
+        let lo = 1.5 * m * g;
+        let (cmd, t, _) = step(Some([lo, 3.0 * m * g]), &hover);
+        assert_eq!(cmd.thrust.to_bits(), lo.to_bits());
+        assert!(t.thrust_limited && t.attitude_demand.iter().all(|d| *d != 0.0));
+        assert_eq!(t.attitude_demand.map(f64::to_bits), demand_for(&t, lo, 0.0).map(f64::to_bits));
+
+        // Inside the bounds nothing changes, bit for bit.
+        let (free, free_t, _) = step(None, &hover);
+        let (cmd, t, _) = step(Some([0.0, 1e3]), &hover);
+        assert_eq!(cmd.thrust.to_bits(), free.thrust.to_bits());
+        assert_eq!(cmd.torque.map(f64::to_bits), free.torque.map(f64::to_bits));
+        assert_eq!(t, free_t);
+        assert!(!t.thrust_limited);
+    }
+
+    #[test]
+    fn thrust_limits_are_validated() {
+        for (limits, field) in [
+            ([-1.0, 10.0], "thrust_limits[0]"),
+            ([f64::NAN, 10.0], "thrust_limits[0]"),
+            ([f64::INFINITY, f64::INFINITY], "thrust_limits[0]"),
+            ([5.0, 5.0], "thrust_limits[1]"),
+            ([5.0, 1.0], "thrust_limits[1]"),
+            ([0.0, f64::INFINITY], "thrust_limits[1]"),
+            ([0.0, f64::NAN], "thrust_limits[1]"),
+        ] {
+            let settings = zero_derivatives(Some(limits));
+            assert_eq!(settings.check().unwrap_err().field, field, "{limits:?}");
+            let err = Cascade::new(paper_config(settings, MassAdaptation::PAPER), paper_laws()).unwrap_err();
+            assert_eq!(err.field, field);
+            // Unchecked, it must not panic.
+            let mut c = Cascade::new_unchecked(paper_config(settings, MassAdaptation::PAPER), paper_laws());
+            c.update(&QuadState::default(), &Reference { position: [0.5, 0.0, 1.0], ..Reference::default() }, 1e-3);
+        }
+        zero_derivatives(Some([0.0, 10.0])).check().unwrap();
+        assert_eq!(CascadeSettings::default().thrust_limits, None);
+        assert!(!CascadeSettings::default().freeze_adaptation_on_saturation);
+    }
+
+    /// A swinging vehicle chasing an offset reference: step `k`.
+    fn wobble(k: usize) -> (QuadState, Reference) {
+        let t = k as f64 * 1e-3;
+        let state = QuadState {
+            position: [0.2 * (3.0 * t).sin(), -0.1 * (2.0 * t).cos(), 0.5 * t],
+            velocity: [0.6 * (3.0 * t).cos(), 0.2 * (2.0 * t).sin(), 0.5],
+            attitude: [0.1 * (7.0 * t).sin(), -0.08 * (5.0 * t).cos(), 0.02 * t],
+            angular_rate: [0.7 * (7.0 * t).cos(), 0.4 * (5.0 * t).sin(), 0.02],
+        };
+        let reference = Reference { position: [1.0, -0.5, 2.0], ..Reference::default() };
+        (state, reference)
+    }
+
+    fn command_bits(c: &Command) -> [u64; 4] {
+        [c.thrust.to_bits(), c.torque[0].to_bits(), c.torque[1].to_bits(), c.torque[2].to_bits()]
+    }
+
+    /// Issue 11 item 6, for one controller built by `make`:
+    /// - option on with `actuator_feedback(false)`, and option off with
+    ///   `actuator_feedback(true)`, are bit-identical to the defaults;
+    /// - option on after `actuator_feedback(true)`: the law states and α̂
+    ///   hold bit for bit while the commands still follow the error;
+    /// - `actuator_feedback(false)` releases them, `reset` clears the report.
+    fn check_cascade_freeze<L: AxisLaw + Clone>(make: impl Fn(CascadeSettings) -> Cascade<L>) {
+        let freeze = CascadeSettings { freeze_adaptation_on_saturation: true, ..CascadeSettings::default() };
+        let mut on = make(freeze);
+        let mut off = make(CascadeSettings::default());
+        let mut ignored = make(CascadeSettings::default());
+        for k in 0..40 {
+            let (state, reference) = wobble(k);
+            on.actuator_feedback(false);
+            ignored.actuator_feedback(true);
+            let a = on.update(&state, &reference, 1e-3);
+            let b = off.update(&state, &reference, 1e-3);
+            let c = ignored.update(&state, &reference, 1e-3);
+            assert_eq!(command_bits(&a), command_bits(&b), "step {k}");
+            assert_eq!(command_bits(&c), command_bits(&b), "step {k}");
+            assert_eq!(on.telemetry(), off.telemetry());
+            assert_eq!(ignored.telemetry(), off.telemetry());
+            assert!(!on.telemetry().adaptation_frozen);
+        }
+
+        on.actuator_feedback(true);
+        assert!(on.actuator_saturated());
+        let held = (on.telemetry().estimates, on.alpha_hat());
+        let held_bits = (held.0.map(|e| e.map(f64::to_bits)), held.1.to_bits());
+        let mut commands = [[0u64; 4]; 10];
+        for (i, k) in (40..50).enumerate() {
+            let (state, reference) = wobble(k);
+            let cmd = on.update(&state, &reference, 1e-3);
+            assert!(cmd.thrust.is_finite() && cmd.torque.iter().all(|t| t.is_finite()));
+            commands[i] = command_bits(&cmd);
+            let t = on.telemetry();
+            assert!(t.adaptation_frozen);
+            assert_eq!((t.estimates.map(|e| e.map(f64::to_bits)), on.alpha_hat().to_bits()), held_bits, "step {k}");
+        }
+        assert!(commands.windows(2).all(|w| w[0] != w[1]), "frozen commands ignore the error");
+
+        on.actuator_feedback(false);
+        let (state, reference) = wobble(50);
+        on.update(&state, &reference, 1e-3);
+        assert!(!on.telemetry().adaptation_frozen);
+        assert_ne!(on.telemetry().estimates, held.0, "released states do not move");
+
+        on.actuator_feedback(true);
+        on.reset();
+        assert!(!on.actuator_saturated());
+        on.update(&state, &reference, 1e-3);
+        assert!(!on.telemetry().adaptation_frozen);
+    }
+
+    #[test]
+    fn freezing_on_saturation_holds_delta_hat_and_alpha_hat() {
+        check_cascade_freeze(paper_ftaftsmc);
+        // α̂ moves when released (the generic check looks at the laws only).
+        let mut c =
+            paper_ftaftsmc(CascadeSettings { freeze_adaptation_on_saturation: true, ..CascadeSettings::default() });
+        let (state, reference) = wobble(3);
+        c.actuator_feedback(true);
+        c.update(&state, &reference, 1e-3);
+        assert_eq!(c.alpha_hat(), MassAdaptation::PAPER.alpha_hat0);
+        c.actuator_feedback(false);
+        c.update(&state, &reference, 1e-3);
+        assert_ne!(c.alpha_hat(), MassAdaptation::PAPER.alpha_hat0);
+    }
+
+    #[test]
+    fn freezing_on_saturation_holds_a_hat_of_ranftsmc() {
+        use crate::ranftsmc::{RanftsmcAxis, RanftsmcGains};
+        check_cascade_freeze(|settings| {
+            let p = RanftsmcAxis::new(RanftsmcGains::PAPER_POSITION);
+            let a = RanftsmcAxis::new(RanftsmcGains::PAPER_ATTITUDE);
+            Cascade::new(paper_config(settings, MassAdaptation::OFF), [p, p, p, a, a, a]).unwrap()
+        });
+    }
+
+    #[test]
+    fn freezing_on_saturation_holds_nu_of_tsm_sta() {
+        use crate::tsm_sta::{TsmStaAxis, TsmStaGains};
+        check_cascade_freeze(|settings| {
+            let p = TsmStaAxis::new(TsmStaGains::DEFAULT_POSITION);
+            let a = TsmStaAxis::new(TsmStaGains::DEFAULT_ATTITUDE);
+            Cascade::new(paper_config(settings, MassAdaptation::OFF), [p, p, p, a, a, a]).unwrap()
+        });
+    }
 }
