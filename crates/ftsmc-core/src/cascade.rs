@@ -141,8 +141,9 @@ pub struct CascadeSettings {
     /// *before* the attitude demand is computed from it, so that the demanded
     /// tilt is the one that realises the horizontal acceleration with the
     /// thrust that will really be produced. Default none (the paper: `U1`
-    /// unbounded, it may even be negative). Requires `0 <= min < max`, both
-    /// finite. See the module docs, "Saturation remedies".
+    /// unbounded, it may even be negative). Requires `0 <= min < max <= 1e100`
+    /// (the finiteness guarantee of [`Cascade::new`] covers thrusts up to
+    /// there). See the module docs, "Saturation remedies".
     #[cfg_attr(feature = "serde", serde(skip_serializing_if = "Option::is_none"))]
     pub thrust_limits: Option<[f64; 2]>,
     /// Saturation remedy: hold the adaptive states (δ̂ of FTAFTSMC, `â` of
@@ -170,7 +171,9 @@ impl Default for CascadeSettings {
 impl CascadeSettings {
     /// Range checks: ω_n and ζ in `(0, 1e6]` (the filter forms ω_n² times
     /// states up to 1e100), `0 < max_tilt < π/2` (NaN rejected), and when
-    /// given `0 <= thrust_limits[0] < thrust_limits[1]`, both finite.
+    /// given `0 <= thrust_limits[0] < thrust_limits[1] <= 1e100` (a minimum
+    /// thrust of 1e300 N would overflow the rotor-speed estimate of the
+    /// gyroscopic cancellation; the cascade's own thrust stays below ~1e120).
     /// `filter_init` and `freeze_adaptation_on_saturation` have no range:
     /// every value is valid, and a misspelt one is refused when the scenario
     /// is parsed.
@@ -179,8 +182,14 @@ impl CascadeSettings {
         check_gain("command_filter.damping", self.command_filter.damping)?;
         check_open("max_tilt", self.max_tilt, 0.0, core::f64::consts::FRAC_PI_2, "0 < max_tilt < π/2")?;
         if let Some([lo, hi]) = self.thrust_limits {
-            check_closed("thrust_limits[0]", lo, 0.0, f64::MAX, "0 <= thrust_limits[0], finite (N)")?;
-            check_open("thrust_limits[1]", hi, lo, f64::INFINITY, "thrust_limits[0] < thrust_limits[1], finite (N)")?;
+            check_closed("thrust_limits[0]", lo, 0.0, STATE_LIMIT, "0 <= thrust_limits[0] < 1e100 (N)")?;
+            check_left_open(
+                "thrust_limits[1]",
+                hi,
+                lo,
+                STATE_LIMIT,
+                "thrust_limits[0] < thrust_limits[1] <= 1e100 (N)",
+            )?;
         }
         Ok(())
     }
@@ -864,6 +873,8 @@ mod tests {
             ([-1.0, 10.0], "thrust_limits[0]"),
             ([f64::NAN, 10.0], "thrust_limits[0]"),
             ([f64::INFINITY, f64::INFINITY], "thrust_limits[0]"),
+            ([1e200, 1e201], "thrust_limits[0]"),
+            ([0.0, 1e101], "thrust_limits[1]"),
             ([5.0, 5.0], "thrust_limits[1]"),
             ([5.0, 1.0], "thrust_limits[1]"),
             ([0.0, f64::INFINITY], "thrust_limits[1]"),
@@ -878,6 +889,7 @@ mod tests {
             c.update(&QuadState::default(), &Reference { position: [0.5, 0.0, 1.0], ..Reference::default() }, 1e-3);
         }
         zero_derivatives(Some([0.0, 10.0])).check().unwrap();
+        zero_derivatives(Some([1e99, 1e100])).check().unwrap();
         assert_eq!(CascadeSettings::default().thrust_limits, None);
         assert!(!CascadeSettings::default().freeze_adaptation_on_saturation);
     }
