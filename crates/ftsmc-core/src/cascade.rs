@@ -8,10 +8,61 @@
 //! the desired roll and pitch (Eq. 52, corrected). Inner loop (attitude): the
 //! same kind of law on φ, θ, ψ, and torques that cancel the plant's coupling,
 //! gyroscopic and drag terms (Eq. 56–58, corrected).
+//!
+//! # Saturation remedies
+//!
+//! The paper assumes actuators that deliver any thrust and torque; its gains
+//! ask for a negative thrust and ±1.5 N·m torques at 6 Hz in scenario 1, and
+//! with a rotor-speed limit FTAFTSMC flips (issue 11). Four options of
+//! [`CascadeSettings`] and [`MassAdaptation`] make the cascade aware of
+//! saturation. Each is off or inert by default, and with the defaults the
+//! cascade is bit-identical to the paper's form (the paper scenarios print
+//! the same numbers).
+//!
+//! * **Tilt limit**, [`CascadeSettings::max_tilt`] (rad, always on, default
+//!   0.6 rad ≈ 34°): the asin arguments of Eq. 52 are clamped to
+//!   `±sin(max_tilt)`, so no horizontal demand asks for more than this tilt
+//!   and the vertical component of the thrust keeps at least `cos(max_tilt)`
+//!   of `U1`. It bounds the attitude *demand*, not the attitude.
+//! * **Thrust bound**, [`CascadeSettings::thrust_limits`] (N, `[min, max]`,
+//!   default none): `U1 = α̂ u1` (or `u1` without mass adaptation) is bounded
+//!   to `[min, max]` right after Eq. 44's scaling and *before* Remark 2, so
+//!   the virtual controls are `u_x = m a_x / U1_bounded` (`α̂ m a_x / …` with
+//!   `compensate_horizontal`): the attitude demanded is the one that gives
+//!   the commanded horizontal acceleration with the thrust the rotors will
+//!   really produce, not with a thrust they cannot give. When `max` clips,
+//!   the demanded tilt grows (up to `max_tilt`) to keep the horizontal
+//!   acceleration and the vertical one falls short; when `min` clips a
+//!   negative or tiny `u1`, the Remark 2 guard `U1 >= 1e-3 m g` applies as
+//!   before. The bounded `U1` is the command's thrust and the one used for
+//!   the rotor-speed estimate of the gyroscopic cancellation. Eq. 44 still
+//!   sees the unbounded `u1` (it is the paper's law). Set it to what the
+//!   mixer can give with some torque margin left, e.g. a fraction of
+//!   `4 k_f ω_max²`. [`Telemetry::thrust_limited`] reports when it clipped.
+//! * **α̂ projection**, [`MassAdaptation::alpha_hat_bounds`] (`[min, max]`,
+//!   default none): α̂ is projected onto the interval after each Eq. 44 step.
+//!   Without it Eq. 44 winds α̂ up whenever `u1` is negative (fast descents),
+//!   and the thrust `α̂ u1` follows it.
+//! * **Freezing the adaptation while the actuators saturate**,
+//!   [`CascadeSettings::freeze_adaptation_on_saturation`] (default false):
+//!   the simulator reports after each period whether its mixer could realise
+//!   the command ([`Controller::actuator_feedback`]); while the last report
+//!   is "saturated", each update holds δ̂ (FTAFTSMC, Eq. 17), `â` (RANFTSMC),
+//!   ν (TSM-STA's super-twisting integral: conditional-integration
+//!   anti-windup) and α̂ (Eq. 44; the `alpha_hat_bounds` projection is then
+//!   not applied either, α̂ simply keeps its value) through
+//!   [`AxisLaw::set_adaptation_frozen`]. The outputs still respond to the
+//!   error with the held states; only the state increments are skipped, so
+//!   the adaptive gains do not grow on errors the actuators cannot remove.
+//!   Only the simulator's report freezes: the thrust bound clipping `U1` by
+//!   itself does not. With no report, or reports of `false`, the cascade is
+//!   bit-identical to the option off. [`Telemetry::adaptation_frozen`]
+//!   reports when the states were held.
 
 use crate::allocation::{residual_speed, rotor_speeds};
 use crate::law::{
-    check_gain, check_left_open, check_open, saturate, AxisLaw, GainError, INPUT_LIMIT, MAX_ESTIMATES, STATE_LIMIT,
+    check_closed, check_gain, check_left_open, check_open, saturate, AxisLaw, GainError, INPUT_LIMIT, MAX_ESTIMATES,
+    STATE_LIMIT,
 };
 use crate::math::{asin, cos, sin_cos};
 use crate::model::{Command, QuadState, QuadrotorParams, Reference};
@@ -85,6 +136,23 @@ pub struct CascadeSettings {
     /// The default reproduces the published Table 3; docs/results.md reports
     /// Table 3 under both.
     pub filter_init: FilterInit,
+    /// Saturation remedy: bound the thrust command `U1` to `[min, max]`, N
+    /// (what the rotors can give, e.g. `4 k_f ω_min²` and `4 k_f ω_max²`),
+    /// *before* the attitude demand is computed from it, so that the demanded
+    /// tilt is the one that realises the horizontal acceleration with the
+    /// thrust that will really be produced. Default none (the paper: `U1`
+    /// unbounded, it may even be negative). Requires `0 <= min < max <= 1e100`
+    /// (the finiteness guarantee of [`Cascade::new`] covers thrusts up to
+    /// there). See the module docs, "Saturation remedies".
+    #[cfg_attr(feature = "serde", serde(skip_serializing_if = "Option::is_none"))]
+    pub thrust_limits: Option<[f64; 2]>,
+    /// Saturation remedy: hold the adaptive states (δ̂ of FTAFTSMC, `â` of
+    /// RANFTSMC, ν of TSM-STA, and α̂ of the mass adaptation) during every
+    /// update that follows a [`Controller::actuator_feedback`] report of
+    /// saturation. Default false (the paper: the adaptive laws integrate
+    /// whatever the actuators do). See the module docs, "Saturation remedies".
+    #[cfg_attr(feature = "serde", serde(skip_serializing_if = "core::ops::Not::not"))]
+    pub freeze_adaptation_on_saturation: bool,
 }
 
 impl Default for CascadeSettings {
@@ -94,19 +162,36 @@ impl Default for CascadeSettings {
             command_filter: CommandFilterParams::default(),
             max_tilt: 0.6,
             filter_init: FilterInit::FirstDemand,
+            thrust_limits: None,
+            freeze_adaptation_on_saturation: false,
         }
     }
 }
 
 impl CascadeSettings {
     /// Range checks: ω_n and ζ in `(0, 1e6]` (the filter forms ω_n² times
-    /// states up to 1e100), `0 < max_tilt < π/2` (NaN rejected).
-    /// `filter_init` has no range: every variant is valid, and a misspelt
-    /// one is refused when the scenario is parsed.
+    /// states up to 1e100), `0 < max_tilt < π/2` (NaN rejected), and when
+    /// given `0 <= thrust_limits[0] < thrust_limits[1] <= 1e100` (a minimum
+    /// thrust of 1e300 N would overflow the rotor-speed estimate of the
+    /// gyroscopic cancellation; the cascade's own thrust stays below ~1e120).
+    /// `filter_init` and `freeze_adaptation_on_saturation` have no range:
+    /// every value is valid, and a misspelt one is refused when the scenario
+    /// is parsed.
     pub fn check(&self) -> Result<(), GainError> {
         check_gain("command_filter.natural_frequency", self.command_filter.natural_frequency)?;
         check_gain("command_filter.damping", self.command_filter.damping)?;
-        check_open("max_tilt", self.max_tilt, 0.0, core::f64::consts::FRAC_PI_2, "0 < max_tilt < π/2")
+        check_open("max_tilt", self.max_tilt, 0.0, core::f64::consts::FRAC_PI_2, "0 < max_tilt < π/2")?;
+        if let Some([lo, hi]) = self.thrust_limits {
+            check_closed("thrust_limits[0]", lo, 0.0, STATE_LIMIT, "0 <= thrust_limits[0] < 1e100 (N)")?;
+            check_left_open(
+                "thrust_limits[1]",
+                hi,
+                lo,
+                STATE_LIMIT,
+                "thrust_limits[0] < thrust_limits[1] <= 1e100 (N)",
+            )?;
+        }
+        Ok(())
     }
 }
 
@@ -241,6 +326,12 @@ pub struct Telemetry {
     pub nominal_thrust: f64,
     /// Mass ratio estimate α̂ (estimated mass = α̂ m).
     pub alpha_hat: f64,
+    /// The thrust bound ([`CascadeSettings::thrust_limits`]) changed `U1`
+    /// at this update.
+    pub thrust_limited: bool,
+    /// The adaptive states were held at this update
+    /// ([`CascadeSettings::freeze_adaptation_on_saturation`]).
+    pub adaptation_frozen: bool,
 }
 
 /// A complete quadrotor controller: state and reference in, command out.
@@ -260,6 +351,18 @@ pub trait Controller {
     fn adapts_mass(&self) -> bool;
     /// Restore initial internal states.
     fn reset(&mut self);
+    /// Actuator feedback: called by the simulator after it has mixed the
+    /// command of each control period into rotor speeds; `saturated` is true
+    /// when the mixer could not realise that command (a rotor limit was hit
+    /// and thrust or torque was given up). The report holds until the next
+    /// call and is cleared by [`Controller::reset`].
+    ///
+    /// The default ignores it. [`Cascade`] stores it and, with
+    /// [`CascadeSettings::freeze_adaptation_on_saturation`], holds its
+    /// adaptive states during the following updates while it is true.
+    fn actuator_feedback(&mut self, saturated: bool) {
+        let _ = saturated;
+    }
 }
 
 #[derive(Clone, Copy, Debug, Default)]
@@ -286,6 +389,8 @@ pub struct Cascade<L: AxisLaw> {
     telemetry: Telemetry,
     /// `sin(max_tilt)`, the clamp of the asin arguments of Eq. 52.
     tilt_limit: f64,
+    /// Last [`Controller::actuator_feedback`] report.
+    actuator_saturated: bool,
 }
 
 impl<L: AxisLaw> Cascade<L> {
@@ -324,12 +429,29 @@ impl<L: AxisLaw> Cascade<L> {
             last_command: hover,
             telemetry: Telemetry { alpha_hat: config.mass_adaptation.alpha_hat0, ..Telemetry::default() },
             tilt_limit: crate::math::sin(config.settings.max_tilt),
+            actuator_saturated: false,
         }
     }
 
     /// Current mass-ratio estimate α̂.
     pub fn alpha_hat(&self) -> f64 {
         self.alpha_hat
+    }
+
+    /// Last [`Controller::actuator_feedback`] report (false until the first).
+    pub fn actuator_saturated(&self) -> bool {
+        self.actuator_saturated
+    }
+
+    /// `thrust` bounded to `[lo, hi]` (no `f64::clamp`: never panics);
+    /// unchanged without bounds.
+    #[inline]
+    fn bound_thrust(thrust: f64, limits: Option<[f64; 2]>) -> f64 {
+        match limits {
+            Some([lo, _]) if thrust < lo => lo,
+            Some([_, hi]) if thrust > hi => hi,
+            _ => thrust,
+        }
     }
 
     /// Desired roll and pitch from the virtual controls (Eq. 52 corrected:
@@ -408,6 +530,15 @@ impl<L: AxisLaw> Controller for Cascade<L> {
         let model = self.config.model;
         let m = model.mass;
         let g = model.gravity;
+        let settings = self.config.settings;
+
+        // Saturation remedy: hold every adaptive state after a saturation
+        // report. Set on all six laws every update (a store), so a law
+        // replaced through the public `laws` field is still governed.
+        let frozen = settings.freeze_adaptation_on_saturation && self.actuator_saturated;
+        for law in &mut self.laws {
+            law.set_adaptation_frozen(frozen);
+        }
 
         // Outer loop: commanded accelerations (Eq. 18–20).
         let mut accel = [0.0; 3];
@@ -422,9 +553,12 @@ impl<L: AxisLaw> Controller for Cascade<L> {
 
         // Mass adaptation (§3.2, Eq. 44): U1 = α̂ u1.
         let ma = self.config.mass_adaptation;
-        let thrust = if ma.enabled { self.alpha_hat * nominal_thrust } else { nominal_thrust };
+        let unbounded_thrust = if ma.enabled { self.alpha_hat * nominal_thrust } else { nominal_thrust };
+        // Saturation remedy: U1 bounded to what the rotors can give, before
+        // Remark 2 uses it, so the attitude demand matches the real thrust.
+        let thrust = Self::bound_thrust(unbounded_thrust, settings.thrust_limits);
         let horizontal_mass = if ma.enabled && ma.compensate_horizontal { self.alpha_hat * m } else { m };
-        if ma.enabled {
+        if ma.enabled && !frozen {
             let s_z = saturate(self.laws[2].sliding_variable(), STATE_LIMIT);
             let rate = -ma.beta1 * (s_z * nominal_thrust * tilt_cos / m + ma.beta2 * self.alpha_hat);
             self.alpha_hat += dt * rate;
@@ -486,6 +620,8 @@ impl<L: AxisLaw> Controller for Cascade<L> {
             commanded_acceleration: accel,
             nominal_thrust,
             alpha_hat: self.alpha_hat,
+            thrust_limited: thrust != unbounded_thrust,
+            adaptation_frozen: frozen,
         };
         command
     }
@@ -510,7 +646,12 @@ impl<L: AxisLaw> Controller for Cascade<L> {
         self.filter = [FilterState::default(); 2];
         self.alpha_hat = self.config.mass_adaptation.alpha_hat0;
         self.last_command = hover;
+        self.actuator_saturated = false;
         self.telemetry = Telemetry { alpha_hat: self.alpha_hat, ..Telemetry::default() };
+    }
+
+    fn actuator_feedback(&mut self, saturated: bool) {
+        self.actuator_saturated = saturated;
     }
 }
 
@@ -676,5 +817,200 @@ mod tests {
         let p = QuadrotorParams::default();
         assert!((cmd.thrust - p.mass * p.gravity).abs() < 1e-12, "{}", cmd.thrust);
         assert!(cmd.torque.iter().all(|t| t.abs() < 1e-15));
+    }
+
+    fn zero_derivatives(thrust_limits: Option<[f64; 2]>) -> CascadeSettings {
+        CascadeSettings { attitude_derivatives: AttitudeDerivatives::Zero, thrust_limits, ..CascadeSettings::default() }
+    }
+
+    /// Issue 11 item 6: the thrust bound acts on U1 before Remark 2, so the
+    /// attitude demand is computed from the bounded thrust (and Eq. 44 still
+    /// sees the unbounded u1).
+    #[test]
+    fn thrust_limits_bound_u1_and_the_attitude_demand_uses_the_bounded_u1() {
+        let m = QuadrotorParams::default().mass;
+        let g = QuadrotorParams::default().gravity;
+        let state = QuadState::default();
+        let climb = Reference { position: [1.0, -0.5, 5.0], yaw: 0.2, ..Reference::default() };
+        let step = |limits: Option<[f64; 2]>, reference: &Reference| {
+            let mut c = paper_ftaftsmc(zero_derivatives(limits));
+            let cmd = c.update(&state, reference, 1e-3);
+            (cmd, *c.telemetry(), c.alpha_hat())
+        };
+        let demand_for = |t: &Telemetry, thrust: f64, yaw: f64| {
+            let [ax, ay, _] = t.commanded_acceleration;
+            Cascade::<FtaftsmcAxis>::desired_roll_pitch(m * ax / thrust, m * ay / thrust, yaw, 0.6)
+        };
+
+        // Upper bound: a fast climb asks for more than the rotors give.
+        let (free, free_t, free_alpha) = step(None, &climb);
+        assert!(!free_t.thrust_limited);
+        let hi = 0.5 * free.thrust;
+        assert!(hi > m * g, "the climb must ask for more than hover: {}", free.thrust);
+        let (cmd, t, alpha) = step(Some([0.0, hi]), &climb);
+        assert_eq!(cmd.thrust.to_bits(), hi.to_bits());
+        assert!(t.thrust_limited);
+        assert_eq!(t.attitude_demand.map(f64::to_bits), demand_for(&t, hi, climb.yaw).map(f64::to_bits));
+        // Half the thrust: the demanded tilt grows to keep the horizontal acceleration.
+        assert_eq!(
+            free_t.attitude_demand.map(f64::to_bits),
+            demand_for(&free_t, free.thrust, climb.yaw).map(f64::to_bits)
+        );
+        for i in 0..2 {
+            assert!(t.attitude_demand[i].abs() > free_t.attitude_demand[i].abs(), "{t:?} {free_t:?}");
+        }
+        assert_eq!(
+            (t.nominal_thrust.to_bits(), alpha.to_bits()),
+            (free_t.nominal_thrust.to_bits(), free_alpha.to_bits())
+        );
+
+        // Lower bound: near hover, a minimum above the weight lifts U1.
+        let hover = Reference { position: [0.3, 0.2, 0.0], ..Reference::default() };
+        let lo = 1.5 * m * g;
+        let (cmd, t, _) = step(Some([lo, 3.0 * m * g]), &hover);
+        assert_eq!(cmd.thrust.to_bits(), lo.to_bits());
+        assert!(t.thrust_limited && t.attitude_demand.iter().all(|d| *d != 0.0));
+        assert_eq!(t.attitude_demand.map(f64::to_bits), demand_for(&t, lo, 0.0).map(f64::to_bits));
+
+        // Inside the bounds nothing changes, bit for bit.
+        let (free, free_t, _) = step(None, &hover);
+        let (cmd, t, _) = step(Some([0.0, 1e3]), &hover);
+        assert_eq!(cmd.thrust.to_bits(), free.thrust.to_bits());
+        assert_eq!(cmd.torque.map(f64::to_bits), free.torque.map(f64::to_bits));
+        assert_eq!(t, free_t);
+        assert!(!t.thrust_limited);
+    }
+
+    #[test]
+    fn thrust_limits_are_validated() {
+        for (limits, field) in [
+            ([-1.0, 10.0], "thrust_limits[0]"),
+            ([f64::NAN, 10.0], "thrust_limits[0]"),
+            ([f64::INFINITY, f64::INFINITY], "thrust_limits[0]"),
+            ([1e200, 1e201], "thrust_limits[0]"),
+            ([0.0, 1e101], "thrust_limits[1]"),
+            ([5.0, 5.0], "thrust_limits[1]"),
+            ([5.0, 1.0], "thrust_limits[1]"),
+            ([0.0, f64::INFINITY], "thrust_limits[1]"),
+            ([0.0, f64::NAN], "thrust_limits[1]"),
+        ] {
+            let settings = zero_derivatives(Some(limits));
+            assert_eq!(settings.check().unwrap_err().field, field, "{limits:?}");
+            let err = Cascade::new(paper_config(settings, MassAdaptation::PAPER), paper_laws()).unwrap_err();
+            assert_eq!(err.field, field);
+            // Unchecked, it must not panic.
+            let mut c = Cascade::new_unchecked(paper_config(settings, MassAdaptation::PAPER), paper_laws());
+            c.update(&QuadState::default(), &Reference { position: [0.5, 0.0, 1.0], ..Reference::default() }, 1e-3);
+        }
+        zero_derivatives(Some([0.0, 10.0])).check().unwrap();
+        zero_derivatives(Some([1e99, 1e100])).check().unwrap();
+        assert_eq!(CascadeSettings::default().thrust_limits, None);
+        assert!(!CascadeSettings::default().freeze_adaptation_on_saturation);
+    }
+
+    /// A swinging vehicle chasing an offset reference: step `k`.
+    fn wobble(k: usize) -> (QuadState, Reference) {
+        let t = k as f64 * 1e-3;
+        let state = QuadState {
+            position: [0.2 * (3.0 * t).sin(), -0.1 * (2.0 * t).cos(), 0.5 * t],
+            velocity: [0.6 * (3.0 * t).cos(), 0.2 * (2.0 * t).sin(), 0.5],
+            attitude: [0.1 * (7.0 * t).sin(), -0.08 * (5.0 * t).cos(), 0.02 * t],
+            angular_rate: [0.7 * (7.0 * t).cos(), 0.4 * (5.0 * t).sin(), 0.02],
+        };
+        let reference = Reference { position: [1.0, -0.5, 2.0], ..Reference::default() };
+        (state, reference)
+    }
+
+    fn command_bits(c: &Command) -> [u64; 4] {
+        [c.thrust.to_bits(), c.torque[0].to_bits(), c.torque[1].to_bits(), c.torque[2].to_bits()]
+    }
+
+    /// Issue 11 item 6, for one controller built by `make`:
+    /// - option on with `actuator_feedback(false)`, and option off with
+    ///   `actuator_feedback(true)`, are bit-identical to the defaults;
+    /// - option on after `actuator_feedback(true)`: the law states and α̂
+    ///   hold bit for bit while the commands still follow the error;
+    /// - `actuator_feedback(false)` releases them, `reset` clears the report.
+    fn check_cascade_freeze<L: AxisLaw + Clone>(make: impl Fn(CascadeSettings) -> Cascade<L>) {
+        let freeze = CascadeSettings { freeze_adaptation_on_saturation: true, ..CascadeSettings::default() };
+        let mut on = make(freeze);
+        let mut off = make(CascadeSettings::default());
+        let mut ignored = make(CascadeSettings::default());
+        for k in 0..40 {
+            let (state, reference) = wobble(k);
+            on.actuator_feedback(false);
+            ignored.actuator_feedback(true);
+            let a = on.update(&state, &reference, 1e-3);
+            let b = off.update(&state, &reference, 1e-3);
+            let c = ignored.update(&state, &reference, 1e-3);
+            assert_eq!(command_bits(&a), command_bits(&b), "step {k}");
+            assert_eq!(command_bits(&c), command_bits(&b), "step {k}");
+            assert_eq!(on.telemetry(), off.telemetry());
+            assert_eq!(ignored.telemetry(), off.telemetry());
+            assert!(!on.telemetry().adaptation_frozen);
+        }
+
+        on.actuator_feedback(true);
+        assert!(on.actuator_saturated());
+        let held = (on.telemetry().estimates, on.alpha_hat());
+        let held_bits = (held.0.map(|e| e.map(f64::to_bits)), held.1.to_bits());
+        let mut commands = [[0u64; 4]; 10];
+        for (i, k) in (40..50).enumerate() {
+            let (state, reference) = wobble(k);
+            let cmd = on.update(&state, &reference, 1e-3);
+            assert!(cmd.thrust.is_finite() && cmd.torque.iter().all(|t| t.is_finite()));
+            commands[i] = command_bits(&cmd);
+            let t = on.telemetry();
+            assert!(t.adaptation_frozen);
+            assert_eq!((t.estimates.map(|e| e.map(f64::to_bits)), on.alpha_hat().to_bits()), held_bits, "step {k}");
+        }
+        assert!(commands.windows(2).all(|w| w[0] != w[1]), "frozen commands ignore the error");
+
+        on.actuator_feedback(false);
+        let (state, reference) = wobble(50);
+        on.update(&state, &reference, 1e-3);
+        assert!(!on.telemetry().adaptation_frozen);
+        assert_ne!(on.telemetry().estimates, held.0, "released states do not move");
+
+        on.actuator_feedback(true);
+        on.reset();
+        assert!(!on.actuator_saturated());
+        on.update(&state, &reference, 1e-3);
+        assert!(!on.telemetry().adaptation_frozen);
+    }
+
+    #[test]
+    fn freezing_on_saturation_holds_delta_hat_and_alpha_hat() {
+        check_cascade_freeze(paper_ftaftsmc);
+        // α̂ moves when released (the generic check looks at the laws only).
+        let mut c =
+            paper_ftaftsmc(CascadeSettings { freeze_adaptation_on_saturation: true, ..CascadeSettings::default() });
+        let (state, reference) = wobble(3);
+        c.actuator_feedback(true);
+        c.update(&state, &reference, 1e-3);
+        assert_eq!(c.alpha_hat(), MassAdaptation::PAPER.alpha_hat0);
+        c.actuator_feedback(false);
+        c.update(&state, &reference, 1e-3);
+        assert_ne!(c.alpha_hat(), MassAdaptation::PAPER.alpha_hat0);
+    }
+
+    #[test]
+    fn freezing_on_saturation_holds_a_hat_of_ranftsmc() {
+        use crate::ranftsmc::{RanftsmcAxis, RanftsmcGains};
+        check_cascade_freeze(|settings| {
+            let p = RanftsmcAxis::new(RanftsmcGains::PAPER_POSITION);
+            let a = RanftsmcAxis::new(RanftsmcGains::PAPER_ATTITUDE);
+            Cascade::new(paper_config(settings, MassAdaptation::OFF), [p, p, p, a, a, a]).unwrap()
+        });
+    }
+
+    #[test]
+    fn freezing_on_saturation_holds_nu_of_tsm_sta() {
+        use crate::tsm_sta::{TsmStaAxis, TsmStaGains};
+        check_cascade_freeze(|settings| {
+            let p = TsmStaAxis::new(TsmStaGains::DEFAULT_POSITION);
+            let a = TsmStaAxis::new(TsmStaGains::DEFAULT_ATTITUDE);
+            Cascade::new(paper_config(settings, MassAdaptation::OFF), [p, p, p, a, a, a]).unwrap()
+        });
     }
 }

@@ -323,6 +323,9 @@ pub struct FtaftsmcAxis {
     pub last_reaching: f64,
     /// `[κ1, κ2]` of Eq. 9, computed once from the gains.
     kappa: [f64; 2],
+    /// δ̂ held (Eq. 17 not integrated) while true; see
+    /// [`AxisLaw::set_adaptation_frozen`].
+    frozen: bool,
 }
 
 impl FtaftsmcAxis {
@@ -347,7 +350,13 @@ impl FtaftsmcAxis {
             last: SurfaceTerms::default(),
             last_reaching: 0.0,
             kappa: kappa(&gains),
+            frozen: false,
         }
+    }
+
+    /// Whether δ̂ is currently held ([`AxisLaw::set_adaptation_frozen`]).
+    pub fn adaptation_frozen(&self) -> bool {
+        self.frozen
     }
 }
 
@@ -362,6 +371,9 @@ impl AxisLaw for FtaftsmcAxis {
     /// NaN and no state change for a non-finite input; `e`, `ė` clamped to
     /// `±INPUT_LIMIT`; δ̂ projected onto `[0, STATE_LIMIT]` (δ̂ estimates
     /// Λ² ≥ 0, and Euler keeps it ≥ 0 anyway while `dt α1 α2 ≤ 1`).
+    ///
+    /// While frozen ([`AxisLaw::set_adaptation_frozen`]) the output uses the
+    /// held δ̂ and Eq. 17 is not integrated.
     #[inline]
     fn update(&mut self, e: f64, e_dot: f64, dt: f64) -> f64 {
         if !inputs_finite(e, e_dot, dt) {
@@ -370,8 +382,10 @@ impl AxisLaw for FtaftsmcAxis {
         let (e, e_dot) = (saturate(e, INPUT_LIMIT), saturate(e_dot, INPUT_LIMIT));
         let terms = sliding_surface_with(&self.gains, self.kappa, e, e_dot);
         let reaching = reaching_law(&self.gains, terms.s, self.delta_hat);
-        let delta_hat = self.delta_hat + dt * delta_hat_rate(&self.gains, terms.s, self.delta_hat);
-        self.delta_hat = delta_hat.clamp(0.0, STATE_LIMIT);
+        if !self.frozen {
+            let delta_hat = self.delta_hat + dt * delta_hat_rate(&self.gains, terms.s, self.delta_hat);
+            self.delta_hat = delta_hat.clamp(0.0, STATE_LIMIT);
+        }
         self.last = terms;
         self.last_reaching = reaching;
         terms.varpi + reaching
@@ -389,13 +403,17 @@ impl AxisLaw for FtaftsmcAxis {
         *self = Self::new(self.gains);
     }
 
+    fn set_adaptation_frozen(&mut self, frozen: bool) {
+        self.frozen = frozen;
+    }
+
     fn check_gains(&self) -> Result<(), GainError> {
         self.gains.check()
     }
 
     /// `v = ϖ + ϖ2(S, δ̂)`, `dδ̂/dt` of Eq. 17 (the `[0, STATE_LIMIT]`
     /// projection of [`AxisLaw::update`] is not applied: Eq. 17 keeps δ̂ ≥ 0
-    /// from δ̂ ≥ 0 by itself).
+    /// from δ̂ ≥ 0 by itself); `dδ̂/dt = 0` while frozen.
     fn continuous_rhs(&self, e: f64, e_dot: f64, estimates: [f64; 3]) -> Option<ContinuousRhs> {
         let (e, e_dot) = (saturate(e, INPUT_LIMIT), saturate(e_dot, INPUT_LIMIT));
         let terms = sliding_surface_with(&self.gains, self.kappa, e, e_dot);
@@ -403,7 +421,7 @@ impl AxisLaw for FtaftsmcAxis {
         Some(ContinuousRhs {
             v: terms.varpi + reaching_law(&self.gains, terms.s, delta_hat),
             s: terms.s,
-            estimates_rate: [delta_hat_rate(&self.gains, terms.s, delta_hat), 0.0, 0.0],
+            estimates_rate: [if self.frozen { 0.0 } else { delta_hat_rate(&self.gains, terms.s, delta_hat) }, 0.0, 0.0],
         })
     }
 }
@@ -534,5 +552,18 @@ mod tests {
         assert_relative_eq!(FtaftsmcGains::PAPER_Z.reaching_time_bound(), 20.0 + 1.0 / 0.6, epsilon = 1e-12);
         // x, y: 1/(0.2·3) + 1/(2·0.8) = 1.6667 + 0.625
         assert_relative_eq!(FtaftsmcGains::PAPER_XY.reaching_time_bound(), 1.0 / 0.6 + 0.625, epsilon = 1e-12);
+    }
+
+    /// Issue 11 item 6: δ̂ is held while frozen, released it is Eq. 17 again.
+    #[test]
+    fn freezing_holds_delta_hat_and_keeps_the_output() {
+        use crate::law::testing::{check_freeze, warmed};
+        for g in
+            [FtaftsmcGains::PAPER_XY, FtaftsmcGains::PAPER_Z, FtaftsmcGains::PAPER_ROLL_PITCH, FtaftsmcGains::PAPER_YAW]
+        {
+            let axis = warmed(FtaftsmcAxis::new(FtaftsmcGains { delta_hat0: 0.3, ..g }));
+            assert!(!axis.adaptation_frozen());
+            check_freeze(axis);
+        }
     }
 }

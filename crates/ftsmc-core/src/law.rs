@@ -212,6 +212,25 @@ pub trait AxisLaw {
     /// Restore the initial adaptive / internal states.
     fn reset(&mut self);
 
+    /// Freeze (`true`) or release (`false`) the law's adaptive / integral
+    /// states (δ̂ of FTAFTSMC, `â` of RANFTSMC, ν of TSM-STA).
+    ///
+    /// While frozen, [`AxisLaw::update`] still computes its output from the
+    /// error and the *current* states, exactly as when released, but skips
+    /// the state increments, so the states hold their values; the finiteness
+    /// contract of [`AxisLaw::update`] is unchanged. Released (the initial
+    /// condition, and the state after [`AxisLaw::reset`]), `update` is
+    /// bit-identical to a law that was never frozen.
+    /// [`AxisLaw::continuous_rhs`] reports zero state rates while frozen.
+    ///
+    /// This is the anti-windup remedy of
+    /// [`crate::cascade::CascadeSettings::freeze_adaptation_on_saturation`]:
+    /// the cascade sets it on all six laws before each update. The default
+    /// does nothing (a law without adaptive states has nothing to freeze).
+    fn set_adaptation_frozen(&mut self, frozen: bool) {
+        let _ = frozen;
+    }
+
     /// Validate the law's gains (the gain struct's `check()`); used by
     /// [`crate::cascade::Cascade::new`].
     fn check_gains(&self) -> Result<(), GainError>;
@@ -228,5 +247,72 @@ pub trait AxisLaw {
     fn continuous_rhs(&self, e: f64, e_dot: f64, estimates: [f64; MAX_ESTIMATES]) -> Option<ContinuousRhs> {
         let _ = (e, e_dot, estimates);
         None
+    }
+}
+
+/// Shared checks of the law implementations.
+#[cfg(test)]
+pub(crate) mod testing {
+    use super::AxisLaw;
+
+    const INPUTS: [(f64, f64); 5] = [(0.4, -0.3), (-0.2, 0.5), (0.05, 0.0), (1.2, -0.8), (-0.7, 0.9)];
+    const DT: f64 = 1e-3;
+
+    fn bits<const N: usize>(x: [f64; N]) -> [u64; N] {
+        x.map(f64::to_bits)
+    }
+
+    /// [`AxisLaw::set_adaptation_frozen`] on `warm` (a law with non-trivial
+    /// states): frozen, the states hold bit for bit while the output is the
+    /// one computed with the held states and still follows the error;
+    /// released again, the law is bit-identical to one never frozen, and
+    /// its states move (so the first part is not vacuous);
+    /// [`AxisLaw::continuous_rhs`] gives zero rates while frozen.
+    pub(crate) fn check_freeze<L: AxisLaw + Clone>(warm: L) {
+        let held = warm.estimates();
+        let mut frozen = warm.clone();
+        frozen.set_adaptation_frozen(true);
+        let mut outputs = [0.0; INPUTS.len()];
+        for (k, &(e, e_dot)) in INPUTS.iter().enumerate() {
+            outputs[k] = frozen.update(e, e_dot, DT);
+            assert_eq!(bits(frozen.estimates()), bits(held), "state moved while frozen at step {k}");
+            // The output of a law at the held states, which `dt = 0` does not advance.
+            let want = warm.clone().update(e, e_dot, 0.0);
+            assert_eq!(outputs[k].to_bits(), want.to_bits(), "step {k}: {} vs {want}", outputs[k]);
+            if let (Some(f), Some(free)) = (frozen.continuous_rhs(e, e_dot, held), warm.continuous_rhs(e, e_dot, held))
+            {
+                assert_eq!(f.estimates_rate, [0.0; super::MAX_ESTIMATES]);
+                assert_eq!((f.v.to_bits(), f.s.to_bits()), (free.v.to_bits(), free.s.to_bits()));
+            }
+        }
+        assert!(outputs.windows(2).all(|w| w[0] != w[1]), "frozen output ignores the error: {outputs:?}");
+
+        let mut released = warm.clone();
+        released.set_adaptation_frozen(true);
+        released.set_adaptation_frozen(false);
+        let mut never = warm.clone();
+        for &(e, e_dot) in &INPUTS {
+            let (a, b) = (released.update(e, e_dot, DT), never.update(e, e_dot, DT));
+            assert_eq!(a.to_bits(), b.to_bits());
+            assert_eq!(bits(released.estimates()), bits(never.estimates()));
+            assert_eq!(released.sliding_variable().to_bits(), never.sliding_variable().to_bits());
+        }
+        assert_ne!(bits(never.estimates()), bits(held), "the states never move: the test is vacuous");
+
+        // `reset` releases.
+        frozen.reset();
+        let mut fresh = frozen.clone();
+        frozen.update(0.4, -0.3, DT);
+        fresh.set_adaptation_frozen(false);
+        fresh.update(0.4, -0.3, DT);
+        assert_eq!(bits(frozen.estimates()), bits(fresh.estimates()));
+    }
+
+    /// `law` after a few updates, so its states are not the initial ones.
+    pub(crate) fn warmed<L: AxisLaw>(mut law: L) -> L {
+        for &(e, e_dot) in INPUTS.iter().rev() {
+            law.update(e, e_dot, 10.0 * DT);
+        }
+        law
     }
 }

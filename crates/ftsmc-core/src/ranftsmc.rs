@@ -161,6 +161,9 @@ pub struct RanftsmcAxis {
     pub a_hat: [f64; 3],
     /// σ of the last update.
     pub sigma: f64,
+    /// `â` held (not integrated) while true; see
+    /// [`AxisLaw::set_adaptation_frozen`].
+    frozen: bool,
 }
 
 /// Below this `|ė|` the update computes `|ė|^(2−β)` with its own power
@@ -183,7 +186,12 @@ impl RanftsmcAxis {
     /// run [`RanftsmcGains::check`] or use [`RanftsmcAxis::try_new`].
     /// Out-of-range gains never panic but may give non-finite commands.
     pub fn new(gains: RanftsmcGains) -> Self {
-        Self { gains, a_hat: [gains.a0_hat0, gains.a1_hat0, gains.a2_hat0], sigma: 0.0 }
+        Self { gains, a_hat: [gains.a0_hat0, gains.a1_hat0, gains.a2_hat0], sigma: 0.0, frozen: false }
+    }
+
+    /// Whether `â` is currently held ([`AxisLaw::set_adaptation_frozen`]).
+    pub fn adaptation_frozen(&self) -> bool {
+        self.frozen
     }
 }
 
@@ -201,6 +209,9 @@ impl AxisLaw for RanftsmcAxis {
     /// NaN and no state change for a non-finite input; `e`, `ė` clamped to
     /// `±INPUT_LIMIT`; `|ė|^(2−β)` computed directly for `|ė| < 1e-100`;
     /// `â` saturated at `STATE_LIMIT` (the adaptation has no leakage).
+    ///
+    /// While frozen ([`AxisLaw::set_adaptation_frozen`]) the output uses the
+    /// held `â` and the three adaptation laws are not integrated.
     #[inline]
     fn update(&mut self, e: f64, e_dot: f64, dt: f64) -> f64 {
         if !inputs_finite(e, e_dot, dt) {
@@ -227,10 +238,12 @@ impl AxisLaw for RanftsmcAxis {
             -(1.0 / (g.beta * g.b2)) * ed_two_minus_beta * (1.0 + g.alpha * g.b1 * e_alpha_minus_one) * sign(e_dot);
         let [a0, a1, a2] = self.a_hat;
         let v = v_eq - g.c * sigma - (a0 + a1 * ae + a2 * aed + g.h) * switching_sign(g, sigma);
-        let abs_sigma = sigma.abs();
-        self.a_hat[0] = saturate(self.a_hat[0] + dt * g.mu0 * abs_sigma * ed_beta_minus_one, STATE_LIMIT);
-        self.a_hat[1] = saturate(self.a_hat[1] + dt * g.mu1 * abs_sigma * ae * ed_beta_minus_one, STATE_LIMIT);
-        self.a_hat[2] = saturate(self.a_hat[2] + dt * g.mu2 * abs_sigma * ed_beta, STATE_LIMIT);
+        if !self.frozen {
+            let abs_sigma = sigma.abs();
+            self.a_hat[0] = saturate(self.a_hat[0] + dt * g.mu0 * abs_sigma * ed_beta_minus_one, STATE_LIMIT);
+            self.a_hat[1] = saturate(self.a_hat[1] + dt * g.mu1 * abs_sigma * ae * ed_beta_minus_one, STATE_LIMIT);
+            self.a_hat[2] = saturate(self.a_hat[2] + dt * g.mu2 * abs_sigma * ed_beta, STATE_LIMIT);
+        }
         self.sigma = sigma;
         v
     }
@@ -247,15 +260,23 @@ impl AxisLaw for RanftsmcAxis {
         *self = Self::new(self.gains);
     }
 
+    fn set_adaptation_frozen(&mut self, frozen: bool) {
+        self.frozen = frozen;
+    }
+
     fn check_gains(&self) -> Result<(), GainError> {
         self.gains.check()
     }
 
     /// `v` and σ exactly as [`AxisLaw::update`] computes them with
-    /// `â = estimates`; `dâ/dt = [μ0 |σ| |ė|^(β−1), μ1 |σ| |e| |ė|^(β−1), μ2 |σ| |ė|^β]`.
+    /// `â = estimates`; `dâ/dt = [μ0 |σ| |ė|^(β−1), μ1 |σ| |e| |ė|^(β−1), μ2 |σ| |ė|^β]`
+    /// (zero while frozen).
     fn continuous_rhs(&self, e: f64, e_dot: f64, estimates: [f64; 3]) -> Option<ContinuousRhs> {
         let mut at = Self { a_hat: estimates, ..*self };
         let v = at.update(e, e_dot, 0.0);
+        if self.frozen {
+            return Some(ContinuousRhs { v, s: at.sigma, estimates_rate: [0.0; 3] });
+        }
         let (e, e_dot) = (saturate(e, INPUT_LIMIT), saturate(e_dot, INPUT_LIMIT));
         let g = &self.gains;
         let abs_sigma = at.sigma.abs();
@@ -374,5 +395,17 @@ mod tests {
         assert!((at(1e-6) - at(-1e-6)).abs() < 1e-3);
         let hard = |e: f64| RanftsmcAxis::new(RanftsmcGains::PAPER_POSITION).update(e, 0.0, 1e-3);
         assert!((hard(1e-6) - hard(-1e-6)).abs() > 0.9, "the default law switches");
+    }
+
+    /// Issue 11 item 6: `â` is held while frozen, released it adapts again.
+    #[test]
+    fn freezing_holds_a_hat_and_keeps_the_output() {
+        use crate::law::testing::{check_freeze, warmed};
+        for g in [RanftsmcGains::PAPER_POSITION, RanftsmcGains::PAPER_ATTITUDE] {
+            let g = RanftsmcGains { a0_hat0: 0.2, a1_hat0: 0.1, a2_hat0: 0.05, ..g };
+            let axis = warmed(RanftsmcAxis::new(g));
+            assert!(!axis.adaptation_frozen());
+            check_freeze(axis);
+        }
     }
 }

@@ -187,6 +187,9 @@ pub struct TsmStaAxis {
     /// real powers) otherwise, so that an unchecked `p = 2999999999` is
     /// neither truncated nor looped over.
     exponents: Option<(u32, u32)>,
+    /// ν held (not integrated) while true; see
+    /// [`AxisLaw::set_adaptation_frozen`].
+    frozen: bool,
 }
 
 impl TsmStaAxis {
@@ -203,7 +206,12 @@ impl TsmStaAxis {
     /// checked range use real powers instead of repeated multiplication),
     /// but may give non-finite commands.
     pub fn new(gains: TsmStaGains) -> Self {
-        Self { gains, nu: 0.0, s: 0.0, exponents: gains.integer_exponents() }
+        Self { gains, nu: 0.0, s: 0.0, exponents: gains.integer_exponents(), frozen: false }
+    }
+
+    /// Whether ν is currently held ([`AxisLaw::set_adaptation_frozen`]).
+    pub fn adaptation_frozen(&self) -> bool {
+        self.frozen
     }
 }
 
@@ -216,6 +224,12 @@ impl AxisLaw for TsmStaAxis {
     /// Guards (no-ops on every meaningful input, see [`AxisLaw::update`]):
     /// NaN and no state change for a non-finite input; `e`, `ė` clamped to
     /// `±INPUT_LIMIT`; ν saturated to `±STATE_LIMIT`.
+    ///
+    /// While frozen ([`AxisLaw::set_adaptation_frozen`]) the output uses the
+    /// held ν and `dν/dt` is not integrated. ν is not an adaptive gain but
+    /// the super-twisting integral; holding it while the actuators saturate
+    /// is the classic conditional-integration anti-windup, so it is frozen
+    /// by the same option as the adaptive gains of the other laws.
     #[inline]
     fn update(&mut self, e: f64, e_dot: f64, dt: f64) -> f64 {
         if !inputs_finite(e, e_dot, dt) {
@@ -236,7 +250,9 @@ impl AxisLaw for TsmStaAxis {
         let s = e + ed_ratio * sign(e_dot) / g.lambda;
         let sw = switching_sign(g, s);
         let v = -g.lambda / ratio * ed_two_minus_ratio * sign(e_dot) - g.k1 * sqrt(s.abs()) * sw + self.nu;
-        self.nu = saturate(self.nu - dt * g.k2 * sw, STATE_LIMIT);
+        if !self.frozen {
+            self.nu = saturate(self.nu - dt * g.k2 * sw, STATE_LIMIT);
+        }
         self.s = s;
         v
     }
@@ -253,16 +269,21 @@ impl AxisLaw for TsmStaAxis {
         *self = Self::new(self.gains);
     }
 
+    fn set_adaptation_frozen(&mut self, frozen: bool) {
+        self.frozen = frozen;
+    }
+
     fn check_gains(&self) -> Result<(), GainError> {
         self.gains.check()
     }
 
     /// `v` and s exactly as [`AxisLaw::update`] computes them with
-    /// `ν = estimates[0]`; `dν/dt = −k2 sign(s)` (or `tanh(s/φ)`).
+    /// `ν = estimates[0]`; `dν/dt = −k2 sign(s)` (or `tanh(s/φ)`; zero while
+    /// frozen).
     fn continuous_rhs(&self, e: f64, e_dot: f64, estimates: [f64; 3]) -> Option<ContinuousRhs> {
         let mut at = Self { nu: estimates[0], ..*self };
         let v = at.update(e, e_dot, 0.0);
-        let rate = -self.gains.k2 * switching_sign(&self.gains, at.s);
+        let rate = if self.frozen { 0.0 } else { -self.gains.k2 * switching_sign(&self.gains, at.s) };
         Some(ContinuousRhs { v, s: at.s, estimates_rate: [rate, 0.0, 0.0] })
     }
 }
@@ -364,6 +385,18 @@ mod tests {
                 ed += v * dt;
             }
             assert!(last_outside < limit, "settles at {last_outside}");
+        }
+    }
+
+    /// Issue 11 item 6: ν (the super-twisting integral) is held while
+    /// frozen, released it integrates again.
+    #[test]
+    fn freezing_holds_nu_and_keeps_the_output() {
+        use crate::law::testing::{check_freeze, warmed};
+        for g in [TsmStaGains::DEFAULT_POSITION, TsmStaGains::DEFAULT_ATTITUDE] {
+            let axis = warmed(TsmStaAxis::new(g));
+            assert!(!axis.adaptation_frozen() && axis.nu != 0.0);
+            check_freeze(axis);
         }
     }
 }

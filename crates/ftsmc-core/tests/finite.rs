@@ -4,6 +4,11 @@
 //! cascade return finite commands with finite adaptive states; a non-finite
 //! input returns a non-finite command and leaves every state bit-identical,
 //! and the next finite input gives a finite command again.
+//!
+//! Issue 11 (saturation remedies): the same holds with the adaptation frozen
+//! ([`AxisLaw::set_adaptation_frozen`], `freeze_adaptation_on_saturation`
+//! with random actuator feedback) and with random thrust limits; frozen
+//! states do not move and the thrust stays inside its limits.
 
 use ftsmc_core::cascade::{
     AttitudeDerivatives, Cascade, CascadeConfig, CascadeSettings, CommandFilterParams, Controller, FilterInit,
@@ -141,10 +146,20 @@ fn tsm_sta_gains() -> impl Strategy<Value = TsmStaGains> {
         })
 }
 
-/// Run finite steps, then one non-finite step, then one finite step.
-fn exercise<L: AxisLaw>(mut law: L, steps: &[(f64, f64, f64)], bad: (f64, f64, f64)) -> Result<(), TestCaseError> {
-    for &(e, ed, dt) in steps {
+/// Run finite steps (each frozen or not), then one non-finite step, then
+/// one finite step.
+fn exercise<L: AxisLaw>(
+    mut law: L,
+    steps: &[(f64, f64, f64, bool)],
+    bad: (f64, f64, f64),
+) -> Result<(), TestCaseError> {
+    for &(e, ed, dt, frozen) in steps {
+        law.set_adaptation_frozen(frozen);
+        let held = law.estimates().map(f64::to_bits);
         let v = law.update(e, ed, dt);
+        if frozen {
+            prop_assert_eq!(law.estimates().map(f64::to_bits), held, "frozen states moved");
+        }
         prop_assert!(v.is_finite(), "e = {e:e}, ė = {ed:e}, dt = {dt:e}: command {v}");
         prop_assert!(law.sliding_variable().is_finite(), "sliding variable {}", law.sliding_variable());
         let est = law.estimates();
@@ -155,7 +170,7 @@ fn exercise<L: AxisLaw>(mut law: L, steps: &[(f64, f64, f64)], bad: (f64, f64, f
     prop_assert!(!v.is_finite(), "non-finite input {bad:?} gave {v}");
     let after = (law.estimates().map(f64::to_bits), law.sliding_variable().to_bits());
     prop_assert_eq!(before, after, "states changed by a non-finite input");
-    let (e, ed, dt) = steps[0];
+    let (e, ed, dt, _) = steps[0];
     let v = law.update(e, ed, dt);
     prop_assert!(v.is_finite(), "no recovery after a non-finite input: {v}");
     Ok(())
@@ -170,8 +185,8 @@ fn bad_step() -> impl Strategy<Value = (f64, f64, f64)> {
     })
 }
 
-fn steps() -> impl Strategy<Value = Vec<(f64, f64, f64)>> {
-    proptest::collection::vec((finite_input(), finite_input(), legal_dt()), 6)
+fn steps() -> impl Strategy<Value = Vec<(f64, f64, f64, bool)>> {
+    proptest::collection::vec((finite_input(), finite_input(), legal_dt(), any::<bool>()), 6)
 }
 
 proptest! {
@@ -215,15 +230,33 @@ fn model() -> impl Strategy<Value = QuadrotorParams> {
         })
 }
 
+/// None, or `[lo, hi]` with `0 <= lo < hi <= 1e100` (the legal range),
+/// log-uniform from 1e-300.
+fn thrust_limits() -> impl Strategy<Value = Option<[f64; 2]>> {
+    let lo = prop_oneof![Just(0.0), log_uniform(-300.0, 99.9)];
+    let width = prop_oneof![4 => log_uniform(-300.0, 100.0), 1 => Just(1e100)];
+    prop_oneof![
+        1 => Just(None),
+        2 => (lo, width).prop_map(|(lo, width)| {
+            let hi = if lo + width > lo { lo + width } else { 2.0 * lo };
+            Some([lo, hi.min(1e100)])
+        }),
+    ]
+}
+
 fn settings() -> impl Strategy<Value = CascadeSettings> {
-    (any::<bool>(), gain(), gain(), (1e-9f64..core::f64::consts::FRAC_PI_2), any::<bool>()).prop_map(
-        |(filter, wn, zeta, tilt, from_vehicle)| CascadeSettings {
+    (
+        (any::<bool>(), gain(), gain(), (1e-9f64..core::f64::consts::FRAC_PI_2), any::<bool>()),
+        (thrust_limits(), any::<bool>()),
+    )
+        .prop_map(|((filter, wn, zeta, tilt, from_vehicle), (thrust_limits, freeze))| CascadeSettings {
             attitude_derivatives: if filter { AttitudeDerivatives::CommandFilter } else { AttitudeDerivatives::Zero },
             command_filter: CommandFilterParams { natural_frequency: wn, damping: zeta },
             max_tilt: tilt,
             filter_init: if from_vehicle { FilterInit::VehicleAttitude } else { FilterInit::FirstDemand },
-        },
-    )
+            thrust_limits,
+            freeze_adaptation_on_saturation: freeze,
+        })
 }
 
 fn mass_adaptation() -> impl Strategy<Value = MassAdaptation> {
@@ -261,16 +294,29 @@ fn reference() -> impl Strategy<Value = Reference> {
     })
 }
 
-fn fly<C: Controller>(
-    mut c: C,
-    steps: &[(QuadState, Reference, f64)],
+fn fly<L: AxisLaw>(
+    mut c: Cascade<L>,
+    steps: &[(QuadState, Reference, f64, bool)],
     bad_state: QuadState,
 ) -> Result<(), TestCaseError> {
-    for (state, reference, dt) in steps {
+    let settings = c.config.settings;
+    for (k, (state, reference, dt, saturated)) in steps.iter().enumerate() {
+        c.actuator_feedback(*saturated);
+        let held = (c.telemetry().estimates.map(|e| e.map(f64::to_bits)), c.alpha_hat().to_bits());
         let cmd = c.update(state, reference, *dt);
         prop_assert!(cmd.thrust.is_finite() && cmd.torque.iter().all(|t| t.is_finite()), "{cmd:?}");
         let t = c.telemetry();
         prop_assert!(t.alpha_hat.is_finite() && t.estimates.iter().flatten().all(|x| x.is_finite()), "{t:?}");
+        let frozen = settings.freeze_adaptation_on_saturation && *saturated;
+        prop_assert_eq!(t.adaptation_frozen, frozen);
+        // Before the first update the telemetry holds no law states yet.
+        if frozen && k > 0 {
+            let now = (t.estimates.map(|e| e.map(f64::to_bits)), c.alpha_hat().to_bits());
+            prop_assert_eq!(now, held, "frozen states moved");
+        }
+        if let Some([lo, hi]) = settings.thrust_limits {
+            prop_assert!(cmd.thrust >= lo && cmd.thrust <= hi, "thrust {} outside [{lo}, {hi}]", cmd.thrust);
+        }
     }
     let before = *c.telemetry();
     let cmd = c.update(&bad_state, &steps[0].1, steps[0].2);
@@ -281,8 +327,8 @@ fn fly<C: Controller>(
     Ok(())
 }
 
-fn cascade_steps() -> impl Strategy<Value = Vec<(QuadState, Reference, f64)>> {
-    proptest::collection::vec((state(), reference(), legal_dt()), 4)
+fn cascade_steps() -> impl Strategy<Value = Vec<(QuadState, Reference, f64, bool)>> {
+    proptest::collection::vec((state(), reference(), legal_dt(), any::<bool>()), 4)
 }
 
 fn bad_state() -> impl Strategy<Value = QuadState> {
