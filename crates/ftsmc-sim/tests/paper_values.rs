@@ -4,7 +4,7 @@
 //! A change here means a change of results, not of layout.
 
 use ftsmc_sim::registry::{run, PAPER_CONTROLLERS};
-use ftsmc_sim::simulate::RunOptions;
+use ftsmc_sim::run::RunOptions;
 use ftsmc_sim::Scenario;
 
 const fn b(bits: u64) -> f64 {

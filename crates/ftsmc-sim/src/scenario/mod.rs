@@ -13,144 +13,18 @@ use ftsmc_core::ranftsmc::RanftsmcGains;
 use ftsmc_core::tsm_sta::TsmStaGains;
 use serde::{Deserialize, Serialize};
 
+pub mod distributions;
+pub mod resolve;
+
+pub use crate::axes::AxisSet;
+pub use crate::environment::{DisturbanceSignals, DragNoise, Payload};
+pub use crate::names::PAPER_CONTROLLERS;
+pub use crate::text::{exact_array, show, show_str, MAX_SHOWN_CHARS};
+pub use distributions::{Dist, MonteCarloSpec};
+
+use crate::environment::EnvironmentParams;
 use crate::limits::{LimitError, Limits};
 use crate::signal::Signal;
-
-/// Longest value echoed in an error message, characters (longer ones are
-/// cut and end in `…`).
-pub const MAX_SHOWN_CHARS: usize = 40;
-
-/// A number for an error message: the ordinary decimal form when it is
-/// short (`0.74`, `-3`), scientific otherwise (`1e308`, `5e-324`, never 309
-/// digits), at most [`MAX_SHOWN_CHARS`] characters.
-pub fn show(v: f64) -> String {
-    let plain = v.to_string();
-    if plain.len() <= 24 && (v == 0.0 || (1e-4..1e6).contains(&v.abs())) {
-        plain
-    } else {
-        show_str(&format!("{v:e}"))
-    }
-}
-
-/// Longest parser message kept in an error, characters.
-const MAX_PARSE_MESSAGE_CHARS: usize = 300;
-
-/// A TOML error as one bounded line: `TOML parse error at line L, column C (`source line`): message`
-/// (the parser's own text spans several lines and quotes the source line).
-pub(crate) fn parse_message(text: &str, e: &toml::de::Error) -> String {
-    let mut message: String = e.message().split_whitespace().collect::<Vec<_>>().join(" ");
-    if message.chars().count() > MAX_PARSE_MESSAGE_CHARS {
-        message = message.chars().take(MAX_PARSE_MESSAGE_CHARS - 1).collect();
-        message.push('…');
-    }
-    match e.span() {
-        Some(span) => {
-            let before = &text.as_bytes()[..span.start.min(text.len())];
-            let line = before.iter().filter(|&&b| b == b'\n').count() + 1;
-            let column = before.iter().rev().take_while(|&&b| b != b'\n').count() + 1;
-            let source = text.lines().nth(line - 1).unwrap_or("").trim();
-            format!("TOML parse error at line {line}, column {column} (`{}`): {message}", show_str(source))
-        }
-        None => format!("TOML parse error: {message}"),
-    }
-}
-
-/// A piece of user text for an error message: control characters escaped,
-/// at most [`MAX_SHOWN_CHARS`] characters (then `…`).
-pub fn show_str(s: &str) -> String {
-    let escaped: String = s.chars().flat_map(char::escape_debug).collect();
-    if escaped.chars().count() <= MAX_SHOWN_CHARS {
-        escaped
-    } else {
-        let mut cut: String = escaped.chars().take(MAX_SHOWN_CHARS - 1).collect();
-        cut.push('…');
-        cut
-    }
-}
-
-/// `#[serde(with = "exact_array")]` for fixed-size arrays in scenario files:
-/// serde's own `[T; N]` reads the first N elements and, in TOML, silently
-/// ignores the rest (`position = [0.5, 0.25, 0.0, 99.0, "junk", [1]]` was a
-/// valid position). This reads the whole array and errors on too few or too
-/// many elements, naming the length found and the length wanted.
-pub mod exact_array {
-    use core::fmt;
-    use core::marker::PhantomData;
-
-    use serde::de::{self, IgnoredAny, SeqAccess, Visitor};
-    use serde::{Deserialize, Deserializer, Serialize, Serializer};
-
-    struct Exact<T, const N: usize>(PhantomData<T>);
-
-    impl<'de, T: Deserialize<'de>, const N: usize> Visitor<'de> for Exact<T, N> {
-        type Value = [T; N];
-
-        fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-            write!(f, "an array of exactly {N} numbers")
-        }
-
-        fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<[T; N], A::Error> {
-            let mut items = Vec::with_capacity(N);
-            while items.len() < N {
-                match seq.next_element::<T>()? {
-                    Some(v) => items.push(v),
-                    None => return Err(de::Error::invalid_length(items.len(), &self)),
-                }
-            }
-            let mut extra = 0usize;
-            while seq.next_element::<IgnoredAny>()?.is_some() {
-                extra += 1;
-            }
-            if extra > 0 {
-                return Err(de::Error::invalid_length(N + extra, &self));
-            }
-            items.try_into().map_err(|_| de::Error::invalid_length(N, &self))
-        }
-    }
-
-    /// Serialize as an ordinary array.
-    pub fn serialize<S: Serializer, T: Serialize, const N: usize>(v: &[T; N], s: S) -> Result<S::Ok, S::Error> {
-        v.as_slice().serialize(s)
-    }
-
-    /// Deserialize exactly `N` elements.
-    pub fn deserialize<'de, D: Deserializer<'de>, T: Deserialize<'de>, const N: usize>(
-        d: D,
-    ) -> Result<[T; N], D::Error> {
-        d.deserialize_seq(Exact::<T, N>(PhantomData))
-    }
-
-    /// The same for an optional array (`#[serde(default, with = "exact_array::option")]`).
-    pub mod option {
-        use super::*;
-
-        struct Wrap<T, const N: usize>([T; N]);
-
-        impl<'de, T: Deserialize<'de>, const N: usize> Deserialize<'de> for Wrap<T, N> {
-            fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-                super::deserialize(d).map(Wrap)
-            }
-        }
-
-        /// Serialize as an ordinary optional array.
-        pub fn serialize<S: Serializer, T: Serialize, const N: usize>(
-            v: &Option<[T; N]>,
-            s: S,
-        ) -> Result<S::Ok, S::Error> {
-            match v {
-                Some(a) => s.serialize_some(a.as_slice()),
-                None => s.serialize_none(),
-            }
-        }
-
-        /// Deserialize `Some` of exactly `N` elements.
-        pub fn deserialize<'de, D: Deserializer<'de>, T: Deserialize<'de>, const N: usize>(
-            d: D,
-        ) -> Result<Option<[T; N]>, D::Error> {
-            Option::<Wrap<T, N>>::deserialize(d).map(|o| o.map(|w| w.0))
-        }
-    }
-}
 
 /// Fixed-size arrays of `ftsmc-core` structs read from scenario files, as
 /// `(dotted path, length)`. Those structs derive serde's own `[f64; N]`,
@@ -182,13 +56,13 @@ pub fn check_name(name: &str) -> Result<(), &'static str> {
 }
 
 /// The paper's scenario 1 (SPEC §4), as shipped in `scenarios/paper-scenario-1.toml`.
-pub const PAPER_SCENARIO_1: &str = include_str!("../../../scenarios/paper-scenario-1.toml");
+pub const PAPER_SCENARIO_1: &str = include_str!("../../../../scenarios/paper-scenario-1.toml");
 /// The paper's scenario 2 (SPEC §4), as shipped in `scenarios/paper-scenario-2.toml`.
-pub const PAPER_SCENARIO_2: &str = include_str!("../../../scenarios/paper-scenario-2.toml");
+pub const PAPER_SCENARIO_2: &str = include_str!("../../../../scenarios/paper-scenario-2.toml");
 
 /// Paper scenario 1 with the FTAFTSMC x/y reaching law tuned against the
 /// limit cycle, as shipped in `scenarios/ftaftsmc-tuned-scenario-1.toml`.
-pub const FTAFTSMC_TUNED_SCENARIO_1: &str = include_str!("../../../scenarios/ftaftsmc-tuned-scenario-1.toml");
+pub const FTAFTSMC_TUNED_SCENARIO_1: &str = include_str!("../../../../scenarios/ftaftsmc-tuned-scenario-1.toml");
 
 /// Every scenario built into the library: `(file name, TOML text)`.
 pub const BUILT_IN_SCENARIOS: [(&str, &str); 3] = [
@@ -258,72 +132,6 @@ pub enum ScenarioError {
         /// Known names, comma-separated.
         known: String,
     },
-}
-
-/// One value per controlled channel `x, y, z, φ, θ, ψ`.
-#[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
-#[serde(deny_unknown_fields)]
-pub struct AxisSet<T> {
-    /// x channel.
-    pub x: T,
-    /// y channel.
-    pub y: T,
-    /// z channel.
-    pub z: T,
-    /// Roll φ channel.
-    pub phi: T,
-    /// Pitch θ channel.
-    pub theta: T,
-    /// Yaw ψ channel.
-    pub psi: T,
-}
-
-impl<T> AxisSet<T> {
-    /// `[x, y, z, φ, θ, ψ]` with their names.
-    pub fn named(&self) -> [(&'static str, &T); 6] {
-        [("x", &self.x), ("y", &self.y), ("z", &self.z), ("phi", &self.phi), ("theta", &self.theta), ("psi", &self.psi)]
-    }
-
-    /// The value of channel `axis` (`"x"`, `"y"`, `"z"`, `"phi"`, `"theta"`, `"psi"`).
-    pub fn get(&self, axis: &str) -> Option<&T> {
-        self.named().into_iter().find(|(n, _)| *n == axis).map(|(_, v)| v)
-    }
-
-    /// Same position gains on x, y, z and attitude gains on φ, θ, ψ.
-    pub fn split(position: T, attitude: T) -> Self
-    where
-        T: Clone,
-    {
-        Self {
-            x: position.clone(),
-            y: position.clone(),
-            z: position,
-            phi: attitude.clone(),
-            theta: attitude.clone(),
-            psi: attitude,
-        }
-    }
-
-    /// As an array `[x, y, z, φ, θ, ψ]`.
-    pub fn to_array(&self) -> [T; 6]
-    where
-        T: Clone,
-    {
-        [self.x.clone(), self.y.clone(), self.z.clone(), self.phi.clone(), self.theta.clone(), self.psi.clone()]
-    }
-}
-
-impl<T: Default> Default for AxisSet<T> {
-    fn default() -> Self {
-        Self {
-            x: T::default(),
-            y: T::default(),
-            z: T::default(),
-            phi: T::default(),
-            theta: T::default(),
-            psi: T::default(),
-        }
-    }
 }
 
 /// Integration, recording, divergence and metric settings.
@@ -420,76 +228,6 @@ pub struct ReferenceSignals {
     pub psi: Signal,
 }
 
-/// External disturbances `D_x … D_ψ` of Eq. 1 as accelerations (m/s², rad/s²).
-#[derive(Clone, Debug, Default, PartialEq, Deserialize, Serialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct DisturbanceSignals {
-    /// D_x, m/s².
-    pub x: Signal,
-    /// D_y, m/s².
-    pub y: Signal,
-    /// D_z, m/s².
-    pub z: Signal,
-    /// D_φ, rad/s².
-    pub phi: Signal,
-    /// D_θ, rad/s².
-    pub theta: Signal,
-    /// D_ψ, rad/s².
-    pub psi: Signal,
-}
-
-impl DisturbanceSignals {
-    /// `[D_x, D_y, D_z, D_φ, D_θ, D_ψ]` at `t`.
-    pub fn at(&self, t: f64) -> [f64; 6] {
-        [self.x.value(t), self.y.value(t), self.z.value(t), self.phi.value(t), self.theta.value(t), self.psi.value(t)]
-    }
-
-    /// With their names.
-    pub fn named(&self) -> [(&'static str, &Signal); 6] {
-        [("x", &self.x), ("y", &self.y), ("z", &self.z), ("phi", &self.phi), ("theta", &self.theta), ("psi", &self.psi)]
-    }
-}
-
-/// Payload profile: nominal mass until `start`, `+mass` held until
-/// `decay_start`, then `mass · exp(−(t − decay_start)/tau)`.
-#[derive(Clone, Copy, Debug, PartialEq, Deserialize, Serialize)]
-#[serde(deny_unknown_fields)]
-pub struct Payload {
-    /// Added mass Δm, kg.
-    pub mass: f64,
-    /// Time the payload is picked up, s.
-    pub start: f64,
-    /// Time the exponential decay starts, s (default: never).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub decay_start: Option<f64>,
-    /// Decay time constant τ, s (required with `decay_start`).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub tau: Option<f64>,
-}
-
-impl Payload {
-    /// Added mass at `t`, kg.
-    pub fn added_mass(&self, t: f64) -> f64 {
-        if t < self.start {
-            return 0.0;
-        }
-        match (self.decay_start, self.tau) {
-            (Some(t2), Some(tau)) if t >= t2 => self.mass * (-(t - t2) / tau).exp(),
-            _ => self.mass,
-        }
-    }
-}
-
-/// Multiplicative white Gaussian noise on every drag coefficient:
-/// `K · max(0, 1 + std · w)`, `w ~ N(0, 1)` drawn once per control period,
-/// one independent stream per coefficient.
-#[derive(Clone, Copy, Debug, PartialEq, Deserialize, Serialize)]
-#[serde(deny_unknown_fields)]
-pub struct DragNoise {
-    /// Relative standard deviation (0.25 = 25 %).
-    pub std: f64,
-}
-
 /// FTAFTSMC configuration: mass adaptation and per-channel gains (Tables 4–5).
 #[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields, default)]
@@ -541,7 +279,7 @@ fn default_tsm_sta() -> AxisSet<TsmStaGains> {
 }
 
 fn default_controllers() -> Vec<String> {
-    crate::registry::PAPER_CONTROLLERS.iter().map(|s| s.to_string()).collect()
+    PAPER_CONTROLLERS.iter().map(|s| s.to_string()).collect()
 }
 
 /// Read a scenario file's text, refusing anything but a regular file of at
@@ -663,7 +401,7 @@ pub struct Scenario {
     pub tsm_sta: AxisSet<TsmStaGains>,
     /// Distributions for `ftsmc montecarlo` (ignored by single runs).
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub montecarlo: Option<crate::montecarlo::MonteCarloSpec>,
+    pub montecarlo: Option<MonteCarloSpec>,
     /// Cost limits (see [`crate::limits`]); every key optional.
     #[serde(default, skip_serializing_if = "is_default_limits")]
     pub limits: Limits,
@@ -688,13 +426,13 @@ impl Scenario {
     }
 
     /// [`Scenario::from_toml_str_with_limits`], also returning the files of
-    /// the `extends` chain and the unit-slip warnings (see [`crate::resolve`]).
+    /// the `extends` chain and the unit-slip warnings (see [`resolve`]).
     pub fn from_toml_str_with_warnings(
         text: &str,
         path: &str,
         overrides: &[String],
-    ) -> Result<crate::resolve::Loaded, ScenarioError> {
-        crate::resolve::load(crate::resolve::Source::Text { text, path }, overrides)
+    ) -> Result<resolve::Loaded, ScenarioError> {
+        resolve::load(resolve::Source::Text { text, path }, overrides)
     }
 
     /// Read, parse and validate a scenario file.
@@ -709,16 +447,16 @@ impl Scenario {
     }
 
     /// [`Scenario::from_file_with_limits`], also returning the files of the
-    /// `extends` chain and the unit-slip warnings (see [`crate::resolve`]).
-    pub fn load_with_warnings(path: &Path, overrides: &[String]) -> Result<crate::resolve::Loaded, ScenarioError> {
-        crate::resolve::load(crate::resolve::Source::File(path), overrides)
+    /// `extends` chain and the unit-slip warnings (see [`resolve`]).
+    pub fn load_with_warnings(path: &Path, overrides: &[String]) -> Result<resolve::Loaded, ScenarioError> {
+        resolve::load(resolve::Source::File(path), overrides)
     }
 
     /// Likely unit slips in this scenario (angles beyond 2π, a payload above
     /// 10× the vehicle mass, windows starting after the end of the run), as
     /// `` `key` = value: why `` lines without a file name.
     pub fn warnings(&self) -> Vec<String> {
-        crate::resolve::unit_slip_warnings(self)
+        resolve::unit_slip_warnings(self)
             .into_iter()
             .map(|w| format!("`{}` = {}: {}", w.key, w.value, w.message))
             .collect()
@@ -897,7 +635,7 @@ impl Scenario {
             g.check().map_err(|e| gain(&format!("tsm-sta.{axis}"), e))?;
         }
         for name in &self.controllers {
-            crate::registry::check_name(name).map_err(|known| ScenarioError::UnknownController {
+            crate::names::check_controller(name).map_err(|known| ScenarioError::UnknownController {
                 path: path.to_string(),
                 name: name.clone(),
                 known,
@@ -916,6 +654,30 @@ impl Scenario {
     /// [`Scenario::limits`]; called by [`Scenario::validate`] with the
     /// scenario's own controller list.
     pub fn check_cost(&self, n_controllers: usize) -> Result<crate::limits::Cost, LimitError> {
-        crate::limits::check_flight(self, n_controllers)
+        crate::limits::check_flight(&self.flight_size(), n_controllers)
+    }
+
+    /// The sizes [`crate::limits`] prices a flight by.
+    pub fn flight_size(&self) -> crate::limits::FlightSize<'_> {
+        crate::limits::FlightSize {
+            duration: self.duration,
+            control_rate: self.simulation.control_rate,
+            substeps: self.simulation.substeps,
+            record_rate: self.simulation.record_rate,
+            limits: &self.limits,
+        }
+    }
+
+    /// The environment's parameter sections (true plant, payload, inertia
+    /// variation, drag noise, disturbances, seed) for [`crate::environment::Environment`].
+    pub fn environment(&self) -> EnvironmentParams<'_> {
+        EnvironmentParams {
+            plant: self.actual_plant.unwrap_or(self.plant),
+            payload: self.payload.as_ref(),
+            inertia_variation: self.inertia_variation.as_ref(),
+            drag_noise: self.drag_noise,
+            disturbance: &self.disturbance,
+            seed: self.seed,
+        }
     }
 }
