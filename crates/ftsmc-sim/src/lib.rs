@@ -20,6 +20,7 @@
 //!            exit.rs            ExitStatus, Divergence, divergence checks
 //!            recording.rs       Recording, recording_columns, CSV numbers
 //! floor 3  scenario/            the file format; composes every part's parameters; validation
+//!            validate.rs        range checks, names, array lengths, cost limits
 //!            resolve.rs         extends chains, deep merge, --set overrides, unit-slip warnings
 //!            distributions.rs   Dist, MonteCarloSpec, SAMPLED_COLUMNS, run_seed, per-run sampling
 //! floor 2  vehicle/             truth models
