@@ -4,7 +4,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Result;
 use ftsmc_sim::registry::label;
-use ftsmc_sim::simulate::RunOutput;
+use ftsmc_sim::run::RunOutput;
 
 use crate::plot::{controller_color, write_3d, write_figure, Figure, Panel, Rgb, Series, Series3};
 

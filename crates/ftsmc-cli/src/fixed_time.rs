@@ -6,8 +6,11 @@ use std::path::Path;
 
 use anyhow::Result;
 use ftsmc_core::cascade::channel::NAMES;
-use ftsmc_sim::fixed_time::{cascade_channel, worst, ChannelTimes, Sampling, SweepSettings, CASCADE_CHANNELS};
-use ftsmc_sim::registry::{self, label};
+use ftsmc_sim::analysis::fixed_time;
+use ftsmc_sim::analysis::fixed_time::{
+    cascade_channel, worst, ChannelTimes, Sampling, SweepSettings, CASCADE_CHANNELS,
+};
+use ftsmc_sim::registry::label;
 use ftsmc_sim::scenario::Scenario;
 use rayon::prelude::*;
 use serde_json::json;
@@ -55,7 +58,7 @@ pub fn run(scenario: &Scenario, controllers: &[String], settings: &SweepSettings
     let rows: Vec<Row> = plan
         .par_iter()
         .map(|(c, axis, sampling)| {
-            let times = registry::sweep_channel(c, scenario, *axis, settings, *sampling).map_err(anyhow::Error::msg);
+            let times = fixed_time::sweep_channel(c, scenario, *axis, settings, *sampling).map_err(anyhow::Error::msg);
             bar.inc(1);
             times.map(|times| Row { controller: c.clone(), axis: *axis, sampling: *sampling, times })
         })
@@ -76,7 +79,7 @@ pub fn run(scenario: &Scenario, controllers: &[String], settings: &SweepSettings
         "bound",
     ])?;
     for r in &rows {
-        let bound = registry::reaching_time_bound(&r.controller, scenario, r.axis);
+        let bound = fixed_time::reaching_time_bound(&r.controller, scenario, r.axis);
         for t in &r.times {
             let o = |v: Option<f64>| v.map_or(String::new(), format_number);
             w.write_record([
@@ -138,7 +141,7 @@ Each |e0| is flown with both signs ({} points per channel and mode).\n",
                 |s: Sampling| rows.iter().find(|r| &r.controller == c && r.axis == axis && r.sampling == s).unwrap();
             let cont = get(Sampling::Continuous);
             let samp = get(Sampling::Sampled);
-            let bound = registry::reaching_time_bound(c, scenario, axis);
+            let bound = fixed_time::reaching_time_bound(c, scenario, axis);
             let wc = worst(cont.times.iter().map(|t| t.reaching_time));
             // Sampled: worst over the initial errors that did not diverge.
             let ws = worst(samp.times.iter().filter(|t| t.diverged_at.is_none()).map(|t| t.reaching_time));
@@ -255,7 +258,7 @@ smallest |e0| that did not settle:\n\n{}",
                         color: controller_color(c),
                         dashed: false,
                     });
-                    if let (0, Some(b)) = (field, registry::reaching_time_bound(c, scenario, axis)) {
+                    if let (0, Some(b)) = (field, fixed_time::reaching_time_bound(c, scenario, axis)) {
                         series.push(Series {
                             label: format!("Eq. 38 bound, {}", label(c)),
                             xs: vec![settings.magnitudes[0], *settings.magnitudes.last().unwrap()],

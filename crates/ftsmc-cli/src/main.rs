@@ -148,7 +148,7 @@ pub fn load_scenario_with_limits(arg: &str, limits: &[String]) -> Result<Scenari
     let loaded = if path.exists() {
         Some(Scenario::load_with_warnings(&path, limits)?)
     } else {
-        match ftsmc_sim::resolve::built_in(arg) {
+        match ftsmc_sim::scenario::resolve::built_in(arg) {
             Some((file, text)) => Some(Scenario::from_toml_str_with_warnings(text, file, limits)?),
             None => None,
         }
@@ -212,14 +212,14 @@ fn run(cli: Cli) -> Result<()> {
             anyhow::ensure!(per_decade >= 1, "--per-decade must be at least 1");
             ftsmc_sim::limits::check_sweep(&scenario.limits, ftsmc_sim::limits::sweep_points(5, per_decade as u64))?;
             let sim = &scenario.simulation;
-            let t_max = ftsmc_sim::fixed_time::SweepSettings::default().t_max;
+            let t_max = ftsmc_sim::analysis::fixed_time::SweepSettings::default().t_max;
             scenario.limits.ensure(
                 "max_steps",
                 "integration steps per sweep flight (60 s × control_rate × substeps)",
                 t_max * sim.control_rate * f64::from(sim.substeps),
             )?;
-            let settings = ftsmc_sim::fixed_time::SweepSettings {
-                magnitudes: ftsmc_sim::fixed_time::SweepSettings::log_magnitudes(-3, 2, per_decade),
+            let settings = ftsmc_sim::analysis::fixed_time::SweepSettings {
+                magnitudes: ftsmc_sim::analysis::fixed_time::SweepSettings::log_magnitudes(-3, 2, per_decade),
                 dt: scenario.control_period(),
                 ..Default::default()
             };
@@ -231,7 +231,7 @@ fn run(cli: Cli) -> Result<()> {
             check_names(&names)?;
             anyhow::ensure!(runs >= 1, "--runs must be at least 1");
             anyhow::ensure!(threads != Some(0), "--threads must be at least 1");
-            ftsmc_sim::limits::check_batch(&scenario, runs, names.len())?;
+            ftsmc_sim::limits::check_batch(&scenario.flight_size(), runs, names.len())?;
             if let Some(n) = threads {
                 ftsmc_sim::limits::check_threads(&scenario.limits, n)?;
             }
@@ -243,7 +243,7 @@ fn run(cli: Cli) -> Result<()> {
         }
         Command::TuneTsmSta { scenario } => {
             let scenario = load_scenario(&scenario)?;
-            let r = ftsmc_sim::tuning::tune_tsm_sta(
+            let r = ftsmc_sim::analysis::tuning::tune_tsm_sta(
                 &scenario,
                 &ftsmc_core::tsm_sta::TsmStaGains::BASE_POSITION,
                 &ftsmc_core::tsm_sta::TsmStaGains::BASE_ATTITUDE,

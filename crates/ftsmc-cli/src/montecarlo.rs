@@ -5,11 +5,11 @@ use std::path::Path;
 use std::time::Instant;
 
 use anyhow::{Context, Result};
-use ftsmc_sim::montecarlo::{run_batch, summarize, ControllerSummary, McRun, MonteCarloSpec, SAMPLED_COLUMNS};
+use ftsmc_sim::batch::montecarlo::{run_batch, summarize, ControllerSummary, McRun, MonteCarloSpec, SAMPLED_COLUMNS};
 use ftsmc_sim::registry::label;
+use ftsmc_sim::run::planned_steps;
+use ftsmc_sim::run::ExitStatus;
 use ftsmc_sim::scenario::Scenario;
-use ftsmc_sim::simulate::planned_steps;
-use ftsmc_sim::simulate::ExitStatus;
 use serde_json::{json, Map, Value};
 
 use crate::output::{format_number, provenance, ResultDir};

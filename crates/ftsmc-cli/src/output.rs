@@ -41,7 +41,7 @@ use std::path::{Component, Path, PathBuf};
 use std::time::{Duration, SystemTime, UNIX_EPOCH};
 
 use anyhow::{bail, Context, Result};
-use ftsmc_sim::simulate::{Recording, RunOutput};
+use ftsmc_sim::run::{Recording, RunOutput};
 use serde_json::{json, Map, Value};
 
 /// Leftover staging / old folders older than this are deleted by the next
@@ -323,10 +323,10 @@ pub fn recording_csv(rec: &Recording) -> Vec<u8> {
 
 /// Shortest round-trip decimal form, as in the time series (`0.3`, `1.0`,
 /// `2.5e-7`; `NaN`, `inf` spelled as pandas reads them; see
-/// [`ftsmc_sim::simulate::push_number`]).
+/// [`ftsmc_sim::run::push_number`]).
 pub fn format_number(v: f64) -> String {
     let mut out = Vec::with_capacity(24);
-    ftsmc_sim::simulate::push_number(&mut out, v);
+    ftsmc_sim::run::push_number(&mut out, v);
     String::from_utf8(out).unwrap_or_default()
 }
 

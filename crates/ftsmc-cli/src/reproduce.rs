@@ -8,8 +8,8 @@ use std::time::Instant;
 use anyhow::{anyhow, Result};
 use ftsmc_core::cascade::AttitudeDerivatives;
 use ftsmc_sim::registry::{self, label};
+use ftsmc_sim::run::{planned_steps, reference_at, RunOptions, RunOutput};
 use ftsmc_sim::scenario::Scenario;
-use ftsmc_sim::simulate::{planned_steps, reference_at, RunOptions, RunOutput};
 use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
 use serde_json::{json, Map, Value};
@@ -155,11 +155,11 @@ fn find<'a>(runs: &'a [RunOutput], scenario: &str, key: &str) -> Option<&'a RunO
     runs.iter().find(|r| r.scenario == scenario && r.controller == key)
 }
 
-fn axis_value(m: &ftsmc_sim::scenario::AxisSet<f64>, axis: &str) -> f64 {
+fn axis_value(m: &ftsmc_sim::axes::AxisSet<f64>, axis: &str) -> f64 {
     m.get(axis).copied().unwrap_or(f64::NAN)
 }
 
-fn settle(m: &ftsmc_sim::scenario::AxisSet<Option<f64>>, axis: &str) -> String {
+fn settle(m: &ftsmc_sim::axes::AxisSet<Option<f64>>, axis: &str) -> String {
     // (For a completed run; a diverged one shows `—`.)
     m.get(axis).copied().flatten().map_or("not settled".into(), |t| format!("{t:.2}"))
 }

@@ -9,8 +9,8 @@ use std::hint::black_box;
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use ftsmc_core::model::{QuadState, Reference};
 use ftsmc_sim::registry;
+use ftsmc_sim::run::{simulate, RunOptions};
 use ftsmc_sim::scenario::Scenario;
-use ftsmc_sim::simulate::{simulate, RunOptions};
 
 fn flights(c: &mut Criterion) {
     let mut scenario = Scenario::paper_scenarios().remove(1);

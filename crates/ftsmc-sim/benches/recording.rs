@@ -18,8 +18,8 @@ use std::hint::black_box;
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use ftsmc_sim::registry;
+use ftsmc_sim::run::{simulate, Recording, RunOptions};
 use ftsmc_sim::scenario::Scenario;
-use ftsmc_sim::simulate::{simulate, Recording, RunOptions};
 
 /// The CSV writer of `ftsmc` before it was replaced: the `csv` crate with
 /// one `format!`ed `String` per number.

@@ -4,7 +4,7 @@
 //! Each benchmark integrates 1000 RK4 steps of 1 ms with the rotor speeds of
 //! a hovering, slightly tilted vehicle held; throughput is in plant steps.
 //!
-//! - `rk4-step/paper`: paper Eq. 1 ([`ftsmc_sim::plant::derivative`] + `rk4_step`).
+//! - `rk4-step/paper`: paper Eq. 1 ([`ftsmc_sim::vehicle::paper::derivative`] + `rk4_step`).
 //! - `rk4-step/rigid-body`: the rigid-body model of the paper vehicle (aero off,
 //!   rotor gyroscopic torque on), quaternion renormalised each step.
 //! - `rk4-step/rigid-body-aero`: the RotorPy Hummingbird with parasitic and
@@ -15,7 +15,7 @@ use std::hint::black_box;
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use ftsmc_core::allocation::{residual_speed, rotor_speeds};
 use ftsmc_core::model::{Command, QuadState, QuadrotorParams};
-use ftsmc_sim::plant::{derivative, rk4_step};
+use ftsmc_sim::vehicle::paper::{derivative, rk4_step};
 use ftsmc_sim::vehicle::{from_quad_state, RigidBody, RigidBodyInput, RigidBodyParams};
 
 const STEPS: u64 = 1000;

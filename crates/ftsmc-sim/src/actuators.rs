@@ -24,7 +24,7 @@ use rand_distr::{Distribution, StandardNormal};
 use serde::{Deserialize, Serialize};
 
 /// ChaCha stream of the motor-speed noise generator. The run loop's drag
-/// noise uses streams 1–6 of the scenario seed (`simulate.rs`); motors use
+/// noise uses streams 1–6 of the scenario seed (`environment`); motors use
 /// this one, so turning motor noise on or off changes no other stream.
 pub const MOTOR_NOISE_STREAM: u64 = 16;
 

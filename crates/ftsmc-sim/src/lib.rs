@@ -1,27 +1,61 @@
 //! # ftsmc-sim
 //!
-//! Everything around the control laws of `ftsmc-core`: the quadrotor plant of
-//! paper Eq. 1 ([`plant`]), time signals for references and disturbances
-//! ([`signal`]), scenario files ([`scenario`]), the zero-order-hold RK4 run
-//! loop ([`simulate`]), metrics ([`metrics`]) and the controller registry
-//! ([`registry`]), and the cost limits every request is checked against
-//! before any flight ([`limits`]).
+//! Everything around the control laws of `ftsmc-core`: truth models of the
+//! vehicle, actuators, the environment, scenario files, the run loop,
+//! metrics, the controller registry, Monte Carlo batches and analyses.
+//!
+//! ## Layout
+//!
+//! Modules are arranged on floors; a module only uses modules on its own
+//! floor or below, never above (checked by `tests/layout.rs`):
+//!
+//! ```text
+//! floor 6  analysis/            analyses built on flights
+//!            fixed_time.rs      fixed-time sweep, per-controller channel sweep, Eq. 38 bound
+//!            tuning.rs          gain tuning
+//!          batch/               batches of flights
+//!            montecarlo.rs      run_batch, stats, summarize
+//! floor 5  registry.rs          controllers by name: label, constructor, run
+//! floor 4  run/                 the loop: controller on its clock, plant by RK4, environment, metrics
+//!            exit.rs            ExitStatus, Divergence, divergence checks
+//!            recording.rs       Recording, recording_columns, CSV numbers
+//! floor 3  scenario/            the file format; composes every part's parameters; validation
+//!            validate.rs        range checks, names, array lengths, cost limits
+//!            resolve.rs         extends chains, deep merge, --set overrides, unit-slip warnings
+//!            distributions.rs   Dist, MonteCarloSpec, SAMPLED_COLUMNS, run_seed, per-run sampling
+//! floor 2  vehicle/             truth models
+//!            paper.rs           Eq. 1 (the paper's plant) and the generic rk4_step
+//!            rigid_body.rs      Newton–Euler rigid body with quaternion attitude
+//!            math.rs            small vector/quaternion helpers
+//!          actuators.rs         motor limits, lag, noise; mixer under saturation
+//!          environment/         plant-side variations, built from their own sections
+//!            disturbance.rs     DisturbanceSignals
+//!            payload.rs         Payload and its profile
+//!            variation.rs       DragNoise (inertia variation is a Signal)
+//!          metrics.rs           ISE, IAE, ITAE, settling, chattering, online
+//! floor 1  axes.rs              AxisSet and other per-axis containers
+//!          signal/              time signals with analytic derivatives
+//!            waypoints.rs       quintic waypoint splines
+//!          names.rs             controller names as data (PAPER_CONTROLLERS, CONTROLLERS)
+//!          limits.rs            cost limits and their arithmetic
+//!          text.rs              values in error messages, exact-length TOML arrays
+//! ```
 #![warn(missing_docs)]
 
 pub mod actuators;
-pub mod fixed_time;
+pub mod analysis;
+pub mod axes;
+pub mod batch;
+pub mod environment;
 pub mod limits;
 pub mod metrics;
-pub mod montecarlo;
-pub mod plant;
+pub mod names;
 pub mod registry;
-pub mod resolve;
+pub mod run;
 pub mod scenario;
 pub mod signal;
-pub mod simulate;
-pub mod tuning;
+pub mod text;
 pub mod vehicle;
-pub mod waypoints;
 
+pub use run::{simulate, ExitStatus, RunOptions, RunOutput};
 pub use scenario::{Scenario, ScenarioError};
-pub use simulate::{simulate, ExitStatus, RunOptions, RunOutput};

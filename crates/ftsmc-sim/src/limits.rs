@@ -18,6 +18,7 @@
 //! All amounts are computed in `f64`, so no request — however large — can
 //! overflow while being priced.
 
+use ftsmc_core::law::MAX_ESTIMATES;
 use serde::{Deserialize, Serialize};
 
 /// Default [`Limits::max_steps`]: 2·10⁸ RK4 steps per flight (about 4 min
@@ -108,8 +109,8 @@ impl core::fmt::Display for LimitError {
             "refused before running: {} = {} exceeds the limit {key} = {}; to allow it, raise the limit with \
              `[limits] {key} = <n>` in the scenario or `--limit {key}=<n>` on the command line",
             self.what,
-            crate::scenario::show(self.requested),
-            crate::scenario::show(self.allowed),
+            crate::text::show(self.requested),
+            crate::text::show(self.allowed),
         )
     }
 }
@@ -198,7 +199,27 @@ impl Limits {
 }
 
 fn abbreviate(s: &str) -> String {
-    crate::scenario::show_str(s)
+    crate::text::show_str(s)
+}
+
+/// Widest row of a recording (`run::Recording`): every column of `run::recording_columns`
+/// with all estimate slots named and the mass adaptation on.
+pub const MAX_RECORDING_COLUMNS: usize = 1 + 12 + 3 + 3 + 2 + 4 + 4 + 4 + 1 + 6 + 6 * MAX_ESTIMATES + 2 + 4 + 6;
+
+/// What a flight's cost depends on: the sizes a scenario declares
+/// (built by `Scenario::flight_size`) and the limits it is checked against.
+#[derive(Clone, Copy, Debug)]
+pub struct FlightSize<'a> {
+    /// Flight duration, s.
+    pub duration: f64,
+    /// Control rate, Hz.
+    pub control_rate: f64,
+    /// RK4 substeps per control period.
+    pub substeps: u32,
+    /// Recording rate, Hz (0 = off).
+    pub record_rate: f64,
+    /// The limits to check against.
+    pub limits: &'a Limits,
 }
 
 /// The priced cost of flying a scenario once with each of `n` controllers.
@@ -216,10 +237,10 @@ pub struct Cost {
 
 /// Price one flight of `scenario` (recording on) with each of `n_controllers`
 /// controllers and compare with its [`Limits`]. The same arithmetic as the
-/// run loop (`simulate.rs`), in `f64` so it cannot overflow.
-pub fn check_flight(scenario: &crate::Scenario, n_controllers: usize) -> Result<Cost, LimitError> {
-    let sim = &scenario.simulation;
-    let limits = &scenario.limits;
+/// run loop (`run/mod.rs`), in `f64` so it cannot overflow.
+pub fn check_flight(scenario: &FlightSize<'_>, n_controllers: usize) -> Result<Cost, LimitError> {
+    let sim = scenario;
+    let limits = scenario.limits;
     let control_steps = (scenario.duration * sim.control_rate).round();
     let integration_steps = control_steps * f64::from(sim.substeps);
     limits.ensure(
@@ -234,7 +255,7 @@ pub fn check_flight(scenario: &crate::Scenario, n_controllers: usize) -> Result<
         0.0
     };
     limits.ensure("max_samples", "recorded rows per flight (duration × record_rate)", samples)?;
-    let columns = crate::simulate::MAX_RECORDING_COLUMNS as f64;
+    let columns = MAX_RECORDING_COLUMNS as f64;
     let output_bytes = samples * columns * BYTES_PER_VALUE * n_controllers.max(1) as f64;
     limits.ensure(
         "max_output_bytes",
@@ -250,8 +271,8 @@ pub fn check_flight(scenario: &crate::Scenario, n_controllers: usize) -> Result<
 /// Price a Monte Carlo batch of `runs` runs × `n_controllers` controllers
 /// (flights are not recorded, so only the step count per flight counts
 /// besides the number of flights and the size of `runs.csv`).
-pub fn check_batch(scenario: &crate::Scenario, runs: u64, n_controllers: usize) -> Result<(), LimitError> {
-    let limits = &scenario.limits;
+pub fn check_batch(scenario: &FlightSize<'_>, runs: u64, n_controllers: usize) -> Result<(), LimitError> {
+    let limits = scenario.limits;
     let flights = runs as f64 * n_controllers as f64;
     limits.ensure("max_flights", "flights in the batch (--runs × controllers)", flights)?;
     limits.ensure(
@@ -259,7 +280,7 @@ pub fn check_batch(scenario: &crate::Scenario, runs: u64, n_controllers: usize) 
         format!("estimated runs.csv size in bytes (flights × {MONTE_CARLO_COLUMNS} columns × {BYTES_PER_VALUE} bytes)"),
         flights * MONTE_CARLO_COLUMNS * BYTES_PER_VALUE,
     )?;
-    let sim = &scenario.simulation;
+    let sim = scenario;
     let steps = (scenario.duration * sim.control_rate).round() * f64::from(sim.substeps);
     limits.ensure("max_steps", "integration steps per flight (duration × control_rate × substeps)", steps)
 }

@@ -8,7 +8,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::scenario::AxisSet;
+use crate::axes::AxisSet;
 
 /// One value per control signal `U1, u2, u3, u4`.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Deserialize, Serialize)]

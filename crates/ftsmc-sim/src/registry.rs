@@ -9,16 +9,7 @@ use ftsmc_core::tsm_sta::TsmStaAxis;
 
 use crate::scenario::Scenario;
 
-/// The three controllers compared in the paper, in table order.
-pub const PAPER_CONTROLLERS: [&str; 3] = ["ranftsmc", "tsm-sta", "ftaftsmc"];
-
-/// Every registered name (with a one-line description).
-pub const CONTROLLERS: [(&str, &str); 4] = [
-    ("ftaftsmc", "fixed-time adaptive fast terminal SMC with mass adaptation (the paper's controller)"),
-    ("ftaftsmc-no-mass", "FTAFTSMC with the mass adaptation of §3.2 switched off (U1 = u1)"),
-    ("ranftsmc", "robust adaptive nonsingular fast terminal SMC (Labbadi & Cherkaoui 2020, ref. [19])"),
-    ("tsm-sta", "nonsingular terminal sliding surface with super-twisting reaching law (ref. [2])"),
-];
+pub use crate::names::{CONTROLLERS, PAPER_CONTROLLERS};
 
 /// Human-readable label for figures and tables.
 pub fn label(name: &str) -> &str {
@@ -35,11 +26,7 @@ pub fn label(name: &str) -> &str {
 
 /// `Ok(())` for a registered name; otherwise the list of known names.
 pub fn check_name(name: &str) -> Result<(), String> {
-    if CONTROLLERS.iter().any(|(n, _)| *n == name) {
-        Ok(())
-    } else {
-        Err(CONTROLLERS.iter().map(|(n, _)| *n).collect::<Vec<_>>().join(", "))
-    }
+    crate::names::check_controller(name)
 }
 
 /// A boxed controller ready to fly.
@@ -77,44 +64,23 @@ pub fn build(name: &str, scenario: &Scenario) -> Result<BoxedController, String>
 
 /// Build controller `name` for `scenario` and fly it; the output's
 /// `controller` field is `name`.
-pub fn run(
-    name: &str,
-    scenario: &Scenario,
-    options: crate::simulate::RunOptions,
-) -> Result<crate::simulate::RunOutput, String> {
+pub fn run(name: &str, scenario: &Scenario, options: crate::run::RunOptions) -> Result<crate::run::RunOutput, String> {
     let mut controller = build(name, scenario)?;
-    let mut out = crate::simulate::simulate(scenario, controller.as_mut(), options);
+    let mut out = crate::run::simulate(scenario, controller.as_mut(), options);
     out.controller = name.to_string();
     Ok(out)
 }
 
-/// Sweep the decoupled channel `axis` (0..6 = x, y, z, φ, θ, ψ) of
-/// controller `name` with the gains of `scenario` (see [`crate::fixed_time`]).
-pub fn sweep_channel(
-    name: &str,
-    scenario: &Scenario,
-    axis: usize,
-    settings: &crate::fixed_time::SweepSettings,
-    sampling: crate::fixed_time::Sampling,
-) -> Result<Vec<crate::fixed_time::ChannelTimes>, String> {
-    use crate::fixed_time::sweep;
-    check_name(name)?;
-    Ok(match name {
-        "ftaftsmc" | "ftaftsmc-no-mass" => {
-            sweep(&FtaftsmcAxis::new(scenario.ftaftsmc.gains().to_array()[axis]), settings, sampling)
-        }
-        "ranftsmc" => sweep(&RanftsmcAxis::new(scenario.ranftsmc.to_array()[axis]), settings, sampling),
-        "tsm-sta" => sweep(&TsmStaAxis::new(scenario.tsm_sta.to_array()[axis]), settings, sampling),
-        _ => unreachable!("check_name accepted an unhandled name"),
-    })
-}
+#[cfg(test)]
+mod tests {
+    use super::*;
 
-/// The paper's reaching-time bound (Eq. 38) for `axis` of controller `name`,
-/// when the controller has one (FTAFTSMC only; the baselines are finite-time
-/// with initial-condition-dependent bounds, Eq. 36–37).
-pub fn reaching_time_bound(name: &str, scenario: &Scenario, axis: usize) -> Option<f64> {
-    match name {
-        "ftaftsmc" | "ftaftsmc-no-mass" => Some(scenario.ftaftsmc.gains().to_array()[axis].reaching_time_bound()),
-        _ => None,
+    #[test]
+    fn builds_every_listed_name() {
+        let scenario = Scenario::paper_scenarios().remove(0);
+        for (name, _) in CONTROLLERS {
+            assert!(build(name, &scenario).is_ok(), "{name} is listed in names.rs but not built");
+        }
+        assert!(build("no-such-controller", &scenario).is_err());
     }
 }

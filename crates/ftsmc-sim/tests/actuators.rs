@@ -251,7 +251,7 @@ fn motor_noise_is_deterministic_per_seed_with_the_right_moments() {
 #[test]
 fn motor_noise_leaves_other_streams_alone() {
     let seed = 42;
-    // A drag-noise stream as `simulate.rs` derives it (stream 1 of the seed).
+    // A drag-noise stream as `environment::Environment` derives it (stream 1 of the seed).
     let drag_stream = || {
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
         rng.set_stream(1);

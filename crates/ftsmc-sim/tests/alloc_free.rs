@@ -12,8 +12,8 @@ use std::cell::Cell;
 
 use ftsmc_core::model::{QuadState, Reference};
 use ftsmc_sim::registry;
+use ftsmc_sim::run::{simulate, RunOptions};
 use ftsmc_sim::scenario::Scenario;
-use ftsmc_sim::simulate::{simulate, RunOptions};
 
 struct Counting;
 

@@ -3,9 +3,9 @@
 use ftsmc_core::cascade::{AttitudeDerivatives, Cascade, CascadeConfig, Controller, MassAdaptation};
 use ftsmc_core::ftaftsmc::{reaching_law, FtaftsmcAxis};
 use ftsmc_sim::registry;
+use ftsmc_sim::run::{simulate, RunOptions};
 use ftsmc_sim::scenario::Scenario;
 use ftsmc_sim::signal::{Signal, Term};
-use ftsmc_sim::simulate::{simulate, RunOptions};
 
 fn paper_1() -> Scenario {
     Scenario::paper_scenarios().remove(0)

@@ -98,10 +98,10 @@ fn batch_sweep_and_thread_requests_are_priced_without_overflow() {
     let s = accepted("");
     let l = Limits::default();
     for runs in [u64::MAX, 1_000_000_000_000] {
-        let e = limits::check_batch(&s, runs, 3).unwrap_err();
+        let e = limits::check_batch(&s.flight_size(), runs, 3).unwrap_err();
         assert_eq!(e.key, "max_flights");
     }
-    limits::check_batch(&s, 100, 3).unwrap();
+    limits::check_batch(&s.flight_size(), 100, 3).unwrap();
     assert_eq!(limits::check_sweep(&l, limits::sweep_points(5, u64::MAX)).unwrap_err().key, "max_sweep_points");
     assert_eq!(limits::check_sweep(&l, limits::sweep_points(5, 100_000_000)).unwrap_err().key, "max_sweep_points");
     limits::check_sweep(&l, limits::sweep_points(5, 3)).unwrap();

@@ -1,6 +1,6 @@
 //! Monte Carlo batches: deterministic across thread counts; divergence is a row.
 
-use ftsmc_sim::montecarlo::{run_batch, Dist, MonteCarloSpec};
+use ftsmc_sim::batch::montecarlo::{run_batch, Dist, MonteCarloSpec};
 use ftsmc_sim::scenario::{Scenario, PAPER_SCENARIO_2};
 
 fn short_scenario() -> Scenario {

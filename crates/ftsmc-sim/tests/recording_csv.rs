@@ -4,8 +4,8 @@
 use ftsmc_core::allocation::forces_from_squared_speeds;
 use ftsmc_core::model::Command;
 use ftsmc_sim::registry;
+use ftsmc_sim::run::{push_number, Recording, RunOptions};
 use ftsmc_sim::scenario::Scenario;
-use ftsmc_sim::simulate::{push_number, Recording, RunOptions};
 
 fn short_scenario_2() -> Scenario {
     let mut s = Scenario::paper_scenarios().remove(1);

@@ -3,7 +3,7 @@
 
 use ftsmc_core::allocation::{forces_from_squared_speeds, residual_speed, rotor_speeds};
 use ftsmc_core::model::{Command, QuadState, QuadrotorParams};
-use ftsmc_sim::plant;
+use ftsmc_sim::vehicle::paper as plant;
 use ftsmc_sim::vehicle::rigid_body::{index, STATE_LEN};
 use ftsmc_sim::vehicle::{
     body_rates_to_euler_rates, euler_rates_to_body_rates, euler_to_quaternion, from_quad_state, quaternion_to_euler,

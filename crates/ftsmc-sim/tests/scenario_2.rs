@@ -1,8 +1,9 @@
 //! Paper scenario 2: seeded noise, payload and the mass adaptation.
 
+use ftsmc_sim::environment::Environment;
 use ftsmc_sim::registry;
+use ftsmc_sim::run::RunOptions;
 use ftsmc_sim::scenario::{Scenario, PAPER_SCENARIO_2};
-use ftsmc_sim::simulate::{Environment, RunOptions};
 
 fn paper_2() -> Scenario {
     Scenario::from_toml_str(PAPER_SCENARIO_2, "paper-scenario-2.toml").unwrap()
@@ -24,7 +25,7 @@ fn same_seed_same_series_different_seed_different_drag_noise() {
 
     // The noise itself: same seed, same draws; other seed, other draws.
     let draws = |scenario: &Scenario| {
-        let mut env = Environment::new(scenario);
+        let mut env = Environment::new(scenario.environment());
         (0..50)
             .map(|_| {
                 env.next_period();
@@ -42,7 +43,7 @@ fn same_seed_same_series_different_seed_different_drag_noise() {
 #[test]
 fn drag_noise_has_the_declared_spread() {
     let s = paper_2();
-    let mut env = Environment::new(&s);
+    let mut env = Environment::new(s.environment());
     let n = 20_000;
     let mut sum = 0.0;
     let mut sq = 0.0;
@@ -62,7 +63,7 @@ fn drag_noise_has_the_declared_spread() {
 #[test]
 fn plant_sees_payload_inertia_and_disturbances_at_documented_times() {
     let s = paper_2();
-    let env = Environment::new(&s);
+    let env = Environment::new(s.environment());
     let m = s.plant.mass;
     assert_eq!(env.params(9.9).mass, m);
     assert!((env.params(25.0).mass - (m + 0.37)).abs() < 1e-12);

@@ -4,8 +4,8 @@
 use std::path::{Path, PathBuf};
 
 use ftsmc_sim::scenario::{Scenario, PAPER_SCENARIO_1, PAPER_SCENARIO_2};
+use ftsmc_sim::signal::waypoints::{WaypointVelocity, Waypoints};
 use ftsmc_sim::signal::{Signal, Term};
-use ftsmc_sim::waypoints::{WaypointVelocity, Waypoints};
 
 fn temp_dir(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("ftsmc-ergonomics-{}-{name}", std::process::id()));

@@ -2,8 +2,8 @@
 //! procedure produces, and they give the settling time it promises.
 
 use ftsmc_core::tsm_sta::TsmStaGains;
+use ftsmc_sim::analysis::tuning::{time_scaled, tune_tsm_sta};
 use ftsmc_sim::scenario::Scenario;
-use ftsmc_sim::tuning::{time_scaled, tune_tsm_sta};
 
 #[test]
 fn shipped_tsm_sta_gains_are_reproduced_by_the_procedure() {

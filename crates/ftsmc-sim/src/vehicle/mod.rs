@@ -1,8 +1,8 @@
 //! Truth models: the vehicle the simulation flies, as opposed to the model
 //! a controller was designed on.
 //!
-//! - `paper` — paper Eq. 1 with Euler angles and Euler rates, today's
-//!   [`crate::plant`] (to be moved here when the crate is reorganised).
+//! - [`paper`] — paper Eq. 1 with Euler angles and Euler rates, and the
+//!   generic RK4 step every model is integrated with.
 //! - [`rigid_body`] — Newton–Euler dynamics with quaternion attitude and body
 //!   rates, per-rotor thrust and drag torque, rotor gyroscopic torque and
 //!   RotorPy-style air-relative aerodynamics (parasitic and rotor drag),
@@ -10,9 +10,10 @@
 //!   paper's controllers expect.
 //!
 //! Models here depend only on `ftsmc-core` and on the integrator in
-//! [`crate::plant`]; nothing here knows about scenarios or the run loop.
+//! [`paper`]; nothing here knows about scenarios or the run loop.
 
 mod math;
+pub mod paper;
 pub mod rigid_body;
 
 pub use rigid_body::{

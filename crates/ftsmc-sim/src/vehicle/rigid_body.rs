@@ -4,7 +4,7 @@
 //! # Conventions
 //!
 //! - World frame: x, y horizontal, **z up** (gravity `−g ẑ`), as the paper
-//!   plant ([`crate::plant`]).
+//!   plant ([`crate::vehicle::paper`]).
 //! - Body frame: x forward, y left, z up (thrust along `+z_b`).
 //! - Attitude: unit quaternion `q = [w, x, y, z]` (scalar first, Hamilton
 //!   product) rotating body vectors into the world: `v_w = R(q) v_b`.
@@ -20,7 +20,7 @@
 //!
 //! `[p (3), v (3), q (4), Ω (3)]` = 13 numbers, world position (m), world
 //! velocity (m/s), quaternion, body rates (rad/s); see [`index`]. The array
-//! goes through the generic [`crate::plant::rk4_step`].
+//! goes through the generic [`crate::vehicle::paper::rk4_step`].
 //!
 //! # Equations (body wrench in the body frame)
 //!
@@ -63,7 +63,7 @@ use serde::{Deserialize, Serialize};
 use super::math::{
     add, cross, det3, inverse3, mat_t_vec, mat_vec, norm, quat_derivative, rotation, sub, Mat3, Quat, Vec3,
 };
-use crate::plant::rk4_step;
+use crate::vehicle::paper::rk4_step;
 
 /// Length of the rigid-body state array.
 pub const STATE_LEN: usize = 13;
@@ -182,7 +182,7 @@ impl RigidBodyParams {
     /// diagonal inertia of `p`, "+" layout with [`PAPER_SPIN`]; aerodynamics
     /// off (the paper's linear drags `K_f1`, `K_f2` have no counterpart here).
     /// With these, small angles and `J_r = 0`, the model agrees with
-    /// [`crate::plant::derivative`] (see the module docs for the gyroscopic sign).
+    /// [`crate::vehicle::paper::derivative`] (see the module docs for the gyroscopic sign).
     pub fn from_paper(p: &QuadrotorParams) -> Self {
         Self {
             mass: p.mass,

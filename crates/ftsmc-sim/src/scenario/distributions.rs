@@ -1,3 +1,6 @@
+//! Monte Carlo sampling: [`Dist`], [`MonteCarloSpec`] (the `[montecarlo]`
+//! section), the sampled columns and the per-run seed [`run_seed`].
+
 //! Monte Carlo robustness: a scenario's `[montecarlo]` section declares
 //! distributions for plant parameters, payload, disturbances and initial
 //! state; each run draws its own values from generators derived from the
@@ -7,13 +10,10 @@
 use rand::{Rng, RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution as _, LogNormal, Normal};
-use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use crate::metrics::Metrics;
 use crate::scenario::Scenario;
 use crate::signal::Term;
-use crate::simulate::{ExitStatus, RunOptions};
 
 /// A scalar distribution, optionally truncated to `[low, high]` by
 /// clamping (`uniform` uses `low`/`high` as its support).
@@ -231,7 +231,7 @@ impl MonteCarloSpec {
     /// initial roll and pitch inside `simulation.max_tilt`.
     /// `Err((key, value, expected))`; the key names the distribution.
     pub fn check_against(&self, base: &Scenario) -> Result<(), (String, String, String)> {
-        use crate::scenario::show;
+        use crate::text::show;
         // After `check`, every support is finite (never NaN), so plain comparisons suffice.
         self.check().map_err(|(k, v, e)| (k, show(v), e.to_string()))?;
         let range = |(lo, hi): (f64, f64)| format!("draws in [{}, {}]", show(lo), show(hi));
@@ -422,159 +422,4 @@ pub fn run_seed(master: u64, index: u64) -> u64 {
     let mut rng = ChaCha8Rng::seed_from_u64(master);
     rng.set_stream(index);
     rng.next_u64()
-}
-
-/// One row of a batch.
-#[derive(Clone, Debug)]
-pub struct McRun {
-    /// Run index in the batch.
-    pub index: u64,
-    /// Seed of this run (drag noise and sampling).
-    pub seed: u64,
-    /// Sampled values ([`SAMPLED_COLUMNS`]).
-    pub sampled: [f64; 12],
-    /// Controller name.
-    pub controller: String,
-    /// Exit status.
-    pub exit: ExitStatus,
-    /// Metrics.
-    pub metrics: Metrics,
-}
-
-/// Fly `runs` randomised copies of `base` with each controller, in parallel
-/// on the current rayon pool. `progress` receives control steps flown, from
-/// inside each flight ([`RunOptions::progress`]); a batch adds up to
-/// `runs × controllers × planned_steps(base)`.
-/// The output order is (run index, controller) whatever the thread count.
-pub fn run_batch(
-    base: &Scenario,
-    spec: &MonteCarloSpec,
-    controllers: &[String],
-    runs: u64,
-    master_seed: u64,
-    progress: &(dyn Fn(u64) + Sync),
-) -> Result<Vec<McRun>, String> {
-    for name in controllers {
-        crate::registry::check_name(name)?;
-    }
-    let rows: Vec<Vec<McRun>> = (0..runs)
-        .into_par_iter()
-        .map(|index| {
-            let (scenario, seed, sampled) = spec.sample(base, master_seed, index);
-            controllers
-                .iter()
-                .map(|name| {
-                    let options = RunOptions { record: false, progress: Some(progress) };
-                    let out = crate::registry::run(name, &scenario, options).expect("controller names checked above");
-                    McRun { index, seed, sampled, controller: name.clone(), exit: out.exit, metrics: out.metrics }
-                })
-                .collect()
-        })
-        .collect();
-    Ok(rows.into_iter().flatten().collect())
-}
-
-/// Order statistics of one metric over the completed runs of a controller.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
-pub struct Stats {
-    /// Median (nearest rank).
-    pub median: f64,
-    /// 5th percentile (nearest rank).
-    pub p5: f64,
-    /// 95th percentile (nearest rank).
-    pub p95: f64,
-    /// Largest value (worst for an error metric).
-    pub worst: f64,
-    /// Number of finite values the statistics are over.
-    pub count: usize,
-}
-
-/// Nearest-rank statistics of the finite values (`None` if there are none).
-pub fn stats(values: &[f64]) -> Option<Stats> {
-    let mut v: Vec<f64> = values.iter().copied().filter(|x| x.is_finite()).collect();
-    if v.is_empty() {
-        return None;
-    }
-    v.sort_by(f64::total_cmp);
-    let rank = |q: f64| v[((q * v.len() as f64).ceil() as usize).clamp(1, v.len()) - 1];
-    Some(Stats { median: rank(0.5), p5: rank(0.05), p95: rank(0.95), worst: v[v.len() - 1], count: v.len() })
-}
-
-/// Per-controller summary of a batch.
-#[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct ControllerSummary {
-    /// Runs flown.
-    pub runs: usize,
-    /// Runs that diverged.
-    pub diverged: usize,
-    /// Fraction of runs that completed.
-    pub success_rate: f64,
-    /// Statistics of every metric over the completed runs (settling times:
-    /// over the runs that settled).
-    pub metrics: std::collections::BTreeMap<String, Stats>,
-}
-
-/// Summaries per controller, in the order the controllers were given.
-pub fn summarize(rows: &[McRun], controllers: &[String]) -> Vec<(String, ControllerSummary)> {
-    controllers
-        .iter()
-        .map(|name| {
-            let mine: Vec<&McRun> = rows.iter().filter(|r| &r.controller == name).collect();
-            let completed: Vec<&McRun> = mine.iter().copied().filter(|r| r.exit.is_completed()).collect();
-            let mut metrics = std::collections::BTreeMap::new();
-            if let Some(first) = completed.first() {
-                let names: Vec<String> = first.metrics.flat().into_iter().map(|(n, _)| n).collect();
-                let flats: Vec<Vec<(String, f64)>> = completed.iter().map(|r| r.metrics.flat()).collect();
-                for (k, n) in names.iter().enumerate() {
-                    let values: Vec<f64> = flats.iter().map(|f| f[k].1).collect();
-                    if let Some(st) = stats(&values) {
-                        metrics.insert(n.clone(), st);
-                    }
-                }
-            }
-            let runs = mine.len();
-            let diverged = runs - completed.len();
-            let success_rate = if runs > 0 { completed.len() as f64 / runs as f64 } else { 0.0 };
-            (name.clone(), ControllerSummary { runs, diverged, success_rate, metrics })
-        })
-        .collect()
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn nearest_rank_statistics() {
-        let v: Vec<f64> = (1..=100).map(f64::from).chain([f64::NAN]).collect();
-        let s = stats(&v).unwrap();
-        assert_eq!((s.median, s.p5, s.p95, s.worst, s.count), (50.0, 5.0, 95.0, 100.0, 100));
-        assert!(stats(&[f64::NAN]).is_none());
-    }
-
-    #[test]
-    fn distributions_respect_their_bounds_and_are_seeded() {
-        let d = Dist::Normal { mean: 1.0, std: 5.0, low: Some(0.5), high: Some(1.5) };
-        let mut a = ChaCha8Rng::seed_from_u64(7);
-        let mut b = ChaCha8Rng::seed_from_u64(7);
-        for _ in 0..1000 {
-            let x = d.sample(&mut a);
-            assert!((0.5..=1.5).contains(&x));
-            assert_eq!(x, d.sample(&mut b));
-        }
-        let u = Dist::Uniform { low: -2.0, high: 3.0 };
-        let xs: Vec<f64> = (0..2000).map(|_| u.sample(&mut a)).collect();
-        assert!(xs.iter().all(|x| (-2.0..=3.0).contains(x)));
-        let mean = xs.iter().sum::<f64>() / xs.len() as f64;
-        assert!((mean - 0.5).abs() < 0.1, "{mean}");
-        assert!(Dist::Uniform { low: 1.0, high: 0.0 }.check().is_err());
-        assert!(Dist::LogNormal { mu: 0.0, sigma: -1.0, low: None, high: None }.check().is_err());
-    }
-
-    #[test]
-    fn run_seeds_depend_only_on_master_and_index() {
-        assert_eq!(run_seed(1, 5), run_seed(1, 5));
-        assert_ne!(run_seed(1, 5), run_seed(1, 6));
-        assert_ne!(run_seed(1, 5), run_seed(2, 5));
-    }
 }

@@ -15,8 +15,9 @@
 
 use ftsmc_core::tsm_sta::TsmStaGains;
 
-use crate::scenario::{AxisSet, Scenario};
-use crate::simulate::RunOptions;
+use crate::axes::AxisSet;
+use crate::run::RunOptions;
+use crate::scenario::Scenario;
 
 /// Scale a base gain set by the time-scale factor `a`.
 pub fn time_scaled(base: &TsmStaGains, a: f64) -> TsmStaGains {

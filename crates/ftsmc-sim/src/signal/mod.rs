@@ -13,11 +13,13 @@
 //! All three mean the same thing as the full form with that one term, and
 //! serialize as the full form.
 
+pub mod waypoints;
+
 use ftsmc_core::math::sin_cos;
 use serde::{Deserialize, Serialize};
 
-use crate::scenario::show;
-use crate::waypoints::Waypoints;
+use crate::text::show;
+use waypoints::Waypoints;
 
 /// One additive term of a [`Signal`]. In TOML: an inline table with a
 /// `type` key, e.g. `{ type = "sine", amplitude = 0.5, omega = 0.4 }`.
@@ -71,7 +73,7 @@ pub enum Term {
         coefficients: Vec<f64>,
     },
     /// Waypoints `t = […]`, `value = […]` joined by C² quintic segments
-    /// (see [`crate::waypoints`]); holds the first value before `t[0]` and
+    /// (see [`crate::signal::waypoints`]); holds the first value before `t[0]` and
     /// the last after `t[N]`.
     Waypoints(Waypoints),
     /// A sequence of time windows, each with its own signal: piece `k` is
@@ -174,7 +176,7 @@ pub struct Signal {
     #[serde(default)]
     pub terms: Vec<Term>,
     /// Active window `[start, end]`, s; always active when absent.
-    #[serde(default, skip_serializing_if = "Option::is_none", with = "crate::scenario::exact_array::option")]
+    #[serde(default, skip_serializing_if = "Option::is_none", with = "crate::text::exact_array::option")]
     pub window: Option<[f64; 2]>,
 }
 
@@ -184,7 +186,7 @@ pub struct Signal {
 struct SignalTable {
     #[serde(default)]
     terms: Vec<Term>,
-    #[serde(default, with = "crate::scenario::exact_array::option")]
+    #[serde(default, with = "crate::text::exact_array::option")]
     window: Option<[f64; 2]>,
 }
 
@@ -207,7 +209,7 @@ impl<'de> Deserialize<'de> for Signal {
             other => Err(D::Error::custom(format!(
                 "invalid signal {}: expected a number (a constant), a term {{ type = \"…\", … }} or a table \
                  {{ terms = […], window = [start, end] }}",
-                crate::scenario::show_str(&other.to_string())
+                crate::text::show_str(&other.to_string())
             ))),
         }
     }

@@ -36,7 +36,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::signal::Sample;
+use super::Sample;
 
 /// How the velocities and accelerations at interior waypoints are chosen.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, Serialize)]
@@ -209,7 +209,7 @@ impl Waypoints {
 
     /// Check lengths, finiteness and ordering: `(sub-key, value, expected)`.
     pub fn check(&self) -> Result<(), (String, String, &'static str)> {
-        use crate::scenario::show;
+        use crate::text::show;
         let (t, v) = (&self.spec.t, &self.spec.value);
         if t.is_empty() || t.len() != v.len() {
             return Err((

@@ -27,8 +27,9 @@ use std::path::{Path, PathBuf};
 use serde::Deserialize;
 
 use crate::limits::Limits;
-use crate::scenario::{read_scenario_text, show, show_str, Scenario, ScenarioError, BUILT_IN_SCENARIOS};
+use crate::scenario::{read_scenario_text, Scenario, ScenarioError, BUILT_IN_SCENARIOS};
 use crate::signal::{Signal, Term};
+use crate::text::{show, show_str};
 
 /// Longest `extends` chain, files (the file itself included).
 pub const MAX_EXTENDS_DEPTH: usize = 16;
@@ -219,7 +220,7 @@ fn load_chain(source: Source<'_>, limits: &Limits) -> Result<Chain, ScenarioErro
     loop {
         let mut table: toml::Table = toml::from_str(&text).map_err(|e| ScenarioError::Parse {
             path: shown.clone(),
-            message: crate::scenario::parse_message(&text, &e),
+            message: crate::text::parse_message(&text, &e),
         })?;
         let extends = table.remove("extends");
         ids.push(id);

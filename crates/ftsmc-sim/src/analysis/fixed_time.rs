@@ -10,6 +10,10 @@
 use ftsmc_core::law::{AxisLaw, MAX_ESTIMATES};
 use serde::Serialize;
 
+use ftsmc_core::ftaftsmc::FtaftsmcAxis;
+use ftsmc_core::ranftsmc::RanftsmcAxis;
+use ftsmc_core::tsm_sta::TsmStaAxis;
+
 use crate::scenario::Scenario;
 
 /// Settings of a sweep.
@@ -409,18 +413,18 @@ pub fn cascade_channel(
     s.simulation.settling_band = settings.settling_fraction;
     s.simulation.settling_floor = 1e-12;
     s.simulation.max_position_error = s.simulation.max_position_error.max(10.0 * e0.abs());
-    let run = crate::registry::run(controller, &s, crate::simulate::RunOptions::default())?;
+    let run = crate::registry::run(controller, &s, crate::run::RunOptions::default())?;
     let name = ftsmc_core::cascade::channel::NAMES[axis];
     let t = run.recording.column("t");
     let sv = run.recording.column(&format!("s_{name}"));
     // The recorded S is the controller's value at each tick.
     let reaching = t.iter().zip(sv).find(|(_, s)| s.abs() <= settings.reaching_band).map(|(t, _)| *t);
     let settling = match run.exit {
-        crate::simulate::ExitStatus::Completed => *run.metrics.settling_time.get(name).unwrap_or(&None),
+        crate::run::ExitStatus::Completed => *run.metrics.settling_time.get(name).unwrap_or(&None),
         _ => None,
     };
     let diverged_at = match run.exit {
-        crate::simulate::ExitStatus::Diverged { time, .. } => Some(time),
+        crate::run::ExitStatus::Diverged { time, .. } => Some(time),
         _ => None,
     };
     Ok(ChannelTimes {
@@ -430,6 +434,36 @@ pub fn cascade_channel(
         settling_time: settling,
         diverged_at,
     })
+}
+
+/// Sweep the decoupled channel `axis` (0..6 = x, y, z, φ, θ, ψ) of
+/// controller `name` with the gains of `scenario` (see the module docs).
+pub fn sweep_channel(
+    name: &str,
+    scenario: &Scenario,
+    axis: usize,
+    settings: &SweepSettings,
+    sampling: Sampling,
+) -> Result<Vec<ChannelTimes>, String> {
+    crate::registry::check_name(name)?;
+    Ok(match name {
+        "ftaftsmc" | "ftaftsmc-no-mass" => {
+            sweep(&FtaftsmcAxis::new(scenario.ftaftsmc.gains().to_array()[axis]), settings, sampling)
+        }
+        "ranftsmc" => sweep(&RanftsmcAxis::new(scenario.ranftsmc.to_array()[axis]), settings, sampling),
+        "tsm-sta" => sweep(&TsmStaAxis::new(scenario.tsm_sta.to_array()[axis]), settings, sampling),
+        _ => unreachable!("check_name accepted an unhandled name"),
+    })
+}
+
+/// The paper's reaching-time bound (Eq. 38) for `axis` of controller `name`,
+/// when the controller has one (FTAFTSMC only; the baselines are finite-time
+/// with initial-condition-dependent bounds, Eq. 36–37).
+pub fn reaching_time_bound(name: &str, scenario: &Scenario, axis: usize) -> Option<f64> {
+    match name {
+        "ftaftsmc" | "ftaftsmc-no-mass" => Some(scenario.ftaftsmc.gains().to_array()[axis].reaching_time_bound()),
+        _ => None,
+    }
 }
 
 #[cfg(test)]

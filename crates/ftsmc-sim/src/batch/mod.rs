@@ -1,0 +1,3 @@
+//! Batches of flights: Monte Carlo runs and their statistics ([`montecarlo`]).
+
+pub mod montecarlo;

@@ -1,0 +1,145 @@
+//! Plant-side variations evaluated in time — payload, inertia variation,
+//! drag noise and disturbances — built from their own parameter sections
+//! ([`EnvironmentParams`]). The controller never sees these.
+
+mod disturbance;
+mod payload;
+mod variation;
+
+pub use disturbance::DisturbanceSignals;
+pub use payload::Payload;
+pub use variation::DragNoise;
+
+use ftsmc_core::model::QuadrotorParams;
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{Distribution, StandardNormal};
+
+use crate::signal::Signal;
+
+/// The environment's parameter sections (borrowed from wherever they are
+/// held, e.g. [`crate::scenario::Scenario::environment`]).
+#[derive(Clone, Copy, Debug)]
+pub struct EnvironmentParams<'a> {
+    /// The true plant before variations (the scenario's `actual_plant`,
+    /// or its `plant` when the controller's model is exact).
+    pub plant: QuadrotorParams,
+    /// Payload profile, if any.
+    pub payload: Option<&'a Payload>,
+    /// Relative inertia variation `ΔI/I`(t), if any.
+    pub inertia_variation: Option<&'a Signal>,
+    /// Drag noise, if any.
+    pub drag_noise: Option<DragNoise>,
+    /// Disturbances `D_x … D_ψ`.
+    pub disturbance: &'a DisturbanceSignals,
+    /// Seed of the drag-noise streams.
+    pub seed: u64,
+}
+
+/// Plant-side variations of a scenario evaluated in time: payload, inertia
+/// variation, drag noise and disturbances. The controller never sees these.
+pub struct Environment<'a> {
+    params: EnvironmentParams<'a>,
+    drag_rngs: Option<[ChaCha8Rng; 6]>,
+    drag_factor: [f64; 6],
+}
+
+impl<'a> Environment<'a> {
+    /// Drag noise streams are derived from `params.seed`: stream `k` for
+    /// coefficient `k` (K_f1x, K_f1y, K_f1z, K_f2x, K_f2y, K_f2z).
+    pub fn new(params: EnvironmentParams<'a>) -> Self {
+        let drag_rngs = params.drag_noise.map(|_| {
+            core::array::from_fn(|k| {
+                let mut rng = ChaCha8Rng::seed_from_u64(params.seed);
+                rng.set_stream(1 + k as u64);
+                rng
+            })
+        });
+        Self { params, drag_rngs, drag_factor: [1.0; 6] }
+    }
+
+    /// Draw the drag multipliers for the next control period.
+    pub fn next_period(&mut self) {
+        if let (Some(rngs), Some(noise)) = (&mut self.drag_rngs, self.params.drag_noise) {
+            for (factor, rng) in self.drag_factor.iter_mut().zip(rngs.iter_mut()) {
+                let w: f64 = StandardNormal.sample(rng);
+                *factor = (1.0 + noise.std * w).max(0.0);
+            }
+        }
+    }
+
+    /// Drag multipliers of the current period.
+    pub fn drag_factor(&self) -> [f64; 6] {
+        self.drag_factor
+    }
+
+    /// The smooth time-varying plant inputs at `t` (s): true mass, inertia
+    /// and disturbances (drag noise is per control period and kept apart).
+    #[inline]
+    pub fn time_varying(&self, t: f64) -> TimeVarying {
+        let s = &self.params;
+        let base = s.plant;
+        let mut mass = base.mass;
+        if let Some(payload) = &s.payload {
+            mass += payload.added_mass(t);
+        }
+        let mut inertia = base.inertia;
+        if let Some(var) = &s.inertia_variation {
+            let scale = 1.0 + var.value(t);
+            for i in &mut inertia {
+                *i *= scale;
+            }
+        }
+        TimeVarying { mass, inertia, disturbance: s.disturbance.at(t) }
+    }
+
+    /// Plant parameters for given time-varying inputs and the current
+    /// period's drag noise.
+    #[inline]
+    pub fn params_with(&self, tv: &TimeVarying) -> QuadrotorParams {
+        let mut p = self.params.plant;
+        p.mass = tv.mass;
+        p.inertia = tv.inertia;
+        for i in 0..3 {
+            p.drag_translational[i] *= self.drag_factor[i];
+            p.drag_rotational[i] *= self.drag_factor[3 + i];
+        }
+        p
+    }
+
+    /// Plant parameters at time `t` (s).
+    #[inline]
+    pub fn params(&self, t: f64) -> QuadrotorParams {
+        self.params_with(&self.time_varying(t))
+    }
+
+    /// Disturbances `[D_x … D_ψ]` at `t`.
+    #[inline]
+    pub fn disturbance(&self, t: f64) -> [f64; 6] {
+        self.params.disturbance.at(t)
+    }
+}
+
+/// Mass (kg), inertia (kg·m²) and disturbances (m/s², rad/s²) at one instant.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct TimeVarying {
+    /// True mass, kg.
+    pub mass: f64,
+    /// True `[I1, I2, I3]`, kg·m².
+    pub inertia: [f64; 3],
+    /// `[D_x, D_y, D_z, D_φ, D_θ, D_ψ]`.
+    pub disturbance: [f64; 6],
+}
+
+impl TimeVarying {
+    /// Linear interpolation `a + w (b − a)`.
+    #[inline]
+    pub fn lerp(a: &Self, b: &Self, w: f64) -> Self {
+        let l = |x: f64, y: f64| x + w * (y - x);
+        Self {
+            mass: l(a.mass, b.mass),
+            inertia: core::array::from_fn(|i| l(a.inertia[i], b.inertia[i])),
+            disturbance: core::array::from_fn(|i| l(a.disturbance[i], b.disturbance[i])),
+        }
+    }
+}

@@ -1,0 +1,96 @@
+//! How a run ends: [`ExitStatus`], [`Divergence`] and the divergence checks.
+
+use ftsmc_core::model::Reference;
+use serde::{Deserialize, Serialize};
+
+use crate::scenario::Scenario;
+
+/// Why a run stopped early.
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize, Serialize)]
+#[serde(rename_all = "kebab-case", tag = "reason")]
+pub enum Divergence {
+    /// A state or command component became NaN or infinite.
+    NonFinite,
+    /// |φ| or |θ| exceeded `simulation.max_tilt`.
+    Tilt {
+        /// The angle reached, rad.
+        angle: f64,
+    },
+    /// A position error exceeded `simulation.max_position_error`.
+    PositionError {
+        /// The error reached, m.
+        error: f64,
+    },
+}
+
+/// How a run ended.
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize, Serialize)]
+#[serde(rename_all = "kebab-case", tag = "status")]
+pub enum ExitStatus {
+    /// Ran for the whole duration.
+    Completed,
+    /// Stopped at `time` (s) for `divergence`.
+    Diverged {
+        /// What went wrong.
+        divergence: Divergence,
+        /// Simulated time at which it was detected, s.
+        time: f64,
+    },
+}
+
+impl ExitStatus {
+    /// True for [`ExitStatus::Completed`].
+    pub fn is_completed(&self) -> bool {
+        matches!(self, ExitStatus::Completed)
+    }
+
+    /// Simulated time at which the run diverged (`None` if it completed).
+    pub fn diverged_at(&self) -> Option<f64> {
+        match self {
+            ExitStatus::Completed => None,
+            ExitStatus::Diverged { time, .. } => Some(*time),
+        }
+    }
+
+    /// Short form for table cells: `completed` or `diverged at 0.64 s`.
+    pub fn short(&self) -> String {
+        match self.diverged_at() {
+            None => "completed".into(),
+            Some(t) => format!("diverged at {t:.2} s"),
+        }
+    }
+}
+
+impl core::fmt::Display for ExitStatus {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            ExitStatus::Completed => write!(f, "completed"),
+            ExitStatus::Diverged { divergence, time } => match divergence {
+                Divergence::NonFinite => write!(f, "diverged: non-finite state at t = {time:.3} s"),
+                Divergence::Tilt { angle } => write!(f, "diverged: tilt {angle:.3} rad at t = {time:.3} s"),
+                Divergence::PositionError { error } => {
+                    write!(f, "diverged: position error {error:.3} m at t = {time:.3} s")
+                }
+            },
+        }
+    }
+}
+
+pub(super) fn check_divergence(scenario: &Scenario, x: &[f64; 12], reference: &Reference) -> Option<Divergence> {
+    if x.iter().any(|v| !v.is_finite()) {
+        return Some(Divergence::NonFinite);
+    }
+    let sim = &scenario.simulation;
+    for &angle in &x[3..5] {
+        if angle.abs() > sim.max_tilt {
+            return Some(Divergence::Tilt { angle });
+        }
+    }
+    for i in 0..3 {
+        let error = (x[i] - reference.position[i]).abs();
+        if error > sim.max_position_error {
+            return Some(Divergence::PositionError { error });
+        }
+    }
+    None
+}

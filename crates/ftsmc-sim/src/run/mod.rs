@@ -1,0 +1,230 @@
+//! The run loop: a controller on its own clock (zero-order hold at the
+//! control period), the plant integrated by RK4 between control ticks
+//! (restarting at each tick, where the input jumps), metrics accumulated
+//! online and an optional time series recorded at a lower rate.
+//!
+//! A run that diverges is an outcome ([`ExitStatus::Diverged`] with the
+//! reason and time), never a panic.
+
+use ftsmc_core::allocation::{forces_from_squared_speeds, residual_speed, rotor_speeds};
+use ftsmc_core::cascade::Controller;
+use ftsmc_core::law::MAX_ESTIMATES;
+use ftsmc_core::model::{Command, QuadState, QuadrotorParams, Reference};
+
+use crate::environment::{Environment, TimeVarying};
+use crate::metrics::{Metrics, MetricsAccumulator};
+use crate::scenario::Scenario;
+use crate::vehicle::paper::{derivative, rk4_step};
+
+mod exit;
+mod recording;
+
+use exit::check_divergence;
+pub use exit::{Divergence, ExitStatus};
+use recording::Row;
+pub use recording::{push_number, recording_columns, Recording, MAX_RECORDING_COLUMNS};
+
+/// Result of one flight.
+#[derive(Clone, Debug)]
+pub struct RunOutput {
+    /// Controller name.
+    pub controller: String,
+    /// Scenario name.
+    pub scenario: String,
+    /// How the run ended.
+    pub exit: ExitStatus,
+    /// Metrics up to the end (or divergence).
+    pub metrics: Metrics,
+    /// Time series (empty when recording is off).
+    pub recording: Recording,
+    /// Control steps executed.
+    pub steps: u64,
+}
+
+/// The reference of `scenario` at time `t`.
+#[inline]
+pub fn reference_at(scenario: &Scenario, t: f64) -> Reference {
+    let r = &scenario.reference;
+    let (x, y, z, psi) = (r.x.sample(t), r.y.sample(t), r.z.sample(t), r.psi.sample(t));
+    Reference {
+        position: [x.value, y.value, z.value],
+        velocity: [x.rate, y.rate, z.rate],
+        acceleration: [x.acceleration, y.acceleration, z.acceleration],
+        yaw: psi.value,
+        yaw_rate: psi.rate,
+        yaw_acceleration: psi.acceleration,
+    }
+}
+
+/// Options of one run (construct with `RunOptions { record: false, ..Default::default() }`).
+#[derive(Clone, Copy)]
+pub struct RunOptions<'a> {
+    /// Record the time series at `simulation.record_rate`.
+    pub record: bool,
+    /// Called with the number of control steps flown since the last call,
+    /// every [`PROGRESS_EVERY`] steps and once at the end (the remainder of
+    /// the planned steps, so a diverged run still adds its planned total).
+    pub progress: Option<&'a (dyn Fn(u64) + Sync)>,
+}
+
+/// Control steps between two [`RunOptions::progress`] calls.
+pub const PROGRESS_EVERY: u64 = 1000;
+
+impl Default for RunOptions<'_> {
+    fn default() -> Self {
+        Self { record: true, progress: None }
+    }
+}
+
+impl core::fmt::Debug for RunOptions<'_> {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.debug_struct("RunOptions").field("record", &self.record).field("progress", &self.progress.is_some()).finish()
+    }
+}
+
+/// Control steps a flight of `scenario` plans (its progress total).
+pub fn planned_steps(scenario: &Scenario) -> u64 {
+    (scenario.duration / scenario.control_period()).round() as u64
+}
+
+/// The command as the rotors deliver it: the applied thrust and torques
+/// (after the rotor-speed limits, when set), the rotor speeds (rad/s) and
+/// their residual Ω̄.
+fn realise(command: &Command, plant: &QuadrotorParams, max_rotor_speed: Option<f64>) -> (Command, [f64; 4], f64) {
+    let omega = rotor_speeds(plant, command, max_rotor_speed.unwrap_or(f64::INFINITY));
+    let applied = match max_rotor_speed {
+        Some(_) => forces_from_squared_speeds(plant, &omega.map(|o| o * o)),
+        None => *command,
+    };
+    (applied, omega, residual_speed(&omega))
+}
+
+/// Fly `controller` through `scenario`.
+pub fn simulate(scenario: &Scenario, controller: &mut dyn Controller, options: RunOptions<'_>) -> RunOutput {
+    let sim = &scenario.simulation;
+    let dt = scenario.control_period();
+    let steps = (scenario.duration / dt).round() as u64;
+    let h = dt / sim.substeps as f64;
+    let record_every = if options.record && sim.record_rate > 0.0 {
+        ((sim.control_rate / sim.record_rate).round() as u64).max(1)
+    } else {
+        0
+    };
+
+    let mut env = Environment::new(scenario.environment());
+    let mut x = scenario.initial_state.state().to_array();
+    let mut metrics = MetricsAccumulator::new(dt, sim.settling_band, sim.settling_floor, sim.steady_state_after)
+        .with_window(sim.metrics_window);
+    let estimate_names = controller.estimate_names();
+    let adapts_mass = controller.adapts_mass();
+    let mut recording = if record_every > 0 {
+        Recording::with_columns(recording_columns(&estimate_names, adapts_mass))
+    } else {
+        Recording::default()
+    };
+    // The estimate slots written: (slot) for each named one.
+    let named_slots: Vec<usize> = (0..MAX_ESTIMATES).filter(|&k| !estimate_names[k].is_empty()).collect();
+    if let Some(per_row) = steps.checked_div(record_every) {
+        let rows = (per_row + 1) as usize;
+        for c in &mut recording.columns {
+            c.reserve(rows);
+        }
+    }
+    let mut exit = ExitStatus::Completed;
+    let mut executed = 0;
+
+    // Time-varying plant inputs are evaluated once per substep boundary and
+    // interpolated linearly inside the substep (RK4 stage times); this keeps
+    // the integration second-order in the inputs' time variation while
+    // evaluating each sinusoid once per substep instead of four times.
+    let mut tv_now = env.time_varying(0.0);
+    let mut reference = reference_at(scenario, 0.0);
+    for k in 0..steps {
+        let t = k as f64 * dt;
+        let state = QuadState::from_array(&x);
+        let command = controller.update(&state, &reference, dt);
+        let telemetry = controller.telemetry();
+        env.next_period();
+        let plant_now = env.params_with(&tv_now);
+        let (applied, omega, omega_bar) = realise(&command, &plant_now, sim.max_rotor_speed);
+
+        let mut errors = [0.0; 6];
+        for i in 0..3 {
+            errors[i] = x[i] - reference.position[i];
+        }
+        errors[3] = x[3] - telemetry.attitude_reference[0];
+        errors[4] = x[4] - telemetry.attitude_reference[1];
+        errors[5] = x[5] - reference.yaw;
+        let u = [applied.thrust, applied.torque[0], applied.torque[1], applied.torque[2]];
+        if !(u.iter().all(|v| v.is_finite())) {
+            exit = ExitStatus::Diverged { divergence: Divergence::NonFinite, time: t };
+            break;
+        }
+        metrics.observe(t, &errors, &u);
+
+        if record_every > 0 && k % record_every == 0 {
+            let mut row = Row::new();
+            row.push(t);
+            row.extend(&x);
+            row.extend(&reference.position);
+            row.extend(&telemetry.attitude_reference);
+            row.extend(&telemetry.attitude_demand);
+            row.extend(&u);
+            row.extend(&[command.thrust, command.torque[0], command.torque[1], command.torque[2]]);
+            row.extend(&omega);
+            row.push(omega_bar);
+            row.extend(&telemetry.sliding);
+            for est in &telemetry.estimates {
+                for &slot in &named_slots {
+                    row.push(est[slot]);
+                }
+            }
+            if adapts_mass {
+                row.push(telemetry.alpha_hat);
+                row.push(telemetry.alpha_hat * scenario.plant.mass);
+            }
+            row.push(plant_now.mass);
+            row.extend(&plant_now.inertia);
+            row.extend(&tv_now.disturbance);
+            recording.push_row(row.as_slice());
+        }
+
+        // Plant between ticks: RK4 substeps with the command held.
+        for j in 0..sim.substeps {
+            let t0 = t + j as f64 * h;
+            let tv_next = env.time_varying(t0 + h);
+            let (a, b, env_ref) = (tv_now, tv_next, &env);
+            let f = |tau: f64, s: &[f64; 12]| {
+                let tv = TimeVarying::lerp(&a, &b, (tau - t0) / h);
+                derivative(s, &applied, omega_bar, &env_ref.params_with(&tv), &tv.disturbance)
+            };
+            x = rk4_step(f, t0, &x, h);
+            tv_now = tv_next;
+        }
+        executed = k + 1;
+        if let Some(progress) = options.progress {
+            if executed % PROGRESS_EVERY == 0 {
+                progress(PROGRESS_EVERY);
+            }
+        }
+
+        let t_next = (k + 1) as f64 * dt;
+        reference = reference_at(scenario, t_next);
+        if let Some(divergence) = check_divergence(scenario, &x, &reference) {
+            exit = ExitStatus::Diverged { divergence, time: t_next };
+            break;
+        }
+    }
+
+    if let Some(progress) = options.progress {
+        progress(steps - executed / PROGRESS_EVERY * PROGRESS_EVERY);
+    }
+    RunOutput {
+        controller: controller.name().to_string(),
+        scenario: scenario.name.clone(),
+        exit,
+        metrics: metrics.finish(),
+        recording,
+        steps: executed,
+    }
+}

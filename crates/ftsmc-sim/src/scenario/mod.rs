@@ -1,0 +1,456 @@
+//! Scenario files (TOML): everything a run needs — duration, rates, plant,
+//! initial state, references, disturbances, payload, parameter variation,
+//! noise, and every controller's gains. Unknown keys are rejected and every
+//! value is range-checked; errors name the file, the key and the value.
+
+use std::path::Path;
+
+use ftsmc_core::cascade::{CascadeSettings, MassAdaptation};
+use ftsmc_core::ftaftsmc::FtaftsmcGains;
+use ftsmc_core::law::GainError;
+use ftsmc_core::model::{QuadState, QuadrotorParams};
+use ftsmc_core::ranftsmc::RanftsmcGains;
+use ftsmc_core::tsm_sta::TsmStaGains;
+use serde::{Deserialize, Serialize};
+
+pub mod distributions;
+pub mod resolve;
+mod validate;
+
+pub use crate::axes::AxisSet;
+pub use crate::environment::{DisturbanceSignals, DragNoise, Payload};
+pub use crate::names::PAPER_CONTROLLERS;
+pub use crate::text::{exact_array, show, show_str, MAX_SHOWN_CHARS};
+pub use distributions::{Dist, MonteCarloSpec};
+pub(crate) use validate::check_core_array_lengths;
+pub use validate::{check_name, MAX_NAME_CHARS};
+
+use crate::environment::EnvironmentParams;
+use crate::limits::{LimitError, Limits};
+use crate::signal::Signal;
+
+/// The paper's scenario 1 (SPEC §4), as shipped in `scenarios/paper-scenario-1.toml`.
+pub const PAPER_SCENARIO_1: &str = include_str!("../../../../scenarios/paper-scenario-1.toml");
+/// The paper's scenario 2 (SPEC §4), as shipped in `scenarios/paper-scenario-2.toml`.
+pub const PAPER_SCENARIO_2: &str = include_str!("../../../../scenarios/paper-scenario-2.toml");
+
+/// Paper scenario 1 with the FTAFTSMC x/y reaching law tuned against the
+/// limit cycle, as shipped in `scenarios/ftaftsmc-tuned-scenario-1.toml`.
+pub const FTAFTSMC_TUNED_SCENARIO_1: &str = include_str!("../../../../scenarios/ftaftsmc-tuned-scenario-1.toml");
+
+/// Every scenario built into the library: `(file name, TOML text)`.
+pub const BUILT_IN_SCENARIOS: [(&str, &str); 3] = [
+    ("paper-scenario-1.toml", PAPER_SCENARIO_1),
+    ("paper-scenario-2.toml", PAPER_SCENARIO_2),
+    ("ftaftsmc-tuned-scenario-1.toml", FTAFTSMC_TUNED_SCENARIO_1),
+];
+
+/// The paper scenarios built into the library: `(file name, TOML text)`.
+pub const PAPER_SCENARIOS: [(&str, &str); 2] =
+    [("paper-scenario-1.toml", PAPER_SCENARIO_1), ("paper-scenario-2.toml", PAPER_SCENARIO_2)];
+
+/// Why a scenario could not be loaded. Every variant names the file.
+#[derive(Debug, thiserror::Error)]
+pub enum ScenarioError {
+    /// The file could not be read.
+    #[error("cannot read scenario file {path}")]
+    Io {
+        /// File path.
+        path: String,
+        /// Underlying error.
+        source: std::io::Error,
+    },
+    /// Not valid TOML, a missing or unknown key, or a value of the wrong type.
+    #[error("{path}: {message}")]
+    Parse {
+        /// File path.
+        path: String,
+        /// Parser message (names the key and line).
+        message: String,
+    },
+    /// A value outside its allowed range.
+    #[error("{path}: `{key}` = {value} is invalid (expected {expected})")]
+    Invalid {
+        /// File path.
+        path: String,
+        /// Dotted key, e.g. `ftaftsmc.z.p`.
+        key: String,
+        /// The offending value as written.
+        value: String,
+        /// What is allowed.
+        expected: String,
+    },
+    /// The file is not a regular file, or too large to be a scenario.
+    #[error("{path}: {message}")]
+    File {
+        /// File path.
+        path: String,
+        /// What is wrong.
+        message: String,
+    },
+    /// The scenario costs more than its limits allow (see [`crate::limits`]).
+    #[error("{path}: {limit}")]
+    Limit {
+        /// File path.
+        path: String,
+        /// The limit exceeded, the amount requested and how to raise it.
+        limit: LimitError,
+    },
+    /// A controller name that is not in the registry.
+    #[error("{path}: unknown controller `{name}` (known: {known})")]
+    UnknownController {
+        /// File path (or `command line`).
+        path: String,
+        /// The name given.
+        name: String,
+        /// Known names, comma-separated.
+        known: String,
+    },
+}
+
+/// Integration, recording, divergence and metric settings.
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct SimulationSettings {
+    /// Controller rate, Hz (default 1000). The command is held constant
+    /// (zero-order hold) over each control period.
+    pub control_rate: f64,
+    /// RK4 substeps per control period (default 1).
+    pub substeps: u32,
+    /// Recording rate of the time series, Hz (default 100; 0 = no time series).
+    pub record_rate: f64,
+    /// A run diverges when any position error exceeds this, m (default 100).
+    pub max_position_error: f64,
+    /// A run diverges when |φ| or |θ| exceeds this, rad (default π/2).
+    pub max_tilt: f64,
+    /// 2 % settling: band as a fraction of the initial error (default 0.02).
+    pub settling_band: f64,
+    /// Smallest settling band, channel units (default 1e-3), used when the
+    /// initial error is (near) zero.
+    pub settling_floor: f64,
+    /// "Steady state" starts here for the max-error metric, s (default 5).
+    pub steady_state_after: f64,
+    /// Optional `[start, end]` window (s) for an extra windowed ISE metric.
+    #[serde(skip_serializing_if = "Option::is_none", with = "exact_array::option")]
+    pub metrics_window: Option<[f64; 2]>,
+    /// Rotor speed limit, rad/s (default: none, ideal actuators). When set,
+    /// the commanded thrust and torques are realised through rotor speeds
+    /// clamped to `[0, max_rotor_speed]`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub max_rotor_speed: Option<f64>,
+}
+
+impl Default for SimulationSettings {
+    fn default() -> Self {
+        Self {
+            control_rate: 1000.0,
+            substeps: 1,
+            record_rate: 100.0,
+            max_position_error: 100.0,
+            max_tilt: core::f64::consts::FRAC_PI_2,
+            settling_band: 0.02,
+            settling_floor: 1e-3,
+            steady_state_after: 5.0,
+            metrics_window: None,
+            max_rotor_speed: None,
+        }
+    }
+}
+
+/// Initial state (defaults: all zero).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct InitialState {
+    /// `[x, y, z]`, m.
+    #[serde(with = "exact_array")]
+    pub position: [f64; 3],
+    /// `[φ, θ, ψ]`, rad.
+    #[serde(with = "exact_array")]
+    pub attitude: [f64; 3],
+    /// `[ẋ, ẏ, ż]`, m/s.
+    #[serde(with = "exact_array")]
+    pub velocity: [f64; 3],
+    /// `[φ̇, θ̇, ψ̇]`, rad/s.
+    #[serde(with = "exact_array")]
+    pub angular_rate: [f64; 3],
+}
+
+impl InitialState {
+    /// As a [`QuadState`].
+    pub fn state(&self) -> QuadState {
+        QuadState {
+            position: self.position,
+            attitude: self.attitude,
+            velocity: self.velocity,
+            angular_rate: self.angular_rate,
+        }
+    }
+}
+
+/// Desired trajectory: x_d, y_d, z_d (m) and ψ_d (rad) as signals with
+/// analytic derivatives (default: hold the origin, ψ_d = 0).
+#[derive(Clone, Debug, Default, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ReferenceSignals {
+    /// x_d(t), m.
+    pub x: Signal,
+    /// y_d(t), m.
+    pub y: Signal,
+    /// z_d(t), m.
+    pub z: Signal,
+    /// ψ_d(t), rad.
+    pub psi: Signal,
+}
+
+/// FTAFTSMC configuration: mass adaptation and per-channel gains (Tables 4–5).
+#[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct FtaftsmcConfig {
+    /// Mass adaptation of §3.2 (β1, β2 of Table 5).
+    pub mass_adaptation: MassAdaptation,
+    /// x channel (Table 5).
+    pub x: FtaftsmcGains,
+    /// y channel (Table 5).
+    pub y: FtaftsmcGains,
+    /// z channel (Table 5).
+    pub z: FtaftsmcGains,
+    /// Roll channel (Table 4).
+    pub phi: FtaftsmcGains,
+    /// Pitch channel (Table 4).
+    pub theta: FtaftsmcGains,
+    /// Yaw channel (Table 4).
+    pub psi: FtaftsmcGains,
+}
+
+impl FtaftsmcConfig {
+    /// The six channel gain sets.
+    pub fn gains(&self) -> AxisSet<FtaftsmcGains> {
+        AxisSet { x: self.x, y: self.y, z: self.z, phi: self.phi, theta: self.theta, psi: self.psi }
+    }
+}
+
+impl Default for FtaftsmcConfig {
+    fn default() -> Self {
+        Self {
+            mass_adaptation: MassAdaptation::PAPER,
+            x: FtaftsmcGains::PAPER_XY,
+            y: FtaftsmcGains::PAPER_XY,
+            z: FtaftsmcGains::PAPER_Z,
+            phi: FtaftsmcGains::PAPER_ROLL_PITCH,
+            theta: FtaftsmcGains::PAPER_ROLL_PITCH,
+            psi: FtaftsmcGains::PAPER_YAW,
+        }
+    }
+}
+
+/// Gain sets of the baselines (defaults: published RANFTSMC gains, tuned TSM-STA gains).
+fn default_ranftsmc() -> AxisSet<RanftsmcGains> {
+    AxisSet::split(RanftsmcGains::PAPER_POSITION, RanftsmcGains::PAPER_ATTITUDE)
+}
+
+fn default_tsm_sta() -> AxisSet<TsmStaGains> {
+    AxisSet::split(TsmStaGains::DEFAULT_POSITION, TsmStaGains::DEFAULT_ATTITUDE)
+}
+
+fn default_controllers() -> Vec<String> {
+    PAPER_CONTROLLERS.iter().map(|s| s.to_string()).collect()
+}
+
+/// Read a scenario file's text, refusing anything but a regular file of at
+/// most `limits.max_scenario_bytes` bytes. The type and size are checked on
+/// the metadata before the file is opened (a FIFO would block `open`), and
+/// the read itself is bounded, so `/dev/zero`, a FIFO, a directory or a
+/// file that grows while being read are refused without reading them.
+pub fn read_scenario_text(path: &Path, limits: &Limits) -> Result<String, ScenarioError> {
+    use std::io::Read as _;
+    let shown = path.display().to_string();
+    let io = |source| ScenarioError::Io { path: shown.clone(), source };
+    let not_regular = |meta: &std::fs::Metadata| {
+        let kind = if meta.is_dir() { "a directory" } else { "not a regular file (a device, FIFO or socket)" };
+        ScenarioError::File { path: shown.clone(), message: format!("{kind}; a scenario must be a regular file") }
+    };
+    let max = limits.max_scenario_bytes.min(u64::MAX as f64) as u64;
+    let too_big = |bytes: u64| ScenarioError::Limit {
+        path: shown.clone(),
+        limit: crate::limits::check_file_size(limits, bytes).expect_err("over the limit"),
+    };
+    let meta = std::fs::metadata(path).map_err(io)?;
+    if !meta.is_file() {
+        return Err(not_regular(&meta));
+    }
+    if meta.len() > max {
+        return Err(too_big(meta.len()));
+    }
+    let file = std::fs::File::open(path).map_err(io)?;
+    let meta = file.metadata().map_err(io)?;
+    if !meta.is_file() {
+        return Err(not_regular(&meta));
+    }
+    let mut bytes = Vec::new();
+    file.take(max.saturating_add(1)).read_to_end(&mut bytes).map_err(io)?;
+    if bytes.len() as u64 > max {
+        return Err(too_big(bytes.len() as u64));
+    }
+    String::from_utf8(bytes).map_err(|e| ScenarioError::File {
+        path: shown.clone(),
+        message: format!("not UTF-8 text (invalid byte at offset {})", e.utf8_error().valid_up_to()),
+    })
+}
+
+/// A complete scenario (see `docs/scenarios.md` for the file format).
+#[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct Scenario {
+    /// Short name used in output paths.
+    pub name: String,
+    /// Free text.
+    #[serde(default)]
+    pub description: String,
+    /// Simulated time, s.
+    pub duration: f64,
+    /// Master seed of every random stream (drag noise, Monte Carlo).
+    #[serde(default)]
+    pub seed: u64,
+    /// Controllers to run (registry names).
+    #[serde(default = "default_controllers")]
+    pub controllers: Vec<String>,
+    /// Integration and metric settings.
+    #[serde(default)]
+    pub simulation: SimulationSettings,
+    /// Nominal plant parameters (the controllers' model).
+    #[serde(default)]
+    pub plant: QuadrotorParams,
+    /// True plant parameters when they differ from the nominal `[plant]`
+    /// (model mismatch; Monte Carlo writes its draws here). Default: `[plant]`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub actual_plant: Option<QuadrotorParams>,
+    /// Initial state.
+    #[serde(default)]
+    pub initial_state: InitialState,
+    /// Desired trajectory.
+    #[serde(default)]
+    pub reference: ReferenceSignals,
+    /// External disturbances (plant only).
+    #[serde(default)]
+    pub disturbance: DisturbanceSignals,
+    /// Payload profile (plant only).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub payload: Option<Payload>,
+    /// Relative inertia variation: `I_i(t) = I_i (1 + signal(t))` (plant only).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub inertia_variation: Option<Signal>,
+    /// Drag-coefficient noise (plant only).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub drag_noise: Option<DragNoise>,
+    /// Cascade options shared by all controllers.
+    #[serde(default)]
+    pub cascade: CascadeSettings,
+    /// FTAFTSMC gains.
+    #[serde(default)]
+    pub ftaftsmc: FtaftsmcConfig,
+    /// RANFTSMC gains per channel.
+    #[serde(default = "default_ranftsmc")]
+    pub ranftsmc: AxisSet<RanftsmcGains>,
+    /// TSM-STA gains per channel.
+    #[serde(default = "default_tsm_sta", rename = "tsm-sta")]
+    pub tsm_sta: AxisSet<TsmStaGains>,
+    /// Distributions for `ftsmc montecarlo` (ignored by single runs).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub montecarlo: Option<MonteCarloSpec>,
+    /// Cost limits (see [`crate::limits`]); every key optional.
+    #[serde(default, skip_serializing_if = "is_default_limits")]
+    pub limits: Limits,
+}
+
+fn is_default_limits(l: &Limits) -> bool {
+    *l == Limits::default()
+}
+
+impl Scenario {
+    /// Parse and validate TOML text; `path` is used in error messages (and
+    /// relative `extends` paths resolve against its directory).
+    pub fn from_toml_str(text: &str, path: &str) -> Result<Self, ScenarioError> {
+        Self::from_toml_str_with_limits(text, path, &[])
+    }
+
+    /// Parse TOML text, apply command-line limit overrides (`KEY=VALUE`,
+    /// see [`Limits::apply_overrides`]; they win over the file's `[limits]`)
+    /// and validate.
+    pub fn from_toml_str_with_limits(text: &str, path: &str, overrides: &[String]) -> Result<Self, ScenarioError> {
+        Ok(Self::from_toml_str_with_warnings(text, path, overrides)?.scenario)
+    }
+
+    /// [`Scenario::from_toml_str_with_limits`], also returning the files of
+    /// the `extends` chain and the unit-slip warnings (see [`resolve`]).
+    pub fn from_toml_str_with_warnings(
+        text: &str,
+        path: &str,
+        overrides: &[String],
+    ) -> Result<resolve::Loaded, ScenarioError> {
+        resolve::load(resolve::Source::Text { text, path }, overrides)
+    }
+
+    /// Read, parse and validate a scenario file.
+    pub fn from_file(path: &Path) -> Result<Self, ScenarioError> {
+        Self::from_file_with_limits(path, &[])
+    }
+
+    /// [`Scenario::from_file`] with command-line limit overrides (which may
+    /// raise `max_scenario_bytes`, for every file of an `extends` chain).
+    pub fn from_file_with_limits(path: &Path, overrides: &[String]) -> Result<Self, ScenarioError> {
+        Ok(Self::load_with_warnings(path, overrides)?.scenario)
+    }
+
+    /// [`Scenario::from_file_with_limits`], also returning the files of the
+    /// `extends` chain and the unit-slip warnings (see [`resolve`]).
+    pub fn load_with_warnings(path: &Path, overrides: &[String]) -> Result<resolve::Loaded, ScenarioError> {
+        resolve::load(resolve::Source::File(path), overrides)
+    }
+
+    /// Likely unit slips in this scenario (angles beyond 2π, a payload above
+    /// 10× the vehicle mass, windows starting after the end of the run), as
+    /// `` `key` = value: why `` lines without a file name.
+    pub fn warnings(&self) -> Vec<String> {
+        resolve::unit_slip_warnings(self)
+            .into_iter()
+            .map(|w| format!("`{}` = {}: {}", w.key, w.value, w.message))
+            .collect()
+    }
+
+    /// The built-in paper scenarios, parsed.
+    pub fn paper_scenarios() -> Vec<Scenario> {
+        PAPER_SCENARIOS
+            .iter()
+            .map(|(name, text)| Self::from_toml_str(text, name).expect("built-in scenario is valid"))
+            .collect()
+    }
+
+    /// Control period, s.
+    pub fn control_period(&self) -> f64 {
+        1.0 / self.simulation.control_rate
+    }
+
+    /// The sizes [`crate::limits`] prices a flight by.
+    pub fn flight_size(&self) -> crate::limits::FlightSize<'_> {
+        crate::limits::FlightSize {
+            duration: self.duration,
+            control_rate: self.simulation.control_rate,
+            substeps: self.simulation.substeps,
+            record_rate: self.simulation.record_rate,
+            limits: &self.limits,
+        }
+    }
+
+    /// The environment's parameter sections (true plant, payload, inertia
+    /// variation, drag noise, disturbances, seed) for [`crate::environment::Environment`].
+    pub fn environment(&self) -> EnvironmentParams<'_> {
+        EnvironmentParams {
+            plant: self.actual_plant.unwrap_or(self.plant),
+            payload: self.payload.as_ref(),
+            inertia_variation: self.inertia_variation.as_ref(),
+            drag_noise: self.drag_noise,
+            disturbance: &self.disturbance,
+            seed: self.seed,
+        }
+    }
+}

@@ -1,0 +1,237 @@
+//! Validation of a parsed scenario: every value range-checked, names,
+//! controller names, array lengths, Monte Carlo section and cost limits;
+//! errors name the file, the dotted key and the value.
+
+use super::*;
+
+/// Fixed-size arrays of `ftsmc-core` structs read from scenario files, as
+/// `(dotted path, length)`. Those structs derive serde's own `[f64; N]`,
+/// which ignores extra elements, so their lengths are checked on the TOML
+/// tree before deserializing.
+const CORE_ARRAYS: [(&str, usize); 7] = [
+    ("plant.inertia", 3),
+    ("plant.drag_translational", 3),
+    ("plant.drag_rotational", 3),
+    ("actual_plant.inertia", 3),
+    ("actual_plant.drag_translational", 3),
+    ("actual_plant.drag_rotational", 3),
+    ("ftaftsmc.mass_adaptation.alpha_hat_bounds", 2),
+];
+
+/// Longest scenario `name`, characters.
+pub const MAX_NAME_CHARS: usize = 64;
+
+/// A scenario `name` is used as a directory name under `--out`, so it must
+/// be one plain file-name component: 1–64 characters from `A–Z a–z 0–9 . _ -`,
+/// not starting with `.` (so never `.`, `..` or a hidden file).
+pub fn check_name(name: &str) -> Result<(), &'static str> {
+    let ok_chars = name.chars().all(|c| c.is_ascii_alphanumeric() || matches!(c, '.' | '_' | '-'));
+    if name.is_empty() || name.len() > MAX_NAME_CHARS || !ok_chars || name.starts_with('.') {
+        Err("1-64 characters from A-Z a-z 0-9 . _ - not starting with `.` (the name is a directory under --out)")
+    } else {
+        Ok(())
+    }
+}
+
+/// Lengths of the `ftsmc-core` arrays ([`CORE_ARRAYS`]) in the resolved
+/// TOML table: `Err((dotted path, message))`.
+pub(crate) fn check_core_array_lengths(root: &toml::Table) -> Result<(), (String, String)> {
+    for (path, len) in CORE_ARRAYS {
+        let mut parts = path.split('.');
+        let first = parts.next().and_then(|k| root.get(k));
+        let value = parts.fold(first, |v, k| v.and_then(|v| v.get(k)));
+        if let Some(toml::Value::Array(a)) = value {
+            if a.len() != len {
+                return Err((
+                    path.to_string(),
+                    format!("`{path}`: invalid length {}, expected an array of exactly {len} numbers", a.len()),
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+impl Scenario {
+    /// Range-check every value; the error names `path` and the dotted key.
+    pub fn validate(&self, path: &str) -> Result<(), ScenarioError> {
+        let invalid = |key: String, value: String, expected: &str| ScenarioError::Invalid {
+            path: path.to_string(),
+            key,
+            value,
+            expected: expected.to_string(),
+        };
+        let gain = |prefix: &str, e: GainError| invalid(format!("{prefix}.{}", e.field), show(e.value), e.expected);
+        let positive = |key: &str, v: f64| {
+            if v.is_finite() && v > 0.0 {
+                Ok(())
+            } else {
+                Err(invalid(key.to_string(), show(v), "a finite value > 0"))
+            }
+        };
+        let non_negative = |key: &str, v: f64| {
+            if v.is_finite() && v >= 0.0 {
+                Ok(())
+            } else {
+                Err(invalid(key.to_string(), show(v), "a finite value >= 0"))
+            }
+        };
+        let finite = |key: &str, v: f64| {
+            if v.is_finite() {
+                Ok(())
+            } else {
+                Err(invalid(key.to_string(), show(v), "a finite number"))
+            }
+        };
+
+        if let Err(rule) = check_name(&self.name) {
+            return Err(invalid("name".into(), format!("\"{}\"", show_str(&self.name)), rule));
+        }
+        if self.controllers.is_empty() {
+            return Err(invalid("controllers".into(), "[]".into(), "at least one controller name"));
+        }
+        if let Err((key, v)) = self.limits.check() {
+            return Err(invalid(format!("limits.{key}"), show(v), "a number > 0"));
+        }
+        positive("duration", self.duration)?;
+        let sim = &self.simulation;
+        positive("simulation.control_rate", sim.control_rate)?;
+        if (self.duration / self.control_period()).round() < 1.0 {
+            return Err(invalid(
+                "duration".into(),
+                show(self.duration),
+                &format!("at least one control period (>= 1/control_rate = {} s)", show(self.control_period())),
+            ));
+        }
+        if sim.substeps == 0 {
+            return Err(invalid("simulation.substeps".into(), "0".into(), "an integer >= 1"));
+        }
+        non_negative("simulation.record_rate", sim.record_rate)?;
+        if sim.record_rate > sim.control_rate {
+            return Err(invalid(
+                "simulation.record_rate".into(),
+                show(sim.record_rate),
+                "a rate <= simulation.control_rate",
+            ));
+        }
+        positive("simulation.max_position_error", sim.max_position_error)?;
+        positive("simulation.max_tilt", sim.max_tilt)?;
+        positive("simulation.settling_band", sim.settling_band)?;
+        positive("simulation.settling_floor", sim.settling_floor)?;
+        non_negative("simulation.steady_state_after", sim.steady_state_after)?;
+        if let Some([start, end]) = sim.metrics_window {
+            if !(start.is_finite() && end.is_finite() && start <= end) {
+                return Err(invalid(
+                    "simulation.metrics_window".into(),
+                    format!("[{}, {}]", show(start), show(end)),
+                    "a window [start, end] with start <= end",
+                ));
+            }
+        }
+        if let Some(w) = sim.max_rotor_speed {
+            positive("simulation.max_rotor_speed", w)?;
+        }
+
+        self.plant.check().map_err(|e| gain("plant", e))?;
+        if let Some(p) = &self.actual_plant {
+            p.check().map_err(|e| gain("actual_plant", e))?;
+        }
+        let init = &self.initial_state;
+        for (name, v) in [
+            ("position", init.position),
+            ("attitude", init.attitude),
+            ("velocity", init.velocity),
+            ("angular_rate", init.angular_rate),
+        ] {
+            for (i, x) in v.iter().enumerate() {
+                finite(&format!("initial_state.{name}[{i}]"), *x)?;
+            }
+        }
+        for (i, a) in init.attitude[..2].iter().enumerate() {
+            if a.abs() >= sim.max_tilt {
+                return Err(invalid(format!("initial_state.attitude[{i}]"), show(*a), "|angle| < simulation.max_tilt"));
+            }
+        }
+        let signal = |prefix: String, s: &Signal| {
+            s.check().map_err(|(key, value, expected)| invalid(format!("{prefix}.{key}"), value, expected))
+        };
+        let r = &self.reference;
+        for (name, s) in [("x", &r.x), ("y", &r.y), ("z", &r.z), ("psi", &r.psi)] {
+            signal(format!("reference.{name}"), s)?;
+        }
+        for (name, s) in self.disturbance.named() {
+            signal(format!("disturbance.{name}"), s)?;
+        }
+        if let Some(p) = &self.payload {
+            finite("payload.mass", p.mass)?;
+            let (true_mass, which) = match &self.actual_plant {
+                Some(a) => (a.mass, "actual_plant.mass"),
+                None => (self.plant.mass, "plant.mass"),
+            };
+            if p.mass <= -true_mass {
+                return Err(invalid(
+                    "payload.mass".into(),
+                    show(p.mass),
+                    &format!("a mass change > -{which} = -{} (the true mass must stay > 0)", show(true_mass)),
+                ));
+            }
+            finite("payload.start", p.start)?;
+            match (p.decay_start, p.tau) {
+                (Some(t2), Some(tau)) => {
+                    finite("payload.decay_start", t2)?;
+                    if t2 < p.start {
+                        return Err(invalid("payload.decay_start".into(), show(t2), "decay_start >= payload.start"));
+                    }
+                    positive("payload.tau", tau)?;
+                }
+                (Some(t2), None) => {
+                    return Err(invalid(
+                        "payload.tau".into(),
+                        "missing".into(),
+                        &format!("a time constant > 0 (decay_start = {} is set)", show(t2)),
+                    ))
+                }
+                (None, Some(tau)) => positive("payload.tau", tau)?,
+                (None, None) => {}
+            }
+        }
+        if let Some(s) = &self.inertia_variation {
+            signal("inertia_variation".into(), s)?;
+        }
+        if let Some(n) = &self.drag_noise {
+            non_negative("drag_noise.std", n.std)?;
+        }
+        self.cascade.check().map_err(|e| gain("cascade", e))?;
+        self.ftaftsmc.mass_adaptation.check().map_err(|e| gain("ftaftsmc.mass_adaptation", e))?;
+        for (axis, g) in self.ftaftsmc.gains().named() {
+            g.check().map_err(|e| gain(&format!("ftaftsmc.{axis}"), e))?;
+        }
+        for (axis, g) in self.ranftsmc.named() {
+            g.check().map_err(|e| gain(&format!("ranftsmc.{axis}"), e))?;
+        }
+        for (axis, g) in self.tsm_sta.named() {
+            g.check().map_err(|e| gain(&format!("tsm-sta.{axis}"), e))?;
+        }
+        for name in &self.controllers {
+            crate::names::check_controller(name).map_err(|known| ScenarioError::UnknownController {
+                path: path.to_string(),
+                name: name.clone(),
+                known,
+            })?;
+        }
+        if let Some(mc) = &self.montecarlo {
+            mc.check_against(self).map_err(|(key, value, expected)| invalid(key, value, &expected))?;
+        }
+        self.check_cost(self.controllers.len())
+            .map_err(|limit| ScenarioError::Limit { path: path.to_string(), limit })?;
+        Ok(())
+    }
+
+    /// Price one flight with each of `n_controllers` controllers (steps
+    /// including substeps, recorded rows, output bytes) against
+    /// [`Scenario::limits`]; called by [`Scenario::validate`] with the
+    /// scenario's own controller list.
+    pub fn check_cost(&self, n_controllers: usize) -> Result<crate::limits::Cost, LimitError> {
+        crate::limits::check_flight(&self.flight_size(), n_controllers)
+    }
+}
