@@ -178,7 +178,8 @@ fn every_csv_column_and_json_key_is_in_docs_outputs_md() {
         assert!(all_paths.contains(p), "{p} not produced: {all_paths:?}");
     }
     // Monte Carlo metric names are runs.csv columns, documented there.
-    let mc: Value = serde_json::from_str(&std::fs::read_to_string(dir.join("mc/paper-scenario-2/summary.json")).unwrap()).unwrap();
+    let mc: Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("mc/paper-scenario-2/summary.json")).unwrap()).unwrap();
     for (_, c) in mc["controllers"].as_object().unwrap() {
         for metric in c["metrics"].as_object().unwrap().keys() {
             if !column_documented(&doc, metric) {

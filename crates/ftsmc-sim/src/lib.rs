@@ -9,7 +9,9 @@
 #![warn(missing_docs)]
 
 pub mod actuators;
+pub mod envelope;
 pub mod fixed_time;
+pub mod ground;
 pub mod limits;
 pub mod metrics;
 pub mod montecarlo;
@@ -19,6 +21,7 @@ pub mod resolve;
 pub mod scenario;
 pub mod signal;
 pub mod simulate;
+pub mod truth;
 pub mod tuning;
 pub mod vehicle;
 pub mod waypoints;

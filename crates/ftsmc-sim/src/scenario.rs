@@ -667,6 +667,19 @@ pub struct Scenario {
     /// Cost limits (see [`crate::limits`]); every key optional.
     #[serde(default, skip_serializing_if = "is_default_limits")]
     pub limits: Limits,
+    // --- issue 11: truth model, actuators, ground, success envelope (crate::truth) ---
+    /// Truth model (`[vehicle]`, default: the paper plant).
+    #[serde(default, skip_serializing_if = "crate::truth::VehicleSettings::is_default")]
+    pub vehicle: crate::truth::VehicleSettings,
+    /// Rotor limits, motor lag and noise (`[actuators]`, default: ideal).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub actuators: Option<crate::actuators::ActuatorParams>,
+    /// Ground plane (`[ground]`, default: none).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ground: Option<crate::ground::GroundSettings>,
+    /// Success envelope (`[envelope]`, default: success = completed).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub envelope: Option<crate::envelope::Envelope>,
 }
 
 fn is_default_limits(l: &Limits) -> bool {
@@ -903,6 +916,7 @@ impl Scenario {
                 known,
             })?;
         }
+        crate::truth::check(self).map_err(|(prefix, e)| gain(&prefix, e))?; // issue 11 hook
         if let Some(mc) = &self.montecarlo {
             mc.check_against(self).map_err(|(key, value, expected)| invalid(key, value, &expected))?;
         }

@@ -50,6 +50,13 @@ pub enum ExitStatus {
         /// Simulated time at which it was detected, s.
         time: f64,
     },
+    /// Hit the ground (`[ground]`) faster than `max_touchdown_speed`.
+    Crashed {
+        /// Simulated time of the touchdown, s.
+        time: f64,
+        /// Downward speed at touchdown, m/s.
+        impact_speed: f64,
+    },
 }
 
 impl ExitStatus {
@@ -61,16 +68,22 @@ impl ExitStatus {
     /// Simulated time at which the run diverged (`None` if it completed).
     pub fn diverged_at(&self) -> Option<f64> {
         match self {
-            ExitStatus::Completed => None,
             ExitStatus::Diverged { time, .. } => Some(*time),
+            ExitStatus::Completed | ExitStatus::Crashed { .. } => None,
         }
     }
 
-    /// Short form for table cells: `completed` or `diverged at 0.64 s`.
+    /// True for [`ExitStatus::Crashed`].
+    pub fn is_crashed(&self) -> bool {
+        matches!(self, ExitStatus::Crashed { .. })
+    }
+
+    /// Short form for table cells: `completed`, `diverged at 0.64 s` or `crashed at 1.23 s`.
     pub fn short(&self) -> String {
-        match self.diverged_at() {
-            None => "completed".into(),
-            Some(t) => format!("diverged at {t:.2} s"),
+        match self {
+            ExitStatus::Completed => "completed".into(),
+            ExitStatus::Diverged { time, .. } => format!("diverged at {time:.2} s"),
+            ExitStatus::Crashed { time, .. } => format!("crashed at {time:.2} s"),
         }
     }
 }
@@ -86,6 +99,9 @@ impl core::fmt::Display for ExitStatus {
                     write!(f, "diverged: position error {error:.3} m at t = {time:.3} s")
                 }
             },
+            ExitStatus::Crashed { time, impact_speed } => {
+                write!(f, "crashed: hit the ground at {impact_speed:.1} m/s at t = {time:.3} s")
+            }
         }
     }
 }
@@ -306,6 +322,15 @@ pub struct RunOutput {
     pub recording: Recording,
     /// Control steps executed.
     pub steps: u64,
+    /// The success envelope's verdict (`None`: the scenario has no `[envelope]`).
+    pub envelope: Option<crate::envelope::Verdict>,
+}
+
+impl RunOutput {
+    /// Completed and inside the scenario's envelope (just completed without one).
+    pub fn success(&self) -> bool {
+        self.envelope.as_ref().map_or(self.exit.is_completed(), |v| v.success)
+    }
 }
 
 /// Plant-side variations of a scenario evaluated in time: payload, inertia
@@ -477,6 +502,10 @@ fn realise(command: &Command, plant: &QuadrotorParams, max_rotor_speed: Option<f
 
 /// Fly `controller` through `scenario`.
 pub fn simulate(scenario: &Scenario, controller: &mut dyn Controller, options: RunOptions<'_>) -> RunOutput {
+    // Hook (issue 11): rigid body, real actuators or a ground fly the realistic loop.
+    if crate::truth::is_realistic(scenario) {
+        return crate::truth::simulate_realistic(scenario, controller, options);
+    }
     let sim = &scenario.simulation;
     let dt = scenario.control_period();
     let steps = (scenario.duration / dt).round() as u64;
@@ -508,6 +537,8 @@ pub fn simulate(scenario: &Scenario, controller: &mut dyn Controller, options: R
     }
     let mut exit = ExitStatus::Completed;
     let mut executed = 0;
+    let mut envelope = crate::envelope::Tracker::new(scenario.envelope); // issue 11 hook
+    envelope.observe(0.0, &x[0..3], &reference_at(scenario, 0.0).position, &x[3..5]);
 
     // Time-varying plant inputs are evaluated once per substep boundary and
     // interpolated linearly inside the substep (RK4 stage times); this keeps
@@ -586,6 +617,7 @@ pub fn simulate(scenario: &Scenario, controller: &mut dyn Controller, options: R
 
         let t_next = (k + 1) as f64 * dt;
         reference = reference_at(scenario, t_next);
+        envelope.observe(t_next, &x[0..3], &reference.position, &x[3..5]);
         if let Some(divergence) = check_divergence(scenario, &x, &reference) {
             exit = ExitStatus::Diverged { divergence, time: t_next };
             break;
@@ -598,6 +630,7 @@ pub fn simulate(scenario: &Scenario, controller: &mut dyn Controller, options: R
     RunOutput {
         controller: controller.name().to_string(),
         scenario: scenario.name.clone(),
+        envelope: envelope.verdict(&exit),
         exit,
         metrics: metrics.finish(),
         recording,
@@ -605,7 +638,7 @@ pub fn simulate(scenario: &Scenario, controller: &mut dyn Controller, options: R
     }
 }
 
-fn check_divergence(scenario: &Scenario, x: &[f64; 12], reference: &Reference) -> Option<Divergence> {
+pub(crate) fn check_divergence(scenario: &Scenario, x: &[f64; 12], reference: &Reference) -> Option<Divergence> {
     if x.iter().any(|v| !v.is_finite()) {
         return Some(Divergence::NonFinite);
     }
