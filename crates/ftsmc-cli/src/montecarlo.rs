@@ -30,11 +30,12 @@ pub fn runs_csv(rows: &[McRun]) -> Result<Vec<u8>> {
     header.extend(SAMPLED_COLUMNS.iter().map(|s| s.to_string()));
     header.extend(metric_names.iter().cloned());
     header.push("completed".into());
+    header.extend(["success".to_string(), "crashed".to_string()]); // issue 11
     w.write_record(&header)?;
     for r in rows {
         let diverged_at = match r.exit {
             ExitStatus::Diverged { time, .. } => format_number(time),
-            ExitStatus::Completed => String::new(),
+            ExitStatus::Completed | ExitStatus::Crashed { .. } => String::new(),
         };
         let mut rec =
             vec![r.index.to_string(), r.seed.to_string(), r.controller.clone(), r.exit.to_string(), diverged_at];
@@ -49,6 +50,7 @@ pub fn runs_csv(rows: &[McRun]) -> Result<Vec<u8>> {
             });
         }
         rec.push(r.exit.is_completed().to_string());
+        rec.extend([r.success.to_string(), r.exit.is_crashed().to_string()]);
         w.write_record(&rec)?;
     }
     w.into_inner().map_err(|e| anyhow::anyhow!("csv: {e}"))
@@ -63,7 +65,11 @@ pub fn runs_csv(rows: &[McRun]) -> Result<Vec<u8>> {
 pub fn mc_table(summaries: &[(String, ControllerSummary)]) -> String {
     let stat_cell = |s: &ControllerSummary, m: &str| {
         s.metrics.get(m).map_or_else(
-            || if s.diverged > 0 { format!("— (all {} diverged)", s.diverged) } else { "—".to_string() },
+            || match (s.diverged, s.crashed) {
+                (0, 0) => "—".to_string(),
+                (d, 0) => format!("— (all {d} diverged)"),
+                (d, c) => format!("— (none completed: {d} diverged, {c} crashed)"),
+            },
             |st| format!("{} [{}, {}]", num(st.median), num(st.p5), num(st.p95)),
         )
     };
@@ -80,7 +86,7 @@ pub fn mc_table(summaries: &[(String, ControllerSummary)]) -> String {
         a.row(vec![
             label(name).to_string(),
             format!("{:.1} %", 100.0 * s.success_rate),
-            s.diverged.to_string(),
+            if s.crashed > 0 { format!("{} (+{} crashed)", s.diverged, s.crashed) } else { s.diverged.to_string() },
             stat_cell(s, "ise_z"),
             s.metrics.get("ise_z").map_or_else(|| stat_cell(s, "ise_z"), |st| num(st.worst)),
             stat_cell(s, "ise_psi"),

@@ -19,6 +19,7 @@
 //! floor 4  run/                 the loop: controller on its clock, plant by RK4, environment, metrics
 //!            exit.rs            ExitStatus, Divergence, divergence checks
 //!            recording.rs       Recording, recording_columns, CSV numbers
+//!            truth.rs           the realistic loop: mixer, motors, rigid body or Eq. 1, ground contact
 //! floor 3  scenario/            the file format; composes every part's parameters; validation
 //!            validate.rs        range checks, names, array lengths, cost limits
 //!            resolve.rs         extends chains, deep merge, --set overrides, unit-slip warnings
@@ -27,11 +28,14 @@
 //!            paper.rs           Eq. 1 (the paper's plant) and the generic rk4_step
 //!            rigid_body.rs      Newton–Euler rigid body with quaternion attitude
 //!            math.rs            small vector/quaternion helpers
+//!            (mod.rs)           VehicleSettings: which truth model flies (`[vehicle]`)
 //!          actuators.rs         motor limits, lag, noise; mixer under saturation
 //!          environment/         plant-side variations, built from their own sections
 //!            disturbance.rs     DisturbanceSignals
 //!            payload.rs         Payload and its profile
 //!            variation.rs       DragNoise (inertia variation is a Signal)
+//!            ground.rs          ground plane, touchdown and crash (`[ground]`)
+//!          envelope.rs          success envelope and its verdict (`[envelope]`)
 //!          metrics.rs           ISE, IAE, ITAE, settling, chattering, online
 //! floor 1  axes.rs              AxisSet and other per-axis containers
 //!          signal/              time signals with analytic derivatives
@@ -46,6 +50,7 @@ pub mod actuators;
 pub mod analysis;
 pub mod axes;
 pub mod batch;
+pub mod envelope;
 pub mod environment;
 pub mod limits;
 pub mod metrics;

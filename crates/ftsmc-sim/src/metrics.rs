@@ -66,6 +66,13 @@ pub struct Metrics {
     /// `[0, duration]`, which is shorter than the scenario for a run that
     /// diverged.
     pub duration: f64,
+    /// Realistic flights only (`crate::run::truth`): the largest rotor speed the
+    /// controller's commands asked for, without limits, rad/s.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub peak_rotor_speed_demand: Option<f64>,
+    /// Realistic flights only: fraction of control periods in which the mixer saturated.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub saturation_fraction: Option<f64>,
 }
 
 impl Metrics {
@@ -108,6 +115,13 @@ impl Metrics {
         }
         for (n, v) in SignalSet::<f64>::NAMES.iter().zip(self.chattering.to_array()) {
             out.push((format!("chattering_{n}"), v));
+        }
+        // Realistic flights only (issue 11).
+        if let Some(v) = self.peak_rotor_speed_demand {
+            out.push(("peak_rotor_speed_demand".into(), v));
+        }
+        if let Some(v) = self.saturation_fraction {
+            out.push(("saturation_fraction".into(), v));
         }
         out.push(("duration".into(), self.duration));
         out
@@ -241,6 +255,8 @@ impl MetricsAccumulator {
             chattering: SignalSet::from_array(per_second),
             ise_window: self.window.map(|_| axes(self.ise_window)),
             duration,
+            peak_rotor_speed_demand: None,
+            saturation_fraction: None,
         }
     }
 }

@@ -19,6 +19,7 @@ const FLOORS: &[(&str, u32)] = &[
     ("actuators", 2),
     ("environment", 2),
     ("metrics", 2),
+    ("envelope", 2),
     ("scenario", 3),
     ("run", 4),
     ("registry", 5),

@@ -27,6 +27,8 @@ pub struct McRun {
     pub exit: ExitStatus,
     /// Metrics.
     pub metrics: Metrics,
+    /// Completed and inside the scenario's `[envelope]` ([`RunOutput::success`](crate::RunOutput::success)).
+    pub success: bool,
 }
 
 /// Fly `runs` randomised copies of `base` with each controller, in parallel
@@ -54,7 +56,15 @@ pub fn run_batch(
                 .map(|name| {
                     let options = RunOptions { record: false, progress: Some(progress) };
                     let out = crate::registry::run(name, &scenario, options).expect("controller names checked above");
-                    McRun { index, seed, sampled, controller: name.clone(), exit: out.exit, metrics: out.metrics }
+                    McRun {
+                        index,
+                        seed,
+                        sampled,
+                        controller: name.clone(),
+                        exit: out.exit,
+                        success: out.success(),
+                        metrics: out.metrics,
+                    }
                 })
                 .collect()
         })
@@ -95,8 +105,15 @@ pub struct ControllerSummary {
     pub runs: usize,
     /// Runs that diverged.
     pub diverged: usize,
-    /// Fraction of runs that completed.
+    /// Runs that hit the ground too fast (`[ground]`).
+    pub crashed: usize,
+    /// Runs that completed but left the scenario's `[envelope]`.
+    pub envelope_failures: usize,
+    /// Fraction of runs that succeeded: completed and inside the
+    /// `[envelope]` (without one: the fraction that completed).
     pub success_rate: f64,
+    /// Fraction of runs that completed (no divergence, no crash).
+    pub completed_rate: f64,
     /// Statistics of every metric over the completed runs (settling times:
     /// over the runs that settled).
     pub metrics: std::collections::BTreeMap<String, Stats>,
@@ -121,9 +138,15 @@ pub fn summarize(rows: &[McRun], controllers: &[String]) -> Vec<(String, Control
                 }
             }
             let runs = mine.len();
-            let diverged = runs - completed.len();
-            let success_rate = if runs > 0 { completed.len() as f64 / runs as f64 } else { 0.0 };
-            (name.clone(), ControllerSummary { runs, diverged, success_rate, metrics })
+            let crashed = mine.iter().filter(|r| r.exit.is_crashed()).count();
+            let diverged = runs - completed.len() - crashed;
+            let successes = mine.iter().filter(|r| r.success).count();
+            let envelope_failures = completed.iter().filter(|r| !r.success).count();
+            let rate = |n: usize| if runs > 0 { n as f64 / runs as f64 } else { 0.0 };
+            let (success_rate, completed_rate) = (rate(successes), rate(completed.len()));
+            let summary =
+                ControllerSummary { runs, diverged, crashed, envelope_failures, success_rate, completed_rate, metrics };
+            (name.clone(), summary)
         })
         .collect()
 }

@@ -3,6 +3,7 @@
 //! ([`EnvironmentParams`]). The controller never sees these.
 
 mod disturbance;
+pub mod ground;
 mod payload;
 mod variation;
 

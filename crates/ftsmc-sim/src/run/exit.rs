@@ -36,6 +36,13 @@ pub enum ExitStatus {
         /// Simulated time at which it was detected, s.
         time: f64,
     },
+    /// Hit the ground (`[ground]`) faster than `max_touchdown_speed`.
+    Crashed {
+        /// Simulated time of the touchdown, s.
+        time: f64,
+        /// Downward speed at touchdown, m/s.
+        impact_speed: f64,
+    },
 }
 
 impl ExitStatus {
@@ -47,16 +54,22 @@ impl ExitStatus {
     /// Simulated time at which the run diverged (`None` if it completed).
     pub fn diverged_at(&self) -> Option<f64> {
         match self {
-            ExitStatus::Completed => None,
             ExitStatus::Diverged { time, .. } => Some(*time),
+            ExitStatus::Completed | ExitStatus::Crashed { .. } => None,
         }
     }
 
-    /// Short form for table cells: `completed` or `diverged at 0.64 s`.
+    /// True for [`ExitStatus::Crashed`].
+    pub fn is_crashed(&self) -> bool {
+        matches!(self, ExitStatus::Crashed { .. })
+    }
+
+    /// Short form for table cells: `completed`, `diverged at 0.64 s` or `crashed at 1.23 s`.
     pub fn short(&self) -> String {
-        match self.diverged_at() {
-            None => "completed".into(),
-            Some(t) => format!("diverged at {t:.2} s"),
+        match self {
+            ExitStatus::Completed => "completed".into(),
+            ExitStatus::Diverged { time, .. } => format!("diverged at {time:.2} s"),
+            ExitStatus::Crashed { time, .. } => format!("crashed at {time:.2} s"),
         }
     }
 }
@@ -72,6 +85,9 @@ impl core::fmt::Display for ExitStatus {
                     write!(f, "diverged: position error {error:.3} m at t = {time:.3} s")
                 }
             },
+            ExitStatus::Crashed { time, impact_speed } => {
+                write!(f, "crashed: hit the ground at {impact_speed:.1} m/s at t = {time:.3} s")
+            }
         }
     }
 }

@@ -18,6 +18,7 @@ use crate::vehicle::paper::{derivative, rk4_step};
 
 mod exit;
 mod recording;
+pub mod truth;
 
 use exit::check_divergence;
 pub use exit::{Divergence, ExitStatus};
@@ -39,6 +40,15 @@ pub struct RunOutput {
     pub recording: Recording,
     /// Control steps executed.
     pub steps: u64,
+    /// The success envelope's verdict (`None`: the scenario has no `[envelope]`).
+    pub envelope: Option<crate::envelope::Verdict>,
+}
+
+impl RunOutput {
+    /// Completed and inside the scenario's envelope (just completed without one).
+    pub fn success(&self) -> bool {
+        self.envelope.as_ref().map_or(self.exit.is_completed(), |v| v.success)
+    }
 }
 
 /// The reference of `scenario` at time `t`.
@@ -101,6 +111,10 @@ fn realise(command: &Command, plant: &QuadrotorParams, max_rotor_speed: Option<f
 
 /// Fly `controller` through `scenario`.
 pub fn simulate(scenario: &Scenario, controller: &mut dyn Controller, options: RunOptions<'_>) -> RunOutput {
+    // Hook (issue 11): rigid body, real actuators or a ground fly the realistic loop.
+    if truth::is_realistic(scenario) {
+        return truth::simulate_realistic(scenario, controller, options);
+    }
     let sim = &scenario.simulation;
     let dt = scenario.control_period();
     let steps = (scenario.duration / dt).round() as u64;
@@ -132,6 +146,8 @@ pub fn simulate(scenario: &Scenario, controller: &mut dyn Controller, options: R
     }
     let mut exit = ExitStatus::Completed;
     let mut executed = 0;
+    let mut envelope = crate::envelope::Tracker::new(scenario.envelope); // issue 11 hook
+    envelope.observe(0.0, &x[0..3], &reference_at(scenario, 0.0).position, &x[3..5]);
 
     // Time-varying plant inputs are evaluated once per substep boundary and
     // interpolated linearly inside the substep (RK4 stage times); this keeps
@@ -210,6 +226,7 @@ pub fn simulate(scenario: &Scenario, controller: &mut dyn Controller, options: R
 
         let t_next = (k + 1) as f64 * dt;
         reference = reference_at(scenario, t_next);
+        envelope.observe(t_next, &x[0..3], &reference.position, &x[3..5]);
         if let Some(divergence) = check_divergence(scenario, &x, &reference) {
             exit = ExitStatus::Diverged { divergence, time: t_next };
             break;
@@ -222,6 +239,7 @@ pub fn simulate(scenario: &Scenario, controller: &mut dyn Controller, options: R
     RunOutput {
         controller: controller.name().to_string(),
         scenario: scenario.name.clone(),
+        envelope: envelope.verdict((!exit.is_completed()).then(|| exit.to_string())),
         exit,
         metrics: metrics.finish(),
         recording,

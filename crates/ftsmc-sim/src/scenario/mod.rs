@@ -360,6 +360,19 @@ pub struct Scenario {
     /// Cost limits (see [`crate::limits`]); every key optional.
     #[serde(default, skip_serializing_if = "is_default_limits")]
     pub limits: Limits,
+    // --- issue 11: truth model, actuators, ground, success envelope ---
+    /// Truth model (`[vehicle]`, default: the paper plant).
+    #[serde(default, skip_serializing_if = "crate::vehicle::VehicleSettings::is_default")]
+    pub vehicle: crate::vehicle::VehicleSettings,
+    /// Rotor limits, motor lag and noise (`[actuators]`, default: ideal).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub actuators: Option<crate::actuators::ActuatorParams>,
+    /// Ground plane (`[ground]`, default: none).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ground: Option<crate::environment::ground::GroundSettings>,
+    /// Success envelope (`[envelope]`, default: success = completed).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub envelope: Option<crate::envelope::Envelope>,
 }
 
 fn is_default_limits(l: &Limits) -> bool {
@@ -367,6 +380,32 @@ fn is_default_limits(l: &Limits) -> bool {
 }
 
 impl Scenario {
+    /// Rigid-body parameters of the truth model: `[vehicle.rigid_body]`, or
+    /// the paper vehicle built from the true plant (aerodynamics off).
+    pub fn rigid_body_params(&self) -> crate::vehicle::RigidBodyParams {
+        let base = self.actual_plant.unwrap_or(self.plant);
+        self.vehicle.rigid_body.unwrap_or_else(|| crate::vehicle::RigidBodyParams::from_paper(&base))
+    }
+
+    /// Allocation matrix of the truth model and the paper-form parameters used
+    /// for the unsaturated rotor-speed demand.
+    pub fn truth_allocation(&self) -> ([[f64; 4]; 4], QuadrotorParams) {
+        let base = self.actual_plant.unwrap_or(self.plant);
+        match self.vehicle.model {
+            crate::vehicle::VehicleModel::Paper => (crate::actuators::paper_allocation_matrix(&base), base),
+            crate::vehicle::VehicleModel::RigidBody => {
+                let rb = self.rigid_body_params();
+                let p = QuadrotorParams {
+                    lift_coefficient: rb.thrust_coefficient,
+                    yaw_drag_coefficient: rb.moment_coefficient,
+                    arm_length: rb.arm_length,
+                    ..base
+                };
+                (rb.allocation_matrix(), p)
+            }
+        }
+    }
+
     /// Parse and validate TOML text; `path` is used in error messages (and
     /// relative `extends` paths resolve against its directory).
     pub fn from_toml_str(text: &str, path: &str) -> Result<Self, ScenarioError> {

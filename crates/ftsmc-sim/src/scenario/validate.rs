@@ -219,6 +219,7 @@ impl Scenario {
                 known,
             })?;
         }
+        check_realism(self).map_err(|(prefix, e)| gain(&prefix, e))?;
         if let Some(mc) = &self.montecarlo {
             mc.check_against(self).map_err(|(key, value, expected)| invalid(key, value, &expected))?;
         }
@@ -234,4 +235,31 @@ impl Scenario {
     pub fn check_cost(&self, n_controllers: usize) -> Result<crate::limits::Cost, LimitError> {
         crate::limits::check_flight(&self.flight_size(), n_controllers)
     }
+}
+
+/// Validation of the realism keys (`[vehicle]`, `[actuators]`, `[ground]`, `[envelope]`):
+/// `(dotted key prefix, error)` of the first bad value.
+pub(super) fn check_realism(scenario: &Scenario) -> Result<(), (String, GainError)> {
+    if let Some(rb) = &scenario.vehicle.rigid_body {
+        rb.check().map_err(|e| ("vehicle.rigid_body".to_string(), e))?;
+    }
+    if let Some(a) = &scenario.actuators {
+        a.check().map_err(|e| ("actuators".to_string(), e))?;
+        let (allocation, _) = scenario.truth_allocation();
+        crate::actuators::Mixer::new(allocation, a).map_err(|e| ("actuators".to_string(), e))?;
+    }
+    if let Some(g) = &scenario.ground {
+        g.check().map_err(|e| ("ground".to_string(), e))?;
+        let z0 = scenario.initial_state.position[2];
+        if g.enabled && z0 < g.height {
+            return Err((
+                "initial_state.position".to_string(),
+                GainError { field: "2", value: z0, expected: "a start at or above ground.height" },
+            ));
+        }
+    }
+    if let Some(e) = &scenario.envelope {
+        e.check().map_err(|e| ("envelope".to_string(), e))?;
+    }
+    Ok(())
 }

@@ -21,3 +21,37 @@ pub use rigid_body::{
     to_quad_state, try_to_quad_state, Configuration, GimbalLock, RigidBody, RigidBodyInput, RigidBodyParams,
     RigidBodyState, Spin, Wrench,
 };
+
+use serde::{Deserialize, Serialize};
+
+/// Which truth model flies (`[vehicle] model`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum VehicleModel {
+    /// Paper Eq. 1 (default).
+    #[default]
+    Paper,
+    /// Newton–Euler rigid body ([`rigid_body`]).
+    RigidBody,
+}
+
+/// `[vehicle]`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct VehicleSettings {
+    /// Truth model (default `paper`).
+    #[serde(default)]
+    pub model: VehicleModel,
+    /// Rigid-body parameters (default: [`RigidBodyParams::from_paper`] of
+    /// the true plant, aerodynamics off). A given table is complete: its
+    /// missing keys take the [`RigidBodyParams`] defaults (paper vehicle).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rigid_body: Option<RigidBodyParams>,
+}
+
+impl VehicleSettings {
+    /// True when nothing is set (for `skip_serializing_if`).
+    pub fn is_default(&self) -> bool {
+        *self == Self::default()
+    }
+}

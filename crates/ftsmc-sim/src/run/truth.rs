@@ -1,0 +1,330 @@
+//! The realistic run loop: the paper's controllers flying a truth model
+//! through real actuators, with an optional ground.
+//!
+//! [`crate::run::simulate`] hands a flight to [`simulate_realistic`]
+//! when [`is_realistic`]: `[vehicle] model = "rigid-body"`, non-ideal
+//! `[actuators]`, or `[ground] enabled = true`. Otherwise today's paper loop
+//! runs unchanged (the paper scenarios stay bit-identical).
+//!
+//! # One control period
+//!
+//! 1. The controller sees the Euler state: the paper plant's state as is, or
+//!    [`to_quad_state`] of the rigid body (Z-Y-X angles, Euler rates from body rates).
+//! 2. Its command goes through [`Mixer::mix`] (priority thrust > roll/pitch >
+//!    yaw, rotor limits `[ω_min, ω_max]` of `[actuators]`); the mixer's
+//!    `saturated` flag is passed to `controller.actuator_feedback`. With the
+//!    paper truth model and ideal actuators the command is applied directly,
+//!    as in the paper loop (negative thrust included).
+//! 3. The motors follow the mixer's rotor-speed commands with the exact
+//!    first-order lag (τ_up / τ_down): inside each RK4 substep the rotor
+//!    speeds at every stage time are [`Motors::speeds_after`] (the exact
+//!    solution, not held per substep), times the period's motor noise
+//!    (one standard-normal draw per rotor per period, its own ChaCha stream
+//!    [`crate::actuators::motor_noise_rng`]).
+//! 4. The truth model integrates the actual rotor speeds: the rigid body's
+//!    per-rotor forces, or paper Eq. 1 with the thrust and torques of the
+//!    actual speeds (paper Eq. 2) and their Ω̄.
+//! 5. Ground contact after every substep ([`crate::environment::ground`]).
+//!
+//! # The scenario's plant variations on the rigid body
+//!
+//! The paper's disturbances are accelerations: `D_x, D_y, D_z` become a world
+//! force `m D` (true mass), `D_φ, D_θ, D_ψ` a body torque `J D`. The latter is
+//! an approximation: in Eq. 1 they add to the Euler-angle accelerations,
+//! which equal body-rate accelerations only at small angles. Payload adds to
+//! the rigid body's mass and the inertia variation scales its inertia matrix,
+//! both updated once per control period. The paper's linear drags
+//! (`K_f1`, `K_f2`) and their noise act on the paper truth model only; the
+//! rigid body uses its own aerodynamics (`[vehicle.rigid_body]`).
+//!
+//! # Recorded and measured
+//!
+//! `thrust … yaw_torque` are the mixer's applied command (what the rotors are
+//! asked for), `*_cmd` the controller's command, `omega_1..4` the actual rotor
+//! speeds (lag and noise) at the tick. The metrics' control signals
+//! (chattering, energy) use the mixer's applied command. Two more metrics:
+//! `peak_rotor_speed_demand` (largest rotor speed the controller's command
+//! asks for with no limit, [`ftsmc_core::allocation::rotor_speeds`]) and
+//! `saturation_fraction` (control periods in which the mixer saturated).
+
+use ftsmc_core::allocation::{forces_from_squared_speeds, residual_speed, rotor_speeds};
+use ftsmc_core::cascade::Controller;
+use ftsmc_core::law::MAX_ESTIMATES;
+use ftsmc_core::model::{Command, QuadState};
+
+use crate::actuators::{motor_noise_rng, ActuatorParams, Mixer, Motors};
+use crate::envelope::Tracker;
+use crate::environment::{Environment, TimeVarying};
+use crate::metrics::MetricsAccumulator;
+use crate::scenario::Scenario;
+use crate::vehicle::paper::{derivative, rk4_step};
+use crate::vehicle::VehicleModel;
+
+use super::exit::check_divergence;
+use super::{
+    recording_columns, reference_at, Divergence, ExitStatus, Recording, RunOptions, RunOutput, PROGRESS_EVERY,
+};
+use crate::vehicle::rigid_body::{normalize_quaternion, RigidBodyState};
+use crate::vehicle::{from_quad_state, to_quad_state, RigidBody, RigidBodyInput, RigidBodyParams};
+
+/// True when the flight needs the realistic loop.
+pub fn is_realistic(scenario: &Scenario) -> bool {
+    scenario.vehicle.model == VehicleModel::RigidBody
+        || scenario.actuators.is_some_and(|a| a != ActuatorParams::default())
+        || scenario.ground.is_some_and(|g| g.enabled)
+}
+
+/// The actuators of a realistic flight: `[actuators]`, or ideal ones with
+/// the legacy `simulation.max_rotor_speed` as ω_max.
+pub fn actuators(scenario: &Scenario) -> ActuatorParams {
+    scenario.actuators.unwrap_or(ActuatorParams {
+        max_rotor_speed: scenario.simulation.max_rotor_speed.unwrap_or(f64::INFINITY),
+        ..ActuatorParams::default()
+    })
+}
+
+// One value per flight, on the stack: the size difference does not matter.
+#[allow(clippy::large_enum_variant)]
+enum Truth {
+    Paper([f64; 12]),
+    Rigid { body: RigidBody, base: RigidBodyParams, key: (f64, f64), x: RigidBodyState },
+}
+
+impl Truth {
+    fn quad_state(&self) -> QuadState {
+        match self {
+            Truth::Paper(x) => QuadState::from_array(x),
+            Truth::Rigid { x, .. } => to_quad_state(x),
+        }
+    }
+}
+
+/// Fly `controller` through `scenario` on the realistic path (module docs).
+pub fn simulate_realistic(scenario: &Scenario, controller: &mut dyn Controller, options: RunOptions<'_>) -> RunOutput {
+    let sim = &scenario.simulation;
+    let dt = scenario.control_period();
+    let steps = (scenario.duration / dt).round() as u64;
+    let h = dt / sim.substeps as f64;
+    let record_every = if options.record && sim.record_rate > 0.0 {
+        ((sim.control_rate / sim.record_rate).round() as u64).max(1)
+    } else {
+        0
+    };
+    let ground = scenario.ground.filter(|g| g.enabled);
+    let act = actuators(scenario);
+    let ideal = act == ActuatorParams::default();
+    let (allocation, demand_params) = scenario.truth_allocation();
+    let mixer = Mixer::new(allocation, &act).expect("validated by Scenario::validate");
+    let base_plant = scenario.actual_plant.unwrap_or(scenario.plant);
+
+    let mut env = Environment::new(scenario.environment());
+    let initial = scenario.initial_state.state();
+    let mut truth = match scenario.vehicle.model {
+        VehicleModel::Paper => Truth::Paper(initial.to_array()),
+        VehicleModel::RigidBody => {
+            let base = scenario.rigid_body_params();
+            let body = RigidBody::new(base).expect("validated by Scenario::validate");
+            Truth::Rigid { body, base, key: (1.0, 0.0), x: from_quad_state(&initial) }
+        }
+    };
+    let paper_direct = ideal && matches!(truth, Truth::Paper(_));
+    let hover = match &truth {
+        Truth::Rigid { base, .. } => base.hover_rotor_speed(),
+        Truth::Paper(_) => (base_plant.mass * base_plant.gravity / (4.0 * base_plant.lift_coefficient)).sqrt(),
+    };
+    let mut motors = Motors::new(&act, [hover; 4]);
+    let mut noise_rng = motor_noise_rng(scenario.seed);
+
+    let mut metrics = MetricsAccumulator::new(dt, sim.settling_band, sim.settling_floor, sim.steady_state_after)
+        .with_window(sim.metrics_window);
+    let mut envelope = Tracker::new(scenario.envelope);
+    let estimate_names = controller.estimate_names();
+    let adapts_mass = controller.adapts_mass();
+    let mut recording = if record_every > 0 {
+        Recording::with_columns(recording_columns(&estimate_names, adapts_mass))
+    } else {
+        Recording::default()
+    };
+    let named_slots: Vec<usize> = (0..MAX_ESTIMATES).filter(|&k| !estimate_names[k].is_empty()).collect();
+    let mut row: Vec<f64> = Vec::with_capacity(recording.names.len());
+    let mut exit = ExitStatus::Completed;
+    let mut executed = 0;
+    let mut peak_demand = 0.0f64;
+    let mut saturated_periods = 0u64;
+
+    let mut tv_now = env.time_varying(0.0);
+    let mut reference = reference_at(scenario, 0.0);
+    {
+        let s = truth.quad_state();
+        envelope.observe(0.0, &s.position, &reference.position, &s.attitude);
+    }
+    'periods: for k in 0..steps {
+        let t = k as f64 * dt;
+        let state = truth.quad_state();
+        let command = controller.update(&state, &reference, dt);
+        env.next_period();
+        let plant_now = env.params_with(&tv_now);
+        let demand = rotor_speeds(&demand_params, &command, f64::INFINITY);
+        peak_demand = demand.iter().fold(peak_demand, |m, &w| if w.is_finite() { m.max(w) } else { m });
+        let (applied, target, saturated) = if paper_direct {
+            (command, rotor_speeds(&plant_now, &command, f64::INFINITY), false)
+        } else {
+            let m = mixer.mix(&command);
+            (m.applied, m.rotor_speeds, m.saturated)
+        };
+        saturated_periods += u64::from(saturated);
+        controller.actuator_feedback(saturated);
+        let telemetry = controller.telemetry();
+        let z = motors.sample_noise(&mut noise_rng);
+        let omega_now = if paper_direct { target } else { motors.with_noise(&motors.speeds(), &z) };
+
+        // Rigid body: mass and inertia of this period.
+        if let Truth::Rigid { body, base, key, .. } = &mut truth {
+            let added = tv_now.mass - base_plant.mass;
+            let scale = tv_now.inertia[0] / base_plant.inertia[0];
+            if (added, scale) != *key {
+                let mut p = *base;
+                p.mass += added;
+                p.inertia = p.inertia.map(|r| r.map(|v| v * scale));
+                if let Ok(b) = RigidBody::new(p) {
+                    *body = b;
+                }
+                *key = (added, scale);
+            }
+        }
+
+        let mut errors = [0.0; 6];
+        for i in 0..3 {
+            errors[i] = state.position[i] - reference.position[i];
+        }
+        errors[3] = state.attitude[0] - telemetry.attitude_reference[0];
+        errors[4] = state.attitude[1] - telemetry.attitude_reference[1];
+        errors[5] = state.attitude[2] - reference.yaw;
+        let u = [applied.thrust, applied.torque[0], applied.torque[1], applied.torque[2]];
+        if !(u.iter().all(|v| v.is_finite())) {
+            exit = ExitStatus::Diverged { divergence: Divergence::NonFinite, time: t };
+            break;
+        }
+        metrics.observe(t, &errors, &u);
+
+        if record_every > 0 && k % record_every == 0 {
+            row.clear();
+            row.push(t);
+            row.extend(state.to_array());
+            row.extend(reference.position);
+            row.extend(telemetry.attitude_reference);
+            row.extend(telemetry.attitude_demand);
+            row.extend(u);
+            row.extend([command.thrust, command.torque[0], command.torque[1], command.torque[2]]);
+            row.extend(omega_now);
+            row.push(residual_speed(&omega_now));
+            row.extend(telemetry.sliding);
+            for est in &telemetry.estimates {
+                for &slot in &named_slots {
+                    row.push(est[slot]);
+                }
+            }
+            if adapts_mass {
+                row.push(telemetry.alpha_hat);
+                row.push(telemetry.alpha_hat * scenario.plant.mass);
+            }
+            row.push(plant_now.mass);
+            row.extend(plant_now.inertia);
+            row.extend(tv_now.disturbance);
+            recording.push_row(&row);
+        }
+
+        for j in 0..sim.substeps {
+            let t0 = t + j as f64 * h;
+            let tv_next = env.time_varying(t0 + h);
+            let (a, b, env_ref, motors_ref) = (tv_now, tv_next, &env, &motors);
+            let speeds_at = |tau: f64| motors_ref.with_noise(&motors_ref.speeds_after(&target, tau - t0), &z);
+            let z_prev;
+            let (zr, vzr): (&mut f64, &mut f64) = match &mut truth {
+                Truth::Paper(x) => {
+                    z_prev = x[2];
+                    *x = if paper_direct {
+                        let omega_bar = residual_speed(&target);
+                        let f = |tau: f64, s: &[f64; 12]| {
+                            let tv = TimeVarying::lerp(&a, &b, (tau - t0) / h);
+                            derivative(s, &applied, omega_bar, &env_ref.params_with(&tv), &tv.disturbance)
+                        };
+                        rk4_step(f, t0, x, h)
+                    } else {
+                        let f = |tau: f64, s: &[f64; 12]| {
+                            let tv = TimeVarying::lerp(&a, &b, (tau - t0) / h);
+                            let p = env_ref.params_with(&tv);
+                            let w = speeds_at(tau);
+                            let delivered: Command = forces_from_squared_speeds(&p, &w.map(|o| o * o));
+                            derivative(s, &delivered, residual_speed(&w), &p, &tv.disturbance)
+                        };
+                        rk4_step(f, t0, x, h)
+                    };
+                    let (head, tail) = x.split_at_mut(8);
+                    (&mut head[2], &mut tail[0])
+                }
+                Truth::Rigid { body, x, .. } => {
+                    z_prev = x[2];
+                    let body = &*body;
+                    let inertia = body.params().inertia;
+                    let mass = body.params().mass;
+                    let f = |tau: f64, s: &RigidBodyState| {
+                        let tv = TimeVarying::lerp(&a, &b, (tau - t0) / h);
+                        let d = tv.disturbance;
+                        let input = RigidBodyInput {
+                            rotor_speeds: speeds_at(tau),
+                            wind: [0.0; 3],
+                            force: [mass * d[0], mass * d[1], mass * d[2]],
+                            torque: core::array::from_fn(|r| (0..3).map(|c| inertia[r][c] * d[3 + c]).sum()),
+                        };
+                        body.derivative(s, &input)
+                    };
+                    *x = rk4_step(f, t0, x, h);
+                    normalize_quaternion(x);
+                    let (head, tail) = x.split_at_mut(5);
+                    (&mut head[2], &mut tail[0])
+                }
+            };
+            if let Some(g) = &ground {
+                if let Some((fraction, impact_speed)) = g.contact(z_prev, zr, vzr) {
+                    exit = ExitStatus::Crashed { time: t0 + fraction * h, impact_speed };
+                    executed = k + 1;
+                    break 'periods;
+                }
+            }
+            motors.advance(&target, h);
+            tv_now = tv_next;
+        }
+        executed = k + 1;
+        if let Some(progress) = options.progress {
+            if executed % PROGRESS_EVERY == 0 {
+                progress(PROGRESS_EVERY);
+            }
+        }
+
+        let t_next = (k + 1) as f64 * dt;
+        reference = reference_at(scenario, t_next);
+        let s = truth.quad_state();
+        envelope.observe(t_next, &s.position, &reference.position, &s.attitude);
+        if let Some(divergence) = check_divergence(scenario, &s.to_array(), &reference) {
+            exit = ExitStatus::Diverged { divergence, time: t_next };
+            break;
+        }
+    }
+
+    if let Some(progress) = options.progress {
+        progress(steps - executed / PROGRESS_EVERY * PROGRESS_EVERY);
+    }
+    let mut metrics = metrics.finish();
+    metrics.peak_rotor_speed_demand = Some(peak_demand);
+    metrics.saturation_fraction = Some(if executed > 0 { saturated_periods as f64 / executed as f64 } else { 0.0 });
+    RunOutput {
+        controller: controller.name().to_string(),
+        scenario: scenario.name.clone(),
+        envelope: envelope.verdict((!exit.is_completed()).then(|| exit.to_string())),
+        exit,
+        metrics,
+        recording,
+        steps: executed,
+    }
+}
