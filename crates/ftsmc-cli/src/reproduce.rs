@@ -299,6 +299,9 @@ pub fn metrics_table(runs: &[Flown], title: &str) -> String {
     ]);
     let mut settling = Table::new(["controller", "settle x (s)", "settle y (s)", "settle z (s)", "settle ψ (s)"]);
     let mut control = Table::new(["controller", "exit", "chattering U1 (N/s)", "chattering u2 (N·m/s)"]);
+    // Realistic flights (issue 11): the envelope's verdict and what was asked of the rotors.
+    let mut actuators = Table::new(["controller", "success", "peak ω demand (rad/s)", "saturated", "why not"]);
+    let mut realistic = false;
     let mut notes = Vec::new();
     let mut on_reference = false;
     for (run, scenario) in runs {
@@ -334,8 +337,26 @@ pub fn metrics_table(runs: &[Flown], title: &str) -> String {
         }
         settling.row(row);
         control.row(vec![name.clone(), run.exit.short(), v(m.chattering.thrust), v(m.chattering.roll_torque)]);
+        if run.envelope.is_some() || m.peak_rotor_speed_demand.is_some() {
+            realistic = true;
+        }
+        let why = match run.envelope.as_ref().and_then(|e| e.violation.clone()) {
+            _ if !ok => run.exit.short(),
+            Some(violation) => {
+                notes.push(format!("- {name}: left the envelope: {violation}."));
+                "envelope (below)".to_string()
+            }
+            None => dash(),
+        };
+        actuators.row(vec![
+            name.clone(),
+            if run.success() { "yes" } else { "no" }.to_string(),
+            m.peak_rotor_speed_demand.map_or_else(dash, |w| format!("{w:.0}")),
+            m.saturation_fraction.map_or_else(dash, |f| format!("{:.1} %", 100.0 * f)),
+            if run.success() { dash() } else { why },
+        ]);
         if !ok {
-            notes.push(format!("- {name}: {}; its metrics are `—` (they would cover a shorter span).", run.exit));
+            notes.push(format!("- {name}: {}; metrics `—` (shorter span).", run.exit));
         }
     }
     let units = "m²·s; ψ rad²·s";
@@ -355,6 +376,13 @@ pub fn metrics_table(runs: &[Flown], title: &str) -> String {
         settling.render()
     );
     let _ = write!(md, "Exit status and chattering (total variation Σ|Δu| per second):\n\n{}", control.render());
+    if realistic {
+        let _ = write!(
+            md,
+            "\nSuccess (completed and inside `[envelope]`) and rotors (peak demand before the limits; periods the mixer saturated):\n\n{}",
+            actuators.render()
+        );
+    }
     if !notes.is_empty() {
         md.push('\n');
         for n in notes {

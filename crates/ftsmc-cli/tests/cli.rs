@@ -236,3 +236,36 @@ fn a_deeply_nested_file_gives_one_short_error_line() {
     }
     std::fs::remove_dir_all(&dir).ok();
 }
+
+#[test]
+fn a_realistic_run_reports_success_and_rotor_demand() {
+    // Paper scenario 1 on the rigid body with 0-350 rad/s rotors, motor lag,
+    // ground and envelope: TSM-STA flies it inside the envelope without
+    // saturating; FTAFTSMC asks for far more than the rotors give and tilts over.
+    let dir = temp_dir("realistic");
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenarios/realism/rigid-body-scenario-1.toml");
+    let out = ftsmc(&["run", root.to_str().unwrap(), "-c", "tsm-sta,ftaftsmc", "--no-figures", "--out", "res"], &dir);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let row = |label: &str| {
+        stdout
+            .lines()
+            .find(|l| l.starts_with(&format!("| {label}")) && l.contains('%'))
+            .unwrap_or_else(|| panic!("no rotor row for {label}: {stdout}"))
+            .to_string()
+    };
+    assert!(stdout.contains("peak ω demand (rad/s)"), "{stdout}");
+    let tsm = row("TSM-STA");
+    assert!(tsm.contains("| yes ") && tsm.contains("0.0 %"), "{tsm}");
+    let ft = row("FTAFTSMC");
+    assert!(ft.contains("| no ") && ft.contains("diverged at"), "{ft}");
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("res/rigid-body-scenario-1/summary.json")).unwrap())
+            .unwrap();
+    let run = &summary["scenarios"]["rigid-body-scenario-1"];
+    assert_eq!(run["tsm-sta"]["success"], true);
+    assert_eq!(run["ftaftsmc"]["success"], false);
+    // The demand is what the law asked for before the 350 rad/s limit.
+    assert!(run["ftaftsmc"]["peak_rotor_speed_demand"].as_f64().unwrap() > 350.0);
+    assert!(stdout.lines().all(|l| l.chars().count() <= 120), "a line is wider than 120 columns");
+}
