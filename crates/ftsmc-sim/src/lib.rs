@@ -37,6 +37,7 @@
 //!            ground.rs          ground plane, touchdown and crash (`[ground]`)
 //!          envelope.rs          success envelope and its verdict (`[envelope]`)
 //!          metrics.rs           ISE, IAE, ITAE, settling, chattering, online
+//!          sensors.rs           measured state: noise, bias, sample rate, latency (not in run/ yet)
 //! floor 1  axes.rs              AxisSet and other per-axis containers
 //!          signal/              time signals with analytic derivatives
 //!            waypoints.rs       quintic waypoint splines
@@ -58,6 +59,7 @@ pub mod names;
 pub mod registry;
 pub mod run;
 pub mod scenario;
+pub mod sensors;
 pub mod signal;
 pub mod text;
 pub mod vehicle;

@@ -20,6 +20,7 @@ const FLOORS: &[(&str, u32)] = &[
     ("environment", 2),
     ("metrics", 2),
     ("envelope", 2),
+    ("sensors", 2),
     ("scenario", 3),
     ("run", 4),
     ("registry", 5),

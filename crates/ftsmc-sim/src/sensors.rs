@@ -1,0 +1,329 @@
+//! Sensors: what the controller sees instead of the true state.
+//!
+//! Each control period the run loop hands the true [`QuadState`] to
+//! [`Sensors::measure`] and gives the controller the answer. The pipeline,
+//! in order:
+//!
+//! 1. **Sampling** at [`SensorParams::sample_rate`] (zero-order hold): on a
+//!    sample period the sensor reads the truth, otherwise it repeats its last
+//!    reading.
+//! 2. **Error** on each reading, per quantity and axis: `measured = truth +
+//!    bias + std · z`, `z ~ N(0, 1)` drawn from that quantity's own generator
+//!    ([`POSITION_NOISE_STREAM`] … [`ANGULAR_RATE_NOISE_STREAM`]), so turning
+//!    one source on or off leaves every other source's draws unchanged.
+//!    Rates are corrupted in the frame [`SensorParams::rates`] says is
+//!    measured; body rates are turned back into the Euler rates the
+//!    controllers use with the *measured* attitude, as an estimator would.
+//! 3. **Latency** of [`SensorParams::latency`] whole control periods: the
+//!    controller sees the reading of `latency` periods ago. Before `latency`
+//!    periods have elapsed it sees the first reading (the sensor's start-up
+//!    value), so a delayed sensor never invents a state.
+//!
+//! [`SensorParams::default`] is the perfect sensor: every period, no error,
+//! no latency; [`Sensors::measure`] then returns the truth bit-exactly.
+//!
+//! No allocation per call: the latency line is a ring buffer of
+//! `latency + 1` states allocated once in [`Sensors::new`]; `measure` only
+//! writes into it. A run loop calling `measure` every step does not touch the
+//! heap (asserted by `tests/sensors_alloc.rs` with a counting allocator).
+
+use ftsmc_core::law::GainError;
+use ftsmc_core::model::QuadState;
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{Distribution, StandardNormal};
+use serde::{Deserialize, Serialize};
+
+use crate::vehicle::rigid_body::{euler_rates_to_body_rates, GIMBAL_LOCK_COS};
+
+/// ChaCha stream of the position-noise generator (scenario seed). Streams in
+/// use elsewhere: 1–6 drag noise (`environment`), 16 motor noise
+/// ([`crate::actuators::MOTOR_NOISE_STREAM`]), 100 + k Monte Carlo sampling
+/// (`scenario::distributions`). The sensors take 20–23.
+pub const POSITION_NOISE_STREAM: u64 = 20;
+/// ChaCha stream of the velocity-noise generator.
+pub const VELOCITY_NOISE_STREAM: u64 = 21;
+/// ChaCha stream of the attitude-noise generator.
+pub const ATTITUDE_NOISE_STREAM: u64 = 22;
+/// ChaCha stream of the angular-rate-noise generator (body or Euler rates,
+/// whichever [`SensorParams::rates`] measures).
+pub const ANGULAR_RATE_NOISE_STREAM: u64 = 23;
+
+/// Largest accepted noise standard deviation or |bias|, in the quantity's
+/// unit (m, m/s, rad or rad/s): far beyond any real sensor, it only catches
+/// unit slips and overflow.
+pub const MAX_ERROR: f64 = 1e3;
+
+/// Largest accepted latency, control periods (bounds the ring buffer).
+pub const MAX_LATENCY: u32 = 100_000;
+
+/// Error model of one measured quantity, per axis `[x, y, z]` or
+/// `[φ, θ, ψ]` (or `[p, q, r]` for body rates). Default: no error.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct QuantityError {
+    /// Standard deviation of the white Gaussian noise added to each reading,
+    /// in the quantity's unit (default 0: no noise). A fresh draw is taken
+    /// at every sample, not every control period.
+    pub std: [f64; 3],
+    /// Constant bias added to each reading, in the quantity's unit
+    /// (default 0).
+    pub bias: [f64; 3],
+}
+
+impl QuantityError {
+    fn has_noise(&self) -> bool {
+        self.std.iter().any(|s| *s != 0.0)
+    }
+
+    fn check(&self, std_field: &'static str, bias_field: &'static str) -> Result<(), GainError> {
+        for s in self.std {
+            if !(0.0..=MAX_ERROR).contains(&s) {
+                return Err(GainError { field: std_field, value: s, expected: "0 <= std <= 1e3 (per axis)" });
+            }
+        }
+        for b in self.bias {
+            if !(-MAX_ERROR..=MAX_ERROR).contains(&b) {
+                return Err(GainError { field: bias_field, value: b, expected: "-1e3 <= bias <= 1e3 (per axis)" });
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Which angular rates the sensor measures (`rates = "euler" | "body"`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum RateFrame {
+    /// Euler-angle rates `[φ̇, θ̇, ψ̇]`, rad/s, corrupted directly (default:
+    /// the paper's idealisation).
+    #[default]
+    Euler,
+    /// Body rates `Ω = [p, q, r]`, rad/s, as a gyroscope measures them:
+    /// the true Euler rates are mapped to Ω at the true attitude, corrupted,
+    /// and mapped back to Euler rates at the *measured* attitude.
+    Body,
+}
+
+/// Sensor parameters. Defaults: the perfect sensor — no noise, no bias,
+/// Euler rates, a sample every control period, no latency.
+///
+/// Orders of magnitude, as examples only: an optical motion-capture system
+/// (Vicon) shows static position errors around 0.15 mm with a spread below
+/// 0.025 mm and dynamic errors under 2 mm (Merriaux et al., "A Study of
+/// Vicon System Positioning Performance", *Sensors* 17(7):1591, 2017); a
+/// consumer MEMS gyroscope (InvenSense MPU-6000 datasheet, PS-MPU-6000A-00
+/// rev. 3.4, §6.1) has a rate noise spectral density of 0.005 °/s/√Hz and a
+/// total RMS noise of 0.05 °/s at a 100 Hz filter bandwidth (≈ 8.7e-4 rad/s).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct SensorParams {
+    /// Position error, m.
+    pub position: QuantityError,
+    /// Velocity error, m/s.
+    pub velocity: QuantityError,
+    /// Attitude (Z-Y-X Euler angles) error, rad.
+    pub attitude: QuantityError,
+    /// Angular-rate error, rad/s, in the frame [`SensorParams::rates`] names.
+    pub angular_rate: QuantityError,
+    /// Which rates are measured (default Euler).
+    pub rates: RateFrame,
+    /// Sample rate, Hz (default: absent, a sample every control period).
+    /// Below the control rate the last sample is held (zero-order hold); at
+    /// or above it the controller still sees one sample per period.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sample_rate: Option<f64>,
+    /// Latency, whole control periods (default 0).
+    pub latency: u32,
+}
+
+impl SensorParams {
+    /// Whether these parameters are the perfect sensor (truth bit-exactly).
+    pub fn is_perfect(&self) -> bool {
+        *self == Self::default()
+    }
+
+    /// Check every value: `0 <= std <= 1e3`, `|bias| <= 1e3` (per axis, in
+    /// the quantity's unit), `0 < sample_rate <= 1e6` Hz, `latency <= 1e5`
+    /// periods. The error names the offending field.
+    pub fn check(&self) -> Result<(), GainError> {
+        self.position.check("position.std", "position.bias")?;
+        self.velocity.check("velocity.std", "velocity.bias")?;
+        self.attitude.check("attitude.std", "attitude.bias")?;
+        self.angular_rate.check("angular_rate.std", "angular_rate.bias")?;
+        if let Some(rate) = self.sample_rate {
+            if !(rate > 0.0 && rate <= 1e6) {
+                return Err(GainError { field: "sample_rate", value: rate, expected: "0 < sample_rate <= 1e6 Hz" });
+            }
+        }
+        if self.latency > MAX_LATENCY {
+            return Err(GainError {
+                field: "latency",
+                value: f64::from(self.latency),
+                expected: "0 <= latency <= 100000 control periods",
+            });
+        }
+        Ok(())
+    }
+}
+
+/// The generator of one noise source: `ChaCha8Rng` seeded with the run's
+/// seed, on `stream`.
+pub fn sensor_noise_rng(seed: u64, stream: u64) -> ChaCha8Rng {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    rng.set_stream(stream);
+    rng
+}
+
+/// One noise source: its error model and its own generator.
+#[derive(Clone, Debug)]
+struct Source {
+    error: QuantityError,
+    rng: ChaCha8Rng,
+}
+
+impl Source {
+    fn new(error: QuantityError, seed: u64, stream: u64) -> Self {
+        Self { error, rng: sensor_noise_rng(seed, stream) }
+    }
+
+    /// `truth + bias + std · z` per axis. Three draws per reading whenever
+    /// any axis is noisy (so an axis's draws do not depend on the others'
+    /// std); none otherwise. Zero terms are skipped, not added, so a
+    /// perfect quantity is returned bit-exactly (`-0.0 + 0.0` would not be).
+    fn corrupt(&mut self, truth: [f64; 3]) -> [f64; 3] {
+        let mut out = truth;
+        if self.error.has_noise() {
+            for k in 0..3 {
+                let z: f64 = StandardNormal.sample(&mut self.rng);
+                if self.error.std[k] != 0.0 {
+                    out[k] += self.error.std[k] * z;
+                }
+            }
+        }
+        for k in 0..3 {
+            if self.error.bias[k] != 0.0 {
+                out[k] += self.error.bias[k];
+            }
+        }
+        out
+    }
+}
+
+/// Z-Y-X Euler rates from body rates at `euler`, never failing: within
+/// [`GIMBAL_LOCK_COS`] of θ = ±π/2, `cos θ` is clamped to `±GIMBAL_LOCK_COS`
+/// as in [`crate::vehicle::to_quad_state`]. (Local because the clamped form
+/// in `vehicle` is private to it.)
+fn euler_rates_clamped(euler: &[f64; 3], body: &[f64; 3]) -> [f64; 3] {
+    let (sphi, cphi) = euler[0].sin_cos();
+    let (stheta, c) = euler[1].sin_cos();
+    let c = if c.abs() >= GIMBAL_LOCK_COS {
+        c
+    } else if c < 0.0 {
+        -GIMBAL_LOCK_COS
+    } else {
+        GIMBAL_LOCK_COS
+    };
+    let [p, q, r] = *body;
+    let a = q * sphi + r * cphi;
+    [p + a * stheta / c, q * cphi - r * sphi, a / c]
+}
+
+/// A running sensor: four noise sources, the sample clock, the held sample
+/// and the latency line. Build one per flight with [`Sensors::new`]; call
+/// [`Sensors::measure`] once per control period.
+#[derive(Clone, Debug)]
+pub struct Sensors {
+    params: SensorParams,
+    position: Source,
+    velocity: Source,
+    attitude: Source,
+    angular_rate: Source,
+    /// Samples per control period, clamped to at most 1.
+    samples_per_period: f64,
+    /// Control periods seen so far.
+    period: u64,
+    /// Index of the last sample taken (`⌊period · samples_per_period⌋`).
+    last_sample: u64,
+    /// The reading held between samples.
+    held: QuadState,
+    /// Ring of the last `latency + 1` readings.
+    line: Vec<QuadState>,
+    /// Slot the next reading goes into.
+    head: usize,
+}
+
+impl Sensors {
+    /// A sensor for a run at `control_rate_hz` (Hz, > 0) whose noise streams
+    /// are keyed by `seed` (streams [`POSITION_NOISE_STREAM`]…
+    /// [`ANGULAR_RATE_NOISE_STREAM`]). `params` should have passed
+    /// [`SensorParams::check`]. Allocates the latency line (`latency + 1`
+    /// states) here, once.
+    pub fn new(params: SensorParams, control_rate_hz: f64, seed: u64) -> Self {
+        let samples_per_period = match params.sample_rate {
+            Some(rate) if control_rate_hz > 0.0 => (rate / control_rate_hz).min(1.0),
+            _ => 1.0,
+        };
+        Self {
+            params,
+            position: Source::new(params.position, seed, POSITION_NOISE_STREAM),
+            velocity: Source::new(params.velocity, seed, VELOCITY_NOISE_STREAM),
+            attitude: Source::new(params.attitude, seed, ATTITUDE_NOISE_STREAM),
+            angular_rate: Source::new(params.angular_rate, seed, ANGULAR_RATE_NOISE_STREAM),
+            samples_per_period,
+            period: 0,
+            last_sample: 0,
+            held: QuadState::default(),
+            line: vec![QuadState::default(); params.latency as usize + 1],
+            head: 0,
+        }
+    }
+
+    /// The parameters this sensor was built with.
+    pub fn params(&self) -> &SensorParams {
+        &self.params
+    }
+
+    /// What the controller sees this control period, given the true state
+    /// (Euler rates in `truth.angular_rate`, rad/s). Call exactly once per
+    /// control period: the sample clock and the latency line advance by one
+    /// period per call. Never allocates.
+    pub fn measure(&mut self, truth: &QuadState) -> QuadState {
+        // A sample is due when the sample index ⌊k · f_s / f_c⌋ moves on; the
+        // 1e-9 guards exact ratios (100 Hz at 1 kHz: every 10th period)
+        // against rounding down.
+        let index = (self.period as f64 * self.samples_per_period + 1e-9).floor() as u64;
+        if self.period == 0 || index != self.last_sample {
+            self.last_sample = index;
+            self.held = self.read(truth);
+        }
+        if self.period == 0 {
+            // Start-up: until `latency` periods have elapsed the line holds
+            // the first reading.
+            self.line.fill(self.held);
+        }
+        self.period += 1;
+
+        let n = self.line.len();
+        self.line[self.head] = self.held;
+        self.head = (self.head + 1) % n;
+        // The oldest slot, now at `head`, holds the reading of `latency`
+        // periods ago (n = latency + 1).
+        self.line[self.head]
+    }
+
+    /// One reading of the truth with every error applied.
+    fn read(&mut self, truth: &QuadState) -> QuadState {
+        let position = self.position.corrupt(truth.position);
+        let velocity = self.velocity.corrupt(truth.velocity);
+        let attitude = self.attitude.corrupt(truth.attitude);
+        let angular_rate = match self.params.rates {
+            RateFrame::Euler => self.angular_rate.corrupt(truth.angular_rate),
+            RateFrame::Body => {
+                let body = euler_rates_to_body_rates(&truth.attitude, &truth.angular_rate);
+                euler_rates_clamped(&attitude, &self.angular_rate.corrupt(body))
+            }
+        };
+        QuadState { position, attitude, velocity, angular_rate }
+    }
+}
