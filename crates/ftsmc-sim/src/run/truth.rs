@@ -26,6 +26,10 @@
 //!    actual speeds (paper Eq. 2) and their Ω̄.
 //! 5. Ground contact after every substep ([`crate::environment::ground`]).
 //!
+//! With `[sensors]` (not perfect) the controller of step 1 sees
+//! [`Sensors::measure`] of the state (noise, bias, sample-and-hold,
+//! latency); metrics, the envelope and the recording use the truth.
+//!
 //! # The scenario's plant variations on the rigid body
 //!
 //! The paper's disturbances are accelerations: `D_x, D_y, D_z` become a world
@@ -64,6 +68,7 @@ use super::exit::check_divergence;
 use super::{
     recording_columns, reference_at, Divergence, ExitStatus, Recording, RunOptions, RunOutput, PROGRESS_EVERY,
 };
+use crate::sensors::Sensors;
 use crate::vehicle::rigid_body::{normalize_quaternion, RigidBodyState};
 use crate::vehicle::{from_quad_state, to_quad_state, RigidBody, RigidBodyInput, RigidBodyParams};
 
@@ -72,6 +77,7 @@ pub fn is_realistic(scenario: &Scenario) -> bool {
     scenario.vehicle.model == VehicleModel::RigidBody
         || scenario.actuators.is_some_and(|a| a != ActuatorParams::default())
         || scenario.ground.is_some_and(|g| g.enabled)
+        || scenario.sensors.is_some_and(|s| !s.is_perfect())
 }
 
 /// The actuators of a realistic flight: `[actuators]`, or ideal ones with
@@ -134,6 +140,9 @@ pub fn simulate_realistic(scenario: &Scenario, controller: &mut dyn Controller, 
     };
     let mut motors = Motors::new(&act, [hover; 4]);
     let mut noise_rng = motor_noise_rng(scenario.seed);
+    // What the controller sees (`[sensors]`; its own streams 20-23 of the seed).
+    let mut sensors =
+        scenario.sensors.filter(|s| !s.is_perfect()).map(|s| Sensors::new(s, sim.control_rate, scenario.seed));
 
     let mut metrics = MetricsAccumulator::new(dt, sim.settling_band, sim.settling_floor, sim.steady_state_after)
         .with_window(sim.metrics_window);
@@ -161,7 +170,10 @@ pub fn simulate_realistic(scenario: &Scenario, controller: &mut dyn Controller, 
     'periods: for k in 0..steps {
         let t = k as f64 * dt;
         let state = truth.quad_state();
-        let command = controller.update(&state, &reference, dt);
+        // The controller flies on the measurement; metrics, the envelope and
+        // the recording keep the truth.
+        let measured = sensors.as_mut().map_or(state, |s| s.measure(&state));
+        let command = controller.update(&measured, &reference, dt);
         env.next_period();
         let plant_now = env.params_with(&tv_now);
         let demand = rotor_speeds(&demand_params, &command, f64::INFINITY);

@@ -373,6 +373,9 @@ pub struct Scenario {
     /// Success envelope (`[envelope]`, default: success = completed).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub envelope: Option<crate::envelope::Envelope>,
+    /// What the controller measures (`[sensors]`, default: the true state).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sensors: Option<crate::sensors::SensorParams>,
 }
 
 fn is_default_limits(l: &Limits) -> bool {

@@ -258,6 +258,9 @@ pub(super) fn check_realism(scenario: &Scenario) -> Result<(), (String, GainErro
             ));
         }
     }
+    if let Some(s) = &scenario.sensors {
+        s.check().map_err(|e| ("sensors".to_string(), e))?;
+    }
     if let Some(e) = &scenario.envelope {
         e.check().map_err(|e| ("envelope".to_string(), e))?;
     }
