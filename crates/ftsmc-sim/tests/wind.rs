@@ -182,21 +182,22 @@ fn sample(seed: u64, airspeed: f64) -> (Dryden, [Vec<f64>; 3]) {
     (d, out)
 }
 
-#[test]
-fn dryden_welch_psd_matches_the_analytic_spectrum() {
-    // 2^20 steps at dt = 0.01 s (10486 s), V = 10 m/s, moderate, h = 10 m:
-    // T_u = T_v = L/V = 6.74 s, T_w = 1 s. Segments of 2^14 (df = 0.0061 Hz).
-    let (d, x) = sample(2024, V);
+/// Welch/analytic ratios in log-spaced bands between max(1/(10 T_L), 4 df)
+/// and Nyquist/3, per axis, for a sample at airspeed `v`.
+fn psd_band_ratios(seed: u64, v: f64) -> [Vec<f64>; 3] {
+    let (d, x) = sample(seed, v);
+    let v = d.airspeed(); // the floor applies
     let sc = d.scales();
     let nseg = 1 << 14;
+    let mut out: [Vec<f64>; 3] = Default::default();
     let fs = 1.0 / DT;
     let df = fs / nseg as f64;
     for axis in 0..3 {
         let p = welch(&x[axis], nseg, DT);
         let (sigma, l) = (sc.sigma[axis], sc.length[axis]);
-        let t_l = l / V;
+        let t_l = l / v;
         let s_alias = |f: f64| -> f64 {
-            (-200i32..=200).map(|m| 2.0 * PI * phi(axis, sigma, l, V, 2.0 * PI * (f + m as f64 * fs).abs())).sum()
+            (-200i32..=200).map(|m| 2.0 * PI * phi(axis, sigma, l, v, 2.0 * PI * (f + m as f64 * fs).abs())).sum()
         };
         let f_lo = (1.0 / (10.0 * t_l)).max(4.0 * df);
         let f_hi = fs / 6.0; // Nyquist / 3
@@ -217,14 +218,34 @@ fn dryden_welch_psd_matches_the_analytic_spectrum() {
                 ratios.push(est / ana);
             }
         }
-        eprintln!("axis {axis}: f in [{f_lo:.4}, {f_hi:.2}] Hz, Welch/analytic per band: {ratios:.3?}");
-        assert!(ratios.len() >= 8, "{ratios:?}");
-        for r in &ratios {
-            assert!((0.7..=1.3).contains(r), "axis {axis}: band ratio {r} outside ±30 %: {ratios:?}");
-        }
-        let mean_ratio = ratios.iter().sum::<f64>() / ratios.len() as f64;
-        assert!((mean_ratio - 1.0).abs() < 0.1, "axis {axis}: mean ratio {mean_ratio}");
+        eprintln!("V = {v} m/s, axis {axis}: f in [{f_lo:.4}, {f_hi:.2}] Hz, Welch/analytic per band: {ratios:.3?}");
+        out[axis] = ratios;
     }
+    out
+}
+
+fn assert_ratios(ratios: &[Vec<f64>; 3]) {
+    for (axis, r) in ratios.iter().enumerate() {
+        assert!(r.len() >= 8, "{r:?}");
+        for x in r {
+            assert!((0.7..=1.3).contains(x), "axis {axis}: band ratio {x} outside ±30 %: {r:?}");
+        }
+        let mean = r.iter().sum::<f64>() / r.len() as f64;
+        assert!((mean - 1.0).abs() < 0.1, "axis {axis}: mean ratio {mean}");
+    }
+}
+
+#[test]
+fn dryden_welch_psd_matches_the_analytic_spectrum() {
+    // 2^20 steps at dt = 0.01 s (10486 s), V = 10 m/s, moderate, h = 10 m:
+    // T_u = T_v = L/V = 6.74 s, T_w = 1 s. Segments of 2^14 (df = 0.0061 Hz).
+    assert_ratios(&psd_band_ratios(2024, V));
+}
+
+#[test]
+fn dryden_welch_psd_at_the_hover_airspeed_floor() {
+    // Hover: V = airspeed floor = 1 m/s (T_u = 67 s, T_w = 10 s).
+    assert_ratios(&psd_band_ratios(77, 0.0));
 }
 
 #[test]
@@ -382,4 +403,29 @@ fn bad_values_are_rejected_with_their_field() {
     }
     assert_eq!(Wind::new(WindParams::default(), 0.0, 0).unwrap_err().field, "dt");
     assert_eq!(Wind::new(WindParams::default(), f64::NAN, 0).unwrap_err().field, "dt");
+}
+
+#[test]
+fn changing_the_airspeed_keeps_the_variance() {
+    // The states are scaled so that their stationary law does not depend on
+    // V: switching from the floor to 10 m/s mid-flight leaves σ² unchanged.
+    let mut d = Dryden::new(TurbulenceParams::moderate(), DT, 0.0, 9);
+    for _ in 0..1000 {
+        d.step();
+    }
+    d.set_airspeed(V);
+    let n = 1 << 19;
+    let mut sum = [0.0; 3];
+    for _ in 0..n {
+        let s = d.step();
+        for k in 0..3 {
+            sum[k] += s[k] * s[k];
+        }
+    }
+    for k in 0..3 {
+        let sigma = d.scales().sigma[k];
+        let ratio = sum[k] / n as f64 / (sigma * sigma);
+        eprintln!("after the switch, axis {k}: mean square / σ² = {ratio:.4}");
+        assert!((ratio - 1.0).abs() < 0.1, "axis {k}: {ratio}");
+    }
 }
