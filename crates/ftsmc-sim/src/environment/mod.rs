@@ -6,6 +6,7 @@ mod disturbance;
 pub mod ground;
 mod payload;
 mod variation;
+pub mod wind;
 
 pub use disturbance::DisturbanceSignals;
 pub use payload::Payload;

@@ -1,0 +1,511 @@
+//! Wind: a mean wind vector, discrete 1−cosine gusts and Dryden turbulence
+//! in the low-altitude form of MIL-F-8785C §3.7 / MIL-HDBK-1797 (Appendix A,
+//! the "Dryden form"), evaluated in the world frame (x, y horizontal, z up,
+//! as [`crate::vehicle::rigid_body`]) for the air-relative drag of the truth
+//! models.
+//!
+//! # Spectra (what this module implements)
+//!
+//! Frozen turbulence seen at airspeed `V`, spatial frequency `Ω = ω/V`
+//! (rad/m), **MIL-F-8785C form** with the 8785C scale lengths:
+//!
+//! ```text
+//! Φ_u(Ω) = σ_u² (2 L_u/π) / (1 + (L_u Ω)²)
+//! Φ_v(Ω) = σ_v² (L_v/π) (1 + 3 (L_v Ω)²) / (1 + (L_v Ω)²)²      (Φ_w likewise)
+//! low altitude, h in ft (h < 1000 ft):
+//!   L_w = h,  L_u = L_v = h / (0.177 + 0.000823 h)^1.2
+//!   σ_w = 0.1 W₂₀,  σ_u = σ_v = σ_w / (0.177 + 0.000823 h)^0.4
+//!   W₂₀ = 15 / 30 / 45 kt (light / moderate / severe)
+//! ```
+//!
+//! MIL-HDBK-1797 writes the same spectra as
+//! `Φ_v = σ² (2L/π)(1 + 12 (LΩ)²)/(1 + 4 (LΩ)²)²` with **halved** lateral and
+//! vertical scales (`2 L_w = h`, `2 L_v = L_u`); `Φ_u` is identical in both.
+//! The two are the same spectrum; the scales [`DrydenScales::length`] returned
+//! here are the 8785C ones and must be used with the 8785C form above. Each
+//! `Φ(Ω)` is one-sided in Ω (∫₀^∞ Φ dΩ = σ²); in time, `Φ(ω) = Φ(Ω)/V` is
+//! one-sided in rad/s (∫₀^∞ Φ(ω) dω = σ²).
+//!
+//! # Shaping filters and their discretisation
+//!
+//! With `a = V/L` (1/s), the temporal spectra are those of
+//!
+//! ```text
+//! u:  u̇ = −a u + σ_u √(2a) ξ                         (H_u = σ_u √(2L/(πV)) / (1 + s/a))
+//! v:  ż₁ = a z₂,  ż₂ = −a z₁ − 2a z₂ + σ_v √a ξ,  v = z₁ + √3 z₂
+//!                                                    (H_v = σ_v √(L/(πV)) (1 + √3 s/a) / (1 + s/a)²)
+//! ```
+//!
+//! (`w` like `v`), `ξ` unit-intensity white noise (`E[ξ(t)ξ(s)] = δ(t − s)`).
+//! The states are scaled so that their stationary covariance does not depend
+//! on `V`: `u` has variance σ_u², `z₁`, `z₂` are uncorrelated with variance
+//! σ²/4 each (so `var v = σ²/4 + 3σ²/4 = σ²`), and changing the airspeed
+//! ([`Dryden::set_airspeed`]) changes the coefficients without a transient.
+//!
+//! The processes are discretised **exactly** at the step `dt` (the sampled
+//! sequence has exactly the continuous process's autocovariance at the sample
+//! instants): `x_{k+1} = e^{A dt} x_k + w_k`, `w_k ~ N(0, Q_d)`,
+//! `Q_d = ∫₀^dt e^{As} B Bᵀ e^{Aᵀs} ds`. For `u`: `e^{−a dt}` and
+//! `Q_d = σ_u² (1 − e^{−2a dt})`. For `v`, `w` (double real pole at `−a`,
+//! `y = a dt`):
+//!
+//! ```text
+//! e^{A dt} = e^{−y} [[1 + y, y], [−y, 1 − y]]
+//! Q_d = σ² [[y³ J₂,  y² J₁ − y³ J₂], [·,  y J₀ − 2 y² J₁ + y³ J₂]],
+//! J_n = ∫₀¹ uⁿ e^{−2y u} du   (closed forms, Taylor series for small y)
+//! ```
+//!
+//! and `w_k = chol(Q_d) (n₁, n₂)`. The filters start in their stationary
+//! distribution, so the sample is stationary from the first step.
+//!
+//! # Frame
+//!
+//! The turbulence components are along the wind axes of a hovering vehicle:
+//! `u` along the horizontal direction of the mean wind (world x when the
+//! horizontal mean wind is below 1e-9 m/s), `v` horizontal and lateral
+//! (`ẑ × u`), `w` world z (up). The airspeed of the spatial-to-temporal
+//! conversion defaults to `V = max(‖mean wind‖, airspeed_floor)` (the mean
+//! wind carries the frozen field past a hovering vehicle);
+//! [`Wind::set_airspeed`] sets it from the vehicle's airspeed.
+//!
+//! # Random streams
+//!
+//! Each turbulence axis draws from its own `ChaCha8Rng` keyed by the run's
+//! seed, streams [`WIND_TURBULENCE_STREAMS`] (u, v, w), distinct from the
+//! drag noise (1–6), motor noise (16) and Monte Carlo sampling (100+), so
+//! turning turbulence on or off changes no other source's draws.
+
+use ftsmc_core::law::GainError;
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{Distribution, StandardNormal};
+use serde::{Deserialize, Serialize};
+
+/// One knot in m/s (exact: 1852 m / 3600 s ≈ 0.514444).
+pub const KNOT: f64 = 1852.0 / 3600.0;
+
+/// One foot in m (exact).
+pub const FOOT: f64 = 0.3048;
+
+/// ChaCha streams of the turbulence axes `u`, `v`, `w`, keyed by the run's
+/// seed (drag noise uses 1–6, motor noise 16, Monte Carlo sampling 100+).
+pub const WIND_TURBULENCE_STREAMS: [u64; 3] = [32, 33, 34];
+
+/// Upper end of the low-altitude Dryden model: 1000 ft, in m.
+pub const LOW_ALTITUDE_MAX: f64 = 1000.0 * FOOT;
+
+/// Turbulence intensity: the wind speed at 20 ft, `W₂₀`, directly or by its
+/// MIL-F-8785C / MIL-HDBK-1797 preset. In a scenario file: `"light"`,
+/// `"moderate"`, `"severe"` or `{ w20 = 7.7 }` (m/s).
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize, Serialize)]
+#[serde(rename_all = "lowercase", deny_unknown_fields)]
+pub enum Intensity {
+    /// Light: `W₂₀` = 15 kt (7.72 m/s).
+    Light,
+    /// Moderate: `W₂₀` = 30 kt (15.43 m/s).
+    Moderate,
+    /// Severe: `W₂₀` = 45 kt (23.15 m/s).
+    Severe,
+    /// `W₂₀` in m/s.
+    W20(f64),
+}
+
+impl Intensity {
+    /// Wind speed at 20 ft, `W₂₀`, in m/s.
+    pub fn w20(self) -> f64 {
+        match self {
+            Intensity::Light => 15.0 * KNOT,
+            Intensity::Moderate => 30.0 * KNOT,
+            Intensity::Severe => 45.0 * KNOT,
+            Intensity::W20(w) => w,
+        }
+    }
+}
+
+fn default_altitude() -> f64 {
+    10.0
+}
+
+fn default_airspeed_floor() -> f64 {
+    1.0
+}
+
+/// Dryden turbulence, low-altitude form (MIL-F-8785C §3.7.2.3,
+/// MIL-HDBK-1797 Appendix A): `[wind.turbulence]`.
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct TurbulenceParams {
+    /// `W₂₀`: `"light"` | `"moderate"` | `"severe"` | `{ w20 = m/s }`. Required.
+    pub intensity: Intensity,
+    /// Altitude `h` above ground that sets σ and L, m, fixed for the flight
+    /// (the vehicle's altitude is not tracked). Default 10 m. Range
+    /// `[0.1, 304.8]` (the low-altitude form holds below 1000 ft).
+    #[serde(default = "default_altitude")]
+    pub altitude: f64,
+    /// Airspeed floor `V_min`, m/s: the spatial-to-temporal conversion uses
+    /// `V = max(airspeed, V_min)`, since a hovering vehicle has V ≈ 0.
+    /// Default 1 m/s.
+    #[serde(default = "default_airspeed_floor")]
+    pub airspeed_floor: f64,
+}
+
+impl TurbulenceParams {
+    /// Moderate turbulence at the default altitude (10 m) and airspeed floor (1 m/s).
+    pub fn moderate() -> Self {
+        Self { intensity: Intensity::Moderate, altitude: default_altitude(), airspeed_floor: default_airspeed_floor() }
+    }
+
+    /// Intensities and scale lengths at [`Self::altitude`], MIL-F-8785C
+    /// low-altitude formulas (h in ft inside, results in SI).
+    pub fn scales(&self) -> DrydenScales {
+        let h_ft = self.altitude / FOOT;
+        let k = 0.177 + 0.000823 * h_ft;
+        let sigma_w = 0.1 * self.intensity.w20();
+        let sigma_uv = sigma_w / k.powf(0.4);
+        let l_uv = h_ft / k.powf(1.2) * FOOT;
+        DrydenScales { sigma: [sigma_uv, sigma_uv, sigma_w], length: [l_uv, l_uv, self.altitude] }
+    }
+}
+
+/// Dryden intensities and scale lengths (MIL-F-8785C convention, see the
+/// module documentation), components `[u, v, w]`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DrydenScales {
+    /// `[σ_u, σ_v, σ_w]`, m/s.
+    pub sigma: [f64; 3],
+    /// `[L_u, L_v, L_w]`, m (8785C: `L_w = h`; MIL-HDBK-1797 halves `L_v`, `L_w`).
+    pub length: [f64; 3],
+}
+
+/// A discrete 1−cosine gust (MIL-F-8785C §3.7.3):
+/// `v(t) = A/2 (1 − cos(2π (t − t₀)/d))` for `t ∈ [t₀, t₀ + d]`, zero outside.
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct Gust {
+    /// Start time `t₀`, s.
+    pub start: f64,
+    /// Duration `d`, s (the peak `A` is reached at `t₀ + d/2`).
+    pub duration: f64,
+    /// Amplitude `A`, world frame, m/s.
+    pub amplitude: [f64; 3],
+}
+
+impl Gust {
+    /// Gust velocity at `t` (s), world frame, m/s.
+    #[inline]
+    pub fn velocity(&self, t: f64) -> [f64; 3] {
+        if t < self.start || t > self.start + self.duration {
+            return [0.0; 3];
+        }
+        let s = 0.5 * (1.0 - (2.0 * core::f64::consts::PI * (t - self.start) / self.duration).cos());
+        self.amplitude.map(|a| a * s)
+    }
+}
+
+/// Wind parameters (`[wind]`): mean wind, gusts and turbulence; every part
+/// optional, the default is still air.
+#[derive(Clone, Debug, Default, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct WindParams {
+    /// Mean wind, world frame, m/s. Default `[0, 0, 0]`.
+    pub mean: [f64; 3],
+    /// Discrete 1−cosine gusts, added to the mean. Default none.
+    pub gusts: Vec<Gust>,
+    /// Dryden turbulence. Default off.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub turbulence: Option<TurbulenceParams>,
+}
+
+fn closed(field: &'static str, value: f64, lo: f64, hi: f64, expected: &'static str) -> Result<(), GainError> {
+    if (lo..=hi).contains(&value) {
+        Ok(())
+    } else {
+        Err(GainError { field, value, expected })
+    }
+}
+
+impl WindParams {
+    /// Reject non-physical values:
+    ///
+    /// | parameter | range |
+    /// |---|---|
+    /// | `mean` components (m/s) | `[−100, 100]` |
+    /// | `gusts.start` (s) | `[0, 1e7]` |
+    /// | `gusts.duration` (s) | `(0, 1e6]` |
+    /// | `gusts.amplitude` components (m/s) | `[−100, 100]` |
+    /// | `turbulence.intensity.w20` (m/s) | `[0, 100]` |
+    /// | `turbulence.altitude` (m) | `[0.1, 304.8]` (below 1000 ft) |
+    /// | `turbulence.airspeed_floor` (m/s) | `[0.01, 1000]` |
+    pub fn check(&self) -> Result<(), GainError> {
+        for &m in &self.mean {
+            closed("mean", m, -100.0, 100.0, "-100 <= mean <= 100 m/s per component")?;
+        }
+        for g in &self.gusts {
+            closed("gusts.start", g.start, 0.0, 1e7, "0 <= start <= 1e7 s")?;
+            if !(g.duration > 0.0 && g.duration <= 1e6) {
+                return Err(GainError {
+                    field: "gusts.duration",
+                    value: g.duration,
+                    expected: "0 < duration <= 1e6 s",
+                });
+            }
+            for &a in &g.amplitude {
+                closed("gusts.amplitude", a, -100.0, 100.0, "-100 <= amplitude <= 100 m/s per component")?;
+            }
+        }
+        if let Some(t) = &self.turbulence {
+            if let Intensity::W20(w) = t.intensity {
+                closed("turbulence.intensity.w20", w, 0.0, 100.0, "0 <= w20 <= 100 m/s")?;
+            }
+            closed(
+                "turbulence.altitude",
+                t.altitude,
+                0.1,
+                LOW_ALTITUDE_MAX,
+                "0.1 <= altitude <= 304.8 m (low-altitude Dryden form, below 1000 ft)",
+            )?;
+            closed("turbulence.airspeed_floor", t.airspeed_floor, 0.01, 1000.0, "0.01 <= airspeed_floor <= 1000 m/s")?;
+        }
+        Ok(())
+    }
+
+    /// Mean wind plus gusts at `t` (s), world frame, m/s.
+    #[inline]
+    pub fn deterministic(&self, t: f64) -> [f64; 3] {
+        let mut v = self.mean;
+        for g in &self.gusts {
+            let gv = g.velocity(t);
+            for i in 0..3 {
+                v[i] += gv[i];
+            }
+        }
+        v
+    }
+}
+
+/// `J_n(x) = ∫₀¹ uⁿ e^{−x u} du` for n = 0, 1, 2, accurate for all `x ≥ 0`.
+fn j_integrals(x: f64) -> [f64; 3] {
+    if x < 1.0 {
+        // Σ_k (−x)^k / (k! (n + k + 1)); 25 terms leave < 1e-25 at x < 1.
+        let mut out = [0.0; 3];
+        let mut term = 1.0; // (−x)^k / k!
+        for k in 0..25 {
+            for (n, o) in out.iter_mut().enumerate() {
+                *o += term / (n + k + 1) as f64;
+            }
+            term *= -x / (k + 1) as f64;
+        }
+        out
+    } else {
+        let e = (-x).exp();
+        [(1.0 - e) / x, (1.0 - e * (1.0 + x)) / (x * x), (2.0 - e * (2.0 + 2.0 * x + x * x)) / (x * x * x)]
+    }
+}
+
+/// Exact discretisation of one axis's shaping filter at one airspeed.
+#[derive(Clone, Copy, Debug)]
+enum AxisFilter {
+    /// `x ← φ x + g n`.
+    First { phi: f64, gain: f64 },
+    /// `z ← Φ z + L (n₁, n₂)`, `L` lower triangular.
+    Second { phi: [[f64; 2]; 2], chol: [[f64; 2]; 2] },
+}
+
+impl AxisFilter {
+    fn first(sigma: f64, a: f64, dt: f64) -> Self {
+        let y = a * dt;
+        AxisFilter::First { phi: (-y).exp(), gain: sigma * (-(-2.0 * y).exp_m1()).sqrt() }
+    }
+
+    fn second(sigma: f64, a: f64, dt: f64) -> Self {
+        let y = a * dt;
+        let e = (-y).exp();
+        let phi = [[e * (1.0 + y), e * y], [-e * y, e * (1.0 - y)]];
+        let [j0, j1, j2] = j_integrals(2.0 * y);
+        let s2 = sigma * sigma;
+        let q11 = s2 * y * y * y * j2;
+        let q12 = s2 * (y * y * j1 - y * y * y * j2);
+        let q22 = s2 * (y * j0 - 2.0 * y * y * j1 + y * y * y * j2);
+        let l11 = q11.max(0.0).sqrt();
+        let l21 = if l11 > 0.0 { q12 / l11 } else { 0.0 };
+        let l22 = (q22 - l21 * l21).max(0.0).sqrt();
+        AxisFilter::Second { phi, chol: [[l11, 0.0], [l21, l22]] }
+    }
+}
+
+/// Dryden turbulence generator: three shaping filters discretised exactly at
+/// `dt`, each with its own random stream ([`WIND_TURBULENCE_STREAMS`]).
+/// Output in the wind axes `[u, v, w]` (see the module documentation).
+#[derive(Clone, Debug)]
+pub struct Dryden {
+    params: TurbulenceParams,
+    scales: DrydenScales,
+    dt: f64,
+    airspeed: f64,
+    filters: [AxisFilter; 3],
+    /// u: `state[0][0]`; v, w: `(z₁, z₂)`.
+    state: [[f64; 2]; 3],
+    rngs: [ChaCha8Rng; 3],
+}
+
+impl Dryden {
+    /// A generator at step `dt` (s), airspeed `max(airspeed, airspeed_floor)`
+    /// (m/s), streams [`WIND_TURBULENCE_STREAMS`] of `seed`; the filters
+    /// start in their stationary distribution (first draws of each stream).
+    /// `params` and `dt` are assumed checked ([`WindParams::check`], `dt > 0`).
+    pub fn new(params: TurbulenceParams, dt: f64, airspeed: f64, seed: u64) -> Self {
+        let mut rngs: [ChaCha8Rng; 3] = core::array::from_fn(|k| {
+            let mut rng = ChaCha8Rng::seed_from_u64(seed);
+            rng.set_stream(WIND_TURBULENCE_STREAMS[k]);
+            rng
+        });
+        let scales = params.scales();
+        let mut state = [[0.0; 2]; 3];
+        for (k, (s, rng)) in state.iter_mut().zip(rngs.iter_mut()).enumerate() {
+            let sigma = scales.sigma[k];
+            if k == 0 {
+                s[0] = sigma * normal(rng);
+            } else {
+                s[0] = 0.5 * sigma * normal(rng);
+                s[1] = 0.5 * sigma * normal(rng);
+            }
+        }
+        let mut d = Self {
+            params,
+            scales,
+            dt,
+            airspeed: f64::NAN,
+            filters: [AxisFilter::First { phi: 0.0, gain: 0.0 }; 3],
+            state,
+            rngs,
+        };
+        d.set_airspeed(airspeed);
+        d
+    }
+
+    /// Set the airspeed of the spatial-to-temporal conversion to
+    /// `max(airspeed, airspeed_floor)` (m/s) and rediscretise the filters;
+    /// the states carry over (their stationary law does not depend on V).
+    pub fn set_airspeed(&mut self, airspeed: f64) {
+        let v =
+            if airspeed.is_finite() { airspeed.max(self.params.airspeed_floor) } else { self.params.airspeed_floor };
+        if v == self.airspeed {
+            return;
+        }
+        self.airspeed = v;
+        let s = &self.scales;
+        self.filters = [
+            AxisFilter::first(s.sigma[0], v / s.length[0], self.dt),
+            AxisFilter::second(s.sigma[1], v / s.length[1], self.dt),
+            AxisFilter::second(s.sigma[2], v / s.length[2], self.dt),
+        ];
+    }
+
+    /// The airspeed in use, m/s.
+    pub fn airspeed(&self) -> f64 {
+        self.airspeed
+    }
+
+    /// Intensities and scale lengths in use.
+    pub fn scales(&self) -> DrydenScales {
+        self.scales
+    }
+
+    /// The current turbulence `[u, v, w]` (m/s, wind axes).
+    #[inline]
+    pub fn current(&self) -> [f64; 3] {
+        let out = |s: &[f64; 2]| s[0] + 3f64.sqrt() * s[1];
+        [self.state[0][0], out(&self.state[1]), out(&self.state[2])]
+    }
+
+    /// Return the current turbulence `[u, v, w]` (m/s, wind axes), then
+    /// advance the filters by one step `dt`.
+    pub fn step(&mut self) -> [f64; 3] {
+        let now = self.current();
+        for ((f, s), rng) in self.filters.iter().zip(self.state.iter_mut()).zip(self.rngs.iter_mut()) {
+            match *f {
+                AxisFilter::First { phi, gain } => s[0] = phi * s[0] + gain * normal(rng),
+                AxisFilter::Second { phi, chol } => {
+                    let n1 = normal(rng);
+                    let n2 = normal(rng);
+                    let z = *s;
+                    s[0] = phi[0][0] * z[0] + phi[0][1] * z[1] + chol[0][0] * n1;
+                    s[1] = phi[1][0] * z[0] + phi[1][1] * z[1] + chol[1][0] * n1 + chol[1][1] * n2;
+                }
+            }
+        }
+        now
+    }
+}
+
+#[inline]
+fn normal(rng: &mut ChaCha8Rng) -> f64 {
+    StandardNormal.sample(rng)
+}
+
+/// The wind of a flight: mean + gusts + turbulence, world frame.
+#[derive(Clone, Debug)]
+pub struct Wind {
+    params: WindParams,
+    turbulence: Option<Dryden>,
+    /// Unit vectors of the wind axes u, v, w in the world frame.
+    axes: [[f64; 3]; 3],
+}
+
+impl Wind {
+    /// The wind for steps of `dt` (s), turbulence seeded by `seed` (streams
+    /// [`WIND_TURBULENCE_STREAMS`]), airspeed `max(‖mean‖, airspeed_floor)`.
+    /// Rejects parameters [`WindParams::check`] rejects and `dt` outside `(0, 10]` s.
+    pub fn new(params: WindParams, dt: f64, seed: u64) -> Result<Self, GainError> {
+        params.check()?;
+        if !(dt > 0.0 && dt <= 10.0) {
+            return Err(GainError { field: "dt", value: dt, expected: "0 < dt <= 10 s" });
+        }
+        let [mx, my, mz] = params.mean;
+        let horizontal = mx.hypot(my);
+        let e_u = if horizontal > 1e-9 { [mx / horizontal, my / horizontal, 0.0] } else { [1.0, 0.0, 0.0] };
+        let axes = [e_u, [-e_u[1], e_u[0], 0.0], [0.0, 0.0, 1.0]];
+        let speed = (horizontal * horizontal + mz * mz).sqrt();
+        let turbulence = params.turbulence.map(|t| Dryden::new(t, dt, speed, seed));
+        Ok(Self { params, turbulence, axes })
+    }
+
+    /// Set the airspeed of the turbulence's spatial-to-temporal conversion
+    /// (m/s; the floor applies). No effect without turbulence.
+    pub fn set_airspeed(&mut self, airspeed: f64) {
+        if let Some(d) = &mut self.turbulence {
+            d.set_airspeed(airspeed);
+        }
+    }
+
+    /// The turbulence generator, if turbulence is on.
+    pub fn turbulence(&self) -> Option<&Dryden> {
+        self.turbulence.as_ref()
+    }
+
+    /// Unit vectors of the turbulence axes `u`, `v`, `w` in the world frame.
+    pub fn axes(&self) -> [[f64; 3]; 3] {
+        self.axes
+    }
+
+    /// The parameters.
+    pub fn params(&self) -> &WindParams {
+        &self.params
+    }
+
+    /// World wind velocity (m/s) at `t` (s): mean + gusts at `t` + the
+    /// current turbulence sample, which then advances by one step `dt`.
+    /// Call once per step, at `t = t₀ + k dt`; deterministic per seed.
+    pub fn step(&mut self, t: f64) -> [f64; 3] {
+        let mut v = self.params.deterministic(t);
+        if let Some(d) = &mut self.turbulence {
+            let uvw = d.step();
+            for (axis, c) in self.axes.iter().zip(uvw) {
+                for i in 0..3 {
+                    v[i] += c * axis[i];
+                }
+            }
+        }
+        v
+    }
+}
