@@ -35,9 +35,10 @@
 //!            payload.rs         Payload and its profile
 //!            variation.rs       DragNoise (inertia variation is a Signal)
 //!            ground.rs          ground plane, touchdown and crash (`[ground]`)
+//!            wind.rs            mean wind, 1−cos gusts, Dryden turbulence (`[wind]`)
 //!          envelope.rs          success envelope and its verdict (`[envelope]`)
 //!          metrics.rs           ISE, IAE, ITAE, settling, chattering, online
-//!          sensors.rs           measured state: noise, bias, sample rate, latency (not in run/ yet)
+//!          sensors.rs           measured state: noise, bias, sample rate, latency (`[sensors]`)
 //! floor 1  axes.rs              AxisSet and other per-axis containers
 //!          signal/              time signals with analytic derivatives
 //!            waypoints.rs       quintic waypoint splines

@@ -26,6 +26,11 @@
 //!    actual speeds (paper Eq. 2) and their Ω̄.
 //! 5. Ground contact after every substep ([`crate::environment::ground`]).
 //!
+//! With `[wind]` the air moves: the wind (mean, gusts, Dryden turbulence of
+//! [`crate::environment::wind`]) is sampled once per RK4 substep, held over
+//! it, and acts through air-relative drag in both truth models (the rigid
+//! body's parasitic and rotor drag; Eq. 1's `K_f1` drag on `v − w`).
+//!
 //! With `[sensors]` (not perfect) the controller of step 1 sees
 //! [`Sensors::measure`] of the state (noise, bias, sample-and-hold,
 //! latency); metrics, the envelope and the recording use the truth.
@@ -58,10 +63,11 @@ use ftsmc_core::model::{Command, QuadState};
 
 use crate::actuators::{motor_noise_rng, ActuatorParams, Mixer, Motors};
 use crate::envelope::Tracker;
+use crate::environment::wind::Wind;
 use crate::environment::{Environment, TimeVarying};
 use crate::metrics::MetricsAccumulator;
 use crate::scenario::Scenario;
-use crate::vehicle::paper::{derivative, rk4_step};
+use crate::vehicle::paper::{derivative_in_wind, rk4_step};
 use crate::vehicle::VehicleModel;
 
 use super::exit::check_divergence;
@@ -78,6 +84,7 @@ pub fn is_realistic(scenario: &Scenario) -> bool {
         || scenario.actuators.is_some_and(|a| a != ActuatorParams::default())
         || scenario.ground.is_some_and(|g| g.enabled)
         || scenario.sensors.is_some_and(|s| !s.is_perfect())
+        || scenario.wind.is_some()
 }
 
 /// The actuators of a realistic flight: `[actuators]`, or ideal ones with
@@ -140,6 +147,9 @@ pub fn simulate_realistic(scenario: &Scenario, controller: &mut dyn Controller, 
     };
     let mut motors = Motors::new(&act, [hover; 4]);
     let mut noise_rng = motor_noise_rng(scenario.seed);
+    // `[wind]`: mean + 1−cos gusts + Dryden turbulence (its own streams of the
+    // seed), sampled once per RK4 substep and held over it.
+    let mut wind = scenario.wind.clone().and_then(|w| Wind::new(w, h, scenario.seed).ok());
     // What the controller sees (`[sensors]`; its own streams 20-23 of the seed).
     let mut sensors =
         scenario.sensors.filter(|s| !s.is_perfect()).map(|s| Sensors::new(s, sim.control_rate, scenario.seed));
@@ -248,6 +258,7 @@ pub fn simulate_realistic(scenario: &Scenario, controller: &mut dyn Controller, 
 
         for j in 0..sim.substeps {
             let t0 = t + j as f64 * h;
+            let wind_now = wind.as_mut().map_or([0.0; 3], |w| w.step(t0));
             let tv_next = env.time_varying(t0 + h);
             let (a, b, env_ref, motors_ref) = (tv_now, tv_next, &env, &motors);
             let speeds_at = |tau: f64| motors_ref.with_noise(&motors_ref.speeds_after(&target, tau - t0), &z);
@@ -259,7 +270,8 @@ pub fn simulate_realistic(scenario: &Scenario, controller: &mut dyn Controller, 
                         let omega_bar = residual_speed(&target);
                         let f = |tau: f64, s: &[f64; 12]| {
                             let tv = TimeVarying::lerp(&a, &b, (tau - t0) / h);
-                            derivative(s, &applied, omega_bar, &env_ref.params_with(&tv), &tv.disturbance)
+                            let p = env_ref.params_with(&tv);
+                            derivative_in_wind(s, &applied, omega_bar, &p, &tv.disturbance, &wind_now)
                         };
                         rk4_step(f, t0, x, h)
                     } else {
@@ -268,7 +280,7 @@ pub fn simulate_realistic(scenario: &Scenario, controller: &mut dyn Controller, 
                             let p = env_ref.params_with(&tv);
                             let w = speeds_at(tau);
                             let delivered: Command = forces_from_squared_speeds(&p, &w.map(|o| o * o));
-                            derivative(s, &delivered, residual_speed(&w), &p, &tv.disturbance)
+                            derivative_in_wind(s, &delivered, residual_speed(&w), &p, &tv.disturbance, &wind_now)
                         };
                         rk4_step(f, t0, x, h)
                     };
@@ -285,7 +297,7 @@ pub fn simulate_realistic(scenario: &Scenario, controller: &mut dyn Controller, 
                         let d = tv.disturbance;
                         let input = RigidBodyInput {
                             rotor_speeds: speeds_at(tau),
-                            wind: [0.0; 3],
+                            wind: wind_now,
                             force: [mass * d[0], mass * d[1], mass * d[2]],
                             torque: core::array::from_fn(|r| (0..3).map(|c| inertia[r][c] * d[3 + c]).sum()),
                         };

@@ -373,6 +373,9 @@ pub struct Scenario {
     /// Success envelope (`[envelope]`, default: success = completed).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub envelope: Option<crate::envelope::Envelope>,
+    /// Moving air (`[wind]`: mean, gusts, Dryden turbulence; default: still air).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub wind: Option<crate::environment::wind::WindParams>,
     /// What the controller measures (`[sensors]`, default: the true state).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub sensors: Option<crate::sensors::SensorParams>,

@@ -258,6 +258,12 @@ pub(super) fn check_realism(scenario: &Scenario) -> Result<(), (String, GainErro
             ));
         }
     }
+    if let Some(w) = &scenario.wind {
+        w.check().map_err(|e| ("wind".to_string(), e))?;
+        // The loop samples the wind once per RK4 substep.
+        let h = scenario.control_period() / f64::from(scenario.simulation.substeps);
+        crate::environment::wind::Wind::new(w.clone(), h, scenario.seed).map_err(|e| ("wind".to_string(), e))?;
+    }
     if let Some(s) = &scenario.sensors {
         s.check().map_err(|e| ("sensors".to_string(), e))?;
     }

@@ -65,6 +65,28 @@ pub fn derivative(
     ]
 }
 
+/// [`derivative`] with the translational drag of Eq. 1 acting on the
+/// air-relative velocity `v − wind` (world frame, m/s) instead of `v`: the
+/// drag terms `−K_f1 ẋ / m` become `−K_f1 (ẋ − w_x) / m`, everything else
+/// (including ṗ = v) is unchanged. With `wind = [0, 0, 0]` it equals
+/// [`derivative`] bit for bit.
+pub fn derivative_in_wind(
+    x: &[f64; 12],
+    command: &Command,
+    omega_bar: f64,
+    p: &QuadrotorParams,
+    disturbance: &[f64; 6],
+    wind: &[f64; 3],
+) -> [f64; 12] {
+    let mut air = *x;
+    for i in 0..3 {
+        air[6 + i] -= wind[i];
+    }
+    let mut d = derivative(&air, command, omega_bar, p, disturbance);
+    d[..3].copy_from_slice(&x[6..9]);
+    d
+}
+
 /// One classical fourth-order Runge–Kutta step of `ẋ = f(t, x)` over `h` (s).
 #[inline]
 pub fn rk4_step<const N: usize>(f: impl Fn(f64, &[f64; N]) -> [f64; N], t: f64, x: &[f64; N], h: f64) -> [f64; N] {
