@@ -17,18 +17,30 @@ fn scenario(extra: &str) -> Scenario {
     Scenario::from_toml_str(&text, "test.toml").unwrap_or_else(|e| panic!("{e}"))
 }
 
-/// Commands a constant thrust and no torque.
-struct Constant(f64, Telemetry);
+/// Commands a constant thrust and no torque, and records the altitude it
+/// was shown each period (what the sensors let it see).
+struct Constant {
+    thrust: f64,
+    seen_z: Vec<f64>,
+    telemetry: Telemetry,
+}
+
+impl Constant {
+    fn new(thrust: f64) -> Self {
+        Self { thrust, seen_z: Vec::new(), telemetry: Telemetry::default() }
+    }
+}
 
 impl Controller for Constant {
     fn name(&self) -> &'static str {
         "constant"
     }
-    fn update(&mut self, _: &QuadState, _: &Reference, _: f64) -> Command {
-        Command { thrust: self.0, torque: [0.0; 3] }
+    fn update(&mut self, state: &QuadState, _: &Reference, _: f64) -> Command {
+        self.seen_z.push(state.position[2]);
+        Command { thrust: self.thrust, torque: [0.0; 3] }
     }
     fn telemetry(&self) -> &Telemetry {
-        &self.1
+        &self.telemetry
     }
     fn estimate_names(&self) -> [&'static str; MAX_ESTIMATES] {
         [""; MAX_ESTIMATES]
@@ -40,7 +52,7 @@ impl Controller for Constant {
 }
 
 fn fly(s: &Scenario, thrust: f64) -> ftsmc_sim::RunOutput {
-    simulate(s, &mut Constant(thrust, Telemetry::default()), RunOptions { record: false, ..Default::default() })
+    simulate(s, &mut Constant::new(thrust), RunOptions { record: false, ..Default::default() })
 }
 
 const DROP: &str = "duration = 3.0\n[initial_state]\nposition = [0.0, 0.0, 2.0]\n[ground]\nenabled = true\n";
@@ -157,29 +169,6 @@ fn rigid_body_with_ideal_actuators_follows_the_paper_plant_for_the_first_second(
     assert!(b.metrics.peak_rotor_speed_demand.is_some() && a.metrics.peak_rotor_speed_demand.is_none());
 }
 
-/// Records what the controller was shown, and commands hover thrust.
-struct Recorder(Vec<f64>, Telemetry);
-
-impl Controller for Recorder {
-    fn name(&self) -> &'static str {
-        "recorder"
-    }
-    fn update(&mut self, state: &QuadState, _: &Reference, _: f64) -> Command {
-        self.0.push(state.position[2]);
-        Command { thrust: 0.74 * G, torque: [0.0; 3] }
-    }
-    fn telemetry(&self) -> &Telemetry {
-        &self.1
-    }
-    fn estimate_names(&self) -> [&'static str; MAX_ESTIMATES] {
-        [""; MAX_ESTIMATES]
-    }
-    fn adapts_mass(&self) -> bool {
-        false
-    }
-    fn reset(&mut self) {}
-}
-
 #[test]
 fn the_controller_flies_on_the_measurement_and_the_metrics_on_the_truth() {
     // A free fall from 2 m on the rigid body (no ground): the controller is
@@ -188,9 +177,9 @@ fn the_controller_flies_on_the_measurement_and_the_metrics_on_the_truth() {
     let clean = scenario(base);
     let sensed = scenario(&format!("{base}[sensors]\nlatency = 3\nposition = {{ bias = [0.0, 0.0, 0.5] }}\n"));
     let shown = |s: &Scenario| {
-        let mut c = Recorder(Vec::new(), Telemetry::default());
+        let mut c = Constant::new(0.74 * G);
         let out = simulate(s, &mut c, RunOptions { record: false, ..Default::default() });
-        (c.0, out)
+        (c.seen_z, out)
     };
     let (truth, out_clean) = shown(&clean);
     let (seen, out_sensed) = shown(&sensed);
@@ -234,7 +223,7 @@ fn a_steady_wind_pushes_the_paper_plant_through_its_drag() {
     // Hover thrust, no torque, level, at rest in a 10 m/s wind along x: Eq. 1's
     // drag on the air-relative velocity gives ẍ = K_f1x · 10 / m at t = 0.
     let s = scenario("duration = 0.2\n[wind]\nmean = [10.0, 0.0, 0.0]\n[initial_state]\nposition = [0.0, 0.0, 1.0]\n");
-    let mut c = Recorder(Vec::new(), Telemetry::default());
+    let mut c = Constant::new(0.74 * G);
     let out = simulate(&s, &mut c, RunOptions::default());
     let a = s.plant.drag_translational[0] * 10.0 / s.plant.mass;
     let x = *out.recording.column("x").last().unwrap();
@@ -243,7 +232,7 @@ fn a_steady_wind_pushes_the_paper_plant_through_its_drag() {
     assert!(expected > 0.0 && (x - expected).abs() < 0.02 * expected, "x = {x}, expected ≈ {expected}");
     // Still air: nothing moves sideways.
     let calm = scenario("duration = 0.2\n[initial_state]\nposition = [0.0, 0.0, 1.0]\n");
-    let out = simulate(&calm, &mut Recorder(Vec::new(), Telemetry::default()), RunOptions::default());
+    let out = simulate(&calm, &mut Constant::new(0.74 * G), RunOptions::default());
     assert_eq!(*out.recording.column("x").last().unwrap(), 0.0);
 }
 
@@ -257,7 +246,7 @@ fn turbulence_is_deterministic_per_seed_and_moves_the_rigid_body() {
     };
     let fly = |seed: u64| {
         let s = scenario(&text(seed));
-        simulate(&s, &mut Recorder(Vec::new(), Telemetry::default()), RunOptions::default())
+        simulate(&s, &mut Constant::new(0.74 * G), RunOptions::default())
     };
     let (a, b, c) = (fly(1), fly(1), fly(2));
     assert_eq!(a.recording.column("y"), b.recording.column("y"), "same seed, same gusts");
