@@ -86,6 +86,26 @@ impl Default for RunOptions<'_> {
     }
 }
 
+impl RunOptions<'_> {
+    /// After control step `executed` (1-based): report [`PROGRESS_EVERY`]
+    /// steps when `executed` is a multiple of it.
+    pub(crate) fn step_done(&self, executed: u64) {
+        if let Some(progress) = self.progress {
+            if executed % PROGRESS_EVERY == 0 {
+                progress(PROGRESS_EVERY);
+            }
+        }
+    }
+
+    /// At the end of a flight of `planned` steps that stopped after
+    /// `executed`: report the rest of the planned total.
+    pub(crate) fn flight_done(&self, planned: u64, executed: u64) {
+        if let Some(progress) = self.progress {
+            progress(planned - executed / PROGRESS_EVERY * PROGRESS_EVERY);
+        }
+    }
+}
+
 impl core::fmt::Debug for RunOptions<'_> {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         f.debug_struct("RunOptions").field("record", &self.record).field("progress", &self.progress.is_some()).finish()
@@ -218,11 +238,7 @@ pub fn simulate(scenario: &Scenario, controller: &mut dyn Controller, options: R
             tv_now = tv_next;
         }
         executed = k + 1;
-        if let Some(progress) = options.progress {
-            if executed % PROGRESS_EVERY == 0 {
-                progress(PROGRESS_EVERY);
-            }
-        }
+        options.step_done(executed);
 
         let t_next = (k + 1) as f64 * dt;
         reference = reference_at(scenario, t_next);
@@ -233,9 +249,7 @@ pub fn simulate(scenario: &Scenario, controller: &mut dyn Controller, options: R
         }
     }
 
-    if let Some(progress) = options.progress {
-        progress(steps - executed / PROGRESS_EVERY * PROGRESS_EVERY);
-    }
+    options.flight_done(steps, executed);
     RunOutput {
         controller: controller.name().to_string(),
         scenario: scenario.name.clone(),

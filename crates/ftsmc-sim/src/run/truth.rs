@@ -71,9 +71,7 @@ use crate::vehicle::paper::{derivative_in_wind, rk4_step};
 use crate::vehicle::VehicleModel;
 
 use super::exit::check_divergence;
-use super::{
-    recording_columns, reference_at, Divergence, ExitStatus, Recording, RunOptions, RunOutput, PROGRESS_EVERY,
-};
+use super::{recording_columns, reference_at, Divergence, ExitStatus, Recording, RunOptions, RunOutput};
 use crate::sensors::Sensors;
 use crate::vehicle::rigid_body::{normalize_quaternion, RigidBodyState};
 use crate::vehicle::{from_quad_state, to_quad_state, RigidBody, RigidBodyInput, RigidBodyParams};
@@ -320,11 +318,7 @@ pub fn simulate_realistic(scenario: &Scenario, controller: &mut dyn Controller, 
             tv_now = tv_next;
         }
         executed = k + 1;
-        if let Some(progress) = options.progress {
-            if executed % PROGRESS_EVERY == 0 {
-                progress(PROGRESS_EVERY);
-            }
-        }
+        options.step_done(executed);
 
         let t_next = (k + 1) as f64 * dt;
         reference = reference_at(scenario, t_next);
@@ -336,9 +330,7 @@ pub fn simulate_realistic(scenario: &Scenario, controller: &mut dyn Controller, 
         }
     }
 
-    if let Some(progress) = options.progress {
-        progress(steps - executed / PROGRESS_EVERY * PROGRESS_EVERY);
-    }
+    options.flight_done(steps, executed);
     let mut metrics = metrics.finish();
     metrics.peak_rotor_speed_demand = Some(peak_demand);
     metrics.saturation_fraction = Some(if executed > 0 { saturated_periods as f64 / executed as f64 } else { 0.0 });
