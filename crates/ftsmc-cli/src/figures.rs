@@ -309,3 +309,56 @@ pub fn generic(runs: &[&RunOutput], dir: &Path) -> Result<Vec<PathBuf>> {
     )?);
     Ok(out)
 }
+
+/// "Beyond the paper" figures of one realistic scenario: positions against
+/// the reference (`<scenario>-position`) and the actual rotor speeds
+/// ω1..ω4 of each controller, one panel per controller, with the rotor
+/// limit `omega_max` dashed (`<scenario>-rotors`).
+pub fn beyond(runs: &[&RunOutput], omega_max: f64, dir: &Path) -> Result<Vec<PathBuf>> {
+    let Some(first) = runs.first() else { return Ok(Vec::new()) };
+    let name = &first.scenario;
+    let mut out = Vec::new();
+    out.extend(write_figure(
+        &comparison(&format!("Beyond the paper — position tracking ({name})"), runs, &position_specs(), 3),
+        &dir.join(format!("{name}-position")),
+    )?);
+    let shades = [Rgb(31, 119, 180), Rgb(255, 127, 14), Rgb(44, 160, 44), Rgb(214, 39, 40)];
+    let panels = runs
+        .iter()
+        .map(|run| {
+            let t = run.recording.column("t").to_vec();
+            let mut s: Vec<Series> = (1..=4)
+                .map(|i| Series {
+                    label: format!("ω{i}"),
+                    xs: t.clone(),
+                    ys: run.recording.column(&format!("omega_{i}")).to_vec(),
+                    color: shades[i - 1],
+                    dashed: false,
+                })
+                .collect();
+            if omega_max.is_finite() {
+                let span = [t.first().copied().unwrap_or(0.0), t.last().copied().unwrap_or(0.0)];
+                s.push(Series {
+                    label: "ω max".into(),
+                    xs: span.to_vec(),
+                    ys: vec![omega_max; 2],
+                    color: controller_color("reference"),
+                    dashed: true,
+                });
+            }
+            Panel {
+                title: format!("{} ({})", label(&run.controller), run.exit.short()),
+                x_label: "time (s)".into(),
+                y_label: "rotor speed (rad/s)".into(),
+                series: s,
+                log_x: false,
+                log_y: false,
+            }
+        })
+        .collect();
+    out.extend(write_figure(
+        &Figure { title: format!("Beyond the paper — rotor speeds ({name})"), panels, columns: 3 },
+        &dir.join(format!("{name}-rotors")),
+    )?);
+    Ok(out)
+}

@@ -55,6 +55,9 @@ enum Command {
         /// Skip figure rendering (tables, CSV and JSON only).
         #[arg(long)]
         no_figures: bool,
+        /// Monte Carlo runs of realistic-scenario-2 per controller in the "Beyond the paper" section (0: none).
+        #[arg(long, default_value_t = reproduce::DEFAULT_REALISTIC_RUNS)]
+        realistic_runs: u64,
     },
     /// Run one scenario file with its controllers (or those given); write CSV, summary.json and comparison figures.
     Run {
@@ -194,7 +197,9 @@ fn main() -> std::process::ExitCode {
 
 fn run(cli: Cli) -> Result<()> {
     match cli.command {
-        Command::Reproduce { out, no_figures } => reproduce::reproduce(&out, !no_figures),
+        Command::Reproduce { out, no_figures, realistic_runs } => {
+            reproduce::reproduce(&out, !no_figures, realistic_runs)
+        }
         Command::Run { scenario, controllers, out, no_figures, limit } => {
             let mut scenario = load_scenario_with_limits(&scenario, &limit)?;
             let names = if controllers.is_empty() { scenario.controllers.clone() } else { controllers };

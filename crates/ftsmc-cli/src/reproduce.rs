@@ -440,8 +440,10 @@ pub fn limit_cycle_table(runs: &[&RunOutput], from: f64) -> String {
     md
 }
 
-/// `ftsmc reproduce`.
-pub fn reproduce(out: &Path, figures: bool) -> Result<()> {
+/// `ftsmc reproduce`: the paper's results, then "Beyond the paper"
+/// ([`beyond_the_paper`], with `realistic_runs` Monte Carlo runs of
+/// realistic scenario 2 per controller; 0 skips the Monte Carlo).
+pub fn reproduce(out: &Path, figures: bool, realistic_runs: u64) -> Result<()> {
     let started = Instant::now();
     let scenarios = Scenario::paper_scenarios();
     let (s1, s2) = (&scenarios[0], &scenarios[1]);
@@ -573,6 +575,11 @@ pub fn reproduce(out: &Path, figures: bool) -> Result<()> {
         crate::figures::scenario_2(&s2_main, find(&runs, &s2.name, "ftaftsmc-no-mass"), &fig_dir)?;
     }
     dir.write("report.md", report.as_bytes())?;
+    // Beyond the paper: its own files under `beyond/` (and `figures/beyond/`),
+    // so everything above stays exactly what the paper part wrote before.
+    let beyond_started = Instant::now();
+    let beyond = beyond_the_paper(&dir, figures, realistic_runs)?;
+    let beyond_elapsed = beyond_started.elapsed().as_secs_f64();
     dir.commit()?;
     println!("{report}");
     let o = out.display();
@@ -582,7 +589,305 @@ pub fn reproduce(out: &Path, figures: bool) -> Result<()> {
         runs.len(),
         elapsed
     );
+    println!("\n{}", beyond.report);
+    println!(
+        "wrote {o}/beyond/report.md, realism.csv, realism.json{}, per-run CSV and scenario.toml under {o}/beyond/<scenario>/{}; {} flights in {:.2} s",
+        if realistic_runs > 0 { ", montecarlo-runs.csv" } else { "" },
+        if figures { format!(", figures under {o}/figures/beyond/") } else { String::new() },
+        beyond.flights,
+        beyond_elapsed
+    );
     Ok(())
+}
+
+/// Controllers flown in "Beyond the paper" on the realistic scenarios
+/// (registry names, in table order). A new controller is one more entry.
+pub const BEYOND_CONTROLLERS: &[&str] = &["ranftsmc", "tsm-sta", "ftaftsmc"];
+
+/// Controllers of the "Beyond the paper" Monte Carlo of realistic scenario 2.
+pub const BEYOND_MC_CONTROLLERS: &[&str] = BEYOND_CONTROLLERS;
+
+/// Default `--realistic-runs`: Monte Carlo runs of realistic scenario 2 per
+/// controller. 100 keeps `reproduce` around ten seconds on two cores (the
+/// paper part takes under one); 1000 runs take about 100 s there.
+pub const DEFAULT_REALISTIC_RUNS: u64 = 100;
+
+/// The realistic scenarios of "Beyond the paper": `(file name, TOML text)`.
+pub const REALISTIC_SCENARIOS: [(&str, &str); 2] = [
+    ("realistic-scenario-1.toml", ftsmc_sim::scenario::REALISTIC_SCENARIO_1),
+    ("realistic-scenario-2.toml", ftsmc_sim::scenario::REALISTIC_SCENARIO_2),
+];
+
+/// What [`beyond_the_paper`] produced.
+pub struct Beyond {
+    /// The section's Markdown (also `beyond/report.md`).
+    pub report: String,
+    /// Flights flown (single runs plus Monte Carlo runs).
+    pub flights: usize,
+}
+
+/// Seconds of an exit: when it diverged or crashed (`None` if completed).
+fn exit_time(run: &RunOutput) -> Option<f64> {
+    match run.exit {
+        ftsmc_sim::run::ExitStatus::Completed => None,
+        ftsmc_sim::run::ExitStatus::Diverged { time, .. } | ftsmc_sim::run::ExitStatus::Crashed { time, .. } => {
+            Some(time)
+        }
+    }
+}
+
+/// `completed`, `diverged` or `crashed`.
+fn exit_kind(run: &RunOutput) -> &'static str {
+    match run.exit {
+        ftsmc_sim::run::ExitStatus::Completed => "completed",
+        ftsmc_sim::run::ExitStatus::Diverged { .. } => "diverged",
+        ftsmc_sim::run::ExitStatus::Crashed { .. } => "crashed",
+    }
+}
+
+/// Largest `max(|φ|, |θ|)` recorded in a run, rad.
+fn max_tilt(run: &RunOutput) -> f64 {
+    let phi = run.recording.column("phi");
+    let theta = run.recording.column("theta");
+    phi.iter().chain(theta).fold(0.0f64, |m, v| m.max(v.abs()))
+}
+
+/// "Beyond the paper": [`BEYOND_CONTROLLERS`] on the realistic scenarios
+/// ([`REALISTIC_SCENARIOS`]) and a `mc_runs`-run Monte Carlo of realistic
+/// scenario 2 with [`BEYOND_MC_CONTROLLERS`]. Writes into `dir`:
+/// `beyond/report.md`, `beyond/realism.csv`, `beyond/realism.json`,
+/// `beyond/montecarlo-runs.csv` (when `mc_runs > 0`), per-run CSV and the
+/// resolved `scenario.toml` under `beyond/<scenario>/`, and with `figures`
+/// `figures/beyond/<scenario>-{position,rotors}.{svg,png}`.
+pub fn beyond_the_paper(dir: &ResultDir, figures: bool, mc_runs: u64) -> Result<Beyond> {
+    let scenarios: Vec<Scenario> = REALISTIC_SCENARIOS
+        .iter()
+        .map(|(file, text)| Scenario::from_toml_str(text, file).map_err(anyhow::Error::from))
+        .collect::<Result<_>>()?;
+    let mut jobs = Vec::new();
+    for s in &scenarios {
+        for name in BEYOND_CONTROLLERS {
+            jobs.push(Job { scenario: s.clone(), controller: (*name).into(), key: (*name).into() });
+        }
+    }
+    eprintln!(
+        "beyond the paper: flying {} runs ({}) …",
+        jobs.len(),
+        scenarios.iter().map(|s| s.name.as_str()).collect::<Vec<_>>().join(" and ")
+    );
+    let runs = fly(&jobs)?;
+    for run in &runs {
+        dir.write(
+            Path::new("beyond").join(&run.scenario).join(format!("{}.csv", run.controller)),
+            &recording_csv(&run.recording),
+        )?;
+    }
+    let mut files = Vec::new();
+    for s in &scenarios {
+        let rel = format!("beyond/{}/scenario.toml", s.name);
+        files.push(dir.write_scenario(&rel, s, &rel)?);
+    }
+
+    let mut md = String::new();
+    let _ = writeln!(
+        md,
+        "## Beyond the paper: the controllers on a realistic quadrotor
+"
+    );
+    let _ = writeln!(
+        md,
+        "The paper's references, disturbances and gains on an AscTec Hummingbird rigid body (RotorS parameters: 0.716 kg, rotors 0–838 rad/s, motor lag 12.5/25 ms), measured by motion capture and an MPU-6000 IMU (200 Hz, 6 ms latency), in moderate Dryden turbulence, taking off from the ground (scenarios/realistic-scenario-{{1,2}}.toml; every value's source is cited there).\n"
+    );
+    let mut outcome = Table::new([
+        "scenario",
+        "controller",
+        "exit",
+        "success",
+        "peak ω demand (rad/s)",
+        "saturated",
+        "max tilt (rad)",
+    ]);
+    let mut errors = Table::new([
+        "scenario",
+        "controller",
+        "ISE x",
+        "ISE y",
+        "ISE z",
+        "ISE ψ",
+        "chattering U1 (N/s)",
+        "chattering u2 (N·m/s)",
+    ]);
+    let mut csv = csv::Writer::from_writer(Vec::new());
+    csv.write_record([
+        "scenario",
+        "controller",
+        "exit_status",
+        "exit_time",
+        "success",
+        "envelope_violation",
+        "ise_x",
+        "ise_y",
+        "ise_z",
+        "ise_psi",
+        "ise_position",
+        "chattering_thrust",
+        "chattering_roll_torque",
+        "peak_rotor_speed_demand",
+        "max_rotor_speed",
+        "saturation_fraction",
+        "max_tilt",
+    ])?;
+    let mut json_scenarios = Map::new();
+    let mut notes = Vec::new();
+    for s in &scenarios {
+        let omega_max = ftsmc_sim::run::truth::actuators(s).max_rotor_speed;
+        let mut per = Map::new();
+        for name in BEYOND_CONTROLLERS {
+            let Some(run) = find(&runs, &s.name, name) else { continue };
+            let m = &run.metrics;
+            let ok = run.exit.is_completed();
+            let v = |x: f64| if ok { num(x) } else { "—".to_string() };
+            let violation = run.envelope.as_ref().and_then(|e| e.violation.clone());
+            let shown = label(name).to_string();
+            let tilt = max_tilt(run);
+            outcome.row(vec![
+                s.name.clone(),
+                shown.clone(),
+                run.exit.short(),
+                if run.success() { "yes".into() } else { "no".into() },
+                m.peak_rotor_speed_demand.map_or_else(|| "—".into(), |w| format!("{w:.0}")),
+                m.saturation_fraction.map_or_else(|| "—".into(), |f| format!("{:.1} %", 100.0 * f)),
+                format!("{tilt:.2}"),
+            ]);
+            errors.row(vec![
+                s.name.clone(),
+                shown.clone(),
+                v(m.ise.x),
+                v(m.ise.y),
+                v(m.ise.z),
+                v(m.ise.psi),
+                v(m.chattering.thrust),
+                v(m.chattering.roll_torque),
+            ]);
+            if let (true, Some(violation)) = (ok, &violation) {
+                notes.push(format!("- {} on {}: left the envelope: {violation}.", shown, s.name));
+            } else if !ok {
+                notes.push(format!("- {} on {}: {}.", shown, s.name, run.exit));
+            }
+            let opt = |x: Option<f64>| x.map_or(String::new(), crate::output::format_number);
+            let ise_position = m.ise.x + m.ise.y + m.ise.z;
+            csv.write_record([
+                s.name.clone(),
+                (*name).to_string(),
+                exit_kind(run).to_string(),
+                opt(exit_time(run)),
+                run.success().to_string(),
+                violation.clone().unwrap_or_default(),
+                crate::output::format_number(m.ise.x),
+                crate::output::format_number(m.ise.y),
+                crate::output::format_number(m.ise.z),
+                crate::output::format_number(m.ise.psi),
+                crate::output::format_number(ise_position),
+                crate::output::format_number(m.chattering.thrust),
+                crate::output::format_number(m.chattering.roll_torque),
+                opt(m.peak_rotor_speed_demand),
+                crate::output::format_number(omega_max),
+                opt(m.saturation_fraction),
+                crate::output::format_number(tilt),
+            ])?;
+            per.insert(
+                (*name).into(),
+                json!({
+                    "exit_status": exit_kind(run),
+                    "exit_time": exit_time(run),
+                    "exit": run.exit.to_string(),
+                    "success": run.success(),
+                    "envelope_violation": violation,
+                    "ise": {"x": m.ise.x, "y": m.ise.y, "z": m.ise.z, "psi": m.ise.psi},
+                    "ise_position": ise_position,
+                    "chattering": {"thrust": m.chattering.thrust, "roll_torque": m.chattering.roll_torque},
+                    "peak_rotor_speed_demand": m.peak_rotor_speed_demand,
+                    "max_rotor_speed": omega_max,
+                    "saturation_fraction": m.saturation_fraction,
+                    "max_tilt": tilt,
+                    "duration": m.duration,
+                }),
+            );
+        }
+        json_scenarios.insert(s.name.clone(), Value::Object(per));
+    }
+    let _ = writeln!(
+        md,
+        "Exit, success (completed and inside the scenario's `[envelope]`) and rotors (peak speed the controller asks for before the limits; share of control periods the mixer saturated):\n\n{}",
+        outcome.render()
+    );
+    let _ = writeln!(md, "ISE ∫e² dt (m²·s; ψ rad²·s) and chattering (total variation per second) of the completed runs (`—`: the run ended early):\n\n{}", errors.render());
+    for n in &notes {
+        md.push_str(n);
+        md.push('\n');
+    }
+    let mut flights = runs.len();
+
+    let mut json_mc = Value::Null;
+    if mc_runs > 0 {
+        let base = &scenarios[1];
+        let spec = base.montecarlo.clone().unwrap_or_default();
+        let controllers: Vec<String> = BEYOND_MC_CONTROLLERS.iter().map(|c| (*c).to_string()).collect();
+        let total = mc_runs * controllers.len() as u64 * planned_steps(base);
+        let bar = steps_bar(total, mc_runs * controllers.len() as u64);
+        eprintln!("beyond the paper: Monte Carlo, {mc_runs} runs of {} per controller …", base.name);
+        let rows =
+            ftsmc_sim::batch::montecarlo::run_batch(base, &spec, &controllers, mc_runs, base.seed, &|n| bar.inc(n))
+                .map_err(|e| anyhow!(e))?;
+        bar.finish_and_clear();
+        flights += rows.len();
+        dir.write("beyond/montecarlo-runs.csv", &crate::montecarlo::runs_csv(&rows)?)?;
+        let summaries = ftsmc_sim::batch::montecarlo::summarize(&rows, &controllers);
+        let mut table = Table::new(["controller", "runs", "success", "envelope failures", "diverged", "crashed"]);
+        let mut per = Map::new();
+        for (name, sm) in &summaries {
+            table.row(vec![
+                label(name).to_string(),
+                sm.runs.to_string(),
+                format!("{} ({:.1} %)", (sm.success_rate * sm.runs as f64).round() as usize, 100.0 * sm.success_rate),
+                sm.envelope_failures.to_string(),
+                sm.diverged.to_string(),
+                sm.crashed.to_string(),
+            ]);
+            per.insert(
+                name.clone(),
+                json!({"runs": sm.runs, "successes": (sm.success_rate * sm.runs as f64).round() as usize,
+                       "success_rate": sm.success_rate, "envelope_failures": sm.envelope_failures,
+                       "diverged": sm.diverged, "crashed": sm.crashed}),
+            );
+        }
+        let _ = writeln!(
+            md,
+            "\n### Monte Carlo: {mc_runs} runs of {} (master seed {}; per run its own turbulence, sensor and motor noise, payload, disturbance amplitude and phase, initial attitude)\n\n{}",
+            base.name,
+            base.seed,
+            table.render()
+        );
+        json_mc = json!({"scenario": base.name, "runs": mc_runs, "master_seed": base.seed, "controllers": per});
+    }
+
+    let record = json!({
+        "controllers": BEYOND_CONTROLLERS,
+        "scenarios": json_scenarios,
+        "montecarlo": json_mc,
+        "provenance": provenance(&files),
+    });
+    dir.write("beyond/realism.json", serde_json::to_string_pretty(&record)?.as_bytes())?;
+    dir.write("beyond/realism.csv", &csv.into_inner().map_err(|e| anyhow!("csv: {e}"))?)?;
+    dir.write("beyond/report.md", md.as_bytes())?;
+    if figures {
+        let fig_dir = dir.path().join("figures").join("beyond");
+        for s in &scenarios {
+            let mine: Vec<&RunOutput> = runs.iter().filter(|r| r.scenario == s.name).collect();
+            crate::figures::beyond(&mine, ftsmc_sim::run::truth::actuators(s).max_rotor_speed, &fig_dir)?;
+        }
+    }
+    Ok(Beyond { report: md, flights })
 }
 
 /// `ftsmc run`: fly `scenario.controllers` and write `out/<name>/`.

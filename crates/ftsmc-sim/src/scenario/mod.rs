@@ -38,11 +38,18 @@ pub const PAPER_SCENARIO_2: &str = include_str!("../../../../scenarios/paper-sce
 /// limit cycle, as shipped in `scenarios/ftaftsmc-tuned-scenario-1.toml`.
 pub const FTAFTSMC_TUNED_SCENARIO_1: &str = include_str!("../../../../scenarios/ftaftsmc-tuned-scenario-1.toml");
 
+/// Paper scenario 1 on an AscTec Hummingbird rigid body with real rotors, sensors, turbulence and ground (issue 12).
+pub const REALISTIC_SCENARIO_1: &str = include_str!("../../../../scenarios/realistic-scenario-1.toml");
+/// Paper scenario 2 on an AscTec Hummingbird rigid body with real rotors, sensors, turbulence and ground (issue 12).
+pub const REALISTIC_SCENARIO_2: &str = include_str!("../../../../scenarios/realistic-scenario-2.toml");
+
 /// Every scenario built into the library: `(file name, TOML text)`.
-pub const BUILT_IN_SCENARIOS: [(&str, &str); 3] = [
+pub const BUILT_IN_SCENARIOS: [(&str, &str); 5] = [
     ("paper-scenario-1.toml", PAPER_SCENARIO_1),
     ("paper-scenario-2.toml", PAPER_SCENARIO_2),
     ("ftaftsmc-tuned-scenario-1.toml", FTAFTSMC_TUNED_SCENARIO_1),
+    ("realistic-scenario-1.toml", REALISTIC_SCENARIO_1),
+    ("realistic-scenario-2.toml", REALISTIC_SCENARIO_2),
 ];
 
 /// The paper scenarios built into the library: `(file name, TOML text)`.
