@@ -721,7 +721,7 @@ pub fn beyond_the_paper(dir: &ResultDir, figures: bool, mc_runs: u64) -> Result<
     csv.write_record([
         "scenario",
         "controller",
-        "exit_status",
+        "exit_kind",
         "exit_time",
         "success",
         "envelope_violation",
@@ -798,7 +798,7 @@ pub fn beyond_the_paper(dir: &ResultDir, figures: bool, mc_runs: u64) -> Result<
             per.insert(
                 (*name).into(),
                 json!({
-                    "exit_status": exit_kind(run),
+                    "exit_kind": exit_kind(run),
                     "exit_time": exit_time(run),
                     "exit": run.exit.to_string(),
                     "success": run.success(),
