@@ -41,7 +41,7 @@ fn no_files_with_suffix(dir: &Path, suffix: &str) -> bool {
 #[test]
 fn reproduce_from_any_directory_writes_table_json_and_csv() {
     let dir = temp_dir("reproduce");
-    let out = ftsmc(&["reproduce", "--out", "res", "--no-figures"], &dir);
+    let out = ftsmc(&["reproduce", "--out", "res", "--no-figures", "--realistic-runs", "4"], &dir);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(stdout.contains("Table 3") && stdout.contains("0.2674"), "{stdout}");

@@ -80,7 +80,7 @@ fn check_pair(stem: &Path) -> (u32, u32) {
 fn reproduce_writes_every_figure_as_matching_svg_and_png() {
     let dir = temp_dir("reproduce");
     let out = dir.join("res");
-    ftsmc(&["reproduce", "--out", out.to_str().unwrap()]);
+    ftsmc(&["reproduce", "--realistic-runs", "4", "--out", out.to_str().unwrap()]);
     for name in FIGURES {
         let (w, _) = check_pair(&out.join("figures").join(name));
         assert!(w >= 800, "{name}: screen figures are at least 800 px wide, got {w}");

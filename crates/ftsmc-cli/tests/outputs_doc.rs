@@ -119,7 +119,7 @@ fn json_paths(file: &Path) -> BTreeSet<String> {
 #[test]
 fn every_csv_column_and_json_key_is_in_docs_outputs_md() {
     let dir = temp_dir("all");
-    ftsmc(&["reproduce", "--no-figures", "--out", "repro"], &dir);
+    ftsmc(&["reproduce", "--no-figures", "--realistic-runs", "4", "--out", "repro"], &dir);
     // A run that diverges (FTAFTSMC under a 1000 rad/s rotor limit tilts
     // over at 0.64 s) writes the divergence keys too.
     let scenario = Command::new(env!("CARGO_BIN_EXE_ftsmc")).args(["scenario", "paper-scenario-1"]).output().unwrap();

@@ -121,7 +121,7 @@ fn rerunning_a_monte_carlo_scenario_gives_an_identical_runs_csv() {
 #[test]
 fn reproduce_and_fixed_time_record_their_scenarios() {
     let dir = temp_dir("reproduce");
-    ftsmc(&["reproduce", "--out", "res", "--no-figures"], &dir);
+    ftsmc(&["reproduce", "--out", "res", "--no-figures", "--realistic-runs", "4"], &dir);
     let summary = json(&dir.join("res/summary.json"));
     let list = summary["provenance"]["scenarios"].as_array().unwrap();
     assert!(list.len() >= 2);
