@@ -77,3 +77,28 @@ fn realistic_monte_carlo_rates_do_not_depend_on_the_thread_count() {
     assert_eq!(one, two);
     assert_eq!(one_summary, two_summary);
 }
+
+/// The draws of true mass, inertia and drag reach an explicit
+/// `[vehicle.rigid_body]` (the truth model), not only `actual_plant`.
+#[test]
+fn mass_inertia_and_drag_draws_reach_the_rigid_body() {
+    let s = scenario();
+    let base = s.vehicle.rigid_body.expect("realistic scenario 2 names its rigid body");
+    let spec = s.montecarlo.clone().unwrap();
+    let (flown, _, sampled) = spec.sample(&s, s.seed, 3);
+    let rb = flown.vehicle.rigid_body.unwrap();
+    let (mass, inertia_factor, drag_factor) = (sampled[0], sampled[2], sampled[3]);
+    assert_ne!(mass, base.mass, "the draw must differ from the nominal mass");
+    assert_eq!(rb.mass, mass);
+    assert_ne!(inertia_factor, 1.0);
+    for (row, base_row) in rb.inertia.iter().zip(&base.inertia) {
+        for (j, b) in row.iter().zip(base_row) {
+            assert_eq!(*j, b * inertia_factor);
+        }
+    }
+    assert_ne!(drag_factor, 1.0);
+    assert_eq!(rb.rotor_drag_z, base.rotor_drag_z * drag_factor);
+    assert_eq!(rb.parasitic_drag[0], base.parasitic_drag[0] * drag_factor);
+    // The controllers keep their nominal model.
+    assert_eq!(flown.plant, s.plant);
+}

@@ -352,6 +352,17 @@ impl MonteCarloSpec {
             *k *= drag_factor;
         }
         s.actual_plant = Some(truth);
+        // An explicit rigid body is the truth model: the draws act on it too
+        // (without one, the rigid body is built from `actual_plant`).
+        if let Some(rb) = s.vehicle.rigid_body.as_mut() {
+            if self.mass.is_some() {
+                rb.mass = truth.mass;
+            }
+            rb.inertia = rb.inertia.map(|row| row.map(|j| j * inertia_factor));
+            rb.parasitic_drag = rb.parasitic_drag.map(|c| c * drag_factor);
+            rb.rotor_drag_xy *= drag_factor;
+            rb.rotor_drag_z *= drag_factor;
+        }
         let amplitude = self.disturbance_amplitude.map_or(1.0, |d| d.sample(&mut stream(4)));
         let mut phase_rng = stream(5);
         let mut first_phase = 0.0;
