@@ -77,7 +77,7 @@ fn names_labels_and_sections_are_unique_and_consistent() {
 
 /// The default of section `key` as a TOML table.
 fn section_defaults(key: &str) -> toml::Table {
-    let all = toml::Table::try_from(&GainSections::default()).expect("sections serialize");
+    let all = toml::Table::try_from(GainSections::default()).expect("sections serialize");
     match all.get(key) {
         Some(toml::Value::Table(t)) => t.clone(),
         other => panic!("section `{key}` is not written as a table: {other:?}"),
@@ -124,9 +124,8 @@ fn first_float(table: &toml::Table, prefix: &str) -> Option<(String, f64)> {
 fn every_section_is_validated_with_the_dotted_key_and_the_writing_file() {
     for key in GainSections::KEYS {
         let (path, _) = first_float(&section_defaults(key), "").unwrap_or_else(|| panic!("[{key}] has no float"));
-        let (table, leaf) = path.rsplit_once('.').map_or((key.to_string(), path.as_str()), |(t, l)| {
-            (format!("{key}.{t}"), l)
-        });
+        let (table, leaf) =
+            path.rsplit_once('.').map_or((key.to_string(), path.as_str()), |(t, l)| (format!("{key}.{t}"), l));
         let text = format!("{DEFAULT}[{table}]\n{leaf} = nan\n");
         match Scenario::from_toml_str(&text, "bad.toml") {
             Err(ScenarioError::Invalid { path: file, key: bad, value, .. }) => {

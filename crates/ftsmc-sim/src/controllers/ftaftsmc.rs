@@ -66,7 +66,11 @@ impl GainSection for FtaftsmcConfig {
 }
 
 /// The cascade of six FTAFTSMC laws with mass adaptation `mass_adaptation`.
-fn cascade(config: &FtaftsmcConfig, mass_adaptation: MassAdaptation, ctx: &BuildContext) -> Result<BoxedController, String> {
+fn cascade(
+    config: &FtaftsmcConfig,
+    mass_adaptation: MassAdaptation,
+    ctx: &BuildContext,
+) -> Result<BoxedController, String> {
     let laws = config.gains().to_array().map(FtaftsmcAxis::new);
     Ok(Box::new(Cascade::new(ctx.cascade_config(mass_adaptation), laws).map_err(|e| e.to_string())?))
 }

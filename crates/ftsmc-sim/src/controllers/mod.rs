@@ -5,7 +5,7 @@
 //! TOML key, serde type, defaults and validation), a constructor, and
 //! optionally its per-axis sliding law (for the fixed-time sweep of
 //! `analysis::fixed_time`) and its reaching-time bound. The list at the
-//! bottom of this file ([`declare_controllers!`]) names each gain section once,
+//! bottom of this file (`declare_controllers!`) names each gain section once,
 //! with the controllers that read it; from it the macro generates
 //!
 //! - [`GainSections`], the typed gain sections of a scenario
@@ -25,8 +25,9 @@
 //!
 //! 1. Write the law in `ftsmc-core` (a per-axis [`ftsmc_core::law::AxisLaw`]
 //!    wrapped in the cascade, or a full-state [`Controller`]) with a gain
-//!    struct that derives serde under the core's `serde` feature and has a
-//!    `check()`.
+//!    struct that derives `Clone, Debug, PartialEq` and, under the core's
+//!    `serde` feature, `Deserialize, Serialize` with `deny_unknown_fields`,
+//!    and has a `check()` returning [`GainError`].
 //! 2. Add `src/controllers/NAME.rs` here: `impl GainSection` for its gain
 //!    struct (TOML `KEY`, `defaults()`, `check()`) and a unit struct with
 //!    `impl Declaration` (`NAME`, `LABEL`, `DESCRIPTION`, `type Section`,
@@ -45,6 +46,7 @@
 //! impl GainSection for ftsmc_core::pid::PidGains {
 //!     const KEY: &'static str = "pid";
 //!     fn defaults() -> Self { Self::default() }
+//!     // `self.check()` is the gain struct's own (inherent) check.
 //!     fn check(&self) -> Result<(), InvalidGain> { self.check().map_err(|e| InvalidGain::at("", e)) }
 //! }
 //! pub struct Pid;
@@ -147,7 +149,9 @@ pub fn check_axes<G>(set: &AxisSet<G>, check: impl Fn(&G) -> Result<(), GainErro
 /// `#[serde(deny_unknown_fields)]`: an unknown key is then an error naming
 /// it), after the built-in defaults of [`GainSection::defaults`] have been
 /// merged under the files' values key by key.
-pub trait GainSection: Clone + core::fmt::Debug + PartialEq + Serialize + DeserializeOwned + Send + Sync + 'static {
+pub trait GainSection:
+    Clone + core::fmt::Debug + PartialEq + Serialize + DeserializeOwned + Send + Sync + 'static
+{
     /// The section's TOML key (`"ftaftsmc"` for `[ftaftsmc]`).
     const KEY: &'static str;
     /// Fixed-length arrays inside the section whose serde ignores extra

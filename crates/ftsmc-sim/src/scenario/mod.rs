@@ -15,9 +15,9 @@ pub mod resolve;
 mod validate;
 
 pub use crate::axes::AxisSet;
-pub use crate::environment::{DisturbanceSignals, DragNoise, Payload};
 pub use crate::controllers::ftaftsmc::FtaftsmcConfig;
 pub use crate::controllers::{GainSections, PAPER_CONTROLLERS};
+pub use crate::environment::{DisturbanceSignals, DragNoise, Payload};
 pub use crate::text::{exact_array, show, show_str, MAX_SHOWN_CHARS};
 pub use distributions::{Dist, MonteCarloSpec};
 pub(crate) use validate::check_core_array_lengths;
