@@ -328,6 +328,9 @@ mod tests {
             })
             .collect();
         assert_eq!(starts.len(), registry::CONTROLLERS.len() + PAPER_SCENARIOS.len());
+        for (name, what) in registry::CONTROLLERS {
+            assert!(text.lines().any(|l| l.trim_start().starts_with(name) && l.ends_with(what)), "{name}:\n{text}");
+        }
         assert!(starts.windows(2).all(|w| w[0] == w[1]), "descriptions not aligned:\n{text}");
     }
 }

@@ -376,10 +376,10 @@ pub const VERSION: &str = env!("CARGO_PKG_VERSION");
 pub const GIT_COMMIT: &str = env!("FTSMC_GIT_COMMIT");
 
 /// The resolved scenario as written to `scenario.toml`: every field, with
-/// every default filled in (`toml::to_string`); loading it gives back an
-/// identical [`Scenario`](ftsmc_sim::scenario::Scenario).
+/// every default filled in ([`Scenario::to_toml`](ftsmc_sim::scenario::Scenario::to_toml));
+/// loading it gives back an identical [`Scenario`](ftsmc_sim::scenario::Scenario).
 pub fn scenario_toml(scenario: &ftsmc_sim::scenario::Scenario) -> Result<String> {
-    toml::to_string(scenario).context("cannot write the scenario as TOML")
+    scenario.to_toml().context("cannot write the scenario as TOML")
 }
 
 /// One scenario file written into a result folder, for the provenance record.

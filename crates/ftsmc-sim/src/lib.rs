@@ -2,7 +2,8 @@
 //!
 //! Everything around the control laws of `ftsmc-core`: truth models of the
 //! vehicle, actuators, the environment, scenario files, the run loop,
-//! metrics, the controller registry, Monte Carlo batches and analyses.
+//! metrics, the controllers (each declared once) and their registry, Monte
+//! Carlo batches and analyses.
 //!
 //! ## Layout
 //!
@@ -15,7 +16,7 @@
 //!            tuning.rs          gain tuning
 //!          batch/               batches of flights
 //!            montecarlo.rs      run_batch, stats, summarize
-//! floor 5  registry.rs          controllers by name: label, constructor, run
+//! floor 5  registry.rs          controllers by name for a scenario: build, run, label
 //! floor 4  run/                 the loop: controller on its clock, plant by RK4, environment, metrics
 //!            exit.rs            ExitStatus, Divergence, divergence checks
 //!            recording.rs       Recording, recording_columns, CSV numbers
@@ -39,10 +40,14 @@
 //!          envelope.rs          success envelope and its verdict (`[envelope]`)
 //!          metrics.rs           ISE, IAE, ITAE, settling, chattering, online
 //!          sensors.rs           measured state: noise, bias, sample rate, latency (`[sensors]`)
+//!          controllers/         each controller declared once: name, label, gain section, constructor
+//!            mod.rs             the Declaration/GainSection traits and the one list (GainSections, CONTROLLERS)
+//!            ftaftsmc.rs        `ftaftsmc`, `ftaftsmc-no-mass` (`[ftaftsmc]`)
+//!            ranftsmc.rs        `ranftsmc` (`[ranftsmc]`)
+//!            tsm_sta.rs         `tsm-sta` (`[tsm-sta]`)
 //! floor 1  axes.rs              AxisSet and other per-axis containers
 //!          signal/              time signals with analytic derivatives
 //!            waypoints.rs       quintic waypoint splines
-//!          names.rs             controller names as data (PAPER_CONTROLLERS, CONTROLLERS)
 //!          limits.rs            cost limits and their arithmetic
 //!          text.rs              values in error messages, exact-length TOML arrays
 //! ```
@@ -52,11 +57,11 @@ pub mod actuators;
 pub mod analysis;
 pub mod axes;
 pub mod batch;
+pub mod controllers;
 pub mod envelope;
 pub mod environment;
 pub mod limits;
 pub mod metrics;
-pub mod names;
 pub mod registry;
 pub mod run;
 pub mod scenario;

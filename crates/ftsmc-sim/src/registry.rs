@@ -1,65 +1,37 @@
-//! Controllers by name. Adding a controller: implement
-//! [`ftsmc_core::law::AxisLaw`] in the core crate, give it a gain section in
-//! [`crate::scenario::Scenario`], and add one arm here.
-
-use ftsmc_core::cascade::{Cascade, CascadeConfig, Controller, MassAdaptation};
-use ftsmc_core::ftaftsmc::FtaftsmcAxis;
-use ftsmc_core::ranftsmc::RanftsmcAxis;
-use ftsmc_core::tsm_sta::TsmStaAxis;
+//! Controllers by name, for the rest of the crate and its users: build one
+//! with the gains of a scenario, fly it, label it. The controllers
+//! themselves are declared in [`crate::controllers`] (one file each, one
+//! line in its list); this module only adds the scenario around them.
 
 use crate::scenario::Scenario;
 
-pub use crate::names::{CONTROLLERS, PAPER_CONTROLLERS};
+pub use crate::controllers::{BoxedController, CONTROLLERS, DECLARED, PAPER_CONTROLLERS};
 
-/// Human-readable label for figures and tables.
+/// Labels of result variants that are not controllers of their own
+/// (`ftsmc reproduce` flies `ftaftsmc` on modified scenarios under these keys).
+const VARIANT_LABELS: [(&str, &str); 2] = [
+    ("ftaftsmc-tuned", "FTAFTSMC (tuned x/y reaching law)"),
+    ("ftaftsmc-zero-derivatives", "FTAFTSMC (zero attitude-reference derivatives)"),
+];
+
+/// Human-readable label for figures and tables: the declared
+/// [`crate::controllers::Declaration::LABEL`], a result variant's label, or
+/// `name` itself.
 pub fn label(name: &str) -> &str {
-    match name {
-        "ftaftsmc" => "FTAFTSMC",
-        "ftaftsmc-no-mass" => "FTAFTSMC (no mass adaptation)",
-        "ftaftsmc-tuned" => "FTAFTSMC (tuned x/y reaching law)",
-        "ftaftsmc-zero-derivatives" => "FTAFTSMC (zero attitude-reference derivatives)",
-        "ranftsmc" => "RANFTSMC [19]",
-        "tsm-sta" => "TSM-STA [2]",
-        other => other,
-    }
+    crate::controllers::label(name)
+        .or_else(|| VARIANT_LABELS.iter().find(|(n, _)| *n == name).map(|(_, l)| *l))
+        .unwrap_or(name)
 }
 
 /// `Ok(())` for a registered name; otherwise the list of known names.
 pub fn check_name(name: &str) -> Result<(), String> {
-    crate::names::check_controller(name)
+    crate::controllers::check_name(name)
 }
-
-/// A boxed controller ready to fly.
-pub type BoxedController = Box<dyn Controller + Send>;
 
 /// Build the controller `name` with the gains of `scenario`. Returns the
 /// list of known names when `name` is not registered.
 pub fn build(name: &str, scenario: &Scenario) -> Result<BoxedController, String> {
-    check_name(name)?;
-    let config = |mass_adaptation: MassAdaptation| CascadeConfig {
-        model: scenario.plant,
-        settings: scenario.cascade,
-        mass_adaptation,
-    };
-    Ok(match name {
-        "ftaftsmc" | "ftaftsmc-no-mass" => {
-            let mut ma = scenario.ftaftsmc.mass_adaptation;
-            if name == "ftaftsmc-no-mass" {
-                ma.enabled = false;
-            }
-            let laws = scenario.ftaftsmc.gains().to_array().map(FtaftsmcAxis::new);
-            Box::new(Cascade::new(config(ma), laws).map_err(|e| e.to_string())?)
-        }
-        "ranftsmc" => {
-            let laws = scenario.ranftsmc.to_array().map(RanftsmcAxis::new);
-            Box::new(Cascade::new(config(MassAdaptation::OFF), laws).map_err(|e| e.to_string())?)
-        }
-        "tsm-sta" => {
-            let laws = scenario.tsm_sta.to_array().map(TsmStaAxis::new);
-            Box::new(Cascade::new(config(MassAdaptation::OFF), laws).map_err(|e| e.to_string())?)
-        }
-        _ => unreachable!("check_name accepted an unhandled name"),
-    })
+    crate::controllers::build(name, &scenario.gains, &scenario.build_context())
 }
 
 /// Build controller `name` for `scenario` and fly it; the output's
@@ -79,8 +51,16 @@ mod tests {
     fn builds_every_listed_name() {
         let scenario = Scenario::paper_scenarios().remove(0);
         for (name, _) in CONTROLLERS {
-            assert!(build(name, &scenario).is_ok(), "{name} is listed in names.rs but not built");
+            assert!(build(name, &scenario).is_ok(), "{name} is declared but not built");
         }
-        assert!(build("no-such-controller", &scenario).is_err());
+        let err = build("no-such-controller", &scenario).err().expect("unknown name rejected");
+        assert!(err.contains("ftaftsmc") && err.contains("tsm-sta"), "{err}");
+    }
+
+    #[test]
+    fn labels_come_from_the_declarations_and_the_variants() {
+        assert_eq!(label("ranftsmc"), "RANFTSMC [19]");
+        assert_eq!(label("ftaftsmc-tuned"), "FTAFTSMC (tuned x/y reaching law)");
+        assert_eq!(label("unknown"), "unknown");
     }
 }

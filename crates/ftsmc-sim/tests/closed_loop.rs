@@ -34,7 +34,7 @@ fn exact_model_scenario() -> Scenario {
     s.plant.drag_translational = [0.0; 3];
     s.plant.drag_rotational = [0.0; 3];
     s.plant.rotor_inertia = 0.0;
-    s.ftaftsmc.mass_adaptation.enabled = false;
+    s.gains.ftaftsmc.mass_adaptation.enabled = false;
     s.reference.x = Signal::default();
     s.reference.y = Signal::default();
     s.reference.z = Signal { terms: vec![Term::Step { time: 0.0, height: 0.5 }], window: None };
@@ -53,7 +53,7 @@ fn sliding_variable_obeys_the_reaching_law_when_the_model_is_exact() {
     let run = registry::run("ftaftsmc", &s, RunOptions::default()).unwrap();
     assert!(run.exit.is_completed());
     let dt = s.control_period();
-    for (axis, gains) in [("z", s.ftaftsmc.z), ("psi", s.ftaftsmc.psi)] {
+    for (axis, gains) in [("z", s.gains.ftaftsmc.z), ("psi", s.gains.ftaftsmc.psi)] {
         let sv = run.recording.column(&format!("s_{axis}"));
         let dh = run.recording.column(&format!("delta_hat_{axis}"));
         let mut worst: f64 = 0.0;
@@ -84,7 +84,7 @@ fn sliding_variable_mismatch_shrinks_with_the_control_period() {
         let dh = run.recording.column("delta_hat_psi");
         let dt = 1.0 / rate;
         (1..sv.len() - 1)
-            .map(|k| ((sv[k + 1] - sv[k]) / dt - reaching_law(&s.ftaftsmc.psi, sv[k], dh[k - 1])).abs())
+            .map(|k| ((sv[k + 1] - sv[k]) / dt - reaching_law(&s.gains.ftaftsmc.psi, sv[k], dh[k - 1])).abs())
             .fold(0.0, f64::max)
     };
     let (coarse, fine) = (residual(1000.0), residual(4000.0));
@@ -99,7 +99,7 @@ fn hover_scenario(adapt: bool) -> Scenario {
     s.reference.y = Signal::default();
     s.reference.z = Signal::constant(1.0);
     s.reference.psi = Signal::default();
-    s.ftaftsmc.mass_adaptation.enabled = adapt;
+    s.gains.ftaftsmc.mass_adaptation.enabled = adapt;
     s.duration = 5.0;
     s
 }
@@ -160,7 +160,7 @@ fn a_diverging_flight_is_an_outcome_not_a_panic() {
 #[test]
 fn controller_runs_directly_without_the_registry() {
     let s = paper_1();
-    let gains = s.ftaftsmc.gains().to_array();
+    let gains = s.gains.ftaftsmc.gains().to_array();
     let config = CascadeConfig { model: s.plant, settings: s.cascade, mass_adaptation: MassAdaptation::PAPER };
     let mut c = Cascade::new(config, gains.map(FtaftsmcAxis::new)).unwrap();
     let out = simulate(&s, &mut c, RunOptions { record: false, ..Default::default() });
@@ -201,7 +201,7 @@ fn mass_adaptation_winds_up_on_a_large_descent_unless_projected() {
     assert!(peak > 10.0, "α̂ peaked at {peak}");
     assert!(!paper_law.exit.is_completed());
 
-    s.ftaftsmc.mass_adaptation.alpha_hat_bounds = Some([0.5, 3.0]);
+    s.gains.ftaftsmc.mass_adaptation.alpha_hat_bounds = Some([0.5, 3.0]);
     let projected = registry::run("ftaftsmc", &s, RunOptions::default()).unwrap();
     assert!(projected.exit.is_completed(), "{}", projected.exit);
     assert!(projected.recording.column("alpha_hat").iter().all(|a| (0.5..=3.0).contains(a)));

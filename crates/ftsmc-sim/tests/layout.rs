@@ -12,7 +12,6 @@ use std::path::{Path, PathBuf};
 const FLOORS: &[(&str, u32)] = &[
     ("text", 1),
     ("axes", 1),
-    ("names", 1),
     ("limits", 1),
     ("signal", 1),
     ("vehicle", 2),
@@ -21,6 +20,7 @@ const FLOORS: &[(&str, u32)] = &[
     ("metrics", 2),
     ("envelope", 2),
     ("sensors", 2),
+    ("controllers", 2),
     ("scenario", 3),
     ("run", 4),
     ("registry", 5),

@@ -30,8 +30,8 @@ fn extends_with_one_gain_override_changes_only_that_gain() {
     let child = write(&dir, "child.toml", "extends = \"paper-scenario-1\"\n[ftaftsmc.z]\nlambda = 3.5\n");
     let got = Scenario::from_file(&child).unwrap();
     let mut want = paper(PAPER_SCENARIO_1, "paper-scenario-1.toml");
-    assert_ne!(want.ftaftsmc.z.lambda, 3.5);
-    want.ftaftsmc.z.lambda = 3.5;
+    assert_ne!(want.gains.ftaftsmc.z.lambda, 3.5);
+    want.gains.ftaftsmc.z.lambda = 3.5;
     assert_eq!(got, want);
 }
 
@@ -145,14 +145,14 @@ fn partial_gain_tables_keep_the_per_axis_defaults() {
     .unwrap();
     let defaults = Scenario::from_toml_str("name = \"p\"\nduration = 1.0\n", "d.toml").unwrap();
     let mut want = defaults.clone();
-    want.ftaftsmc.z.lambda = 2.5;
-    want.ftaftsmc.psi.gamma = 3.0;
-    want.tsm_sta.x.k1 = 4.0;
+    want.gains.ftaftsmc.z.lambda = 2.5;
+    want.gains.ftaftsmc.psi.gamma = 3.0;
+    want.gains.tsm_sta.x.k1 = 4.0;
     assert_eq!(s, want);
     // x/y, z and attitude defaults differ, and each axis kept its own.
-    assert_ne!(defaults.ftaftsmc.x, defaults.ftaftsmc.z);
-    assert_eq!(s.ftaftsmc.x, defaults.ftaftsmc.x);
-    assert_eq!(s.ftaftsmc.z.gamma, defaults.ftaftsmc.z.gamma);
+    assert_ne!(defaults.gains.ftaftsmc.x, defaults.gains.ftaftsmc.z);
+    assert_eq!(s.gains.ftaftsmc.x, defaults.gains.ftaftsmc.x);
+    assert_eq!(s.gains.ftaftsmc.z.gamma, defaults.gains.ftaftsmc.z.gamma);
 }
 
 #[test]

@@ -13,15 +13,15 @@ fn shipped_tsm_sta_gains_are_reproduced_by_the_procedure() {
     for (target, achieved) in r.target.iter().zip(r.achieved) {
         assert!((achieved - target).abs() < 0.01, "achieved {achieved} vs target {target}");
     }
-    for ((axis, shipped), (_, tuned)) in s.tsm_sta.named().into_iter().zip(r.gains.named()) {
+    for ((axis, shipped), (_, tuned)) in s.gains.tsm_sta.named().into_iter().zip(r.gains.named()) {
         for (name, a, b) in
             [("lambda", shipped.lambda, tuned.lambda), ("k1", shipped.k1, tuned.k1), ("k2", shipped.k2, tuned.k2)]
         {
             assert!((a - b).abs() < 1e-6 * b.abs(), "tsm-sta.{axis}.{name}: shipped {a} vs procedure {b}");
         }
     }
-    assert_eq!(s.tsm_sta.x, TsmStaGains::DEFAULT_POSITION);
-    assert_eq!(s.tsm_sta.psi, TsmStaGains::DEFAULT_ATTITUDE);
+    assert_eq!(s.gains.tsm_sta.x, TsmStaGains::DEFAULT_POSITION);
+    assert_eq!(s.gains.tsm_sta.psi, TsmStaGains::DEFAULT_ATTITUDE);
 }
 
 #[test]

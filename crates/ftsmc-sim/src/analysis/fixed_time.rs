@@ -10,10 +10,7 @@
 use ftsmc_core::law::{AxisLaw, MAX_ESTIMATES};
 use serde::Serialize;
 
-use ftsmc_core::ftaftsmc::FtaftsmcAxis;
-use ftsmc_core::ranftsmc::RanftsmcAxis;
-use ftsmc_core::tsm_sta::TsmStaAxis;
-
+use crate::controllers::AxisLawVisitor;
 use crate::scenario::Scenario;
 
 /// Settings of a sweep.
@@ -436,8 +433,24 @@ pub fn cascade_channel(
     })
 }
 
+/// [`sweep`] as a visitor of a declaration's per-axis law.
+struct SweepVisitor<'a> {
+    settings: &'a SweepSettings,
+    sampling: Sampling,
+}
+
+impl AxisLawVisitor for SweepVisitor<'_> {
+    type Output = Vec<ChannelTimes>;
+    fn visit<L: AxisLaw + Clone>(self, law: L) -> Vec<ChannelTimes> {
+        sweep(&law, self.settings, self.sampling)
+    }
+}
+
 /// Sweep the decoupled channel `axis` (0..6 = x, y, z, φ, θ, ψ) of
-/// controller `name` with the gains of `scenario` (see the module docs).
+/// controller `name` with the gains of `scenario` (see the module docs),
+/// using the per-axis law its declaration gives
+/// ([`crate::controllers::Declaration::visit_axis_law`]). An error for an
+/// unknown name or a controller without per-axis sliding laws.
 pub fn sweep_channel(
     name: &str,
     scenario: &Scenario,
@@ -445,25 +458,17 @@ pub fn sweep_channel(
     settings: &SweepSettings,
     sampling: Sampling,
 ) -> Result<Vec<ChannelTimes>, String> {
-    crate::registry::check_name(name)?;
-    Ok(match name {
-        "ftaftsmc" | "ftaftsmc-no-mass" => {
-            sweep(&FtaftsmcAxis::new(scenario.ftaftsmc.gains().to_array()[axis]), settings, sampling)
-        }
-        "ranftsmc" => sweep(&RanftsmcAxis::new(scenario.ranftsmc.to_array()[axis]), settings, sampling),
-        "tsm-sta" => sweep(&TsmStaAxis::new(scenario.tsm_sta.to_array()[axis]), settings, sampling),
-        _ => unreachable!("check_name accepted an unhandled name"),
-    })
+    crate::controllers::visit_axis_law(name, &scenario.gains, axis, SweepVisitor { settings, sampling })?.ok_or_else(
+        || format!("controller `{name}` has no per-axis sliding law: the decoupled-channel sweep does not apply"),
+    )
 }
 
-/// The paper's reaching-time bound (Eq. 38) for `axis` of controller `name`,
-/// when the controller has one (FTAFTSMC only; the baselines are finite-time
-/// with initial-condition-dependent bounds, Eq. 36–37).
+/// The reaching-time bound for `axis` of controller `name`, when its
+/// declaration has one ([`crate::controllers::Declaration::reaching_time_bound`]):
+/// FTAFTSMC's Eq. 38; the baselines are finite-time with
+/// initial-condition-dependent bounds (Eq. 36–37) and have none.
 pub fn reaching_time_bound(name: &str, scenario: &Scenario, axis: usize) -> Option<f64> {
-    match name {
-        "ftaftsmc" | "ftaftsmc-no-mass" => Some(scenario.ftaftsmc.gains().to_array()[axis].reaching_time_bound()),
-        _ => None,
-    }
+    crate::controllers::reaching_time_bound(name, &scenario.gains, axis)
 }
 
 #[cfg(test)]

@@ -75,7 +75,7 @@ pub fn tune_tsm_sta(
     let mut position_scale = 1.0;
     let mut attitude_scale = 1.0;
     let apply = |s: &mut Scenario, pos: f64, att: f64| {
-        s.tsm_sta = AxisSet::split(time_scaled(base_position, pos), time_scaled(base_attitude, att));
+        s.gains.tsm_sta = AxisSet::split(time_scaled(base_position, pos), time_scaled(base_attitude, att));
     };
     for pass in 0..2 {
         attitude_scale = bisect(
@@ -100,5 +100,5 @@ pub fn tune_tsm_sta(
         }
     }
     let achieved = settling(&s, "tsm-sta")?;
-    Ok(TuningReport { position_scale, attitude_scale, gains: s.tsm_sta.clone(), target, achieved })
+    Ok(TuningReport { position_scale, attitude_scale, gains: s.gains.tsm_sta.clone(), target, achieved })
 }

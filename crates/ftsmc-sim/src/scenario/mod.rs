@@ -5,12 +5,9 @@
 
 use std::path::Path;
 
-use ftsmc_core::cascade::{CascadeSettings, MassAdaptation};
-use ftsmc_core::ftaftsmc::FtaftsmcGains;
+use ftsmc_core::cascade::CascadeSettings;
 use ftsmc_core::law::GainError;
 use ftsmc_core::model::{QuadState, QuadrotorParams};
-use ftsmc_core::ranftsmc::RanftsmcGains;
-use ftsmc_core::tsm_sta::TsmStaGains;
 use serde::{Deserialize, Serialize};
 
 pub mod distributions;
@@ -18,8 +15,9 @@ pub mod resolve;
 mod validate;
 
 pub use crate::axes::AxisSet;
+pub use crate::controllers::ftaftsmc::FtaftsmcConfig;
+pub use crate::controllers::{GainSections, PAPER_CONTROLLERS};
 pub use crate::environment::{DisturbanceSignals, DragNoise, Payload};
-pub use crate::names::PAPER_CONTROLLERS;
 pub use crate::text::{exact_array, show, show_str, MAX_SHOWN_CHARS};
 pub use distributions::{Dist, MonteCarloSpec};
 pub(crate) use validate::check_core_array_lengths;
@@ -209,56 +207,6 @@ pub struct ReferenceSignals {
     pub psi: Signal,
 }
 
-/// FTAFTSMC configuration: mass adaptation and per-channel gains (Tables 4–5).
-#[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct FtaftsmcConfig {
-    /// Mass adaptation of §3.2 (β1, β2 of Table 5).
-    pub mass_adaptation: MassAdaptation,
-    /// x channel (Table 5).
-    pub x: FtaftsmcGains,
-    /// y channel (Table 5).
-    pub y: FtaftsmcGains,
-    /// z channel (Table 5).
-    pub z: FtaftsmcGains,
-    /// Roll channel (Table 4).
-    pub phi: FtaftsmcGains,
-    /// Pitch channel (Table 4).
-    pub theta: FtaftsmcGains,
-    /// Yaw channel (Table 4).
-    pub psi: FtaftsmcGains,
-}
-
-impl FtaftsmcConfig {
-    /// The six channel gain sets.
-    pub fn gains(&self) -> AxisSet<FtaftsmcGains> {
-        AxisSet { x: self.x, y: self.y, z: self.z, phi: self.phi, theta: self.theta, psi: self.psi }
-    }
-}
-
-impl Default for FtaftsmcConfig {
-    fn default() -> Self {
-        Self {
-            mass_adaptation: MassAdaptation::PAPER,
-            x: FtaftsmcGains::PAPER_XY,
-            y: FtaftsmcGains::PAPER_XY,
-            z: FtaftsmcGains::PAPER_Z,
-            phi: FtaftsmcGains::PAPER_ROLL_PITCH,
-            theta: FtaftsmcGains::PAPER_ROLL_PITCH,
-            psi: FtaftsmcGains::PAPER_YAW,
-        }
-    }
-}
-
-/// Gain sets of the baselines (defaults: published RANFTSMC gains, tuned TSM-STA gains).
-fn default_ranftsmc() -> AxisSet<RanftsmcGains> {
-    AxisSet::split(RanftsmcGains::PAPER_POSITION, RanftsmcGains::PAPER_ATTITUDE)
-}
-
-fn default_tsm_sta() -> AxisSet<TsmStaGains> {
-    AxisSet::split(TsmStaGains::DEFAULT_POSITION, TsmStaGains::DEFAULT_ATTITUDE)
-}
-
 fn default_controllers() -> Vec<String> {
     PAPER_CONTROLLERS.iter().map(|s| s.to_string()).collect()
 }
@@ -352,15 +300,17 @@ pub struct Scenario {
     /// Cascade options shared by all controllers.
     #[serde(default)]
     pub cascade: CascadeSettings,
-    /// FTAFTSMC gains.
-    #[serde(default)]
-    pub ftaftsmc: FtaftsmcConfig,
-    /// RANFTSMC gains per channel.
-    #[serde(default = "default_ranftsmc")]
-    pub ranftsmc: AxisSet<RanftsmcGains>,
-    /// TSM-STA gains per channel.
-    #[serde(default = "default_tsm_sta", rename = "tsm-sta")]
-    pub tsm_sta: AxisSet<TsmStaGains>,
+    /// Every declared controller's gain section (`scenario.gains.ftaftsmc`,
+    /// …; see [`crate::controllers`]), written as the top-level tables
+    /// `[ftaftsmc]`, `[ranftsmc]`, `[tsm-sta]`, … in the list's order.
+    ///
+    /// Not read by `Scenario`'s own `Deserialize` (serde's `flatten` would
+    /// lose `deny_unknown_fields` and the key paths of errors): the loaders
+    /// ([`Scenario::from_toml_str`], [`Scenario::from_file`]) take the
+    /// sections out of the TOML tree and parse each with its declared type.
+    /// Deserializing a `Scenario` directly rejects them as unknown fields.
+    #[serde(flatten, skip_deserializing)]
+    pub gains: GainSections,
     /// Distributions for `ftsmc montecarlo` (ignored by single runs).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub montecarlo: Option<MonteCarloSpec>,
@@ -480,6 +430,24 @@ impl Scenario {
     /// Control period, s.
     pub fn control_period(&self) -> f64 {
         1.0 / self.simulation.control_rate
+    }
+
+    /// What a controller is built from besides its gain section: the
+    /// nominal `[plant]`, `[cascade]` and the control period.
+    pub fn build_context(&self) -> crate::controllers::BuildContext {
+        crate::controllers::BuildContext {
+            plant: self.plant,
+            cascade: self.cascade,
+            control_period: self.control_period(),
+        }
+    }
+
+    /// The scenario as TOML with every default filled in (every gain
+    /// section included): what `ftsmc` writes as `scenario.toml`. Loading
+    /// the text back ([`Scenario::from_toml_str`]) gives an identical
+    /// `Scenario`.
+    pub fn to_toml(&self) -> Result<String, toml::ser::Error> {
+        toml::to_string(self)
     }
 
     /// The sizes [`crate::limits`] prices a flight by.

@@ -19,13 +19,17 @@
 //! The merged table is then deserialized with every struct's
 //! `deny_unknown_fields`, so a misspelt key in any file of the chain is
 //! still an error that names it, and `name`/`duration` must be set by some
-//! file of the chain.
+//! file of the chain. The controllers' gain sections (`[ftaftsmc]`, …; see
+//! [`crate::controllers`]) are taken out of the merged table first and each
+//! is deserialized with its declared type, its error keys prefixed with the
+//! section's.
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use serde::Deserialize;
 
+use crate::controllers::{GainSections, SectionParseError};
 use crate::limits::Limits;
 use crate::scenario::{read_scenario_text, Scenario, ScenarioError, BUILT_IN_SCENARIOS};
 use crate::signal::{Signal, Term};
@@ -309,6 +313,19 @@ fn error_path(e: &toml::de::Error) -> String {
     path
 }
 
+/// serde's "unknown field `k`, expected one of `a`, `b`" for the top level
+/// of a scenario, with the gain sections (which `Scenario` does not
+/// deserialize itself) added to the known keys; `None` for other messages.
+fn with_gain_sections(message: &str) -> Option<String> {
+    let message: String = message.split_whitespace().collect::<Vec<_>>().join(" ");
+    let (head, known) = message.split_once(", expected one of ")?;
+    if !head.starts_with("unknown field `") || !known.contains("`name`") {
+        return None;
+    }
+    let sections: Vec<String> = GainSections::KEYS.iter().map(|k| format!("`{k}`")).collect();
+    Some(format!("{head}, expected one of {known}, {}", sections.join(", ")))
+}
+
 /// Resolve, deserialize and validate the scenario at `source`, with
 /// command-line limit overrides (see [`Limits::apply_overrides`]).
 pub fn load(source: Source<'_>, overrides: &[String]) -> Result<Loaded, ScenarioError> {
@@ -327,8 +344,7 @@ pub fn load(source: Source<'_>, overrides: &[String]) -> Result<Loaded, Scenario
     }
 
     crate::scenario::check_core_array_lengths(&merged).map_err(|(path, message)| chain.parse_error(&path, &message))?;
-    let mut scenario = Scenario::deserialize(merged).map_err(|e| {
-        let path = error_path(&e);
+    let describe = |e: &toml::de::Error, path: &str| {
         let mut message: String = e.message().split_whitespace().collect::<Vec<_>>().join(" ");
         if e.message().starts_with("missing field") {
             let key = if path.is_empty() { String::new() } else { format!(" in `{path}`") };
@@ -338,8 +354,22 @@ pub fn load(source: Source<'_>, overrides: &[String]) -> Result<Loaded, Scenario
                 format!("{message}{key}")
             };
         }
-        chain.parse_error(&path, &message)
+        chain.parse_error(path, &message)
+    };
+    let gains = GainSections::take_from(&mut merged).map_err(|SectionParseError { section, error }| {
+        let inner = error_path(&error);
+        let path = if inner.is_empty() { section.to_string() } else { format!("{section}.{inner}") };
+        describe(&error, &path)
     })?;
+    let mut scenario = Scenario::deserialize(merged).map_err(|e| {
+        let path = error_path(&e);
+        match with_gain_sections(e.message()) {
+            // An unknown top-level key: the known keys include the gain sections.
+            Some(message) if !path.contains('.') => chain.parse_error(&path, &message),
+            _ => describe(&e, &path),
+        }
+    })?;
+    scenario.gains = gains;
     scenario.limits.apply_overrides(overrides).map_err(|message| ScenarioError::Parse { path: top_name, message })?;
     scenario.validate(&chain.layers[0].shown).map_err(|e| match e {
         ScenarioError::Invalid { key, value, expected, .. } => {

@@ -7,15 +7,15 @@ use super::*;
 /// Fixed-size arrays of `ftsmc-core` structs read from scenario files, as
 /// `(dotted path, length)`. Those structs derive serde's own `[f64; N]`,
 /// which ignores extra elements, so their lengths are checked on the TOML
-/// tree before deserializing.
-const CORE_ARRAYS: [(&str, usize); 7] = [
+/// tree before deserializing. The gain sections declare their own
+/// ([`crate::controllers::GainSection::CORE_ARRAYS`]).
+const CORE_ARRAYS: [(&str, usize); 6] = [
     ("plant.inertia", 3),
     ("plant.drag_translational", 3),
     ("plant.drag_rotational", 3),
     ("actual_plant.inertia", 3),
     ("actual_plant.drag_translational", 3),
     ("actual_plant.drag_rotational", 3),
-    ("ftaftsmc.mass_adaptation.alpha_hat_bounds", 2),
 ];
 
 /// Longest scenario `name`, characters.
@@ -33,10 +33,12 @@ pub fn check_name(name: &str) -> Result<(), &'static str> {
     }
 }
 
-/// Lengths of the `ftsmc-core` arrays ([`CORE_ARRAYS`]) in the resolved
-/// TOML table: `Err((dotted path, message))`.
+/// Lengths of the `ftsmc-core` arrays ([`CORE_ARRAYS`] and the gain
+/// sections') in the resolved TOML table: `Err((dotted path, message))`.
 pub(crate) fn check_core_array_lengths(root: &toml::Table) -> Result<(), (String, String)> {
-    for (path, len) in CORE_ARRAYS {
+    let sections = GainSections::core_arrays();
+    let all = CORE_ARRAYS.iter().map(|(p, n)| (*p, *n)).chain(sections.iter().map(|(p, n)| (p.as_str(), *n)));
+    for (path, len) in all {
         let mut parts = path.split('.');
         let first = parts.next().and_then(|k| root.get(k));
         let value = parts.fold(first, |v, k| v.and_then(|v| v.get(k)));
@@ -202,18 +204,9 @@ impl Scenario {
             non_negative("drag_noise.std", n.std)?;
         }
         self.cascade.check().map_err(|e| gain("cascade", e))?;
-        self.ftaftsmc.mass_adaptation.check().map_err(|e| gain("ftaftsmc.mass_adaptation", e))?;
-        for (axis, g) in self.ftaftsmc.gains().named() {
-            g.check().map_err(|e| gain(&format!("ftaftsmc.{axis}"), e))?;
-        }
-        for (axis, g) in self.ranftsmc.named() {
-            g.check().map_err(|e| gain(&format!("ranftsmc.{axis}"), e))?;
-        }
-        for (axis, g) in self.tsm_sta.named() {
-            g.check().map_err(|e| gain(&format!("tsm-sta.{axis}"), e))?;
-        }
+        self.gains.check().map_err(|e| invalid(e.key, e.value, &e.expected))?;
         for name in &self.controllers {
-            crate::names::check_controller(name).map_err(|known| ScenarioError::UnknownController {
+            crate::controllers::check_name(name).map_err(|known| ScenarioError::UnknownController {
                 path: path.to_string(),
                 name: name.clone(),
                 known,

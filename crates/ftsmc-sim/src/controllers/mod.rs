@@ -1,0 +1,381 @@
+//! Every controller declared once.
+//!
+//! A controller is one [`Declaration`] in its own file: its registry name,
+//! label, one-line description, the [`GainSection`] it reads (the section's
+//! TOML key, serde type, defaults and validation), a constructor, and
+//! optionally its per-axis sliding law (for the fixed-time sweep of
+//! `analysis::fixed_time`) and its reaching-time bound. The list at the
+//! bottom of this file (`declare_controllers!`) names each gain section once,
+//! with the controllers that read it; from it the macro generates
+//!
+//! - [`GainSections`], the typed gain sections of a scenario
+//!   (`scenario.gains.ftaftsmc`, …), with their defaults, serialization,
+//!   parsing ([`GainSections::take_from`]) and validation
+//!   ([`GainSections::check`]);
+//! - [`CONTROLLERS`] and [`DECLARED`], the names in list order;
+//! - the name → declaration dispatch: [`build`], [`visit_axis_law`],
+//!   [`reaching_time_bound`], [`label`].
+//!
+//! Nothing here knows of the scenario file as a whole: a controller is built
+//! from its own gain section and a small [`BuildContext`] (nominal plant,
+//! cascade settings, control period), so this module sits on a low floor and
+//! the scenario, the run loop and the analyses all use it.
+//!
+//! # Adding a controller
+//!
+//! 1. Write the law in `ftsmc-core` (a per-axis [`ftsmc_core::law::AxisLaw`]
+//!    wrapped in the cascade, or a full-state [`Controller`]) with a gain
+//!    struct that derives `Clone, Debug, PartialEq` and, under the core's
+//!    `serde` feature, `Deserialize, Serialize` with `deny_unknown_fields`,
+//!    and has a `check()` returning [`GainError`].
+//! 2. Add `src/controllers/NAME.rs` here: `impl GainSection` for its gain
+//!    struct (TOML `KEY`, `defaults()`, `check()`) and a unit struct with
+//!    `impl Declaration` (`NAME`, `LABEL`, `DESCRIPTION`, `type Section`,
+//!    `build`; `visit_axis_law` and `reaching_time_bound` only for per-axis
+//!    sliding laws).
+//! 3. Add `pub mod NAME;` and one line to the list at the bottom of this
+//!    file: `field: NAME::Gains => [NAME::Controller],`.
+//!
+//! That is all: the scenario reads, defaults, writes and validates
+//! `[KEY]`, every command (`run`, `montecarlo`, `reproduce`) can fly it, and
+//! `ftsmc list` shows it. A full-state controller, for example a PID whose
+//! gains are `ftsmc_core::pid::PidGains`, is declared as
+//!
+//! ```ignore
+//! // src/controllers/pid.rs
+//! impl GainSection for ftsmc_core::pid::PidGains {
+//!     const KEY: &'static str = "pid";
+//!     fn defaults() -> Self { Self::default() }
+//!     // `self.check()` is the gain struct's own (inherent) check.
+//!     fn check(&self) -> Result<(), InvalidGain> { self.check().map_err(|e| InvalidGain::at("", e)) }
+//! }
+//! pub struct Pid;
+//! impl Declaration for Pid {
+//!     const NAME: &'static str = "pid";
+//!     const LABEL: &'static str = "PID (PX4 cascade)";
+//!     const DESCRIPTION: &'static str = "PX4-style cascaded P/PID position, velocity, attitude and rate loops";
+//!     type Section = ftsmc_core::pid::PidGains;
+//!     fn build(gains: &Self::Section, ctx: &BuildContext) -> Result<BoxedController, String> {
+//!         let c = ftsmc_core::pid::Pid::new(*gains, ctx.plant, ctx.control_period).map_err(|e| e.to_string())?;
+//!         Ok(Box::new(c))
+//!     }
+//! }
+//! // the list:  pid: ftsmc_core::pid::PidGains => [pid::Pid],
+//! ```
+//!
+//! A section's position in the list is its position in a written
+//! `scenario.toml`; append new sections at the end. Several controllers may
+//! share one section (`ftaftsmc` and `ftaftsmc-no-mass` both read
+//! `[ftaftsmc]`). `tests/registry.rs` checks that every declared controller
+//! builds from the default scenario and flies, that names are unique and
+//! that every section rejects an unknown key.
+
+use ftsmc_core::cascade::{CascadeConfig, CascadeSettings, Controller, MassAdaptation};
+use ftsmc_core::law::{AxisLaw, GainError};
+use ftsmc_core::model::QuadrotorParams;
+use serde::de::DeserializeOwned;
+use serde::Serialize;
+
+use crate::axes::AxisSet;
+use crate::text::show;
+
+pub mod ftaftsmc;
+pub mod ranftsmc;
+pub mod tsm_sta;
+
+/// A boxed controller ready to fly.
+pub type BoxedController = Box<dyn Controller + Send>;
+
+/// The three controllers compared in the paper, in table order; also the
+/// default `controllers` list of a scenario.
+pub const PAPER_CONTROLLERS: [&str; 3] = ["ranftsmc", "tsm-sta", "ftaftsmc"];
+
+/// What a controller is built from besides its own gain section.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BuildContext {
+    /// Nominal plant parameters (the controller's model, `[plant]`; the true
+    /// plant may differ).
+    pub plant: QuadrotorParams,
+    /// Cascade options shared by the cascaded controllers (`[cascade]`).
+    pub cascade: CascadeSettings,
+    /// Control period, s (`1 / simulation.control_rate`).
+    pub control_period: f64,
+}
+
+impl BuildContext {
+    /// The cascade configuration of a cascaded controller with `mass_adaptation`.
+    pub fn cascade_config(&self, mass_adaptation: MassAdaptation) -> CascadeConfig {
+        CascadeConfig { model: self.plant, settings: self.cascade, mass_adaptation }
+    }
+}
+
+/// An invalid value in a gain section: the dotted key, the value as shown
+/// and what is allowed (becomes `ScenarioError::Invalid`).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct InvalidGain {
+    /// Dotted key (below the section in [`GainSection::check`], from the
+    /// scenario root in [`GainSections::check`]).
+    pub key: String,
+    /// The offending value, as shown in messages.
+    pub value: String,
+    /// What is allowed.
+    pub expected: String,
+}
+
+impl InvalidGain {
+    /// A [`GainError`] of the table at dotted `prefix` (empty: the section
+    /// itself), e.g. `InvalidGain::at("x", e)` for `[KEY.x]`.
+    pub fn at(prefix: &str, e: GainError) -> Self {
+        let key = if prefix.is_empty() { e.field.to_string() } else { format!("{prefix}.{}", e.field) };
+        Self { key, value: show(e.value), expected: e.expected.to_string() }
+    }
+
+    /// The same error with `section.` in front of its key.
+    pub fn under(self, section: &str) -> Self {
+        Self { key: format!("{section}.{}", self.key), ..self }
+    }
+}
+
+/// Check the six channel gain sets of an [`AxisSet`] section with `check`.
+pub fn check_axes<G>(set: &AxisSet<G>, check: impl Fn(&G) -> Result<(), GainError>) -> Result<(), InvalidGain> {
+    for (axis, g) in set.named() {
+        check(g).map_err(|e| InvalidGain::at(axis, e))?;
+    }
+    Ok(())
+}
+
+/// A gain section of the scenario file, `[KEY]`: its serde type, defaults
+/// and validation. Parsed with the type's own serde (use
+/// `#[serde(deny_unknown_fields)]`: an unknown key is then an error naming
+/// it), after the built-in defaults of [`GainSection::defaults`] have been
+/// merged under the files' values key by key.
+pub trait GainSection:
+    Clone + core::fmt::Debug + PartialEq + Serialize + DeserializeOwned + Send + Sync + 'static
+{
+    /// The section's TOML key (`"ftaftsmc"` for `[ftaftsmc]`).
+    const KEY: &'static str;
+    /// Fixed-length arrays inside the section whose serde ignores extra
+    /// elements (`[f64; N]` of `ftsmc-core` structs), as (dotted path below
+    /// the section, length); their lengths are checked on the TOML tree.
+    const CORE_ARRAYS: &'static [(&'static str, usize)] = &[];
+    /// The built-in gains (what a scenario gets without a `[KEY]` table).
+    fn defaults() -> Self;
+    /// Range-check every value; keys in the error are below the section.
+    fn check(&self) -> Result<(), InvalidGain>;
+}
+
+/// Something done with a per-axis sliding law whose type is only known to
+/// its declaration (the fixed-time sweep is one): see
+/// [`Declaration::visit_axis_law`].
+pub trait AxisLawVisitor {
+    /// What the visit returns.
+    type Output;
+    /// Use the channel law `law` (fresh, at its initial state).
+    fn visit<L: AxisLaw + Clone>(self, law: L) -> Self::Output;
+}
+
+/// One controller: name, label, description, gain section and constructor.
+pub trait Declaration {
+    /// Registry name (`-c NAME`, the `controllers` list, output file names).
+    const NAME: &'static str;
+    /// Human-readable label for figures and tables.
+    const LABEL: &'static str;
+    /// One line for `ftsmc list`.
+    const DESCRIPTION: &'static str;
+    /// The gain section it reads.
+    type Section: GainSection;
+    /// Build the controller from its gain section and the context.
+    fn build(gains: &Self::Section, ctx: &BuildContext) -> Result<BoxedController, String>;
+    /// Hand the per-axis sliding law of channel `axis` (0..6 = x, y, z, φ,
+    /// θ, ψ) to `visitor`; `None` (the default) for a controller without
+    /// per-axis sliding laws (full-state controllers).
+    fn visit_axis_law<V: AxisLawVisitor>(gains: &Self::Section, axis: usize, visitor: V) -> Option<V::Output> {
+        let _ = (gains, axis, visitor);
+        None
+    }
+    /// A reaching-time bound of channel `axis`, s, when the law has one
+    /// independent of the initial conditions (FTAFTSMC, Eq. 38); default none.
+    fn reaching_time_bound(gains: &Self::Section, axis: usize) -> Option<f64> {
+        let _ = (gains, axis);
+        None
+    }
+}
+
+/// What the list says about one declared controller.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Declared {
+    /// [`Declaration::NAME`].
+    pub name: &'static str,
+    /// [`Declaration::LABEL`].
+    pub label: &'static str,
+    /// [`Declaration::DESCRIPTION`].
+    pub description: &'static str,
+    /// The [`GainSection::KEY`] it reads.
+    pub section: &'static str,
+}
+
+/// A declared section that could not be deserialized.
+#[derive(Debug)]
+pub struct SectionParseError {
+    /// The section's key.
+    pub section: &'static str,
+    /// The serde error (key paths below the section).
+    pub error: toml::de::Error,
+}
+
+/// `Ok(())` for a declared name; otherwise the declared names, comma-separated.
+pub fn check_name(name: &str) -> Result<(), String> {
+    if DECLARED.iter().any(|d| d.name == name) {
+        Ok(())
+    } else {
+        Err(known_names())
+    }
+}
+
+/// The declared names, comma-separated.
+fn known_names() -> String {
+    DECLARED.iter().map(|d| d.name).collect::<Vec<_>>().join(", ")
+}
+
+/// The label of a declared controller.
+pub fn label(name: &str) -> Option<&'static str> {
+    DECLARED.iter().find(|d| d.name == name).map(|d| d.label)
+}
+
+/// Generates the gain sections, the name lists and the dispatch from the
+/// list of `field: SectionType => [Controller, …]` lines.
+macro_rules! declare_controllers {
+    ($( $field:ident : $section:ty => [ $( $controller:ty ),+ $(,)? ] ),+ $(,)?) => {
+        /// The gain section of every declared controller, one field per
+        /// section (see the list in `controllers/mod.rs`). In a scenario:
+        /// `scenario.gains`, written as the top-level tables `[KEY]`.
+        #[derive(Clone, Debug, PartialEq)]
+        pub struct GainSections {
+            $(
+                #[doc = concat!(
+                    "Gain section read by ", stringify!($( $controller ),+),
+                    " (its TOML key is the type's `GainSection::KEY`)."
+                )]
+                pub $field: $section,
+            )+
+        }
+
+        impl Default for GainSections {
+            fn default() -> Self {
+                Self { $( $field: <$section as GainSection>::defaults(), )+ }
+            }
+        }
+
+        /// Written as a map `KEY → section`, in list order (flattened into
+        /// the scenario's top level).
+        impl Serialize for GainSections {
+            fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+                use serde::ser::SerializeMap as _;
+                let mut map = serializer.serialize_map(Some(GainSections::KEYS.len()))?;
+                $( map.serialize_entry(<$section as GainSection>::KEY, &self.$field)?; )+
+                map.end()
+            }
+        }
+
+        impl GainSections {
+            /// The sections' TOML keys, in list order.
+            pub const KEYS: &'static [&'static str] = &[ $( <$section as GainSection>::KEY ),+ ];
+
+            /// Range-check every section; the key in the error starts with the section's.
+            pub fn check(&self) -> Result<(), InvalidGain> {
+                $( GainSection::check(&self.$field).map_err(|e| e.under(<$section as GainSection>::KEY))?; )+
+                Ok(())
+            }
+
+            /// Remove every declared section from `table` and deserialize it
+            /// with its type; a section absent from `table` gets its defaults.
+            pub fn take_from(table: &mut toml::Table) -> Result<Self, SectionParseError> {
+                let mut out = Self::default();
+                $(
+                    let key = <$section as GainSection>::KEY;
+                    if let Some(value) = table.remove(key) {
+                        out.$field = <$section as serde::Deserialize>::deserialize(value)
+                            .map_err(|error| SectionParseError { section: key, error })?;
+                    }
+                )+
+                Ok(out)
+            }
+
+            /// Every section's [`GainSection::CORE_ARRAYS`], as (dotted path
+            /// from the scenario root, length).
+            pub fn core_arrays() -> Vec<(String, usize)> {
+                let mut out = Vec::new();
+                $(
+                    for (path, len) in <$section as GainSection>::CORE_ARRAYS {
+                        out.push((format!("{}.{path}", <$section as GainSection>::KEY), *len));
+                    }
+                )+
+                out
+            }
+        }
+
+        /// Every declared controller, in list order.
+        pub const DECLARED: &[Declared] = &[
+            $($(
+                Declared {
+                    name: <$controller as Declaration>::NAME,
+                    label: <$controller as Declaration>::LABEL,
+                    description: <$controller as Declaration>::DESCRIPTION,
+                    section: <$section as GainSection>::KEY,
+                },
+            )+)+
+        ];
+
+        /// Every declared name with its one-line description, in list order.
+        pub const CONTROLLERS: &[(&str, &str)] = &[
+            $($( (<$controller as Declaration>::NAME, <$controller as Declaration>::DESCRIPTION), )+)+
+        ];
+
+        /// Build the declared controller `name` from its section of `gains`.
+        /// Unknown `name`: the declared names.
+        pub fn build(name: &str, gains: &GainSections, ctx: &BuildContext) -> Result<BoxedController, String> {
+            $($(
+                if name == <$controller as Declaration>::NAME {
+                    return <$controller as Declaration>::build(&gains.$field, ctx);
+                }
+            )+)+
+            Err(known_names())
+        }
+
+        /// Hand the per-axis law of channel `axis` of controller `name` to
+        /// `visitor`: `Ok(None)` when the controller has none, `Err(known
+        /// names)` for an unknown name.
+        pub fn visit_axis_law<V: AxisLawVisitor>(
+            name: &str,
+            gains: &GainSections,
+            axis: usize,
+            visitor: V,
+        ) -> Result<Option<V::Output>, String> {
+            $($(
+                if name == <$controller as Declaration>::NAME {
+                    return Ok(<$controller as Declaration>::visit_axis_law(&gains.$field, axis, visitor));
+                }
+            )+)+
+            Err(known_names())
+        }
+
+        /// The reaching-time bound of channel `axis` of controller `name`,
+        /// s, when it has one (see [`Declaration::reaching_time_bound`]).
+        pub fn reaching_time_bound(name: &str, gains: &GainSections, axis: usize) -> Option<f64> {
+            $($(
+                if name == <$controller as Declaration>::NAME {
+                    return <$controller as Declaration>::reaching_time_bound(&gains.$field, axis);
+                }
+            )+)+
+            None
+        }
+    };
+}
+
+// The list: one line per gain section, `field: type => [controllers that read it]`.
+// Order = order of `ftsmc list` and of the sections in a written scenario.toml.
+declare_controllers! {
+    ftaftsmc: ftaftsmc::FtaftsmcConfig => [ftaftsmc::Ftaftsmc, ftaftsmc::FtaftsmcNoMass],
+    ranftsmc: AxisSet<ftsmc_core::ranftsmc::RanftsmcGains> => [ranftsmc::Ranftsmc],
+    tsm_sta: AxisSet<ftsmc_core::tsm_sta::TsmStaGains> => [tsm_sta::TsmSta],
+}
