@@ -202,14 +202,8 @@ pub fn rotation_from_euler(euler: &Vec3) -> Mat3 {
 /// `[−π, π]`, θ in `[−π/2, π/2]` (inverse of [`rotation_from_euler`] away
 /// from θ = ±π/2).
 pub fn euler_from_rotation(r: &Mat3) -> Vec3 {
-    let s = -r[2][0];
-    let s = if s > 1.0 {
-        1.0
-    } else if s < -1.0 {
-        -1.0
-    } else {
-        s
-    };
+    // `saturate`, not `f64::clamp`: no panic path, NaN passes through.
+    let s = crate::law::saturate(-r[2][0], 1.0);
     [atan2(r[2][1], r[2][2]), asin(s), atan2(r[1][0], r[0][0])]
 }
 

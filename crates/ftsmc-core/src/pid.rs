@@ -23,7 +23,8 @@
 //!    tracking anti-windup (Rundqwist 1990, PX4's choice),
 //!    `e_v,xy' = e_v,xy − (2/K_p,v,x)(a_sp,xy − a_lim,xy)`, `a_lim` the
 //!    acceleration the limited thrust produces, `T_xy g/H`, when it is smaller;
-//!    `|I_v,z| <= g`.
+//!    `|I_v,z| <= g`. [`PidGains::anti_windup`] = false switches both off
+//!    (PX4 cannot; used to show what they prevent).
 //! 6. **Thrust → attitude** (PX4 `thrustToAttitude`/`bodyzToAttitude`):
 //!    `R_d = [b₁ b₂ b₃]`, `b₁ = (y_C × b₃)/‖·‖`, `y_C = (−sin ψ_d, cos ψ_d, 0)`,
 //!    `b₂ = b₃ × b₁`; commanded thrust `‖T‖` (N).
@@ -56,8 +57,10 @@
 //!   `T_max = m g / 0.5 = 2 m g` (14.5 N for the paper's 0.74 kg quadrotor,
 //!   the 4 b ω_max² of the realistic scenarios' 350 rad/s rotors). Then
 //!   `H = 0.5 T_max = m g`, `thrust_min = 0.12 T_max` (`MPC_THR_MIN`),
-//!   `thrust_max = 1.0 T_max` (`MPC_THR_MAX`), margin `0.3 T_max`
-//!   (`MPC_THR_XY_MARG`).
+//!   margin `0.3 T_max` (`MPC_THR_XY_MARG`), and `thrust_max = 0.8 T_max`
+//!   instead of PX4's `MPC_THR_MAX` = 1.0: PX4's allocator lowers the
+//!   collective thrust to keep roll/pitch torque, the simulator's mixer
+//!   keeps thrust first, so the controller leaves the torque margin itself.
 //! * **Torque.** PX4's rate loop outputs a normalised torque in [−1, 1]
 //!   that the control allocator maps to the full differential thrust of the
 //!   rotors; so torque (N·m) = normalised output × the vehicle's maximum
@@ -126,7 +129,11 @@ pub struct PidGains {
     pub hover_thrust: f64,
     /// Minimum collective thrust, N (`MPC_THR_MIN` 0.12 × T_max).
     pub thrust_min: f64,
-    /// Maximum collective thrust, N (`MPC_THR_MAX` 1.0 × T_max).
+    /// Maximum collective thrust, N (default 0.8 × T_max; PX4's `MPC_THR_MAX`
+    /// is 1.0, but PX4's allocator lowers the collective thrust to keep
+    /// roll/pitch authority, while the simulator's mixer keeps thrust first,
+    /// so a command at T_max would leave no torque: 0.8 keeps 40 % of the
+    /// roll/pitch torque, the same margin as [`crate::se3::Se3Gains::max_thrust`]).
     pub thrust_max: f64,
     /// Horizontal thrust kept when the vertical one saturates, N (`MPC_THR_XY_MARG` 0.3 × T_max).
     pub thrust_xy_margin: f64,
@@ -148,6 +155,11 @@ pub struct PidGains {
     pub rate_integral_limit: [f64; 3],
     /// Cutoff of the angular-acceleration low-pass of the D term, Hz (PX4 `IMU_DGYRO_CUTOFF` 30).
     pub rate_derivative_cutoff: f64,
+    /// Velocity-loop anti-windup (step 5 of the module docs: vertical
+    /// conditional integration and horizontal tracking). PX4 always applies
+    /// it (default true); false integrates the raw velocity error, only to
+    /// show what it prevents (`tests/practitioners.rs`).
+    pub anti_windup: bool,
 }
 
 impl Default for PidGains {
@@ -177,7 +189,7 @@ impl PidGains {
             max_tilt: 45.0 * deg,
             hover_thrust: PX4_HOVER_THRUST * t_max,
             thrust_min: 0.12 * t_max,
-            thrust_max: t_max,
+            thrust_max: 0.8 * t_max,
             thrust_xy_margin: 0.3 * t_max,
             attitude_p: [6.5, 6.5, 2.8],
             yaw_weight: 0.4,
@@ -188,6 +200,7 @@ impl PidGains {
             rate_ff: [0.0; 3],
             rate_integral_limit: scale([0.3, 0.3, 0.3]),
             rate_derivative_cutoff: 30.0,
+            anti_windup: true,
         }
     }
 
@@ -478,7 +491,13 @@ impl Controller for PidController {
             k.velocity_derivative_cutoff,
             dt,
         );
-        Self::filtered_derivative(&omega, &mut self.previous_rates, &mut self.rate_derivative, k.rate_derivative_cutoff, dt);
+        Self::filtered_derivative(
+            &omega,
+            &mut self.previous_rates,
+            &mut self.rate_derivative,
+            k.rate_derivative_cutoff,
+            dt,
+        );
 
         // 1. Position P → velocity setpoint.
         let mut from_position = [0.0; 3];
@@ -503,7 +522,9 @@ impl Controller for PidController {
         for i in 0..3 {
             error[i] = velocity_setpoint[i] - velocity[i];
             accel[i] = saturate(
-                saturate(reference.acceleration[i], INPUT_LIMIT) + k.velocity_p[i] * error[i] + self.velocity_integral[i]
+                saturate(reference.acceleration[i], INPUT_LIMIT)
+                    + k.velocity_p[i] * error[i]
+                    + self.velocity_integral[i]
                     - k.velocity_d[i] * self.velocity_derivative[i],
                 INPUT_LIMIT,
             );
@@ -517,11 +538,14 @@ impl Controller for PidController {
         };
         let direction = limit_tilt(unlimited, k.max_tilt);
         let nominal_thrust = k.hover_thrust * (accel[2] + g) / g / direction[2];
-        let collective = if nominal_thrust < k.thrust_min { k.thrust_min } else { nominal_thrust };
+        let floored = nominal_thrust < k.thrust_min;
+        let collective = if floored { k.thrust_min } else { nominal_thrust };
         let mut thrust = direction.map(|d| d * collective);
 
         // 5a. Vertical anti-windup: stop integrating into a saturated thrust.
-        if (thrust[2] <= k.thrust_min && error[2] <= 0.0) || (thrust[2] >= k.thrust_max && error[2] >= 0.0) {
+        if k.anti_windup
+            && ((thrust[2] <= k.thrust_min && error[2] <= 0.0) || (thrust[2] >= k.thrust_max && error[2] >= 0.0))
+        {
             error[2] = 0.0;
         }
 
@@ -530,11 +554,13 @@ impl Controller for PidController {
         let max_sq = k.thrust_max * k.thrust_max;
         let allocated = horizontal.min(k.thrust_xy_margin);
         let z_max = sqrt((max_sq - allocated * allocated).max(0.0));
-        if thrust[2] > z_max {
+        let z_capped = thrust[2] > z_max;
+        if z_capped {
             thrust[2] = z_max;
         }
         let xy_max = sqrt((max_sq - thrust[2] * thrust[2]).max(0.0));
-        if horizontal > xy_max {
+        let xy_capped = horizontal > xy_max;
+        if xy_capped {
             thrust[0] *= xy_max / horizontal;
             thrust[1] *= xy_max / horizontal;
         }
@@ -549,12 +575,13 @@ impl Controller for PidController {
         } else {
             demanded
         };
-        let arw = 2.0 / k.velocity_p[0];
+        let arw = if k.anti_windup { 2.0 / k.velocity_p[0] } else { 0.0 };
         for i in 0..2 {
             error[i] -= arw * (demanded[i] - limited[i]);
         }
         for i in 0..3 {
-            self.velocity_integral[i] = saturate(self.velocity_integral[i] + k.velocity_i[i] * error[i] * dt, STATE_LIMIT);
+            self.velocity_integral[i] =
+                saturate(self.velocity_integral[i] + k.velocity_i[i] * error[i] * dt, STATE_LIMIT);
         }
         self.velocity_integral[2] = saturate(self.velocity_integral[2], g);
 
@@ -610,7 +637,7 @@ impl Controller for PidController {
             commanded_acceleration: accel,
             nominal_thrust,
             alpha_hat: 1.0,
-            thrust_limited: magnitude != nominal_thrust || direction != unlimited,
+            thrust_limited: floored || z_capped || xy_capped || direction != unlimited,
             adaptation_frozen: false,
         };
         Command { thrust: magnitude, torque }
@@ -682,7 +709,7 @@ mod tests {
         let [roll, _, yaw] = PidGains::max_torques(&p);
         assert!((roll - 0.7622).abs() < 1e-4, "{roll}");
         assert!((yaw - 0.07862).abs() < 1e-5, "{yaw}");
-        assert!((g.thrust_max - 2.0 * p.mass * p.gravity).abs() < 1e-12);
+        assert!((g.thrust_max - 1.6 * p.mass * p.gravity).abs() < 1e-12);
         assert!((g.hover_thrust - p.mass * p.gravity).abs() < 1e-12);
         // Rate-loop bandwidth K_p τ_max / J.
         assert!((g.rate_p[0] / p.inertia[0] - 29.9).abs() < 0.05);
@@ -785,13 +812,15 @@ mod tests {
         for _ in 0..50 {
             c.update(&state, &reference, 1e-3);
         }
-        let before = (c.velocity_integral(), c.rate_integral(), c.velocity_derivative, c.rate_derivative, *c.telemetry());
+        let before =
+            (c.velocity_integral(), c.rate_integral(), c.velocity_derivative, c.rate_derivative, *c.telemetry());
         assert!(before.0.iter().any(|v| *v != 0.0) && before.1.iter().any(|v| *v != 0.0));
         let bad = QuadState { position: [f64::NAN, 0.0, 0.0], ..state };
         let cmd = c.update(&bad, &reference, 1e-3);
         assert!(cmd.thrust.is_nan() && cmd.torque.iter().all(|t| t.is_nan()));
         assert!(c.update(&state, &reference, f64::INFINITY).thrust.is_nan());
-        let after = (c.velocity_integral(), c.rate_integral(), c.velocity_derivative, c.rate_derivative, *c.telemetry());
+        let after =
+            (c.velocity_integral(), c.rate_integral(), c.velocity_derivative, c.rate_derivative, *c.telemetry());
         assert_eq!(before, after);
         c.reset();
         assert_eq!((c.velocity_integral(), c.rate_integral()), ([0.0; 3], [0.0; 3]));

@@ -9,7 +9,7 @@
 //! b₂d = b₃d × b₁c / ‖b₃d × b₁c‖,  b₁d = b₂d × b₃d,  R_d = [b₁d b₂d b₃d]
 //! e_R = ½ (R_dᵀR − RᵀR_d)^∨,   e_Ω = Ω − RᵀR_d Ω_d
 //! M = −k_R e_R − k_Ω e_Ω + Ω × JΩ − J(Ω̂ RᵀR_d Ω_d − RᵀR_d Ω̇_d)
-//! f = F_d · R e₃   (floored at `min_thrust`)
+//! f = F_d · R e₃   (bounded to [min_thrust, max_thrust])
 //! ```
 //!
 //! Gains are per body axis (`k_x`, `k_v` per world axis), so `k_R e_R` is
@@ -26,10 +26,12 @@
 //!   t = 0.
 //! * **Two additions to the paper's law**: the desired thrust direction `b₃d`
 //!   is tilt-limited to [`Se3Gains::max_tilt`] from the vertical (as PX4's
-//!   `limitTilt`), and the thrust is floored at [`Se3Gains::min_thrust`] so
-//!   the mixer keeps torque authority when `F_d · R e₃` is negative (upside
-//!   down): rotors cannot push. With the default gains neither acts near
-//!   hover.
+//!   `limitTilt`), and the thrust is bounded below by
+//!   [`Se3Gains::min_thrust`] and above by [`Se3Gains::max_thrust`] so that the
+//!   mixer keeps torque authority both when `F_d · R e₃` is negative (upside
+//!   down: rotors cannot push) and when a large error asks for more thrust
+//!   than the rotors have (the simulator's mixer gives thrust priority over
+//!   torque). Neither acts near hover.
 //!
 //! # State conversion, and what is approximated on the paper plant
 //!
@@ -79,6 +81,14 @@ pub struct Se3Gains {
     /// negative; default `0.24 m g`, PX4's `MPC_THR_MIN` = 0.12 of a maximum
     /// thrust of `2 m g`, see [`crate::pid`]).
     pub min_thrust: f64,
+    /// Largest thrust commanded, N (not in Lee et al.; default `1.6 m g`,
+    /// 80 % of the `2 m g` maximum that [`crate::pid`] assumes, PX4's
+    /// `MPC_THR_HOVER` = 0.5). The simulator's mixer keeps thrust before
+    /// torque, so a thrust command at the rotors' maximum leaves no torque
+    /// at all; the 20 % margin keeps 40 % of the roll/pitch torque
+    /// authority (a 170° recovery without it tumbles, see
+    /// `tests/practitioners.rs`).
+    pub max_thrust: f64,
 }
 
 impl Default for Se3Gains {
@@ -96,7 +106,8 @@ impl Se3Gains {
     /// * position, per world axis: `m ë + k_v ė + k_x e = 0` with `ω_x`, `ζ_x`:
     ///   `k_x = m ω_x²`, `k_v = 2 ζ_x m ω_x`.
     ///
-    /// `max_tilt` and `min_thrust` take their defaults (0.6 rad, `0.24 m g`).
+    /// `max_tilt`, `min_thrust` and `max_thrust` take their defaults (0.6 rad,
+    /// `0.24 m g`, `1.6 m g`).
     pub fn from_bandwidth(
         params: &QuadrotorParams,
         attitude_frequency: [f64; 3],
@@ -119,6 +130,7 @@ impl Se3Gains {
             ],
             max_tilt: 0.6,
             min_thrust: 0.24 * m * params.gravity,
+            max_thrust: 1.6 * m * params.gravity,
         }
     }
 
@@ -141,7 +153,7 @@ impl Se3Gains {
     }
 
     /// Range checks: every gain in `(0, 1e6]`, `0 < max_tilt <= π/2`,
-    /// `0 <= min_thrust <= 1e6` N. The error names the field (e.g.
+    /// `0 <= min_thrust < max_thrust <= 1e6` N. The error names the field (e.g.
     /// `attitude[2]`) and its value.
     pub fn check(&self) -> Result<(), GainError> {
         const NAMES: [[&str; 3]; 4] = [
@@ -156,7 +168,8 @@ impl Se3Gains {
             }
         }
         check_left_open("max_tilt", self.max_tilt, 0.0, core::f64::consts::FRAC_PI_2, "0 < max_tilt <= π/2 (rad)")?;
-        check_closed("min_thrust", self.min_thrust, 0.0, 1e6, "0 <= min_thrust <= 1e6 (N)")
+        check_closed("min_thrust", self.min_thrust, 0.0, 1e6, "0 <= min_thrust <= 1e6 (N)")?;
+        check_left_open("max_thrust", self.max_thrust, self.min_thrust, 1e6, "min_thrust < max_thrust <= 1e6 (N)")
     }
 }
 
@@ -281,7 +294,13 @@ impl Controller for Se3Controller {
                 -k.attitude[i] * e_r[i] - k.angular_rate[i] * e_w + gyro[i] - j[i] * (hat[i] - omega_d_dot_body[i]);
         }
         let lee_thrust = dot(&force, &[r[0][2], r[1][2], r[2][2]]);
-        let thrust = if lee_thrust < k.min_thrust { k.min_thrust } else { lee_thrust };
+        let thrust = if lee_thrust < k.min_thrust {
+            k.min_thrust
+        } else if lee_thrust > k.max_thrust {
+            k.max_thrust
+        } else {
+            lee_thrust
+        };
 
         let desired = euler_from_rotation(&r_d);
         self.telemetry = Telemetry {
@@ -418,6 +437,7 @@ mod tests {
             (Se3Gains { max_tilt: 2.0, ..Se3Gains::default() }, "max_tilt"),
             (Se3Gains { max_tilt: 0.0, ..Se3Gains::default() }, "max_tilt"),
             (Se3Gains { min_thrust: -1.0, ..Se3Gains::default() }, "min_thrust"),
+            (Se3Gains { max_thrust: 1.0, ..Se3Gains::default() }, "max_thrust"),
         ];
         for (gains, field) in bad {
             let err = Se3Controller::new(QuadrotorParams::default(), gains).unwrap_err();
