@@ -9,7 +9,9 @@
 //! - [`cascade`]: the outer/inner cascade with mass adaptation (Eq. 18–20, 44, 52, 56–58).
 //! - [`allocation`]: rotor allocation (Eq. 2).
 //! - [`model`]: physical parameters (Table 2, corrected), state, reference, command.
-//! - [`law`]: the [`law::AxisLaw`] interface all controllers implement.
+//! - [`law`]: the [`law::AxisLaw`] interface all cascaded sliding-mode laws implement.
+//! - [`pid`]: the PX4 multicopter cascade (P/PID position, quaternion P attitude, PID rates).
+//! - [`se3`]: Lee, Leok & McClamroch 2010 geometric control on SE(3).
 //!
 //! Built without the default `std` feature, every transcendental function
 //! goes through the pure-Rust `libm` crate.
@@ -22,10 +24,14 @@ pub mod ftaftsmc;
 pub mod law;
 pub mod math;
 pub mod model;
+pub mod pid;
 pub mod ranftsmc;
+pub mod se3;
 pub mod tsm_sta;
 
 pub use cascade::{Cascade, CascadeConfig, CascadeSettings, Controller, MassAdaptation, Telemetry};
 pub use ftaftsmc::{FtaftsmcAxis, FtaftsmcGains};
 pub use law::{AxisLaw, GainError};
 pub use model::{Command, QuadState, QuadrotorParams, Reference};
+pub use pid::{PidController, PidGains};
+pub use se3::{Se3Controller, Se3Gains};

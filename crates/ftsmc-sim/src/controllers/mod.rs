@@ -80,7 +80,9 @@ use crate::axes::AxisSet;
 use crate::text::show;
 
 pub mod ftaftsmc;
+pub mod pid;
 pub mod ranftsmc;
+pub mod se3;
 pub mod tsm_sta;
 
 /// A boxed controller ready to fly.
@@ -158,8 +160,17 @@ pub trait GainSection:
     /// elements (`[f64; N]` of `ftsmc-core` structs), as (dotted path below
     /// the section, length); their lengths are checked on the TOML tree.
     const CORE_ARRAYS: &'static [(&'static str, usize)] = &[];
-    /// The built-in gains (what a scenario gets without a `[KEY]` table).
+    /// The built-in gains of the paper's vehicle.
     fn defaults() -> Self;
+    /// The built-in gains for a scenario whose nominal plant (`[plant]`) is
+    /// `plant`: what a scenario gets without a `[KEY]` table, and what the
+    /// keys a `[KEY]` table omits take. The default is [`GainSection::defaults`]
+    /// whatever the vehicle (the paper's gains); a controller whose gains are
+    /// derived from the vehicle (`pid`, `se3`) overrides it.
+    fn defaults_for(plant: &QuadrotorParams) -> Self {
+        let _ = plant;
+        Self::defaults()
+    }
     /// Range-check every value; keys in the error are below the section.
     fn check(&self) -> Result<(), InvalidGain>;
 }
@@ -242,6 +253,35 @@ pub fn label(name: &str) -> Option<&'static str> {
     DECLARED.iter().find(|d| d.name == name).map(|d| d.label)
 }
 
+/// Remove section `S` from `table` and deserialize it over
+/// `S::defaults_for(plant)` (tables merged key by key, other values replaced).
+fn take_section<S: GainSection>(table: &mut toml::Table, plant: &QuadrotorParams) -> Result<S, SectionParseError> {
+    let defaults = S::defaults_for(plant);
+    let Some(value) = table.remove(S::KEY) else { return Ok(defaults) };
+    let value = match (toml::Value::try_from(&defaults), value) {
+        (Ok(toml::Value::Table(mut base)), toml::Value::Table(top)) => {
+            merge_tables(&mut base, top);
+            toml::Value::Table(base)
+        }
+        // Not a table (the type's own error says so), or defaults that do
+        // not serialize as one: parse what the file wrote.
+        (_, value) => value,
+    };
+    S::deserialize(value).map_err(|error| SectionParseError { section: S::KEY, error })
+}
+
+/// Merge `top` into `base`: tables key by key, any other value replaced.
+fn merge_tables(base: &mut toml::Table, top: toml::Table) {
+    for (key, value) in top {
+        match (base.get_mut(&key), value) {
+            (Some(toml::Value::Table(b)), toml::Value::Table(t)) => merge_tables(b, t),
+            (_, value) => {
+                base.insert(key, value);
+            }
+        }
+    }
+}
+
 /// Generates the gain sections, the name lists and the dispatch from the
 /// list of `field: SectionType => [Controller, …]` lines.
 macro_rules! declare_controllers {
@@ -288,17 +328,17 @@ macro_rules! declare_controllers {
             }
 
             /// Remove every declared section from `table` and deserialize it
-            /// with its type; a section absent from `table` gets its defaults.
-            pub fn take_from(table: &mut toml::Table) -> Result<Self, SectionParseError> {
-                let mut out = Self::default();
-                $(
-                    let key = <$section as GainSection>::KEY;
-                    if let Some(value) = table.remove(key) {
-                        out.$field = <$section as serde::Deserialize>::deserialize(value)
-                            .map_err(|error| SectionParseError { section: key, error })?;
-                    }
-                )+
-                Ok(out)
+            /// with its type, over the defaults for the nominal plant `plant`
+            /// ([`GainSection::defaults_for`]) key by key; a section absent
+            /// from `table` gets those defaults.
+            pub fn take_from(table: &mut toml::Table, plant: &QuadrotorParams) -> Result<Self, SectionParseError> {
+                Ok(Self { $( $field: take_section::<$section>(table, plant)?, )+ })
+            }
+
+            /// Every section's defaults for the nominal plant `plant`
+            /// ([`GainSection::defaults_for`]).
+            pub fn defaults_for(plant: &QuadrotorParams) -> Self {
+                Self { $( $field: <$section as GainSection>::defaults_for(plant), )+ }
             }
 
             /// Every section's [`GainSection::CORE_ARRAYS`], as (dotted path
@@ -378,4 +418,6 @@ declare_controllers! {
     ftaftsmc: ftaftsmc::FtaftsmcConfig => [ftaftsmc::Ftaftsmc, ftaftsmc::FtaftsmcNoMass],
     ranftsmc: AxisSet<ftsmc_core::ranftsmc::RanftsmcGains> => [ranftsmc::Ranftsmc],
     tsm_sta: AxisSet<ftsmc_core::tsm_sta::TsmStaGains> => [tsm_sta::TsmSta],
+    pid: ftsmc_core::pid::PidGains => [pid::Pid],
+    se3: ftsmc_core::se3::Se3Gains => [se3::Se3],
 }

@@ -27,6 +27,7 @@
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
+use ftsmc_core::model::QuadrotorParams;
 use serde::Deserialize;
 
 use crate::controllers::{GainSections, SectionParseError};
@@ -123,6 +124,11 @@ fn defaults() -> toml::Table {
     let mut table = toml::Table::try_from(&minimal).expect("defaults serialize");
     table.remove("name");
     table.remove("duration");
+    // Gain sections get their defaults from the scenario's own `[plant]`
+    // (`GainSections::take_from`), not the paper vehicle's.
+    for key in GainSections::KEYS {
+        table.remove(*key);
+    }
     table
 }
 
@@ -356,7 +362,11 @@ pub fn load(source: Source<'_>, overrides: &[String]) -> Result<Loaded, Scenario
         }
         chain.parse_error(path, &message)
     };
-    let gains = GainSections::take_from(&mut merged).map_err(|SectionParseError { section, error }| {
+    // The nominal plant the vehicle-derived default gains are built for; an
+    // invalid `[plant]` is reported by the scenario's own parse below.
+    let plant: QuadrotorParams =
+        merged.get("plant").cloned().and_then(|v| QuadrotorParams::deserialize(v).ok()).unwrap_or_default();
+    let gains = GainSections::take_from(&mut merged, &plant).map_err(|SectionParseError { section, error }| {
         let inner = error_path(&error);
         let path = if inner.is_empty() { section.to_string() } else { format!("{section}.{inner}") };
         describe(&error, &path)

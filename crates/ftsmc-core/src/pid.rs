@@ -1,0 +1,850 @@
+//! The PX4 multicopter cascade (`mc_pos_control` `PositionControl.cpp`,
+//! `mc_att_control` `AttitudeControl.cpp`, `rate_control.cpp`), in SI units
+//! and the z-up world frame of paper Eq. 1. All loops run at the control
+//! rate (PX4 runs position at the estimator rate, ~50–100 Hz, and rates at
+//! the gyro rate).
+//!
+//! 1. **Position (P)**: `v_sp = K_p,x ⊙ (x_d − x) + v_d`; the horizontal part
+//!    limited to `max_velocity_xy` keeping the position part first (PX4
+//!    `constrainXY`), the vertical one to `[−max_velocity_down, max_velocity_up]`.
+//! 2. **Velocity (PID → acceleration)**: `e_v = v_sp − v`,
+//!    `a_sp = ẍ_d + K_p,v ⊙ e_v + I_v − K_d,v ⊙ v̇`, `v̇` the measured
+//!    velocity differenced and low-passed at `velocity_derivative_cutoff` (PX4
+//!    `MPC_VELD_LP`); `İ_v = K_i,v ⊙ e_v'` with the anti-windup of 5 below.
+//! 3. **Acceleration → thrust vector** (PX4 `_accelerationControl`): thrust
+//!    direction `b₃ = (a_x, a_y, g)/‖·‖` tilted at most `max_tilt` towards the
+//!    vertical; collective thrust `T = H (a_z + g)/(g b₃·e₃)` (`H` = hover
+//!    thrust, N), at least `thrust_min`; thrust vector `T b₃`.
+//! 4. **Thrust priority** (PX4 `_velocityControl`): the vertical component is
+//!    kept first, up to `sqrt(T_max² − min(‖T_xy‖, margin)²)`; the horizontal
+//!    one is scaled to what is left, `sqrt(T_max² − T_z²)`.
+//! 5. **Anti-windup**: vertical — `e_v,z` is not integrated while `T_z` sits
+//!    at `thrust_min` (error down) or `thrust_max` (error up); horizontal —
+//!    tracking anti-windup (Rundqwist 1990, PX4's choice),
+//!    `e_v,xy' = e_v,xy − (2/K_p,v,x)(a_sp,xy − a_lim,xy)`, `a_lim` the
+//!    acceleration the limited thrust produces, `T_xy g/H`, when it is smaller;
+//!    `|I_v,z| <= g`. [`PidGains::anti_windup`] = false switches both off
+//!    (PX4 cannot; used to show what they prevent).
+//! 6. **Thrust → attitude** (PX4 `thrustToAttitude`/`bodyzToAttitude`):
+//!    `R_d = [b₁ b₂ b₃]`, `b₁ = (y_C × b₃)/‖·‖`, `y_C = (−sin ψ_d, cos ψ_d, 0)`,
+//!    `b₂ = b₃ × b₁`; commanded thrust `‖T‖` (N).
+//! 7. **Attitude (quaternion P, tilt before yaw)** (PX4 `AttitudeControl`):
+//!    the reduced desired attitude `q_red` turns the body z axis onto `b₃` by
+//!    the shortest arc; the remaining yaw rotation `q_red⁻¹ q_d` is scaled by
+//!    `yaw_weight`; `q_e = q⁻¹ q_d'`, `ω_sp = 2 vec(q_e) ⊙ K_att'` with
+//!    `K_att' = (K_φ, K_θ, K_ψ / yaw_weight)` (so the small-error yaw gain
+//!    is `K_ψ`), plus the yaw-rate feed-forward `Rᵀe₃ ψ̇_d`, each component
+//!    limited to `max_rate`. (PX4's newer reference model, `MC_REF_*`, is
+//!    not implemented.)
+//! 8. **Rates (PID → torque)** (PX4 `RateControl::update`):
+//!    `τ = K_p,ω ⊙ e_ω + I_ω − K_d,ω ⊙ Ω̇ + K_ff ⊙ ω_sp`, `e_ω = ω_sp − Ω`,
+//!    `Ω̇` differenced and low-passed at `rate_derivative_cutoff`;
+//!    `İ_ω = f(e_ω) K_i,ω e_ω`, `f(e) = max(0, 1 − (e/400°/s)²)`,
+//!    `|I_ω| <= rate_integral_limit`. While the simulator reports actuator
+//!    saturation ([`Controller::actuator_feedback`]), an axis whose last
+//!    torque was positive (negative) only integrates negative (positive)
+//!    errors: PX4's per-axis saturation flags, with the direction taken from
+//!    the sign of the torque because the report is one flag.
+//!
+//! # Gains: PX4 defaults rescaled to this vehicle
+//!
+//! [`PidGains::for_vehicle`] keeps PX4's position, velocity and attitude
+//! gains unchanged (they are in SI units: 1/s, 1/s², m/s² per m/s²) and
+//! converts the normalised ones:
+//!
+//! * **Thrust.** PX4's thrust is normalised to the maximum, and the default
+//!   hover thrust `MPC_THR_HOVER` is 0.5, i.e. a thrust-to-weight ratio of 2:
+//!   `T_max = m g / 0.5 = 2 m g` (14.5 N for the paper's 0.74 kg quadrotor,
+//!   the 4 b ω_max² of the realistic scenarios' 350 rad/s rotors). Then
+//!   `H = 0.5 T_max = m g`, `thrust_min = 0.12 T_max` (`MPC_THR_MIN`),
+//!   margin `0.3 T_max` (`MPC_THR_XY_MARG`), and `thrust_max = 0.8 T_max`
+//!   instead of PX4's `MPC_THR_MAX` = 1.0: PX4's allocator lowers the
+//!   collective thrust to keep roll/pitch torque, the simulator's mixer
+//!   keeps thrust first, so the controller leaves the torque margin itself.
+//! * **Torque.** PX4's rate loop outputs a normalised torque in [−1, 1]
+//!   that the control allocator maps to the full differential thrust of the
+//!   rotors; so torque (N·m) = normalised output × the vehicle's maximum
+//!   torque at hover collective thrust with rotors spanning `[0, T_max/4]`.
+//!   For the "+" allocation of Eq. 2: roll/pitch `τ_max = l T_max/4 = l m g/2`
+//!   (one rotor at `T_max/4`, the opposite at 0; 0.762 N·m), yaw
+//!   `τ_max = (d/b) T_max/2` (two rotors at `T_max/4`, two at 0; 0.0786 N·m).
+//!   `MC_*RATE_P/I/D` and `MC_*R_INT_LIM` are multiplied by these. This
+//!   keeps PX4's rate-loop bandwidth *for a vehicle of this thrust-to-weight
+//!   and geometry*: `K_p τ_max / J` = 29.9 rad/s roll/pitch, 2.05 rad/s yaw,
+//!   and with `MC_ROLL_P = 6.5` a small-error attitude loop
+//!   `s² + 29.9 s + 194` (ω_n 13.9 rad/s, ζ 1.07); yaw `s² + 2.05 s + 5.75`
+//!   (ω_n 2.40 rad/s, ζ 0.43).
+//!
+//! # State conversion, and what is approximated on the paper plant
+//!
+//! As for [`crate::se3`]: the attitude quaternion is built from the Euler
+//! angles and the body rates `Ω = W(φ, θ) η̇` exactly; on the rigid-body
+//! truth model these are the true attitude and body rates. On the paper
+//! plant (Eq. 1) the torques drive the Euler-angle accelerations instead of
+//! `Ω̇`, so the rate loop acts on `η̈` with a gain matrix that equals the
+//! intended one only to first order about hover (`W ≈ I`). The PID law
+//! has no model terms to cancel, so nothing else differs.
+
+use crate::cascade::{Controller, Telemetry};
+use crate::law::{
+    check_gain, check_gain_or_zero, check_left_open, check_open, saturate, GainError, INPUT_LIMIT, MAX_ESTIMATES,
+    STATE_LIMIT,
+};
+use crate::math::{
+    acos, asin, body_rates_from_euler_rates, cos, cross, dot, euler_from_rotation, exp, mat_t_vec, norm,
+    rotation_from_euler, sin, sin_cos, sqrt, Mat3, Vec3,
+};
+use crate::model::{Command, QuadState, QuadrotorParams, Reference};
+use crate::se3::{limit_tilt, reference_finite};
+
+/// PX4 `MPC_THR_HOVER` default: hover at half the maximum thrust (T/W = 2).
+pub const PX4_HOVER_THRUST: f64 = 0.5;
+
+/// Gains and limits of [`PidController`], in SI units. `Default` is
+/// [`PidGains::for_vehicle`] of the paper's quadrotor. The PX4 parameter
+/// each field comes from is named in its doc.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Deserialize, serde::Serialize))]
+#[cfg_attr(feature = "serde", serde(deny_unknown_fields, default))]
+pub struct PidGains {
+    /// Position P per world axis, 1/s (`MPC_XY_P` 0.95, `MPC_Z_P` 1.0).
+    pub position_p: [f64; 3],
+    /// Velocity P, 1/s = m/s² per m/s (`MPC_XY_VEL_P_ACC` 1.8, `MPC_Z_VEL_P_ACC` 4.0).
+    pub velocity_p: [f64; 3],
+    /// Velocity I, 1/s² (`MPC_XY_VEL_I_ACC` 0.4, `MPC_Z_VEL_I_ACC` 2.0).
+    pub velocity_i: [f64; 3],
+    /// Velocity D, m/s² per m/s² (`MPC_XY_VEL_D_ACC` 0.2, `MPC_Z_VEL_D_ACC` 0).
+    pub velocity_d: [f64; 3],
+    /// Cutoff of the velocity-derivative low-pass, Hz (`MPC_VELD_LP` 5).
+    pub velocity_derivative_cutoff: f64,
+    /// Horizontal velocity limit, m/s (`MPC_XY_VEL_MAX` 12).
+    pub max_velocity_xy: f64,
+    /// Climb-rate limit, m/s (`MPC_Z_VEL_MAX_UP` 3).
+    pub max_velocity_up: f64,
+    /// Descent-rate limit, m/s (`MPC_Z_VEL_MAX_DN` 1.5).
+    pub max_velocity_down: f64,
+    /// Tilt limit of the thrust direction, rad (`MPC_TILTMAX_AIR` 45°).
+    pub max_tilt: f64,
+    /// Hover thrust `H`, N (`MPC_THR_HOVER` × T_max = m g).
+    pub hover_thrust: f64,
+    /// Minimum collective thrust, N (`MPC_THR_MIN` 0.12 × T_max).
+    pub thrust_min: f64,
+    /// Maximum collective thrust, N (default 0.8 × T_max; PX4's `MPC_THR_MAX`
+    /// is 1.0, but PX4's allocator lowers the collective thrust to keep
+    /// roll/pitch authority, while the simulator's mixer keeps thrust first,
+    /// so a command at T_max would leave no torque: 0.8 keeps 40 % of the
+    /// roll/pitch torque, the same margin as [`crate::se3::Se3Gains::max_thrust`]).
+    pub thrust_max: f64,
+    /// Horizontal thrust kept when the vertical one saturates, N (`MPC_THR_XY_MARG` 0.3 × T_max).
+    pub thrust_xy_margin: f64,
+    /// Attitude P per body axis, 1/s (`MC_ROLL_P` 6.5, `MC_PITCH_P` 6.5, `MC_YAW_P` 2.8).
+    pub attitude_p: [f64; 3],
+    /// Weight of yaw against tilt in the attitude error, in (0, 1] (`MC_YAW_WEIGHT` 0.4).
+    pub yaw_weight: f64,
+    /// Body-rate setpoint limits, rad/s (`MC_ROLLRATE_MAX`, `MC_PITCHRATE_MAX` 220°/s, `MC_YAWRATE_MAX` 200°/s).
+    pub max_rate: [f64; 3],
+    /// Rate P, N·m per rad/s (`MC_ROLLRATE_P` 0.15, `MC_YAWRATE_P` 0.2, × τ_max).
+    pub rate_p: [f64; 3],
+    /// Rate I, N·m per rad (`MC_ROLLRATE_I` 0.2, `MC_YAWRATE_I` 0.1, × τ_max).
+    pub rate_i: [f64; 3],
+    /// Rate D, N·m per rad/s² (`MC_ROLLRATE_D` 0.003, `MC_YAWRATE_D` 0, × τ_max).
+    pub rate_d: [f64; 3],
+    /// Rate feed-forward, N·m per rad/s (`MC_ROLLRATE_FF` 0).
+    pub rate_ff: [f64; 3],
+    /// Rate integrator limit, N·m (`MC_RR_INT_LIM`, `MC_PR_INT_LIM`, `MC_YR_INT_LIM` 0.3, × τ_max).
+    pub rate_integral_limit: [f64; 3],
+    /// Cutoff of the angular-acceleration low-pass of the D term, Hz (PX4 `IMU_DGYRO_CUTOFF` 30).
+    pub rate_derivative_cutoff: f64,
+    /// Velocity-loop anti-windup (step 5 of the module docs: vertical
+    /// conditional integration and horizontal tracking). PX4 always applies
+    /// it (default true); false integrates the raw velocity error, only to
+    /// show what it prevents (`tests/practitioners.rs`).
+    pub anti_windup: bool,
+}
+
+impl Default for PidGains {
+    fn default() -> Self {
+        Self::for_vehicle(&QuadrotorParams::default())
+    }
+}
+
+impl PidGains {
+    /// PX4's default gains rescaled to `params` ([module docs](self),
+    /// "Gains"): `T_max = m g / MPC_THR_HOVER`, torque = normalised rate-loop
+    /// output × `τ_max` (`l T_max/4` roll/pitch, `(d/b) T_max/2` yaw).
+    pub fn for_vehicle(params: &QuadrotorParams) -> Self {
+        let deg = core::f64::consts::PI / 180.0;
+        let t_max = params.mass * params.gravity / PX4_HOVER_THRUST;
+        let [roll, pitch, yaw] = Self::max_torques(params);
+        let scale = |normalised: [f64; 3]| [normalised[0] * roll, normalised[1] * pitch, normalised[2] * yaw];
+        Self {
+            position_p: [0.95, 0.95, 1.0],
+            velocity_p: [1.8, 1.8, 4.0],
+            velocity_i: [0.4, 0.4, 2.0],
+            velocity_d: [0.2, 0.2, 0.0],
+            velocity_derivative_cutoff: 5.0,
+            max_velocity_xy: 12.0,
+            max_velocity_up: 3.0,
+            max_velocity_down: 1.5,
+            max_tilt: 45.0 * deg,
+            hover_thrust: PX4_HOVER_THRUST * t_max,
+            thrust_min: 0.12 * t_max,
+            thrust_max: 0.8 * t_max,
+            thrust_xy_margin: 0.3 * t_max,
+            attitude_p: [6.5, 6.5, 2.8],
+            yaw_weight: 0.4,
+            max_rate: [220.0 * deg, 220.0 * deg, 200.0 * deg],
+            rate_p: scale([0.15, 0.15, 0.2]),
+            rate_i: scale([0.2, 0.2, 0.1]),
+            rate_d: scale([0.003, 0.003, 0.0]),
+            rate_ff: [0.0; 3],
+            rate_integral_limit: scale([0.3, 0.3, 0.3]),
+            rate_derivative_cutoff: 30.0,
+            anti_windup: true,
+        }
+    }
+
+    /// Torque, N·m, that a normalised rate-loop output of 1 stands for on
+    /// each body axis: `[l T_max/4, l T_max/4, (d/b) T_max/2]` with
+    /// `T_max = m g / MPC_THR_HOVER` (Eq. 2 allocation, rotors in `[0, T_max/4]`).
+    pub fn max_torques(params: &QuadrotorParams) -> [f64; 3] {
+        let t_max = params.mass * params.gravity / PX4_HOVER_THRUST;
+        let tilt = params.arm_length * t_max / 4.0;
+        [tilt, tilt, params.yaw_drag_coefficient / params.lift_coefficient * t_max / 2.0]
+    }
+
+    /// Range checks (the error names the field and value): P gains, limits,
+    /// cutoffs and rates in `(0, 1e6]`; I, D, feed-forward gains, the
+    /// margin and the integrator limits in `[0, 1e6]`; `0 < max_tilt < π/2`;
+    /// `0 < yaw_weight <= 1`; `0 <= thrust_min < hover_thrust < thrust_max`.
+    pub fn check(&self) -> Result<(), GainError> {
+        let triples: [(&[&'static str; 3], [f64; 3], bool); 10] = [
+            (&["position_p[0]", "position_p[1]", "position_p[2]"], self.position_p, true),
+            (&["velocity_p[0]", "velocity_p[1]", "velocity_p[2]"], self.velocity_p, true),
+            (&["velocity_i[0]", "velocity_i[1]", "velocity_i[2]"], self.velocity_i, false),
+            (&["velocity_d[0]", "velocity_d[1]", "velocity_d[2]"], self.velocity_d, false),
+            (&["attitude_p[0]", "attitude_p[1]", "attitude_p[2]"], self.attitude_p, true),
+            (&["max_rate[0]", "max_rate[1]", "max_rate[2]"], self.max_rate, true),
+            (&["rate_p[0]", "rate_p[1]", "rate_p[2]"], self.rate_p, true),
+            (&["rate_i[0]", "rate_i[1]", "rate_i[2]"], self.rate_i, false),
+            (&["rate_d[0]", "rate_d[1]", "rate_d[2]"], self.rate_d, false),
+            (&["rate_ff[0]", "rate_ff[1]", "rate_ff[2]"], self.rate_ff, false),
+        ];
+        for (names, values, positive) in triples {
+            for (name, value) in names.iter().zip(values) {
+                if positive {
+                    check_gain(name, value)?;
+                } else {
+                    check_gain_or_zero(name, value)?;
+                }
+            }
+        }
+        for (name, value) in ["rate_integral_limit[0]", "rate_integral_limit[1]", "rate_integral_limit[2]"]
+            .iter()
+            .zip(self.rate_integral_limit)
+        {
+            check_gain_or_zero(name, value)?;
+        }
+        check_gain("velocity_derivative_cutoff", self.velocity_derivative_cutoff)?;
+        check_gain("rate_derivative_cutoff", self.rate_derivative_cutoff)?;
+        check_gain("max_velocity_xy", self.max_velocity_xy)?;
+        check_gain("max_velocity_up", self.max_velocity_up)?;
+        check_gain("max_velocity_down", self.max_velocity_down)?;
+        check_open("max_tilt", self.max_tilt, 0.0, core::f64::consts::FRAC_PI_2, "0 < max_tilt < π/2 (rad)")?;
+        check_left_open("yaw_weight", self.yaw_weight, 0.0, 1.0, "0 < yaw_weight <= 1")?;
+        check_gain("hover_thrust", self.hover_thrust)?;
+        check_gain("thrust_max", self.thrust_max)?;
+        check_gain_or_zero("thrust_xy_margin", self.thrust_xy_margin)?;
+        if !(self.thrust_min >= 0.0 && self.thrust_min < self.hover_thrust) {
+            return Err(GainError {
+                field: "thrust_min",
+                value: self.thrust_min,
+                expected: "0 <= thrust_min < hover_thrust (N)",
+            });
+        }
+        if self.thrust_max <= self.hover_thrust {
+            return Err(GainError {
+                field: "thrust_max",
+                value: self.thrust_max,
+                expected: "hover_thrust < thrust_max <= 1e6 (N)",
+            });
+        }
+        Ok(())
+    }
+}
+
+/// Unit quaternion `[w, x, y, z]` (Hamilton, body-to-world).
+type Quat = [f64; 4];
+
+fn quat_mul(a: &Quat, b: &Quat) -> Quat {
+    [
+        a[0] * b[0] - a[1] * b[1] - a[2] * b[2] - a[3] * b[3],
+        a[0] * b[1] + a[1] * b[0] + a[2] * b[3] - a[3] * b[2],
+        a[0] * b[2] - a[1] * b[3] + a[2] * b[0] + a[3] * b[1],
+        a[0] * b[3] + a[1] * b[2] - a[2] * b[1] + a[3] * b[0],
+    ]
+}
+
+fn quat_conj(q: &Quat) -> Quat {
+    [q[0], -q[1], -q[2], -q[3]]
+}
+
+fn quat_normalise(q: Quat) -> Quat {
+    let n = sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+    if n > 0.0 {
+        [q[0] / n, q[1] / n, q[2] / n, q[3] / n]
+    } else {
+        [1.0, 0.0, 0.0, 0.0]
+    }
+}
+
+/// `q` or `−q`, whichever has `w >= 0` (the shorter rotation).
+fn canonical(q: Quat) -> Quat {
+    if q[0] < 0.0 {
+        [-q[0], -q[1], -q[2], -q[3]]
+    } else {
+        q
+    }
+}
+
+/// Quaternion of a rotation matrix (Shepperd's method: largest pivot).
+fn quat_from_rotation(r: &Mat3) -> Quat {
+    let trace = r[0][0] + r[1][1] + r[2][2];
+    let q = if trace > 0.0 {
+        let s = 2.0 * sqrt(1.0 + trace);
+        [0.25 * s, (r[2][1] - r[1][2]) / s, (r[0][2] - r[2][0]) / s, (r[1][0] - r[0][1]) / s]
+    } else if r[0][0] > r[1][1] && r[0][0] > r[2][2] {
+        let s = 2.0 * sqrt((1.0 + r[0][0] - r[1][1] - r[2][2]).max(0.0));
+        [(r[2][1] - r[1][2]) / s, 0.25 * s, (r[0][1] + r[1][0]) / s, (r[0][2] + r[2][0]) / s]
+    } else if r[1][1] > r[2][2] {
+        let s = 2.0 * sqrt((1.0 + r[1][1] - r[0][0] - r[2][2]).max(0.0));
+        [(r[0][2] - r[2][0]) / s, (r[0][1] + r[1][0]) / s, 0.25 * s, (r[1][2] + r[2][1]) / s]
+    } else {
+        let s = 2.0 * sqrt((1.0 + r[2][2] - r[0][0] - r[1][1]).max(0.0));
+        [(r[1][0] - r[0][1]) / s, (r[0][2] + r[2][0]) / s, (r[1][2] + r[2][1]) / s, 0.25 * s]
+    };
+    quat_normalise(q)
+}
+
+/// Shortest-arc rotation taking the unit vector `u` onto the unit vector
+/// `v`; for opposite vectors, a half turn about an axis perpendicular to `u`.
+fn quat_between(u: &Vec3, v: &Vec3) -> Quat {
+    let c = cross(u, v);
+    let d = dot(u, v);
+    if norm(&c) < 1e-9 && d < 0.0 {
+        // Half turn about the axis perpendicular to u with the smallest components.
+        let axis = if u[0].abs() < 0.9 { cross(u, &[1.0, 0.0, 0.0]) } else { cross(u, &[0.0, 1.0, 0.0]) };
+        let n = norm(&axis);
+        return [0.0, axis[0] / n, axis[1] / n, axis[2] / n];
+    }
+    quat_normalise([1.0 + d, c[0], c[1], c[2]])
+}
+
+/// PX4 `ControlMath::constrainXY`: `v0 + v1` limited to norm `max`, keeping
+/// `v0` first (the position part before the feed-forward).
+fn constrain_xy(v0: [f64; 2], v1: [f64; 2], max: f64) -> [f64; 2] {
+    let sum = [v0[0] + v1[0], v0[1] + v1[1]];
+    let n_sum = sqrt(sum[0] * sum[0] + sum[1] * sum[1]);
+    if n_sum <= max {
+        return sum;
+    }
+    let n0 = sqrt(v0[0] * v0[0] + v0[1] * v0[1]);
+    if n0 >= max {
+        return [v0[0] / n0 * max, v0[1] / n0 * max];
+    }
+    // |v0 + s v1| = max, s in [0, 1): a s² + b s + c = 0.
+    let a = v1[0] * v1[0] + v1[1] * v1[1];
+    let b = 2.0 * (v0[0] * v1[0] + v0[1] * v1[1]);
+    let c = n0 * n0 - max * max;
+    let s = (-b + sqrt((b * b - 4.0 * a * c).max(0.0))) / (2.0 * a);
+    [v0[0] + s * v1[0], v0[1] + s * v1[1]]
+}
+
+/// PX4's cascade ([module docs](self)).
+#[derive(Clone, Debug)]
+pub struct PidController {
+    model: QuadrotorParams,
+    gains: PidGains,
+    velocity_integral: Vec3,
+    rate_integral: Vec3,
+    previous_velocity: Vec3,
+    previous_rates: Vec3,
+    velocity_derivative: Vec3,
+    rate_derivative: Vec3,
+    initialised: bool,
+    last_torque: Vec3,
+    actuator_saturated: bool,
+    telemetry: Telemetry,
+}
+
+/// Names of the [`Telemetry::estimates`] slots: slot 0 of x, y, z is the
+/// velocity integrator (m/s²), of φ, θ, ψ the rate integrator (N·m).
+pub const PID_ESTIMATE_NAMES: [&str; MAX_ESTIMATES] = ["integral", "", ""];
+
+impl PidController {
+    /// Build after checking the nominal model ([`QuadrotorParams::check`])
+    /// and the gains ([`PidGains::check`]).
+    pub fn new(model: QuadrotorParams, gains: PidGains) -> Result<Self, GainError> {
+        model.check()?;
+        gains.check()?;
+        Ok(Self {
+            model,
+            gains,
+            velocity_integral: [0.0; 3],
+            rate_integral: [0.0; 3],
+            previous_velocity: [0.0; 3],
+            previous_rates: [0.0; 3],
+            velocity_derivative: [0.0; 3],
+            rate_derivative: [0.0; 3],
+            initialised: false,
+            last_torque: [0.0; 3],
+            actuator_saturated: false,
+            telemetry: Telemetry { alpha_hat: 1.0, ..Telemetry::default() },
+        })
+    }
+
+    /// The gains in use.
+    pub fn gains(&self) -> &PidGains {
+        &self.gains
+    }
+
+    /// Velocity integrator `I_v`, m/s².
+    pub fn velocity_integral(&self) -> Vec3 {
+        self.velocity_integral
+    }
+
+    /// Rate integrator `I_ω`, N·m.
+    pub fn rate_integral(&self) -> Vec3 {
+        self.rate_integral
+    }
+
+    /// First-order low-pass of a finite difference, one step of `dt` at
+    /// cutoff `hz`; `previous` is updated to `value`.
+    fn filtered_derivative(value: &Vec3, previous: &mut Vec3, filtered: &mut Vec3, hz: f64, dt: f64) {
+        if dt > 0.0 {
+            let alpha = 1.0 - exp(-2.0 * core::f64::consts::PI * hz * dt);
+            for i in 0..3 {
+                let raw = saturate((value[i] - previous[i]) / dt, INPUT_LIMIT);
+                filtered[i] = saturate(filtered[i] + alpha * (raw - filtered[i]), INPUT_LIMIT);
+            }
+        }
+        *previous = *value;
+    }
+
+    /// Body-rate setpoint of the quaternion P law (step 7), rad/s.
+    fn rate_setpoint(&self, r: &Mat3, q: &Quat, r_d: &Mat3, yaw_rate: f64) -> Vec3 {
+        let k = &self.gains;
+        let q_d = quat_from_rotation(r_d);
+        let e_z = [r[0][2], r[1][2], r[2][2]];
+        let e_z_d = [r_d[0][2], r_d[1][2], r_d[2][2]];
+        let tilt = quat_between(&e_z, &e_z_d);
+        let q_red = if tilt[1].abs() > 1.0 - 1e-5 || tilt[2].abs() > 1.0 - 1e-5 {
+            // Thrust axis exactly reversed: full attitude control (PX4's corner case).
+            q_d
+        } else {
+            quat_mul(&tilt, q)
+        };
+        let mut dyaw = canonical(quat_mul(&quat_conj(&q_red), &q_d));
+        dyaw[0] = saturate(dyaw[0], 1.0);
+        dyaw[3] = saturate(dyaw[3], 1.0);
+        let w = k.yaw_weight;
+        let weighted = [cos(w * acos(dyaw[0])), 0.0, 0.0, sin(w * asin(dyaw[3]))];
+        let q_target = quat_mul(&q_red, &weighted);
+        let q_e = canonical(quat_mul(&quat_conj(q), &q_target));
+        let gain = [k.attitude_p[0], k.attitude_p[1], k.attitude_p[2] / w];
+        let feed_forward = mat_t_vec(r, &[0.0, 0.0, yaw_rate]);
+        let mut rate = [0.0; 3];
+        for i in 0..3 {
+            rate[i] = saturate(2.0 * q_e[i + 1] * gain[i] + feed_forward[i], k.max_rate[i]);
+        }
+        rate
+    }
+}
+
+impl Controller for PidController {
+    fn name(&self) -> &'static str {
+        "pid"
+    }
+
+    /// One period of the cascade of the [module docs](self). A non-finite
+    /// state, reference or `dt` gives a NaN command and leaves every
+    /// internal state unchanged. Errors and rates are clamped to
+    /// `±INPUT_LIMIT` and the integrators to `±STATE_LIMIT` (no-ops in flight).
+    fn update(&mut self, state: &QuadState, reference: &Reference, dt: f64) -> Command {
+        if !(dt.is_finite() && state.to_array().iter().all(|v| v.is_finite()) && reference_finite(reference)) {
+            return Command { thrust: f64::NAN, torque: [f64::NAN; 3] };
+        }
+        let k = self.gains;
+        let g = self.model.gravity;
+        let dt = dt.max(0.0);
+        let velocity = state.velocity.map(|v| saturate(v, INPUT_LIMIT));
+        let omega = body_rates_from_euler_rates(&state.attitude, &state.angular_rate).map(|w| saturate(w, INPUT_LIMIT));
+        if !self.initialised {
+            self.previous_velocity = velocity;
+            self.previous_rates = omega;
+            self.initialised = true;
+        }
+        Self::filtered_derivative(
+            &velocity,
+            &mut self.previous_velocity,
+            &mut self.velocity_derivative,
+            k.velocity_derivative_cutoff,
+            dt,
+        );
+        Self::filtered_derivative(
+            &omega,
+            &mut self.previous_rates,
+            &mut self.rate_derivative,
+            k.rate_derivative_cutoff,
+            dt,
+        );
+
+        // 1. Position P → velocity setpoint.
+        let mut from_position = [0.0; 3];
+        for (i, v) in from_position.iter_mut().enumerate() {
+            *v = k.position_p[i] * saturate(reference.position[i] - state.position[i], INPUT_LIMIT);
+        }
+        let ff = reference.velocity.map(|v| saturate(v, INPUT_LIMIT));
+        let xy = constrain_xy([from_position[0], from_position[1]], [ff[0], ff[1]], k.max_velocity_xy);
+        let vz = from_position[2] + ff[2];
+        let vz = if vz > k.max_velocity_up {
+            k.max_velocity_up
+        } else if vz < -k.max_velocity_down {
+            -k.max_velocity_down
+        } else {
+            vz
+        };
+        let velocity_setpoint = [xy[0], xy[1], vz];
+
+        // 2. Velocity PID → acceleration setpoint.
+        let mut error = [0.0; 3];
+        let mut accel = [0.0; 3];
+        for i in 0..3 {
+            error[i] = velocity_setpoint[i] - velocity[i];
+            accel[i] = saturate(
+                saturate(reference.acceleration[i], INPUT_LIMIT)
+                    + k.velocity_p[i] * error[i]
+                    + self.velocity_integral[i]
+                    - k.velocity_d[i] * self.velocity_derivative[i],
+                INPUT_LIMIT,
+            );
+        }
+
+        // 3. Acceleration → thrust vector (N).
+        let unlimited = {
+            let v = [accel[0], accel[1], g];
+            let n = norm(&v);
+            [v[0] / n, v[1] / n, v[2] / n]
+        };
+        let direction = limit_tilt(unlimited, k.max_tilt);
+        let nominal_thrust = k.hover_thrust * (accel[2] + g) / g / direction[2];
+        let floored = nominal_thrust < k.thrust_min;
+        let collective = if floored { k.thrust_min } else { nominal_thrust };
+        let mut thrust = direction.map(|d| d * collective);
+
+        // 5a. Vertical anti-windup: stop integrating into a saturated thrust.
+        if k.anti_windup
+            && ((thrust[2] <= k.thrust_min && error[2] <= 0.0) || (thrust[2] >= k.thrust_max && error[2] >= 0.0))
+        {
+            error[2] = 0.0;
+        }
+
+        // 4. Vertical priority with a horizontal margin.
+        let horizontal = sqrt(thrust[0] * thrust[0] + thrust[1] * thrust[1]);
+        let max_sq = k.thrust_max * k.thrust_max;
+        let allocated = horizontal.min(k.thrust_xy_margin);
+        let z_max = sqrt((max_sq - allocated * allocated).max(0.0));
+        let z_capped = thrust[2] > z_max;
+        if z_capped {
+            thrust[2] = z_max;
+        }
+        let xy_max = sqrt((max_sq - thrust[2] * thrust[2]).max(0.0));
+        let xy_capped = horizontal > xy_max;
+        if xy_capped {
+            thrust[0] *= xy_max / horizontal;
+            thrust[1] *= xy_max / horizontal;
+        }
+
+        // 5b. Horizontal tracking anti-windup.
+        let produced = [thrust[0] * g / k.hover_thrust, thrust[1] * g / k.hover_thrust];
+        let demanded = [accel[0], accel[1]];
+        let limited = if demanded[0] * demanded[0] + demanded[1] * demanded[1]
+            > produced[0] * produced[0] + produced[1] * produced[1]
+        {
+            produced
+        } else {
+            demanded
+        };
+        let arw = if k.anti_windup { 2.0 / k.velocity_p[0] } else { 0.0 };
+        for i in 0..2 {
+            error[i] -= arw * (demanded[i] - limited[i]);
+        }
+        for i in 0..3 {
+            self.velocity_integral[i] =
+                saturate(self.velocity_integral[i] + k.velocity_i[i] * error[i] * dt, STATE_LIMIT);
+        }
+        self.velocity_integral[2] = saturate(self.velocity_integral[2], g);
+
+        // 6. Thrust vector → desired attitude and collective thrust.
+        let magnitude = norm(&thrust);
+        let b3 = if magnitude > 0.0 { thrust.map(|t| t / magnitude) } else { [0.0, 0.0, 1.0] };
+        let (s, c) = sin_cos(reference.yaw);
+        let b1 = cross(&[-s, c, 0.0], &b3);
+        let n1 = norm(&b1);
+        let b1 = if n1 > 1e-9 { b1.map(|v| v / n1) } else { [1.0, 0.0, 0.0] };
+        let b2 = cross(&b3, &b1);
+        let r_d = [[b1[0], b2[0], b3[0]], [b1[1], b2[1], b3[1]], [b1[2], b2[2], b3[2]]];
+
+        // 7. Attitude P → body-rate setpoint.
+        let r = rotation_from_euler(&state.attitude);
+        let q = quat_from_rotation(&r);
+        let rate_setpoint = self.rate_setpoint(&r, &q, &r_d, saturate(reference.yaw_rate, INPUT_LIMIT));
+
+        // 8. Rate PID → torques.
+        let mut torque = [0.0; 3];
+        let max_error = 400.0 * core::f64::consts::PI / 180.0;
+        for i in 0..3 {
+            let mut e = rate_setpoint[i] - omega[i];
+            torque[i] = k.rate_p[i] * e + self.rate_integral[i] - k.rate_d[i] * self.rate_derivative[i]
+                + k.rate_ff[i] * rate_setpoint[i];
+            if self.actuator_saturated {
+                if self.last_torque[i] > 0.0 {
+                    e = e.min(0.0);
+                } else if self.last_torque[i] < 0.0 {
+                    e = e.max(0.0);
+                }
+            }
+            let f = e / max_error;
+            let factor = (1.0 - f * f).max(0.0);
+            self.rate_integral[i] =
+                saturate(self.rate_integral[i] + factor * k.rate_i[i] * e * dt, k.rate_integral_limit[i]);
+        }
+        self.last_torque = torque;
+
+        let desired = euler_from_rotation(&r_d);
+        let mut estimates = [[0.0; MAX_ESTIMATES]; 6];
+        for i in 0..3 {
+            estimates[i][0] = self.velocity_integral[i];
+            estimates[3 + i][0] = self.rate_integral[i];
+        }
+        self.telemetry = Telemetry {
+            attitude_reference: [desired[0], desired[1], reference.yaw],
+            attitude_reference_rate: [0.0, 0.0, reference.yaw_rate],
+            attitude_reference_acceleration: [0.0, 0.0, reference.yaw_acceleration],
+            attitude_demand: [desired[0], desired[1]],
+            sliding: [0.0; 6],
+            estimates,
+            commanded_acceleration: accel,
+            nominal_thrust,
+            alpha_hat: 1.0,
+            thrust_limited: floored || z_capped || xy_capped || direction != unlimited,
+            adaptation_frozen: false,
+        };
+        Command { thrust: magnitude, torque }
+    }
+
+    fn telemetry(&self) -> &Telemetry {
+        &self.telemetry
+    }
+
+    fn estimate_names(&self) -> [&'static str; MAX_ESTIMATES] {
+        PID_ESTIMATE_NAMES
+    }
+
+    fn adapts_mass(&self) -> bool {
+        false
+    }
+
+    fn reset(&mut self) {
+        *self = Self {
+            model: self.model,
+            gains: self.gains,
+            velocity_integral: [0.0; 3],
+            rate_integral: [0.0; 3],
+            previous_velocity: [0.0; 3],
+            previous_rates: [0.0; 3],
+            velocity_derivative: [0.0; 3],
+            rate_derivative: [0.0; 3],
+            initialised: false,
+            last_torque: [0.0; 3],
+            actuator_saturated: false,
+            telemetry: Telemetry { alpha_hat: 1.0, ..Telemetry::default() },
+        };
+    }
+
+    fn actuator_feedback(&mut self, saturated: bool) {
+        self.actuator_saturated = saturated;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn controller() -> PidController {
+        PidController::new(QuadrotorParams::default(), PidGains::default()).unwrap()
+    }
+
+    #[test]
+    fn hover_at_the_reference_gives_weight_zero_torque_and_no_integration() {
+        let p = QuadrotorParams::default();
+        for yaw in [0.0, 0.7, -2.5] {
+            let mut c = controller();
+            let state = QuadState { position: [1.0, 2.0, 3.0], attitude: [0.0, 0.0, yaw], ..QuadState::default() };
+            let reference = Reference { position: [1.0, 2.0, 3.0], yaw, ..Reference::default() };
+            for _ in 0..100 {
+                let cmd = c.update(&state, &reference, 1e-3);
+                assert!((cmd.thrust - p.mass * p.gravity).abs() < 1e-12, "{}", cmd.thrust);
+                assert!(cmd.torque.iter().all(|t| t.abs() < 1e-12), "{:?}", cmd.torque);
+            }
+            assert_eq!(c.velocity_integral(), [0.0; 3]);
+            assert!(c.rate_integral().iter().all(|i| i.abs() < 1e-15));
+        }
+    }
+
+    #[test]
+    fn rescaled_gains_have_the_documented_values() {
+        let p = QuadrotorParams::default();
+        let g = PidGains::for_vehicle(&p);
+        let [roll, _, yaw] = PidGains::max_torques(&p);
+        assert!((roll - 0.7622).abs() < 1e-4, "{roll}");
+        assert!((yaw - 0.07862).abs() < 1e-5, "{yaw}");
+        assert!((g.thrust_max - 1.6 * p.mass * p.gravity).abs() < 1e-12);
+        assert!((g.hover_thrust - p.mass * p.gravity).abs() < 1e-12);
+        // Rate-loop bandwidth K_p τ_max / J.
+        assert!((g.rate_p[0] / p.inertia[0] - 29.9).abs() < 0.05);
+        assert!((g.rate_p[2] / p.inertia[2] - 2.05).abs() < 0.01);
+        g.check().unwrap();
+    }
+
+    #[test]
+    fn the_demanded_tilt_never_exceeds_max_tilt() {
+        let mut c = controller();
+        let reference = Reference { position: [50.0, -80.0, 0.0], ..Reference::default() };
+        // Moving fast sideways: the velocity error alone asks for ~60 m/s².
+        let state = QuadState { velocity: [-20.0, 15.0, 0.0], ..QuadState::default() };
+        c.update(&state, &reference, 1e-3);
+        let [phi, theta, _] = c.telemetry().attitude_reference;
+        let tilt = (phi.cos() * theta.cos()).acos();
+        assert!(tilt <= PidGains::default().max_tilt + 1e-12, "{tilt}");
+        assert!(tilt > PidGains::default().max_tilt - 1e-9, "{tilt}");
+        assert!(c.telemetry().commanded_acceleration[0].abs() > 20.0);
+    }
+
+    #[test]
+    fn thrust_stays_within_its_limits_with_vertical_priority() {
+        let k = PidGains::default();
+        let mut c = controller();
+        // A fast climb demand: thrust capped at thrust_max.
+        let state = QuadState { velocity: [0.0, 0.0, -10.0], ..QuadState::default() };
+        let cmd = c.update(&state, &Reference { position: [0.0, 0.0, 20.0], ..Reference::default() }, 1e-3);
+        assert!((cmd.thrust - k.thrust_max).abs() < 1e-9, "{}", cmd.thrust);
+        // A fast descent demand: thrust floored at thrust_min.
+        let mut c = controller();
+        let state = QuadState { velocity: [0.0, 0.0, 10.0], ..QuadState::default() };
+        let cmd = c.update(&state, &Reference { position: [0.0, 0.0, -20.0], ..Reference::default() }, 1e-3);
+        assert!((cmd.thrust - k.thrust_min).abs() < 1e-9, "{}", cmd.thrust);
+        // The vertical integrator did not wind further into the floor.
+        assert_eq!(c.velocity_integral()[2], 0.0);
+    }
+
+    #[test]
+    fn tilt_is_corrected_before_yaw() {
+        // Rolled 0.3 rad and 1 rad off in yaw: the rate setpoint is mostly roll.
+        let c = controller();
+        let r = rotation_from_euler(&[0.3, 0.0, 1.0]);
+        let q = quat_from_rotation(&r);
+        let r_d = rotation_from_euler(&[0.0, 0.0, 0.0]);
+        let rate = c.rate_setpoint(&r, &q, &r_d, 0.0);
+        let k = PidGains::default();
+        // Roll error 0.3 rad at gain 6.5 ≈ 1.9 rad/s; yaw 1 rad weighted 0.4 at 2.8/0.4.
+        assert!(rate[0] < -1.5, "{rate:?}");
+        assert!(rate[2].abs() < k.attitude_p[2] * 1.0 + 0.1, "{rate:?}");
+        // Pure yaw error: small-error yaw gain is MC_YAW_P.
+        let r = rotation_from_euler(&[0.0, 0.0, 0.01]);
+        let rate = c.rate_setpoint(&r, &quat_from_rotation(&r), &r_d, 0.0);
+        assert!((rate[2] + 0.01 * k.attitude_p[2]).abs() < 1e-4, "{rate:?}");
+    }
+
+    #[test]
+    fn quaternion_helpers_agree_with_rotation_matrices() {
+        let r = rotation_from_euler(&[0.4, -0.3, 2.9]);
+        let q = quat_from_rotation(&r);
+        // Rotating e₃ by q gives the third column of R.
+        let v = quat_mul(&quat_mul(&q, &[0.0, 0.0, 0.0, 1.0]), &quat_conj(&q));
+        for i in 0..3 {
+            assert!((v[i + 1] - r[i][2]).abs() < 1e-12);
+        }
+        let t = quat_between(&[0.0, 0.0, 1.0], &[0.0, 0.0, -1.0]);
+        let w = quat_mul(&quat_mul(&t, &[0.0, 0.0, 0.0, 1.0]), &quat_conj(&t));
+        assert!((w[3] + 1.0).abs() < 1e-12);
+        let v = constrain_xy([3.0, 4.0], [1.0, 0.0], 2.0);
+        assert!((v[0] - 1.2).abs() < 1e-12 && (v[1] - 1.6).abs() < 1e-12, "{v:?}");
+        let v = constrain_xy([1.0, 0.0], [0.0, 5.0], 2.0);
+        assert!(((v[0] * v[0] + v[1] * v[1]).sqrt() - 2.0).abs() < 1e-12 && v[0] == 1.0);
+    }
+
+    #[test]
+    fn bad_gains_are_refused_naming_the_field() {
+        let d = PidGains::default();
+        let bad = [
+            (PidGains { position_p: [1.0, 0.0, 1.0], ..d }, "position_p[1]"),
+            (PidGains { velocity_i: [0.0, 0.0, -1.0], ..d }, "velocity_i[2]"),
+            (PidGains { rate_p: [f64::NAN, 1.0, 1.0], ..d }, "rate_p[0]"),
+            (PidGains { rate_integral_limit: [0.1, -0.1, 0.1], ..d }, "rate_integral_limit[1]"),
+            (PidGains { max_tilt: 1.6, ..d }, "max_tilt"),
+            (PidGains { yaw_weight: 0.0, ..d }, "yaw_weight"),
+            (PidGains { thrust_min: d.hover_thrust, ..d }, "thrust_min"),
+            (PidGains { thrust_max: d.hover_thrust, ..d }, "thrust_max"),
+            (PidGains { rate_derivative_cutoff: 0.0, ..d }, "rate_derivative_cutoff"),
+        ];
+        for (gains, field) in bad {
+            let err = PidController::new(QuadrotorParams::default(), gains).unwrap_err();
+            assert_eq!(err.field, field, "{err}");
+        }
+    }
+
+    #[test]
+    fn a_non_finite_input_leaves_every_state_unchanged_and_reset_clears_them() {
+        let mut c = controller();
+        let reference = Reference { position: [1.0, -1.0, 2.0], ..Reference::default() };
+        let state = QuadState { attitude: [0.1, 0.0, 0.0], angular_rate: [0.5, 0.0, 0.0], ..QuadState::default() };
+        for _ in 0..50 {
+            c.update(&state, &reference, 1e-3);
+        }
+        let before =
+            (c.velocity_integral(), c.rate_integral(), c.velocity_derivative, c.rate_derivative, *c.telemetry());
+        assert!(before.0.iter().any(|v| *v != 0.0) && before.1.iter().any(|v| *v != 0.0));
+        let bad = QuadState { position: [f64::NAN, 0.0, 0.0], ..state };
+        let cmd = c.update(&bad, &reference, 1e-3);
+        assert!(cmd.thrust.is_nan() && cmd.torque.iter().all(|t| t.is_nan()));
+        assert!(c.update(&state, &reference, f64::INFINITY).thrust.is_nan());
+        let after =
+            (c.velocity_integral(), c.rate_integral(), c.velocity_derivative, c.rate_derivative, *c.telemetry());
+        assert_eq!(before, after);
+        c.reset();
+        assert_eq!((c.velocity_integral(), c.rate_integral()), ([0.0; 3], [0.0; 3]));
+        assert_eq!(c.telemetry().alpha_hat, 1.0);
+        assert_eq!(c.estimate_names(), PID_ESTIMATE_NAMES);
+    }
+
+    #[test]
+    fn saturation_feedback_stops_the_rate_integrator_growing() {
+        let mut free = controller();
+        let mut held = controller();
+        let state = QuadState { attitude: [0.3, 0.0, 0.0], ..QuadState::default() };
+        let reference = Reference::default();
+        held.actuator_feedback(true);
+        free.update(&state, &reference, 1e-3);
+        held.update(&state, &reference, 1e-3);
+        for _ in 0..100 {
+            free.update(&state, &reference, 1e-3);
+            held.update(&state, &reference, 1e-3);
+        }
+        // Negative roll torque demanded; the held integrator does not grow more negative.
+        assert!(free.rate_integral()[0] < -1e-3, "{:?}", free.rate_integral());
+        assert!(held.rate_integral()[0] >= free.rate_integral()[0]);
+        // Only the first step (before any torque sign is known) integrated.
+        assert!(held.rate_integral()[0].abs() < 1e-3, "{:?}", held.rate_integral());
+    }
+}

@@ -1,0 +1,464 @@
+//! Geometric tracking control on SE(3): Lee, Leok & McClamroch, *Geometric
+//! tracking control of a quadrotor UAV on SE(3)*, CDC 2010, in the z-up form
+//! of REALISM §4 (world z up, body z along the thrust).
+//!
+//! ```text
+//! e_x = x − x_d,   e_v = v − v_d
+//! F_d = −k_x e_x − k_v e_v + m g e₃ + m ẍ_d                 (desired force, N)
+//! b₃d = F_d/‖F_d‖ (tilt-limited),  b₁c = (cos ψ_d, sin ψ_d, 0)
+//! b₂d = b₃d × b₁c / ‖b₃d × b₁c‖,  b₁d = b₂d × b₃d,  R_d = [b₁d b₂d b₃d]
+//! e_R = ½ (R_dᵀR − RᵀR_d)^∨,   e_Ω = Ω − RᵀR_d Ω_d
+//! M = −k_R e_R − k_Ω e_Ω + Ω × JΩ − J(Ω̂ RᵀR_d Ω_d − RᵀR_d Ω̇_d)
+//! f = F_d · R e₃   (bounded to [min_thrust, max_thrust])
+//! ```
+//!
+//! Gains are per body axis (`k_x`, `k_v` per world axis), so `k_R e_R` is
+//! the diagonal product; Lee et al. use scalars.
+//!
+//! # What is neglected
+//!
+//! * **Ω_d and Ω̇_d** are taken from the reference yaw only:
+//!   `Ω_d = R_dᵀ e₃ ψ̇_d`, `Ω̇_d = R_dᵀ e₃ ψ̈_d`. The components that come from
+//!   the rotation of `b₃d` (they need the jerk and snap of the desired force,
+//!   i.e. derivatives of the measured velocity) and the `ψ̇_d Ṙ_d` term of
+//!   Ω̇_d are dropped, as RotorPy's `se3_control.py` and most flight code do.
+//!   For a step reference (paper scenario 1) Ω_d is then exactly zero after
+//!   t = 0.
+//! * **Two additions to the paper's law**: the desired thrust direction `b₃d`
+//!   is tilt-limited to [`Se3Gains::max_tilt`] from the vertical (as PX4's
+//!   `limitTilt`), and the thrust is bounded below by
+//!   [`Se3Gains::min_thrust`] and above by [`Se3Gains::max_thrust`] so that the
+//!   mixer keeps torque authority both when `F_d · R e₃` is negative (upside
+//!   down: rotors cannot push) and when a large error asks for more thrust
+//!   than the rotors have (the simulator's mixer gives thrust priority over
+//!   torque). Neither acts near hover.
+//!
+//! # State conversion, and what is approximated on the paper plant
+//!
+//! The controller receives the Euler state of paper Eq. 1 ([`QuadState`]).
+//! It builds `R = R_z(ψ) R_y(θ) R_x(φ)` and the body rates `Ω = W(φ, θ) η̇`
+//! exactly ([`crate::math::rotation_from_euler`],
+//! [`crate::math::body_rates_from_euler_rates`]). On the rigid-body truth
+//! model the simulator reports the Euler angles and rates of its rotation
+//! and body rates, so `R` and `Ω` are the true ones and the law is the
+//! paper's. The paper plant (Eq. 1) instead drives the Euler-angle
+//! accelerations directly with the torques, `I φ̈ = (I₂ − I₃) θ̇ ψ̇ − … + u₂`:
+//! the moment computed for `J Ω̇ = M − Ω × JΩ` is applied to `η̈`. The two
+//! agree to first order about hover (`W ≈ I`), and the law's `Ω × JΩ` term
+//! cancels a coupling the paper plant writes with Euler rates instead
+//! of body rates; at large tilt and rates the paper plant sees a different
+//! (but still stabilising near hover) moment. The translational part of
+//! Eq. 1 uses the same `R e₃`, so it is exact on both plants.
+
+use crate::cascade::{Controller, Telemetry};
+use crate::law::{check_closed, check_gain, check_left_open, saturate, GainError, INPUT_LIMIT, MAX_ESTIMATES};
+use crate::math::{
+    body_rates_from_euler_rates, cos, cross, dot, euler_from_rotation, mat_t_mat, mat_t_vec, mat_vec, norm,
+    rotation_from_euler, sin, sin_cos, sqrt, Mat3, Vec3,
+};
+use crate::model::{Command, QuadState, QuadrotorParams, Reference};
+
+/// Gains of [`Se3Controller`]. `Default` is [`Se3Gains::for_vehicle`] of the
+/// paper's quadrotor ([`QuadrotorParams::default`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Deserialize, serde::Serialize))]
+#[cfg_attr(feature = "serde", serde(deny_unknown_fields, default))]
+pub struct Se3Gains {
+    /// Position gain `k_x` per world axis, N/m.
+    pub position: [f64; 3],
+    /// Velocity gain `k_v` per world axis, N·s/m.
+    pub velocity: [f64; 3],
+    /// Attitude gain `k_R` per body axis, N·m (per unit of `e_R`, ≈ rad for small errors).
+    pub attitude: [f64; 3],
+    /// Angular-velocity gain `k_Ω` per body axis, N·m·s/rad.
+    pub angular_rate: [f64; 3],
+    /// Largest angle between the desired thrust direction `b₃d` and the
+    /// vertical, rad (not in Lee et al.; default 0.6 rad ≈ 34°, the paper
+    /// cascades' default `max_tilt`, so the five controllers share one
+    /// demand limit).
+    pub max_tilt: f64,
+    /// Smallest thrust commanded, N (not in Lee et al., whose `f` may be
+    /// negative; default `0.24 m g`, PX4's `MPC_THR_MIN` = 0.12 of a maximum
+    /// thrust of `2 m g`, see [`crate::pid`]).
+    pub min_thrust: f64,
+    /// Largest thrust commanded, N (not in Lee et al.; default `1.6 m g`,
+    /// 80 % of the `2 m g` maximum that [`crate::pid`] assumes, PX4's
+    /// `MPC_THR_HOVER` = 0.5). The simulator's mixer keeps thrust before
+    /// torque, so a thrust command at the rotors' maximum leaves no torque
+    /// at all; the 20 % margin keeps 40 % of the roll/pitch torque
+    /// authority (a 170° recovery without it tumbles, see
+    /// `tests/practitioners.rs`).
+    pub max_thrust: f64,
+}
+
+impl Default for Se3Gains {
+    fn default() -> Self {
+        Self::for_vehicle(&QuadrotorParams::default())
+    }
+}
+
+impl Se3Gains {
+    /// Gains by pole placement on the small-error closed loops:
+    ///
+    /// * attitude, per body axis: `J_i ë + k_Ω,i ė + k_R,i e = 0` with natural
+    ///   frequency `ω_R,i` (rad/s) and damping `ζ_R`: `k_R,i = J_i ω_R,i²`,
+    ///   `k_Ω,i = 2 ζ_R J_i ω_R,i`;
+    /// * position, per world axis: `m ë + k_v ė + k_x e = 0` with `ω_x`, `ζ_x`:
+    ///   `k_x = m ω_x²`, `k_v = 2 ζ_x m ω_x`.
+    ///
+    /// `max_tilt`, `min_thrust` and `max_thrust` take their defaults (0.6 rad,
+    /// `0.24 m g`, `1.6 m g`).
+    pub fn from_bandwidth(
+        params: &QuadrotorParams,
+        attitude_frequency: [f64; 3],
+        attitude_damping: f64,
+        position_frequency: f64,
+        position_damping: f64,
+    ) -> Self {
+        let m = params.mass;
+        let j = params.inertia;
+        let w = attitude_frequency;
+        let wx = position_frequency;
+        Self {
+            position: [m * wx * wx; 3],
+            velocity: [2.0 * position_damping * m * wx; 3],
+            attitude: [j[0] * w[0] * w[0], j[1] * w[1] * w[1], j[2] * w[2] * w[2]],
+            angular_rate: [
+                2.0 * attitude_damping * j[0] * w[0],
+                2.0 * attitude_damping * j[1] * w[1],
+                2.0 * attitude_damping * j[2] * w[2],
+            ],
+            max_tilt: 0.6,
+            min_thrust: 0.24 * m * params.gravity,
+            max_thrust: 1.6 * m * params.gravity,
+        }
+    }
+
+    /// The default procedure (docs/controllers.md, "se3"): the attitude
+    /// loop gets the natural frequency of the [`crate::pid`] default's
+    /// small-error attitude loop on the same vehicle,
+    /// `ω_R,i = sqrt(K_rate,i K_att,i / J_i)` (PX4's gains rescaled by
+    /// [`crate::pid::PidGains::for_vehicle`]; 13.9, 13.9, 2.40 rad/s for the
+    /// paper's quadrotor), critically damped (`ζ_R = 1`), so `pid` and `se3`
+    /// are compared at equal attitude bandwidth; the position loop is
+    /// 5 times slower than roll/pitch, `ω_x = ω_R,roll / 5` (2.79 rad/s),
+    /// critically damped. Paper quadrotor: `k_x = 5.75 N/m`,
+    /// `k_v = 4.12 N·s/m`, `k_R = (0.743, 0.743, 0.044) N·m`,
+    /// `k_Ω = (0.107, 0.107, 0.037) N·m·s/rad`.
+    pub fn for_vehicle(params: &QuadrotorParams) -> Self {
+        let pid = crate::pid::PidGains::for_vehicle(params);
+        let j = params.inertia;
+        let w = [0, 1, 2].map(|i| sqrt(pid.rate_p[i] * pid.attitude_p[i] / j[i]));
+        Self::from_bandwidth(params, w, 1.0, w[0].min(w[1]) / 5.0, 1.0)
+    }
+
+    /// Range checks: every gain in `(0, 1e6]`, `0 < max_tilt <= π/2`,
+    /// `0 <= min_thrust < max_thrust <= 1e6` N. The error names the field (e.g.
+    /// `attitude[2]`) and its value.
+    pub fn check(&self) -> Result<(), GainError> {
+        const NAMES: [[&str; 3]; 4] = [
+            ["position[0]", "position[1]", "position[2]"],
+            ["velocity[0]", "velocity[1]", "velocity[2]"],
+            ["attitude[0]", "attitude[1]", "attitude[2]"],
+            ["angular_rate[0]", "angular_rate[1]", "angular_rate[2]"],
+        ];
+        for (names, values) in NAMES.iter().zip([self.position, self.velocity, self.attitude, self.angular_rate]) {
+            for (name, value) in names.iter().zip(values) {
+                check_gain(name, value)?;
+            }
+        }
+        check_left_open("max_tilt", self.max_tilt, 0.0, core::f64::consts::FRAC_PI_2, "0 < max_tilt <= π/2 (rad)")?;
+        check_closed("min_thrust", self.min_thrust, 0.0, 1e6, "0 <= min_thrust <= 1e6 (N)")?;
+        check_left_open("max_thrust", self.max_thrust, self.min_thrust, 1e6, "min_thrust < max_thrust <= 1e6 (N)")
+    }
+}
+
+/// `½ (R_dᵀR − RᵀR_d)^∨`, Lee et al. 2010 Eq. 10: zero at `R = R_d`, its
+/// norm is `sin` of the rotation angle between them.
+pub fn attitude_error(r: &Mat3, r_d: &Mat3) -> Vec3 {
+    let m = mat_t_mat(r_d, r);
+    // (M − Mᵀ)^∨ with M = R_dᵀR (so Mᵀ = RᵀR_d).
+    [0.5 * (m[2][1] - m[1][2]), 0.5 * (m[0][2] - m[2][0]), 0.5 * (m[1][0] - m[0][1])]
+}
+
+/// Rotate the unit vector `b` towards the vertical so that its angle to
+/// `e₃` is at most `max_tilt` (PX4 `ControlMath::limitTilt`, z up).
+pub(crate) fn limit_tilt(b: Vec3, max_tilt: f64) -> Vec3 {
+    let c = b[2];
+    let limit_cos = cos(max_tilt);
+    if c >= limit_cos {
+        return b;
+    }
+    let horizontal = sqrt(b[0] * b[0] + b[1] * b[1]);
+    let (hx, hy) = if horizontal > 1e-12 { (b[0] / horizontal, b[1] / horizontal) } else { (1.0, 0.0) };
+    let s = sin(max_tilt);
+    [s * hx, s * hy, limit_cos]
+}
+
+/// Lee et al.'s geometric controller ([module docs](self)).
+#[derive(Clone, Debug)]
+pub struct Se3Controller {
+    model: QuadrotorParams,
+    gains: Se3Gains,
+    telemetry: Telemetry,
+}
+
+impl Se3Controller {
+    /// Build after checking the nominal model ([`QuadrotorParams::check`])
+    /// and the gains ([`Se3Gains::check`]).
+    pub fn new(model: QuadrotorParams, gains: Se3Gains) -> Result<Self, GainError> {
+        model.check()?;
+        gains.check()?;
+        Ok(Self { model, gains, telemetry: Self::initial_telemetry() })
+    }
+
+    /// The gains in use.
+    pub fn gains(&self) -> &Se3Gains {
+        &self.gains
+    }
+
+    fn initial_telemetry() -> Telemetry {
+        Telemetry { alpha_hat: 1.0, ..Telemetry::default() }
+    }
+
+    /// Desired rotation from the desired force direction and heading ψ_d;
+    /// the second value is true when the tilt limit changed `b₃d`.
+    fn desired_rotation(&self, force: &Vec3, yaw: f64) -> (Mat3, bool) {
+        let f = norm(force);
+        let b3 = if f > 1e-9 { [force[0] / f, force[1] / f, force[2] / f] } else { [0.0, 0.0, 1.0] };
+        let limited = limit_tilt(b3, self.gains.max_tilt);
+        let tilt_limited = limited != b3;
+        let b3 = limited;
+        let (s, c) = sin_cos(yaw);
+        let b1c = [c, s, 0.0];
+        let b2 = cross(&b3, &b1c);
+        let n2 = norm(&b2);
+        // b₃d along b₁c (only with max_tilt = π/2): the heading is undefined;
+        // take b₂d horizontal, perpendicular to b₁c.
+        let b2 = if n2 > 1e-9 { [b2[0] / n2, b2[1] / n2, b2[2] / n2] } else { [-s, c, 0.0] };
+        let b1 = cross(&b2, &b3);
+        let r_d = [[b1[0], b2[0], b3[0]], [b1[1], b2[1], b3[1]], [b1[2], b2[2], b3[2]]];
+        (r_d, tilt_limited)
+    }
+}
+
+impl Controller for Se3Controller {
+    fn name(&self) -> &'static str {
+        "se3"
+    }
+
+    /// One period of the law of the [module docs](self). A non-finite state,
+    /// reference or `dt` gives a NaN command and leaves the telemetry as it
+    /// was (the law has no internal state). Errors, rates and the reference
+    /// acceleration are clamped to `±INPUT_LIMIT` (no-op in flight) so the
+    /// command is finite for every finite input.
+    fn update(&mut self, state: &QuadState, reference: &Reference, dt: f64) -> Command {
+        if !(dt.is_finite() && state.to_array().iter().all(|v| v.is_finite()) && reference_finite(reference)) {
+            return Command { thrust: f64::NAN, torque: [f64::NAN; 3] };
+        }
+        let m = self.model.mass;
+        let g = self.model.gravity;
+        let j = self.model.inertia;
+        let k = self.gains;
+
+        let r = rotation_from_euler(&state.attitude);
+        let omega = body_rates_from_euler_rates(&state.attitude, &state.angular_rate).map(|w| saturate(w, INPUT_LIMIT));
+
+        // Translational loop: desired force.
+        let mut force = [0.0; 3];
+        for i in 0..3 {
+            let e_x = saturate(state.position[i] - reference.position[i], INPUT_LIMIT);
+            let e_v = saturate(state.velocity[i] - reference.velocity[i], INPUT_LIMIT);
+            let a_d = saturate(reference.acceleration[i], INPUT_LIMIT);
+            force[i] = -k.position[i] * e_x - k.velocity[i] * e_v + m * a_d;
+        }
+        force[2] += m * g;
+        let (r_d, tilt_limited) = self.desired_rotation(&force, reference.yaw);
+
+        // Attitude loop.
+        let e_r = attitude_error(&r, &r_d);
+        let rt_rd = mat_t_mat(&r, &r_d);
+        let yaw_rate = saturate(reference.yaw_rate, INPUT_LIMIT);
+        let yaw_accel = saturate(reference.yaw_acceleration, INPUT_LIMIT);
+        let omega_d = mat_t_vec(&r_d, &[0.0, 0.0, yaw_rate]);
+        let omega_d_dot = mat_t_vec(&r_d, &[0.0, 0.0, yaw_accel]);
+        let omega_d_body = mat_vec(&rt_rd, &omega_d);
+        let omega_d_dot_body = mat_vec(&rt_rd, &omega_d_dot);
+        let j_omega = [j[0] * omega[0], j[1] * omega[1], j[2] * omega[2]];
+        let gyro = cross(&omega, &j_omega);
+        let hat = cross(&omega, &omega_d_body);
+        let mut torque = [0.0; 3];
+        for i in 0..3 {
+            let e_w = omega[i] - omega_d_body[i];
+            torque[i] =
+                -k.attitude[i] * e_r[i] - k.angular_rate[i] * e_w + gyro[i] - j[i] * (hat[i] - omega_d_dot_body[i]);
+        }
+        let lee_thrust = dot(&force, &[r[0][2], r[1][2], r[2][2]]);
+        let thrust = if lee_thrust < k.min_thrust {
+            k.min_thrust
+        } else if lee_thrust > k.max_thrust {
+            k.max_thrust
+        } else {
+            lee_thrust
+        };
+
+        let desired = euler_from_rotation(&r_d);
+        self.telemetry = Telemetry {
+            attitude_reference: desired,
+            attitude_reference_rate: [0.0, 0.0, yaw_rate],
+            attitude_reference_acceleration: [0.0, 0.0, yaw_accel],
+            attitude_demand: [desired[0], desired[1]],
+            sliding: [0.0; 6],
+            estimates: [[0.0; MAX_ESTIMATES]; 6],
+            commanded_acceleration: [force[0] / m, force[1] / m, force[2] / m - g],
+            nominal_thrust: lee_thrust,
+            alpha_hat: 1.0,
+            thrust_limited: thrust != lee_thrust || tilt_limited,
+            adaptation_frozen: false,
+        };
+        Command { thrust, torque }
+    }
+
+    fn telemetry(&self) -> &Telemetry {
+        &self.telemetry
+    }
+
+    /// No internal states: every slot unnamed.
+    fn estimate_names(&self) -> [&'static str; MAX_ESTIMATES] {
+        [""; MAX_ESTIMATES]
+    }
+
+    fn adapts_mass(&self) -> bool {
+        false
+    }
+
+    fn reset(&mut self) {
+        self.telemetry = Self::initial_telemetry();
+    }
+}
+
+/// Every component of the reference is finite.
+pub(crate) fn reference_finite(r: &Reference) -> bool {
+    r.position.iter().chain(&r.velocity).chain(&r.acceleration).all(|v| v.is_finite())
+        && r.yaw.is_finite()
+        && r.yaw_rate.is_finite()
+        && r.yaw_acceleration.is_finite()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn controller() -> Se3Controller {
+        Se3Controller::new(QuadrotorParams::default(), Se3Gains::default()).unwrap()
+    }
+
+    #[test]
+    fn hover_at_the_reference_gives_weight_and_zero_torque() {
+        let p = QuadrotorParams::default();
+        for yaw in [0.0, 0.5, -2.0] {
+            let mut c = controller();
+            let state = QuadState { position: [0.3, -1.0, 2.0], attitude: [0.0, 0.0, yaw], ..QuadState::default() };
+            let reference = Reference { position: [0.3, -1.0, 2.0], yaw, ..Reference::default() };
+            let cmd = c.update(&state, &reference, 1e-3);
+            assert!((cmd.thrust - p.mass * p.gravity).abs() < 1e-12, "{}", cmd.thrust);
+            assert!(cmd.torque.iter().all(|t| t.abs() < 1e-12), "{:?}", cmd.torque);
+            let t = c.telemetry();
+            assert!(t.commanded_acceleration.iter().all(|a| a.abs() < 1e-12));
+            assert!((t.attitude_reference[2] - yaw).abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn attitude_error_is_zero_at_the_desired_rotation_and_antisymmetric() {
+        let a = rotation_from_euler(&[0.3, -0.2, 1.1]);
+        let b = rotation_from_euler(&[-0.5, 0.4, -0.7]);
+        assert!(attitude_error(&a, &a).iter().all(|e| e.abs() < 1e-15));
+        // Antisymmetric in its arguments: e_R(R, R_d) = −e_R(R_d, R).
+        let ab = attitude_error(&a, &b);
+        let ba = attitude_error(&b, &a);
+        assert!(ab.iter().any(|e| e.abs() > 0.1));
+        for i in 0..3 {
+            assert_eq!(ab[i], -ba[i]);
+        }
+        // A rotation by α about body x: e_R = (sin α, 0, 0).
+        let alpha: f64 = 0.7;
+        let r = rotation_from_euler(&[alpha, 0.0, 0.0]);
+        let e = attitude_error(&r, &rotation_from_euler(&[0.0; 3]));
+        assert!((e[0] - alpha.sin()).abs() < 1e-15 && e[1].abs() < 1e-15 && e[2].abs() < 1e-15);
+    }
+
+    #[test]
+    fn a_roll_error_gives_a_restoring_torque_and_the_tilt_limit_holds() {
+        let mut c = controller();
+        let state = QuadState { attitude: [0.2, 0.0, 0.0], ..QuadState::default() };
+        let cmd = c.update(&state, &Reference::default(), 1e-3);
+        assert!(cmd.torque[0] < 0.0 && cmd.torque[1].abs() < 1e-12, "{:?}", cmd.torque);
+        // A 100 m step asks for a far larger tilt than max_tilt.
+        let reference = Reference { position: [100.0, -50.0, 0.0], ..Reference::default() };
+        c.update(&QuadState::default(), &reference, 1e-3);
+        let [phi, theta, _] = c.telemetry().attitude_reference;
+        let tilt = (phi.cos() * theta.cos()).acos();
+        assert!((tilt - Se3Gains::default().max_tilt).abs() < 1e-9, "{tilt}");
+        assert!(c.telemetry().thrust_limited);
+    }
+
+    #[test]
+    fn upside_down_the_thrust_is_floored_and_the_torque_turns_back() {
+        let mut c = controller();
+        let state = QuadState { position: [0.0, 0.0, 5.0], attitude: [3.0, 0.0, 0.0], ..QuadState::default() };
+        let reference = Reference { position: [0.0, 0.0, 5.0], ..Reference::default() };
+        let cmd = c.update(&state, &reference, 1e-3);
+        assert_eq!(cmd.thrust, Se3Gains::default().min_thrust);
+        assert!(c.telemetry().nominal_thrust < 0.0);
+        assert!(cmd.torque[0] < 0.0, "{:?}", cmd.torque);
+    }
+
+    #[test]
+    fn default_gains_follow_the_documented_procedure() {
+        let g = Se3Gains::default();
+        let p = QuadrotorParams::default();
+        let wr = (g.attitude[0] / p.inertia[0]).sqrt();
+        assert!((wr - 13.93).abs() < 0.01, "{wr}");
+        assert!((g.angular_rate[0] - 2.0 * p.inertia[0] * wr).abs() < 1e-12);
+        let wx = (g.position[0] / p.mass).sqrt();
+        assert!((wx - wr / 5.0).abs() < 1e-12);
+        assert!(((g.attitude[2] / p.inertia[2]).sqrt() - 2.40).abs() < 0.01);
+        g.check().unwrap();
+    }
+
+    #[test]
+    fn bad_gains_are_refused_naming_the_field() {
+        let bad = [
+            (Se3Gains { position: [1.0, -1.0, 1.0], ..Se3Gains::default() }, "position[1]"),
+            (Se3Gains { velocity: [f64::NAN, 1.0, 1.0], ..Se3Gains::default() }, "velocity[0]"),
+            (Se3Gains { attitude: [1.0, 1.0, 0.0], ..Se3Gains::default() }, "attitude[2]"),
+            (Se3Gains { angular_rate: [1.0, 1e7, 1.0], ..Se3Gains::default() }, "angular_rate[1]"),
+            (Se3Gains { max_tilt: 2.0, ..Se3Gains::default() }, "max_tilt"),
+            (Se3Gains { max_tilt: 0.0, ..Se3Gains::default() }, "max_tilt"),
+            (Se3Gains { min_thrust: -1.0, ..Se3Gains::default() }, "min_thrust"),
+            (Se3Gains { max_thrust: 1.0, ..Se3Gains::default() }, "max_thrust"),
+        ];
+        for (gains, field) in bad {
+            let err = Se3Controller::new(QuadrotorParams::default(), gains).unwrap_err();
+            assert_eq!(err.field, field);
+        }
+    }
+
+    #[test]
+    fn a_non_finite_input_gives_a_nan_command_and_keeps_the_telemetry() {
+        let mut c = controller();
+        let reference = Reference { position: [1.0, 0.0, 1.0], ..Reference::default() };
+        c.update(&QuadState::default(), &reference, 1e-3);
+        let before = *c.telemetry();
+        let bad = QuadState { angular_rate: [0.0, f64::INFINITY, 0.0], ..QuadState::default() };
+        let cmd = c.update(&bad, &reference, 1e-3);
+        assert!(cmd.thrust.is_nan() && cmd.torque.iter().all(|t| t.is_nan()));
+        assert_eq!(*c.telemetry(), before);
+        let cmd = c.update(&QuadState::default(), &Reference { yaw: f64::NAN, ..reference }, 1e-3);
+        assert!(cmd.thrust.is_nan());
+        c.reset();
+        assert_eq!(c.telemetry().alpha_hat, 1.0);
+        assert!(!c.adapts_mass());
+    }
+}

@@ -1,0 +1,53 @@
+//! `pid`: the PX4 multicopter cascade (`ftsmc_core::pid`); reads `[pid]`.
+
+use ftsmc_core::model::QuadrotorParams;
+use ftsmc_core::pid::{PidController, PidGains};
+
+use super::{BoxedController, BuildContext, Declaration, GainSection, InvalidGain};
+
+/// `[pid]`: PX4's default gains rescaled to the scenario's nominal `[plant]`
+/// ([`PidGains::for_vehicle`]); keys the table gives replace them one by one.
+impl GainSection for PidGains {
+    const KEY: &'static str = "pid";
+    const CORE_ARRAYS: &'static [(&'static str, usize)] = &[
+        ("position_p", 3),
+        ("velocity_p", 3),
+        ("velocity_i", 3),
+        ("velocity_d", 3),
+        ("attitude_p", 3),
+        ("max_rate", 3),
+        ("rate_p", 3),
+        ("rate_i", 3),
+        ("rate_d", 3),
+        ("rate_ff", 3),
+        ("rate_integral_limit", 3),
+    ];
+
+    fn defaults() -> Self {
+        Self::default()
+    }
+
+    fn defaults_for(plant: &QuadrotorParams) -> Self {
+        Self::for_vehicle(plant)
+    }
+
+    fn check(&self) -> Result<(), InvalidGain> {
+        PidGains::check(self).map_err(|e| InvalidGain::at("", e))
+    }
+}
+
+/// `pid`: P position → PID velocity → thrust and attitude (tilt limit,
+/// thrust priority) → P attitude quaternion error → PID body rates.
+pub struct Pid;
+
+impl Declaration for Pid {
+    const NAME: &'static str = "pid";
+    const LABEL: &'static str = "PID (PX4 cascade)";
+    const DESCRIPTION: &'static str =
+        "PX4-style cascade: P position, PID velocity, P attitude (quaternion), PID body rates; PX4 gains rescaled";
+    type Section = PidGains;
+
+    fn build(gains: &Self::Section, ctx: &BuildContext) -> Result<BoxedController, String> {
+        Ok(Box::new(PidController::new(ctx.plant, *gains).map_err(|e| e.to_string())?))
+    }
+}

@@ -1,0 +1,43 @@
+//! `se3`: the geometric controller of Lee, Leok & McClamroch 2010
+//! (`ftsmc_core::se3`); reads `[se3]`.
+
+use ftsmc_core::model::QuadrotorParams;
+use ftsmc_core::se3::{Se3Controller, Se3Gains};
+
+use super::{BoxedController, BuildContext, Declaration, GainSection, InvalidGain};
+
+/// `[se3]`: gains placed on the scenario's nominal `[plant]`
+/// ([`Se3Gains::for_vehicle`]); keys the table gives replace them one by one.
+impl GainSection for Se3Gains {
+    const KEY: &'static str = "se3";
+    const CORE_ARRAYS: &'static [(&'static str, usize)] =
+        &[("position", 3), ("velocity", 3), ("attitude", 3), ("angular_rate", 3)];
+
+    fn defaults() -> Self {
+        Self::default()
+    }
+
+    fn defaults_for(plant: &QuadrotorParams) -> Self {
+        Self::for_vehicle(plant)
+    }
+
+    fn check(&self) -> Result<(), InvalidGain> {
+        Se3Gains::check(self).map_err(|e| InvalidGain::at("", e))
+    }
+}
+
+/// `se3`: force from position/velocity errors, rotation from the force
+/// direction and heading, moment from `e_R`, `e_Ω` and `Ω × JΩ`.
+pub struct Se3;
+
+impl Declaration for Se3 {
+    const NAME: &'static str = "se3";
+    const LABEL: &'static str = "SE(3) (Lee et al. 2010)";
+    const DESCRIPTION: &'static str =
+        "geometric tracking control on SE(3) (Lee, Leok & McClamroch 2010), gains by pole placement on the vehicle";
+    type Section = Se3Gains;
+
+    fn build(gains: &Self::Section, ctx: &BuildContext) -> Result<BoxedController, String> {
+        Ok(Box::new(Se3Controller::new(ctx.plant, *gains).map_err(|e| e.to_string())?))
+    }
+}
