@@ -210,6 +210,8 @@ pub fn controller_color(name: &str) -> Rgb {
         "ftaftsmc-no-mass" => Rgb(148, 103, 189),
         "ftaftsmc-tuned" => Rgb(23, 190, 207),
         "ftaftsmc-zero-derivatives" => Rgb(140, 86, 75),
+        "pid" => Rgb(214, 39, 40),
+        "se3" => Rgb(227, 119, 194),
         "reference" => Rgb(0, 0, 0),
         other => {
             const PALETTE: [Rgb; 6] = [

@@ -220,14 +220,21 @@ fn default_gains_follow_the_scenarios_plant_and_a_partial_table_keeps_the_rest()
     let text = "name = \"heavy\"\nduration = 1.0\n[plant]\nmass = 1.5\ninertia = [0.01, 0.012, 0.02]\n\
                 [pid]\nposition_p = [2.0, 2.0, 1.5]\n";
     let s = Scenario::from_toml_str(text, "heavy.toml").unwrap();
-    let vehicle_pid = PidGains::for_vehicle(&s.plant);
+    // No rotor limit: the thrust caps are 10 m g (never binding).
+    let weight = 1.5 * 9.81;
+    let vehicle_pid = PidGains { thrust_max: 10.0 * weight, ..PidGains::for_vehicle(&s.plant) };
     assert_ne!(vehicle_pid, PidGains::default(), "a heavier vehicle must get other gains");
     assert_eq!(s.gains.pid, PidGains { position_p: [2.0, 2.0, 1.5], ..vehicle_pid });
-    assert_eq!(s.gains.se3, Se3Gains::for_vehicle(&s.plant));
+    assert_eq!(s.gains.se3, Se3Gains { max_thrust: 10.0 * weight, ..Se3Gains::for_vehicle(&s.plant) });
+    // With a rotor limit: 80 % of 4 b ω_max².
+    let limited = Scenario::from_toml_str(&format!("{text}[actuators]\nmax_rotor_speed = 500.0\n"), "l.toml").unwrap();
+    let t_max = 4.0 * limited.plant.lift_coefficient * 500.0 * 500.0;
+    assert!((limited.gains.pid.thrust_max - 0.8 * t_max).abs() < 1e-9);
+    assert!((limited.gains.se3.max_thrust - 0.8 * t_max).abs() < 1e-9);
     // Written and read back: the same gains, now explicit.
     let again = Scenario::from_toml_str(&s.to_toml().unwrap(), "again.toml").unwrap();
     assert_eq!(again.gains, s.gains);
     // Without [plant], the paper vehicle's.
     let paper = Scenario::from_toml_str("name = \"p\"\nduration = 1.0\n", "p.toml").unwrap();
-    assert_eq!(paper.gains.pid, PidGains::default());
+    assert_eq!(paper.gains.pid.rate_p, PidGains::default().rate_p);
 }

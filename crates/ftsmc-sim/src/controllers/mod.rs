@@ -111,6 +111,38 @@ impl BuildContext {
     }
 }
 
+/// What a scenario tells its controllers about the vehicle when their
+/// default gains are derived from it ([`GainSection::defaults_for`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct NominalVehicle {
+    /// Nominal plant parameters (`[plant]`).
+    pub plant: QuadrotorParams,
+    /// Largest collective thrust the rotors give, N: `4 b ω_max²` with the
+    /// nominal lift coefficient `b` and the rotor limit ω_max of
+    /// `[actuators]` (or `simulation.max_rotor_speed`); `None` when the
+    /// rotors are unlimited (the paper plant).
+    pub max_thrust: Option<f64>,
+}
+
+impl NominalVehicle {
+    /// The vehicle with nominal `plant` whose rotors stop at
+    /// `max_rotor_speed` rad/s (`None` or infinite: unlimited).
+    pub fn new(plant: QuadrotorParams, max_rotor_speed: Option<f64>) -> Self {
+        let max_thrust =
+            max_rotor_speed.filter(|w| w.is_finite() && *w > 0.0).map(|w| 4.0 * plant.lift_coefficient * w * w);
+        Self { plant, max_thrust }
+    }
+
+    /// A collective-thrust cap for a controller that keeps `margin` (0..1)
+    /// of the rotors' thrust for torque: `(1 − margin) × max_thrust`, at
+    /// least 1.05 m g (an under-powered vehicle still gets a valid cap);
+    /// without a rotor limit `unlimited` m g.
+    pub fn thrust_cap(&self, margin: f64, unlimited: f64) -> f64 {
+        let weight = self.plant.mass * self.plant.gravity;
+        self.max_thrust.map_or(unlimited * weight, |t| ((1.0 - margin) * t).max(1.05 * weight))
+    }
+}
+
 /// An invalid value in a gain section: the dotted key, the value as shown
 /// and what is allowed (becomes `ScenarioError::Invalid`).
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -162,13 +194,13 @@ pub trait GainSection:
     const CORE_ARRAYS: &'static [(&'static str, usize)] = &[];
     /// The built-in gains of the paper's vehicle.
     fn defaults() -> Self;
-    /// The built-in gains for a scenario whose nominal plant (`[plant]`) is
-    /// `plant`: what a scenario gets without a `[KEY]` table, and what the
-    /// keys a `[KEY]` table omits take. The default is [`GainSection::defaults`]
-    /// whatever the vehicle (the paper's gains); a controller whose gains are
-    /// derived from the vehicle (`pid`, `se3`) overrides it.
-    fn defaults_for(plant: &QuadrotorParams) -> Self {
-        let _ = plant;
+    /// The built-in gains for a scenario flying `vehicle`: what a scenario
+    /// gets without a `[KEY]` table, and what the keys a `[KEY]` table omits
+    /// take. The default is [`GainSection::defaults`] whatever the vehicle
+    /// (the paper's gains); a controller whose gains are derived from the
+    /// vehicle (`pid`, `se3`) overrides it.
+    fn defaults_for(vehicle: &NominalVehicle) -> Self {
+        let _ = vehicle;
         Self::defaults()
     }
     /// Range-check every value; keys in the error are below the section.
@@ -254,9 +286,9 @@ pub fn label(name: &str) -> Option<&'static str> {
 }
 
 /// Remove section `S` from `table` and deserialize it over
-/// `S::defaults_for(plant)` (tables merged key by key, other values replaced).
-fn take_section<S: GainSection>(table: &mut toml::Table, plant: &QuadrotorParams) -> Result<S, SectionParseError> {
-    let defaults = S::defaults_for(plant);
+/// `S::defaults_for(vehicle)` (tables merged key by key, other values replaced).
+fn take_section<S: GainSection>(table: &mut toml::Table, vehicle: &NominalVehicle) -> Result<S, SectionParseError> {
+    let defaults = S::defaults_for(vehicle);
     let Some(value) = table.remove(S::KEY) else { return Ok(defaults) };
     let value = match (toml::Value::try_from(&defaults), value) {
         (Ok(toml::Value::Table(mut base)), toml::Value::Table(top)) => {
@@ -328,17 +360,16 @@ macro_rules! declare_controllers {
             }
 
             /// Remove every declared section from `table` and deserialize it
-            /// with its type, over the defaults for the nominal plant `plant`
+            /// with its type, over the defaults for `vehicle`
             /// ([`GainSection::defaults_for`]) key by key; a section absent
             /// from `table` gets those defaults.
-            pub fn take_from(table: &mut toml::Table, plant: &QuadrotorParams) -> Result<Self, SectionParseError> {
-                Ok(Self { $( $field: take_section::<$section>(table, plant)?, )+ })
+            pub fn take_from(table: &mut toml::Table, vehicle: &NominalVehicle) -> Result<Self, SectionParseError> {
+                Ok(Self { $( $field: take_section::<$section>(table, vehicle)?, )+ })
             }
 
-            /// Every section's defaults for the nominal plant `plant`
-            /// ([`GainSection::defaults_for`]).
-            pub fn defaults_for(plant: &QuadrotorParams) -> Self {
-                Self { $( $field: <$section as GainSection>::defaults_for(plant), )+ }
+            /// Every section's defaults for `vehicle` ([`GainSection::defaults_for`]).
+            pub fn defaults_for(vehicle: &NominalVehicle) -> Self {
+                Self { $( $field: <$section as GainSection>::defaults_for(vehicle), )+ }
             }
 
             /// Every section's [`GainSection::CORE_ARRAYS`], as (dotted path

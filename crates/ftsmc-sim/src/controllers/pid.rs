@@ -1,9 +1,8 @@
 //! `pid`: the PX4 multicopter cascade (`ftsmc_core::pid`); reads `[pid]`.
 
-use ftsmc_core::model::QuadrotorParams;
 use ftsmc_core::pid::{PidController, PidGains};
 
-use super::{BoxedController, BuildContext, Declaration, GainSection, InvalidGain};
+use super::{BoxedController, BuildContext, Declaration, GainSection, InvalidGain, NominalVehicle};
 
 /// `[pid]`: PX4's default gains rescaled to the scenario's nominal `[plant]`
 /// ([`PidGains::for_vehicle`]); keys the table gives replace them one by one.
@@ -27,8 +26,12 @@ impl GainSection for PidGains {
         Self::default()
     }
 
-    fn defaults_for(plant: &QuadrotorParams) -> Self {
-        Self::for_vehicle(plant)
+    fn defaults_for(vehicle: &NominalVehicle) -> Self {
+        // The thrust cap keeps 20 % of the rotors' thrust for torque when the
+        // rotors are limited; on unlimited rotors (the paper plant, where the
+        // sliding-mode controllers are not limited either) it is 10 m g, so
+        // it never binds there.
+        Self { thrust_max: vehicle.thrust_cap(0.2, 10.0), ..Self::for_vehicle(&vehicle.plant) }
     }
 
     fn check(&self) -> Result<(), InvalidGain> {

@@ -1,10 +1,9 @@
 //! `se3`: the geometric controller of Lee, Leok & McClamroch 2010
 //! (`ftsmc_core::se3`); reads `[se3]`.
 
-use ftsmc_core::model::QuadrotorParams;
 use ftsmc_core::se3::{Se3Controller, Se3Gains};
 
-use super::{BoxedController, BuildContext, Declaration, GainSection, InvalidGain};
+use super::{BoxedController, BuildContext, Declaration, GainSection, InvalidGain, NominalVehicle};
 
 /// `[se3]`: gains placed on the scenario's nominal `[plant]`
 /// ([`Se3Gains::for_vehicle`]); keys the table gives replace them one by one.
@@ -17,8 +16,12 @@ impl GainSection for Se3Gains {
         Self::default()
     }
 
-    fn defaults_for(plant: &QuadrotorParams) -> Self {
-        Self::for_vehicle(plant)
+    fn defaults_for(vehicle: &NominalVehicle) -> Self {
+        // The thrust cap keeps 20 % of the rotors' thrust for torque when the
+        // rotors are limited; on unlimited rotors (the paper plant, where the
+        // sliding-mode controllers are not limited either) it is 10 m g, so
+        // it never binds there.
+        Self { max_thrust: vehicle.thrust_cap(0.2, 10.0), ..Self::for_vehicle(&vehicle.plant) }
     }
 
     fn check(&self) -> Result<(), InvalidGain> {

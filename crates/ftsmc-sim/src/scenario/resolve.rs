@@ -30,7 +30,7 @@ use std::path::{Path, PathBuf};
 use ftsmc_core::model::QuadrotorParams;
 use serde::Deserialize;
 
-use crate::controllers::{GainSections, SectionParseError};
+use crate::controllers::{GainSections, NominalVehicle, SectionParseError};
 use crate::limits::Limits;
 use crate::scenario::{read_scenario_text, Scenario, ScenarioError, BUILT_IN_SCENARIOS};
 use crate::signal::{Signal, Term};
@@ -366,7 +366,14 @@ pub fn load(source: Source<'_>, overrides: &[String]) -> Result<Loaded, Scenario
     // invalid `[plant]` is reported by the scenario's own parse below.
     let plant: QuadrotorParams =
         merged.get("plant").cloned().and_then(|v| QuadrotorParams::deserialize(v).ok()).unwrap_or_default();
-    let gains = GainSections::take_from(&mut merged, &plant).map_err(|SectionParseError { section, error }| {
+    let rotor_limit = |section: &str| {
+        merged
+            .get(section)
+            .and_then(|t| t.get("max_rotor_speed"))
+            .and_then(|v| v.as_float().or(v.as_integer().map(|i| i as f64)))
+    };
+    let vehicle = NominalVehicle::new(plant, rotor_limit("actuators").or_else(|| rotor_limit("simulation")));
+    let gains = GainSections::take_from(&mut merged, &vehicle).map_err(|SectionParseError { section, error }| {
         let inner = error_path(&error);
         let path = if inner.is_empty() { section.to_string() } else { format!("{section}.{inner}") };
         describe(&error, &path)
