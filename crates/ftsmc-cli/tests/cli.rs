@@ -83,8 +83,8 @@ fn a_bad_scenario_file_is_a_clear_error_not_a_panic() {
 
     let out = ftsmc(&["run", "missing.toml"], &dir);
     assert!(!out.status.success() && String::from_utf8_lossy(&out.stderr).contains("missing.toml"));
-    let out = ftsmc(&["run", "paper-scenario-1", "-c", "pid"], &dir);
-    assert!(!out.status.success() && String::from_utf8_lossy(&out.stderr).contains("unknown controller `pid`"));
+    let out = ftsmc(&["run", "paper-scenario-1", "-c", "pidd"], &dir);
+    assert!(!out.status.success() && String::from_utf8_lossy(&out.stderr).contains("unknown controller `pidd`"));
     std::fs::remove_dir_all(&dir).ok();
 }
 

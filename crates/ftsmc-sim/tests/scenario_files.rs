@@ -77,8 +77,8 @@ fn negative_mass_names_the_key() {
 fn non_positive_rates_and_unknown_controllers_are_rejected() {
     let msg = message(&PAPER_SCENARIO_1.replace("control_rate = 1000.0", "control_rate = 0.0"));
     assert!(msg.contains("simulation.control_rate"), "{msg}");
-    let msg = message(&PAPER_SCENARIO_1.replace("\"tsm-sta\"", "\"pid\""));
-    assert!(msg.contains("unknown controller `pid`"), "{msg}");
+    let msg = message(&PAPER_SCENARIO_1.replace("\"tsm-sta\"", "\"pidd\""));
+    assert!(msg.contains("unknown controller `pidd`"), "{msg}");
     let msg = message(
         &PAPER_SCENARIO_1.replace("attitude_derivatives = \"command-filter\"", "attitude_derivatives = \"magic\""),
     );

@@ -22,8 +22,10 @@ impl GainSection for PidGains {
         ("rate_integral_limit", 3),
     ];
 
+    /// The paper vehicle's: [`GainSection::defaults_for`] the default
+    /// `[plant]` with unlimited rotors.
     fn defaults() -> Self {
-        Self::default()
+        Self::defaults_for(&NominalVehicle::default())
     }
 
     fn defaults_for(vehicle: &NominalVehicle) -> Self {

@@ -12,8 +12,10 @@ impl GainSection for Se3Gains {
     const CORE_ARRAYS: &'static [(&'static str, usize)] =
         &[("position", 3), ("velocity", 3), ("attitude", 3), ("angular_rate", 3)];
 
+    /// The paper vehicle's: [`GainSection::defaults_for`] the default
+    /// `[plant]` with unlimited rotors.
     fn defaults() -> Self {
-        Self::default()
+        Self::defaults_for(&NominalVehicle::default())
     }
 
     fn defaults_for(vehicle: &NominalVehicle) -> Self {
