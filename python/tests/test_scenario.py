@@ -37,8 +37,8 @@ def test_overrides_return_a_new_validated_scenario() -> None:
     assert 'lambda2 = 0.8' in t.to_toml()
     assert "mass = 0.5" in t.to_toml().split("[payload]")[1]
     # an int where a float is expected is fine; a whole table is a dict
-    u = s.with_overrides({"duration": 5, "reference.z": {"terms": [{"type": "constant", "value": 2.0}]}})
-    assert u.duration == 5.0
+    u = s.with_overrides({"duration": 45, "reference.z": {"terms": [{"type": "constant", "value": 2.0}]}})
+    assert u.duration == 45.0
     run = ftsmc.simulate(u, "ftaftsmc")
     assert run.exit.status == "completed"
     assert abs(run.columns["z"][-1] - 2.0) < 0.05
@@ -84,14 +84,15 @@ def test_load_errors_carry_the_cli_message(tmp_path: Path) -> None:
 
 
 def test_cost_limits_apply_as_in_the_cli() -> None:
-    s = ftsmc.Scenario.builtin("paper-scenario-1").with_overrides({"limits.max_steps": 10.0})
-    with pytest.raises(ValueError, match="max_steps"):
-        ftsmc.simulate(s, "ftaftsmc")
+    with pytest.raises(ValueError, match="exceeds the limit max_steps = 10"):
+        ftsmc.Scenario.builtin("paper-scenario-1").with_overrides({"limits.max_steps": 10.0})
+    with pytest.raises(ValueError, match="max_flights"):
+        ftsmc.montecarlo(ftsmc.Scenario.builtin("paper-scenario-1").with_overrides({"limits.max_flights": 5.0}), 2)
 
 
 def test_unit_slip_warnings_are_python_warnings() -> None:
-    with pytest.warns(UserWarning, match="initial_state.attitude"):
-        ftsmc.Scenario.builtin("paper-scenario-1").with_overrides({"initial_state.attitude": [10.0, 0.0, 0.0]})
+    with pytest.warns(UserWarning, match="`simulation.metrics_window` = \\[10, 40\\]: starts after the end of the run"):
+        ftsmc.Scenario.builtin("paper-scenario-2").with_overrides({"duration": 5.0})
 
 
 def test_registry_listing() -> None:

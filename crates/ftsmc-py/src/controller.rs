@@ -74,7 +74,12 @@ impl NativeController {
     /// attitude rates), reference (12 floats: position, velocity,
     /// acceleration, yaw, yaw rate, yaw acceleration), `dt` s; returns
     /// `(thrust, roll torque, pitch torque, yaw torque)`.
-    fn update(&self, state: &Bound<'_, PyAny>, reference: &Bound<'_, PyAny>, dt: f64) -> PyResult<(f64, f64, f64, f64)> {
+    fn update(
+        &self,
+        state: &Bound<'_, PyAny>,
+        reference: &Bound<'_, PyAny>,
+        dt: f64,
+    ) -> PyResult<(f64, f64, f64, f64)> {
         let s: [f64; 12] = floats(state, "state")?;
         let r: [f64; 12] = floats(reference, "reference")?;
         if !(dt.is_finite() && dt > 0.0) {

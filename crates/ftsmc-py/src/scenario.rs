@@ -158,7 +158,10 @@ impl Scenario {
     }
 
     fn __repr__(&self) -> String {
-        format!("Scenario(name={:?}, duration={}, controllers={:?})", self.inner.name, self.inner.duration, self.inner.controllers)
+        format!(
+            "Scenario(name={:?}, duration={}, controllers={:?})",
+            self.inner.name, self.inner.duration, self.inner.controllers
+        )
     }
 }
 
@@ -187,7 +190,9 @@ fn to_toml_value(value: &Bound<'_, PyAny>) -> Result<toml::Value, String> {
         }
         return Ok(toml::Value::Table(table));
     }
-    if value.is_instance_of::<PyList>() || value.is_instance_of::<PyTuple>() || value.hasattr("__array__").unwrap_or(false)
+    if value.is_instance_of::<PyList>()
+        || value.is_instance_of::<PyTuple>()
+        || value.hasattr("__array__").unwrap_or(false)
     {
         let mut items = Vec::new();
         for item in value.try_iter().map_err(|e| e.to_string())? {
@@ -200,7 +205,9 @@ fn to_toml_value(value: &Bound<'_, PyAny>) -> Result<toml::Value, String> {
         return Ok(toml::Value::Float(x));
     }
     let type_name = value.get_type().name().map(|n| n.to_string()).unwrap_or_else(|_| "?".into());
-    Err(format!("a value of type {type_name} cannot be written to a scenario (use bool, int, float, str, list or dict)"))
+    Err(format!(
+        "a value of type {type_name} cannot be written to a scenario (use bool, int, float, str, list or dict)"
+    ))
 }
 
 /// Set `table[a][b][c] = value` for `key = "a.b.c"`, creating missing
