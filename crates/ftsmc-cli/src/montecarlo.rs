@@ -5,53 +5,29 @@ use std::path::Path;
 use std::time::Instant;
 
 use anyhow::{Context, Result};
-use ftsmc_sim::batch::montecarlo::{run_batch, summarize, ControllerSummary, McRun, MonteCarloSpec, SAMPLED_COLUMNS};
+use ftsmc_sim::batch::montecarlo::{run_batch, summarize, ControllerSummary, McRun, MonteCarloSpec};
+use ftsmc_sim::batch::runs_table::runs_table;
 use ftsmc_sim::registry::label;
 use ftsmc_sim::run::planned_steps;
-use ftsmc_sim::run::ExitStatus;
 use ftsmc_sim::scenario::Scenario;
 use serde_json::{json, Map, Value};
 
-use crate::output::{format_number, provenance, ResultDir};
+use crate::output::{provenance, ResultDir};
 use crate::plot::{controller_color, write_boxplots, BoxGroup, BoxPanel};
 use crate::reproduce::{num, steps_bar, Table};
 
-/// `runs.csv` text: one row per (run, controller), in run order. The
-/// integral metrics of a diverged row cover `[0, duration]` (its last
-/// column) and the `completed` column says whether that is the whole
-/// scenario; `max_error_after_*` is empty when the run ended before
+/// `runs.csv` text: one row per (run, controller), in run order (the
+/// columns of [`runs_table`], shared with the Python package). The integral
+/// metrics of a diverged row cover `[0, duration]` (its last column) and
+/// the `completed` column says whether that is the whole scenario;
+/// `max_error_after_*` is empty when the run ended before
 /// `steady_state_after` (`settling_time_*` is `NaN` when not settled).
 pub fn runs_csv(rows: &[McRun]) -> Result<Vec<u8>> {
+    let table = runs_table(rows);
     let mut w = csv::Writer::from_writer(Vec::new());
-    let metric_names: Vec<String> =
-        rows.first().map(|r| r.metrics.flat().into_iter().map(|(n, _)| n).collect()).unwrap_or_default();
-    let mut header: Vec<String> =
-        ["run", "seed", "controller", "exit", "diverged_at"].iter().map(|s| s.to_string()).collect();
-    header.extend(SAMPLED_COLUMNS.iter().map(|s| s.to_string()));
-    header.extend(metric_names.iter().cloned());
-    header.push("completed".into());
-    header.extend(["success".to_string(), "crashed".to_string()]); // issue 11
-    w.write_record(&header)?;
-    for r in rows {
-        let diverged_at = match r.exit {
-            ExitStatus::Diverged { time, .. } => format_number(time),
-            ExitStatus::Completed | ExitStatus::Crashed { .. } => String::new(),
-        };
-        let mut rec =
-            vec![r.index.to_string(), r.seed.to_string(), r.controller.clone(), r.exit.to_string(), diverged_at];
-        rec.extend(r.sampled.iter().map(|v| format_number(*v)));
-        let flat = r.metrics.flat();
-        let after = &r.metrics.max_error_after;
-        for name in &metric_names {
-            let not_reached = name.starts_with("max_error_after_") && after.to_array().iter().all(Option::is_none);
-            rec.push(match flat.iter().find(|(n, _)| n == name) {
-                Some((_, v)) if !not_reached => format_number(*v),
-                _ => String::new(),
-            });
-        }
-        rec.push(r.exit.is_completed().to_string());
-        rec.extend([r.success.to_string(), r.exit.is_crashed().to_string()]);
-        w.write_record(&rec)?;
+    w.write_record(&table.names)?;
+    for row in 0..table.rows {
+        w.write_record(table.record(row))?;
     }
     w.into_inner().map_err(|e| anyhow::anyhow!("csv: {e}"))
 }

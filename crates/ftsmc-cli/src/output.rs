@@ -330,27 +330,7 @@ pub fn format_number(v: f64) -> String {
     String::from_utf8(out).unwrap_or_default()
 }
 
-/// Metrics and exit status of one run as a JSON object, with `covered`
-/// (`[0, t_end]`, s: the span the integral metrics cover) and `completed`.
-pub fn run_json(run: &RunOutput) -> Value {
-    let mut obj = match serde_json::to_value(&run.metrics) {
-        Ok(Value::Object(m)) => m,
-        _ => Map::new(),
-    };
-    obj.insert("exit".into(), json!(run.exit.to_string()));
-    obj.insert("exit_status".into(), serde_json::to_value(run.exit).unwrap_or(Value::Null));
-    obj.insert("steps".into(), json!(run.steps));
-    // The span the integral metrics (ISE, IAE, ITAE, RMS, energy,
-    // chattering) cover: shorter than the scenario for a diverged run.
-    obj.insert("covered".into(), json!(run.metrics.covered()));
-    obj.insert("completed".into(), json!(run.exit.is_completed()));
-    // issue 11: only scenarios with an [envelope] say more than `completed`.
-    if let Some(v) = &run.envelope {
-        obj.insert("success".into(), json!(v.success));
-        obj.insert("envelope_violation".into(), json!(v.violation));
-    }
-    Value::Object(obj)
-}
+pub use ftsmc_sim::run::summary::run_json;
 
 /// `{"scenarios": {scenario: {controller: {...metrics, "exit": ...}}}}`.
 pub fn summary_json(runs: &[&RunOutput], extra: Map<String, Value>) -> Value {

@@ -18,6 +18,7 @@ use crate::vehicle::paper::{derivative, rk4_step};
 
 mod exit;
 mod recording;
+pub mod summary;
 pub mod truth;
 
 use exit::check_divergence;

@@ -1,0 +1,48 @@
+//! `ftsmc._ftsmc`: the native module of the `ftsmc` Python package
+//! (python/ftsmc). The Python layer (`python/ftsmc/__init__.py`) wraps it
+//! in the documented API; this module stays small and typed by the
+//! hand-written stub `python/ftsmc/_ftsmc.pyi`.
+//!
+//! Every flight goes through the same `ftsmc-sim` entry points as the
+//! `ftsmc` command ([`ftsmc_sim::registry::run`], [`ftsmc_sim::run::simulate`],
+//! [`ftsmc_sim::batch::montecarlo::run_batch`]), with the same checks, so a
+//! result from Python equals the CLI's for the same scenario.
+
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+
+mod controller;
+mod flight;
+mod scenario;
+
+/// A `ValueError` carrying `message` (the text the CLI prints after `error: `).
+pub(crate) fn value_error(message: impl std::fmt::Display) -> PyErr {
+    PyValueError::new_err(message.to_string())
+}
+
+/// The module `ftsmc._ftsmc`.
+#[pymodule]
+fn _ftsmc(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<scenario::Scenario>()?;
+    m.add_class::<controller::NativeController>()?;
+    m.add_class::<flight::RunData>()?;
+    m.add_function(wrap_pyfunction!(flight::simulate_native, m)?)?;
+    m.add_function(wrap_pyfunction!(flight::simulate_python, m)?)?;
+    m.add_function(wrap_pyfunction!(flight::montecarlo_columns, m)?)?;
+    m.add_function(wrap_pyfunction!(controller_names, m)?)?;
+    m.add_function(wrap_pyfunction!(controller_label, m)?)?;
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    Ok(())
+}
+
+/// Every registered controller as `(name, description)`, in registry order.
+#[pyfunction]
+fn controller_names() -> Vec<(String, String)> {
+    ftsmc_sim::registry::CONTROLLERS.iter().map(|(n, d)| (n.to_string(), d.to_string())).collect()
+}
+
+/// Human-readable label of controller `name` (figures, tables).
+#[pyfunction]
+fn controller_label(name: &str) -> String {
+    ftsmc_sim::registry::label(name).to_string()
+}

@@ -1,0 +1,233 @@
+//! `ftsmc.Scenario`: a validated scenario, loaded by the same resolver as
+//! the CLI (built-in name, file, or TOML text), with dotted-key overrides
+//! applied at TOML level and re-validated.
+
+use std::path::Path;
+
+use ftsmc_sim::scenario::resolve::{self, Loaded};
+use pyo3::exceptions::PyUserWarning;
+use pyo3::prelude::*;
+use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyList, PyString, PyTuple};
+
+use crate::value_error;
+
+/// The resolved scenario as TOML: every field, every default filled in.
+/// The one place the package serializes a scenario (the CLI's
+/// `scenario.toml` uses the same `toml::to_string`).
+pub(crate) fn scenario_toml(scenario: &ftsmc_sim::Scenario) -> Result<String, String> {
+    toml::to_string(scenario).map_err(|e| format!("cannot write the scenario as TOML: {e}"))
+}
+
+/// An error and its sources, `a: b: c`, as the CLI prints them (`{:#}`).
+pub(crate) fn chain_message(err: &dyn std::error::Error) -> String {
+    let mut text = err.to_string();
+    let mut source = err.source();
+    while let Some(s) = source {
+        text.push_str(": ");
+        text.push_str(&s.to_string());
+        source = s.source();
+    }
+    text
+}
+
+/// A validated scenario (see docs/scenarios.md for the file format and
+/// docs/python.md for this class).
+#[pyclass(module = "ftsmc", name = "Scenario", frozen)]
+#[derive(Clone)]
+pub struct Scenario {
+    pub(crate) inner: ftsmc_sim::Scenario,
+}
+
+/// Issue the loader's unit-slip warnings as Python `UserWarning`s (the CLI
+/// prints them as `warning: …` lines).
+fn warn_all(py: Python<'_>, loaded: Loaded) -> PyResult<Scenario> {
+    for w in &loaded.warnings {
+        PyErr::warn(py, &py.get_type::<PyUserWarning>(), &std::ffi::CString::new(w.as_str())?, 2)?;
+    }
+    Ok(Scenario { inner: loaded.scenario })
+}
+
+#[pymethods]
+impl Scenario {
+    /// A built-in scenario by name (`paper-scenario-1`, `paper-scenario-2`,
+    /// `ftaftsmc-tuned-scenario-1`; `.toml` optional).
+    #[staticmethod]
+    fn builtin(py: Python<'_>, name: &str) -> PyResult<Self> {
+        let Some((file, text)) = resolve::built_in(name) else {
+            let known: Vec<&str> = ftsmc_sim::scenario::BUILT_IN_SCENARIOS
+                .iter()
+                .map(|(f, _)| f.strip_suffix(".toml").unwrap_or(f))
+                .collect();
+            return Err(value_error(format!("no built-in scenario `{name}` (built-in: {})", known.join(", "))));
+        };
+        let loaded = ftsmc_sim::Scenario::from_toml_str_with_warnings(text, file, &[])
+            .map_err(|e| value_error(chain_message(&e)))?;
+        warn_all(py, loaded)
+    }
+
+    /// Read, resolve (`extends`) and validate a scenario file.
+    #[staticmethod]
+    fn from_file(py: Python<'_>, path: std::path::PathBuf) -> PyResult<Self> {
+        let loaded = ftsmc_sim::Scenario::load_with_warnings(Path::new(&path), &[])
+            .map_err(|e| value_error(chain_message(&e)))?;
+        warn_all(py, loaded)
+    }
+
+    /// Parse and validate TOML text; `path` names it in error messages and
+    /// relative `extends` paths resolve against its directory.
+    #[staticmethod]
+    #[pyo3(signature = (text, path = "<string>"))]
+    fn from_toml(py: Python<'_>, text: &str, path: &str) -> PyResult<Self> {
+        let loaded = ftsmc_sim::Scenario::from_toml_str_with_warnings(text, path, &[])
+            .map_err(|e| value_error(chain_message(&e)))?;
+        warn_all(py, loaded)
+    }
+
+    /// The resolved scenario as TOML text (what the CLI writes as
+    /// `scenario.toml`; `Scenario.from_toml` of it gives this scenario back).
+    fn to_toml(&self) -> PyResult<String> {
+        scenario_toml(&self.inner).map_err(value_error)
+    }
+
+    /// A new scenario with dotted keys set (`{"payload.mass": 0.5,
+    /// "ftaftsmc.z.lambda2": 0.8}`), validated as a file would be: the
+    /// resolved TOML of this scenario with each key set (missing tables
+    /// created), loaded again. Values: bool, int, float, str, lists and
+    /// dicts of them (a dict is a TOML table, e.g. a whole signal).
+    fn with_overrides(&self, py: Python<'_>, overrides: &Bound<'_, PyDict>) -> PyResult<Self> {
+        let text = scenario_toml(&self.inner).map_err(value_error)?;
+        let mut table: toml::Table = toml::from_str(&text).map_err(|e| value_error(e.to_string()))?;
+        let mut keys = Vec::new();
+        for (key, value) in overrides.iter() {
+            let key: String = key.extract().map_err(|_| value_error("override keys must be strings"))?;
+            let value = to_toml_value(&value).map_err(|m| value_error(format!("override `{key}`: {m}")))?;
+            set_dotted(&mut table, &key, value).map_err(|m| value_error(format!("override `{key}`: {m}")))?;
+            keys.push(key);
+        }
+        let text = toml::to_string(&table).map_err(|e| value_error(e.to_string()))?;
+        let shown = format!("{} with overrides {}", self.inner.name, keys.join(", "));
+        let loaded = ftsmc_sim::Scenario::from_toml_str_with_warnings(&text, &shown, &[])
+            .map_err(|e| value_error(chain_message(&e)))?;
+        warn_all(py, loaded)
+    }
+
+    /// Scenario name (used in result paths).
+    #[getter]
+    fn name(&self) -> String {
+        self.inner.name.clone()
+    }
+
+    /// Free-text description.
+    #[getter]
+    fn description(&self) -> String {
+        self.inner.description.clone()
+    }
+
+    /// Simulated time, s.
+    #[getter]
+    fn duration(&self) -> f64 {
+        self.inner.duration
+    }
+
+    /// Master seed of every random stream.
+    #[getter]
+    fn seed(&self) -> u64 {
+        self.inner.seed
+    }
+
+    /// The scenario's controller list (registry names).
+    #[getter]
+    fn controllers(&self) -> Vec<String> {
+        self.inner.controllers.clone()
+    }
+
+    /// Control period 1/`simulation.control_rate`, s.
+    #[getter]
+    fn control_period(&self) -> f64 {
+        self.inner.control_period()
+    }
+
+    /// True when the scenario has a `[montecarlo]` section.
+    #[getter]
+    fn has_montecarlo(&self) -> bool {
+        self.inner.montecarlo.is_some()
+    }
+
+    fn __eq__(&self, other: &Self) -> bool {
+        self.inner == other.inner
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "Scenario(name={:?}, duration={}, controllers={:?})",
+            self.inner.name, self.inner.duration, self.inner.controllers
+        )
+    }
+}
+
+/// A Python value as a TOML value.
+fn to_toml_value(value: &Bound<'_, PyAny>) -> Result<toml::Value, String> {
+    if value.is_instance_of::<PyBool>() {
+        return Ok(toml::Value::Boolean(value.extract().map_err(|e: PyErr| e.to_string())?));
+    }
+    if value.is_instance_of::<PyInt>() {
+        return value
+            .extract::<i64>()
+            .map(toml::Value::Integer)
+            .map_err(|_| format!("{value} does not fit a 64-bit integer"));
+    }
+    if value.is_instance_of::<PyFloat>() {
+        return Ok(toml::Value::Float(value.extract().map_err(|e: PyErr| e.to_string())?));
+    }
+    if value.is_instance_of::<PyString>() {
+        return Ok(toml::Value::String(value.extract().map_err(|e: PyErr| e.to_string())?));
+    }
+    if let Ok(dict) = value.cast::<PyDict>() {
+        let mut table = toml::Table::new();
+        for (k, v) in dict.iter() {
+            let k: String = k.extract().map_err(|_| "table keys must be strings".to_string())?;
+            table.insert(k, to_toml_value(&v)?);
+        }
+        return Ok(toml::Value::Table(table));
+    }
+    if value.is_instance_of::<PyList>()
+        || value.is_instance_of::<PyTuple>()
+        || value.hasattr("__array__").unwrap_or(false)
+    {
+        let mut items = Vec::new();
+        for item in value.try_iter().map_err(|e| e.to_string())? {
+            items.push(to_toml_value(&item.map_err(|e| e.to_string())?)?);
+        }
+        return Ok(toml::Value::Array(items));
+    }
+    // numpy scalars and other numbers: through float().
+    if let Ok(x) = value.extract::<f64>() {
+        return Ok(toml::Value::Float(x));
+    }
+    let type_name = value.get_type().name().map(|n| n.to_string()).unwrap_or_else(|_| "?".into());
+    Err(format!(
+        "a value of type {type_name} cannot be written to a scenario (use bool, int, float, str, list or dict)"
+    ))
+}
+
+/// Set `table[a][b][c] = value` for `key = "a.b.c"`, creating missing
+/// tables; an existing non-table on the way is an error naming it.
+fn set_dotted(table: &mut toml::Table, key: &str, value: toml::Value) -> Result<(), String> {
+    let parts: Vec<&str> = key.split('.').collect();
+    if parts.iter().any(|p| p.is_empty()) {
+        return Err("empty key part (expected dotted keys such as `payload.mass`)".into());
+    }
+    let (last, path) = parts.split_last().expect("split gives at least one part");
+    let mut here = table;
+    for (i, part) in path.iter().enumerate() {
+        let entry = here.entry(part.to_string()).or_insert_with(|| toml::Value::Table(toml::Table::new()));
+        here = match entry {
+            toml::Value::Table(t) => t,
+            other => {
+                return Err(format!("`{}` is a {}, not a table", parts[..=i].join("."), other.type_str()));
+            }
+        };
+    }
+    here.insert(last.to_string(), value);
+    Ok(())
+}

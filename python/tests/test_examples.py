@@ -1,0 +1,53 @@
+"""Every example runs headless, and `mypy --strict` accepts the examples and
+the package against the hand-written stubs."""
+
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+REPO = Path(__file__).resolve().parents[2]
+EXAMPLES = REPO / "examples" / "python"
+
+
+def run(args: list, tmp_path: Path) -> str:
+    env = dict(os.environ, MPLBACKEND="Agg")
+    done = subprocess.run([sys.executable, *args], capture_output=True, text=True, env=env, cwd=tmp_path)
+    assert done.returncode == 0, done.stderr
+    return done.stdout
+
+
+def test_table3_and_fig4(tmp_path: Path) -> None:
+    out = run([str(EXAMPLES / "table3_fig4.py"), "--out", str(tmp_path)], tmp_path)
+    assert "paper-scenario-2  z" in out and (tmp_path / "fig4.png").stat().st_size > 10_000
+
+
+def test_montecarlo_box_plot(tmp_path: Path) -> None:
+    runs = os.environ.get("FTSMC_EXAMPLE_RUNS", "1000")
+    out = run([str(EXAMPLES / "montecarlo_boxplot.py"), "--runs", runs, "--out", str(tmp_path)], tmp_path)
+    assert f"{3 * int(runs)} flights" in out and (tmp_path / "montecarlo-ise.png").is_file()
+
+
+def test_pd_controller(tmp_path: Path) -> None:
+    out = run([str(EXAMPLES / "pd_controller.py")], tmp_path)
+    assert "pd: completed" in out
+
+
+def test_rotorpy_example(tmp_path: Path) -> None:
+    pytest.importorskip("rotorpy")
+    out = run([str(EXAMPLES / "rotorpy_ftaftsmc.py"), "--duration", "2.5", "--out", str(tmp_path)], tmp_path)
+    assert "FTAFTSMC: exit" in out and (tmp_path / "rotorpy.png").is_file()
+
+
+def test_mypy_strict_on_the_examples_and_package() -> None:
+    if shutil.which("mypy") is None and not (Path(sys.executable).parent / "mypy").exists():
+        pytest.fail("mypy is not installed (.ci/run installs it)")
+    mypy = [sys.executable, "-m", "mypy", "--strict", "--ignore-missing-imports", "--no-incremental"]
+    for target in (["-p", "ftsmc"], [str(p) for p in sorted(EXAMPLES.glob("*.py"))]):
+        done = subprocess.run([*mypy, *target], capture_output=True, text=True, cwd=REPO)
+        assert done.returncode == 0, done.stdout + done.stderr

@@ -1,0 +1,99 @@
+"""Loading and overrides: every path validates as a file would, and a bad
+key or value raises ValueError naming it."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+import ftsmc
+
+
+def test_builtin_file_and_text_give_the_same_scenario(tmp_path: Path) -> None:
+    s = ftsmc.Scenario.builtin("paper-scenario-2")
+    path = tmp_path / "s.toml"
+    path.write_text(s.to_toml())
+    assert ftsmc.Scenario.from_file(path) == s
+    assert ftsmc.Scenario.from_file(str(path)) == s
+    assert ftsmc.Scenario.from_toml(s.to_toml()) == s
+    assert ftsmc.Scenario.builtin("paper-scenario-2.toml") == s
+    assert s.name == "paper-scenario-2" and s.duration == 50.0 and s.seed == 2
+    assert s.controllers == ["ranftsmc", "tsm-sta", "ftaftsmc"]
+    assert s.control_period == pytest.approx(1e-3)
+
+
+def test_extends_resolves_relative_to_the_file(tmp_path: Path) -> None:
+    (tmp_path / "mine.toml").write_text('extends = "paper-scenario-1"\nname = "mine"\n[ftaftsmc.z]\nlambda2 = 0.8\n')
+    mine = ftsmc.Scenario.from_file(tmp_path / "mine.toml")
+    base = ftsmc.Scenario.builtin("paper-scenario-1")
+    assert mine == base.with_overrides({"name": "mine", "ftaftsmc.z.lambda2": 0.8})
+
+
+def test_overrides_return_a_new_validated_scenario() -> None:
+    s = ftsmc.Scenario.builtin("paper-scenario-2")
+    t = s.with_overrides({"payload.mass": 0.5, "ftaftsmc.z.lambda2": 0.8, "seed": 9})
+    assert t != s and t.seed == 9 and s.seed == 2
+    assert 'lambda2 = 0.8' in t.to_toml()
+    assert "mass = 0.5" in t.to_toml().split("[payload]")[1]
+    # an int where a float is expected is fine; a whole table is a dict
+    u = s.with_overrides({"duration": 45, "reference.z": {"terms": [{"type": "constant", "value": 2.0}]}})
+    assert u.duration == 45.0
+    run = ftsmc.simulate(u, "ftaftsmc")
+    assert run.exit.status == "completed"
+    assert abs(run.columns["z"][-1] - 2.0) < 0.05
+
+
+@pytest.mark.parametrize(
+    "overrides, named",
+    [
+        ({"ftaftsmc.z.lambda9": 0.8}, "lambda9"),  # unknown key
+        ({"ftaftsmc.z.lambda2": -0.8}, "`ftaftsmc.z.lambda2` = -0.8"),  # out of range
+        ({"ftaftsmc.z.lambda2": "fast"}, "ftaftsmc.z.lambda2"),  # wrong type
+        ({"simulation.control_rate": 0.0}, "simulation.control_rate"),
+        ({"duration.x": 1.0}, "`duration` is a float, not a table"),
+        ({"payload..mass": 1.0}, "payload..mass"),
+        ({"ftaftsmc.z.lambda2": object()}, "ftaftsmc.z.lambda2"),
+    ],
+)
+def test_a_bad_override_raises_value_error_naming_the_key(overrides: dict[str, object], named: str) -> None:
+    s = ftsmc.Scenario.builtin("paper-scenario-2")
+    with pytest.raises(ValueError) as err:
+        s.with_overrides(overrides)
+    assert named in str(err.value), str(err.value)
+
+
+def test_a_missing_field_of_a_new_section_is_named() -> None:
+    with pytest.raises(ValueError, match="missing field `start` in `payload`"):
+        ftsmc.Scenario.builtin("paper-scenario-1").with_overrides({"payload.mass": 0.5})
+
+
+def test_load_errors_carry_the_cli_message(tmp_path: Path) -> None:
+    with pytest.raises(ValueError, match="no built-in scenario `nope`"):
+        ftsmc.Scenario.builtin("nope")
+    with pytest.raises(ValueError, match="cannot read scenario file .*missing.toml: No such file"):
+        ftsmc.Scenario.from_file(tmp_path / "missing.toml")
+    bad = tmp_path / "bad.toml"
+    bad.write_text('name = "bad"\nduration = 1.0\n[plant]\nmass = -1.0\n')
+    with pytest.raises(ValueError, match=r"bad.toml: `plant.mass` = -1"):
+        ftsmc.Scenario.from_file(bad)
+    with pytest.raises(ValueError, match="unknown controller `nope` \\(known: ftaftsmc"):
+        ftsmc.simulate(ftsmc.Scenario.builtin("paper-scenario-1"), "nope")
+    with pytest.raises(ValueError, match="runs must be at least 1"):
+        ftsmc.montecarlo(ftsmc.Scenario.builtin("paper-scenario-1"), 0)
+
+
+def test_cost_limits_apply_as_in_the_cli() -> None:
+    with pytest.raises(ValueError, match="exceeds the limit max_steps = 10"):
+        ftsmc.Scenario.builtin("paper-scenario-1").with_overrides({"limits.max_steps": 10.0})
+    with pytest.raises(ValueError, match="max_flights"):
+        ftsmc.montecarlo(ftsmc.Scenario.builtin("paper-scenario-1").with_overrides({"limits.max_flights": 5.0}), 2)
+
+
+def test_unit_slip_warnings_are_python_warnings() -> None:
+    with pytest.warns(UserWarning, match="`simulation.metrics_window` = \\[10, 40\\]: starts after the end of the run"):
+        ftsmc.Scenario.builtin("paper-scenario-2").with_overrides({"duration": 5.0})
+
+
+def test_registry_listing() -> None:
+    assert "ftaftsmc" in ftsmc.CONTROLLERS and ftsmc.label("ftaftsmc") == "FTAFTSMC"
