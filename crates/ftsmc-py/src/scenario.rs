@@ -15,7 +15,7 @@ use crate::value_error;
 /// The one place the package serializes a scenario (the CLI's
 /// `scenario.toml` uses the same `toml::to_string`).
 pub(crate) fn scenario_toml(scenario: &ftsmc_sim::Scenario) -> Result<String, String> {
-    toml::to_string(scenario).map_err(|e| format!("cannot write the scenario as TOML: {e}"))
+    scenario.to_toml().map_err(|e| format!("cannot write the scenario as TOML: {e}"))
 }
 
 /// An error and its sources, `a: b: c`, as the CLI prints them (`{:#}`).
