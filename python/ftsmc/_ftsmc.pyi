@@ -14,7 +14,7 @@ class Scenario:
 
     @staticmethod
     def builtin(name: str) -> Scenario:
-        """A built-in scenario: ``paper-scenario-1``, ``paper-scenario-2``, ``ftaftsmc-tuned-scenario-1``."""
+        """A built-in scenario: ``paper-scenario-1``, ``paper-scenario-2``, ``ftaftsmc-tuned-scenario-1``, ``realistic-scenario-1``, ``realistic-scenario-2``."""
     @staticmethod
     def from_file(path: Union[str, PathLike[str]]) -> Scenario:
         """Read, resolve (``extends``) and validate a scenario file."""

@@ -13,7 +13,7 @@ use crate::value_error;
 
 /// The resolved scenario as TOML: every field, every default filled in.
 /// The one place the package serializes a scenario (the CLI's
-/// `scenario.toml` uses the same `toml::to_string`).
+/// `scenario.toml` uses the same `Scenario::to_toml`).
 pub(crate) fn scenario_toml(scenario: &ftsmc_sim::Scenario) -> Result<String, String> {
     scenario.to_toml().map_err(|e| format!("cannot write the scenario as TOML: {e}"))
 }
