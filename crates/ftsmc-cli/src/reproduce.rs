@@ -971,7 +971,9 @@ pub fn run_scenario(scenario: &Scenario, out: &Path, figures: bool) -> Result<()
         .iter()
         .map(|n| Job { scenario: scenario.clone(), controller: n.clone(), key: n.clone() })
         .collect();
+    let started = std::time::Instant::now();
     let runs = fly(&jobs)?;
+    let flight_seconds = started.elapsed().as_secs_f64();
     write_runs(&runs, &dir, true)?;
     let file = dir.write_scenario("scenario.toml", scenario, "scenario.toml")?;
     let refs: Vec<&RunOutput> = runs.iter().collect();
@@ -987,9 +989,11 @@ pub fn run_scenario(scenario: &Scenario, out: &Path, figures: bool) -> Result<()
     dir.commit()?;
     println!("{table}");
     println!(
-        "wrote {}/ (CSV per controller, scenario.toml, summary.json{})",
+        "wrote {}/ (CSV per controller, scenario.toml, summary.json{}); {} flight{} in {flight_seconds:.3} s",
         out.join(&scenario.name).display(),
-        if figures { ", figures/" } else { "" }
+        if figures { ", figures/" } else { "" },
+        runs.len(),
+        if runs.len() == 1 { "" } else { "s" }
     );
     Ok(())
 }
