@@ -344,11 +344,17 @@ pub trait Controller {
     /// Quantities computed at the last update.
     fn telemetry(&self) -> &Telemetry;
     /// Names of the channel laws' [`Telemetry::estimates`] slots
-    /// ([`AxisLaw::ESTIMATE_NAMES`], `""` for an unused slot).
-    fn estimate_names(&self) -> [&'static str; MAX_ESTIMATES];
+    /// ([`AxisLaw::ESTIMATE_NAMES`], `""` for an unused slot). The default:
+    /// no internal states, every slot unnamed.
+    fn estimate_names(&self) -> [&'static str; MAX_ESTIMATES] {
+        [""; MAX_ESTIMATES]
+    }
     /// True when the mass adaptation of §3.2 is on, i.e.
-    /// [`Telemetry::alpha_hat`] changes (otherwise it stays at its initial value).
-    fn adapts_mass(&self) -> bool;
+    /// [`Telemetry::alpha_hat`] changes (otherwise it stays at its initial
+    /// value). The default: false.
+    fn adapts_mass(&self) -> bool {
+        false
+    }
     /// Restore initial internal states.
     fn reset(&mut self);
     /// Actuator feedback: called by the simulator after it has mixed the

@@ -651,10 +651,6 @@ impl Controller for PidController {
         PID_ESTIMATE_NAMES
     }
 
-    fn adapts_mass(&self) -> bool {
-        false
-    }
-
     fn reset(&mut self) {
         *self = Self {
             model: self.model,

@@ -323,15 +323,6 @@ impl Controller for Se3Controller {
         &self.telemetry
     }
 
-    /// No internal states: every slot unnamed.
-    fn estimate_names(&self) -> [&'static str; MAX_ESTIMATES] {
-        [""; MAX_ESTIMATES]
-    }
-
-    fn adapts_mass(&self) -> bool {
-        false
-    }
-
     fn reset(&mut self) {
         self.telemetry = Self::initial_telemetry();
     }

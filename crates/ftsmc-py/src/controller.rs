@@ -15,7 +15,6 @@
 use std::sync::Mutex;
 
 use ftsmc_core::cascade::{Controller, Telemetry};
-use ftsmc_core::law::MAX_ESTIMATES;
 use ftsmc_core::model::{Command, QuadState, Reference};
 use ftsmc_sim::registry::{self, BoxedController};
 use pyo3::prelude::*;
@@ -177,14 +176,6 @@ impl Controller for PythonController<'_> {
 
     fn telemetry(&self) -> &Telemetry {
         &self.telemetry
-    }
-
-    fn estimate_names(&self) -> [&'static str; MAX_ESTIMATES] {
-        [""; MAX_ESTIMATES]
-    }
-
-    fn adapts_mass(&self) -> bool {
-        false
     }
 
     fn reset(&mut self) {

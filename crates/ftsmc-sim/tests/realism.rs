@@ -2,7 +2,6 @@
 //! with crashes, and the rigid-body loop against the paper loop.
 
 use ftsmc_core::cascade::{Controller, Telemetry};
-use ftsmc_core::law::MAX_ESTIMATES;
 use ftsmc_core::model::{Command, QuadState, Reference};
 use ftsmc_sim::batch::montecarlo::{run_batch, summarize, Dist, MonteCarloSpec};
 use ftsmc_sim::registry;
@@ -41,12 +40,6 @@ impl Controller for Constant {
     }
     fn telemetry(&self) -> &Telemetry {
         &self.telemetry
-    }
-    fn estimate_names(&self) -> [&'static str; MAX_ESTIMATES] {
-        [""; MAX_ESTIMATES]
-    }
-    fn adapts_mass(&self) -> bool {
-        false
     }
     fn reset(&mut self) {}
 }
