@@ -69,6 +69,8 @@ def test_control_dict_feeds_every_rotorpy_abstraction_we_claim() -> None:
     [
         "tsm-sta",
         "ranftsmc",
+        "pid",
+        "se3",
         pytest.param(
             "ftaftsmc",
             marks=pytest.mark.xfail(

@@ -97,3 +97,26 @@ def test_unit_slip_warnings_are_python_warnings() -> None:
 
 def test_registry_listing() -> None:
     assert "ftaftsmc" in ftsmc.CONTROLLERS and ftsmc.label("ftaftsmc") == "FTAFTSMC"
+
+
+def _section(text: str, key: str) -> str:
+    """The lines of table `[key]` in a scenario's TOML text."""
+    lines = text.splitlines()
+    start = lines.index(f"[{key}]")
+    end = next((i for i in range(start + 1, len(lines)) if lines[i].startswith("[")), len(lines))
+    return "\n".join(lines[start:end])
+
+
+def test_vehicle_derived_gains_follow_a_plant_override_unless_set() -> None:
+    base = ftsmc.Scenario.builtin("paper-scenario-1")
+    heavy = base.with_overrides({"plant.mass": 1.5})
+    # pid's hover thrust and se3's position gain are derived from the mass.
+    assert "hover_thrust = 14.715" in _section(heavy.to_toml(), "pid")
+    assert _section(heavy.to_toml(), "se3") != _section(base.to_toml(), "se3")
+    # The sliding-mode gains are the paper's whatever the vehicle.
+    assert _section(heavy.to_toml(), "ftaftsmc.x") == _section(base.to_toml(), "ftaftsmc.x")
+    # A key the user sets is kept; the rest of the section still follows the plant.
+    tuned = base.with_overrides({"pid.position_p": [2.0, 2.0, 1.5]}).with_overrides({"plant.mass": 1.5})
+    pid = _section(tuned.to_toml(), "pid")
+    assert "position_p = [2.0, 2.0, 1.5]" in pid
+    assert "hover_thrust = 7.2594" in pid  # a changed section is kept whole

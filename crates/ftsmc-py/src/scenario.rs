@@ -97,6 +97,12 @@ impl Scenario {
     fn with_overrides(&self, py: Python<'_>, overrides: &Bound<'_, PyDict>) -> PyResult<Self> {
         let text = scenario_toml(&self.inner).map_err(value_error)?;
         let mut table: toml::Table = toml::from_str(&text).map_err(|e| value_error(e.to_string()))?;
+        // Gain sections still at their vehicle-derived defaults (`pid`,
+        // `se3`) are dropped, so that they follow an overridden `[plant]` or
+        // rotor limit as a scenario file without them would.
+        for key in self.inner.gains.keys_at_defaults(&self.inner.nominal_vehicle()) {
+            table.remove(key);
+        }
         let mut keys = Vec::new();
         for (key, value) in overrides.iter() {
             let key: String = key.extract().map_err(|_| value_error("override keys must be strings"))?;

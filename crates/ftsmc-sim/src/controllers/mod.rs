@@ -367,6 +367,19 @@ macro_rules! declare_controllers {
                 Ok(Self { $( $field: take_section::<$section>(table, vehicle)?, )+ })
             }
 
+            /// The keys of the sections whose gains are exactly their
+            /// defaults for `vehicle`: dropping those tables from a written
+            /// scenario loses nothing, and lets them follow a changed `[plant]`.
+            pub fn keys_at_defaults(&self, vehicle: &NominalVehicle) -> Vec<&'static str> {
+                let mut keys = Vec::new();
+                $(
+                    if self.$field == <$section as GainSection>::defaults_for(vehicle) {
+                        keys.push(<$section as GainSection>::KEY);
+                    }
+                )+
+                keys
+            }
+
             /// Every section's defaults for `vehicle` ([`GainSection::defaults_for`]).
             pub fn defaults_for(vehicle: &NominalVehicle) -> Self {
                 Self { $( $field: <$section as GainSection>::defaults_for(vehicle), )+ }

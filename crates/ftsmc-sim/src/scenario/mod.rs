@@ -350,6 +350,15 @@ impl Scenario {
         self.vehicle.rigid_body.unwrap_or_else(|| crate::vehicle::RigidBodyParams::from_paper(&base))
     }
 
+    /// What the controllers' vehicle-derived default gains are built for:
+    /// the nominal `[plant]` and the rotor limit of `[actuators]` (or
+    /// `simulation.max_rotor_speed`); see [`crate::controllers::GainSection::defaults_for`].
+    pub fn nominal_vehicle(&self) -> crate::controllers::NominalVehicle {
+        let limit =
+            self.actuators.map(|a| a.max_rotor_speed).filter(|w| w.is_finite()).or(self.simulation.max_rotor_speed);
+        crate::controllers::NominalVehicle::new(self.plant, limit)
+    }
+
     /// Allocation matrix of the truth model and the paper-form parameters used
     /// for the unsaturated rotor-speed demand.
     pub fn truth_allocation(&self) -> ([[f64; 4]; 4], QuadrotorParams) {

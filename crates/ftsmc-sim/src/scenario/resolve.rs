@@ -371,6 +371,7 @@ pub fn load(source: Source<'_>, overrides: &[String]) -> Result<Loaded, Scenario
             .get(section)
             .and_then(|t| t.get("max_rotor_speed"))
             .and_then(|v| v.as_float().or(v.as_integer().map(|i| i as f64)))
+            .filter(|w| w.is_finite())
     };
     let vehicle = NominalVehicle::new(plant, rotor_limit("actuators").or_else(|| rotor_limit("simulation")));
     let gains = GainSections::take_from(&mut merged, &vehicle).map_err(|SectionParseError { section, error }| {
