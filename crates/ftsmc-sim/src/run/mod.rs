@@ -7,8 +7,7 @@
 //! reason and time), never a panic.
 
 use ftsmc_core::allocation::{forces_from_squared_speeds, residual_speed, rotor_speeds};
-use ftsmc_core::cascade::Controller;
-use ftsmc_core::law::MAX_ESTIMATES;
+use ftsmc_core::cascade::{Controller, Telemetry};
 use ftsmc_core::model::{Command, QuadState, QuadrotorParams, Reference};
 
 use crate::environment::{Environment, TimeVarying};
@@ -23,8 +22,8 @@ pub mod truth;
 
 use exit::check_divergence;
 pub use exit::{Divergence, ExitStatus};
-use recording::Row;
 pub use recording::{push_number, recording_columns, Recording, MAX_RECORDING_COLUMNS};
+use recording::{Recorder, Tick};
 
 /// Result of one flight.
 #[derive(Clone, Debug)]
@@ -130,6 +129,21 @@ fn realise(command: &Command, plant: &QuadrotorParams, max_rotor_speed: Option<f
     (applied, omega, residual_speed(&omega))
 }
 
+/// Tracking errors `[e_x, e_y, e_z, e_φ, e_θ, e_ψ]` the metrics integrate:
+/// position against the reference, roll and pitch against the attitude
+/// reference the controller tracks (its telemetry), yaw against ψ_d.
+/// `state` is `[x, y, z, φ, θ, ψ, …]`.
+fn tracking_errors(state: &[f64; 12], reference: &Reference, telemetry: &Telemetry) -> [f64; 6] {
+    [
+        state[0] - reference.position[0],
+        state[1] - reference.position[1],
+        state[2] - reference.position[2],
+        state[3] - telemetry.attitude_reference[0],
+        state[4] - telemetry.attitude_reference[1],
+        state[5] - reference.yaw,
+    ]
+}
+
 /// Fly `controller` through `scenario`.
 pub fn simulate(scenario: &Scenario, controller: &mut dyn Controller, options: RunOptions<'_>) -> RunOutput {
     // Hook (issue 11): rigid body, real actuators or a ground fly the realistic loop.
@@ -140,31 +154,12 @@ pub fn simulate(scenario: &Scenario, controller: &mut dyn Controller, options: R
     let dt = scenario.control_period();
     let steps = (scenario.duration / dt).round() as u64;
     let h = dt / sim.substeps as f64;
-    let record_every = if options.record && sim.record_rate > 0.0 {
-        ((sim.control_rate / sim.record_rate).round() as u64).max(1)
-    } else {
-        0
-    };
 
     let mut env = Environment::new(scenario.environment());
     let mut x = scenario.initial_state.state().to_array();
     let mut metrics = MetricsAccumulator::new(dt, sim.settling_band, sim.settling_floor, sim.steady_state_after)
         .with_window(sim.metrics_window);
-    let estimate_names = controller.estimate_names();
-    let adapts_mass = controller.adapts_mass();
-    let mut recording = if record_every > 0 {
-        Recording::with_columns(recording_columns(&estimate_names, adapts_mass))
-    } else {
-        Recording::default()
-    };
-    // The estimate slots written: (slot) for each named one.
-    let named_slots: Vec<usize> = (0..MAX_ESTIMATES).filter(|&k| !estimate_names[k].is_empty()).collect();
-    if let Some(per_row) = steps.checked_div(record_every) {
-        let rows = (per_row + 1) as usize;
-        for c in &mut recording.columns {
-            c.reserve(rows);
-        }
-    }
+    let mut recorder = Recorder::new(scenario, options.record, steps, controller);
     let mut exit = ExitStatus::Completed;
     let mut executed = 0;
     let mut envelope = crate::envelope::Tracker::new(scenario.envelope); // issue 11 hook
@@ -185,13 +180,7 @@ pub fn simulate(scenario: &Scenario, controller: &mut dyn Controller, options: R
         let plant_now = env.params_with(&tv_now);
         let (applied, omega, omega_bar) = realise(&command, &plant_now, sim.max_rotor_speed);
 
-        let mut errors = [0.0; 6];
-        for i in 0..3 {
-            errors[i] = x[i] - reference.position[i];
-        }
-        errors[3] = x[3] - telemetry.attitude_reference[0];
-        errors[4] = x[4] - telemetry.attitude_reference[1];
-        errors[5] = x[5] - reference.yaw;
+        let errors = tracking_errors(&x, &reference, telemetry);
         let u = [applied.thrust, applied.torque[0], applied.torque[1], applied.torque[2]];
         if !(u.iter().all(|v| v.is_finite())) {
             exit = ExitStatus::Diverged { divergence: Divergence::NonFinite, time: t };
@@ -199,31 +188,21 @@ pub fn simulate(scenario: &Scenario, controller: &mut dyn Controller, options: R
         }
         metrics.observe(t, &errors, &u);
 
-        if record_every > 0 && k % record_every == 0 {
-            let mut row = Row::new();
-            row.push(t);
-            row.extend(&x);
-            row.extend(&reference.position);
-            row.extend(&telemetry.attitude_reference);
-            row.extend(&telemetry.attitude_demand);
-            row.extend(&u);
-            row.extend(&[command.thrust, command.torque[0], command.torque[1], command.torque[2]]);
-            row.extend(&omega);
-            row.push(omega_bar);
-            row.extend(&telemetry.sliding);
-            for est in &telemetry.estimates {
-                for &slot in &named_slots {
-                    row.push(est[slot]);
-                }
-            }
-            if adapts_mass {
-                row.push(telemetry.alpha_hat);
-                row.push(telemetry.alpha_hat * scenario.plant.mass);
-            }
-            row.push(plant_now.mass);
-            row.extend(&plant_now.inertia);
-            row.extend(&tv_now.disturbance);
-            recording.push_row(row.as_slice());
+        if recorder.due(k) {
+            recorder.push(&Tick {
+                t,
+                state: x,
+                reference: &reference,
+                telemetry,
+                applied: u,
+                command: &command,
+                omega,
+                omega_bar,
+                nominal_mass: scenario.plant.mass,
+                mass: plant_now.mass,
+                inertia: plant_now.inertia,
+                disturbance: tv_now.disturbance,
+            });
         }
 
         // Plant between ticks: RK4 substeps with the command held.
@@ -257,7 +236,7 @@ pub fn simulate(scenario: &Scenario, controller: &mut dyn Controller, options: R
         envelope: envelope.verdict((!exit.is_completed()).then(|| exit.to_string())),
         exit,
         metrics: metrics.finish(),
-        recording,
+        recording: recorder.recording,
         steps: executed,
     }
 }

@@ -1,6 +1,10 @@
 //! The recorded time series: [`Recording`] and its columns.
 
+use ftsmc_core::cascade::{Controller, Telemetry};
 use ftsmc_core::law::MAX_ESTIMATES;
+use ftsmc_core::model::{Command, Reference};
+
+use crate::scenario::Scenario;
 
 pub use crate::limits::MAX_RECORDING_COLUMNS;
 
@@ -169,6 +173,120 @@ fn push_number_with(buffer: &mut zmij::Buffer, out: &mut Vec<u8>, v: f64) {
         out.extend_from_slice(b"inf");
     } else {
         out.extend_from_slice(b"-inf");
+    }
+}
+
+/// What one recorded control tick holds (the columns of [`recording_columns`]).
+pub(super) struct Tick<'a> {
+    /// Time, s.
+    pub t: f64,
+    /// True state `[x, y, z, φ, θ, ψ, ẋ, ẏ, ż, φ̇, θ̇, ψ̇]`.
+    pub state: [f64; 12],
+    /// Reference of this tick.
+    pub reference: &'a Reference,
+    /// The controller's telemetry after this tick's update.
+    pub telemetry: &'a Telemetry,
+    /// Applied thrust and torques `[U1, u2, u3, u4]`.
+    pub applied: [f64; 4],
+    /// Commanded thrust and torques.
+    pub command: &'a Command,
+    /// Rotor speeds, rad/s.
+    pub omega: [f64; 4],
+    /// Residual rotor speed ω̄, rad/s.
+    pub omega_bar: f64,
+    /// Nominal mass (`plant.mass`), kg, for `mass_estimate`.
+    pub nominal_mass: f64,
+    /// True mass, kg.
+    pub mass: f64,
+    /// True principal inertia, kg·m².
+    pub inertia: [f64; 3],
+    /// Disturbances of this tick.
+    pub disturbance: [f64; 6],
+}
+
+/// The time series of one flight as it is flown, shared by the paper loop
+/// and the realistic loop: a [`Recording`] with its controller's columns,
+/// a row every `every` ticks (none with 0), assembled on the stack.
+pub(super) struct Recorder {
+    /// The rows recorded so far.
+    pub recording: Recording,
+    every: u64,
+    /// The estimate slots written (those with a name).
+    named_slots: [usize; MAX_ESTIMATES],
+    n_named: usize,
+    adapts_mass: bool,
+}
+
+impl Recorder {
+    /// Columns for `controller` flying `scenario` for `steps` control ticks:
+    /// a row every `control_rate / record_rate` ticks when `record` is on and
+    /// `record_rate > 0`, none otherwise (room for all of them is reserved
+    /// up front).
+    pub(super) fn new(scenario: &Scenario, record: bool, steps: u64, controller: &dyn Controller) -> Self {
+        let sim = &scenario.simulation;
+        let every = if record && sim.record_rate > 0.0 {
+            ((sim.control_rate / sim.record_rate).round() as u64).max(1)
+        } else {
+            0
+        };
+        let estimate_names = controller.estimate_names();
+        let adapts_mass = controller.adapts_mass();
+        let mut recording = if every > 0 {
+            Recording::with_columns(recording_columns(&estimate_names, adapts_mass))
+        } else {
+            Recording::default()
+        };
+        if let Some(per_row) = steps.checked_div(every) {
+            let rows = (per_row + 1) as usize;
+            for c in &mut recording.columns {
+                c.reserve(rows);
+            }
+        }
+        let mut named_slots = [0; MAX_ESTIMATES];
+        let mut n_named = 0;
+        for (slot, name) in estimate_names.iter().enumerate() {
+            if !name.is_empty() {
+                named_slots[n_named] = slot;
+                n_named += 1;
+            }
+        }
+        Self { recording, every, named_slots, n_named, adapts_mass }
+    }
+
+    /// True when tick `k` is recorded.
+    #[inline]
+    pub(super) fn due(&self, k: u64) -> bool {
+        self.every > 0 && k % self.every == 0
+    }
+
+    /// Append the row of `tick`.
+    pub(super) fn push(&mut self, tick: &Tick<'_>) {
+        let telemetry = tick.telemetry;
+        let command = tick.command;
+        let mut row = Row::new();
+        row.push(tick.t);
+        row.extend(&tick.state);
+        row.extend(&tick.reference.position);
+        row.extend(&telemetry.attitude_reference);
+        row.extend(&telemetry.attitude_demand);
+        row.extend(&tick.applied);
+        row.extend(&[command.thrust, command.torque[0], command.torque[1], command.torque[2]]);
+        row.extend(&tick.omega);
+        row.push(tick.omega_bar);
+        row.extend(&telemetry.sliding);
+        for est in &telemetry.estimates {
+            for &slot in &self.named_slots[..self.n_named] {
+                row.push(est[slot]);
+            }
+        }
+        if self.adapts_mass {
+            row.push(telemetry.alpha_hat);
+            row.push(telemetry.alpha_hat * tick.nominal_mass);
+        }
+        row.push(tick.mass);
+        row.extend(&tick.inertia);
+        row.extend(&tick.disturbance);
+        self.recording.push_row(row.as_slice());
     }
 }
 

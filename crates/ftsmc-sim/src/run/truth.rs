@@ -58,7 +58,6 @@
 
 use ftsmc_core::allocation::{forces_from_squared_speeds, residual_speed, rotor_speeds};
 use ftsmc_core::cascade::Controller;
-use ftsmc_core::law::MAX_ESTIMATES;
 use ftsmc_core::model::{Command, QuadState};
 
 use crate::actuators::{motor_noise_rng, ActuatorParams, Mixer, Motors};
@@ -71,7 +70,8 @@ use crate::vehicle::paper::{derivative_in_wind, rk4_step};
 use crate::vehicle::VehicleModel;
 
 use super::exit::check_divergence;
-use super::{recording_columns, reference_at, Divergence, ExitStatus, Recording, RunOptions, RunOutput};
+use super::recording::{Recorder, Tick};
+use super::{reference_at, tracking_errors, Divergence, ExitStatus, RunOptions, RunOutput};
 use crate::sensors::Sensors;
 use crate::vehicle::rigid_body::{normalize_quaternion, RigidBodyState};
 use crate::vehicle::{from_quad_state, to_quad_state, RigidBody, RigidBodyInput, RigidBodyParams};
@@ -116,11 +116,6 @@ pub fn simulate_realistic(scenario: &Scenario, controller: &mut dyn Controller, 
     let dt = scenario.control_period();
     let steps = (scenario.duration / dt).round() as u64;
     let h = dt / sim.substeps as f64;
-    let record_every = if options.record && sim.record_rate > 0.0 {
-        ((sim.control_rate / sim.record_rate).round() as u64).max(1)
-    } else {
-        0
-    };
     let ground = scenario.ground.filter(|g| g.enabled);
     let act = actuators(scenario);
     let ideal = act == ActuatorParams::default();
@@ -155,15 +150,7 @@ pub fn simulate_realistic(scenario: &Scenario, controller: &mut dyn Controller, 
     let mut metrics = MetricsAccumulator::new(dt, sim.settling_band, sim.settling_floor, sim.steady_state_after)
         .with_window(sim.metrics_window);
     let mut envelope = Tracker::new(scenario.envelope);
-    let estimate_names = controller.estimate_names();
-    let adapts_mass = controller.adapts_mass();
-    let mut recording = if record_every > 0 {
-        Recording::with_columns(recording_columns(&estimate_names, adapts_mass))
-    } else {
-        Recording::default()
-    };
-    let named_slots: Vec<usize> = (0..MAX_ESTIMATES).filter(|&k| !estimate_names[k].is_empty()).collect();
-    let mut row: Vec<f64> = Vec::with_capacity(recording.names.len());
+    let mut recorder = Recorder::new(scenario, options.record, steps, controller);
     let mut exit = ExitStatus::Completed;
     let mut executed = 0;
     let mut peak_demand = 0.0f64;
@@ -213,13 +200,7 @@ pub fn simulate_realistic(scenario: &Scenario, controller: &mut dyn Controller, 
             }
         }
 
-        let mut errors = [0.0; 6];
-        for i in 0..3 {
-            errors[i] = state.position[i] - reference.position[i];
-        }
-        errors[3] = state.attitude[0] - telemetry.attitude_reference[0];
-        errors[4] = state.attitude[1] - telemetry.attitude_reference[1];
-        errors[5] = state.attitude[2] - reference.yaw;
+        let errors = tracking_errors(&state.to_array(), &reference, telemetry);
         let u = [applied.thrust, applied.torque[0], applied.torque[1], applied.torque[2]];
         if !(u.iter().all(|v| v.is_finite())) {
             exit = ExitStatus::Diverged { divergence: Divergence::NonFinite, time: t };
@@ -227,31 +208,21 @@ pub fn simulate_realistic(scenario: &Scenario, controller: &mut dyn Controller, 
         }
         metrics.observe(t, &errors, &u);
 
-        if record_every > 0 && k % record_every == 0 {
-            row.clear();
-            row.push(t);
-            row.extend(state.to_array());
-            row.extend(reference.position);
-            row.extend(telemetry.attitude_reference);
-            row.extend(telemetry.attitude_demand);
-            row.extend(u);
-            row.extend([command.thrust, command.torque[0], command.torque[1], command.torque[2]]);
-            row.extend(omega_now);
-            row.push(residual_speed(&omega_now));
-            row.extend(telemetry.sliding);
-            for est in &telemetry.estimates {
-                for &slot in &named_slots {
-                    row.push(est[slot]);
-                }
-            }
-            if adapts_mass {
-                row.push(telemetry.alpha_hat);
-                row.push(telemetry.alpha_hat * scenario.plant.mass);
-            }
-            row.push(plant_now.mass);
-            row.extend(plant_now.inertia);
-            row.extend(tv_now.disturbance);
-            recording.push_row(&row);
+        if recorder.due(k) {
+            recorder.push(&Tick {
+                t,
+                state: state.to_array(),
+                reference: &reference,
+                telemetry,
+                applied: u,
+                command: &command,
+                omega: omega_now,
+                omega_bar: residual_speed(&omega_now),
+                nominal_mass: scenario.plant.mass,
+                mass: plant_now.mass,
+                inertia: plant_now.inertia,
+                disturbance: tv_now.disturbance,
+            });
         }
 
         for j in 0..sim.substeps {
@@ -340,7 +311,7 @@ pub fn simulate_realistic(scenario: &Scenario, controller: &mut dyn Controller, 
         envelope: envelope.verdict((!exit.is_completed()).then(|| exit.to_string())),
         exit,
         metrics,
-        recording,
+        recording: recorder.recording,
         steps: executed,
     }
 }
