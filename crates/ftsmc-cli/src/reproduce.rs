@@ -760,7 +760,7 @@ pub fn beyond_the_paper(dir: &ResultDir, figures: bool, mc_runs: u64) -> Result<
     let mut json_scenarios = Map::new();
     let mut notes = Vec::new();
     for s in &scenarios {
-        let omega_max = ftsmc_sim::run::truth::actuators(s).max_rotor_speed;
+        let omega_max = ftsmc_sim::run::actuators(s).max_rotor_speed;
         let mut per = Map::new();
         for name in BEYOND_CONTROLLERS {
             let Some(run) = find(&runs, &s.name, name) else { continue };
@@ -955,7 +955,7 @@ pub fn beyond_the_paper(dir: &ResultDir, figures: bool, mc_runs: u64) -> Result<
         let fig_dir = dir.path().join("figures").join("beyond");
         for s in &scenarios {
             let mine: Vec<&RunOutput> = runs.iter().filter(|r| r.scenario == s.name).collect();
-            crate::figures::beyond(&mine, ftsmc_sim::run::truth::actuators(s).max_rotor_speed, &fig_dir)?;
+            crate::figures::beyond(&mine, ftsmc_sim::run::actuators(s).max_rotor_speed, &fig_dir)?;
         }
     }
     Ok(Beyond { report: md, flights })

@@ -59,6 +59,20 @@ pub struct MotorNoise {
     pub scale: NoiseScale,
 }
 
+/// How rotor speed commands are made from a thrust and torque command
+/// (`[actuators] mixer`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum MixerKind {
+    /// [`Mixer::mix`]: under saturation keep thrust, then roll/pitch, then yaw (default).
+    #[default]
+    ThrustFirst,
+    /// Paper Eq. 2 inverted and each rotor speed clamped to `[ω_min, ω_max]`
+    /// on its own (thrust and torques change together). The rotors reach the
+    /// clamped speeds at once: no lag, no noise.
+    Clamp,
+}
+
 /// Motor limits, lag and noise. Defaults: the ideal actuator — no limits
 /// (`ω_min = 0`, `ω_max = ∞`), no lag (τ = 0), no noise.
 ///
@@ -77,6 +91,13 @@ pub struct ActuatorParams {
     pub time_constant_down: f64,
     /// Motor-speed noise (default none).
     pub noise: Option<MotorNoise>,
+    /// How the rotor speed commands are made (default `thrust-first`).
+    #[serde(skip_serializing_if = "is_thrust_first")]
+    pub mixer: MixerKind,
+}
+
+fn is_thrust_first(m: &MixerKind) -> bool {
+    *m == MixerKind::ThrustFirst
 }
 
 impl Default for ActuatorParams {
@@ -87,6 +108,7 @@ impl Default for ActuatorParams {
             time_constant_up: 0.0,
             time_constant_down: 0.0,
             noise: None,
+            mixer: MixerKind::ThrustFirst,
         }
     }
 }
@@ -155,6 +177,23 @@ impl ActuatorParams {
             match noise.scale {
                 NoiseScale::Absolute => closed("noise.std", noise.std, 0.0, 1e6, "0 <= std <= 1e6 rad/s")?,
                 NoiseScale::Relative => closed("noise.std", noise.std, 0.0, 10.0, "0 <= std <= 10 (fraction)")?,
+            }
+        }
+        if self.mixer == MixerKind::Clamp {
+            if self.time_constant_up != 0.0 || self.time_constant_down != 0.0 {
+                let value = self.time_constant_up.max(self.time_constant_down);
+                return Err(GainError {
+                    field: "mixer",
+                    value,
+                    expected: "mixer = \"clamp\" with time_constant_up = time_constant_down = 0 (or mixer = \"thrust-first\" for lagged motors)",
+                });
+            }
+            if let Some(noise) = self.noise {
+                return Err(GainError {
+                    field: "mixer",
+                    value: noise.std,
+                    expected: "mixer = \"clamp\" without [actuators.noise] (or mixer = \"thrust-first\" for noisy motors)",
+                });
             }
         }
         Ok(())
@@ -411,6 +450,20 @@ impl Mixer {
             }
         }
         s.max(0.0)
+    }
+
+    /// Rotor speed commands for `command` with each squared speed clamped to
+    /// `[ω_min², ω_max²]` on its own ([`MixerKind::Clamp`]); `applied` is what
+    /// the clamped speeds produce (`A w`), `saturated` whether any rotor was clamped.
+    pub fn mix_clamped(&self, command: &Command) -> MixerOutput {
+        let finite = |v: f64| if v.is_finite() { v } else { 0.0 };
+        let commanded = Command { thrust: finite(command.thrust), torque: command.torque.map(finite) };
+        let u = [commanded.thrust, commanded.torque[0], commanded.torque[1], commanded.torque[2]];
+        let w = self.squared(&u);
+        let clamped = w.map(|wi| wi.clamp(self.w_min, self.w_max));
+        let saturated = commanded != *command || clamped != w;
+        let applied = if saturated { self.forces(&clamped) } else { commanded };
+        MixerOutput { commanded, applied, rotor_speeds: clamped.map(f64::sqrt), saturated }
     }
 
     /// Rotor speed commands for `command` under the documented priority.

@@ -1,0 +1,173 @@
+//! The actuator stage of a flight: what the rotors make of the controller's
+//! command, chosen once per flight from the scenario ([`ActuatorStage::of`]).
+//!
+//! | stage | when | applied command | rotor speeds |
+//! |---|---|---|---|
+//! | ideal | no `[actuators]` (or the default one) and no `simulation.max_rotor_speed`, paper truth model | the command itself (Eq. 1 has no rotors: negative thrust flies) | paper Eq. 2 inverted, `ω ≥ 0` |
+//! | clamp | `[actuators] mixer = "clamp"` (or the deprecated `simulation.max_rotor_speed`) | what the clamped speeds produce | Eq. 2 inverted, each clamped to `[ω_min, ω_max]`, reached at once |
+//! | rotors | any other `[actuators]`, and the rigid body without `[actuators]` | [`Mixer::mix`] (thrust first) | first-order lag with exact exponentials, motor noise |
+//!
+//! The ideal and clamp stages hold a constant wrench (and rotor speeds) over
+//! the control period; the rotor stage hands the truth model the lagged
+//! rotor speeds at each RK4 stage time.
+
+use ftsmc_core::allocation::{forces_from_squared_speeds, rotor_speeds, squared_speeds_from_forces};
+use ftsmc_core::model::{Command, QuadrotorParams};
+use rand_chacha::ChaCha8Rng;
+
+use crate::actuators::{motor_noise_rng, ActuatorParams, Mixer, MixerKind, Motors};
+use crate::scenario::Scenario;
+use crate::vehicle::VehicleModel;
+
+/// The rotor limits, lag, noise and mixer a flight of `scenario` uses:
+/// `[actuators]`, or for a file with the deprecated
+/// `simulation.max_rotor_speed` (and no `[actuators]`) the per-rotor clamp
+/// `[actuators] max_rotor_speed = …, mixer = "clamp"` it always meant on the paper plant.
+pub fn actuators(scenario: &Scenario) -> ActuatorParams {
+    scenario.actuators.unwrap_or(match scenario.simulation.max_rotor_speed {
+        Some(max_rotor_speed) => ActuatorParams { max_rotor_speed, mixer: MixerKind::Clamp, ..ActuatorParams::default() },
+        None => ActuatorParams::default(),
+    })
+}
+
+/// What the actuator stage delivers in one control period.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Delivered {
+    /// Thrust and torques the rotors are asked for after the mixer (N, N·m).
+    pub applied: Command,
+    /// Rotor speed commands (held speeds for the ideal and clamp stages), rad/s.
+    pub target: [f64; 4],
+    /// Rotor speeds at the tick, rad/s.
+    pub omega: [f64; 4],
+    /// The command could not be delivered.
+    pub saturated: bool,
+    /// This period's standard-normal motor noise draws.
+    pub noise: [f64; 4],
+}
+
+/// The rotors as the truth model sees them inside a control period.
+#[derive(Clone, Copy)]
+pub(crate) enum Drive<'a> {
+    /// A wrench and rotor speeds held over the period.
+    Held {
+        /// Thrust and torques, N and N·m.
+        applied: &'a Command,
+        /// Rotor speeds, rad/s.
+        speeds: &'a [f64; 4],
+        /// Their residual Ω̄, rad/s.
+        omega_bar: f64,
+    },
+    /// Lagged motors following `target` from their state at the substep start.
+    Lagged {
+        /// The motors at the start of the substep.
+        motors: &'a Motors,
+        /// Rotor speed commands, rad/s.
+        target: &'a [f64; 4],
+        /// Motor noise draws of the period.
+        noise: &'a [f64; 4],
+    },
+}
+
+impl Drive<'_> {
+    /// Rotor speeds `dt` seconds into the substep, rad/s.
+    #[inline]
+    pub(crate) fn speeds_after(&self, dt: f64) -> [f64; 4] {
+        match self {
+            Drive::Held { speeds, .. } => **speeds,
+            Drive::Lagged { motors, target, noise } => motors.with_noise(&motors.speeds_after(target, dt), noise),
+        }
+    }
+}
+
+/// The actuator stage of one flight.
+pub(crate) enum ActuatorStage {
+    /// The command applied as is (paper truth model only).
+    Ideal,
+    /// Eq. 2 inverted and clamped per rotor, reached at once; `mixer` for the
+    /// rigid body's allocation, `None` for the paper plant's Eq. 2.
+    Clamp { min: f64, max: f64, mixer: Option<Mixer> },
+    /// Mixer, lagged motors and their noise stream.
+    Rotors { mixer: Mixer, motors: Motors, rng: ChaCha8Rng },
+}
+
+impl ActuatorStage {
+    /// The stage for `scenario` (see the module table); `allocation` is the
+    /// truth model's `u = A ω²` and `hover` its hover rotor speed (rad/s),
+    /// where lagged motors start.
+    pub(crate) fn of(scenario: &Scenario, allocation: [[f64; 4]; 4], hover: f64) -> Self {
+        let act = actuators(scenario);
+        let paper = scenario.vehicle.model == VehicleModel::Paper;
+        let mixer = || Mixer::new(allocation, &act).expect("validated by Scenario::validate");
+        if paper && act == ActuatorParams::default() {
+            return ActuatorStage::Ideal;
+        }
+        match act.mixer {
+            MixerKind::Clamp => ActuatorStage::Clamp {
+                min: act.min_rotor_speed,
+                max: act.max_rotor_speed,
+                mixer: (!paper).then(mixer),
+            },
+            MixerKind::ThrustFirst => ActuatorStage::Rotors {
+                mixer: mixer(),
+                motors: Motors::new(&act, [hover; 4]),
+                rng: motor_noise_rng(scenario.seed),
+            },
+        }
+    }
+
+    /// What the rotors make of `command` this period; `plant` is the true
+    /// plant of the period (paper Eq. 2's coefficients for the ideal and
+    /// clamp stages on the paper truth model).
+    #[inline]
+    pub(crate) fn deliver(&mut self, command: &Command, plant: &QuadrotorParams) -> Delivered {
+        match self {
+            ActuatorStage::Ideal => {
+                let target = rotor_speeds(plant, command, f64::INFINITY);
+                Delivered { applied: *command, target, omega: target, saturated: false, noise: [0.0; 4] }
+            }
+            ActuatorStage::Clamp { min, max, mixer: None } => {
+                let w = squared_speeds_from_forces(plant, command);
+                let (w_min, w_max) = (*min * *min, *max * *max);
+                let saturated = !w.iter().all(|&wi| wi >= w_min && wi <= w_max);
+                let target = rotor_speeds(plant, command, *max).map(|o| if o < *min { *min } else { o });
+                let applied = forces_from_squared_speeds(plant, &target.map(|o| o * o));
+                Delivered { applied, target, omega: target, saturated, noise: [0.0; 4] }
+            }
+            ActuatorStage::Clamp { mixer: Some(mixer), .. } => {
+                let m = mixer.mix_clamped(command);
+                Delivered {
+                    applied: m.applied,
+                    target: m.rotor_speeds,
+                    omega: m.rotor_speeds,
+                    saturated: m.saturated,
+                    noise: [0.0; 4],
+                }
+            }
+            ActuatorStage::Rotors { mixer, motors, rng } => {
+                let m = mixer.mix(command);
+                let noise = motors.sample_noise(rng);
+                let omega = motors.with_noise(&motors.speeds(), &noise);
+                Delivered { applied: m.applied, target: m.rotor_speeds, omega, saturated: m.saturated, noise }
+            }
+        }
+    }
+
+    /// How the truth model sees the rotors over the next substep.
+    #[inline]
+    pub(crate) fn drive<'a>(&'a self, delivered: &'a Delivered, omega_bar: f64) -> Drive<'a> {
+        match self {
+            ActuatorStage::Rotors { motors, .. } => {
+                Drive::Lagged { motors, target: &delivered.target, noise: &delivered.noise }
+            }
+            _ => Drive::Held { applied: &delivered.applied, speeds: &delivered.target, omega_bar },
+        }
+    }
+
+    /// Advance the motors by one substep of `h` seconds towards `target`.
+    #[inline]
+    pub(crate) fn advance(&mut self, target: &[f64; 4], h: f64) {
+        if let ActuatorStage::Rotors { motors, .. } = self {
+            motors.advance(target, h);
+        }
+    }
+}
