@@ -261,6 +261,38 @@ impl Motors {
         self.speeds = self.speeds_after(command, h);
     }
 
+    /// The lag's decay factors `[e^{−dt/τ_up}, e^{−dt/τ_down}]` over `dt`
+    /// seconds (1 for τ = 0, where they are not used): computed once for a
+    /// step size that does not change, then [`Motors::speeds_decayed`].
+    pub fn decay(&self, dt: f64) -> [f64; 2] {
+        let f = |tau: f64| if tau == 0.0 { 1.0 } else { (-dt / tau).exp() };
+        [f(self.params.time_constant_up), f(self.params.time_constant_down)]
+    }
+
+    /// [`Motors::speeds_after`] with the decay factors of [`Motors::decay`]
+    /// for that `dt` (same formula, no exponential evaluated).
+    #[inline]
+    pub fn speeds_decayed(&self, command: &[f64; 4], decay: &[f64; 2]) -> [f64; 4] {
+        let p = &self.params;
+        core::array::from_fn(|i| {
+            let target = p.clamp_speed(command[i]);
+            let now = self.speeds[i];
+            let (tau, e) =
+                if target > now { (p.time_constant_up, decay[0]) } else { (p.time_constant_down, decay[1]) };
+            if tau == 0.0 {
+                target
+            } else {
+                target + (now - target) * e
+            }
+        })
+    }
+
+    /// [`Motors::advance`] by the `dt` of `decay` ([`Motors::decay`]).
+    #[inline]
+    pub fn advance_decayed(&mut self, command: &[f64; 4], decay: &[f64; 2]) {
+        self.speeds = self.speeds_decayed(command, decay);
+    }
+
     /// Draw one standard-normal sample per rotor (rotors 1..4 in order) for
     /// the next period's noise; all zeros, **without touching `rng`**, when
     /// the noise is off.

@@ -13,6 +13,8 @@
 
 use ftsmc_core::allocation::{forces_from_squared_speeds, rotor_speeds, squared_speeds_from_forces};
 use ftsmc_core::model::{Command, QuadrotorParams};
+use core::cell::Cell;
+
 use rand_chacha::ChaCha8Rng;
 
 use crate::actuators::{motor_noise_rng, ActuatorParams, Mixer, MixerKind, Motors};
@@ -61,6 +63,8 @@ pub(crate) enum Drive<'a> {
     Lagged {
         /// The motors at the start of the substep.
         motors: &'a Motors,
+        /// The lag's decay factors, cached per stage step ([`DecayCache`]).
+        decay: &'a DecayCache,
         /// Rotor speed commands, rad/s.
         target: &'a [f64; 4],
         /// Motor noise draws of the period.
@@ -69,12 +73,15 @@ pub(crate) enum Drive<'a> {
 }
 
 impl Drive<'_> {
-    /// Rotor speeds `dt` seconds into the substep, rad/s.
+    /// Rotor speeds `dt` seconds into the substep (an RK4 stage time minus
+    /// the substep's start), rad/s.
     #[inline]
     pub(crate) fn speeds_after(&self, dt: f64) -> [f64; 4] {
         match self {
             Drive::Held { speeds, .. } => **speeds,
-            Drive::Lagged { motors, target, noise } => motors.with_noise(&motors.speeds_after(target, dt), noise),
+            Drive::Lagged { motors, target, noise, decay } => {
+                motors.with_noise(&motors.speeds_decayed(target, &decay.get(motors, dt)), noise)
+            }
         }
     }
 }
@@ -86,15 +93,16 @@ pub(crate) enum ActuatorStage {
     /// Eq. 2 inverted and clamped per rotor, reached at once; `mixer` for the
     /// rigid body's allocation, `None` for the paper plant's Eq. 2.
     Clamp { min: f64, max: f64, mixer: Option<Mixer> },
-    /// Mixer, lagged motors and their noise stream.
-    Rotors { mixer: Mixer, motors: Motors, rng: ChaCha8Rng },
+    /// Mixer, lagged motors (with their decay factors over half and a whole
+    /// substep, computed once) and their noise stream.
+    Rotors { mixer: Mixer, motors: Motors, rng: ChaCha8Rng, decay: DecayCache },
 }
 
 impl ActuatorStage {
     /// The stage for `scenario` (see the module table); `allocation` is the
     /// truth model's `u = A ω²` and `hover` its hover rotor speed (rad/s),
-    /// where lagged motors start.
-    pub(crate) fn of(scenario: &Scenario, allocation: [[f64; 4]; 4], hover: f64) -> Self {
+    /// where lagged motors start; `h` the RK4 substep, s.
+    pub(crate) fn of(scenario: &Scenario, allocation: [[f64; 4]; 4], hover: f64, h: f64) -> Self {
         let act = actuators(scenario);
         let paper = scenario.vehicle.model == VehicleModel::Paper;
         let mixer = || Mixer::new(allocation, &act).expect("validated by Scenario::validate");
@@ -107,11 +115,11 @@ impl ActuatorStage {
                 max: act.max_rotor_speed,
                 mixer: (!paper).then(mixer),
             },
-            MixerKind::ThrustFirst => ActuatorStage::Rotors {
-                mixer: mixer(),
-                motors: Motors::new(&act, [hover; 4]),
-                rng: motor_noise_rng(scenario.seed),
-            },
+            MixerKind::ThrustFirst => {
+                let motors = Motors::new(&act, [hover; 4]);
+                let decay = DecayCache::new(&motors, h);
+                ActuatorStage::Rotors { mixer: mixer(), motors, rng: motor_noise_rng(scenario.seed), decay }
+            }
         }
     }
 
@@ -143,7 +151,7 @@ impl ActuatorStage {
                     noise: [0.0; 4],
                 }
             }
-            ActuatorStage::Rotors { mixer, motors, rng } => {
+            ActuatorStage::Rotors { mixer, motors, rng, .. } => {
                 let m = mixer.mix(command);
                 let noise = motors.sample_noise(rng);
                 let omega = motors.with_noise(&motors.speeds(), &noise);
@@ -156,18 +164,55 @@ impl ActuatorStage {
     #[inline]
     pub(crate) fn drive<'a>(&'a self, delivered: &'a Delivered, omega_bar: f64) -> Drive<'a> {
         match self {
-            ActuatorStage::Rotors { motors, .. } => {
-                Drive::Lagged { motors, target: &delivered.target, noise: &delivered.noise }
+            ActuatorStage::Rotors { motors, decay, .. } => {
+                Drive::Lagged { motors, target: &delivered.target, noise: &delivered.noise, decay }
             }
             _ => Drive::Held { applied: &delivered.applied, speeds: &delivered.target, omega_bar },
         }
     }
 
-    /// Advance the motors by one substep of `h` seconds towards `target`.
+    /// Advance the motors by one substep towards `target`.
     #[inline]
-    pub(crate) fn advance(&mut self, target: &[f64; 4], h: f64) {
-        if let ActuatorStage::Rotors { motors, .. } = self {
-            motors.advance(target, h);
+    pub(crate) fn advance(&mut self, target: &[f64; 4]) {
+        if let ActuatorStage::Rotors { motors, decay, .. } = self {
+            motors.advance_decayed(target, &decay.whole);
         }
+    }
+}
+
+/// The motor lag's decay factors `[e^{−dt/τ_up}, e^{−dt/τ_down}]`
+/// ([`Motors::decay`]) for the few step lengths a flight uses, each
+/// computed once. The RK4 stage offsets `(t0 + h/2) − t0` and `(t0 + h) − t0`
+/// differ from `h/2` and `h` in their last bits depending on `t0`, so the
+/// factors are cached by the exact offset: the rotor speeds are the very
+/// bits [`Motors::speeds_after`] gives, without its exponentials.
+pub(crate) struct DecayCache {
+    /// Factors over a whole substep `h` (motor advance).
+    pub whole: [f64; 2],
+    slots: [Cell<(u64, [f64; 2])>; 16],
+}
+
+impl DecayCache {
+    /// A cache for `motors` and substeps of `h` seconds.
+    pub(crate) fn new(motors: &Motors, h: f64) -> Self {
+        // NaN bits never equal a real offset's: every slot starts empty.
+        Self { whole: motors.decay(h), slots: core::array::from_fn(|_| Cell::new((f64::NAN.to_bits(), [1.0; 2]))) }
+    }
+
+    /// The factors over `dt` seconds.
+    #[inline]
+    pub(crate) fn get(&self, motors: &Motors, dt: f64) -> [f64; 2] {
+        if dt == 0.0 {
+            return [1.0; 2];
+        }
+        let key = dt.to_bits();
+        let slot = &self.slots[((key ^ (key >> 4) ^ (key >> 9)) & 15) as usize];
+        let (k, v) = slot.get();
+        if k == key {
+            return v;
+        }
+        let v = motors.decay(dt);
+        slot.set((key, v));
+        v
     }
 }

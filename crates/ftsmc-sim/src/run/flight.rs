@@ -21,7 +21,7 @@
 
 use ftsmc_core::allocation::{residual_speed, rotor_speeds};
 use ftsmc_core::cascade::Controller;
-use ftsmc_core::model::{QuadrotorParams, Reference};
+use ftsmc_core::model::{QuadState, QuadrotorParams, Reference};
 
 use crate::envelope::Tracker;
 use crate::environment::ground::GroundSettings;
@@ -59,6 +59,8 @@ pub struct Flight<'s, C: Controller + ?Sized> {
     k: u64,
     env: Environment<'s>,
     truth: Box<dyn TruthModel + Send>,
+    /// The truth's Euler state at the current period boundary (converted once per period).
+    state: QuadState,
     actuators: ActuatorStage,
     demand_params: QuadrotorParams,
     base_plant: QuadrotorParams,
@@ -99,8 +101,14 @@ impl<'s, C: Controller + ?Sized> Flight<'s, C> {
         let steps = super::planned_steps(scenario);
         let h = dt / sim.substeps as f64;
         let (truth, allocation, demand_params, hover) = truth_of(scenario);
-        let actuators = ActuatorStage::of(scenario, allocation, hover);
-        let env = Environment::new(scenario.environment());
+        let actuators = ActuatorStage::of(scenario, allocation, hover, h);
+        let mut env_params = scenario.environment();
+        if scenario.vehicle.model == crate::vehicle::VehicleModel::RigidBody {
+            // The paper's drag coefficients (and their noise) act on Eq. 1 only:
+            // no draws that feed nothing.
+            env_params.drag_noise = None;
+        }
+        let env = Environment::new(env_params);
         let wind = scenario.wind.clone().and_then(|w| Wind::new(w, h, scenario.seed).ok());
         let sensors =
             scenario.sensors.filter(|s| !s.is_perfect()).map(|s| Sensors::new(s, sim.control_rate, scenario.seed));
@@ -118,6 +126,7 @@ impl<'s, C: Controller + ?Sized> Flight<'s, C> {
             steps,
             k: 0,
             env,
+            state: truth.quad_state(),
             truth,
             actuators,
             demand_params,
@@ -162,7 +171,7 @@ impl<'s, C: Controller + ?Sized> Flight<'s, C> {
     }
 
     fn boundary(&mut self, t: f64) {
-        let s = self.truth.quad_state();
+        let s = self.state;
         self.envelope.boundary(t, &s, &self.reference);
         self.stats.boundary(t, &s, &self.reference);
         for o in &mut self.observers {
@@ -186,7 +195,7 @@ impl<'s, C: Controller + ?Sized> Flight<'s, C> {
         }
         let (k, dt, h) = (self.k, self.dt, self.h);
         let t = k as f64 * dt;
-        let state = self.truth.quad_state();
+        let state = self.state;
         let measured = self.sensors.as_mut().map_or(state, |s| s.measure(&state));
         let command = self.controller.update(&measured, &self.reference, dt);
         self.env.next_period();
@@ -257,7 +266,7 @@ impl<'s, C: Controller + ?Sized> Flight<'s, C> {
                     return self.end(ExitStatus::Crashed { time: t0 + fraction * h, impact_speed });
                 }
             }
-            self.actuators.advance(&delivered.target, h);
+            self.actuators.advance(&delivered.target);
             self.tv_now = tv_next;
         }
         self.k = k + 1;
@@ -265,9 +274,9 @@ impl<'s, C: Controller + ?Sized> Flight<'s, C> {
 
         let t_next = (k + 1) as f64 * dt;
         self.reference = reference_at(self.scenario, t_next);
+        self.state = self.truth.quad_state();
         self.boundary(t_next);
-        let s = self.truth.quad_state();
-        if let Some(divergence) = check_divergence(self.scenario, &s.to_array(), &self.reference) {
+        if let Some(divergence) = check_divergence(self.scenario, &self.state.to_array(), &self.reference) {
             return self.end(ExitStatus::Diverged { divergence, time: t_next });
         }
         if self.k >= self.steps {
