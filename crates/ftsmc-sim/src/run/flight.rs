@@ -200,8 +200,8 @@ impl<'s, C: Controller + ?Sized> Flight<'s, C> {
         let command = self.controller.update(&measured, &self.reference, dt);
         self.env.next_period();
         let plant_now = self.env.params_with(&self.tv_now);
-        let demand = rotor_speeds(&self.demand_params, &command, f64::INFINITY);
         let delivered: Delivered = self.actuators.deliver(&command, &plant_now);
+        let demand = delivered.demand.unwrap_or_else(|| rotor_speeds(&self.demand_params, &command, f64::INFINITY));
         if self.legacy_rotor_metrics {
             self.peak_demand = demand.iter().fold(self.peak_demand, |m, &w| if w.is_finite() { m.max(w) } else { m });
             self.saturated_periods += u64::from(delivered.saturated);
@@ -247,7 +247,7 @@ impl<'s, C: Controller + ?Sized> Flight<'s, C> {
         let omega_bar = residual_speed(&delivered.target);
         for j in 0..self.scenario.simulation.substeps {
             let t0 = t + j as f64 * h;
-            let wind = self.wind.as_mut().map_or([0.0; 3], |w| w.step(t0));
+            let wind = self.wind.as_mut().map(|w| w.step(t0));
             let tv_next = self.env.time_varying(t0 + h);
             let z_prev = *self.truth.vertical().0;
             self.truth.substep(&Substep {
