@@ -95,7 +95,7 @@ use crate::math::{
     rotation_from_euler, sin, sin_cos, sqrt, Mat3, Vec3,
 };
 use crate::model::{Command, QuadState, QuadrotorParams, Reference};
-use crate::se3::{limit_tilt, reference_finite};
+use crate::setpoint::{limit_tilt, reference_finite};
 
 /// PX4 `MPC_THR_HOVER` default: hover at half the maximum thrust (T/W = 2).
 pub const PX4_HOVER_THRUST: f64 = 0.5;

@@ -11,10 +11,10 @@
 //! the control period; the rotor stage hands the truth model the lagged
 //! rotor speeds at each RK4 stage time.
 
+use core::cell::Cell;
 use ftsmc_core::allocation::{forces_from_squared_speeds, rotor_speeds, squared_speeds_from_forces};
 use ftsmc_core::math::sqrt;
 use ftsmc_core::model::{Command, QuadrotorParams};
-use core::cell::Cell;
 
 use rand_chacha::ChaCha8Rng;
 
@@ -28,7 +28,9 @@ use crate::vehicle::VehicleModel;
 /// `[actuators] max_rotor_speed = …, mixer = "clamp"` it always meant on the paper plant.
 pub fn actuators(scenario: &Scenario) -> ActuatorParams {
     scenario.actuators.unwrap_or(match scenario.simulation.max_rotor_speed {
-        Some(max_rotor_speed) => ActuatorParams { max_rotor_speed, mixer: MixerKind::Clamp, ..ActuatorParams::default() },
+        Some(max_rotor_speed) => {
+            ActuatorParams { max_rotor_speed, mixer: MixerKind::Clamp, ..ActuatorParams::default() }
+        }
         None => ActuatorParams::default(),
     })
 }
@@ -114,11 +116,9 @@ impl ActuatorStage {
             return ActuatorStage::Ideal;
         }
         match act.mixer {
-            MixerKind::Clamp => ActuatorStage::Clamp {
-                min: act.min_rotor_speed,
-                max: act.max_rotor_speed,
-                mixer: (!paper).then(mixer),
-            },
+            MixerKind::Clamp => {
+                ActuatorStage::Clamp { min: act.min_rotor_speed, max: act.max_rotor_speed, mixer: (!paper).then(mixer) }
+            }
             MixerKind::ThrustFirst => {
                 let motors = Motors::new(&act, [hover; 4]);
                 let decay = DecayCache::new(&motors, h);
@@ -162,7 +162,14 @@ impl ActuatorStage {
                 let m = mixer.mix(command);
                 let noise = motors.sample_noise(rng);
                 let omega = motors.with_noise(&motors.speeds(), &noise);
-                Delivered { applied: m.applied, target: m.rotor_speeds, omega, saturated: m.saturated, noise, demand: None }
+                Delivered {
+                    applied: m.applied,
+                    target: m.rotor_speeds,
+                    omega,
+                    saturated: m.saturated,
+                    noise,
+                    demand: None,
+                }
             }
         }
     }

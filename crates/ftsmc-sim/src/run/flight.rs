@@ -150,8 +150,12 @@ impl<'s, C: Controller + ?Sized> Flight<'s, C> {
         flight
     }
 
-    /// Add an observer of every tick and period boundary from now on.
+    /// Add an observer of every tick and period boundary from now on; it
+    /// first sees the boundary the flight is at (`t = 0` for a new flight).
     pub fn observe_with(&mut self, observer: &'s mut dyn Observer) {
+        if self.exit.is_none() {
+            observer.boundary(self.k as f64 * self.dt, &self.state, &self.reference);
+        }
         self.observers.push(observer);
     }
 
