@@ -93,6 +93,8 @@ impl Drive<'_> {
 }
 
 /// The actuator stage of one flight.
+// One value per flight: the size difference between variants does not matter.
+#[allow(clippy::large_enum_variant)]
 pub(crate) enum ActuatorStage {
     /// The command applied as is (paper truth model only).
     Ideal,
