@@ -137,10 +137,9 @@ impl TruthModel for RigidTruth {
         let added = tv.mass - base_plant.mass;
         let scale = tv.inertia[0] / base_plant.inertia[0];
         if (added, scale) != self.key {
-            let mut p = self.base;
-            p.mass += added;
-            p.inertia = p.inertia.map(|r| r.map(|v| v * scale));
-            if let Ok(b) = RigidBody::new(p) {
+            let mass = self.base.mass + added;
+            let inertia = self.base.inertia.map(|r| r.map(|v| v * scale));
+            if let Ok(b) = self.body.with_mass_and_inertia(mass, inertia) {
                 self.body = b;
             }
             self.key = (added, scale);
