@@ -83,7 +83,7 @@ pub fn run(scenario: &Scenario, runs: u64, threads: Option<usize>, out: &Path, f
     let seed = scenario.seed;
     let folder = out.join(&scenario.name);
     // Refuse a bad --out before any flight.
-    let dir = ResultDir::begin(&folder)?;
+    let dir = ResultDir::begin(&folder, "montecarlo")?;
     let spec = scenario.montecarlo.clone().unwrap_or_else(|| {
         eprintln!("note: {} has no [montecarlo] section; runs differ only in their seeds (drag noise)", scenario.name);
         MonteCarloSpec::default()

@@ -467,7 +467,7 @@ pub fn reproduce(out: &Path, figures: bool, realistic_runs: u64) -> Result<()> {
 
     // Refuse a bad --out before any flight; everything goes into a staging
     // folder that replaces `out` whole at the end.
-    let dir = ResultDir::begin(out)?;
+    let dir = ResultDir::begin(out, "reproduce")?;
     eprintln!("flying {} runs ({} and {}) …", jobs.len(), s1.name, s2.name);
     let runs = fly(&jobs)?;
     write_runs(&runs, &dir, false)?;
@@ -965,7 +965,7 @@ pub fn beyond_the_paper(dir: &ResultDir, figures: bool, mc_runs: u64) -> Result<
 pub fn run_scenario(scenario: &Scenario, out: &Path, figures: bool) -> Result<()> {
     // `out/<name>/` is the result folder: checked before any flight,
     // written in staging, swapped into place whole.
-    let dir = ResultDir::begin(&out.join(&scenario.name))?;
+    let dir = ResultDir::begin(&out.join(&scenario.name), "run")?;
     let jobs: Vec<Job> = scenario
         .controllers
         .iter()
