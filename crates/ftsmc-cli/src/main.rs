@@ -58,6 +58,9 @@ enum Command {
         /// Monte Carlo runs of realistic-scenario-2 per controller in the "Beyond the paper" section (0: none).
         #[arg(long, default_value_t = reproduce::DEFAULT_REALISTIC_RUNS)]
         realistic_runs: u64,
+        /// Raise a cost limit of the realistic Monte Carlo, e.g. `--limit max_flights=1e7` (repeatable; see docs/scenarios.md).
+        #[arg(long = "limit", value_name = "KEY=VALUE")]
+        limit: Vec<String>,
     },
     /// Run one scenario file with its controllers (or those given); write CSV, summary.json and comparison figures.
     Run {
@@ -197,7 +200,8 @@ fn main() -> std::process::ExitCode {
 
 fn run(cli: Cli) -> Result<()> {
     match cli.command {
-        Command::Reproduce { out, no_figures, realistic_runs } => {
+        Command::Reproduce { out, no_figures, realistic_runs, limit } => {
+            reproduce::price_realistic_runs(realistic_runs, &limit)?;
             reproduce::reproduce(&out, !no_figures, realistic_runs)
         }
         Command::Run { scenario, controllers, out, no_figures, limit } => {

@@ -50,8 +50,10 @@ fn commands_sharing_an_out_keep_each_others_results() {
     let run = ftsmc(&["run", "paper-scenario-2", "-c", "ftaftsmc", "--out", "out", "--no-figures"], &dir);
     assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
     let run_csv = std::fs::read(folder.join("ftaftsmc.csv")).unwrap();
-    let mc =
-        ftsmc(&["montecarlo", "paper-scenario-2", "--runs", "2", "-c", "ftaftsmc", "--out", "out", "--no-figures"], &dir);
+    let mc = ftsmc(
+        &["montecarlo", "paper-scenario-2", "--runs", "2", "-c", "ftaftsmc", "--out", "out", "--no-figures"],
+        &dir,
+    );
     assert!(mc.status.success(), "{}", String::from_utf8_lossy(&mc.stderr));
     let err = String::from_utf8_lossy(&mc.stderr);
     // Both write summary.json and scenario.toml: the user is told.
