@@ -456,9 +456,7 @@ proptest! {
         velocity_p in prop_oneof![Just(f64::from_bits(1)), Just(1e-310), Just(f64::MIN_POSITIVE)],
         s in cascade_steps(),
     ) {
-        let mut gains = PidGains::default();
-        gains.yaw_weight = yaw_weight;
-        gains.velocity_p = [velocity_p; 3];
+        let gains = PidGains { yaw_weight, velocity_p: [velocity_p; 3], ..PidGains::default() };
         let mut c = PidController::new(QuadrotorParams::default(), gains).unwrap();
         for (state, reference, dt, _) in &s {
             let cmd = c.update(state, reference, *dt);

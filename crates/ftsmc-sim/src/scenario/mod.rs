@@ -264,9 +264,9 @@ pub struct Scenario {
     pub description: String,
     /// Simulated time, s.
     pub duration: f64,
-    /// Master seed of every random stream (drag noise, Monte Carlo); seeds
-    /// >= 2^63 are written as decimal strings, since TOML integers are i64
-    /// (see [`seed`]).
+    /// Master seed of every random stream (drag noise, Monte Carlo); a seed
+    /// of 2^63 or more is written as a decimal string, since TOML integers
+    /// are i64 (see [`seed`]).
     #[serde(default, with = "seed")]
     pub seed: u64,
     /// Controllers to run (registry names).
