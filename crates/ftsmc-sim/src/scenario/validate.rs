@@ -217,6 +217,7 @@ impl Scenario {
         // must stay in the rigid body's valid range.
         if let (crate::vehicle::VehicleModel::RigidBody, Some(p)) = (self.vehicle.model, &self.payload) {
             let mut rb = self.rigid_body_params();
+            let body_mass = rb.mass;
             if rb.check().is_ok() {
                 rb.mass += p.mass;
                 if let Err(e) = rb.check() {
@@ -226,7 +227,7 @@ impl Scenario {
                         &format!(
                             "a payload keeping the rigid body's {} ({} kg + payload = {}) in range: {}",
                             e.field,
-                            show(rb.mass - p.mass),
+                            show(body_mass),
                             show(rb.mass),
                             e.expected
                         ),
