@@ -220,6 +220,11 @@ fn run(cli: Cli) -> Result<()> {
             scenario.controllers = controllers.clone();
             anyhow::ensure!(per_decade >= 1, "--per-decade must be at least 1");
             ftsmc_sim::limits::check_sweep(&scenario.limits, ftsmc_sim::limits::sweep_points(5, per_decade as u64))?;
+            // With `max_sweep_points = inf` the check is off: refuse what
+            // cannot be counted or held in memory instead of overflowing.
+            let points = per_decade.checked_mul(5).and_then(|n| n.checked_add(1));
+            let fits = points.is_some_and(|n| Vec::<f64>::new().try_reserve_exact(n).is_ok());
+            anyhow::ensure!(fits, "--per-decade {per_decade}: 5 × {per_decade} + 1 magnitudes do not fit in memory");
             let sim = &scenario.simulation;
             let t_max = ftsmc_sim::analysis::fixed_time::SweepSettings::default().t_max;
             scenario.limits.ensure(

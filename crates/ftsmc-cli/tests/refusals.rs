@@ -309,3 +309,14 @@ fn a_seed_of_2_pow_64_minus_1_writes_a_scenario_that_runs_again() {
     assert!(again.contains(&format!("seed = \"{big}\"")), "{again}");
     std::fs::remove_dir_all(&dir).ok();
 }
+
+#[test]
+fn an_inf_limit_never_overflows() {
+    // The check is off, but 5 × u64::MAX magnitudes cannot be counted: an error, not a panic.
+    refused(
+        "inf-per-decade",
+        &["fixed-time", "-c", "pid", "--per-decade", "18446744073709551615", "--limit", "max_sweep_points=inf"],
+        None,
+        &["--per-decade 18446744073709551615", "do not fit in memory"],
+    );
+}
