@@ -276,18 +276,32 @@ fn list_files(dir: &Path, prefix: &str, out: &mut Vec<String>) {
 
 /// Tell the user when this result replaces files another command's
 /// manifest (in `old`) lists.
+/// The manifests of the destination's parent folder count too (prefixed
+/// with the destination's name): `ftsmc run paper-scenario-1` after
+/// `ftsmc reproduce` replaces CSVs that `reproduce` lists.
 fn warn_replaced(old: &Path, owner: &str, written: &HashSet<String>, dest: &Path) {
-    let Ok(entries) = std::fs::read_dir(old) else { return };
+    let name = dest.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    let parent = dest.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    for (folder, prefix) in [(old, String::new()), (parent, format!("{name}/"))] {
+        warn_replaced_in(folder, &prefix, owner, written, dest);
+    }
+}
+
+fn warn_replaced_in(folder: &Path, prefix: &str, owner: &str, written: &HashSet<String>, dest: &Path) {
+    let Ok(entries) = std::fs::read_dir(folder) else { return };
     for entry in entries.flatten() {
         let file_name = entry.file_name().to_string_lossy().into_owned();
         let Some(other) = file_name.strip_prefix(".ftsmc-").and_then(|r| r.strip_suffix(".manifest")) else {
             continue;
         };
-        if other == owner {
+        if other == owner && prefix.is_empty() {
             continue;
         }
-        let mut replaced: Vec<String> =
-            read_manifest(&entry.path()).into_iter().filter(|f| written.contains(f)).collect();
+        let mut replaced: Vec<String> = read_manifest(&entry.path())
+            .into_iter()
+            .filter_map(|f| f.strip_prefix(prefix).map(str::to_string))
+            .filter(|f| written.contains(f))
+            .collect();
         if !replaced.is_empty() {
             replaced.sort();
             eprintln!(

@@ -466,7 +466,7 @@ pub fn reproduce(out: &Path, figures: bool, realistic_runs: u64) -> Result<()> {
     jobs.push(Job { scenario: s2.clone(), controller: "ftaftsmc-no-mass".into(), key: "ftaftsmc-no-mass".into() });
 
     // Refuse a bad --out before any flight; everything goes into a staging
-    // folder that replaces `out` whole at the end.
+    // folder swapped into place at the end (keeping files reproduce did not write).
     let dir = ResultDir::begin(out, "reproduce")?;
     eprintln!("flying {} runs ({} and {}) …", jobs.len(), s1.name, s2.name);
     let runs = fly(&jobs)?;

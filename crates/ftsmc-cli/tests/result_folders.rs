@@ -72,6 +72,10 @@ fn commands_sharing_an_out_keep_each_others_results() {
     assert!(s1.join("ftaftsmc-tuned.csv").is_file());
     let run1 = ftsmc(&["run", "paper-scenario-1", "--out", "out", "--no-figures"], &dir);
     assert!(run1.status.success(), "{}", String::from_utf8_lossy(&run1.stderr));
+    let err = String::from_utf8_lossy(&run1.stderr);
+    assert!(err.contains("note: replaced ftaftsmc.csv, ranftsmc.csv, scenario.toml, tsm-sta.csv"), "{err}");
+    assert!(err.contains("written by `ftsmc reproduce`"), "{err}");
+    assert!(s1.join("ftaftsmc-tuned.csv").is_file());
     let summary: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.join("out/summary.json")).unwrap()).unwrap();
     for (scenario, runs) in summary["scenarios"].as_object().unwrap() {
