@@ -100,7 +100,7 @@ impl<'s, C: Controller + ?Sized> Flight<'s, C> {
         let dt = scenario.control_period();
         let steps = super::planned_steps(scenario);
         let h = dt / sim.substeps as f64;
-        let (truth, allocation, demand_params, hover) = truth_of(scenario);
+        let (truth, allocation, demand_params, hover, invalid) = truth_of(scenario);
         let actuators = ActuatorStage::of(scenario, allocation, hover, h);
         let mut env_params = scenario.environment();
         if scenario.vehicle.model == crate::vehicle::VehicleModel::RigidBody {
@@ -147,6 +147,9 @@ impl<'s, C: Controller + ?Sized> Flight<'s, C> {
             exit: None,
         };
         flight.boundary(0.0);
+        if let Some(divergence) = invalid {
+            flight.exit = Some(ExitStatus::Diverged { divergence, time: 0.0 });
+        }
         flight
     }
 
@@ -211,7 +214,9 @@ impl<'s, C: Controller + ?Sized> Flight<'s, C> {
             self.saturated_periods += u64::from(delivered.saturated);
         }
         self.controller.actuator_feedback(delivered.saturated);
-        self.truth.begin_period(&self.tv_now, &self.base_plant);
+        if let Err(divergence) = self.truth.begin_period(&self.tv_now, &self.base_plant) {
+            return self.end(ExitStatus::Diverged { divergence, time: t });
+        }
 
         let applied = delivered.applied;
         let u = [applied.thrust, applied.torque[0], applied.torque[1], applied.torque[2]];
@@ -274,7 +279,9 @@ impl<'s, C: Controller + ?Sized> Flight<'s, C> {
             self.tv_now = tv_next;
         }
         self.k = k + 1;
-        self.options.step_done(self.k);
+        if self.options.step_done(self.k) {
+            return self.end(ExitStatus::Interrupted { time: self.k as f64 * dt });
+        }
 
         let t_next = (k + 1) as f64 * dt;
         self.reference = reference_at(self.scenario, t_next);
