@@ -4,6 +4,7 @@
 
 mod figures;
 mod fixed_time;
+mod ladder;
 mod montecarlo;
 mod output;
 mod plot;
@@ -55,7 +56,7 @@ enum Command {
         /// Skip figure rendering (tables, CSV and JSON only).
         #[arg(long)]
         no_figures: bool,
-        /// Monte Carlo runs of realistic-scenario-2 per controller in the "Beyond the paper" section (0: none).
+        /// Monte Carlo runs of each wind-ladder rung (realistic-<level>-<n>) per controller in the "Beyond the paper" section (0: none).
         #[arg(long, default_value_t = reproduce::DEFAULT_REALISTIC_RUNS)]
         realistic_runs: u64,
     },

@@ -134,22 +134,29 @@ impl Se3Gains {
         }
     }
 
-    /// The default procedure (docs/controllers.md, "se3"): the attitude
-    /// loop gets the natural frequency of the [`crate::pid`] default's
-    /// small-error attitude loop on the same vehicle,
-    /// `ω_R,i = sqrt(K_rate,i K_att,i / J_i)` (PX4's gains rescaled by
-    /// [`crate::pid::PidGains::for_vehicle`]; 13.9, 13.9, 2.40 rad/s for the
-    /// paper's quadrotor), critically damped (`ζ_R = 1`), so `pid` and `se3`
-    /// are compared at equal attitude bandwidth; the position loop is
-    /// 5 times slower than roll/pitch, `ω_x = ω_R,roll / 5` (2.79 rad/s),
-    /// critically damped. Paper quadrotor: `k_x = 5.75 N/m`,
-    /// `k_v = 4.12 N·s/m`, `k_R = (0.743, 0.743, 0.044) N·m`,
-    /// `k_Ω = (0.107, 0.107, 0.037) N·m·s/rad`.
+    /// The default gains (docs/controllers.md, "se3"): RotorPy's
+    /// Hummingbird gains (spencerfolk/rotorpy, `rotorpy/controllers/
+    /// quadrotor_control.py`, `SE3Control`), which are per unit mass and
+    /// inertia (`kp_pos = (6.5, 6.5, 15)`, `kd_pos = (4, 4, 9)` in 1/s² and
+    /// 1/s; `kp_att = 544` 1/s², `kd_att = 46.64` 1/s), carried to `params`
+    /// by RotorPy's own scaling: `k_x = m kp_pos`, `k_v = m kd_pos`,
+    /// `k_R = J kp_att`, `k_Ω = J kd_att`. They place the position loop at
+    /// ω_n = 2.55 rad/s (ζ 0.78) horizontally, 3.87 rad/s (ζ 1.16)
+    /// vertically, and the attitude loop at ω_n = 23.3 rad/s (ζ 1.0) on
+    /// every vehicle. Paper quadrotor: `k_x = (4.81, 4.81, 11.1) N/m`,
+    /// `k_v = (2.96, 2.96, 6.66) N·s/m`, `k_R = (2.08, 2.08, 4.17) N·m`,
+    /// `k_Ω = (0.178, 0.178, 0.357) N·m·s/rad`. `max_tilt`, `min_thrust`,
+    /// `max_thrust` as [`Self::from_bandwidth`].
     pub fn for_vehicle(params: &QuadrotorParams) -> Self {
-        let pid = crate::pid::PidGains::for_vehicle(params);
+        let m = params.mass;
         let j = params.inertia;
-        let w = [0, 1, 2].map(|i| sqrt(pid.rate_p[i] * pid.attitude_p[i] / j[i]));
-        Self::from_bandwidth(params, w, 1.0, w[0].min(w[1]) / 5.0, 1.0)
+        Self {
+            position: [6.5 * m, 6.5 * m, 15.0 * m],
+            velocity: [4.0 * m, 4.0 * m, 9.0 * m],
+            attitude: j.map(|ji| 544.0 * ji),
+            angular_rate: j.map(|ji| 46.64 * ji),
+            ..Self::from_bandwidth(params, [1.0; 3], 1.0, 1.0, 1.0)
+        }
     }
 
     /// Range checks: every gain in `(0, 1e6]`, `0 < max_tilt <= π/2`,
