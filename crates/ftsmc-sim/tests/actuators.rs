@@ -17,6 +17,7 @@ fn lagged() -> ActuatorParams {
         time_constant_up: 0.05,
         time_constant_down: 0.02,
         noise: None,
+        ..ActuatorParams::default()
     }
 }
 
