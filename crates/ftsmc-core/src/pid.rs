@@ -59,7 +59,9 @@
 //!   limited (24.0 N on the AscTec Hummingbird), and `m g / MPC_THR_HOVER`
 //!   = 2 m g (PX4's default hover thrust 0.5) when they are not (the paper
 //!   plant). The hover thrust is `m g` (what PX4's hover-thrust estimator
-//!   converges to), `thrust_min = 0.12 T_max` (`MPC_THR_MIN`), margin
+//!   converges to), `thrust_min = 0.12 T_max` (`MPC_THR_MIN`; at most
+//!   `m g / 2`, so a vehicle with thrust-to-weight above 4 can still
+//!   descend), margin
 //!   `0.3 T_max` (`MPC_THR_XY_MARG`), `thrust_max = T_max` (`MPC_THR_MAX`
 //!   1.0): with PX4's mixer (`[actuators] mixer = "px4"`) the allocator
 //!   lowers the collective thrust to keep roll/pitch, so the controller
@@ -136,7 +138,7 @@ pub struct PidGains {
     pub max_tilt: f64,
     /// Hover thrust `H`, N (`MPC_THR_HOVER` × T_max = m g).
     pub hover_thrust: f64,
-    /// Minimum collective thrust, N (`MPC_THR_MIN` 0.12 × T_max).
+    /// Minimum collective thrust, N (`MPC_THR_MIN` 0.12 × T_max, at most m g / 2).
     pub thrust_min: f64,
     /// Maximum collective thrust, N (`MPC_THR_MAX` 1.0 × T_max). A lower
     /// value is a private thrust cap, useful only with a thrust-first mixer.
@@ -202,7 +204,10 @@ impl PidGains {
             max_velocity_down: 1.5,
             max_tilt: 45.0 * deg,
             hover_thrust: weight,
-            thrust_min: 0.12 * t_max,
+            // MPC_THR_MIN, kept below half the hover thrust: on a vehicle
+            // with thrust-to-weight above 4 (0.12 T_max > m g / 2) PX4's
+            // fraction would leave no room to descend.
+            thrust_min: (0.12 * t_max).min(0.5 * weight),
             thrust_max: t_max,
             thrust_xy_margin: 0.3 * t_max,
             attitude_p: [4.0, 4.0, 2.8],
