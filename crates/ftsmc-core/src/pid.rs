@@ -738,7 +738,7 @@ mod tests {
         let [roll, _, yaw] = PidGains::max_torques(&p);
         // √2 l T_max/4 and (d/b) T_max with T_max = 2 m g = 14.52 N.
         assert!((roll - 1.0779).abs() < 1e-4, "{roll}");
-        assert!((yaw - 0.15723).abs() < 1e-5, "{yaw}");
+        assert!((yaw - 0.157244).abs() < 1e-5, "{yaw}");
         assert!((g.thrust_max - 2.0 * p.mass * p.gravity).abs() < 1e-12);
         assert!((g.hover_thrust - p.mass * p.gravity).abs() < 1e-12);
         // Rate-loop bandwidth K_p τ_max / J.

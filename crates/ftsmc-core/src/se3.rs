@@ -414,14 +414,22 @@ mod tests {
 
     #[test]
     fn default_gains_follow_the_documented_procedure() {
+        // RotorPy's Hummingbird gains per unit mass and inertia, carried to
+        // the paper's quadrotor: the same loops on every vehicle.
         let g = Se3Gains::default();
         let p = QuadrotorParams::default();
-        let wr = (g.attitude[0] / p.inertia[0]).sqrt();
-        assert!((wr - 13.93).abs() < 0.01, "{wr}");
-        assert!((g.angular_rate[0] - 2.0 * p.inertia[0] * wr).abs() < 1e-12);
+        for i in 0..3 {
+            let wr = (g.attitude[i] / p.inertia[i]).sqrt();
+            assert!((wr - 544f64.sqrt()).abs() < 1e-12, "{wr}");
+            let zeta = g.angular_rate[i] / (2.0 * p.inertia[i] * wr);
+            assert!((zeta - 1.0).abs() < 0.001, "{zeta}");
+        }
+        let close = |a: [f64; 3], b: [f64; 3]| a.iter().zip(b).all(|(x, y)| (x - y).abs() < 1e-12);
+        assert!(close(g.position.map(|k| k / p.mass), [6.5, 6.5, 15.0]), "{:?}", g.position);
+        assert!(close(g.velocity.map(|k| k / p.mass), [4.0, 4.0, 9.0]), "{:?}", g.velocity);
+        // Horizontal ω_n 2.55 rad/s, ζ 0.78; vertical 3.87 rad/s, ζ 1.16.
         let wx = (g.position[0] / p.mass).sqrt();
-        assert!((wx - wr / 5.0).abs() < 1e-12);
-        assert!(((g.attitude[2] / p.inertia[2]).sqrt() - 2.40).abs() < 0.01);
+        assert!((wx - 2.55).abs() < 0.01 && (g.velocity[0] / p.mass / (2.0 * wx) - 0.78).abs() < 0.01);
         g.check().unwrap();
     }
 
