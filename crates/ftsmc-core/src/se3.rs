@@ -81,13 +81,13 @@ pub struct Se3Gains {
     /// negative; default `0.24 m g`, PX4's `MPC_THR_MIN` = 0.12 of a maximum
     /// thrust of `2 m g`, see [`crate::pid`]).
     pub min_thrust: f64,
-    /// Largest thrust commanded, N (not in Lee et al.; default `1.6 m g`,
-    /// 80 % of the `2 m g` maximum that [`crate::pid`] assumes, PX4's
-    /// `MPC_THR_HOVER` = 0.5). The simulator's mixer keeps thrust before
-    /// torque, so a thrust command at the rotors' maximum leaves no torque
-    /// at all; the 20 % margin keeps 40 % of the roll/pitch torque
-    /// authority (a 170° recovery without it tumbles, see
-    /// `tests/practitioners.rs`).
+    /// Largest thrust commanded, N (not in Lee et al.). Core default
+    /// `1.6 m g`, 80 % of the `2 m g` maximum that [`crate::pid`] assumes
+    /// on unlimited rotors: a cap for thrust-first mixers, where a thrust
+    /// command at the rotors' maximum leaves no torque. The simulator's
+    /// scenario defaults replace it by the rotors' whole thrust (PX4's
+    /// mixer lowers the collective thrust to keep roll/pitch, so no cap is
+    /// needed), or 10 m g on unlimited rotors.
     pub max_thrust: f64,
 }
 
