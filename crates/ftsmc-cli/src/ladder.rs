@@ -91,6 +91,7 @@ fn cell(rows: &[&McRun]) -> Cell {
                     Divergence::Tilt { .. } => "tilt",
                     Divergence::PositionError { .. } => "position",
                     Divergence::NonFinite => "non-finite",
+                    _ => "other",
                 },
             )),
             _ => None,
@@ -102,7 +103,13 @@ fn cell(rows: &[&McRun]) -> Cell {
     if !diverged.is_empty() {
         let times = sorted(diverged.iter().map(|d| d.0).collect());
         let tilt = diverged.iter().filter(|d| d.1 == "tilt").count();
-        let kind = if tilt == diverged.len() { "tilt" } else { "tilt/position" };
+        let kind = if tilt == diverged.len() {
+            "tilt"
+        } else if diverged.iter().all(|d| d.1 == "tilt" || d.1 == "position") {
+            "tilt/position"
+        } else {
+            "tilt/position/other"
+        };
         why.push(format!(
             "{} diverged ({kind}, median {:.1} s)",
             diverged.len(),
@@ -144,8 +151,11 @@ pub fn ladder(dir: &ResultDir, runs: u64, controllers: &[&str]) -> Result<Ladder
         .iter()
         .map(|(file, text)| Scenario::from_toml_str(text, file).map_err(|e| anyhow!("{e}")))
         .collect::<Result<_>>()?;
-    let total: u64 = scenarios.iter().map(|s| runs * names.len() as u64 * planned_steps(s)).sum();
-    let bar = steps_bar(total, runs * names.len() as u64 * scenarios.len() as u64);
+    // Progress totals saturate instead of overflowing (absurd --realistic-runs
+    // are refused by the pricing before any flight anyway).
+    let per_rung = runs.saturating_mul(names.len() as u64);
+    let total = scenarios.iter().fold(0u64, |t, s| t.saturating_add(per_rung.saturating_mul(planned_steps(s))));
+    let bar = steps_bar(total, per_rung.saturating_mul(scenarios.len() as u64));
     eprintln!("beyond the paper: the wind ladder, {runs} runs of each of {} rungs per controller …", scenarios.len());
     let mut flights = 0;
     let mut table = Table::new([

@@ -5,7 +5,7 @@ use std::fmt::Write as _;
 use std::path::Path;
 use std::time::Instant;
 
-use anyhow::{anyhow, Result};
+use anyhow::{anyhow, Context, Result};
 use ftsmc_core::cascade::AttitudeDerivatives;
 use ftsmc_sim::registry::{self, label};
 use ftsmc_sim::run::{planned_steps, reference_at, RunOptions, RunOutput};
@@ -466,8 +466,8 @@ pub fn reproduce(out: &Path, figures: bool, realistic_runs: u64) -> Result<()> {
     jobs.push(Job { scenario: s2.clone(), controller: "ftaftsmc-no-mass".into(), key: "ftaftsmc-no-mass".into() });
 
     // Refuse a bad --out before any flight; everything goes into a staging
-    // folder that replaces `out` whole at the end.
-    let dir = ResultDir::begin(out)?;
+    // folder swapped into place at the end (keeping files reproduce did not write).
+    let dir = ResultDir::begin(out, "reproduce")?;
     eprintln!("flying {} runs ({} and {}) …", jobs.len(), s1.name, s2.name);
     let runs = fly(&jobs)?;
     write_runs(&runs, &dir, false)?;
@@ -635,9 +635,9 @@ pub struct Beyond {
 fn exit_time(run: &RunOutput) -> Option<f64> {
     match run.exit {
         ftsmc_sim::run::ExitStatus::Completed => None,
-        ftsmc_sim::run::ExitStatus::Diverged { time, .. } | ftsmc_sim::run::ExitStatus::Crashed { time, .. } => {
-            Some(time)
-        }
+        ftsmc_sim::run::ExitStatus::Diverged { time, .. }
+        | ftsmc_sim::run::ExitStatus::Crashed { time, .. }
+        | ftsmc_sim::run::ExitStatus::Interrupted { time } => Some(time),
     }
 }
 
@@ -647,6 +647,7 @@ fn exit_kind(run: &RunOutput) -> &'static str {
         ftsmc_sim::run::ExitStatus::Completed => "completed",
         ftsmc_sim::run::ExitStatus::Diverged { .. } => "diverged",
         ftsmc_sim::run::ExitStatus::Crashed { .. } => "crashed",
+        ftsmc_sim::run::ExitStatus::Interrupted { .. } => "interrupted",
     }
 }
 
@@ -657,11 +658,29 @@ fn max_tilt(run: &RunOutput) -> f64 {
     phi.iter().chain(theta).fold(0.0f64, |m, v| m.max(v.abs()))
 }
 
+/// Price `reproduce --realistic-runs N` before any flight, like
+/// `ftsmc montecarlo`: N runs × [`BEYOND_MC_CONTROLLERS`] flights of every
+/// wind-ladder rung (`ftsmc_sim::scenario::ladder::LADDER`), each against
+/// its limits (raised by `--limit KEY=VALUE`).
+pub fn price_realistic_runs(runs: u64, limit_overrides: &[String]) -> Result<()> {
+    if runs == 0 {
+        return Ok(());
+    }
+    for (file, text) in ftsmc_sim::scenario::ladder::LADDER {
+        let mut base = Scenario::from_toml_str(text, file)?;
+        base.limits.apply_overrides(limit_overrides).map_err(|e| anyhow!(e))?;
+        ftsmc_sim::limits::check_batch(&base.flight_size(), runs, BEYOND_MC_CONTROLLERS.len())
+            .with_context(|| format!("--realistic-runs {runs} ({})", base.name))?;
+    }
+    Ok(())
+}
+
 /// "Beyond the paper": [`BEYOND_CONTROLLERS`] on the paper's and the
-/// realistic scenarios ([`BEYOND_SCENARIOS`]) and a `mc_runs`-run Monte
-/// Carlo of realistic scenario 2 with [`BEYOND_MC_CONTROLLERS`]. Writes into `dir`:
+/// realistic scenarios ([`BEYOND_SCENARIOS`]) and the wind ladder
+/// ([`crate::ladder`]: `mc_runs` Monte Carlo runs of every rung with
+/// [`BEYOND_MC_CONTROLLERS`]). Writes into `dir`:
 /// `beyond/report.md`, `beyond/realism.csv`, `beyond/realism.json`,
-/// `beyond/montecarlo-runs.csv` (when `mc_runs > 0`), per-run CSV and the
+/// `beyond/ladder-runs/<rung>.csv` (when `mc_runs > 0`), per-run CSV and the
 /// resolved `scenario.toml` under `beyond/<scenario>/`, and with `figures`
 /// `figures/beyond/<scenario>-{position,rotors}.{svg,png}`.
 pub fn beyond_the_paper(dir: &ResultDir, figures: bool, mc_runs: u64) -> Result<Beyond> {
@@ -906,7 +925,7 @@ pub fn beyond_the_paper(dir: &ResultDir, figures: bool, mc_runs: u64) -> Result<
 pub fn run_scenario(scenario: &Scenario, out: &Path, figures: bool) -> Result<()> {
     // `out/<name>/` is the result folder: checked before any flight,
     // written in staging, swapped into place whole.
-    let dir = ResultDir::begin(&out.join(&scenario.name))?;
+    let dir = ResultDir::begin(&out.join(&scenario.name), "run")?;
     let jobs: Vec<Job> = scenario
         .controllers
         .iter()
