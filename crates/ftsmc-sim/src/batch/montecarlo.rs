@@ -182,7 +182,8 @@ pub fn summarize_outcomes(rows: &[RowOutcome], controllers: &[String]) -> Vec<(S
             let mut metrics = std::collections::BTreeMap::new();
             if let Some(first) = completed.first() {
                 for (k, (n, _)) in first.metrics.iter().enumerate() {
-                    let values: Vec<f64> = completed.iter().map(|r| r.metrics.get(k).map_or(f64::NAN, |m| m.1)).collect();
+                    let values: Vec<f64> =
+                        completed.iter().map(|r| r.metrics.get(k).map_or(f64::NAN, |m| m.1)).collect();
                     if let Some(st) = stats(&values) {
                         metrics.insert(n.clone(), st);
                     }

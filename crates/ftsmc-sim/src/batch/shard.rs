@@ -41,8 +41,12 @@ pub enum ShardError {
         count: u64,
     },
     /// More shards than runs: some shard would fly nothing.
-    #[error("{count} shards for {runs} runs: every shard needs at least one run (use N <= runs)")]
+    #[error(
+        "shard {index}/{count}: {count} shards for {runs} runs, but every shard needs at least one run (use N <= runs)"
+    )]
     MoreShardsThanRuns {
+        /// K.
+        index: u64,
         /// N.
         count: u64,
         /// Runs of the campaign.
@@ -67,7 +71,7 @@ impl Shard {
     /// `0..runs` and differ in size by at most one run.
     pub fn range(&self, runs: u64) -> Result<Range<u64>, ShardError> {
         if self.count > runs {
-            return Err(ShardError::MoreShardsThanRuns { count: self.count, runs });
+            return Err(ShardError::MoreShardsThanRuns { index: self.index, count: self.count, runs });
         }
         let bound = |k: u64| (u128::from(k) * u128::from(runs) / u128::from(self.count)) as u64;
         Ok(bound(self.index - 1)..bound(self.index))
