@@ -17,12 +17,19 @@ from __future__ import annotations
 import argparse
 import importlib
 import logging
+import resource
 import time
 from typing import Any
 
 import pandas
 
 import ftsmc
+
+
+def cpu_seconds(who: int) -> float:
+    """User + system CPU time of this process (``resource.RUSAGE_SELF``), s."""
+    usage = resource.getrusage(who)
+    return usage.ru_utime + usage.ru_stime
 
 
 def main() -> None:
@@ -44,10 +51,12 @@ def main() -> None:
     local = None
     if not args.no_local:
         # The reference: one process with as many threads as the cluster has workers.
+        cpu0 = cpu_seconds(resource.RUSAGE_SELF)
         started = time.perf_counter()
         local = ftsmc.montecarlo(scenario, args.runs, controllers=controllers, threads=args.workers)
         local_s = time.perf_counter() - started
-        print(f"local call, {args.workers} thread(s): {args.runs} runs in {local_s:.2f} s")
+        local_cpu = cpu_seconds(resource.RUSAGE_SELF) - cpu0
+        print(f"local call, {args.workers} thread(s): {args.runs} runs in {local_s:.2f} s (CPU {local_cpu:.2f} s)")
 
     with LocalCluster(
         n_workers=args.workers, threads_per_worker=1, processes=True, dashboard_address=None, silence_logs=logging.ERROR
@@ -57,16 +66,32 @@ def main() -> None:
         client.run(importlib.import_module, "ftsmc")
         print(f"start-up: ftsmc imported on {args.workers} worker(s) in {time.perf_counter() - started:.2f} s")
         shards = args.shards or min(args.runs, 4 * args.workers)
+        workers_cpu0 = sum(client.run(cpu_seconds, resource.RUSAGE_SELF).values())
+        scheduler_cpu0 = client.run_on_scheduler(cpu_seconds, resource.RUSAGE_SELF)
+        cpu0 = cpu_seconds(resource.RUSAGE_SELF)
         started = time.perf_counter()
         runs = ftsmc.montecarlo(scenario, args.runs, controllers=controllers, client=client, shards=shards)
         dask_s = time.perf_counter() - started
+        client_cpu = cpu_seconds(resource.RUSAGE_SELF) - cpu0
+        # CPU the workers and the scheduler spent: measured inside them.
+        workers_cpu = sum(client.run(cpu_seconds, resource.RUSAGE_SELF).values()) - workers_cpu0
+        scheduler_cpu = client.run_on_scheduler(cpu_seconds, resource.RUSAGE_SELF) - scheduler_cpu0
     print(f"Dask, {args.workers} worker process(es), {shards} tasks: {args.runs} runs in {dask_s:.2f} s")
+    print(
+        f"  CPU during the batch: workers {workers_cpu:.2f} s, scheduler {scheduler_cpu:.2f} s, "
+        f"this process {client_cpu:.2f} s while waiting"
+    )
     if local is not None:
         pandas.testing.assert_frame_equal(local, runs, check_exact=True)
         # Overhead per task: the extra wall time over the local call with as
-        # many threads, spread over the tasks each worker ran.
+        # many threads, spread over the tasks each worker ran; and the extra
+        # CPU time over the local call's, per task (robust on a loaded machine).
         per_task = (dask_s - local_s) / (shards / args.workers)
-        print(f"rows identical to the local call; overhead {dask_s - local_s:+.2f} s, {per_task * 1000:+.0f} ms per task")
+        cpu_per_task = (workers_cpu + scheduler_cpu + client_cpu - local_cpu) / shards
+        print(
+            f"rows identical to the local call; overhead {dask_s - local_s:+.2f} s wall "
+            f"({per_task * 1000:+.0f} ms per task per worker), {cpu_per_task * 1000:+.1f} ms CPU per task"
+        )
     print(f"success rate: {runs['success'].mean():.3f}, median ISE z: {runs['ise_z'].median():.4g} m²·s")
 
 
