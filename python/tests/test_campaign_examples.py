@@ -62,3 +62,22 @@ def test_dask_local_cluster_example(tmp_path: Path) -> None:
     )
     assert done.returncode == 0, done.stderr
     assert "rows identical to the local call" in done.stdout, done.stdout
+
+
+def test_bad_shard_arguments_are_refused_with_their_value() -> None:
+    import ftsmc
+    from ftsmc import _ftsmc
+
+    s = ftsmc.Scenario.builtin("paper-scenario-2")
+    with pytest.raises(ValueError, match="needs a Dask client"):
+        ftsmc.montecarlo(s, 4, shards=2)
+    with pytest.raises(ValueError, match=r"run_range \(3, 9\).*runs \(4\)"):
+        _ftsmc.montecarlo_columns(s, 4, None, None, 1, (3, 9))
+    # A run range flies exactly those rows of the whole batch.
+    whole = ftsmc.montecarlo(s, 4, controllers=["pid"], threads=1)
+    names, columns = _ftsmc.montecarlo_columns(s, 4, None, ["pid"], 1, (1, 3))
+    assert list(columns[0]) == [1, 2]
+    for name, column in zip(names, columns):
+        expected = list(whole[name].iloc[1:3])
+        got = list(column)
+        assert [str(v) for v in got] == [str(v) for v in expected], name
