@@ -256,7 +256,9 @@ pub fn merge(dirs: &[PathBuf], out: &Path, figures: bool) -> Result<()> {
     if let Some(s) = shards.iter().find(|s| s.dir.canonicalize().ok() == folder.canonicalize().ok()) {
         bail!("--out would replace shard `{}` with the merged result: choose another --out", s.dir.display());
     }
-    let dir = ResultDir::begin(&folder)?;
+    // The merged folder is the Monte Carlo result itself: owned as `montecarlo`
+    // writes it (see output.rs), so a later `ftsmc montecarlo` into it replaces it.
+    let dir = ResultDir::begin(&folder, "montecarlo")?;
 
     // runs.csv: the rows of shards 1..N in order, written as the batch writes them.
     let mut w = csv::Writer::from_writer(Vec::new());

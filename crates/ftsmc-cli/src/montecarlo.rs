@@ -93,7 +93,7 @@ pub fn run(
     let indices = shard.unwrap_or(Shard::WHOLE).range(runs)?;
     let folder = out.join(shard.map_or_else(|| scenario.name.clone(), |s| s.folder_name(&scenario.name)));
     // Refuse a bad --out before any flight.
-    let dir = ResultDir::begin(&folder)?;
+    let dir = ResultDir::begin(&folder, "montecarlo")?;
     let spec = scenario.montecarlo.clone().unwrap_or_else(|| {
         eprintln!("note: {} has no [montecarlo] section; runs differ only in their seeds (drag noise)", scenario.name);
         MonteCarloSpec::default()
@@ -103,11 +103,11 @@ pub fn run(
         builder = builder.num_threads(t);
     }
     let pool = builder.build().context("cannot start the thread pool")?;
-    let flights = (indices.end - indices.start) * controllers.len() as u64;
-    let bar = steps_bar(flights * planned_steps(scenario), flights);
+    let flights = (indices.end - indices.start).saturating_mul(controllers.len() as u64);
+    let bar = steps_bar(flights.saturating_mul(planned_steps(scenario)), flights);
     let started = Instant::now();
     let rows = pool
-        .install(|| run_batch_range(scenario, &spec, controllers, indices.clone(), seed, &|n| bar.inc(n)))
+        .install(|| run_batch_range(scenario, &spec, controllers, indices.clone(), seed, &|n| bar.inc(n), None))
         .map_err(|known| anyhow::anyhow!("unknown controller (known: {known})"))?;
     bar.finish_and_clear();
     let elapsed = started.elapsed().as_secs_f64();
