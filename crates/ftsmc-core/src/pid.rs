@@ -48,32 +48,43 @@
 //!
 //! # Gains: PX4 defaults rescaled to this vehicle
 //!
-//! [`PidGains::for_vehicle`] keeps PX4's position, velocity and attitude
-//! gains unchanged (they are in SI units: 1/s, 1/s², m/s² per m/s²) and
-//! converts the normalised ones:
+//! [`PidGains::for_vehicle_with_max_thrust`] keeps PX4's position, velocity
+//! and attitude gains unchanged (they are in SI units: 1/s, 1/s², m/s² per
+//! m/s²) and converts the normalised ones as PX4's control allocation
+//! (`ControlAllocationPseudoInverse`, the default for multicopters) would
+//! on this vehicle:
 //!
-//! * **Thrust.** PX4's thrust is normalised to the maximum, and the default
-//!   hover thrust `MPC_THR_HOVER` is 0.5, i.e. a thrust-to-weight ratio of 2:
-//!   `T_max = m g / 0.5 = 2 m g` (14.5 N for the paper's 0.74 kg quadrotor,
-//!   the 4 b ω_max² of the realistic scenarios' 350 rad/s rotors). Then
-//!   `H = 0.5 T_max = m g`, `thrust_min = 0.12 T_max` (`MPC_THR_MIN`),
-//!   margin `0.3 T_max` (`MPC_THR_XY_MARG`), and `thrust_max = 0.8 T_max`
-//!   instead of PX4's `MPC_THR_MAX` = 1.0: PX4's allocator lowers the
-//!   collective thrust to keep roll/pitch torque, the simulator's mixer
-//!   keeps thrust first, so the controller leaves the torque margin itself.
-//! * **Torque.** PX4's rate loop outputs a normalised torque in [−1, 1]
-//!   that the control allocator maps to the full differential thrust of the
-//!   rotors; so torque (N·m) = normalised output × the vehicle's maximum
-//!   torque at hover collective thrust with rotors spanning `[0, T_max/4]`.
-//!   For the "+" allocation of Eq. 2: roll/pitch `τ_max = l T_max/4 = l m g/2`
-//!   (one rotor at `T_max/4`, the opposite at 0; 0.762 N·m), yaw
-//!   `τ_max = (d/b) T_max/2` (two rotors at `T_max/4`, two at 0; 0.0786 N·m).
-//!   `MC_*RATE_P/I/D` and `MC_*R_INT_LIM` are multiplied by these. This
-//!   keeps PX4's rate-loop bandwidth *for a vehicle of this thrust-to-weight
-//!   and geometry*: `K_p τ_max / J` = 29.9 rad/s roll/pitch, 2.05 rad/s yaw,
-//!   and with `MC_ROLL_P = 6.5` a small-error attitude loop
-//!   `s² + 29.9 s + 194` (ω_n 13.9 rad/s, ζ 1.07); yaw `s² + 2.05 s + 5.75`
-//!   (ω_n 2.40 rad/s, ζ 0.43).
+//! * **Thrust.** PX4's thrust setpoint is normalised to the vehicle's
+//!   maximum collective thrust `T_max`: `4 b ω_max²` when the rotors are
+//!   limited (24.0 N on the AscTec Hummingbird), and `m g / MPC_THR_HOVER`
+//!   = 2 m g (PX4's default hover thrust 0.5) when they are not (the paper
+//!   plant). The hover thrust is `m g` (what PX4's hover-thrust estimator
+//!   converges to), `thrust_min = 0.12 T_max` (`MPC_THR_MIN`; at most
+//!   `m g / 2`, so a vehicle with thrust-to-weight above 4 can still
+//!   descend), margin
+//!   `0.3 T_max` (`MPC_THR_XY_MARG`), `thrust_max = T_max` (`MPC_THR_MAX`
+//!   1.0): with PX4's mixer (`[actuators] mixer = "px4"`) the allocator
+//!   lowers the collective thrust to keep roll/pitch, so the controller
+//!   needs no private thrust cap.
+//! * **Torque.** PX4 normalises the pseudo-inverse of the effectiveness
+//!   matrix so that the roll (pitch) column has squared norm
+//!   `n/2`, `n` the number of rotors that roll (pitch) the vehicle, and the
+//!   yaw column has largest entry 1 (`updateControlAllocationMatrixScale`),
+//!   rotor thrusts in units of one rotor's maximum `T_max/4`. For the "+"
+//!   allocation of Eq. 2 two rotors roll the vehicle, each by
+//!   `±1/√2 · T_max/4` for a normalised roll torque of 1: roll/pitch
+//!   `τ_max = √2 l T_max/4` (1.44 N·m on the Hummingbird); every rotor
+//!   yaws by `±T_max/4`: `τ_max = (d/b) T_max`. `MC_*RATE_P/I/D` and
+//!   `MC_*R_INT_LIM` are multiplied by these. (An earlier ftsmc took
+//!   `l T_max/4` with `T_max = 2 m g`: 2.42× softer on the Hummingbird.)
+//! * **Attitude.** `MC_ROLL_P = MC_PITCH_P = 4.0`, `MC_YAW_P = 2.8`: the
+//!   values of PX4's current `mc_att_control_params.c` (older releases
+//!   shipped 6.5). PX4's rate loop has no reference model by default, so
+//!   nothing else shapes the attitude response. On the Hummingbird the
+//!   small-error roll loop is `s² + K_p τ_max/J s + K_p τ_max/J · 4`
+//!   = `s² + 30.9 s + 124` (ω_n 11.1 rad/s, ζ 1.39).
+//!
+//! [`PidGains::for_vehicle`] is the same with unlimited rotors.
 //!
 //! # State conversion, and what is approximated on the paper plant
 //!
@@ -127,17 +138,14 @@ pub struct PidGains {
     pub max_tilt: f64,
     /// Hover thrust `H`, N (`MPC_THR_HOVER` × T_max = m g).
     pub hover_thrust: f64,
-    /// Minimum collective thrust, N (`MPC_THR_MIN` 0.12 × T_max).
+    /// Minimum collective thrust, N (`MPC_THR_MIN` 0.12 × T_max, at most m g / 2).
     pub thrust_min: f64,
-    /// Maximum collective thrust, N (default 0.8 × T_max; PX4's `MPC_THR_MAX`
-    /// is 1.0, but PX4's allocator lowers the collective thrust to keep
-    /// roll/pitch authority, while the simulator's mixer keeps thrust first,
-    /// so a command at T_max would leave no torque: 0.8 keeps 40 % of the
-    /// roll/pitch torque, the same margin as [`crate::se3::Se3Gains::max_thrust`]).
+    /// Maximum collective thrust, N (`MPC_THR_MAX` 1.0 × T_max). A lower
+    /// value is a private thrust cap, useful only with a thrust-first mixer.
     pub thrust_max: f64,
     /// Horizontal thrust kept when the vertical one saturates, N (`MPC_THR_XY_MARG` 0.3 × T_max).
     pub thrust_xy_margin: f64,
-    /// Attitude P per body axis, 1/s (`MC_ROLL_P` 6.5, `MC_PITCH_P` 6.5, `MC_YAW_P` 2.8).
+    /// Attitude P per body axis, 1/s (`MC_ROLL_P` 4.0, `MC_PITCH_P` 4.0, `MC_YAW_P` 2.8).
     pub attitude_p: [f64; 3],
     /// Weight of yaw against tilt in the attitude error, in (0, 1] (`MC_YAW_WEIGHT` 0.4).
     pub yaw_weight: f64,
@@ -169,13 +177,21 @@ impl Default for PidGains {
 }
 
 impl PidGains {
-    /// PX4's default gains rescaled to `params` ([module docs](self),
-    /// "Gains"): `T_max = m g / MPC_THR_HOVER`, torque = normalised rate-loop
-    /// output × `τ_max` (`l T_max/4` roll/pitch, `(d/b) T_max/2` yaw).
+    /// PX4's default gains rescaled to `params` with unlimited rotors
+    /// ([`Self::for_vehicle_with_max_thrust`] with `None`).
     pub fn for_vehicle(params: &QuadrotorParams) -> Self {
+        Self::for_vehicle_with_max_thrust(params, None)
+    }
+
+    /// PX4's default gains rescaled to `params` and the rotors' maximum
+    /// collective thrust `max_thrust` (N; `None`: unlimited rotors, then
+    /// `T_max = m g / MPC_THR_HOVER`) ([module docs](self), "Gains"):
+    /// torque = normalised rate-loop output × [`Self::max_torques`].
+    pub fn for_vehicle_with_max_thrust(params: &QuadrotorParams, max_thrust: Option<f64>) -> Self {
         let deg = core::f64::consts::PI / 180.0;
-        let t_max = params.mass * params.gravity / PX4_HOVER_THRUST;
-        let [roll, pitch, yaw] = Self::max_torques(params);
+        let weight = params.mass * params.gravity;
+        let t_max = Self::normalisation_thrust(params, max_thrust);
+        let [roll, pitch, yaw] = Self::max_torques_for(params, t_max);
         let scale = |normalised: [f64; 3]| [normalised[0] * roll, normalised[1] * pitch, normalised[2] * yaw];
         Self {
             position_p: [0.95, 0.95, 1.0],
@@ -187,11 +203,14 @@ impl PidGains {
             max_velocity_up: 3.0,
             max_velocity_down: 1.5,
             max_tilt: 45.0 * deg,
-            hover_thrust: PX4_HOVER_THRUST * t_max,
-            thrust_min: 0.12 * t_max,
-            thrust_max: 0.8 * t_max,
+            hover_thrust: weight,
+            // MPC_THR_MIN, kept below half the hover thrust: on a vehicle
+            // with thrust-to-weight above 4 (0.12 T_max > m g / 2) PX4's
+            // fraction would leave no room to descend.
+            thrust_min: (0.12 * t_max).min(0.5 * weight),
+            thrust_max: t_max,
             thrust_xy_margin: 0.3 * t_max,
-            attitude_p: [6.5, 6.5, 2.8],
+            attitude_p: [4.0, 4.0, 2.8],
             yaw_weight: 0.4,
             max_rate: [220.0 * deg, 220.0 * deg, 200.0 * deg],
             rate_p: scale([0.15, 0.15, 0.2]),
@@ -204,13 +223,27 @@ impl PidGains {
         }
     }
 
+    /// The thrust PX4 normalises to, N: `max_thrust` when given (finite and
+    /// above the weight), else `m g / MPC_THR_HOVER`.
+    pub fn normalisation_thrust(params: &QuadrotorParams, max_thrust: Option<f64>) -> f64 {
+        let weight = params.mass * params.gravity;
+        max_thrust.filter(|t| t.is_finite() && *t > weight).unwrap_or(weight / PX4_HOVER_THRUST)
+    }
+
     /// Torque, N·m, that a normalised rate-loop output of 1 stands for on
-    /// each body axis: `[l T_max/4, l T_max/4, (d/b) T_max/2]` with
-    /// `T_max = m g / MPC_THR_HOVER` (Eq. 2 allocation, rotors in `[0, T_max/4]`).
+    /// each body axis with unlimited rotors (`T_max = m g / MPC_THR_HOVER`):
+    /// [`Self::max_torques_for`].
     pub fn max_torques(params: &QuadrotorParams) -> [f64; 3] {
-        let t_max = params.mass * params.gravity / PX4_HOVER_THRUST;
-        let tilt = params.arm_length * t_max / 4.0;
-        [tilt, tilt, params.yaw_drag_coefficient / params.lift_coefficient * t_max / 2.0]
+        Self::max_torques_for(params, params.mass * params.gravity / PX4_HOVER_THRUST)
+    }
+
+    /// Torque, N·m, that a normalised rate-loop output of 1 stands for with
+    /// PX4's allocation normalisation on the "+" allocation of Eq. 2 and a
+    /// maximum collective thrust `t_max` (N): `[√2 l T_max/4, √2 l T_max/4,
+    /// (d/b) T_max]` ([module docs](self), "Gains").
+    pub fn max_torques_for(params: &QuadrotorParams, t_max: f64) -> [f64; 3] {
+        let tilt = core::f64::consts::SQRT_2 * params.arm_length * t_max / 4.0;
+        [tilt, tilt, params.yaw_drag_coefficient / params.lift_coefficient * t_max]
     }
 
     /// Range checks (the error names the field and value): P gains, limits,
@@ -712,14 +745,30 @@ mod tests {
         let p = QuadrotorParams::default();
         let g = PidGains::for_vehicle(&p);
         let [roll, _, yaw] = PidGains::max_torques(&p);
-        assert!((roll - 0.7622).abs() < 1e-4, "{roll}");
-        assert!((yaw - 0.07862).abs() < 1e-5, "{yaw}");
-        assert!((g.thrust_max - 1.6 * p.mass * p.gravity).abs() < 1e-12);
+        // √2 l T_max/4 and (d/b) T_max with T_max = 2 m g = 14.52 N.
+        assert!((roll - 1.0779).abs() < 1e-4, "{roll}");
+        assert!((yaw - 0.157244).abs() < 1e-5, "{yaw}");
+        assert!((g.thrust_max - 2.0 * p.mass * p.gravity).abs() < 1e-12);
         assert!((g.hover_thrust - p.mass * p.gravity).abs() < 1e-12);
         // Rate-loop bandwidth K_p τ_max / J.
-        assert!((g.rate_p[0] / p.inertia[0] - 29.9).abs() < 0.05);
-        assert!((g.rate_p[2] / p.inertia[2] - 2.05).abs() < 0.01);
+        assert!((g.rate_p[0] / p.inertia[0] - 42.25).abs() < 0.05, "{}", g.rate_p[0] / p.inertia[0]);
+        assert!((g.rate_p[2] / p.inertia[2] - 4.107).abs() < 0.01, "{}", g.rate_p[2] / p.inertia[2]);
         g.check().unwrap();
+        // The AscTec Hummingbird of the realistic scenarios (RotorS): 24.0 N
+        // of rotor thrust, 2.42× the torque of the old l (2 m g)/4 scaling.
+        let hb = QuadrotorParams {
+            mass: 0.716,
+            inertia: [0.007, 0.007, 0.012],
+            lift_coefficient: 8.54858e-6,
+            yaw_drag_coefficient: 1.36777e-7,
+            arm_length: 0.17,
+            ..QuadrotorParams::default()
+        };
+        let t_max = 4.0 * 8.54858e-6 * 838.0 * 838.0;
+        let g = PidGains::for_vehicle_with_max_thrust(&hb, Some(t_max));
+        let old = 0.17 * 2.0 * 0.716 * 9.81 / 4.0;
+        assert!((g.rate_p[0] / 0.15 / old - 2.42).abs() < 0.01, "{}", g.rate_p[0] / 0.15 / old);
+        assert!((g.thrust_max - t_max).abs() < 1e-12);
     }
 
     #[test]
@@ -762,8 +811,8 @@ mod tests {
         let r_d = rotation_from_euler(&[0.0, 0.0, 0.0]);
         let rate = c.rate_setpoint(&r, &q, &r_d, 0.0);
         let k = PidGains::default();
-        // Roll error 0.3 rad at gain 6.5 ≈ 1.9 rad/s; yaw 1 rad weighted 0.4 at 2.8/0.4.
-        assert!(rate[0] < -1.5, "{rate:?}");
+        // Roll error 0.3 rad at gain 4.0 ≈ 1.2 rad/s; yaw 1 rad weighted 0.4 at 2.8/0.4.
+        assert!(rate[0] < -1.0, "{rate:?}");
         assert!(rate[2].abs() < k.attitude_p[2] * 1.0 + 0.1, "{rate:?}");
         // Pure yaw error: small-error yaw gain is MC_YAW_P.
         let r = rotation_from_euler(&[0.0, 0.0, 0.01]);

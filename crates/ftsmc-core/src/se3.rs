@@ -54,7 +54,7 @@ use crate::cascade::{Controller, Telemetry};
 use crate::law::{check_closed, check_gain, check_left_open, saturate, GainError, INPUT_LIMIT, MAX_ESTIMATES};
 use crate::math::{
     body_rates_from_euler_rates, cross, dot, euler_from_rotation, mat_t_mat, mat_t_vec, mat_vec, norm,
-    rotation_from_euler, sin_cos, sqrt, Mat3, Vec3,
+    rotation_from_euler, sin_cos, Mat3, Vec3,
 };
 use crate::model::{Command, QuadState, QuadrotorParams, Reference};
 use crate::setpoint::{limit_tilt, reference_finite};
@@ -82,13 +82,13 @@ pub struct Se3Gains {
     /// negative; default `0.24 m g`, PX4's `MPC_THR_MIN` = 0.12 of a maximum
     /// thrust of `2 m g`, see [`crate::pid`]).
     pub min_thrust: f64,
-    /// Largest thrust commanded, N (not in Lee et al.; default `1.6 m g`,
-    /// 80 % of the `2 m g` maximum that [`crate::pid`] assumes, PX4's
-    /// `MPC_THR_HOVER` = 0.5). The simulator's mixer keeps thrust before
-    /// torque, so a thrust command at the rotors' maximum leaves no torque
-    /// at all; the 20 % margin keeps 40 % of the roll/pitch torque
-    /// authority (a 170° recovery without it tumbles, see
-    /// `tests/practitioners.rs`).
+    /// Largest thrust commanded, N (not in Lee et al.). Core default
+    /// `1.6 m g`, 80 % of the `2 m g` maximum that [`crate::pid`] assumes
+    /// on unlimited rotors: a cap for thrust-first mixers, where a thrust
+    /// command at the rotors' maximum leaves no torque. The simulator's
+    /// scenario defaults replace it by the rotors' whole thrust (PX4's
+    /// mixer lowers the collective thrust to keep roll/pitch, so no cap is
+    /// needed), or 10 m g on unlimited rotors.
     pub max_thrust: f64,
 }
 
@@ -135,22 +135,29 @@ impl Se3Gains {
         }
     }
 
-    /// The default procedure (docs/controllers.md, "se3"): the attitude
-    /// loop gets the natural frequency of the [`crate::pid`] default's
-    /// small-error attitude loop on the same vehicle,
-    /// `ω_R,i = sqrt(K_rate,i K_att,i / J_i)` (PX4's gains rescaled by
-    /// [`crate::pid::PidGains::for_vehicle`]; 13.9, 13.9, 2.40 rad/s for the
-    /// paper's quadrotor), critically damped (`ζ_R = 1`), so `pid` and `se3`
-    /// are compared at equal attitude bandwidth; the position loop is
-    /// 5 times slower than roll/pitch, `ω_x = ω_R,roll / 5` (2.79 rad/s),
-    /// critically damped. Paper quadrotor: `k_x = 5.75 N/m`,
-    /// `k_v = 4.12 N·s/m`, `k_R = (0.743, 0.743, 0.044) N·m`,
-    /// `k_Ω = (0.107, 0.107, 0.037) N·m·s/rad`.
+    /// The default gains (docs/controllers.md, "se3"): RotorPy's
+    /// Hummingbird gains (spencerfolk/rotorpy, `rotorpy/controllers/
+    /// quadrotor_control.py`, `SE3Control`), which are per unit mass and
+    /// inertia (`kp_pos = (6.5, 6.5, 15)`, `kd_pos = (4, 4, 9)` in 1/s² and
+    /// 1/s; `kp_att = 544` 1/s², `kd_att = 46.64` 1/s), carried to `params`
+    /// by RotorPy's own scaling: `k_x = m kp_pos`, `k_v = m kd_pos`,
+    /// `k_R = J kp_att`, `k_Ω = J kd_att`. They place the position loop at
+    /// ω_n = 2.55 rad/s (ζ 0.78) horizontally, 3.87 rad/s (ζ 1.16)
+    /// vertically, and the attitude loop at ω_n = 23.3 rad/s (ζ 1.0) on
+    /// every vehicle. Paper quadrotor: `k_x = (4.81, 4.81, 11.1) N/m`,
+    /// `k_v = (2.96, 2.96, 6.66) N·s/m`, `k_R = (2.08, 2.08, 4.17) N·m`,
+    /// `k_Ω = (0.178, 0.178, 0.357) N·m·s/rad`. `max_tilt`, `min_thrust`,
+    /// `max_thrust` as [`Self::from_bandwidth`].
     pub fn for_vehicle(params: &QuadrotorParams) -> Self {
-        let pid = crate::pid::PidGains::for_vehicle(params);
+        let m = params.mass;
         let j = params.inertia;
-        let w = [0, 1, 2].map(|i| sqrt(pid.rate_p[i] * pid.attitude_p[i] / j[i]));
-        Self::from_bandwidth(params, w, 1.0, w[0].min(w[1]) / 5.0, 1.0)
+        Self {
+            position: [6.5 * m, 6.5 * m, 15.0 * m],
+            velocity: [4.0 * m, 4.0 * m, 9.0 * m],
+            attitude: j.map(|ji| 544.0 * ji),
+            angular_rate: j.map(|ji| 46.64 * ji),
+            ..Self::from_bandwidth(params, [1.0; 3], 1.0, 1.0, 1.0)
+        }
     }
 
     /// Range checks: every gain in `(0, 1e6]`, `0 < max_tilt <= π/2`,
@@ -386,14 +393,22 @@ mod tests {
 
     #[test]
     fn default_gains_follow_the_documented_procedure() {
+        // RotorPy's Hummingbird gains per unit mass and inertia, carried to
+        // the paper's quadrotor: the same loops on every vehicle.
         let g = Se3Gains::default();
         let p = QuadrotorParams::default();
-        let wr = (g.attitude[0] / p.inertia[0]).sqrt();
-        assert!((wr - 13.93).abs() < 0.01, "{wr}");
-        assert!((g.angular_rate[0] - 2.0 * p.inertia[0] * wr).abs() < 1e-12);
+        for i in 0..3 {
+            let wr = (g.attitude[i] / p.inertia[i]).sqrt();
+            assert!((wr - 544f64.sqrt()).abs() < 1e-12, "{wr}");
+            let zeta = g.angular_rate[i] / (2.0 * p.inertia[i] * wr);
+            assert!((zeta - 1.0).abs() < 0.001, "{zeta}");
+        }
+        let close = |a: [f64; 3], b: [f64; 3]| a.iter().zip(b).all(|(x, y)| (x - y).abs() < 1e-12);
+        assert!(close(g.position.map(|k| k / p.mass), [6.5, 6.5, 15.0]), "{:?}", g.position);
+        assert!(close(g.velocity.map(|k| k / p.mass), [4.0, 4.0, 9.0]), "{:?}", g.velocity);
+        // Horizontal ω_n 2.55 rad/s, ζ 0.78; vertical 3.87 rad/s, ζ 1.16.
         let wx = (g.position[0] / p.mass).sqrt();
-        assert!((wx - wr / 5.0).abs() < 1e-12);
-        assert!(((g.attitude[2] / p.inertia[2]).sqrt() - 2.40).abs() < 0.01);
+        assert!((wx - 2.55).abs() < 0.01 && (g.velocity[0] / p.mass / (2.0 * wx) - 0.78).abs() < 0.01);
         g.check().unwrap();
     }
 

@@ -59,18 +59,35 @@ pub struct MotorNoise {
     pub scale: NoiseScale,
 }
 
-/// How rotor speed commands are made from a thrust and torque command
-/// (`[actuators] mixer`).
+/// How the mixer gives up authority when the rotors saturate
+/// (`[actuators] mixer = "thrust-first" | "px4" | "px4-airmode" | "clamp"`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, Serialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum MixerKind {
-    /// [`Mixer::mix`]: under saturation keep thrust, then roll/pitch, then yaw (default).
+    /// Priority thrust, then roll/pitch, then yaw (the collective thrust is
+    /// kept whenever it is feasible by itself; [`Mixer`]). Default, so the
+    /// scenarios written before the PX4 mixer keep their results.
     #[default]
     ThrustFirst,
+    /// PX4's multicopter allocation with airmode off (`MC_AIRMODE` = 0, its
+    /// default; `ControlAllocationSequentialDesaturation`): roll and pitch
+    /// are kept by **lowering** the collective thrust (never raising it);
+    /// roll/pitch are scaled down only when no thrust at or below the
+    /// command fits them; yaw is added last and scaled to fit.
+    Px4,
+    /// PX4 with airmode for roll and pitch (`MC_AIRMODE` = 1): as
+    /// [`MixerKind::Px4`], but the collective thrust may also be raised
+    /// (at low throttle) to keep roll/pitch authority.
+    Px4Airmode,
     /// Paper Eq. 2 inverted and each rotor speed clamped to `[ω_min, ω_max]`
-    /// on its own (thrust and torques change together). The rotors reach the
-    /// clamped speeds at once: no lag, no noise.
+    /// on its own (thrust and torques change together; [`Mixer::mix_clamped`]).
+    /// The rotors reach the clamped speeds at once: no lag, no noise. What the
+    /// deprecated `simulation.max_rotor_speed` means.
     Clamp,
+}
+
+fn is_thrust_first(m: &MixerKind) -> bool {
+    *m == MixerKind::ThrustFirst
 }
 
 /// Motor limits, lag and noise. Defaults: the ideal actuator — no limits
@@ -91,13 +108,9 @@ pub struct ActuatorParams {
     pub time_constant_down: f64,
     /// Motor-speed noise (default none).
     pub noise: Option<MotorNoise>,
-    /// How the rotor speed commands are made (default `thrust-first`).
+    /// Desaturation strategy of the mixer (default `"thrust-first"`).
     #[serde(skip_serializing_if = "is_thrust_first")]
     pub mixer: MixerKind,
-}
-
-fn is_thrust_first(m: &MixerKind) -> bool {
-    *m == MixerKind::ThrustFirst
 }
 
 impl Default for ActuatorParams {
@@ -335,6 +348,12 @@ pub struct MixerOutput {
 
 /// Turns thrust and torques into rotor speeds under the rotor limits.
 ///
+/// Which authority gives way first is [`MixerKind`] (`[actuators] mixer`);
+/// the default, thrust first, is described here. With `"px4"` step 1 and 2
+/// become PX4's: the collective thrust is lowered (never raised; with
+/// `"px4-airmode"` also raised) as far as needed to keep roll and pitch, and
+/// roll/pitch are scaled only when no such thrust exists; yaw stays last.
+///
 /// With `u = [U1, u2, u3, u4]` (N, N·m) and the allocation `u = A w`
 /// (`w_i = ω_i²`), the squared speeds are `w = A⁻¹ u`. When every `w_i` lies
 /// in `[ω_min², ω_max²]` the command is feasible and is applied unchanged.
@@ -365,6 +384,7 @@ pub struct Mixer {
     w_min: f64,
     w_max: f64,
     thrust_range: [f64; 2],
+    kind: MixerKind,
 }
 
 /// Inverse of a 4×4 matrix by Gauss–Jordan elimination with partial
@@ -447,7 +467,7 @@ impl Mixer {
                 expected: "a speed range wide enough for some torque-free thrust",
             });
         }
-        Ok(Self { allocation, inverse, w_min, w_max, thrust_range })
+        Ok(Self { allocation, inverse, w_min, w_max, thrust_range, kind: actuators.mixer })
     }
 
     /// The mixer of paper Eq. 2 ([`paper_allocation_matrix`]).
@@ -484,6 +504,43 @@ impl Mixer {
         s.max(0.0)
     }
 
+    /// The PX4 desaturation of roll/pitch by the collective thrust
+    /// ([`MixerKind::Px4`]): the largest roll/pitch scale `s ∈ [0, 1]` for
+    /// which some collective thrust `T` puts every rotor in range, with
+    /// `T <= requested` unless `raise` (airmode), then the feasible `T`
+    /// nearest `requested`. With `w_i = c_i T + s r_i` (`c = A⁻¹ e₁`, `r` the
+    /// roll/pitch part of `A⁻¹ u`), rotor `i` needs
+    /// `T ∈ [(w_min − s r_i)/c_i, (w_max − s r_i)/c_i]`; `s` is feasible when
+    /// every lower bound is below every upper bound (and below `requested`
+    /// without airmode): pairwise linear inequalities in `s`, solved exactly.
+    fn keep_roll_pitch(&self, requested: f64, rp: &[f64; 4], raise: bool) -> (f64, f64) {
+        let c: [f64; 4] = core::array::from_fn(|i| self.inverse[i][0]);
+        let mut s = 1.0f64;
+        // lower_i(s) <= upper_j(s):  s (r_j/c_j − r_i/c_i) <= w_max/c_j − w_min/c_i.
+        for i in 0..4 {
+            for j in 0..4 {
+                let coef = rp[j] / c[j] - rp[i] / c[i];
+                let rhs = self.w_max / c[j] - self.w_min / c[i];
+                if coef > 0.0 {
+                    s = s.min(rhs / coef);
+                }
+            }
+            if !raise {
+                // lower_i(s) <= requested:  −s r_i/c_i <= requested − w_min/c_i.
+                let coef = -rp[i] / c[i];
+                let rhs = requested - self.w_min / c[i];
+                if coef > 0.0 {
+                    s = s.min(rhs / coef);
+                }
+            }
+        }
+        let s = s.max(0.0);
+        let lower = (0..4).map(|i| (self.w_min - s * rp[i]) / c[i]).fold(f64::NEG_INFINITY, f64::max);
+        let upper = (0..4).map(|i| (self.w_max - s * rp[i]) / c[i]).fold(f64::INFINITY, f64::min);
+        let thrust = if raise { requested.clamp(lower, upper.max(lower)) } else { requested.min(upper).max(lower) };
+        (thrust, s)
+    }
+
     /// Rotor speed commands for `command` with each squared speed clamped to
     /// `[ω_min², ω_max²]` on its own ([`MixerKind::Clamp`]); `applied` is what
     /// the clamped speeds produce (`A w`), `saturated` whether any rotor was clamped.
@@ -500,6 +557,9 @@ impl Mixer {
 
     /// Rotor speed commands for `command` under the documented priority.
     pub fn mix(&self, command: &Command) -> MixerOutput {
+        if self.kind == MixerKind::Clamp {
+            return self.mix_clamped(command);
+        }
         let finite = |v: f64| if v.is_finite() { v } else { 0.0 };
         let commanded = Command { thrust: finite(command.thrust), torque: command.torque.map(finite) };
         let all_finite = commanded == *command;
@@ -510,13 +570,17 @@ impl Mixer {
             return MixerOutput { commanded, applied: commanded, rotor_speeds: speeds(&w), saturated: false };
         }
         let column = |k: usize, scale: f64| -> [f64; 4] { core::array::from_fn(|i| self.inverse[i][k] * scale) };
-        let thrust = commanded.thrust.clamp(self.thrust_range[0], self.thrust_range[1]);
-        let base = column(0, thrust);
         let rp = {
             let (a, b) = (column(1, u[1]), column(2, u[2]));
             core::array::from_fn(|i| a[i] + b[i])
         };
-        let s_rp = self.max_scale(&base, &rp);
+        let requested = commanded.thrust.clamp(self.thrust_range[0], self.thrust_range[1]);
+        let (thrust, s_rp) = match self.kind {
+            MixerKind::ThrustFirst | MixerKind::Clamp => (requested, self.max_scale(&column(0, requested), &rp)),
+            MixerKind::Px4 => self.keep_roll_pitch(requested, &rp, false),
+            MixerKind::Px4Airmode => self.keep_roll_pitch(requested, &rp, true),
+        };
+        let base = column(0, thrust);
         let base: [f64; 4] = core::array::from_fn(|i| base[i] + s_rp * rp[i]);
         let yaw = column(3, u[3]);
         let s_y = self.max_scale(&base, &yaw);

@@ -16,6 +16,7 @@
 //!            tuning.rs          gain tuning
 //!          batch/               batches of flights
 //!            montecarlo.rs      run_batch, stats, summarize
+//!            shard.rs           K/N shards of a campaign (contiguous blocks of runs)
 //! floor 5  registry.rs          controllers by name for a scenario: build, run, label
 //! floor 4  run/                 the one loop (docs/architecture.md): simulate, RunOptions, RunOutput
 //!            flight.rs          Flight: one flight, stepped one control period at a time
@@ -28,6 +29,7 @@
 //!            validate.rs        range checks, names, array lengths, cost limits
 //!            resolve.rs         extends chains, deep merge, --set overrides, unit-slip warnings
 //!            distributions.rs   Dist, MonteCarloSpec, SAMPLED_COLUMNS, run_seed, per-run sampling
+//!            ladder.rs          the wind ladder's built-in scenarios realistic-<level>-<n>
 //! floor 2  vehicle/             truth models
 //!            paper.rs           Eq. 1 (the paper's plant) and the generic rk4_step
 //!            rigid_body.rs      Newton–Euler rigid body with quaternion attitude

@@ -22,6 +22,11 @@
 //! [`SensorParams::default`] is the perfect sensor: every period, no error,
 //! no latency; [`Sensors::measure`] then returns the truth bit-exactly.
 //!
+//! With [`SensorParams::imu`] attitude and rates have their own sample
+//! rate and latency (an IMU), position and velocity keep `sample_rate` and
+//! `latency` (a motion-capture or GNSS source); each quantity keeps its own
+//! random stream either way.
+//!
 //! No allocation per call: the latency line is a ring buffer of
 //! `latency + 1` states allocated once in [`Sensors::new`]; `measure` only
 //! writes into it. A run loop calling `measure` every step does not touch the
@@ -135,6 +140,41 @@ pub struct SensorParams {
     pub sample_rate: Option<f64>,
     /// Latency, whole control periods (default 0).
     pub latency: u32,
+    /// The IMU's own clock for attitude and angular rates (default: absent,
+    /// they share `sample_rate` and `latency` with position and velocity).
+    /// An IMU runs far faster than a motion-capture system (≥ 500 Hz,
+    /// about 1 ms against 100–200 Hz and about 6 ms).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub imu: Option<SensorClock>,
+}
+
+/// Sample rate and latency of one group of measured quantities.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct SensorClock {
+    /// Sample rate, Hz (absent: a sample every control period).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sample_rate: Option<f64>,
+    /// Latency, whole control periods (default 0).
+    pub latency: u32,
+}
+
+impl SensorClock {
+    fn check(&self, rate_field: &'static str, latency_field: &'static str) -> Result<(), GainError> {
+        if let Some(rate) = self.sample_rate {
+            if !(rate > 0.0 && rate <= 1e6) {
+                return Err(GainError { field: rate_field, value: rate, expected: "0 < sample_rate <= 1e6 Hz" });
+            }
+        }
+        if self.latency > MAX_LATENCY {
+            return Err(GainError {
+                field: latency_field,
+                value: f64::from(self.latency),
+                expected: "0 <= latency <= 100000 control periods",
+            });
+        }
+        Ok(())
+    }
 }
 
 impl SensorParams {
@@ -151,17 +191,9 @@ impl SensorParams {
         self.velocity.check("velocity.std", "velocity.bias")?;
         self.attitude.check("attitude.std", "attitude.bias")?;
         self.angular_rate.check("angular_rate.std", "angular_rate.bias")?;
-        if let Some(rate) = self.sample_rate {
-            if !(rate > 0.0 && rate <= 1e6) {
-                return Err(GainError { field: "sample_rate", value: rate, expected: "0 < sample_rate <= 1e6 Hz" });
-            }
-        }
-        if self.latency > MAX_LATENCY {
-            return Err(GainError {
-                field: "latency",
-                value: f64::from(self.latency),
-                expected: "0 <= latency <= 100000 control periods",
-            });
+        SensorClock { sample_rate: self.sample_rate, latency: self.latency }.check("sample_rate", "latency")?;
+        if let Some(imu) = &self.imu {
+            imu.check("imu.sample_rate", "imu.latency")?;
         }
         Ok(())
     }
@@ -229,8 +261,67 @@ fn euler_rates_clamped(euler: &[f64; 3], body: &[f64; 3]) -> [f64; 3] {
     [p + a * stheta / c, q * cphi - r * sphi, a / c]
 }
 
-/// A running sensor: four noise sources, the sample clock, the held sample
-/// and the latency line. Build one per flight with [`Sensors::new`]; call
+/// The sample clock, held sample and latency line of one group of
+/// quantities (the whole state is carried; the caller picks its fields).
+#[derive(Clone, Debug)]
+struct Line {
+    /// Samples per control period, clamped to at most 1.
+    samples_per_period: f64,
+    /// Index of the last sample taken (`⌊period · samples_per_period⌋`).
+    last_sample: u64,
+    /// The reading held between samples.
+    held: QuadState,
+    /// Ring of the last `latency + 1` readings.
+    ring: Vec<QuadState>,
+    /// Slot the next reading goes into.
+    head: usize,
+}
+
+impl Line {
+    fn new(clock: SensorClock, control_rate_hz: f64) -> Self {
+        let samples_per_period = match clock.sample_rate {
+            Some(rate) if control_rate_hz > 0.0 => (rate / control_rate_hz).min(1.0),
+            _ => 1.0,
+        };
+        Self {
+            samples_per_period,
+            last_sample: 0,
+            held: QuadState::default(),
+            ring: vec![QuadState::default(); clock.latency as usize + 1],
+            head: 0,
+        }
+    }
+
+    /// Whether a sample is due in control period `period`: when the sample
+    /// index ⌊k · f_s / f_c⌋ moves on (the 1e-9 guards exact ratios, 100 Hz
+    /// at 1 kHz: every 10th period, against rounding down).
+    fn due(&mut self, period: u64) -> bool {
+        let index = (period as f64 * self.samples_per_period + 1e-9).floor() as u64;
+        if period == 0 || index != self.last_sample {
+            self.last_sample = index;
+            true
+        } else {
+            false
+        }
+    }
+
+    /// Push this period's held reading and return the one of `latency`
+    /// periods ago (the first reading until then).
+    fn delayed(&mut self, period: u64) -> QuadState {
+        if period == 0 {
+            self.ring.fill(self.held);
+        }
+        let n = self.ring.len();
+        self.ring[self.head] = self.held;
+        self.head = (self.head + 1) % n;
+        self.ring[self.head]
+    }
+}
+
+/// A running sensor: four noise sources, the sample clocks, the held
+/// samples and the latency lines (one for position and velocity, one for
+/// attitude and rates when [`SensorParams::imu`] gives the IMU its own
+/// clock). Build one per flight with [`Sensors::new`]; call
 /// [`Sensors::measure`] once per control period.
 #[derive(Clone, Debug)]
 pub struct Sensors {
@@ -239,43 +330,31 @@ pub struct Sensors {
     velocity: Source,
     attitude: Source,
     angular_rate: Source,
-    /// Samples per control period, clamped to at most 1.
-    samples_per_period: f64,
     /// Control periods seen so far.
     period: u64,
-    /// Index of the last sample taken (`⌊period · samples_per_period⌋`).
-    last_sample: u64,
-    /// The reading held between samples.
-    held: QuadState,
-    /// Ring of the last `latency + 1` readings.
-    line: Vec<QuadState>,
-    /// Slot the next reading goes into.
-    head: usize,
+    /// Position and velocity (and attitude/rates without an IMU clock).
+    main: Line,
+    /// Attitude and rates on their own clock, if any.
+    imu: Option<Line>,
 }
 
 impl Sensors {
     /// A sensor for a run at `control_rate_hz` (Hz, > 0) whose noise streams
     /// are keyed by `seed` (streams [`POSITION_NOISE_STREAM`]…
     /// [`ANGULAR_RATE_NOISE_STREAM`]). `params` should have passed
-    /// [`SensorParams::check`]. Allocates the latency line (`latency + 1`
-    /// states) here, once.
+    /// [`SensorParams::check`]. Allocates the latency lines (`latency + 1`
+    /// states each) here, once.
     pub fn new(params: SensorParams, control_rate_hz: f64, seed: u64) -> Self {
-        let samples_per_period = match params.sample_rate {
-            Some(rate) if control_rate_hz > 0.0 => (rate / control_rate_hz).min(1.0),
-            _ => 1.0,
-        };
+        let main = SensorClock { sample_rate: params.sample_rate, latency: params.latency };
         Self {
             params,
             position: Source::new(params.position, seed, POSITION_NOISE_STREAM),
             velocity: Source::new(params.velocity, seed, VELOCITY_NOISE_STREAM),
             attitude: Source::new(params.attitude, seed, ATTITUDE_NOISE_STREAM),
             angular_rate: Source::new(params.angular_rate, seed, ANGULAR_RATE_NOISE_STREAM),
-            samples_per_period,
             period: 0,
-            last_sample: 0,
-            held: QuadState::default(),
-            line: vec![QuadState::default(); params.latency as usize + 1],
-            head: 0,
+            main: Line::new(main, control_rate_hz),
+            imu: params.imu.map(|c| Line::new(c, control_rate_hz)),
         }
     }
 
@@ -286,36 +365,45 @@ impl Sensors {
 
     /// What the controller sees this control period, given the true state
     /// (Euler rates in `truth.angular_rate`, rad/s). Call exactly once per
-    /// control period: the sample clock and the latency line advance by one
-    /// period per call. Never allocates.
+    /// control period: the sample clocks and the latency lines advance by
+    /// one period per call. Never allocates.
     pub fn measure(&mut self, truth: &QuadState) -> QuadState {
-        // A sample is due when the sample index ⌊k · f_s / f_c⌋ moves on; the
-        // 1e-9 guards exact ratios (100 Hz at 1 kHz: every 10th period)
-        // against rounding down.
-        let index = (self.period as f64 * self.samples_per_period + 1e-9).floor() as u64;
-        if self.period == 0 || index != self.last_sample {
-            self.last_sample = index;
-            self.held = self.read(truth);
-        }
-        if self.period == 0 {
-            // Start-up: until `latency` periods have elapsed the line holds
-            // the first reading.
-            self.line.fill(self.held);
-        }
+        let k = self.period;
         self.period += 1;
-
-        let n = self.line.len();
-        self.line[self.head] = self.held;
-        self.head = (self.head + 1) % n;
-        // The oldest slot, now at `head`, holds the reading of `latency`
-        // periods ago (n = latency + 1).
-        self.line[self.head]
+        match &mut self.imu {
+            None => {
+                if self.main.due(k) {
+                    self.main.held = self.read(truth);
+                }
+                self.main.delayed(k)
+            }
+            Some(_) => {
+                if self.main.due(k) {
+                    let position = self.position.corrupt(truth.position);
+                    let velocity = self.velocity.corrupt(truth.velocity);
+                    self.main.held = QuadState { position, velocity, ..self.main.held };
+                }
+                let imu_due = self.imu.as_mut().is_some_and(|l| l.due(k));
+                if imu_due {
+                    let (attitude, angular_rate) = self.read_rotation(truth);
+                    if let Some(l) = &mut self.imu {
+                        l.held = QuadState { attitude, angular_rate, ..l.held };
+                    }
+                }
+                let translation = self.main.delayed(k);
+                let rotation = self.imu.as_mut().map_or(translation, |l| l.delayed(k));
+                QuadState {
+                    position: translation.position,
+                    velocity: translation.velocity,
+                    attitude: rotation.attitude,
+                    angular_rate: rotation.angular_rate,
+                }
+            }
+        }
     }
 
-    /// One reading of the truth with every error applied.
-    fn read(&mut self, truth: &QuadState) -> QuadState {
-        let position = self.position.corrupt(truth.position);
-        let velocity = self.velocity.corrupt(truth.velocity);
+    /// One reading of attitude and angular rate with their errors.
+    fn read_rotation(&mut self, truth: &QuadState) -> ([f64; 3], [f64; 3]) {
         let attitude = self.attitude.corrupt(truth.attitude);
         let angular_rate = match self.params.rates {
             RateFrame::Euler => self.angular_rate.corrupt(truth.angular_rate),
@@ -324,6 +412,14 @@ impl Sensors {
                 euler_rates_clamped(&attitude, &self.angular_rate.corrupt(body))
             }
         };
+        (attitude, angular_rate)
+    }
+
+    /// One reading of the truth with every error applied.
+    fn read(&mut self, truth: &QuadState) -> QuadState {
+        let position = self.position.corrupt(truth.position);
+        let velocity = self.velocity.corrupt(truth.velocity);
+        let (attitude, angular_rate) = self.read_rotation(truth);
         QuadState { position, attitude, velocity, angular_rate }
     }
 }

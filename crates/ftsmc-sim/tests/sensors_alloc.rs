@@ -3,7 +3,7 @@
 //! global allocator (per thread, as in `alloc_free.rs`).
 
 use ftsmc_core::model::QuadState;
-use ftsmc_sim::sensors::{QuantityError, RateFrame, SensorParams, Sensors};
+use ftsmc_sim::sensors::{QuantityError, RateFrame, SensorClock, SensorParams, Sensors};
 
 mod common;
 
@@ -23,6 +23,8 @@ fn measure_does_not_allocate() {
         rates: RateFrame::Body,
         sample_rate: Some(250.0),
         latency: 7,
+        // The IMU on its own clock: a second latency line, allocated once too.
+        imu: Some(SensorClock { sample_rate: Some(1000.0), latency: 1 }),
     };
     let mut sensors = Sensors::new(params, 1000.0, 3);
     let mut sink = 0.0;

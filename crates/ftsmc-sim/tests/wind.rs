@@ -62,6 +62,7 @@ fn mean_plus_gusts_in_the_wind() {
             Gust { start: 1.5, duration: 1.0, amplitude: [2.0, 0.0, 0.0] },
         ],
         turbulence: None,
+        ..WindParams::default()
     };
     let mut w = Wind::new(params, 0.01, 7).unwrap();
     assert_eq!(w.step(0.0), [1.0, 2.0, 0.0]);
@@ -285,7 +286,7 @@ fn airspeed_floor_and_wind_axes() {
 // ---------------------------------------------------------------- determinism, streams
 
 fn turbulent(seed: u64, gusts: Vec<Gust>) -> Vec<[f64; 3]> {
-    let params = WindParams { mean: [0.0; 3], gusts, turbulence: Some(TurbulenceParams::moderate()) };
+    let params = WindParams { gusts, turbulence: Some(TurbulenceParams::moderate()), ..WindParams::default() };
     let mut w = Wind::new(params, DT, seed).unwrap();
     (0..2000).map(|k| w.step(k as f64 * DT)).collect()
 }

@@ -5,7 +5,8 @@ use ftsmc_core::pid::{PidController, PidGains};
 use super::{BoxedController, BuildContext, Declaration, GainSection, InvalidGain, NominalVehicle};
 
 /// `[pid]`: PX4's default gains rescaled to the scenario's nominal `[plant]`
-/// ([`PidGains::for_vehicle`]); keys the table gives replace them one by one.
+/// and rotor limit ([`PidGains::for_vehicle_with_max_thrust`]); keys the
+/// table gives replace them one by one.
 impl GainSection for PidGains {
     const KEY: &'static str = "pid";
     const CORE_ARRAYS: &'static [(&'static str, usize)] = &[
@@ -29,11 +30,15 @@ impl GainSection for PidGains {
     }
 
     fn defaults_for(vehicle: &NominalVehicle) -> Self {
-        // The thrust cap keeps 20 % of the rotors' thrust for torque when the
-        // rotors are limited; on unlimited rotors (the paper plant, where the
-        // sliding-mode controllers are not limited either) it is 10 m g, so
-        // it never binds there.
-        Self { thrust_max: vehicle.thrust_cap(0.2, 10.0), ..Self::for_vehicle(&vehicle.plant) }
+        // No private thrust cap: on limited rotors PX4's MPC_THR_MAX = 1.0 of
+        // the rotors' thrust (the "px4" mixer lowers the collective thrust to
+        // keep roll/pitch); on unlimited rotors (the paper plant, where the
+        // sliding-mode controllers are not limited either) 10 m g, so it
+        // never binds there.
+        Self {
+            thrust_max: vehicle.thrust_cap(0.0, 10.0),
+            ..Self::for_vehicle_with_max_thrust(&vehicle.plant, vehicle.max_thrust)
+        }
     }
 
     fn check(&self) -> Result<(), InvalidGain> {

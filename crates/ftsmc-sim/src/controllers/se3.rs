@@ -19,11 +19,10 @@ impl GainSection for Se3Gains {
     }
 
     fn defaults_for(vehicle: &NominalVehicle) -> Self {
-        // The thrust cap keeps 20 % of the rotors' thrust for torque when the
-        // rotors are limited; on unlimited rotors (the paper plant, where the
-        // sliding-mode controllers are not limited either) it is 10 m g, so
-        // it never binds there.
-        Self { max_thrust: vehicle.thrust_cap(0.2, 10.0), ..Self::for_vehicle(&vehicle.plant) }
+        // No private thrust cap: the rotors' whole thrust when they are
+        // limited (the "px4" mixer keeps roll/pitch by lowering the
+        // collective thrust); 10 m g on unlimited rotors (never binds).
+        Self { max_thrust: vehicle.thrust_cap(0.0, 10.0), ..Self::for_vehicle(&vehicle.plant) }
     }
 
     fn check(&self) -> Result<(), InvalidGain> {

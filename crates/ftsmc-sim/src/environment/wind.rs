@@ -177,6 +177,52 @@ pub struct DrydenScales {
     pub length: [f64; 3],
 }
 
+impl DrydenScales {
+    /// Share of the `u` variance below `frequency` (Hz) at `airspeed` (m/s):
+    /// integrating the first-order spectrum (module docs),
+    /// `(2/π) atan(2π f L_u / V)`. Turbulence carried by a strong mean wind
+    /// has its energy at higher frequencies (gusts); carried at a 1 m/s
+    /// floor it is a slowly wandering wind.
+    pub fn u_variance_share_below(&self, frequency: f64, airspeed: f64) -> f64 {
+        core::f64::consts::FRAC_2_PI * (core::f64::consts::TAU * frequency * self.length[0] / airspeed).atan()
+    }
+}
+
+/// Statistics of a `[wind]` section as flown (after [`WindParams::resolved`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct WindSummary {
+    /// Mean wind speed, m/s.
+    pub mean_speed: f64,
+    /// Turbulence intensities `[σ_u, σ_v, σ_w]`, m/s (zero without turbulence).
+    pub sigma: [f64; 3],
+    /// Dryden airspeed `V`, m/s (`None` without turbulence).
+    pub airspeed: Option<f64>,
+    /// Share of the `u` variance below 0.1 Hz (`None` without turbulence).
+    pub u_share_below_0_1_hz: Option<f64>,
+}
+
+impl WindParams {
+    /// Mean speed, σ and the share of `u` variance below 0.1 Hz of this
+    /// wind as [`Wind::new`] flies it (airspeed `max(‖mean‖, floor)`).
+    pub fn summary(&self) -> WindSummary {
+        let r = self.resolved();
+        let mean_speed = r.mean.iter().map(|v| v * v).sum::<f64>().sqrt();
+        match r.turbulence {
+            None => WindSummary { mean_speed, sigma: [0.0; 3], airspeed: None, u_share_below_0_1_hz: None },
+            Some(t) => {
+                let scales = t.scales();
+                let v = mean_speed.max(t.airspeed_floor);
+                WindSummary {
+                    mean_speed,
+                    sigma: scales.sigma,
+                    airspeed: Some(v),
+                    u_share_below_0_1_hz: Some(scales.u_variance_share_below(0.1, v)),
+                }
+            }
+        }
+    }
+}
+
 /// A discrete 1−cosine gust (MIL-F-8785C §3.7.3):
 /// `v(t) = A/2 (1 − cos(2π (t − t₀)/d))` for `t ∈ [t₀, t₀ + d]`, zero outside.
 #[derive(Clone, Copy, Debug, PartialEq, Deserialize, Serialize)]
@@ -202,11 +248,84 @@ impl Gust {
     }
 }
 
+/// A rung of the wind ladder (`[wind] preset = "calm" | "breeze" | "light" |
+/// "moderate"`): the wind speed at 20 ft `W₂₀` that sets both the mean wind
+/// at the flight's altitude (MIL-F-8785C §3.7.2.1 logarithmic profile) and
+/// the Dryden turbulence (MIL-F-8785C §3.7.2.3, σ_w = 0.1 W₂₀).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum WindPreset {
+    /// Still air (`W₂₀` = 0): an indoor motion-capture room. No mean wind,
+    /// no turbulence.
+    Calm,
+    /// `W₂₀` = 5 kt (2.57 m/s): Beaufort force 2, "light breeze" (4–6 kt),
+    /// with the MIL-F-8785C low-altitude relations applied at that `W₂₀`
+    /// (the specification itself starts its table at 15 kt).
+    Breeze,
+    /// `W₂₀` = 15 kt (7.72 m/s): MIL-F-8785C / MIL-HDBK-1797 "light".
+    Light,
+    /// `W₂₀` = 30 kt (15.43 m/s): MIL-F-8785C / MIL-HDBK-1797 "moderate".
+    Moderate,
+}
+
+impl WindPreset {
+    /// Wind speed at 20 ft, `W₂₀`, m/s.
+    pub fn w20(self) -> f64 {
+        match self {
+            WindPreset::Calm => 0.0,
+            WindPreset::Breeze => 5.0 * KNOT,
+            WindPreset::Light => 15.0 * KNOT,
+            WindPreset::Moderate => 30.0 * KNOT,
+        }
+    }
+}
+
+/// Roughness length `z₀` of the MIL-F-8785C §3.7.2.1 mean-wind profile for
+/// Category C flight phases (take-off, approach, landing): 0.15 ft, in m.
+pub const ROUGHNESS_LENGTH: f64 = 0.15 * FOOT;
+
+/// Mean wind speed (m/s) at `altitude` (m) for a wind of `w20` (m/s) at
+/// 20 ft: MIL-F-8785C §3.7.2.1, `u(h) = W₂₀ ln(h/z₀) / ln(20 ft/z₀)`,
+/// `z₀` = [`ROUGHNESS_LENGTH`]; 0 at or below `z₀`.
+pub fn mean_wind_at(w20: f64, altitude: f64) -> f64 {
+    if altitude <= ROUGHNESS_LENGTH {
+        return 0.0;
+    }
+    w20 * (altitude / ROUGHNESS_LENGTH).ln() / (20.0 * FOOT / ROUGHNESS_LENGTH).ln()
+}
+
+fn is_zero(v: &f64) -> bool {
+    *v == 0.0
+}
+
 /// Wind parameters (`[wind]`): mean wind, gusts and turbulence; every part
 /// optional, the default is still air.
+///
+/// The mean wind is given either as a vector (`mean`), or as a speed and a
+/// direction (`speed`, `direction`), or by a ladder rung (`preset`, which
+/// also sets the turbulence unless `turbulence` is given). With a preset
+/// the Dryden airspeed is the mean wind at `altitude` (the frozen field is
+/// carried past a hovering vehicle by the mean wind; the floor only matters
+/// for `calm`, which has no turbulence).
 #[derive(Clone, Debug, Default, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct WindParams {
+    /// A rung of the wind ladder: mean wind at `altitude` along `direction`
+    /// and Dryden turbulence of the same `W₂₀` (see [`WindPreset`]). Default none.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub preset: Option<WindPreset>,
+    /// Mean wind speed, m/s, horizontal along `direction` (replaces the
+    /// preset's). Default none. Not together with a non-zero `mean`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub speed: Option<f64>,
+    /// Direction the mean wind blows towards, degrees from world x towards
+    /// world y (0: along +x). Default 0.
+    #[serde(skip_serializing_if = "is_zero")]
+    pub direction: f64,
+    /// Altitude of the preset's mean wind and turbulence, m (`[0.1, 304.8]`).
+    /// Default 5 m (the middle of the paper scenarios' altitudes).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub altitude: Option<f64>,
     /// Mean wind, world frame, m/s. Default `[0, 0, 0]`.
     pub mean: [f64; 3],
     /// Discrete 1−cosine gusts, added to the mean. Default none.
@@ -237,6 +356,27 @@ impl WindParams {
     /// | `turbulence.altitude` (m) | `[0.1, 304.8]` (below 1000 ft) |
     /// | `turbulence.airspeed_floor` (m/s) | `[0.01, 1000]` |
     pub fn check(&self) -> Result<(), GainError> {
+        if let Some(v) = self.speed {
+            closed("speed", v, 0.0, 100.0, "0 <= speed <= 100 m/s")?;
+            if self.mean != [0.0; 3] {
+                return Err(GainError {
+                    field: "speed",
+                    value: v,
+                    expected: "either speed (and direction) or mean, not both",
+                });
+            }
+        }
+        if self.preset.is_some() && self.mean != [0.0; 3] {
+            return Err(GainError {
+                field: "mean",
+                value: self.mean[0],
+                expected: "no mean with a preset (use speed and direction to change the preset's mean wind)",
+            });
+        }
+        closed("direction", self.direction, -360.0, 360.0, "-360 <= direction <= 360 degrees")?;
+        if let Some(h) = self.altitude {
+            closed("altitude", h, 0.1, LOW_ALTITUDE_MAX, "0.1 <= altitude <= 304.8 m (low-altitude Dryden form)")?;
+        }
         for &m in &self.mean {
             closed("mean", m, -100.0, 100.0, "-100 <= mean <= 100 m/s per component")?;
         }
@@ -267,6 +407,40 @@ impl WindParams {
             closed("turbulence.airspeed_floor", t.airspeed_floor, 0.01, 1000.0, "0.01 <= airspeed_floor <= 1000 m/s")?;
         }
         Ok(())
+    }
+
+    /// The altitude of the preset, m (default 5).
+    pub fn preset_altitude(&self) -> f64 {
+        self.altitude.unwrap_or(5.0)
+    }
+
+    /// These parameters with `preset`, `speed` and `direction` expanded
+    /// into `mean` and `turbulence` (what [`Wind::new`] flies): the mean
+    /// wind is `speed` (or the preset's [`mean_wind_at`] its altitude)
+    /// along `direction`; a preset other than `calm` adds Dryden turbulence
+    /// of its `W₂₀` at its altitude unless `turbulence` is given. Without
+    /// any of them the parameters are returned unchanged.
+    pub fn resolved(&self) -> WindParams {
+        let mut out = self.clone();
+        let speed = match (self.speed, self.preset) {
+            (Some(v), _) => Some(v),
+            (None, Some(p)) => Some(mean_wind_at(p.w20(), self.preset_altitude())),
+            (None, None) => None,
+        };
+        if let Some(v) = speed {
+            let (s, c) = self.direction.to_radians().sin_cos();
+            out.mean = [v * c, v * s, 0.0];
+        }
+        if let Some(p) = self.preset {
+            if out.turbulence.is_none() && p != WindPreset::Calm {
+                out.turbulence = Some(TurbulenceParams {
+                    intensity: Intensity::W20(p.w20()),
+                    altitude: self.preset_altitude(),
+                    airspeed_floor: default_airspeed_floor(),
+                });
+            }
+        }
+        out
     }
 
     /// Mean wind plus gusts at `t` (s), world frame, m/s.
@@ -458,6 +632,7 @@ impl Wind {
     /// Rejects parameters [`WindParams::check`] rejects and `dt` outside `(0, 10]` s.
     pub fn new(params: WindParams, dt: f64, seed: u64) -> Result<Self, GainError> {
         params.check()?;
+        let params = params.resolved();
         if !(dt > 0.0 && dt <= 10.0) {
             return Err(GainError { field: "dt", value: dt, expected: "0 < dt <= 10 s" });
         }

@@ -5,7 +5,7 @@
 //! |---|---|---|---|
 //! | ideal | no `[actuators]` (or the default one) and no `simulation.max_rotor_speed`, paper truth model | the command itself (Eq. 1 has no rotors: negative thrust flies) | paper Eq. 2 inverted, `ω ≥ 0` |
 //! | clamp | `[actuators] mixer = "clamp"` (or the deprecated `simulation.max_rotor_speed`) | what the clamped speeds produce | Eq. 2 inverted, each clamped to `[ω_min, ω_max]`, reached at once |
-//! | rotors | any other `[actuators]`, and the rigid body without `[actuators]` | [`Mixer::mix`] (thrust first) | first-order lag with exact exponentials, motor noise |
+//! | rotors | any other `[actuators]`, and the rigid body without `[actuators]` | [`Mixer::mix`] (`thrust-first`, `px4`, `px4-airmode`) | first-order lag with exact exponentials, motor noise |
 //!
 //! The ideal and clamp stages hold a constant wrench (and rotor speeds) over
 //! the control period; the rotor stage hands the truth model the lagged
@@ -121,7 +121,7 @@ impl ActuatorStage {
             MixerKind::Clamp => {
                 ActuatorStage::Clamp { min: act.min_rotor_speed, max: act.max_rotor_speed, mixer: (!paper).then(mixer) }
             }
-            MixerKind::ThrustFirst => {
+            MixerKind::ThrustFirst | MixerKind::Px4 | MixerKind::Px4Airmode => {
                 let motors = Motors::new(&act, [hover; 4]);
                 let decay = DecayCache::new(&motors, h);
                 ActuatorStage::Rotors { mixer: mixer(), motors, rng: motor_noise_rng(scenario.seed), decay }

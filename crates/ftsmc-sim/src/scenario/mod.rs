@@ -11,6 +11,7 @@ use ftsmc_core::model::{QuadState, QuadrotorParams};
 use serde::{Deserialize, Serialize};
 
 pub mod distributions;
+pub mod ladder;
 pub mod resolve;
 pub mod seed;
 mod validate;
@@ -37,18 +38,26 @@ pub const PAPER_SCENARIO_2: &str = include_str!("../../../../scenarios/paper-sce
 /// limit cycle, as shipped in `scenarios/ftaftsmc-tuned-scenario-1.toml`.
 pub const FTAFTSMC_TUNED_SCENARIO_1: &str = include_str!("../../../../scenarios/ftaftsmc-tuned-scenario-1.toml");
 
-/// Paper scenario 1 on an AscTec Hummingbird rigid body with real rotors, sensors, turbulence and ground (issue 12).
+/// Alias of `realistic-moderate-1`, the moderate rung of the wind ladder ([`ladder`]).
 pub const REALISTIC_SCENARIO_1: &str = include_str!("../../../../scenarios/realistic-scenario-1.toml");
-/// Paper scenario 2 on an AscTec Hummingbird rigid body with real rotors, sensors, turbulence and ground (issue 12).
+/// Alias of `realistic-moderate-2`, the moderate rung of the wind ladder ([`ladder`]).
 pub const REALISTIC_SCENARIO_2: &str = include_str!("../../../../scenarios/realistic-scenario-2.toml");
 
 /// Every scenario built into the library: `(file name, TOML text)`.
-pub const BUILT_IN_SCENARIOS: [(&str, &str); 5] = [
+pub const BUILT_IN_SCENARIOS: [(&str, &str); 13] = [
     ("paper-scenario-1.toml", PAPER_SCENARIO_1),
     ("paper-scenario-2.toml", PAPER_SCENARIO_2),
     ("ftaftsmc-tuned-scenario-1.toml", FTAFTSMC_TUNED_SCENARIO_1),
     ("realistic-scenario-1.toml", REALISTIC_SCENARIO_1),
     ("realistic-scenario-2.toml", REALISTIC_SCENARIO_2),
+    ladder::LADDER[0],
+    ladder::LADDER[1],
+    ladder::LADDER[2],
+    ladder::LADDER[3],
+    ladder::LADDER[4],
+    ladder::LADDER[5],
+    ladder::LADDER[6],
+    ladder::LADDER[7],
 ];
 
 /// The paper scenarios built into the library: `(file name, TOML text)`.
