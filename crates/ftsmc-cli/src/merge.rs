@@ -25,15 +25,8 @@ use ftsmc_sim::batch::shard::Shard;
 use ftsmc_sim::scenario::Scenario;
 use serde_json::{json, Map, Value};
 
-use crate::montecarlo::{mc_table, write_ise_boxplots};
+use crate::montecarlo::{mc_table, shard_json, write_ise_boxplots};
 use crate::output::{provenance, sha256_hex, ResultDir, ScenarioFile};
-
-/// The `shard` object of a shard's `summary.json`: `index` K and `count` N
-/// (`--shard K/N`) and the run indices it holds, `first_run` ..
-/// `end_run` (end excluded).
-pub fn shard_json(shard: Shard, indices: &Range<u64>) -> Value {
-    json!({"index": shard.index, "count": shard.count, "first_run": indices.start, "end_run": indices.end})
-}
 
 /// One shard folder, read and checked on its own.
 struct ShardFolder {
