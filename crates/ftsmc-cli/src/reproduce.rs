@@ -575,13 +575,16 @@ pub fn reproduce(out: &Path, figures: bool, realistic_runs: u64) -> Result<()> {
         crate::figures::scenario_2(&s2_main, find(&runs, &s2.name, "ftaftsmc-no-mass"), &fig_dir)?;
     }
     dir.write("report.md", report.as_bytes())?;
+    // The paper's part is printed as soon as it is known (the beyond part,
+    // with its Monte Carlo, takes minutes); the files are written whole at
+    // the end, with the beyond part, and listed after the commit.
+    println!("{report}");
     // Beyond the paper: its own files under `beyond/` (and `figures/beyond/`),
     // so everything above stays exactly what the paper part wrote before.
     let beyond_started = Instant::now();
     let beyond = beyond_the_paper(&dir, figures, realistic_runs)?;
     let beyond_elapsed = beyond_started.elapsed().as_secs_f64();
     dir.commit()?;
-    println!("{report}");
     let o = out.display();
     println!(
         "wrote {o}/summary.json, {o}/report.md, per-run CSV and scenario.toml under {o}/<scenario>/{}; {} flights in {:.2} s",
