@@ -943,6 +943,9 @@ pub fn beyond_the_paper(dir: &ResultDir, figures: bool, mc_runs: u64) -> Result<
             table.render()
         );
         json_mc = json!({"scenario": base.name, "runs": mc_runs, "master_seed": base.seed, "controllers": per});
+        if figures {
+            crate::figures::montecarlo(base, &rows, &controllers, &dir.path().join("figures").join("beyond"))?;
+        }
     }
 
     let record = json!({
