@@ -179,8 +179,8 @@ pub fn log(lo: f64, hi: f64, max_labels: usize) -> Ticks {
     let d1 = (b + 1e-9).floor() as i32;
     let mut minor = Vec::new();
     // Minor ticks only where they can be told apart (at most 12 decades).
-    let minor_decades = if b - a <= 12.0 { (a.floor() as i32)..=(b.ceil() as i32) } else { 1..=0 };
-    for d in minor_decades {
+    let minor_decades = (a.floor() as i32)..=(b.ceil() as i32);
+    for d in minor_decades.filter(|_| b - a <= 12.0) {
         for m in 2..10 {
             let v = f64::from(m) * 10f64.powi(d);
             if v >= lo && v <= hi {
