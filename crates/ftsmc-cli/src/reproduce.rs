@@ -612,7 +612,7 @@ pub const BEYOND_CONTROLLERS: &[&str] = &["ranftsmc", "tsm-sta", "ftaftsmc", "pi
 pub const BEYOND_MC_CONTROLLERS: &[&str] = BEYOND_CONTROLLERS;
 
 /// Default `--realistic-runs`: Monte Carlo runs of realistic scenario 2 per
-/// controller (issue 13 asks for 1000; with the five controllers this is
+/// controller (1000; with the five controllers this is
 /// the longest part of `reproduce`, a few minutes on two cores).
 pub const DEFAULT_REALISTIC_RUNS: u64 = 1000;
 

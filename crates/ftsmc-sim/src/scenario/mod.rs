@@ -27,18 +27,18 @@ use crate::environment::EnvironmentParams;
 use crate::limits::{LimitError, Limits};
 use crate::signal::Signal;
 
-/// The paper's scenario 1 (SPEC §4), as shipped in `scenarios/paper-scenario-1.toml`.
+/// The paper's scenario 1 (§4.1), as shipped in `scenarios/paper-scenario-1.toml`.
 pub const PAPER_SCENARIO_1: &str = include_str!("../../../../scenarios/paper-scenario-1.toml");
-/// The paper's scenario 2 (SPEC §4), as shipped in `scenarios/paper-scenario-2.toml`.
+/// The paper's scenario 2 (§4.2), as shipped in `scenarios/paper-scenario-2.toml`.
 pub const PAPER_SCENARIO_2: &str = include_str!("../../../../scenarios/paper-scenario-2.toml");
 
 /// Paper scenario 1 with the FTAFTSMC x/y reaching law tuned against the
 /// limit cycle, as shipped in `scenarios/ftaftsmc-tuned-scenario-1.toml`.
 pub const FTAFTSMC_TUNED_SCENARIO_1: &str = include_str!("../../../../scenarios/ftaftsmc-tuned-scenario-1.toml");
 
-/// Paper scenario 1 on an AscTec Hummingbird rigid body with real rotors, sensors, turbulence and ground (issue 12).
+/// Paper scenario 1 on an AscTec Hummingbird rigid body with real rotors, sensors, turbulence and ground.
 pub const REALISTIC_SCENARIO_1: &str = include_str!("../../../../scenarios/realistic-scenario-1.toml");
-/// Paper scenario 2 on an AscTec Hummingbird rigid body with real rotors, sensors, turbulence and ground (issue 12).
+/// Paper scenario 2 on an AscTec Hummingbird rigid body with real rotors, sensors, turbulence and ground.
 pub const REALISTIC_SCENARIO_2: &str = include_str!("../../../../scenarios/realistic-scenario-2.toml");
 
 /// Every scenario built into the library: `(file name, TOML text)`.
