@@ -20,10 +20,11 @@ from typing import TYPE_CHECKING, Any, Dict, NamedTuple, Optional, Protocol, Seq
 
 import numpy as np
 
-from . import _ftsmc
+from . import _ftsmc, _progress
 from ._ftsmc import Scenario
 
 if TYPE_CHECKING:
+    import matplotlib.figure
     import pandas
 
 __all__ = [
@@ -191,6 +192,13 @@ class Run:
         """The time series exactly as the CLI writes ``<controller>.csv``."""
         return self._data.csv()
 
+    def plot(self, what: str = "position") -> matplotlib.figure.Figure:
+        """A matplotlib figure of this run: ``"position"``, ``"attitude"`` or
+        ``"rotors"`` (see :mod:`ftsmc.plot`)."""
+        from . import plot
+
+        return plot.run(self, what)
+
     def __repr__(self) -> str:
         return f"Run(controller={self.controller!r}, scenario={self.scenario!r}, exit={self.exit.text!r})"
 
@@ -218,6 +226,7 @@ def montecarlo(
     seed: Optional[int] = None,
     controllers: Optional[Sequence[str]] = None,
     threads: Optional[int] = None,
+    progress: _progress.ProgressArg = None,
 ) -> pandas.DataFrame:
     """A Monte Carlo batch: the rows of the CLI's ``runs.csv`` as a DataFrame.
 
@@ -227,13 +236,21 @@ def montecarlo(
     workers (default: all cores; the rows do not depend on it), with the
     GIL released. Same rows and values as ``ftsmc montecarlo``: ``run`` and
     ``seed`` are uint64, empty CSV cells are NaN, ``completed``/``success``/
-    ``crashed`` are bool.
+    ``crashed`` are bool. ``progress``: a tqdm bar (shown after 1 s) when
+    the session is interactive and tqdm is installed (``None``), always
+    (``True``), never (``False``), or a callable ``progress(done, total)``
+    (control steps), called about every 0.2 s.
     """
     import pandas
 
-    names, columns = _ftsmc.montecarlo_columns(
-        scenario, runs, seed, None if controllers is None else list(controllers), threads
-    )
+    flights = runs * len(scenario.controllers if controllers is None else controllers)
+    cb = _progress.callback(progress, flights, f"{scenario.name} Monte Carlo")
+    try:
+        names, columns = _ftsmc.montecarlo_columns(
+            scenario, runs, seed, None if controllers is None else list(controllers), threads, cb
+        )
+    finally:
+        _progress.close(cb)
     return pandas.DataFrame(dict(zip(names, columns)))
 
 

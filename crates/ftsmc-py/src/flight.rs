@@ -112,8 +112,10 @@ pub fn simulate_python(
 /// an empty cell, `bool`) or a list of str. Same checks, seed handling and
 /// rows as `ftsmc montecarlo`; flown with the GIL released on a pool of
 /// `threads` workers (default: all cores); the rows do not depend on it.
+/// `progress(done, total)`, when given, is called about every 0.2 s with
+/// the control steps flown and planned (crate::progress).
 #[pyfunction]
-#[pyo3(signature = (scenario, runs, seed=None, controllers=None, threads=None))]
+#[pyo3(signature = (scenario, runs, seed=None, controllers=None, threads=None, progress=None))]
 pub fn montecarlo_columns<'py>(
     py: Python<'py>,
     scenario: PyRef<'_, Scenario>,
@@ -121,6 +123,7 @@ pub fn montecarlo_columns<'py>(
     seed: Option<u64>,
     controllers: Option<Vec<String>>,
     threads: Option<usize>,
+    progress: Option<Bound<'py, PyAny>>,
 ) -> PyResult<(Vec<String>, Vec<Bound<'py, PyAny>>)> {
     let mut scenario = scenario.inner.clone();
     let names = controllers.unwrap_or_else(|| scenario.controllers.clone());
@@ -142,18 +145,19 @@ pub fn montecarlo_columns<'py>(
     scenario.seed = seed.unwrap_or(scenario.seed);
     scenario.controllers = names;
     let spec = scenario.montecarlo.clone().unwrap_or_default();
+    let total = runs * scenario.controllers.len() as u64 * ftsmc_sim::run::planned_steps(&scenario);
 
-    let rows = py.detach(move || {
+    let rows = crate::progress::with_progress(py, total, progress.as_ref(), move |tick| {
         let mut builder = rayon::ThreadPoolBuilder::new();
         if let Some(t) = threads {
             builder = builder.num_threads(t);
         }
         let pool = builder.build().map_err(|e| format!("cannot start the thread pool: {e}"))?;
         pool.install(|| {
-            run_batch(&scenario, &spec, &scenario.controllers, runs, scenario.seed, &|_| {})
+            run_batch(&scenario, &spec, &scenario.controllers, runs, scenario.seed, tick)
                 .map_err(|known| format!("unknown controller (known: {known})"))
         })
-    });
+    })?;
     let table = runs_table(&rows.map_err(value_error)?);
     let mut columns = Vec::with_capacity(table.columns.len());
     for column in table.columns {
