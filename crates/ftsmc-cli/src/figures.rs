@@ -35,7 +35,8 @@ fn series(run: &RunOutput, column: &str, label: String, dashed: bool) -> Series 
 }
 
 /// The note at the end of a run that stopped early: "diverged (tilt) at
-/// 1.22 s", "crashed at 0.87 s"; `None` for a completed run.
+/// 1.22 s", "crashed at 0.87 s", "interrupted at 3.00 s"; `None` for a
+/// completed run.
 pub fn end_note(exit: &ExitStatus) -> Option<String> {
     match exit {
         ExitStatus::Completed => None,
@@ -44,10 +45,14 @@ pub fn end_note(exit: &ExitStatus) -> Option<String> {
                 Divergence::NonFinite => "non-finite state",
                 Divergence::Tilt { .. } => "tilt",
                 Divergence::PositionError { .. } => "position error",
+                Divergence::RigidBodyOutOfRange { .. } => {
+                    return Some(format!("stopped (rigid body out of range) at {time:.2} s"))
+                }
             };
             Some(format!("diverged ({why}) at {time:.2} s"))
         }
         ExitStatus::Crashed { time, .. } => Some(format!("crashed at {time:.2} s")),
+        ExitStatus::Interrupted { time } => Some(format!("interrupted at {time:.2} s")),
     }
 }
 
