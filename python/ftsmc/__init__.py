@@ -226,6 +226,8 @@ def montecarlo(
     seed: Optional[int] = None,
     controllers: Optional[Sequence[str]] = None,
     threads: Optional[int] = None,
+    client: Optional[Any] = None,
+    shards: Optional[int] = None,
     progress: _progress.ProgressArg = None,
 ) -> pandas.DataFrame:
     """A Monte Carlo batch: the rows of the CLI's ``runs.csv`` as a DataFrame.
@@ -236,10 +238,15 @@ def montecarlo(
     workers (default: all cores; the rows do not depend on it), with the
     GIL released. Same rows and values as ``ftsmc montecarlo``: ``run`` and
     ``seed`` are uint64, empty CSV cells are NaN, ``completed``/``success``/
-    ``crashed`` are bool. ``progress``: a tqdm bar (shown after 1 s) when
-    the session is interactive and tqdm is installed (``None``), always
-    (``True``), never (``False``), or a callable ``progress(done, total)``
-    (control steps), called about every 0.2 s.
+    ``crashed`` are bool. ``progress`` (local batches): a tqdm bar (shown
+    after 1 s) when the session is interactive and tqdm is installed
+    (``None``), always (``True``), never (``False``), or a callable
+    ``progress(done, total)`` (control steps), called about every 0.2 s.
+
+    With ``client`` (a ``dask.distributed.Client``; ``pip install
+    "./python[dask]"``) the batch is flown as ``shards`` Dask tasks of
+    contiguous runs, ``threads`` (default 1) threads each, and gives the same
+    rows; see :mod:`ftsmc.dask` and docs/campaigns.md.
     """
     import pandas
 
@@ -255,14 +262,21 @@ def montecarlo(
                     "controller) in a loop over the parameters you want to vary"
                 )
 
-    flights = runs * len(scenario.controllers if controllers is None else controllers)
-    cb = _progress.callback(progress, flights, f"{scenario.name} Monte Carlo")
-    try:
-        names, columns = _ftsmc.montecarlo_columns(
-            scenario, runs, seed, None if controllers is None else list(controllers), threads, cb
-        )
-    finally:
-        _progress.close(cb)
+    names_arg = None if controllers is None else list(controllers)
+    if client is not None:
+        from .dask import montecarlo_columns
+
+        per_task = 1 if threads is None else threads
+        names, columns = montecarlo_columns(client, scenario, runs, seed, names_arg, shards, per_task)
+    else:
+        if shards is not None:
+            raise ValueError("shards needs a Dask client (client=...)")
+        flights = runs * len(scenario.controllers if names_arg is None else names_arg)
+        cb = _progress.callback(progress, flights, f"{scenario.name} Monte Carlo")
+        try:
+            names, columns = _ftsmc.montecarlo_columns(scenario, runs, seed, names_arg, threads, None, cb)
+        finally:
+            _progress.close(cb)
     return pandas.DataFrame(dict(zip(names, columns)))
 
 

@@ -75,6 +75,7 @@ def montecarlo_columns(
     seed: Optional[int] = None,
     controllers: Optional[List[str]] = None,
     threads: Optional[int] = None,
+    run_range: Optional[Tuple[int, int]] = None,
     progress: Optional[Callable[[int, int], Any]] = None,
 ) -> Tuple[List[str], List[Union[npt.NDArray[Any], List[str]]]]: ...
 def controller_names() -> List[Tuple[str, str]]: ...

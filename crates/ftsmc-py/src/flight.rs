@@ -2,7 +2,7 @@
 //! released, or a Python controller), and Monte Carlo batches whose rows
 //! are `runs.csv`'s.
 
-use ftsmc_sim::batch::montecarlo::run_batch_cancellable;
+use ftsmc_sim::batch::montecarlo::run_batch_range;
 use ftsmc_sim::batch::runs_table::{runs_table, Column};
 use ftsmc_sim::run::{RunOptions, RunOutput};
 use numpy::PyArray1;
@@ -145,10 +145,15 @@ pub fn simulate_python(
 /// an empty cell, `bool`) or a list of str. Same checks, seed handling and
 /// rows as `ftsmc montecarlo`; flown with the GIL released on a pool of
 /// `threads` workers (default: all cores); the rows do not depend on it.
+/// `run_range = (start, end)` flies only the runs with index in
+/// `start..end` of the `runs`-run batch (a shard, for Dask tasks): their
+/// rows are bit-identical to those rows of the whole batch.
 /// `progress(done, total)`, when given, is called about every 0.2 s with
 /// the control steps flown and planned (crate::progress).
 #[pyfunction]
-#[pyo3(signature = (scenario, runs, seed=None, controllers=None, threads=None, progress=None))]
+#[pyo3(signature = (scenario, runs, seed=None, controllers=None, threads=None, run_range=None, progress=None))]
+// The arguments are Python's keyword arguments, one each.
+#[allow(clippy::too_many_arguments)]
 pub fn montecarlo_columns<'py>(
     py: Python<'py>,
     scenario: PyRef<'_, Scenario>,
@@ -156,6 +161,7 @@ pub fn montecarlo_columns<'py>(
     seed: Option<u64>,
     controllers: Option<Vec<String>>,
     threads: Option<usize>,
+    run_range: Option<(u64, u64)>,
     progress: Option<Bound<'py, PyAny>>,
 ) -> PyResult<(Vec<String>, Vec<Bound<'py, PyAny>>)> {
     let mut scenario = scenario.inner.clone();
@@ -170,7 +176,11 @@ pub fn montecarlo_columns<'py>(
     if threads == Some(0) {
         return Err(value_error("threads must be at least 1"));
     }
-    ftsmc_sim::limits::check_batch(&scenario.flight_size(), runs, names.len())
+    let (start, end) = run_range.unwrap_or((0, runs));
+    if start >= end || end > runs {
+        return Err(value_error(format!("run_range ({start}, {end}) must satisfy 0 <= start < end <= runs ({runs})")));
+    }
+    ftsmc_sim::limits::check_batch(&scenario.flight_size(), end - start, names.len())
         .map_err(|e| value_error(chain_message(&e)))?;
     if let Some(n) = threads {
         ftsmc_sim::limits::check_threads(&scenario.limits, n).map_err(|e| value_error(chain_message(&e)))?;
@@ -178,7 +188,7 @@ pub fn montecarlo_columns<'py>(
     scenario.seed = seed.unwrap_or(scenario.seed);
     scenario.controllers = names;
     let spec = scenario.montecarlo.clone().unwrap_or_default();
-    let total = runs * scenario.controllers.len() as u64 * ftsmc_sim::run::planned_steps(&scenario);
+    let total = (end - start) * scenario.controllers.len() as u64 * ftsmc_sim::run::planned_steps(&scenario);
 
     let rows = crate::progress::with_progress(py, total, progress.as_ref(), move |cancel, tick| {
         let mut builder = rayon::ThreadPoolBuilder::new();
@@ -187,7 +197,7 @@ pub fn montecarlo_columns<'py>(
         }
         let pool = builder.build().map_err(|e| format!("cannot start the thread pool: {e}"))?;
         pool.install(|| {
-            run_batch_cancellable(&scenario, &spec, &scenario.controllers, runs, scenario.seed, tick, Some(cancel))
+            run_batch_range(&scenario, &spec, &scenario.controllers, start..end, scenario.seed, tick, Some(cancel))
                 .map_err(|known| format!("unknown controller (known: {known})"))
         })
     })?;
