@@ -192,7 +192,8 @@ impl ActuatorParams {
                 return Err(GainError {
                     field: "mixer",
                     value: noise.std,
-                    expected: "mixer = \"clamp\" without [actuators.noise] (or mixer = \"thrust-first\" for noisy motors)",
+                    expected:
+                        "mixer = \"clamp\" without [actuators.noise] (or mixer = \"thrust-first\" for noisy motors)",
                 });
             }
         }
@@ -277,8 +278,7 @@ impl Motors {
         core::array::from_fn(|i| {
             let target = p.clamp_speed(command[i]);
             let now = self.speeds[i];
-            let (tau, e) =
-                if target > now { (p.time_constant_up, decay[0]) } else { (p.time_constant_down, decay[1]) };
+            let (tau, e) = if target > now { (p.time_constant_up, decay[0]) } else { (p.time_constant_down, decay[1]) };
             if tau == 0.0 {
                 target
             } else {

@@ -16,6 +16,10 @@
 //!            tuning.rs          gain tuning
 //!          batch/               batches of flights
 //!            montecarlo.rs      run_batch, stats, summarize
+//!          gym/                 reinforcement-learning environments (Python's `ftsmc.gym`)
+//!            agent.rs           the agent as a controller: thrust + body rates, or rotor speeds
+//!            lane.rs            one environment: an owned Flight, observation, reward, episode end
+//!            batch.rs           N environments per call, next-step auto-reset
 //! floor 5  registry.rs          controllers by name for a scenario: build, run, label
 //! floor 4  run/                 the loop: controller on its clock, plant by RK4, environment, metrics
 //!            exit.rs            ExitStatus, Divergence, divergence checks
@@ -60,6 +64,7 @@ pub mod batch;
 pub mod controllers;
 pub mod envelope;
 pub mod environment;
+pub mod gym;
 pub mod limits;
 pub mod metrics;
 pub mod registry;

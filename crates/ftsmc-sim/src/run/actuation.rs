@@ -11,9 +11,9 @@
 //! the control period; the rotor stage hands the truth model the lagged
 //! rotor speeds at each RK4 stage time.
 
+use core::cell::Cell;
 use ftsmc_core::allocation::{forces_from_squared_speeds, rotor_speeds, squared_speeds_from_forces};
 use ftsmc_core::model::{Command, QuadrotorParams};
-use core::cell::Cell;
 
 use rand_chacha::ChaCha8Rng;
 
@@ -27,7 +27,9 @@ use crate::vehicle::VehicleModel;
 /// `[actuators] max_rotor_speed = …, mixer = "clamp"` it always meant on the paper plant.
 pub fn actuators(scenario: &Scenario) -> ActuatorParams {
     scenario.actuators.unwrap_or(match scenario.simulation.max_rotor_speed {
-        Some(max_rotor_speed) => ActuatorParams { max_rotor_speed, mixer: MixerKind::Clamp, ..ActuatorParams::default() },
+        Some(max_rotor_speed) => {
+            ActuatorParams { max_rotor_speed, mixer: MixerKind::Clamp, ..ActuatorParams::default() }
+        }
         None => ActuatorParams::default(),
     })
 }
@@ -110,11 +112,9 @@ impl ActuatorStage {
             return ActuatorStage::Ideal;
         }
         match act.mixer {
-            MixerKind::Clamp => ActuatorStage::Clamp {
-                min: act.min_rotor_speed,
-                max: act.max_rotor_speed,
-                mixer: (!paper).then(mixer),
-            },
+            MixerKind::Clamp => {
+                ActuatorStage::Clamp { min: act.min_rotor_speed, max: act.max_rotor_speed, mixer: (!paper).then(mixer) }
+            }
             MixerKind::ThrustFirst => {
                 let motors = Motors::new(&act, [hover; 4]);
                 let decay = DecayCache::new(&motors, h);
