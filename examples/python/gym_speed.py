@@ -35,7 +35,7 @@ def ftsmc_rate(n: int, steps: int, single: bool) -> float:
 
     rng = np.random.default_rng(0)
     if single:
-        env = gym.make("ftsmc/Hover-v0", max_episode_time=1e4)
+        env = gym.make("ftsmc/Hover-v0", max_episode_time=100.0)
         env.reset(seed=0)
         actions = rng.uniform(-0.1, 0.1, (steps, 4)).astype(np.float32)
         t0 = time.perf_counter()
@@ -44,7 +44,7 @@ def ftsmc_rate(n: int, steps: int, single: bool) -> float:
             if terminated or truncated:
                 env.reset()
         return steps / (time.perf_counter() - t0)
-    venv = gym.make_vec("ftsmc/Hover-v0", num_envs=n, vectorization_mode="vector_entry_point", max_episode_time=1e4)
+    venv = gym.make_vec("ftsmc/Hover-v0", num_envs=n, vectorization_mode="vector_entry_point", max_episode_time=100.0)
     venv.reset(seed=0)
     batch = rng.uniform(-0.1, 0.1, (n, 4)).astype(np.float32)
     t0 = time.perf_counter()
@@ -69,7 +69,7 @@ def rotorpy_rate(n: int, steps: int) -> float:
         "rotor_speeds": np.full((n, 4), hover),
     }
     init_t = {k: torch.from_numpy(v).double() for k, v in init.items()}
-    env = QuadrotorEnv(n, init_t, control_mode="cmd_ctbr", quad_params=quad_params, max_time=1e4, sim_rate=100)
+    env = QuadrotorEnv(n, init_t, control_mode="cmd_ctbr", quad_params=quad_params, max_time=100, sim_rate=100)
     env.reset()
     batch = np.random.default_rng(0).uniform(-0.1, 0.1, (n, 4))
     t0 = time.perf_counter()

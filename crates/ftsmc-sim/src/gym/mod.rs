@@ -241,6 +241,8 @@ impl GymSpec {
             }
             scenario.duration = t;
         }
+        // An environment records no time series (the agent gets every step).
+        scenario.simulation.record_rate = 0.0;
         scenario.validate(path).map_err(|e| e.to_string())?;
         if settings.randomize && scenario.montecarlo.is_none() {
             return Err(format!("`randomize` = True needs a [montecarlo] section in scenario {path} (it has none)"));
