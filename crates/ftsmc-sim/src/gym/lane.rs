@@ -39,7 +39,7 @@ impl OwnedFlight {
         // SAFETY: both pointers come from `Box::into_raw` just above and
         // stay valid until `drop`, which drops the flight first.
         let (s, a): (&'static Scenario, &'static mut Agent) = unsafe { (&*scenario, &mut *agent) };
-        let flight = Flight::new(s, a, RunOptions { record: false, progress: None });
+        let flight = Flight::new(s, a, RunOptions { record: false, ..RunOptions::default() });
         Self { flight: Some(flight), scenario, agent }
     }
 
