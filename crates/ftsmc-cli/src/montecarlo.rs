@@ -12,9 +12,9 @@ use ftsmc_sim::run::planned_steps;
 use ftsmc_sim::scenario::Scenario;
 use serde_json::{json, Map, Value};
 
+use crate::console::{num, steps_bar, Table};
 use crate::output::{provenance, ResultDir};
 use crate::plot::{controller_color, write_boxplots, BoxGroup, BoxPanel};
-use crate::reproduce::{num, steps_bar, Table};
 
 /// `runs.csv` text: one row per (run, controller), in run order (the
 /// columns of [`runs_table`], shared with the Python package). The integral

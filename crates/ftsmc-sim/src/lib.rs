@@ -21,10 +21,13 @@
 //!            lane.rs            one environment: an owned Flight, observation, reward, episode end
 //!            batch.rs           N environments per call, next-step auto-reset
 //! floor 5  registry.rs          controllers by name for a scenario: build, run, label
-//! floor 4  run/                 the loop: controller on its clock, plant by RK4, environment, metrics
+//! floor 4  run/                 the one loop (docs/architecture.md): simulate, RunOptions, RunOutput
+//!            flight.rs          Flight: one flight, stepped one control period at a time
+//!            actuation.rs       the actuator stage: ideal, per-rotor clamp, mixer + lagged motors
+//!            truth.rs           TruthModel: paper Eq. 1 and the rigid body, RK4 substeps
+//!            observer.rs        Tick, Observer, FlightStats (tilt, saturation, rotor statistics)
 //!            exit.rs            ExitStatus, Divergence, divergence checks
 //!            recording.rs       Recording, recording_columns, CSV numbers
-//!            truth.rs           the realistic loop: mixer, motors, rigid body or Eq. 1, ground contact
 //! floor 3  scenario/            the file format; composes every part's parameters; validation
 //!            validate.rs        range checks, names, array lengths, cost limits
 //!            resolve.rs         extends chains, deep merge, --set overrides, unit-slip warnings

@@ -13,6 +13,7 @@
 
 use core::cell::Cell;
 use ftsmc_core::allocation::{forces_from_squared_speeds, rotor_speeds, squared_speeds_from_forces};
+use ftsmc_core::math::sqrt;
 use ftsmc_core::model::{Command, QuadrotorParams};
 
 use rand_chacha::ChaCha8Rng;
@@ -47,6 +48,9 @@ pub(crate) struct Delivered {
     pub saturated: bool,
     /// This period's standard-normal motor noise draws.
     pub noise: [f64; 4],
+    /// The unlimited rotor-speed demand when the stage computed it (paper
+    /// Eq. 2 inverted with the true plant's coefficients), rad/s.
+    pub demand: Option<[f64; 4]>,
 }
 
 /// The rotors as the truth model sees them inside a control period.
@@ -89,6 +93,8 @@ impl Drive<'_> {
 }
 
 /// The actuator stage of one flight.
+// One value per flight: the size difference between variants does not matter.
+#[allow(clippy::large_enum_variant)]
 pub(crate) enum ActuatorStage {
     /// The command applied as is (paper truth model only).
     Ideal,
@@ -131,7 +137,8 @@ impl ActuatorStage {
         match self {
             ActuatorStage::Ideal => {
                 let target = rotor_speeds(plant, command, f64::INFINITY);
-                Delivered { applied: *command, target, omega: target, saturated: false, noise: [0.0; 4] }
+                let demand = Some(target);
+                Delivered { applied: *command, target, omega: target, saturated: false, noise: [0.0; 4], demand }
             }
             ActuatorStage::Clamp { min, max, mixer: None } => {
                 let w = squared_speeds_from_forces(plant, command);
@@ -139,7 +146,8 @@ impl ActuatorStage {
                 let saturated = !w.iter().all(|&wi| wi >= w_min && wi <= w_max);
                 let target = rotor_speeds(plant, command, *max).map(|o| if o < *min { *min } else { o });
                 let applied = forces_from_squared_speeds(plant, &target.map(|o| o * o));
-                Delivered { applied, target, omega: target, saturated, noise: [0.0; 4] }
+                let demand = Some(w.map(|wi| sqrt(wi.clamp(0.0, f64::INFINITY))));
+                Delivered { applied, target, omega: target, saturated, noise: [0.0; 4], demand }
             }
             ActuatorStage::Clamp { mixer: Some(mixer), .. } => {
                 let m = mixer.mix_clamped(command);
@@ -149,13 +157,21 @@ impl ActuatorStage {
                     omega: m.rotor_speeds,
                     saturated: m.saturated,
                     noise: [0.0; 4],
+                    demand: None,
                 }
             }
             ActuatorStage::Rotors { mixer, motors, rng, .. } => {
                 let m = mixer.mix(command);
                 let noise = motors.sample_noise(rng);
                 let omega = motors.with_noise(&motors.speeds(), &noise);
-                Delivered { applied: m.applied, target: m.rotor_speeds, omega, saturated: m.saturated, noise }
+                Delivered {
+                    applied: m.applied,
+                    target: m.rotor_speeds,
+                    omega,
+                    saturated: m.saturated,
+                    noise,
+                    demand: None,
+                }
             }
         }
     }

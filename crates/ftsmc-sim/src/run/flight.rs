@@ -154,8 +154,12 @@ impl<'s, C: Controller + ?Sized> Flight<'s, C> {
         flight
     }
 
-    /// Add an observer of every tick and period boundary from now on.
+    /// Add an observer of every tick and period boundary from now on; it
+    /// first sees the boundary the flight is at (`t = 0` for a new flight).
     pub fn observe_with(&mut self, observer: &'s mut dyn Observer) {
+        if self.exit.is_none() {
+            observer.boundary(self.k as f64 * self.dt, &self.state, &self.reference);
+        }
         self.observers.push(observer);
     }
 
@@ -238,8 +242,8 @@ impl<'s, C: Controller + ?Sized> Flight<'s, C> {
         let command = self.controller.update(&measured, &self.reference, dt);
         self.env.next_period();
         let plant_now = self.env.params_with(&self.tv_now);
-        let demand = rotor_speeds(&self.demand_params, &command, f64::INFINITY);
         let delivered: Delivered = self.actuators.deliver(&command, &plant_now);
+        let demand = delivered.demand.unwrap_or_else(|| rotor_speeds(&self.demand_params, &command, f64::INFINITY));
         if self.legacy_rotor_metrics {
             self.peak_demand = demand.iter().fold(self.peak_demand, |m, &w| if w.is_finite() { m.max(w) } else { m });
             self.saturated_periods += u64::from(delivered.saturated);
@@ -285,7 +289,7 @@ impl<'s, C: Controller + ?Sized> Flight<'s, C> {
         let omega_bar = residual_speed(&delivered.target);
         for j in 0..self.scenario.simulation.substeps {
             let t0 = t + j as f64 * h;
-            let wind = self.wind.as_mut().map_or([0.0; 3], |w| w.step(t0));
+            let wind = self.wind.as_mut().map(|w| w.step(t0));
             let tv_next = self.env.time_varying(t0 + h);
             let z_prev = *self.truth.vertical().0;
             self.truth.substep(&Substep {

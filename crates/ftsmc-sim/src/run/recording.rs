@@ -177,8 +177,8 @@ fn push_number_with(buffer: &mut zmij::Buffer, out: &mut Vec<u8>, v: f64) {
     }
 }
 
-/// The time series of one flight as it is flown, shared by the paper loop
-/// and the realistic loop: a [`Recording`] with its controller's columns,
+/// The time series of one flight as it is flown (an [`Observer`] of the
+/// run loop): a [`Recording`] with its controller's columns,
 /// a row every `every` ticks (none with 0), assembled on the stack.
 pub(super) struct Recorder {
     /// The rows recorded so far.

@@ -21,7 +21,7 @@ use ftsmc_core::model::{Command, QuadState, QuadrotorParams};
 
 use crate::environment::{Environment, TimeVarying};
 use crate::scenario::Scenario;
-use crate::vehicle::paper::{derivative_in_wind, rk4_step};
+use crate::vehicle::paper::{derivative, derivative_in_wind, rk4_step};
 use crate::vehicle::rigid_body::{normalize_quaternion, RigidBodyState};
 use crate::vehicle::{from_quad_state, to_quad_state, RigidBody, RigidBodyInput, RigidBodyParams, VehicleModel};
 
@@ -41,8 +41,8 @@ pub(crate) struct Substep<'a> {
     pub env: &'a Environment<'a>,
     /// The rotors.
     pub drive: Drive<'a>,
-    /// Wind held over the substep, world frame, m/s.
-    pub wind: [f64; 3],
+    /// Wind held over the substep, world frame, m/s (`None`: still air, no `[wind]`).
+    pub wind: Option<[f64; 3]>,
 }
 
 /// A truth model the loop can fly.
@@ -73,14 +73,24 @@ impl TruthModel for PaperTruth {
     fn substep(&mut self, s: &Substep<'_>) {
         let (t0, h, a, b, env, wind) = (s.t0, s.h, s.a, s.b, s.env, s.wind);
         self.0 = match s.drive {
-            Drive::Held { applied, omega_bar, .. } => {
-                let f = |tau: f64, x: &[f64; 12]| {
-                    let tv = TimeVarying::lerp(&a, &b, (tau - t0) / h);
-                    derivative_in_wind(x, applied, omega_bar, &env.params_with(&tv), &tv.disturbance, &wind)
-                };
-                rk4_step(f, t0, &self.0, h)
-            }
+            Drive::Held { applied, omega_bar, .. } => match wind {
+                None => {
+                    let f = |tau: f64, x: &[f64; 12]| {
+                        let tv = TimeVarying::lerp(&a, &b, (tau - t0) / h);
+                        derivative(x, applied, omega_bar, &env.params_with(&tv), &tv.disturbance)
+                    };
+                    rk4_step(f, t0, &self.0, h)
+                }
+                Some(wind) => {
+                    let f = |tau: f64, x: &[f64; 12]| {
+                        let tv = TimeVarying::lerp(&a, &b, (tau - t0) / h);
+                        derivative_in_wind(x, applied, omega_bar, &env.params_with(&tv), &tv.disturbance, &wind)
+                    };
+                    rk4_step(f, t0, &self.0, h)
+                }
+            },
             drive @ Drive::Lagged { .. } => {
+                let wind = wind.unwrap_or([0.0; 3]);
                 let f = |tau: f64, x: &[f64; 12]| {
                     let tv = TimeVarying::lerp(&a, &b, (tau - t0) / h);
                     let p = env.params_with(&tv);
@@ -139,7 +149,8 @@ impl TruthModel for RigidTruth {
 
     #[inline]
     fn substep(&mut self, s: &Substep<'_>) {
-        let (t0, h, a, b, wind, drive) = (s.t0, s.h, s.a, s.b, s.wind, s.drive);
+        let (t0, h, a, b, drive) = (s.t0, s.h, s.a, s.b, s.drive);
+        let wind = s.wind.unwrap_or([0.0; 3]);
         let body = &self.body;
         let inertia = body.params().inertia;
         let mass = body.params().mass;

@@ -384,12 +384,16 @@ impl RigidBody {
     /// Rotor and aerodynamic wrench in the body frame at a state (without
     /// gravity, external inputs or the gyroscopic terms).
     pub fn body_wrench(&self, x: &RigidBodyState, input: &RigidBodyInput) -> Wrench {
+        self.body_wrench_in(x, input, &rotation(quaternion(x)))
+    }
+
+    /// [`RigidBody::body_wrench`] with the body-to-world rotation `r` of `x` given.
+    #[inline]
+    fn body_wrench_in(&self, x: &RigidBodyState, input: &RigidBodyInput, r: &Mat3) -> Wrench {
         let p = &self.params;
-        let q = quaternion(x);
         let v = block(x, index::VELOCITY);
         let omega = block(x, index::BODY_RATES);
-        let r = rotation(q);
-        let v_air = mat_t_vec(&r, sub(v, input.wind));
+        let v_air = mat_t_vec(r, sub(v, input.wind));
         let aero = p.rotor_drag_xy != 0.0 || p.rotor_drag_z != 0.0;
         let mut force = [0.0; 3];
         let mut torque = [0.0; 3];
@@ -428,7 +432,7 @@ impl RigidBody {
         let q = quaternion(x);
         let omega = block(x, index::BODY_RATES);
         let r = rotation(q);
-        let wrench = self.body_wrench(x, input);
+        let wrench = self.body_wrench_in(x, input, &r);
         let f_world = add(mat_vec(&r, wrench.force), input.force);
         let acc = [f_world[0] / p.mass, f_world[1] / p.mass, f_world[2] / p.mass - p.gravity];
         let j_omega = mat_vec(&p.inertia, omega);
