@@ -151,6 +151,9 @@ impl<'s, C: Controller + ?Sized> Flight<'s, C> {
             measured_ahead: None,
         };
         flight.boundary(0.0);
+        if let Some(divergence) = flight.truth.invalid() {
+            flight.exit = Some(ExitStatus::Diverged { divergence, time: 0.0 });
+        }
         flight
     }
 
@@ -250,6 +253,9 @@ impl<'s, C: Controller + ?Sized> Flight<'s, C> {
         }
         self.controller.actuator_feedback(delivered.saturated);
         self.truth.begin_period(&self.tv_now, &self.base_plant);
+        if let Some(divergence) = self.truth.invalid() {
+            return self.end(ExitStatus::Diverged { divergence, time: t });
+        }
 
         let applied = delivered.applied;
         let u = [applied.thrust, applied.torque[0], applied.torque[1], applied.torque[2]];
@@ -312,7 +318,9 @@ impl<'s, C: Controller + ?Sized> Flight<'s, C> {
             self.tv_now = tv_next;
         }
         self.k = k + 1;
-        self.options.step_done(self.k);
+        if self.options.step_done(self.k) {
+            return self.end(ExitStatus::Interrupted { time: self.k as f64 * dt });
+        }
 
         let t_next = (k + 1) as f64 * dt;
         self.reference = reference_at(self.scenario, t_next);

@@ -26,6 +26,7 @@ use crate::vehicle::rigid_body::{normalize_quaternion, RigidBodyState};
 use crate::vehicle::{from_quad_state, to_quad_state, RigidBody, RigidBodyInput, RigidBodyParams, VehicleModel};
 
 use super::actuation::Drive;
+use super::Divergence;
 
 /// One RK4 substep `[t0, t0 + h]` as the loop hands it to a truth model.
 pub(crate) struct Substep<'a> {
@@ -58,6 +59,12 @@ pub(crate) trait TruthModel {
     fn substep(&mut self, s: &Substep<'_>);
     /// Height `z` (m) and vertical velocity `ż` (m/s), for ground contact.
     fn vertical(&mut self) -> (&mut f64, &mut f64);
+    /// Why the model cannot fly on (a rigid body whose mass or inertia left
+    /// its valid range, at the start or after [`TruthModel::begin_period`]);
+    /// the flight then stops as diverged with this reason.
+    fn invalid(&self) -> Option<Divergence> {
+        None
+    }
 }
 
 /// Paper Eq. 1 in Euler form.
@@ -116,18 +123,33 @@ pub(crate) struct RigidTruth {
     base: RigidBodyParams,
     key: (f64, f64),
     x: RigidBodyState,
+    /// Set when the body left its valid range (never flown on).
+    invalid: Option<Divergence>,
 }
 
 impl RigidTruth {
     /// The rigid body of `scenario` at its initial state.
     pub(crate) fn new(scenario: &Scenario) -> Self {
         let base = scenario.rigid_body_params();
-        let body = RigidBody::new(base).expect("validated by Scenario::validate");
-        Self { body, base, key: (1.0, 0.0), x: from_quad_state(&scenario.initial_state.state()) }
+        // An invalid rigid body (Scenario::validate refuses it; a caller may
+        // skip validation) stops the flight at t = 0 with the reason.
+        let (body, invalid) = match RigidBody::new(base) {
+            Ok(body) => (body, None),
+            Err(_) => {
+                let stand_in = RigidBodyParams::from_paper(&QuadrotorParams::default());
+                let body = RigidBody::new(stand_in).expect("the paper vehicle is a valid rigid body");
+                (body, Some(Divergence::RigidBodyOutOfRange { mass: base.mass, inertia_scale: 1.0 }))
+            }
+        };
+        Self { body, base, key: (1.0, 0.0), x: from_quad_state(&scenario.initial_state.state()), invalid }
     }
 }
 
 impl TruthModel for RigidTruth {
+    fn invalid(&self) -> Option<Divergence> {
+        self.invalid
+    }
+
     #[inline]
     fn quad_state(&self) -> QuadState {
         to_quad_state(&self.x)
@@ -140,8 +162,10 @@ impl TruthModel for RigidTruth {
             let mut p = self.base;
             p.mass += added;
             p.inertia = p.inertia.map(|r| r.map(|v| v * scale));
-            if let Ok(b) = RigidBody::new(p) {
-                self.body = b;
+            match RigidBody::new(p) {
+                Ok(b) => self.body = b,
+                // Never fly a mass or inertia other than the recorded one.
+                Err(_) => self.invalid = Some(Divergence::RigidBodyOutOfRange { mass: p.mass, inertia_scale: scale }),
             }
             self.key = (added, scale);
         }
