@@ -159,13 +159,12 @@ impl TruthModel for RigidTruth {
         let added = tv.mass - base_plant.mass;
         let scale = tv.inertia[0] / base_plant.inertia[0];
         if (added, scale) != self.key {
-            let mut p = self.base;
-            p.mass += added;
-            p.inertia = p.inertia.map(|r| r.map(|v| v * scale));
-            match RigidBody::new(p) {
+            let mass = self.base.mass + added;
+            let inertia = self.base.inertia.map(|r| r.map(|v| v * scale));
+            match self.body.with_mass_and_inertia(mass, inertia) {
                 Ok(b) => self.body = b,
                 // Never fly a mass or inertia other than the recorded one.
-                Err(_) => self.invalid = Some(Divergence::RigidBodyOutOfRange { mass: p.mass, inertia_scale: scale }),
+                Err(_) => self.invalid = Some(Divergence::RigidBodyOutOfRange { mass, inertia_scale: scale }),
             }
             self.key = (added, scale);
         }
