@@ -25,7 +25,9 @@
 //! into one `--out` keep each other's CSVs), and files of a folder written
 //! before manifests existed. ftsmc therefore never deletes a file it did
 //! not write, except by writing a file of the same name. A command that
-//! replaces a file another command's manifest lists is told so on stderr.
+//! replaces a file another command's manifest lists is told so on stderr,
+//! and the file leaves that manifest (it belongs to the last writer alone,
+//! so the other command's next run cannot delete it).
 //!
 //! On every error path (a flight fails, a write fails — disk full included
 //! — or a figure cannot be rendered) the staging folder is removed by a drop
@@ -227,6 +229,7 @@ impl ResultDir {
             let _ = std::fs::remove_dir_all(old);
         }
         remove_stale(&parent, &name);
+        disown_replaced(&self.dest, &self.owner, &written);
         Ok(())
     }
 }
@@ -309,6 +312,43 @@ fn warn_replaced_in(folder: &Path, prefix: &str, owner: &str, written: &HashSet<
                 replaced.join(", "),
                 dest.display()
             );
+        }
+    }
+}
+
+/// Remove the files this result wrote (`written`, relative to `dest`) from
+/// every other command's manifest, in `dest` and in its parent folder
+/// (prefixed with the destination's name): the file now belongs to `owner`
+/// alone, so the other command's next commit, if it no longer writes that
+/// name, does not delete a file it did not write last. Best effort: a
+/// manifest that cannot be rewritten keeps the entry (the file then stays
+/// listed twice, never unlisted).
+fn disown_replaced(dest: &Path, owner: &str, written: &HashSet<String>) {
+    let name = dest.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    let parent = dest.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    for (folder, prefix) in [(dest, String::new()), (parent, format!("{name}/"))] {
+        let Ok(entries) = std::fs::read_dir(folder) else { continue };
+        for entry in entries.flatten() {
+            let file_name = entry.file_name().to_string_lossy().into_owned();
+            let Some(other) = file_name.strip_prefix(".ftsmc-").and_then(|r| r.strip_suffix(".manifest")) else {
+                continue;
+            };
+            if other == owner && prefix.is_empty() {
+                continue;
+            }
+            let Ok(text) = std::fs::read_to_string(entry.path()) else { continue };
+            let kept: Vec<&str> = text
+                .lines()
+                .filter(|l| !l.is_empty())
+                .filter(|l| !l.strip_prefix(prefix.as_str()).is_some_and(|f| written.contains(f)))
+                .collect();
+            if kept.len() != text.lines().filter(|l| !l.is_empty()).count() {
+                let mut out = kept.join("\n");
+                if !out.is_empty() {
+                    out.push('\n');
+                }
+                let _ = write_atomic(&entry.path(), out.as_bytes());
+            }
         }
     }
 }
@@ -659,6 +699,26 @@ mod tests {
         let dest = root.join("a/b/res");
         drop(ResultDir::begin(&dest, "run").unwrap());
         assert!(names(&root).is_empty(), "{:?}", names(&root));
+        std::fs::remove_dir_all(&root).ok();
+    }
+
+    #[test]
+    fn a_file_another_command_replaced_is_no_longer_the_first_commands_to_delete() {
+        let root = temp("disown");
+        let dest = root.join("res").join("scen");
+        // `run` writes summary.json and its CSV; `montecarlo` then replaces summary.json.
+        write_result(&dest, "run", &[("summary.json", b"run"), ("pid.csv", b"csv")]).unwrap();
+        write_result(&dest, "montecarlo", &[("summary.json", b"mc"), ("runs.csv", b"rows")]).unwrap();
+        assert_eq!(std::fs::read_to_string(dest.join(".ftsmc-run.manifest")).unwrap(), "pid.csv\n");
+        // A later `run` that no longer writes summary.json must not delete montecarlo's.
+        write_result(&dest, "run", &[("pid.csv", b"csv2")]).unwrap();
+        assert_eq!(std::fs::read_to_string(dest.join("summary.json")).unwrap(), "mc");
+        assert_eq!(std::fs::read_to_string(dest.join("runs.csv")).unwrap(), "rows");
+        // The parent's manifest too: `reproduce` listed scen/pid.csv, `run` replaced it.
+        let parent = root.join("res");
+        std::fs::write(parent.join(".ftsmc-reproduce.manifest"), "scen/pid.csv\nsummary.json\n").unwrap();
+        write_result(&dest, "run", &[("pid.csv", b"csv3")]).unwrap();
+        assert_eq!(std::fs::read_to_string(parent.join(".ftsmc-reproduce.manifest")).unwrap(), "summary.json\n");
         std::fs::remove_dir_all(&root).ok();
     }
 
