@@ -103,7 +103,7 @@ impl<'s, C: Controller + ?Sized> Flight<'s, C> {
         let dt = scenario.control_period();
         let steps = super::planned_steps(scenario);
         let h = dt / sim.substeps as f64;
-        let (truth, allocation, demand_params, hover) = truth_of(scenario);
+        let (truth, allocation, demand_params, hover, invalid) = truth_of(scenario);
         let actuators = ActuatorStage::of(scenario, allocation, hover, h);
         let mut env_params = scenario.environment();
         if scenario.vehicle.model == crate::vehicle::VehicleModel::RigidBody {
@@ -151,7 +151,7 @@ impl<'s, C: Controller + ?Sized> Flight<'s, C> {
             measured_ahead: None,
         };
         flight.boundary(0.0);
-        if let Some(divergence) = flight.truth.invalid() {
+        if let Some(divergence) = invalid {
             flight.exit = Some(ExitStatus::Diverged { divergence, time: 0.0 });
         }
         flight
@@ -252,8 +252,7 @@ impl<'s, C: Controller + ?Sized> Flight<'s, C> {
             self.saturated_periods += u64::from(delivered.saturated);
         }
         self.controller.actuator_feedback(delivered.saturated);
-        self.truth.begin_period(&self.tv_now, &self.base_plant);
-        if let Some(divergence) = self.truth.invalid() {
+        if let Err(divergence) = self.truth.begin_period(&self.tv_now, &self.base_plant) {
             return self.end(ExitStatus::Diverged { divergence, time: t });
         }
 

@@ -52,19 +52,15 @@ pub(crate) trait TruthModel {
     fn quad_state(&self) -> QuadState;
     /// The start of a control period with the plant variation `tv` (the
     /// rigid body's payload and inertia scaling); `base` is the true plant.
-    fn begin_period(&mut self, tv: &TimeVarying, base: &QuadrotorParams) {
+    /// An error stops the run: the model cannot represent this variation.
+    fn begin_period(&mut self, tv: &TimeVarying, base: &QuadrotorParams) -> Result<(), Divergence> {
         let _ = (tv, base);
+        Ok(())
     }
     /// Integrate one substep.
     fn substep(&mut self, s: &Substep<'_>);
     /// Height `z` (m) and vertical velocity `ż` (m/s), for ground contact.
     fn vertical(&mut self) -> (&mut f64, &mut f64);
-    /// Why the model cannot fly on (a rigid body whose mass or inertia left
-    /// its valid range, at the start or after [`TruthModel::begin_period`]);
-    /// the flight then stops as diverged with this reason.
-    fn invalid(&self) -> Option<Divergence> {
-        None
-    }
 }
 
 /// Paper Eq. 1 in Euler form.
@@ -123,39 +119,27 @@ pub(crate) struct RigidTruth {
     base: RigidBodyParams,
     key: (f64, f64),
     x: RigidBodyState,
-    /// Set when the body left its valid range (never flown on).
-    invalid: Option<Divergence>,
 }
 
 impl RigidTruth {
-    /// The rigid body of `scenario` at its initial state.
-    pub(crate) fn new(scenario: &Scenario) -> Self {
+    /// The rigid body of `scenario` at its initial state (`Err`: its
+    /// parameters are out of range; `Scenario::validate` refuses them, a
+    /// caller may skip validation).
+    pub(crate) fn new(scenario: &Scenario) -> Result<Self, Divergence> {
         let base = scenario.rigid_body_params();
-        // An invalid rigid body (Scenario::validate refuses it; a caller may
-        // skip validation) stops the flight at t = 0 with the reason.
-        let (body, invalid) = match RigidBody::new(base) {
-            Ok(body) => (body, None),
-            Err(_) => {
-                let stand_in = RigidBodyParams::from_paper(&QuadrotorParams::default());
-                let body = RigidBody::new(stand_in).expect("the paper vehicle is a valid rigid body");
-                (body, Some(Divergence::RigidBodyOutOfRange { mass: base.mass, inertia_scale: 1.0 }))
-            }
-        };
-        Self { body, base, key: (1.0, 0.0), x: from_quad_state(&scenario.initial_state.state()), invalid }
+        let body = RigidBody::new(base)
+            .map_err(|_| Divergence::RigidBodyOutOfRange { mass: base.mass, inertia_scale: 1.0 })?;
+        Ok(Self { body, base, key: (1.0, 0.0), x: from_quad_state(&scenario.initial_state.state()) })
     }
 }
 
 impl TruthModel for RigidTruth {
-    fn invalid(&self) -> Option<Divergence> {
-        self.invalid
-    }
-
     #[inline]
     fn quad_state(&self) -> QuadState {
         to_quad_state(&self.x)
     }
 
-    fn begin_period(&mut self, tv: &TimeVarying, base_plant: &QuadrotorParams) {
+    fn begin_period(&mut self, tv: &TimeVarying, base_plant: &QuadrotorParams) -> Result<(), Divergence> {
         let added = tv.mass - base_plant.mass;
         let scale = tv.inertia[0] / base_plant.inertia[0];
         if (added, scale) != self.key {
@@ -164,10 +148,11 @@ impl TruthModel for RigidTruth {
             match self.body.with_mass_and_inertia(mass, inertia) {
                 Ok(b) => self.body = b,
                 // Never fly a mass or inertia other than the recorded one.
-                Err(_) => self.invalid = Some(Divergence::RigidBodyOutOfRange { mass, inertia_scale: scale }),
+                Err(_) => return Err(Divergence::RigidBodyOutOfRange { mass, inertia_scale: scale }),
             }
             self.key = (added, scale);
         }
+        Ok(())
     }
 
     #[inline]
@@ -201,19 +186,23 @@ impl TruthModel for RigidTruth {
 
 /// The truth model `scenario` flies (`[vehicle] model`), its allocation
 /// `u = A ω²`, the paper-form parameters of its unsaturated rotor-speed
-/// demand, and its hover rotor speed (rad/s).
-pub(crate) fn truth_of(scenario: &Scenario) -> (Box<dyn TruthModel + Send>, [[f64; 4]; 4], QuadrotorParams, f64) {
+/// demand, its hover rotor speed (rad/s), and why it cannot fly (an
+/// out-of-range rigid body: the paper plant stands in, the run stops at t = 0).
+pub(crate) fn truth_of(
+    scenario: &Scenario,
+) -> (Box<dyn TruthModel + Send>, [[f64; 4]; 4], QuadrotorParams, f64, Option<Divergence>) {
     let (allocation, demand) = scenario.truth_allocation();
+    let p = scenario.actual_plant.unwrap_or(scenario.plant);
+    let paper_hover = (p.mass * p.gravity / (4.0 * p.lift_coefficient)).sqrt();
+    let paper = || Box::new(PaperTruth(scenario.initial_state.state().to_array()));
     match scenario.vehicle.model {
-        VehicleModel::Paper => {
-            let p = scenario.actual_plant.unwrap_or(scenario.plant);
-            let hover = (p.mass * p.gravity / (4.0 * p.lift_coefficient)).sqrt();
-            (Box::new(PaperTruth(scenario.initial_state.state().to_array())), allocation, demand, hover)
-        }
-        VehicleModel::RigidBody => {
-            let truth = RigidTruth::new(scenario);
-            let hover = truth.base.hover_rotor_speed();
-            (Box::new(truth), allocation, demand, hover)
-        }
+        VehicleModel::Paper => (paper(), allocation, demand, paper_hover, None),
+        VehicleModel::RigidBody => match RigidTruth::new(scenario) {
+            Ok(truth) => {
+                let hover = truth.base.hover_rotor_speed();
+                (Box::new(truth), allocation, demand, hover, None)
+            }
+            Err(why) => (paper(), allocation, demand, paper_hover, Some(why)),
+        },
     }
 }
