@@ -16,6 +16,7 @@
 //!            tuning.rs          gain tuning
 //!          batch/               batches of flights
 //!            montecarlo.rs      run_batch, stats, summarize
+//!            shard.rs           K/N shards of a campaign (contiguous blocks of runs)
 //!          gym/                 reinforcement-learning environments (Python's `ftsmc.gym`)
 //!            agent.rs           the agent as a controller: thrust + body rates, or rotor speeds
 //!            lane.rs            one environment: an owned Flight, observation, reward, episode end
