@@ -35,7 +35,7 @@ use super::actuation::{ActuatorStage, Delivered};
 use super::exit::check_divergence;
 use super::observer::{FlightStats, Observer, Tick};
 use super::recording::Recorder;
-use super::truth::{truth_of, Substep, TruthModel};
+use super::truth::{truth_of, Substep, TruthModel, TruthSetup};
 use super::{reference_at, tracking_errors, Divergence, ExitStatus, RunOptions, RunOutput};
 
 /// What one [`Flight::step`] did.
@@ -103,7 +103,7 @@ impl<'s, C: Controller + ?Sized> Flight<'s, C> {
         let dt = scenario.control_period();
         let steps = super::planned_steps(scenario);
         let h = dt / sim.substeps as f64;
-        let (truth, allocation, demand_params, hover, invalid) = truth_of(scenario);
+        let TruthSetup { truth, allocation, demand: demand_params, hover, invalid } = truth_of(scenario);
         let actuators = ActuatorStage::of(scenario, allocation, hover, h);
         let mut env_params = scenario.environment();
         if scenario.vehicle.model == crate::vehicle::VehicleModel::RigidBody {

@@ -184,25 +184,36 @@ impl TruthModel for RigidTruth {
     }
 }
 
-/// The truth model `scenario` flies (`[vehicle] model`), its allocation
-/// `u = A ω²`, the paper-form parameters of its unsaturated rotor-speed
-/// demand, its hover rotor speed (rad/s), and why it cannot fly (an
-/// out-of-range rigid body: the paper plant stands in, the run stops at t = 0).
-pub(crate) fn truth_of(
-    scenario: &Scenario,
-) -> (Box<dyn TruthModel + Send>, [[f64; 4]; 4], QuadrotorParams, f64, Option<Divergence>) {
+/// What a flight's truth model brings to the loop ([`truth_of`]).
+pub(crate) struct TruthSetup {
+    /// The model at the scenario's initial state.
+    pub truth: Box<dyn TruthModel + Send>,
+    /// Its allocation `u = A ω²`.
+    pub allocation: [[f64; 4]; 4],
+    /// Paper-form parameters of its unsaturated rotor-speed demand.
+    pub demand: QuadrotorParams,
+    /// Its hover rotor speed, rad/s.
+    pub hover: f64,
+    /// Why it cannot fly (an out-of-range rigid body: the paper plant
+    /// stands in and the run stops at t = 0).
+    pub invalid: Option<Divergence>,
+}
+
+/// The truth model `scenario` flies (`[vehicle] model`).
+pub(crate) fn truth_of(scenario: &Scenario) -> TruthSetup {
     let (allocation, demand) = scenario.truth_allocation();
     let p = scenario.actual_plant.unwrap_or(scenario.plant);
     let paper_hover = (p.mass * p.gravity / (4.0 * p.lift_coefficient)).sqrt();
     let paper = || Box::new(PaperTruth(scenario.initial_state.state().to_array()));
-    match scenario.vehicle.model {
-        VehicleModel::Paper => (paper(), allocation, demand, paper_hover, None),
+    let (truth, hover, invalid): (Box<dyn TruthModel + Send>, f64, Option<Divergence>) = match scenario.vehicle.model {
+        VehicleModel::Paper => (paper(), paper_hover, None),
         VehicleModel::RigidBody => match RigidTruth::new(scenario) {
             Ok(truth) => {
                 let hover = truth.base.hover_rotor_speed();
-                (Box::new(truth), allocation, demand, hover, None)
+                (Box::new(truth), hover, None)
             }
-            Err(why) => (paper(), allocation, demand, paper_hover, Some(why)),
+            Err(why) => (paper(), paper_hover, Some(why)),
         },
-    }
+    };
+    TruthSetup { truth, allocation, demand, hover, invalid }
 }
