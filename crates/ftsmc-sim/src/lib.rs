@@ -17,6 +17,10 @@
 //!          batch/               batches of flights
 //!            montecarlo.rs      run_batch, stats, summarize
 //!            shard.rs           K/N shards of a campaign (contiguous blocks of runs)
+//!          gym/                 reinforcement-learning environments (Python's `ftsmc.gym`)
+//!            agent.rs           the agent as a controller: thrust + body rates, or rotor speeds
+//!            lane.rs            one environment: an owned Flight, observation, reward, episode end
+//!            batch.rs           N environments per call, next-step auto-reset
 //! floor 5  registry.rs          controllers by name for a scenario: build, run, label
 //! floor 4  run/                 the one loop (docs/architecture.md): simulate, RunOptions, RunOutput
 //!            flight.rs          Flight: one flight, stepped one control period at a time
@@ -65,6 +69,7 @@ pub mod batch;
 pub mod controllers;
 pub mod envelope;
 pub mod environment;
+pub mod gym;
 pub mod limits;
 pub mod metrics;
 pub mod registry;

@@ -78,6 +78,9 @@ pub struct Flight<'s, C: Controller + ?Sized> {
     peak_demand: f64,
     saturated_periods: u64,
     exit: Option<ExitStatus>,
+    /// The measurement of the coming tick when it was taken ahead of
+    /// [`Flight::step`] by [`Flight::measurement`].
+    measured_ahead: Option<QuadState>,
 }
 
 /// True when the two rotor metrics of [`crate::metrics::Metrics`]
@@ -145,6 +148,7 @@ impl<'s, C: Controller + ?Sized> Flight<'s, C> {
             peak_demand: 0.0,
             saturated_periods: 0,
             exit: None,
+            measured_ahead: None,
         };
         flight.boundary(0.0);
         if let Some(divergence) = invalid {
@@ -177,6 +181,37 @@ impl<'s, C: Controller + ?Sized> Flight<'s, C> {
         self.exit.as_ref()
     }
 
+    /// The measurement the controller will be given at the coming tick
+    /// (the sensor stage's output; the truth with perfect sensors), taken
+    /// now and handed to the next [`Flight::step`]: an agent outside the
+    /// loop sees exactly what the controller stage sees. The sensors are
+    /// read once per tick however often this is called.
+    pub fn measurement(&mut self) -> QuadState {
+        if let Some(m) = self.measured_ahead {
+            return m;
+        }
+        let state = self.state;
+        let m = self.sensors.as_mut().map_or(state, |s| s.measure(&state));
+        self.measured_ahead = Some(m);
+        m
+    }
+
+    /// The truth's Euler state at the current period boundary.
+    pub fn truth_state(&self) -> &QuadState {
+        &self.state
+    }
+
+    /// The reference at the current period boundary.
+    pub fn reference(&self) -> &Reference {
+        &self.reference
+    }
+
+    /// The controller being flown (e.g. to hand an external agent's
+    /// command to it between two steps).
+    pub fn controller_mut(&mut self) -> &mut C {
+        self.controller
+    }
+
     fn boundary(&mut self, t: f64) {
         let s = self.state;
         self.envelope.boundary(t, &s, &self.reference);
@@ -203,7 +238,10 @@ impl<'s, C: Controller + ?Sized> Flight<'s, C> {
         let (k, dt, h) = (self.k, self.dt, self.h);
         let t = k as f64 * dt;
         let state = self.state;
-        let measured = self.sensors.as_mut().map_or(state, |s| s.measure(&state));
+        let measured = match self.measured_ahead.take() {
+            Some(m) => m,
+            None => self.sensors.as_mut().map_or(state, |s| s.measure(&state)),
+        };
         let command = self.controller.update(&measured, &self.reference, dt);
         self.env.next_period();
         let plant_now = self.env.params_with(&self.tv_now);
