@@ -11,6 +11,10 @@
 //! floor or below, never above (checked by `tests/layout.rs`):
 //!
 //! ```text
+//! floor 7  tune/                `ftsmc tune`: parameter space, cost, CMA-ES, held-out validation
+//!            cmaes.rs           ask/tell CMA-ES
+//!            cost.rs            flight statistics and the tuning cost
+//!            space.rs           declared + [tune] parameters, normalised coordinates, tuned TOML diff
 //! floor 6  analysis/            analyses built on flights
 //!            fixed_time.rs      fixed-time sweep, per-controller channel sweep, Eq. 38 bound
 //!            tuning.rs          gain tuning
@@ -41,6 +45,7 @@
 //!          metrics.rs           ISE, IAE, ITAE, settling, chattering, online
 //!          sensors.rs           measured state: noise, bias, sample rate, latency (`[sensors]`)
 //!          controllers/         each controller declared once: name, label, gain section, constructor
+//!            tunable.rs         what `ftsmc tune` may change, by controller (declared in each file)
 //!            mod.rs             the Declaration/GainSection traits and the one list (GainSections, CONTROLLERS)
 //!            ftaftsmc.rs        `ftaftsmc`, `ftaftsmc-no-mass` (`[ftaftsmc]`)
 //!            ranftsmc.rs        `ranftsmc` (`[ranftsmc]`)
@@ -68,6 +73,7 @@ pub mod scenario;
 pub mod sensors;
 pub mod signal;
 pub mod text;
+pub mod tune;
 pub mod vehicle;
 
 pub use run::{simulate, ExitStatus, RunOptions, RunOutput};

@@ -26,8 +26,9 @@ const FLOORS: &[(&str, u32)] = &[
     ("registry", 5),
     ("analysis", 6),
     ("batch", 6),
+    ("tune", 7),
     // The crate root only re-exports.
-    ("", 7),
+    ("", 8),
 ];
 
 fn floor_of(module: &str) -> u32 {

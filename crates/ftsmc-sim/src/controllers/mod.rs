@@ -84,6 +84,7 @@ pub mod pid;
 pub mod ranftsmc;
 pub mod se3;
 pub mod tsm_sta;
+pub mod tunable;
 
 /// A boxed controller ready to fly.
 pub type BoxedController = Box<dyn Controller + Send>;

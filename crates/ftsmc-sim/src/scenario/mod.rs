@@ -12,6 +12,7 @@ use serde::{Deserialize, Serialize};
 
 pub mod distributions;
 pub mod resolve;
+pub mod tune_section;
 mod validate;
 
 pub use crate::axes::AxisSet;
@@ -336,6 +337,10 @@ pub struct Scenario {
     /// What the controller measures (`[sensors]`, default: the true state).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub sensors: Option<crate::sensors::SensorParams>,
+    /// What `ftsmc tune` searches and its cost weights (`[tune]`; ignored
+    /// by every other command).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tune: Option<tune_section::TuneSection>,
 }
 
 fn is_default_limits(l: &Limits) -> bool {

@@ -213,6 +213,9 @@ impl Scenario {
             })?;
         }
         check_realism(self).map_err(|(prefix, e)| gain(&prefix, e))?;
+        if let Some(t) = &self.tune {
+            t.check().map_err(|(key, e)| invalid(format!("tune.{key}"), show(e.value), e.expected))?;
+        }
         if let Some(mc) = &self.montecarlo {
             mc.check_against(self).map_err(|(key, value, expected)| invalid(key, value, &expected))?;
         }

@@ -1,0 +1,86 @@
+//! What `ftsmc tune` may change in each controller: named parameters with
+//! bounds and scale, declared in the controller's own file
+//! (`tune_parameters()` in `ftaftsmc.rs`, `pid.rs`, …) and listed here by
+//! controller name.
+//!
+//! Every declared parameter is a **factor** on the gains the scenario
+//! already has (its start is 1: the controller's defaults, or the gains the
+//! scenario file sets), searched on a log scale between `low` and `high`.
+//! Applying a parameter multiplies one or more gains; applying the same
+//! values to the same scenario always gives the same gains, and the factor
+//! 1 leaves them bit for bit as they were.
+//!
+//! # Adding a parameter
+//!
+//! Append a [`TuneParam`] to the controller's `tune_parameters()`: a name
+//! (unique for the controller; it is a `[tune]` key and a `history.csv`
+//! column), one line of documentation, bounds on the factor and the
+//! function that applies it (`apply(target, factor)` multiplies the gains
+//! it stands for). A user adds a one-off parameter without code through
+//! `[[tune.extra]]` (any numeric key, absolute values).
+
+use ftsmc_core::cascade::CascadeSettings;
+
+use super::GainSections;
+
+/// What a parameter may change: every gain section and the shared
+/// `[cascade]` settings (command filter) of one scenario.
+pub struct TuneTarget<'a> {
+    /// The scenario's gain sections.
+    pub gains: &'a mut GainSections,
+    /// The scenario's `[cascade]` settings.
+    pub cascade: &'a mut CascadeSettings,
+}
+
+/// One declared parameter: a factor on some gains.
+#[derive(Clone, Copy, Debug)]
+pub struct TuneParam {
+    /// Name (a `[tune]` key and a `history.csv` column).
+    pub name: &'static str,
+    /// What it multiplies, in one line (docs and `ftsmc tune --list`).
+    pub doc: &'static str,
+    /// Smallest factor searched (> 0).
+    pub low: f64,
+    /// Largest factor searched.
+    pub high: f64,
+    /// Multiply the gains it stands for by `factor`.
+    pub apply: fn(&mut TuneTarget<'_>, f64),
+}
+
+impl TuneParam {
+    /// A log-scale factor parameter searched in `[low, high]`.
+    pub const fn factor(
+        name: &'static str,
+        doc: &'static str,
+        low: f64,
+        high: f64,
+        apply: fn(&mut TuneTarget<'_>, f64),
+    ) -> Self {
+        Self { name, doc, low, high, apply }
+    }
+}
+
+/// Command-filter bandwidth factor on `[cascade] command_filter.natural_frequency`
+/// (shared by the cascaded sliding-mode controllers).
+pub const COMMAND_FILTER: TuneParam = TuneParam::factor(
+    "command_filter",
+    "factor on the attitude command filter's natural frequency ω_n ([cascade])",
+    0.1,
+    4.0,
+    |t, a| t.cascade.command_filter.natural_frequency *= a,
+);
+
+/// The declared parameters of controller `name`; `Err(known names)` for an
+/// unknown one.
+pub fn parameters(name: &str) -> Result<Vec<TuneParam>, String> {
+    super::check_name(name)?;
+    Ok(match name {
+        "ftaftsmc" => super::ftaftsmc::tune_parameters(true),
+        "ftaftsmc-no-mass" => super::ftaftsmc::tune_parameters(false),
+        "ranftsmc" => super::ranftsmc::tune_parameters(),
+        "tsm-sta" => super::tsm_sta::tune_parameters(),
+        "pid" => super::pid::tune_parameters(),
+        "se3" => super::se3::tune_parameters(),
+        _ => Vec::new(),
+    })
+}
