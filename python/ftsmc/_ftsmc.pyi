@@ -76,5 +76,13 @@ def montecarlo_columns(
     controllers: Optional[List[str]] = None,
     threads: Optional[int] = None,
 ) -> Tuple[List[str], List[Union[npt.NDArray[Any], List[str]]]]: ...
+def tune_native(
+    scenario: Scenario,
+    controller: str,
+    budget: int = 2000,
+    seed: Optional[int] = None,
+    threads: Optional[int] = None,
+    extends: Optional[str] = None,
+) -> Tuple[Scenario, str, str]: ...
 def controller_names() -> List[Tuple[str, str]]: ...
 def controller_label(name: str) -> str: ...

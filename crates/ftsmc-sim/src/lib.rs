@@ -29,6 +29,7 @@
 //!            validate.rs        range checks, names, array lengths, cost limits
 //!            resolve.rs         extends chains, deep merge, --set overrides, unit-slip warnings
 //!            distributions.rs   Dist, MonteCarloSpec, SAMPLED_COLUMNS, run_seed, per-run sampling
+//!            tune_section.rs    `[tune]`: parameter set and cost weights of `ftsmc tune`
 //! floor 2  vehicle/             truth models
 //!            paper.rs           Eq. 1 (the paper's plant) and the generic rk4_step
 //!            rigid_body.rs      Newton–Euler rigid body with quaternion attitude

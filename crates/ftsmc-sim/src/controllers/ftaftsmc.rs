@@ -203,12 +203,16 @@ pub fn tune_parameters(with_mass: bool) -> Vec<super::tunable::TuneParam> {
         TuneParam::factor("time_yaw", "time scale a of the ψ law (as time_xy)", 0.05, 20.0, |t, a| {
             scale_time(t, &[5], a)
         }),
-        TuneParam::factor("reaching_position", "factor on λ2, γ2, η2 of x, y, z (Eq. 15)", 0.05, 20.0, |t, k| {
+        TuneParam::factor("reaching_position", "factor on λ2, γ2, η2 of x, y, z (Eq. 15)", 0.001, 20.0, |t, k| {
             scale_reaching(t, &[0, 1, 2], k)
         }),
-        TuneParam::factor("reaching_attitude", "factor on λ2, γ2, η2 of φ, θ, ψ (Eq. 15)", 0.05, 20.0, |t, k| {
-            scale_reaching(t, &[3, 4, 5], k)
-        }),
+        TuneParam::factor(
+            "reaching_attitude",
+            "factor on λ2, γ2, η2 of φ, θ, ψ (Eq. 15)",
+            0.001,
+            20.0,
+            |t, k| scale_reaching(t, &[3, 4, 5], k),
+        ),
         TuneParam::factor(
             "alpha1",
             "factor on the δ̂ adaptation rate α1 of every channel (Eq. 17)",

@@ -57,7 +57,7 @@ pub struct TuneSection {
     /// search never used). Default 200.
     pub validation_runs: u64,
     /// Initial CMA-ES step, as a fraction of each parameter's search range
-    /// (log range for log parameters). Default 0.15.
+    /// (log range for log parameters). Default 0.3.
     pub sigma: f64,
     /// CMA-ES population λ (default `4 + ⌊3 ln n⌋` for n parameters).
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -91,7 +91,7 @@ impl Default for TuneSection {
             extra: Vec::new(),
             runs: 4,
             validation_runs: 200,
-            sigma: 0.15,
+            sigma: 0.3,
             population: None,
             divergence: 1000.0,
             envelope: 10.0,

@@ -38,7 +38,7 @@ impl Dim {
         (t(v) - t(self.low)) / (t(self.high) - t(self.low))
     }
 
-    fn from_unit(&self, u: f64) -> f64 {
+    fn value_at(&self, u: f64) -> f64 {
         let u = u.clamp(0.0, 1.0);
         if self.log {
             (self.low.ln() + u * (self.high.ln() - self.low.ln())).exp()
@@ -126,7 +126,7 @@ impl Space {
 
     /// Parameter values of a normalised point (clamped into the bounds).
     pub fn values(&self, unit: &[f64]) -> Vec<f64> {
-        self.dims.iter().zip(unit).map(|(d, u)| d.from_unit(*u)).collect()
+        self.dims.iter().zip(unit).map(|(d, u)| d.value_at(*u)).collect()
     }
 
     /// The start values (1 for factors, the scenario's for keys).
