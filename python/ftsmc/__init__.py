@@ -233,6 +233,18 @@ def montecarlo(
     """
     import pandas
 
+    if controllers is not None:
+        if isinstance(controllers, str):
+            controllers = [controllers]
+        for c in controllers:
+            if not isinstance(c, str):
+                raise TypeError(
+                    f"montecarlo flies built-in controllers by name ({', '.join(CONTROLLERS)}); "
+                    f"got a {type(c).__name__} object. A Python controller runs under the GIL and cannot be flown "
+                    "on the batch's worker threads: fly it with ftsmc.simulate(scenario.with_overrides({...}), "
+                    "controller) in a loop over the parameters you want to vary"
+                )
+
     names, columns = _ftsmc.montecarlo_columns(
         scenario, runs, seed, None if controllers is None else list(controllers), threads
     )

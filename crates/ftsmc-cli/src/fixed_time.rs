@@ -44,7 +44,7 @@ fn reach_cell(t: Option<&ChannelTimes>) -> String {
 pub fn run(scenario: &Scenario, controllers: &[String], settings: &SweepSettings, out: &Path) -> Result<()> {
     let folder = out.join(&scenario.name);
     // Refuse a bad --out before any flight; write into a staging folder.
-    let dir = ResultDir::begin(&folder)?;
+    let dir = ResultDir::begin(&folder, "fixed-time")?;
     let file = dir.write_scenario("scenario.toml", scenario, "scenario.toml")?;
     let mut plan = Vec::new();
     for c in controllers {

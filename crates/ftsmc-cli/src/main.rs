@@ -58,6 +58,9 @@ enum Command {
         /// Monte Carlo runs of realistic-scenario-2 per controller in the "Beyond the paper" section (0: none).
         #[arg(long, default_value_t = reproduce::DEFAULT_REALISTIC_RUNS)]
         realistic_runs: u64,
+        /// Raise a cost limit of the realistic Monte Carlo, e.g. `--limit max_flights=1e7` (repeatable; see docs/scenarios.md).
+        #[arg(long = "limit", value_name = "KEY=VALUE")]
+        limit: Vec<String>,
     },
     /// Run one scenario file with its controllers (or those given); write CSV, summary.json and comparison figures.
     Run {
@@ -197,7 +200,8 @@ fn main() -> std::process::ExitCode {
 
 fn run(cli: Cli) -> Result<()> {
     match cli.command {
-        Command::Reproduce { out, no_figures, realistic_runs } => {
+        Command::Reproduce { out, no_figures, realistic_runs, limit } => {
+            reproduce::price_realistic_runs(realistic_runs, &limit)?;
             reproduce::reproduce(&out, !no_figures, realistic_runs)
         }
         Command::Run { scenario, controllers, out, no_figures, limit } => {
@@ -216,6 +220,11 @@ fn run(cli: Cli) -> Result<()> {
             scenario.controllers = controllers.clone();
             anyhow::ensure!(per_decade >= 1, "--per-decade must be at least 1");
             ftsmc_sim::limits::check_sweep(&scenario.limits, ftsmc_sim::limits::sweep_points(5, per_decade as u64))?;
+            // With `max_sweep_points = inf` the check is off: refuse what
+            // cannot be counted or held in memory instead of overflowing.
+            let points = per_decade.checked_mul(5).and_then(|n| n.checked_add(1));
+            let fits = points.is_some_and(|n| Vec::<f64>::new().try_reserve_exact(n).is_ok());
+            anyhow::ensure!(fits, "--per-decade {per_decade}: 5 × {per_decade} + 1 magnitudes do not fit in memory");
             let sim = &scenario.simulation;
             let t_max = ftsmc_sim::analysis::fixed_time::SweepSettings::default().t_max;
             scenario.limits.ensure(

@@ -83,7 +83,7 @@ pub fn run(scenario: &Scenario, runs: u64, threads: Option<usize>, out: &Path, f
     let seed = scenario.seed;
     let folder = out.join(&scenario.name);
     // Refuse a bad --out before any flight.
-    let dir = ResultDir::begin(&folder)?;
+    let dir = ResultDir::begin(&folder, "montecarlo")?;
     let spec = scenario.montecarlo.clone().unwrap_or_else(|| {
         eprintln!("note: {} has no [montecarlo] section; runs differ only in their seeds (drag noise)", scenario.name);
         MonteCarloSpec::default()
@@ -93,8 +93,8 @@ pub fn run(scenario: &Scenario, runs: u64, threads: Option<usize>, out: &Path, f
         builder = builder.num_threads(t);
     }
     let pool = builder.build().context("cannot start the thread pool")?;
-    let flights = runs * controllers.len() as u64;
-    let bar = steps_bar(flights * planned_steps(scenario), flights);
+    let flights = runs.saturating_mul(controllers.len() as u64);
+    let bar = steps_bar(flights.saturating_mul(planned_steps(scenario)), flights);
     let started = Instant::now();
     let rows = pool
         .install(|| run_batch(scenario, &spec, controllers, runs, seed, &|n| bar.inc(n)))

@@ -1,41 +1,56 @@
 //! Output files: whole result folders ([`ResultDir`]), per-run CSV time
 //! series and the JSON summary.
 //!
-//! # Result folders are whole
+//! # Result folders are whole, and hold only what each command owns
 //!
 //! Every command writes its results into a *staging* folder beside the
 //! destination, `.<name>.tmp-<pid>-<nanos>` (hidden, unique per process and
 //! start time), and only when every file is complete swaps it into place:
 //! the old destination (if any) is renamed to `.<name>.old-<pid>-<nanos>`,
-//! the staging folder is renamed to the destination, and the old folder is
-//! deleted. A reader therefore sees the whole old result or the whole new
-//! one, never a mix, and no file of an older run survives beside the new
-//! ones. (Between the two renames — microseconds — the destination does not
-//! exist at all.) The one exception is nested results of *other* commands:
-//! a sub-folder of the old destination that holds its own `summary.json` or
-//! `fixed-time.json`, or whose own sub-folders do (e.g. `results/montecarlo`,
-//! parent of `ftsmc montecarlo`'s `results/montecarlo/<scenario>/`),
-//! and that the new result does not contain is moved into the new folder
-//! before the swap, so `ftsmc reproduce` does not delete a Monte Carlo batch.
+//! every entry of it that this command does not own is moved into the
+//! staging folder, the staging folder is renamed to the destination, and
+//! what is left of the old folder is deleted. A reader therefore sees the
+//! whole old result or the whole new one, never a mix. (Between the two
+//! renames — microseconds — the destination does not exist at all.)
 //!
-//! On every error path (a flight fails, a write fails — disk full included —
-//! or a figure cannot be rendered) the staging folder is removed by a drop
-//! guard, and directories created only for it are removed again.
+//! **Ownership.** Each command (`owner`: `reproduce`, `run`, `montecarlo`,
+//! `fixed-time`, …) records the files it wrote in a manifest in the result
+//! folder, `.ftsmc-<owner>.manifest` (one path per line, relative to the
+//! folder, `/`-separated). At the next commit by the same owner into the
+//! same folder, the files of its old manifest that the new result does not
+//! write again are deleted (so no file of an older run survives beside the
+//! new ones); the files the new result writes replace those of the same
+//! name, whoever wrote them; **every other file is kept** — the user's own
+//! files, another command's results (`ftsmc run X` and `ftsmc montecarlo X`
+//! into one `--out` keep each other's CSVs), and files of a folder written
+//! before manifests existed. ftsmc therefore never deletes a file it did
+//! not write, except by writing a file of the same name. A command that
+//! replaces a file another command's manifest lists is told so on stderr,
+//! and the file leaves that manifest (it belongs to the last writer alone,
+//! so the other command's next run cannot delete it).
+//!
+//! On every error path (a flight fails, a write fails — disk full included
+//! — or a figure cannot be rendered) the staging folder is removed by a drop
+//! guard, and directories created only for it are removed again; a commit
+//! that fails after moving kept entries into the staging folder moves them
+//! back first.
 //!
 //! The destination is checked before any flight: the nearest existing
 //! ancestor must be a directory and the staging folder must be creatable
 //! in it, so a bad `--out` is refused before any work.
 //!
 //! **Concurrency** (unique names, no lock): two runs into the same folder
-//! each write their own staging folder; each commit is a rename swap, so the
-//! run that finishes last wins and the folder is exactly its whole output —
-//! never one run's CSV beside the other's summary. A run killed with SIGKILL
+//! each write their own staging folder; each commit is a rename swap that
+//! carries the other owners' files along, so for one owner the run that
+//! finishes last wins and its files are exactly its whole output — never
+//! one run's CSV beside the other's summary. A run killed with SIGKILL
 //! leaves only a hidden `.<name>.tmp-…` (or, if killed between the two
 //! renames, `.<name>.old-…`) folder beside the destination; the next
 //! successful run into the same destination deletes such leftovers older
 //! than [`STALE_AFTER`] whose process no longer exists (on Linux; elsewhere
 //! the age alone decides).
 
+use std::collections::HashSet;
 use std::ffi::OsString;
 use std::path::{Component, Path, PathBuf};
 use std::time::{Duration, SystemTime, UNIX_EPOCH};
@@ -58,6 +73,8 @@ const COMMIT_ATTEMPTS: usize = 100;
 #[derive(Debug)]
 pub struct ResultDir {
     dest: PathBuf,
+    /// The command writing this result; names its manifest.
+    owner: String,
     staging: PathBuf,
     /// Directories created for the staging folder (deepest last), removed
     /// again if they are still empty when the transaction fails.
@@ -78,9 +95,14 @@ fn hidden_name(name: &std::ffi::OsStr, kind: &str) -> OsString {
 }
 
 impl ResultDir {
-    /// Start a result folder for `dest`: check it can be written and create
-    /// the staging folder. Call before doing any work.
-    pub fn begin(dest: &Path) -> Result<Self> {
+    /// Start a result folder for `dest`, written by the command `owner`
+    /// (`run`, `montecarlo`, …: names its manifest, see the module docs):
+    /// check it can be written and create the staging folder. Call before
+    /// doing any work.
+    pub fn begin(dest: &Path, owner: &str) -> Result<Self> {
+        if owner.is_empty() || !owner.chars().all(|c| c.is_ascii_alphanumeric() || c == '-' || c == '_') {
+            bail!("internal: result owner `{owner}` must be a plain name");
+        }
         let name = match dest.components().next_back() {
             Some(Component::Normal(n)) => n.to_owned(),
             _ => bail!("output folder `{}` must end in a folder name (not `.`, `..` or `/`)", dest.display()),
@@ -128,7 +150,7 @@ impl ResultDir {
             remove_created(&created);
             return Err(e).with_context(|| format!("cannot write to `{}`", dest.display()));
         }
-        Ok(Self { dest: dest.to_path_buf(), staging, created, committed: false })
+        Ok(Self { dest: dest.to_path_buf(), owner: owner.to_string(), staging, created, committed: false })
     }
 
     /// The staging folder: write every file of the result below it.
@@ -142,11 +164,26 @@ impl ResultDir {
         write_file(&self.staging.join(rel), bytes)
     }
 
-    /// Swap the staging folder into place (see the module docs).
+    /// Swap the staging folder into place, keeping every file of the old
+    /// folder this owner does not own (see the module docs).
     pub fn commit(mut self) -> Result<()> {
         let parent = self.staging.parent().map(Path::to_path_buf).unwrap_or_else(|| PathBuf::from("."));
         let name = self.dest.file_name().map(ToOwned::to_owned).unwrap_or_default();
+        let manifest_name = manifest_file(&self.owner);
+        // The manifest lists what this result wrote: every file in staging.
+        let mut written = Vec::new();
+        list_files(&self.staging, "", &mut written);
+        written.sort();
+        let mut text = String::new();
+        for f in &written {
+            text.push_str(f);
+            text.push('\n');
+        }
+        write_file(&self.staging.join(&manifest_name), text.as_bytes())?;
+        let written: HashSet<String> = written.into_iter().collect();
         let mut olds = Vec::new();
+        // Entries moved from an old folder into staging: (from, to).
+        let mut carried: Vec<(PathBuf, PathBuf)> = Vec::new();
         let mut attempt = 0;
         loop {
             attempt += 1;
@@ -154,13 +191,16 @@ impl ResultDir {
                 let old = parent.join(hidden_name(&name, "old"));
                 match std::fs::rename(&self.dest, &old) {
                     Ok(()) => {
-                        carry_nested_results(&old, &self.staging);
+                        let owned = read_manifest(&old.join(&manifest_name));
+                        warn_replaced(&old, &self.owner, &written, &self.dest);
+                        carry_unowned(&old, &self.staging, "", &owned, &manifest_name, &mut carried);
                         olds.push(old);
                     }
                     // A concurrent run moved it away first.
                     Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
                     Err(e) => {
-                        return Err(e).with_context(|| format!("cannot move the old {} aside", self.dest.display()))
+                        undo_carries(&carried);
+                        return Err(e).with_context(|| format!("cannot move the old {} aside", self.dest.display()));
                     }
                 }
             }
@@ -169,7 +209,9 @@ impl ResultDir {
                 // A concurrent run put its result in place between our renames: move that aside too.
                 Err(_) if attempt < COMMIT_ATTEMPTS && std::fs::symlink_metadata(&self.dest).is_ok() => continue,
                 Err(e) => {
-                    // Put the old result back if nothing took its place.
+                    // Give the kept files back, then put the old result back
+                    // if nothing took its place.
+                    undo_carries(&carried);
                     if let Some(old) = olds.pop() {
                         let _ = std::fs::rename(&old, &self.dest);
                     }
@@ -187,7 +229,182 @@ impl ResultDir {
             let _ = std::fs::remove_dir_all(old);
         }
         remove_stale(&parent, &name);
+        disown_replaced(&self.dest, &self.owner, &written);
         Ok(())
+    }
+}
+
+/// Write a whole result folder in one call: `files` (paths relative to
+/// `dest`, `/`-separated, with their bytes) are written into a staging
+/// folder and committed as the result of the command `owner` (see the
+/// module docs: the owner's older files in `dest` are replaced, every other
+/// file is kept). Nothing is written when any file fails.
+#[cfg_attr(not(test), allow(dead_code))] // the API `ftsmc merge` writes through
+pub fn write_result(dest: &Path, owner: &str, files: &[(&str, &[u8])]) -> Result<()> {
+    let dir = ResultDir::begin(dest, owner)?;
+    for (rel, bytes) in files {
+        let rel_path = Path::new(rel);
+        if rel_path.components().any(|c| !matches!(c, Component::Normal(_))) || rel.is_empty() {
+            bail!("result file `{rel}` must be a relative path inside `{}`", dest.display());
+        }
+        dir.write(rel_path, bytes)?;
+    }
+    dir.commit()
+}
+
+/// The manifest file name of `owner`: `.ftsmc-<owner>.manifest`.
+pub fn manifest_file(owner: &str) -> String {
+    format!(".ftsmc-{owner}.manifest")
+}
+
+/// The relative paths a manifest lists (empty when it is missing).
+fn read_manifest(path: &Path) -> HashSet<String> {
+    std::fs::read_to_string(path)
+        .map(|t| t.lines().filter(|l| !l.is_empty()).map(str::to_string).collect())
+        .unwrap_or_default()
+}
+
+/// Every regular file (and symlink) below `dir`, as `/`-separated paths
+/// relative to it, prefixed with `prefix`.
+fn list_files(dir: &Path, prefix: &str, out: &mut Vec<String>) {
+    let Ok(entries) = std::fs::read_dir(dir) else { return };
+    for entry in entries.flatten() {
+        let rel = format!("{prefix}{}", entry.file_name().to_string_lossy());
+        match entry.file_type() {
+            Ok(t) if t.is_dir() => list_files(&entry.path(), &format!("{rel}/"), out),
+            _ => out.push(rel),
+        }
+    }
+}
+
+/// Tell the user when this result replaces files another command's
+/// manifest (in `old`) lists.
+/// The manifests of the destination's parent folder count too (prefixed
+/// with the destination's name): `ftsmc run paper-scenario-1` after
+/// `ftsmc reproduce` replaces CSVs that `reproduce` lists.
+fn warn_replaced(old: &Path, owner: &str, written: &HashSet<String>, dest: &Path) {
+    let name = dest.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    let parent = dest.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    for (folder, prefix) in [(old, String::new()), (parent, format!("{name}/"))] {
+        warn_replaced_in(folder, &prefix, owner, written, dest);
+    }
+}
+
+fn warn_replaced_in(folder: &Path, prefix: &str, owner: &str, written: &HashSet<String>, dest: &Path) {
+    let Ok(entries) = std::fs::read_dir(folder) else { return };
+    for entry in entries.flatten() {
+        let file_name = entry.file_name().to_string_lossy().into_owned();
+        let Some(other) = file_name.strip_prefix(".ftsmc-").and_then(|r| r.strip_suffix(".manifest")) else {
+            continue;
+        };
+        if other == owner && prefix.is_empty() {
+            continue;
+        }
+        let mut replaced: Vec<String> = read_manifest(&entry.path())
+            .into_iter()
+            .filter_map(|f| f.strip_prefix(prefix).map(str::to_string))
+            .filter(|f| written.contains(f))
+            .collect();
+        if !replaced.is_empty() {
+            replaced.sort();
+            eprintln!(
+                "note: replaced {} in {} written by `ftsmc {other}` (its other files are kept)",
+                replaced.join(", "),
+                dest.display()
+            );
+        }
+    }
+}
+
+/// Remove the files this result wrote (`written`, relative to `dest`) from
+/// every other command's manifest, in `dest` and in its parent folder
+/// (prefixed with the destination's name): the file now belongs to `owner`
+/// alone, so the other command's next commit, if it no longer writes that
+/// name, does not delete a file it did not write last. Best effort: a
+/// manifest that cannot be rewritten keeps the entry (the file then stays
+/// listed twice, never unlisted).
+fn disown_replaced(dest: &Path, owner: &str, written: &HashSet<String>) {
+    let name = dest.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    let parent = dest.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    for (folder, prefix) in [(dest, String::new()), (parent, format!("{name}/"))] {
+        let Ok(entries) = std::fs::read_dir(folder) else { continue };
+        for entry in entries.flatten() {
+            let file_name = entry.file_name().to_string_lossy().into_owned();
+            let Some(other) = file_name.strip_prefix(".ftsmc-").and_then(|r| r.strip_suffix(".manifest")) else {
+                continue;
+            };
+            if other == owner && prefix.is_empty() {
+                continue;
+            }
+            let Ok(text) = std::fs::read_to_string(entry.path()) else { continue };
+            let kept: Vec<&str> = text
+                .lines()
+                .filter(|l| !l.is_empty())
+                .filter(|l| !l.strip_prefix(prefix.as_str()).is_some_and(|f| written.contains(f)))
+                .collect();
+            if kept.len() != text.lines().filter(|l| !l.is_empty()).count() {
+                let mut out = kept.join("\n");
+                if !out.is_empty() {
+                    out.push('\n');
+                }
+                let _ = write_atomic(&entry.path(), out.as_bytes());
+            }
+        }
+    }
+}
+
+/// Move every entry of `old` that the owner does not own (not in `owned`,
+/// its manifest) and that `new` does not already hold into `new`,
+/// descending into folders both hold and folders holding owned files.
+/// Records each move in `carried`.
+fn carry_unowned(
+    old: &Path,
+    new: &Path,
+    prefix: &str,
+    owned: &HashSet<String>,
+    manifest_name: &str,
+    carried: &mut Vec<(PathBuf, PathBuf)>,
+) {
+    let Ok(entries) = std::fs::read_dir(old) else { return };
+    for entry in entries.flatten() {
+        let file_name = entry.file_name();
+        let rel = format!("{prefix}{}", file_name.to_string_lossy());
+        if prefix.is_empty() && file_name.to_string_lossy() == manifest_name {
+            continue;
+        }
+        let path = entry.path();
+        let target = new.join(&file_name);
+        let is_dir = entry.file_type().is_ok_and(|t| t.is_dir());
+        let sub_prefix = format!("{rel}/");
+        match std::fs::symlink_metadata(&target) {
+            // The new result has this name: a file there wins; two folders merge.
+            Ok(meta) => {
+                if is_dir && meta.is_dir() {
+                    carry_unowned(&path, &target, &sub_prefix, owned, manifest_name, carried);
+                }
+            }
+            Err(_) => {
+                if is_dir && owned.iter().any(|f| f.starts_with(&sub_prefix)) {
+                    if std::fs::create_dir(&target).is_ok() {
+                        carry_unowned(&path, &target, &sub_prefix, owned, manifest_name, carried);
+                        // Nothing kept in it: it held only our old files.
+                        let _ = std::fs::remove_dir(&target);
+                    }
+                } else if !owned.contains(&rel) && std::fs::rename(&path, &target).is_ok() {
+                    carried.push((path, target));
+                }
+            }
+        }
+    }
+}
+
+/// Move carried entries back where they came from (latest first).
+fn undo_carries(carried: &[(PathBuf, PathBuf)]) {
+    for (from, to) in carried.iter().rev() {
+        if let Some(p) = from.parent() {
+            let _ = std::fs::create_dir_all(p);
+        }
+        let _ = std::fs::rename(to, from);
     }
 }
 
@@ -204,33 +421,6 @@ impl Drop for ResultDir {
 fn remove_created(created: &[PathBuf]) {
     for dir in created.iter().rev() {
         let _ = std::fs::remove_dir(dir);
-    }
-}
-
-/// True when `dir` is another command's whole result (it holds
-/// `summary.json` or `fixed-time.json`) or, `depth` levels down, contains
-/// one (`results/montecarlo/<scenario>/`).
-fn holds_result(dir: &Path, depth: usize) -> bool {
-    if !dir.is_dir() {
-        return false;
-    }
-    if dir.join("summary.json").is_file() || dir.join("fixed-time.json").is_file() {
-        return true;
-    }
-    depth > 0 && std::fs::read_dir(dir).is_ok_and(|rd| rd.flatten().any(|e| holds_result(&e.path(), depth - 1)))
-}
-
-/// Move sub-folders of `old` that hold another command's whole result (see
-/// [`holds_result`]) and that `new` lacks into `new`.
-fn carry_nested_results(old: &Path, new: &Path) {
-    let Ok(entries) = std::fs::read_dir(old) else { return };
-    for entry in entries.flatten() {
-        let path = entry.path();
-        let is_result = holds_result(&path, 1);
-        let target = new.join(entry.file_name());
-        if is_result && std::fs::symlink_metadata(&target).is_err() {
-            let _ = std::fs::rename(&path, &target);
-        }
     }
 }
 
@@ -492,7 +682,7 @@ mod tests {
         std::fs::create_dir_all(&dest).unwrap();
         std::fs::write(dest.join("old.csv"), "old").unwrap();
         {
-            let dir = ResultDir::begin(&dest).unwrap();
+            let dir = ResultDir::begin(&dest, "run").unwrap();
             dir.write("a.csv", b"1,2\n").unwrap();
             // Fails midway, like a full disk: `a.csv` is a file, not a folder.
             assert!(dir.write("a.csv/b.csv", b"x").is_err());
@@ -507,27 +697,70 @@ mod tests {
     fn a_failed_transaction_removes_the_folders_it_created() {
         let root = temp("created");
         let dest = root.join("a/b/res");
-        drop(ResultDir::begin(&dest).unwrap());
+        drop(ResultDir::begin(&dest, "run").unwrap());
         assert!(names(&root).is_empty(), "{:?}", names(&root));
         std::fs::remove_dir_all(&root).ok();
     }
 
     #[test]
-    fn commit_replaces_the_whole_folder_but_keeps_nested_results_of_other_commands() {
+    fn a_file_another_command_replaced_is_no_longer_the_first_commands_to_delete() {
+        let root = temp("disown");
+        let dest = root.join("res").join("scen");
+        // `run` writes summary.json and its CSV; `montecarlo` then replaces summary.json.
+        write_result(&dest, "run", &[("summary.json", b"run"), ("pid.csv", b"csv")]).unwrap();
+        write_result(&dest, "montecarlo", &[("summary.json", b"mc"), ("runs.csv", b"rows")]).unwrap();
+        assert_eq!(std::fs::read_to_string(dest.join(".ftsmc-run.manifest")).unwrap(), "pid.csv\n");
+        // A later `run` that no longer writes summary.json must not delete montecarlo's.
+        write_result(&dest, "run", &[("pid.csv", b"csv2")]).unwrap();
+        assert_eq!(std::fs::read_to_string(dest.join("summary.json")).unwrap(), "mc");
+        assert_eq!(std::fs::read_to_string(dest.join("runs.csv")).unwrap(), "rows");
+        // The parent's manifest too: `reproduce` listed scen/pid.csv, `run` replaced it.
+        let parent = root.join("res");
+        std::fs::write(parent.join(".ftsmc-reproduce.manifest"), "scen/pid.csv\nsummary.json\n").unwrap();
+        write_result(&dest, "run", &[("pid.csv", b"csv3")]).unwrap();
+        assert_eq!(std::fs::read_to_string(parent.join(".ftsmc-reproduce.manifest")).unwrap(), "summary.json\n");
+        std::fs::remove_dir_all(&root).ok();
+    }
+
+    #[test]
+    fn commit_replaces_the_owners_files_and_keeps_every_other_file() {
         let root = temp("commit");
         let dest = root.join("res");
         std::fs::create_dir_all(dest.join("montecarlo/paper-scenario-2")).unwrap();
-        std::fs::create_dir_all(dest.join("paper-scenario-1")).unwrap();
         std::fs::write(dest.join("montecarlo/paper-scenario-2/summary.json"), "{}").unwrap();
-        std::fs::write(dest.join("junk.csv"), "stale").unwrap();
-        std::fs::write(dest.join("paper-scenario-1/stale.csv"), "stale").unwrap();
-        let dir = ResultDir::begin(&dest).unwrap();
-        dir.write("paper-scenario-1/new.csv", b"new").unwrap();
-        dir.write("summary.json", b"{}").unwrap();
+        std::fs::write(dest.join("notes.txt"), "mine").unwrap();
+        // A first result of `reproduce`.
+        let dir = ResultDir::begin(&dest, "reproduce").unwrap();
+        dir.write("paper-scenario-1/old.csv", b"old").unwrap();
+        dir.write("paper-scenario-1/both.csv", b"old").unwrap();
+        dir.write("figures/a.svg", b"old").unwrap();
+        dir.write("summary.json", b"{1}").unwrap();
+        dir.commit().unwrap();
+        // The user adds a file inside a folder reproduce writes.
+        std::fs::write(dest.join("paper-scenario-1/mine.csv"), "mine").unwrap();
+        // A second result of `reproduce` no longer writes old.csv nor figures/.
+        let dir = ResultDir::begin(&dest, "reproduce").unwrap();
+        dir.write("paper-scenario-1/both.csv", b"new").unwrap();
+        dir.write("summary.json", b"{2}").unwrap();
         dir.commit().unwrap();
         assert_eq!(names(&root), ["res"], "no staging or old folder left");
-        assert_eq!(names(&dest), ["montecarlo", "paper-scenario-1", "summary.json"]);
-        assert_eq!(names(&dest.join("paper-scenario-1")), ["new.csv"]);
+        assert_eq!(
+            names(&dest),
+            [".ftsmc-reproduce.manifest", "montecarlo", "notes.txt", "paper-scenario-1", "summary.json"]
+        );
+        assert_eq!(names(&dest.join("paper-scenario-1")), ["both.csv", "mine.csv"]);
+        assert_eq!(std::fs::read_to_string(dest.join("paper-scenario-1/both.csv")).unwrap(), "new");
+        assert_eq!(std::fs::read_to_string(dest.join("notes.txt")).unwrap(), "mine");
+        assert_eq!(
+            std::fs::read_to_string(dest.join(".ftsmc-reproduce.manifest")).unwrap(),
+            "paper-scenario-1/both.csv\nsummary.json\n"
+        );
+        // Another owner into the same folder keeps reproduce's files.
+        write_result(&dest, "merge", &[("merged.csv", b"m")]).unwrap();
+        assert!(dest.join("paper-scenario-1/both.csv").is_file() && dest.join("summary.json").is_file());
+        assert!(dest.join("merged.csv").is_file() && dest.join(".ftsmc-merge.manifest").is_file());
+        assert!(write_result(&dest, "merge", &[("../escape.csv", b"m")]).is_err());
+        assert!(!root.join("escape.csv").exists());
         std::fs::remove_dir_all(&root).ok();
     }
 
@@ -535,10 +768,10 @@ mod tests {
     fn a_destination_under_a_regular_file_is_refused_and_nothing_is_written() {
         let root = temp("refuse");
         std::fs::write(root.join("file"), "x").unwrap();
-        let err = ResultDir::begin(&root.join("file/sub/res")).unwrap_err().to_string();
+        let err = ResultDir::begin(&root.join("file/sub/res"), "run").unwrap_err().to_string();
         assert!(err.contains("is not a directory"), "{err}");
-        assert!(ResultDir::begin(&root.join("file")).is_err(), "an existing file as destination");
-        assert!(ResultDir::begin(Path::new(".")).is_err());
+        assert!(ResultDir::begin(&root.join("file"), "run").is_err(), "an existing file as destination");
+        assert!(ResultDir::begin(Path::new("."), "run").is_err());
         assert_eq!(names(&root), ["file"]);
         std::fs::remove_dir_all(&root).ok();
     }
@@ -557,7 +790,7 @@ mod tests {
         for d in [&stale, &other] {
             std::fs::File::open(d).unwrap().set_modified(two_hours_ago).unwrap();
         }
-        let dir = ResultDir::begin(&root.join("res")).unwrap();
+        let dir = ResultDir::begin(&root.join("res"), "run").unwrap();
         dir.write("summary.json", b"{}").unwrap();
         dir.commit().unwrap();
         // The stale one goes; a fresh one may belong to a concurrent run,
@@ -567,7 +800,7 @@ mod tests {
         let live = root.join(format!(".res.tmp-{}-3", std::process::id()));
         std::fs::create_dir_all(&live).unwrap();
         std::fs::File::open(&live).unwrap().set_modified(two_hours_ago).unwrap();
-        ResultDir::begin(&root.join("res")).unwrap().commit().unwrap();
+        ResultDir::begin(&root.join("res"), "run").unwrap().commit().unwrap();
         assert!(live.exists());
         std::fs::remove_dir_all(&root).ok();
     }

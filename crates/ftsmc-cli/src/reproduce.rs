@@ -5,7 +5,7 @@ use std::fmt::Write as _;
 use std::path::Path;
 use std::time::Instant;
 
-use anyhow::{anyhow, Result};
+use anyhow::{anyhow, Context, Result};
 use ftsmc_core::cascade::AttitudeDerivatives;
 use ftsmc_sim::registry::{self, label};
 use ftsmc_sim::run::{planned_steps, reference_at, RunOptions, RunOutput};
@@ -466,8 +466,8 @@ pub fn reproduce(out: &Path, figures: bool, realistic_runs: u64) -> Result<()> {
     jobs.push(Job { scenario: s2.clone(), controller: "ftaftsmc-no-mass".into(), key: "ftaftsmc-no-mass".into() });
 
     // Refuse a bad --out before any flight; everything goes into a staging
-    // folder that replaces `out` whole at the end.
-    let dir = ResultDir::begin(out)?;
+    // folder swapped into place at the end (keeping files reproduce did not write).
+    let dir = ResultDir::begin(out, "reproduce")?;
     eprintln!("flying {} runs ({} and {}) …", jobs.len(), s1.name, s2.name);
     let runs = fly(&jobs)?;
     write_runs(&runs, &dir, false)?;
@@ -634,9 +634,9 @@ pub struct Beyond {
 fn exit_time(run: &RunOutput) -> Option<f64> {
     match run.exit {
         ftsmc_sim::run::ExitStatus::Completed => None,
-        ftsmc_sim::run::ExitStatus::Diverged { time, .. } | ftsmc_sim::run::ExitStatus::Crashed { time, .. } => {
-            Some(time)
-        }
+        ftsmc_sim::run::ExitStatus::Diverged { time, .. }
+        | ftsmc_sim::run::ExitStatus::Crashed { time, .. }
+        | ftsmc_sim::run::ExitStatus::Interrupted { time } => Some(time),
     }
 }
 
@@ -646,6 +646,7 @@ fn exit_kind(run: &RunOutput) -> &'static str {
         ftsmc_sim::run::ExitStatus::Completed => "completed",
         ftsmc_sim::run::ExitStatus::Diverged { .. } => "diverged",
         ftsmc_sim::run::ExitStatus::Crashed { .. } => "crashed",
+        ftsmc_sim::run::ExitStatus::Interrupted { .. } => "interrupted",
     }
 }
 
@@ -654,6 +655,22 @@ fn max_tilt(run: &RunOutput) -> f64 {
     let phi = run.recording.column("phi");
     let theta = run.recording.column("theta");
     phi.iter().chain(theta).fold(0.0f64, |m, v| m.max(v.abs()))
+}
+
+/// Price `reproduce --realistic-runs N` before any flight, like
+/// `ftsmc montecarlo`: N runs × [`BEYOND_MC_CONTROLLERS`] flights of the
+/// last [`BEYOND_SCENARIOS`] scenario against its limits (raised by
+/// `--limit KEY=VALUE`).
+pub fn price_realistic_runs(runs: u64, limit_overrides: &[String]) -> Result<()> {
+    if runs == 0 {
+        return Ok(());
+    }
+    let (file, text) = BEYOND_SCENARIOS[BEYOND_SCENARIOS.len() - 1];
+    let mut base = Scenario::from_toml_str(text, file)?;
+    base.limits.apply_overrides(limit_overrides).map_err(|e| anyhow!(e))?;
+    ftsmc_sim::limits::check_batch(&base.flight_size(), runs, BEYOND_MC_CONTROLLERS.len())
+        .with_context(|| format!("--realistic-runs {runs}"))?;
+    Ok(())
 }
 
 /// "Beyond the paper": [`BEYOND_CONTROLLERS`] on the paper's and the
@@ -877,8 +894,8 @@ pub fn beyond_the_paper(dir: &ResultDir, figures: bool, mc_runs: u64) -> Result<
         let base = scenarios.last().expect("the Monte Carlo flies the last beyond scenario");
         let spec = base.montecarlo.clone().unwrap_or_default();
         let controllers: Vec<String> = BEYOND_MC_CONTROLLERS.iter().map(|c| (*c).to_string()).collect();
-        let total = mc_runs * controllers.len() as u64 * planned_steps(base);
-        let bar = steps_bar(total, mc_runs * controllers.len() as u64);
+        let mc_flights = mc_runs.saturating_mul(controllers.len() as u64);
+        let bar = steps_bar(mc_flights.saturating_mul(planned_steps(base)), mc_flights);
         eprintln!("beyond the paper: Monte Carlo, {mc_runs} runs of {} per controller …", base.name);
         let rows =
             ftsmc_sim::batch::montecarlo::run_batch(base, &spec, &controllers, mc_runs, base.seed, &|n| bar.inc(n))
@@ -965,7 +982,7 @@ pub fn beyond_the_paper(dir: &ResultDir, figures: bool, mc_runs: u64) -> Result<
 pub fn run_scenario(scenario: &Scenario, out: &Path, figures: bool) -> Result<()> {
     // `out/<name>/` is the result folder: checked before any flight,
     // written in staging, swapped into place whole.
-    let dir = ResultDir::begin(&out.join(&scenario.name))?;
+    let dir = ResultDir::begin(&out.join(&scenario.name), "run")?;
     let jobs: Vec<Job> = scenario
         .controllers
         .iter()

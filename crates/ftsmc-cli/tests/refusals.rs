@@ -243,3 +243,80 @@ fn limits_given_on_the_command_line_win_over_the_defaults() {
     // Paper scenario 1 is 2e4 steps: a lowered limit refuses it, naming the flag.
     refused("limit-lowered", &["run", "paper-scenario-1", "--limit", "max_steps=1000"], None, &["max_steps = 1000"]);
 }
+
+#[test]
+fn reproduce_realistic_runs_are_priced() {
+    refused(
+        "realistic-runs",
+        &["reproduce", "--no-figures", "--realistic-runs", "18446744073709551615"],
+        None,
+        &["--realistic-runs 18446744073709551615", "max_flights", "exceeds the limit"],
+    );
+    refused(
+        "realistic-runs-limit",
+        &["reproduce", "--no-figures", "--realistic-runs", "400000", "--limit", "max_flights=1e7"],
+        None,
+        &["max_output_bytes"],
+    );
+}
+
+#[test]
+fn rigid_body_draws_outside_its_range() {
+    let scenario = "extends = \"paper-scenario-1\"\nname = \"s\"\n[vehicle]\nmodel = \"rigid-body\"\n[montecarlo]\nmass = { dist = \"uniform\", low = 1e-9, high = 1.0 }\n";
+    refused(
+        "rigid-draws",
+        &["montecarlo", "s.toml", "--runs", "2"],
+        Some(scenario),
+        &["s.toml", "montecarlo.mass", "draws in [1e-9, 1]", "rigid body", "mass = 1e-9"],
+    );
+}
+
+#[test]
+fn a_seed_of_2_pow_64_minus_1_writes_a_scenario_that_runs_again() {
+    let dir = temp_dir("big-seed");
+    let run = |args: &[&str]| {
+        let out = Command::new(env!("CARGO_BIN_EXE_ftsmc")).args(args).current_dir(&dir).output().unwrap();
+        assert!(out.status.success(), "{args:?}: {}", String::from_utf8_lossy(&out.stderr));
+    };
+    run(&[
+        "montecarlo",
+        "paper-scenario-2",
+        "--runs",
+        "8",
+        "-c",
+        "pid",
+        "--seed",
+        "18446744073709551615",
+        "--out",
+        "a",
+        "--no-figures",
+    ]);
+    let toml = std::fs::read_to_string(dir.join("a/paper-scenario-2/scenario.toml")).unwrap();
+    assert!(toml.contains("seed = \"18446744073709551615\""), "{toml}");
+    run(&["montecarlo", "a/paper-scenario-2/scenario.toml", "--runs", "8", "--out", "b", "--no-figures"]);
+    assert_eq!(
+        std::fs::read(dir.join("a/paper-scenario-2/runs.csv")).unwrap(),
+        std::fs::read(dir.join("b/paper-scenario-2/runs.csv")).unwrap()
+    );
+    // A row seed >= 2^63 from runs.csv flies again through `seed = "<row seed>"`.
+    let csv = std::fs::read_to_string(dir.join("a/paper-scenario-2/runs.csv")).unwrap();
+    let seeds: Vec<u64> = csv.lines().skip(1).map(|l| l.split(',').nth(1).unwrap().parse().unwrap()).collect();
+    let big = *seeds.iter().find(|&&s| s >= 1 << 63).expect("a row seed >= 2^63 among 8");
+    let text = format!("extends = \"paper-scenario-2\"\nname = \"row\"\nduration = 0.1\nseed = \"{big}\"\n");
+    std::fs::write(dir.join("row.toml"), text).unwrap();
+    run(&["run", "row.toml", "-c", "pid", "--out", "c", "--no-figures"]);
+    let again = std::fs::read_to_string(dir.join("c/row/scenario.toml")).unwrap();
+    assert!(again.contains(&format!("seed = \"{big}\"")), "{again}");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn an_inf_limit_never_overflows() {
+    // The check is off, but 5 × u64::MAX magnitudes cannot be counted: an error, not a panic.
+    refused(
+        "inf-per-decade",
+        &["fixed-time", "-c", "pid", "--per-decade", "18446744073709551615", "--limit", "max_sweep_points=inf"],
+        None,
+        &["--per-decade 18446744073709551615", "do not fit in memory"],
+    );
+}

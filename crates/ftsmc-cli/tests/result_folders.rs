@@ -1,6 +1,7 @@
 //! Result folders are whole: a bad `--out` is refused before any flight,
-//! stale files of an older run never survive, and two runs into one folder
-//! leave exactly one run's whole output.
+//! stale files of an older run never survive, two runs into one folder
+//! leave exactly one run's whole output, and no command deletes a file it
+//! did not write (the user's, or another command's results).
 
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
@@ -23,17 +24,70 @@ fn names(dir: &Path) -> BTreeSet<String> {
 }
 
 #[test]
-fn stale_files_of_an_older_run_are_gone() {
+fn stale_files_of_an_older_run_are_gone_and_the_users_files_stay() {
     let dir = temp_dir("stale");
     let folder = dir.join("res/paper-scenario-1");
     std::fs::create_dir_all(&folder).unwrap();
     std::fs::write(folder.join("junk.csv"), "t,x\n0,1\n").unwrap();
-    std::fs::write(folder.join("tsm-sta.csv"), "from an older run").unwrap();
+    let first = ftsmc(&["run", "paper-scenario-1", "-c", "tsm-sta", "--out", "res", "--no-figures"], &dir);
+    assert!(first.status.success(), "{}", String::from_utf8_lossy(&first.stderr));
+    assert!(folder.join("tsm-sta.csv").is_file());
     let out = ftsmc(&["run", "paper-scenario-1", "-c", "ftaftsmc", "--out", "res", "--no-figures"], &dir);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    let expected: BTreeSet<String> = ["ftaftsmc.csv", "scenario.toml", "summary.json"].map(String::from).into();
+    // The first run's tsm-sta.csv is gone (the run wrote it); junk.csv is the user's.
+    let expected: BTreeSet<String> =
+        [".ftsmc-run.manifest", "ftaftsmc.csv", "junk.csv", "scenario.toml", "summary.json"].map(String::from).into();
     assert_eq!(names(&folder), expected);
+    assert_eq!(std::fs::read_to_string(folder.join("junk.csv")).unwrap(), "t,x\n0,1\n");
     assert_eq!(names(&dir.join("res")), ["paper-scenario-1".to_string()].into(), "no staging or old folder left");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn commands_sharing_an_out_keep_each_others_results() {
+    let dir = temp_dir("shared");
+    let folder = dir.join("out/paper-scenario-2");
+    let run = ftsmc(&["run", "paper-scenario-2", "-c", "ftaftsmc", "--out", "out", "--no-figures"], &dir);
+    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    let run_csv = std::fs::read(folder.join("ftaftsmc.csv")).unwrap();
+    let mc = ftsmc(
+        &["montecarlo", "paper-scenario-2", "--runs", "2", "-c", "ftaftsmc", "--out", "out", "--no-figures"],
+        &dir,
+    );
+    assert!(mc.status.success(), "{}", String::from_utf8_lossy(&mc.stderr));
+    let err = String::from_utf8_lossy(&mc.stderr);
+    // Both write summary.json and scenario.toml: the user is told.
+    assert!(err.contains("replaced scenario.toml, summary.json") && err.contains("ftsmc run"), "{err}");
+    assert_eq!(std::fs::read(folder.join("ftaftsmc.csv")).unwrap(), run_csv, "the run's CSV is kept");
+    assert!(folder.join("runs.csv").is_file());
+    // A user's file in the reproduce folder survives `run` and `reproduce`.
+    std::fs::write(dir.join("out/notes.md"), "my notes").unwrap();
+    let rep = ftsmc(&["reproduce", "--out", "out", "--no-figures", "--realistic-runs", "0"], &dir);
+    assert!(rep.status.success(), "{}", String::from_utf8_lossy(&rep.stderr));
+    assert_eq!(std::fs::read_to_string(dir.join("out/notes.md")).unwrap(), "my notes");
+    assert!(folder.join("runs.csv").is_file(), "reproduce keeps the Monte Carlo batch");
+    // After reproduce, `run paper-scenario-1` keeps reproduce's tuned variant,
+    // so reproduce's summary.json points only at files that exist.
+    let s1 = dir.join("out/paper-scenario-1");
+    assert!(s1.join("ftaftsmc-tuned.csv").is_file());
+    let run1 = ftsmc(&["run", "paper-scenario-1", "--out", "out", "--no-figures"], &dir);
+    assert!(run1.status.success(), "{}", String::from_utf8_lossy(&run1.stderr));
+    let err = String::from_utf8_lossy(&run1.stderr);
+    assert!(err.contains("note: replaced ftaftsmc.csv, ranftsmc.csv, scenario.toml, tsm-sta.csv"), "{err}");
+    assert!(err.contains("written by `ftsmc reproduce`"), "{err}");
+    assert!(s1.join("ftaftsmc-tuned.csv").is_file());
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("out/summary.json")).unwrap()).unwrap();
+    for (scenario, runs) in summary["scenarios"].as_object().unwrap() {
+        for controller in runs.as_object().unwrap().keys() {
+            let csv = dir.join("out").join(scenario).join(format!("{controller}.csv"));
+            assert!(csv.is_file(), "summary.json names {} which is gone", csv.display());
+        }
+    }
+    for s in summary["provenance"]["scenarios"].as_array().unwrap() {
+        assert!(dir.join("out").join(s["scenario_file"].as_str().unwrap()).is_file(), "{s}");
+    }
+    assert_eq!(std::fs::read_to_string(dir.join("out/notes.md")).unwrap(), "my notes");
     std::fs::remove_dir_all(&dir).ok();
 }
 
@@ -93,6 +147,7 @@ fn concurrent_runs_into_one_folder_leave_one_whole_result() {
         let controllers: BTreeSet<String> =
             summary["scenarios"]["paper-scenario-1"].as_object().unwrap().keys().cloned().collect();
         let mut expected: BTreeSet<String> = controllers.iter().map(|c| format!("{c}.csv")).collect();
+        expected.insert(".ftsmc-run.manifest".into());
         expected.insert("summary.json".into());
         expected.insert("scenario.toml".into());
         assert_eq!(names(&folder), expected, "round {round}: the files must be exactly those of one run");

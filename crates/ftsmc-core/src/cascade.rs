@@ -533,6 +533,17 @@ impl<L: AxisLaw> Controller for Cascade<L> {
         {
             return Command { thrust: f64::NAN, torque: [f64::NAN; 3] };
         }
+        // Finite inputs whose differences overflow (x = 1e308, x_d = -1e308)
+        // are non-finite intermediates: the same NaN, before any state moves
+        // (otherwise the attitude reference filter keeps a NaN for good).
+        let yaw = [state.attitude[2] - reference.yaw, state.angular_rate[2] - reference.yaw_rate];
+        if !((0..3).all(|i| {
+            (state.position[i] - reference.position[i]).is_finite()
+                && (state.velocity[i] - reference.velocity[i]).is_finite()
+        }) && yaw.iter().all(|v| v.is_finite()))
+        {
+            return Command { thrust: f64::NAN, torque: [f64::NAN; 3] };
+        }
         let model = self.config.model;
         let m = model.mass;
         let g = model.gravity;

@@ -451,7 +451,8 @@ impl PidController {
         let weighted = [cos(w * acos(dyaw[0])), 0.0, 0.0, sin(w * asin(dyaw[3]))];
         let q_target = quat_mul(&q_red, &weighted);
         let q_e = canonical(quat_mul(&quat_conj(q), &q_target));
-        let gain = [k.attitude_p[0], k.attitude_p[1], k.attitude_p[2] / w];
+        // A subnormal yaw_weight would make K_ψ / w infinite (and 0 · ∞ = NaN).
+        let gain = [k.attitude_p[0], k.attitude_p[1], saturate(k.attitude_p[2] / w, INPUT_LIMIT)];
         let feed_forward = mat_t_vec(r, &[0.0, 0.0, yaw_rate]);
         let mut rate = [0.0; 3];
         for i in 0..3 {
@@ -575,7 +576,8 @@ impl Controller for PidController {
         } else {
             demanded
         };
-        let arw = if k.anti_windup { 2.0 / k.velocity_p[0] } else { 0.0 };
+        // Bounded: a subnormal velocity_p gives 2 / K_p = ∞ and ∞ · 0 = NaN.
+        let arw = if k.anti_windup { saturate(2.0 / k.velocity_p[0], STATE_LIMIT) } else { 0.0 };
         for i in 0..2 {
             error[i] -= arw * (demanded[i] - limited[i]);
         }

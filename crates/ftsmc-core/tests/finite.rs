@@ -5,6 +5,12 @@
 //! input returns a non-finite command and leaves every state bit-identical,
 //! and the next finite input gives a finite command again.
 //!
+//! Extreme finite inputs (magnitudes up to `f64::MAX`, whose differences
+//! overflow) give either a finite command or a NaN command with every state
+//! untouched, and never poison the attitude reference: the next ordinary
+//! input gives a finite command again. PID gains at their subnormal lower
+//! edge (`yaw_weight`, `velocity_p`) give finite torques and integrators.
+//!
 //! Issue 11 (saturation remedies): the same holds with the adaptation frozen
 //! ([`AxisLaw::set_adaptation_frozen`], `freeze_adaptation_on_saturation`
 //! with random actuator feedback) and with random thrust limits; frozen
@@ -17,6 +23,7 @@ use ftsmc_core::cascade::{
 use ftsmc_core::ftaftsmc::{FtaftsmcAxis, FtaftsmcGains};
 use ftsmc_core::law::{AxisLaw, DT_MAX};
 use ftsmc_core::model::{QuadState, QuadrotorParams, Reference};
+use ftsmc_core::pid::{PidController, PidGains};
 use ftsmc_core::ranftsmc::{RanftsmcAxis, RanftsmcGains};
 use ftsmc_core::tsm_sta::{TsmStaAxis, TsmStaGains};
 use proptest::prelude::*;
@@ -370,5 +377,94 @@ proptest! {
         bad in bad_state(),
     ) {
         fly(Cascade::new(config, g.map(TsmStaAxis::new)).unwrap(), &s, bad)?;
+    }
+}
+
+/// A finite input up to `f64::MAX` in magnitude: [`finite_input`] or ±10^x
+/// with x in [300, 308.25] (so `x − x_d` can overflow).
+fn extreme_input() -> impl Strategy<Value = f64> {
+    prop_oneof![
+        1 => finite_input(),
+        1 => (log_uniform(300.0, 308.25), any::<bool>()).prop_map(|(m, neg)| if neg { -m } else { m }),
+        1 => Just(f64::MAX),
+        1 => Just(-f64::MAX),
+    ]
+}
+
+fn extreme_steps() -> impl Strategy<Value = Vec<(QuadState, Reference, f64)>> {
+    let state = proptest::array::uniform12(extreme_input()).prop_map(|a| QuadState::from_array(&a));
+    let reference = proptest::array::uniform12(extreme_input()).prop_map(|a| Reference {
+        position: [a[0], a[1], a[2]],
+        velocity: [a[3], a[4], a[5]],
+        acceleration: [a[6], a[7], a[8]],
+        yaw: a[9],
+        yaw_rate: a[10],
+        yaw_acceleration: a[11],
+    });
+    proptest::collection::vec((state, reference, legal_dt()), 4)
+}
+
+/// Extreme steps: each gives a finite command, or a NaN command with the
+/// telemetry (every law state, α̂, the attitude reference) unchanged; then an
+/// ordinary hover step gives a finite command and a finite attitude reference.
+fn survive_extremes(c: &mut dyn Controller, steps: &[(QuadState, Reference, f64)]) -> Result<(), TestCaseError> {
+    for (state, reference, dt) in steps {
+        let before = *c.telemetry();
+        let cmd = c.update(state, reference, *dt);
+        let finite = cmd.thrust.is_finite() && cmd.torque.iter().all(|t| t.is_finite());
+        if !finite {
+            prop_assert!(cmd.thrust.is_nan(), "{cmd:?}");
+            prop_assert_eq!(before, *c.telemetry(), "a NaN command moved a state");
+        }
+    }
+    let cmd = c.update(&QuadState::default(), &Reference::default(), 1e-3);
+    prop_assert!(cmd.thrust.is_finite() && cmd.torque.iter().all(|t| t.is_finite()), "poisoned: {cmd:?}");
+    prop_assert!(c.telemetry().attitude_reference.iter().all(|v| v.is_finite()), "{:?}", c.telemetry());
+    Ok(())
+}
+
+/// Cases per extreme-input property.
+const EXTREME_CASES: u32 = 2000;
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(EXTREME_CASES))]
+
+    #[test]
+    fn ftaftsmc_cascade_survives_overflowing_differences(
+        config in config(), g in proptest::array::uniform6(ftaftsmc_gains()), s in extreme_steps(),
+    ) {
+        survive_extremes(&mut Cascade::new(config, g.map(FtaftsmcAxis::new)).unwrap(), &s)?;
+    }
+
+    #[test]
+    fn ranftsmc_cascade_survives_overflowing_differences(
+        config in config(), g in proptest::array::uniform6(ranftsmc_gains()), s in extreme_steps(),
+    ) {
+        survive_extremes(&mut Cascade::new(config, g.map(RanftsmcAxis::new)).unwrap(), &s)?;
+    }
+
+    #[test]
+    fn tsm_sta_cascade_survives_overflowing_differences(
+        config in config(), g in proptest::array::uniform6(tsm_sta_gains()), s in extreme_steps(),
+    ) {
+        survive_extremes(&mut Cascade::new(config, g.map(TsmStaAxis::new)).unwrap(), &s)?;
+    }
+
+    #[test]
+    fn pid_with_subnormal_yaw_weight_and_velocity_p_stays_finite(
+        yaw_weight in prop_oneof![Just(f64::from_bits(1)), Just(1e-310), Just(f64::MIN_POSITIVE)],
+        velocity_p in prop_oneof![Just(f64::from_bits(1)), Just(1e-310), Just(f64::MIN_POSITIVE)],
+        s in cascade_steps(),
+    ) {
+        let gains = PidGains { yaw_weight, velocity_p: [velocity_p; 3], ..PidGains::default() };
+        let mut c = PidController::new(QuadrotorParams::default(), gains).unwrap();
+        for (state, reference, dt, _) in &s {
+            let cmd = c.update(state, reference, *dt);
+            prop_assert!(cmd.thrust.is_finite() && cmd.torque.iter().all(|t| t.is_finite()), "{cmd:?}");
+            prop_assert!(c.velocity_integral().iter().all(|v| v.is_finite()), "{:?}", c.velocity_integral());
+        }
+        // Level, at rest, 1 rad off in yaw: the yaw torque is a number.
+        let cmd = c.update(&QuadState::default(), &Reference { yaw: 1.0, ..Reference::default() }, 1e-3);
+        prop_assert!(cmd.torque[2].is_finite(), "{cmd:?}");
     }
 }

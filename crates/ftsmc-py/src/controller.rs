@@ -165,6 +165,13 @@ impl Controller for PythonController<'_> {
     }
 
     fn update(&mut self, state: &QuadState, reference: &Reference, dt: f64) -> Command {
+        // Ctrl-C (or any pending signal handler that raises) stops the run:
+        // the NaN command ends it at once and the error is raised.
+        if self.error.is_none() {
+            if let Err(e) = self.obj.py().check_signals() {
+                self.error = Some(e);
+            }
+        }
         if self.error.is_none() {
             match self.call(state, reference, dt) {
                 Ok(command) => return command,

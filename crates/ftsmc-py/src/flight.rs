@@ -2,7 +2,7 @@
 //! released, or a Python controller), and Monte Carlo batches whose rows
 //! are `runs.csv`'s.
 
-use ftsmc_sim::batch::montecarlo::run_batch;
+use ftsmc_sim::batch::montecarlo::run_batch_cancellable;
 use ftsmc_sim::batch::runs_table::{runs_table, Column};
 use ftsmc_sim::run::{RunOptions, RunOutput};
 use numpy::PyArray1;
@@ -81,8 +81,41 @@ pub fn simulate_native(py: Python<'_>, scenario: PyRef<'_, Scenario>, controller
     build(controller, &scenario)?;
     scenario.check_cost(1).map_err(|e| value_error(chain_message(&e)))?;
     let name = controller.to_string();
-    let out = py.detach(move || ftsmc_sim::registry::run(&name, &scenario, RunOptions::default()));
+    let out = with_ctrl_c(py, |cancel| {
+        ftsmc_sim::registry::run(&name, &scenario, RunOptions { cancel: Some(cancel), ..Default::default() })
+    })?;
     Ok(RunData { out: out.map_err(value_error)? })
+}
+
+/// How often the watcher checks for a signal (Ctrl-C), s.
+const SIGNAL_POLL: std::time::Duration = std::time::Duration::from_millis(50);
+
+/// Run `work` on a worker thread without the GIL while this thread checks
+/// for signals every [`SIGNAL_POLL`] ([`Python::check_signals`]): on Ctrl-C
+/// the cancellation flag is set, the worker stops (within
+/// [`ftsmc_sim::run::PROGRESS_EVERY`] control steps), and the signal's
+/// exception (`KeyboardInterrupt`) is raised.
+fn with_ctrl_c<T: Send>(py: Python<'_>, work: impl FnOnce(&std::sync::atomic::AtomicBool) -> T + Send) -> PyResult<T> {
+    use std::sync::atomic::{AtomicBool, Ordering};
+    let cancel = AtomicBool::new(false);
+    std::thread::scope(|scope| {
+        let cancel = &cancel;
+        let worker = scope.spawn(move || work(cancel));
+        let mut interrupted = None;
+        while !worker.is_finished() {
+            py.detach(|| std::thread::sleep(SIGNAL_POLL));
+            if let Err(e) = py.check_signals() {
+                cancel.store(true, Ordering::Relaxed);
+                interrupted = Some(e);
+                break;
+            }
+        }
+        let result = py.detach(|| worker.join());
+        if let Some(e) = interrupted {
+            return Err(e);
+        }
+        result.map_err(|_| pyo3::exceptions::PyRuntimeError::new_err("the flight thread panicked"))
+    })
 }
 
 /// Fly the Python object `controller` (see [`PythonController`]) through
@@ -143,17 +176,17 @@ pub fn montecarlo_columns<'py>(
     scenario.controllers = names;
     let spec = scenario.montecarlo.clone().unwrap_or_default();
 
-    let rows = py.detach(move || {
+    let rows = with_ctrl_c(py, move |cancel| {
         let mut builder = rayon::ThreadPoolBuilder::new();
         if let Some(t) = threads {
             builder = builder.num_threads(t);
         }
         let pool = builder.build().map_err(|e| format!("cannot start the thread pool: {e}"))?;
         pool.install(|| {
-            run_batch(&scenario, &spec, &scenario.controllers, runs, scenario.seed, &|_| {})
+            run_batch_cancellable(&scenario, &spec, &scenario.controllers, runs, scenario.seed, &|_| {}, Some(cancel))
                 .map_err(|known| format!("unknown controller (known: {known})"))
         })
-    });
+    })?;
     let table = runs_table(&rows.map_err(value_error)?);
     let mut columns = Vec::with_capacity(table.columns.len());
     for column in table.columns {

@@ -104,9 +104,20 @@ impl Scenario {
             table.remove(key);
         }
         let mut keys = Vec::new();
+        let mut budget = MAX_OVERRIDE_VALUES;
         for (key, value) in overrides.iter() {
             let key: String = key.extract().map_err(|_| value_error("override keys must be strings"))?;
-            let value = to_toml_value(&value).map_err(|m| value_error(format!("override `{key}`: {m}")))?;
+            // Error messages quote at most the first characters of a key.
+            let key = if key.chars().count() > MAX_KEY_CHARS {
+                return Err(value_error(format!(
+                    "override `{}…`: a dotted key is at most {MAX_KEY_CHARS} characters and {MAX_KEY_PARTS} parts",
+                    key.chars().take(40).collect::<String>()
+                )));
+            } else {
+                key
+            };
+            let value =
+                to_toml_value(&value, &mut budget).map_err(|m| value_error(format!("override `{key}`: {m}")))?;
             set_dotted(&mut table, &key, value).map_err(|m| value_error(format!("override `{key}`: {m}")))?;
             keys.push(key);
         }
@@ -172,15 +183,44 @@ impl Scenario {
 }
 
 /// A Python value as a TOML value.
-fn to_toml_value(value: &Bound<'_, PyAny>) -> Result<toml::Value, String> {
+/// Deepest nesting of an override value (dicts and lists); a scenario's
+/// deepest key is a handful of levels down.
+pub const MAX_OVERRIDE_DEPTH: usize = 32;
+/// Most values (dict entries, list items, scalars) in all overrides of one call.
+pub const MAX_OVERRIDE_VALUES: usize = 1_000_000;
+/// Longest dotted override key, characters, and most parts in it.
+pub const MAX_KEY_CHARS: usize = 256;
+/// Most parts of a dotted override key.
+pub const MAX_KEY_PARTS: usize = 16;
+
+/// [`to_toml_value`] within [`MAX_OVERRIDE_DEPTH`] and a budget of
+/// [`MAX_OVERRIDE_VALUES`] values, so that a self-referencing or hugely
+/// nested dict raises `ValueError` instead of exhausting the stack.
+fn to_toml_value(value: &Bound<'_, PyAny>, budget: &mut usize) -> Result<toml::Value, String> {
+    to_toml_value_at(value, 0, budget)
+}
+
+fn to_toml_value_at(value: &Bound<'_, PyAny>, depth: usize, budget: &mut usize) -> Result<toml::Value, String> {
+    if depth > MAX_OVERRIDE_DEPTH {
+        return Err(format!("nested deeper than {MAX_OVERRIDE_DEPTH} levels (a dict or list that contains itself?)"));
+    }
+    if *budget == 0 {
+        return Err(format!("more than {MAX_OVERRIDE_VALUES} values in the overrides"));
+    }
+    *budget -= 1;
     if value.is_instance_of::<PyBool>() {
         return Ok(toml::Value::Boolean(value.extract().map_err(|e: PyErr| e.to_string())?));
     }
     if value.is_instance_of::<PyInt>() {
+        if let Ok(v) = value.extract::<i64>() {
+            return Ok(toml::Value::Integer(v));
+        }
+        // A u64 beyond i64 (a seed >= 2^63): TOML has no such integer; the
+        // seed reads it back from its decimal string.
         return value
-            .extract::<i64>()
-            .map(toml::Value::Integer)
-            .map_err(|_| format!("{value} does not fit a 64-bit integer"));
+            .extract::<u64>()
+            .map(|v| toml::Value::String(v.to_string()))
+            .map_err(|_| "an integer that does not fit 64 bits".to_string());
     }
     if value.is_instance_of::<PyFloat>() {
         return Ok(toml::Value::Float(value.extract().map_err(|e: PyErr| e.to_string())?));
@@ -192,7 +232,7 @@ fn to_toml_value(value: &Bound<'_, PyAny>) -> Result<toml::Value, String> {
         let mut table = toml::Table::new();
         for (k, v) in dict.iter() {
             let k: String = k.extract().map_err(|_| "table keys must be strings".to_string())?;
-            table.insert(k, to_toml_value(&v)?);
+            table.insert(k, to_toml_value_at(&v, depth + 1, budget)?);
         }
         return Ok(toml::Value::Table(table));
     }
@@ -202,7 +242,7 @@ fn to_toml_value(value: &Bound<'_, PyAny>) -> Result<toml::Value, String> {
     {
         let mut items = Vec::new();
         for item in value.try_iter().map_err(|e| e.to_string())? {
-            items.push(to_toml_value(&item.map_err(|e| e.to_string())?)?);
+            items.push(to_toml_value_at(&item.map_err(|e| e.to_string())?, depth + 1, budget)?);
         }
         return Ok(toml::Value::Array(items));
     }
@@ -219,6 +259,9 @@ fn to_toml_value(value: &Bound<'_, PyAny>) -> Result<toml::Value, String> {
 /// Set `table[a][b][c] = value` for `key = "a.b.c"`, creating missing
 /// tables; an existing non-table on the way is an error naming it.
 fn set_dotted(table: &mut toml::Table, key: &str, value: toml::Value) -> Result<(), String> {
+    if key.chars().count() > MAX_KEY_CHARS || key.split('.').count() > MAX_KEY_PARTS {
+        return Err(format!("a dotted key is at most {MAX_KEY_CHARS} characters and {MAX_KEY_PARTS} parts"));
+    }
     let parts: Vec<&str> = key.split('.').collect();
     if parts.iter().any(|p| p.is_empty()) {
         return Err("empty key part (expected dotted keys such as `payload.mass`)".into());

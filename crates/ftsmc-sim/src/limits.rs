@@ -41,6 +41,11 @@ pub const BYTES_PER_VALUE: f64 = 20.0;
 /// sampled values and metrics).
 pub const MONTE_CARLO_COLUMNS: f64 = 64.0;
 
+/// Signal term evaluations that cost about as much as one integration step
+/// (an RK4 step of the plant with its controller is ~1 µs; a sine term is
+/// ~20–30 ns): `max_steps` prices `steps × (1 + terms / TERMS_PER_STEP)`.
+pub const TERMS_PER_STEP: f64 = 32.0;
+
 /// Default [`Limits::max_threads`]: 4 × the available cores, at least 256.
 pub fn default_max_threads() -> f64 {
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
@@ -218,6 +223,10 @@ pub struct FlightSize<'a> {
     pub substeps: u32,
     /// Recording rate, Hz (0 = off).
     pub record_rate: f64,
+    /// Work of evaluating every signal of the scenario once (references,
+    /// disturbances, inertia variation), in term evaluations
+    /// ([`crate::signal::Signal::evaluation_cost`]).
+    pub signal_cost: f64,
     /// The limits to check against.
     pub limits: &'a Limits,
 }
@@ -247,6 +256,17 @@ pub fn check_flight(scenario: &FlightSize<'_>, n_controllers: usize) -> Result<C
         "max_steps",
         "integration steps per flight (duration × control_rate × substeps)",
         integration_steps,
+    )?;
+    // Signal terms are evaluated every step: a file of thousands of terms
+    // costs like that many times more steps.
+    let weighted = integration_steps * (1.0 + sim.signal_cost / TERMS_PER_STEP);
+    limits.ensure(
+        "max_steps",
+        format!(
+            "integration steps per flight weighted by the signal terms (steps × (1 + {} terms / {TERMS_PER_STEP}))",
+            crate::text::show(sim.signal_cost)
+        ),
+        weighted,
     )?;
     let samples = if sim.record_rate > 0.0 {
         let every = (sim.control_rate / sim.record_rate).round().max(1.0);
@@ -282,7 +302,15 @@ pub fn check_batch(scenario: &FlightSize<'_>, runs: u64, n_controllers: usize) -
     )?;
     let sim = scenario;
     let steps = (scenario.duration * sim.control_rate).round() * f64::from(sim.substeps);
-    limits.ensure("max_steps", "integration steps per flight (duration × control_rate × substeps)", steps)
+    limits.ensure("max_steps", "integration steps per flight (duration × control_rate × substeps)", steps)?;
+    limits.ensure(
+        "max_steps",
+        format!(
+            "integration steps per flight weighted by the signal terms (steps × (1 + {} terms / {TERMS_PER_STEP}))",
+            crate::text::show(sim.signal_cost)
+        ),
+        steps * (1.0 + sim.signal_cost / TERMS_PER_STEP),
+    )
 }
 
 /// Number of magnitudes of a fixed-time sweep over `decades` decades with

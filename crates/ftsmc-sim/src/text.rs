@@ -42,6 +42,20 @@ pub(crate) fn parse_message(text: &str, e: &toml::de::Error) -> String {
     }
 }
 
+/// Where a TOML parse error is, without quoting the file:
+/// `not valid TOML at line L, column C`.
+pub(crate) fn parse_position(text: &str, e: &toml::de::Error) -> String {
+    match e.span() {
+        Some(span) => {
+            let before = &text.as_bytes()[..span.start.min(text.len())];
+            let line = before.iter().filter(|&&b| b == b'\n').count() + 1;
+            let column = before.iter().rev().take_while(|&&b| b != b'\n').count() + 1;
+            format!("not valid TOML at line {line}, column {column}")
+        }
+        None => "not valid TOML".to_string(),
+    }
+}
+
 /// A piece of user text for an error message: control characters escaped,
 /// at most [`MAX_SHOWN_CHARS`] characters (then `…`).
 pub fn show_str(s: &str) -> String {

@@ -305,3 +305,201 @@ fn long_values_are_abbreviated() {
     let msg = parse(&long_name).map(|_| ()).unwrap_err().to_string();
     assert!(msg.len() < 300, "{msg}");
 }
+
+// ---- The rigid body's valid range: refused at load, or stopped with a reason ----
+
+const RIGID: &str = "extends = \"paper-scenario-1\"\nname = \"t\"\nduration = 1.0\n[vehicle]\nmodel = \"rigid-body\"\n";
+
+fn rigid(extra: &str) -> Result<Scenario, String> {
+    Scenario::from_toml_str(&format!("{RIGID}{extra}"), "rigid.toml").map_err(|e| e.to_string())
+}
+
+#[test]
+fn monte_carlo_draws_outside_the_rigid_bodys_range_are_refused_at_load() {
+    // Each passes the plant's own checks (mass > 0, factor > 0) but not the rigid body's.
+    for (dist, key, field) in [
+        ("mass = { dist = \"uniform\", low = 1e-9, high = 1.0 }", "montecarlo.mass", "mass = 1e-9"),
+        ("mass = { dist = \"uniform\", low = 0.5, high = 2e6 }", "montecarlo.mass", "mass = 2e6"),
+        ("inertia_factor = { dist = \"uniform\", low = 0.5, high = 1e12 }", "montecarlo.inertia_factor", "inertia"),
+    ] {
+        let msg = rigid(&format!("[montecarlo]\n{dist}\n")).expect_err(dist);
+        assert!(msg.starts_with("rigid.toml") && msg.contains(&format!("`{key}`")), "{dist}: {msg}");
+        assert!(msg.contains("draws in [") && msg.contains(field) && msg.contains("rigid body"), "{dist}: {msg}");
+    }
+    // The payload adds to the drawn mass.
+    let msg = rigid(
+        "[payload]\nmass = 0.5\nstart = 0.0\n[montecarlo]\nmass = { dist = \"uniform\", low = 0.5, high = 999999.8 }\n",
+    )
+    .unwrap_err();
+    assert!(msg.contains("`montecarlo.mass`") && msg.contains("mass = 1.0000003e6"), "{msg}");
+    // The same draws on the paper plant are legal: the range is the rigid body's.
+    Scenario::from_toml_str(
+        "extends = \"paper-scenario-1\"\nname = \"t\"\n[montecarlo]\nmass = { dist = \"uniform\", low = 1e-9, high = 1.0 }\n",
+        "paper.toml",
+    )
+    .unwrap();
+    rigid("[montecarlo]\nmass = { dist = \"uniform\", low = 0.6, high = 0.9 }\n").unwrap();
+}
+
+#[test]
+fn a_payload_outside_the_rigid_bodys_range_is_refused_at_load() {
+    let msg = rigid("[payload]\nmass = 2e6\nstart = 0.5\n").unwrap_err();
+    assert!(msg.starts_with("rigid.toml") && msg.contains("`payload.mass`") && msg.contains("2e6"), "{msg}");
+    assert!(msg.contains("1e-6 <= mass <= 1e6"), "{msg}");
+    // A rigid body built from a plant outside its range is refused too.
+    let msg = rigid("[plant]\nmass = 1e-7\n").unwrap_err();
+    assert!(msg.contains("mass") && msg.contains("1e-7"), "{msg}");
+}
+
+#[test]
+fn an_inertia_variation_leaving_the_range_stops_the_run_with_a_reason() {
+    use ftsmc_sim::{registry, run::Divergence, ExitStatus, RunOptions};
+    // Inertia × (1 - 2) < 0 from t = 0.5 s: the run must not go on with the old inertia.
+    let s =
+        rigid("[inertia_variation]\nwindow = [0.5, 1.0]\nterms = [{ type = \"constant\", value = -2.0 }]\n").unwrap();
+    let out = registry::run("pid", &s, RunOptions::default()).unwrap();
+    match out.exit {
+        ExitStatus::Diverged { divergence: Divergence::RigidBodyOutOfRange { inertia_scale, .. }, time } => {
+            assert!((time - 0.5).abs() < 2e-3 && inertia_scale < 0.0, "{}", out.exit);
+        }
+        other => panic!("must stop with a reason, got {other}"),
+    }
+    assert!(out.exit.to_string().contains("rigid body out of its valid range"), "{}", out.exit);
+    // The recorded inertia is the one flown: every row before the stop.
+    let t = out.recording.column("t");
+    assert!(t.last().is_some_and(|&t| t < 0.5), "no row after the stop");
+}
+
+#[test]
+fn an_unvalidated_invalid_rigid_body_stops_at_once_instead_of_panicking() {
+    use ftsmc_sim::{registry, run::Divergence, ExitStatus, RunOptions};
+    let mut s = rigid("").unwrap();
+    let mut rb = s.rigid_body_params();
+    rb.mass = 1e-9; // below the rigid body's range, set behind validation's back
+    s.vehicle.rigid_body = Some(rb);
+    let out = registry::run("pid", &s, RunOptions::default()).unwrap();
+    assert!(
+        matches!(out.exit, ExitStatus::Diverged { divergence: Divergence::RigidBodyOutOfRange { .. }, time } if time == 0.0),
+        "{}",
+        out.exit
+    );
+}
+
+#[test]
+fn extends_of_a_file_that_is_not_a_scenario_names_it_without_quoting_it() {
+    let dir = temp_dir("extends-secret");
+    let secret = "root:SECRET-HASH:19000:0:99999:7:::";
+    std::fs::write(dir.join("system-file"), format!("{secret}\nother line\n")).unwrap();
+    std::fs::write(dir.join("mine.toml"), "extends = \"system-file\"\nname = \"t\"\n").unwrap();
+    let msg = Scenario::from_file(&dir.join("mine.toml")).map(|_| ()).unwrap_err().to_string();
+    assert!(!msg.contains("SECRET") && !msg.contains("root"), "content quoted: {msg}");
+    assert!(msg.contains("system-file") && msg.contains("not a scenario file") && msg.contains("line 1"), "{msg}");
+    assert!(msg.contains("mine.toml"), "names the extending file: {msg}");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn every_u64_seed_round_trips_through_scenario_toml() {
+    for seed in [0, 1, (1u64 << 63) - 1, 1u64 << 63, u64::MAX] {
+        let mut s = parse(BASE).unwrap();
+        s.seed = seed;
+        let text = s.to_toml().unwrap();
+        let back = Scenario::from_toml_str(&text, "scenario.toml").unwrap_or_else(|e| panic!("seed {seed}: {e}"));
+        assert_eq!(back.seed, seed);
+        assert_eq!(back, s);
+        if seed >= 1 << 63 {
+            assert!(text.contains(&format!("seed = \"{seed}\"")), "{text}");
+        } else {
+            assert!(text.contains(&format!("seed = {seed}\n")), "{text}");
+        }
+    }
+    // By hand: a decimal or hex string; a negative or malformed seed is refused naming the key.
+    assert_eq!(accepted("seed = \"0xffffffffffffffff\"\n").seed, u64::MAX);
+    assert_eq!(accepted("seed = \"9223372036854775808\"\n").seed, 1 << 63);
+    for bad in ["seed = -1\n", "seed = \"18446744073709551616\"\n", "seed = \"twelve\"\n"] {
+        let msg = refused(bad);
+        assert!(msg.contains("seed"), "{bad}: {msg}");
+    }
+}
+
+#[test]
+fn monte_carlo_row_seeds_load_back() {
+    use ftsmc_sim::batch::montecarlo::{run_seed, MonteCarloSpec};
+    // Find row seeds >= 2^63 of a batch with master seed u64::MAX and load each as a scenario seed.
+    let base = parse(BASE).unwrap();
+    let spec = MonteCarloSpec::default();
+    let mut big = 0;
+    for index in 0..16 {
+        let (s, seed, _) = spec.sample(&base, u64::MAX, index);
+        assert_eq!(seed, run_seed(u64::MAX, index));
+        let back = Scenario::from_toml_str(&s.to_toml().unwrap(), "row.toml").unwrap();
+        assert_eq!(back.seed, seed);
+        big += usize::from(seed >= 1 << 63);
+    }
+    assert!(big > 0, "no row seed >= 2^63 in 16 rows");
+}
+
+// ---- Limits: `inf` means no limit, never an overflow; signal terms are priced ----
+
+const NO_LIMITS: &str = "[limits]\nmax_steps = inf\nmax_samples = inf\nmax_output_bytes = inf\n";
+
+#[test]
+fn an_inf_limit_lifts_the_check_without_overflow_and_the_run_can_be_cancelled() {
+    use ftsmc_sim::{registry, ExitStatus, RunOptions};
+    use std::sync::atomic::{AtomicBool, Ordering};
+    // 1e300 s at 1 kHz: u64::MAX steps and rows; refused by default, accepted with `inf`.
+    let huge = "extends = \"paper-scenario-1\"\nname = \"t\"\nduration = 1e300\n";
+    let msg = Scenario::from_toml_str(huge, "inf.toml").unwrap_err().to_string();
+    assert!(msg.contains("max_steps"), "{msg}");
+    let text = format!("{huge}{NO_LIMITS}");
+    let s = Scenario::from_toml_str(&text, "inf.toml").unwrap();
+    for (controller, extra) in [("pid", ""), ("ftaftsmc", "[vehicle]\nmodel = \"rigid-body\"\n")] {
+        let s = if extra.is_empty() {
+            s.clone()
+        } else {
+            Scenario::from_toml_str(&format!("{text}{extra}"), "inf.toml").unwrap()
+        };
+        let cancel = AtomicBool::new(false);
+        let started = std::time::Instant::now();
+        let out = std::thread::scope(|scope| {
+            scope.spawn(|| {
+                std::thread::sleep(Duration::from_millis(200));
+                cancel.store(true, Ordering::Relaxed);
+            });
+            registry::run(controller, &s, RunOptions { cancel: Some(&cancel), ..Default::default() }).unwrap()
+        });
+        assert!(started.elapsed() < Duration::from_secs(5), "{controller}: took {:?}", started.elapsed());
+        let ExitStatus::Interrupted { time } = out.exit else { panic!("{controller}: {}", out.exit) };
+        assert!(time > 0.0 && out.exit.to_string().starts_with("interrupted at t = "), "{}", out.exit);
+        assert_eq!(out.recording.column("t").last().copied().map(|t| t < time), Some(true));
+    }
+}
+
+#[test]
+fn a_cancelled_batch_stops_and_returns_no_partial_rows() {
+    use ftsmc_sim::batch::montecarlo::{run_batch_cancellable, MonteCarloSpec, INTERRUPTED};
+    use std::sync::atomic::AtomicBool;
+    let s = Scenario::from_toml_str(PAPER_SCENARIO_2, "paper-scenario-2.toml").unwrap();
+    let cancel = AtomicBool::new(true);
+    let started = std::time::Instant::now();
+    let r = run_batch_cancellable(&s, &MonteCarloSpec::default(), &["pid".into()], 100_000, 1, &|_| {}, Some(&cancel));
+    assert_eq!(r.unwrap_err(), INTERRUPTED);
+    assert!(started.elapsed() < Duration::from_secs(5), "{:?}", started.elapsed());
+}
+
+#[test]
+fn signal_terms_are_priced_into_the_step_limit() {
+    // ~1 MiB of sine terms on a 1000 s flight: thousands of term evaluations per step.
+    let terms: Vec<String> =
+        (0..20_000).map(|i| format!("{{ type = \"sine\", amplitude = 1e-6, omega = {}.0 }}", i % 7 + 1)).collect();
+    let many = format!("[disturbance.x]\nterms = [{}]\n", terms.join(", "));
+    let long =
+        |extra: &str| Scenario::from_toml_str(&format!("name = \"t\"\nduration = 1000.0\n{many}{extra}"), "t.toml");
+    let msg = long("").unwrap_err().to_string();
+    assert!(msg.contains("max_steps") && msg.contains("signal terms") && msg.contains("20000 terms"), "{msg}");
+    // Without the terms the same flight is fine; so are the terms on a short
+    // flight, or with the limit lifted.
+    Scenario::from_toml_str("name = \"t\"\nduration = 1000.0\n", "t.toml").unwrap();
+    accepted(&many);
+    long("[limits]\nmax_steps = inf\n").unwrap();
+}

@@ -44,17 +44,38 @@ pub fn run_batch(
     master_seed: u64,
     progress: &(dyn Fn(u64) + Sync),
 ) -> Result<Vec<McRun>, String> {
+    run_batch_cancellable(base, spec, controllers, runs, master_seed, progress, None)
+}
+
+/// Message of a batch stopped through its cancellation flag.
+pub const INTERRUPTED: &str = "interrupted";
+
+/// [`run_batch`] that stops when `cancel` is set: no new flight starts,
+/// flights under way stop within [`crate::run::PROGRESS_EVERY`] steps, and
+/// the batch returns `Err(INTERRUPTED)` (no partial rows).
+pub fn run_batch_cancellable(
+    base: &Scenario,
+    spec: &MonteCarloSpec,
+    controllers: &[String],
+    runs: u64,
+    master_seed: u64,
+    progress: &(dyn Fn(u64) + Sync),
+    cancel: Option<&std::sync::atomic::AtomicBool>,
+) -> Result<Vec<McRun>, String> {
     for name in controllers {
         crate::registry::check_name(name)?;
     }
+    let options = RunOptions { record: false, progress: Some(progress), cancel };
     let rows: Vec<Vec<McRun>> = (0..runs)
         .into_par_iter()
         .map(|index| {
+            if options.cancelled() {
+                return Vec::new();
+            }
             let (scenario, seed, sampled) = spec.sample(base, master_seed, index);
             controllers
                 .iter()
                 .map(|name| {
-                    let options = RunOptions { record: false, progress: Some(progress) };
                     let out = crate::registry::run(name, &scenario, options).expect("controller names checked above");
                     McRun {
                         index,
@@ -69,6 +90,9 @@ pub fn run_batch(
                 .collect()
         })
         .collect();
+    if options.cancelled() {
+        return Err(INTERRUPTED.to_string());
+    }
     Ok(rows.into_iter().flatten().collect())
 }
 

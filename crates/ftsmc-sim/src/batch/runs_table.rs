@@ -85,7 +85,7 @@ pub fn runs_table(rows: &[McRun]) -> RunsTable {
             rows.iter()
                 .map(|r| match r.exit {
                     ExitStatus::Diverged { time, .. } => Some(time),
-                    ExitStatus::Completed | ExitStatus::Crashed { .. } => None,
+                    ExitStatus::Completed | ExitStatus::Crashed { .. } | ExitStatus::Interrupted { .. } => None,
                 })
                 .collect(),
         ),

@@ -21,6 +21,16 @@ pub enum Divergence {
         /// The error reached, m.
         error: f64,
     },
+    /// The rigid body's mass or inertia (with the payload and the inertia
+    /// variation of this instant) left its valid range
+    /// ([`crate::vehicle::RigidBodyParams::check`]): the run stops rather
+    /// than fly parameters it cannot represent.
+    RigidBodyOutOfRange {
+        /// True mass asked for, kg.
+        mass: f64,
+        /// Inertia scale asked for (1 + ΔI/I), dimensionless.
+        inertia_scale: f64,
+    },
 }
 
 /// How a run ended.
@@ -43,6 +53,11 @@ pub enum ExitStatus {
         /// Downward speed at touchdown, m/s.
         impact_speed: f64,
     },
+    /// Stopped at `time` (s) on request ([`crate::run::RunOptions::cancel`], e.g. Ctrl-C).
+    Interrupted {
+        /// Simulated time at which the run stopped, s.
+        time: f64,
+    },
 }
 
 impl ExitStatus {
@@ -55,7 +70,7 @@ impl ExitStatus {
     pub fn diverged_at(&self) -> Option<f64> {
         match self {
             ExitStatus::Diverged { time, .. } => Some(*time),
-            ExitStatus::Completed | ExitStatus::Crashed { .. } => None,
+            ExitStatus::Completed | ExitStatus::Crashed { .. } | ExitStatus::Interrupted { .. } => None,
         }
     }
 
@@ -70,6 +85,7 @@ impl ExitStatus {
             ExitStatus::Completed => "completed".into(),
             ExitStatus::Diverged { time, .. } => format!("diverged at {time:.2} s"),
             ExitStatus::Crashed { time, .. } => format!("crashed at {time:.2} s"),
+            ExitStatus::Interrupted { time } => format!("interrupted at {time:.2} s"),
         }
     }
 }
@@ -84,10 +100,15 @@ impl core::fmt::Display for ExitStatus {
                 Divergence::PositionError { error } => {
                     write!(f, "diverged: position error {error:.3} m at t = {time:.3} s")
                 }
+                Divergence::RigidBodyOutOfRange { mass, inertia_scale } => write!(
+                    f,
+                    "stopped: rigid body out of its valid range (mass {mass} kg, inertia x {inertia_scale}) at t = {time:.3} s"
+                ),
             },
             ExitStatus::Crashed { time, impact_speed } => {
                 write!(f, "crashed: hit the ground at {impact_speed:.1} m/s at t = {time:.3} s")
             }
+            ExitStatus::Interrupted { time } => write!(f, "interrupted at t = {time:.3} s"),
         }
     }
 }

@@ -24,6 +24,7 @@ use exit::check_divergence;
 pub use exit::{Divergence, ExitStatus};
 pub use recording::{push_number, recording_columns, Recording, MAX_RECORDING_COLUMNS};
 use recording::{Recorder, Tick};
+use std::sync::atomic::{AtomicBool, Ordering};
 
 /// Result of one flight.
 #[derive(Clone, Debug)]
@@ -75,6 +76,10 @@ pub struct RunOptions<'a> {
     /// every [`PROGRESS_EVERY`] steps and once at the end (the remainder of
     /// the planned steps, so a diverged run still adds its planned total).
     pub progress: Option<&'a (dyn Fn(u64) + Sync)>,
+    /// Cancellation: when set to `true` (by another thread, e.g. on Ctrl-C),
+    /// the run stops within [`PROGRESS_EVERY`] control steps with
+    /// [`ExitStatus::Interrupted`].
+    pub cancel: Option<&'a AtomicBool>,
 }
 
 /// Control steps between two [`RunOptions::progress`] calls.
@@ -82,19 +87,27 @@ pub const PROGRESS_EVERY: u64 = 1000;
 
 impl Default for RunOptions<'_> {
     fn default() -> Self {
-        Self { record: true, progress: None }
+        Self { record: true, progress: None, cancel: None }
     }
 }
 
 impl RunOptions<'_> {
     /// After control step `executed` (1-based): report [`PROGRESS_EVERY`]
-    /// steps when `executed` is a multiple of it.
-    pub(crate) fn step_done(&self, executed: u64) {
-        if let Some(progress) = self.progress {
-            if executed % PROGRESS_EVERY == 0 {
-                progress(PROGRESS_EVERY);
-            }
+    /// steps when `executed` is a multiple of it, and then also check the
+    /// cancellation flag. True when the run must stop (cancelled).
+    pub(crate) fn step_done(&self, executed: u64) -> bool {
+        if executed % PROGRESS_EVERY != 0 {
+            return false;
         }
+        if let Some(progress) = self.progress {
+            progress(PROGRESS_EVERY);
+        }
+        self.cancelled()
+    }
+
+    /// True when [`RunOptions::cancel`] is set.
+    pub fn cancelled(&self) -> bool {
+        self.cancel.is_some_and(|c| c.load(Ordering::Relaxed))
     }
 
     /// At the end of a flight of `planned` steps that stopped after
@@ -108,7 +121,11 @@ impl RunOptions<'_> {
 
 impl core::fmt::Debug for RunOptions<'_> {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        f.debug_struct("RunOptions").field("record", &self.record).field("progress", &self.progress.is_some()).finish()
+        f.debug_struct("RunOptions")
+            .field("record", &self.record)
+            .field("progress", &self.progress.is_some())
+            .field("cancel", &self.cancel.is_some())
+            .finish()
     }
 }
 
@@ -218,7 +235,10 @@ pub fn simulate(scenario: &Scenario, controller: &mut dyn Controller, options: R
             tv_now = tv_next;
         }
         executed = k + 1;
-        options.step_done(executed);
+        if options.step_done(executed) {
+            exit = ExitStatus::Interrupted { time: (k + 1) as f64 * dt };
+            break;
+        }
 
         let t_next = (k + 1) as f64 * dt;
         reference = reference_at(scenario, t_next);

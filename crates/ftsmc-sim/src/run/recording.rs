@@ -237,7 +237,10 @@ impl Recorder {
             Recording::default()
         };
         if let Some(per_row) = steps.checked_div(every) {
-            let rows = (per_row + 1) as usize;
+            // Reserved up front up to the default `max_samples`; beyond it
+            // (a raised or `inf` limit) the columns grow as rows come, so
+            // no request overflows the reservation.
+            let rows = per_row.saturating_add(1).min(crate::limits::DEFAULT_MAX_SAMPLES as u64) as usize;
             for c in &mut recording.columns {
                 c.reserve(rows);
             }

@@ -125,12 +125,20 @@ pub fn simulate_realistic(scenario: &Scenario, controller: &mut dyn Controller, 
 
     let mut env = Environment::new(scenario.environment());
     let initial = scenario.initial_state.state();
+    // An invalid rigid body (Scenario::validate refuses it; a caller may
+    // skip validation) stops the run at t = 0 with the reason.
+    let mut invalid_body = None;
     let mut truth = match scenario.vehicle.model {
         VehicleModel::Paper => Truth::Paper(initial.to_array()),
         VehicleModel::RigidBody => {
             let base = scenario.rigid_body_params();
-            let body = RigidBody::new(base).expect("validated by Scenario::validate");
-            Truth::Rigid { body, base, key: (1.0, 0.0), x: from_quad_state(&initial) }
+            match RigidBody::new(base) {
+                Ok(body) => Truth::Rigid { body, base, key: (1.0, 0.0), x: from_quad_state(&initial) },
+                Err(_) => {
+                    invalid_body = Some(Divergence::RigidBodyOutOfRange { mass: base.mass, inertia_scale: 1.0 });
+                    Truth::Paper(initial.to_array())
+                }
+            }
         }
     };
     let paper_direct = ideal && matches!(truth, Truth::Paper(_));
@@ -162,7 +170,13 @@ pub fn simulate_realistic(scenario: &Scenario, controller: &mut dyn Controller, 
         let s = truth.quad_state();
         envelope.observe(0.0, &s.position, &reference.position, &s.attitude);
     }
+    if let Some(divergence) = invalid_body {
+        exit = ExitStatus::Diverged { divergence, time: 0.0 };
+    }
     'periods: for k in 0..steps {
+        if invalid_body.is_some() {
+            break;
+        }
         let t = k as f64 * dt;
         let state = truth.quad_state();
         // The controller flies on the measurement; metrics, the envelope and
@@ -193,8 +207,14 @@ pub fn simulate_realistic(scenario: &Scenario, controller: &mut dyn Controller, 
                 let mut p = *base;
                 p.mass += added;
                 p.inertia = p.inertia.map(|r| r.map(|v| v * scale));
-                if let Ok(b) = RigidBody::new(p) {
-                    *body = b;
+                match RigidBody::new(p) {
+                    Ok(b) => *body = b,
+                    // Never fly a mass or inertia other than the recorded one.
+                    Err(_) => {
+                        let divergence = Divergence::RigidBodyOutOfRange { mass: p.mass, inertia_scale: scale };
+                        exit = ExitStatus::Diverged { divergence, time: t };
+                        break 'periods;
+                    }
                 }
                 *key = (added, scale);
             }
@@ -289,7 +309,10 @@ pub fn simulate_realistic(scenario: &Scenario, controller: &mut dyn Controller, 
             tv_now = tv_next;
         }
         executed = k + 1;
-        options.step_done(executed);
+        if options.step_done(executed) {
+            exit = ExitStatus::Interrupted { time: (k + 1) as f64 * dt };
+            break;
+        }
 
         let t_next = (k + 1) as f64 * dt;
         reference = reference_at(scenario, t_next);

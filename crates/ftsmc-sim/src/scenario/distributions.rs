@@ -286,6 +286,56 @@ impl MonteCarloSpec {
                 return err("drag_factor", d, "factors >= 0 with finite scaled drag".into());
             }
         }
+        // On the rigid body, every draw must also leave its parameters in
+        // their valid range (RigidBodyParams::check): mass with the payload,
+        // scaled inertia and drag, at both ends of each support.
+        if matches!(base.vehicle.model, crate::vehicle::VehicleModel::RigidBody) {
+            let ends = |d: Option<&Dist>| d.map_or(Vec::new(), |d| vec![d.support().0, d.support().1]);
+            let fails = |rb: crate::vehicle::RigidBodyParams| {
+                rb.check().err().map(|e| {
+                    format!(
+                        "draws keeping the rigid body in its valid range (a draw gives {} = {}; expected {})",
+                        e.field,
+                        show(e.value),
+                        e.expected
+                    )
+                })
+            };
+            let masses: Vec<Option<f64>> = match &self.mass {
+                Some(d) => ends(Some(d)).into_iter().map(Some).collect(),
+                None => vec![None],
+            };
+            let payloads: Vec<f64> = match (&self.payload_mass, &base.payload) {
+                (Some(d), Some(_)) => ends(Some(d)).into_iter().chain([0.0]).collect(),
+                (None, Some(p)) => vec![0.0, p.mass],
+                _ => vec![0.0],
+            };
+            for &m in &masses {
+                for &added in &payloads {
+                    let mut rb = drawn_rigid_body(base, m, 1.0, 1.0);
+                    rb.mass += added;
+                    if let Some(why) = fails(rb) {
+                        let (name, d) = match (&self.payload_mass, &self.mass) {
+                            (Some(d), _) if added != 0.0 => ("payload_mass", d),
+                            (_, Some(d)) => ("mass", d),
+                            (Some(d), None) => ("payload_mass", d),
+                            (None, None) => continue, // the fixed values, checked by Scenario::validate
+                        };
+                        return err(name, d, why);
+                    }
+                }
+            }
+            for f in ends(self.inertia_factor.as_ref()) {
+                if let (Some(why), Some(d)) = (fails(drawn_rigid_body(base, None, f, 1.0)), &self.inertia_factor) {
+                    return err("inertia_factor", d, why);
+                }
+            }
+            for f in ends(self.drag_factor.as_ref()) {
+                if let (Some(why), Some(d)) = (fails(drawn_rigid_body(base, None, 1.0, f)), &self.drag_factor) {
+                    return err("drag_factor", d, why);
+                }
+            }
+        }
         if let Some(d) = &self.initial_position_offset {
             let (lo, hi) = d.support();
             if base.initial_state.position.iter().any(|p| !((p + lo).is_finite() && (p + hi).is_finite())) {
@@ -425,6 +475,35 @@ impl MonteCarloSpec {
         ];
         (s, seed, sampled)
     }
+}
+
+/// The rigid-body truth parameters of a run whose true mass is drawn as
+/// `mass` (`None`: not drawn) and whose inertia and drag are scaled by
+/// `inertia_factor` and `drag_factor`, exactly as [`MonteCarloSpec::sample`]
+/// builds them (payload not included).
+fn drawn_rigid_body(
+    base: &Scenario,
+    mass: Option<f64>,
+    inertia_factor: f64,
+    drag_factor: f64,
+) -> crate::vehicle::RigidBodyParams {
+    let mut s = base.clone();
+    let mut truth = s.actual_plant.unwrap_or(s.plant);
+    if let Some(m) = mass {
+        truth.mass = m;
+    }
+    truth.inertia = truth.inertia.map(|i| i * inertia_factor);
+    s.actual_plant = Some(truth);
+    if let Some(rb) = s.vehicle.rigid_body.as_mut() {
+        if mass.is_some() {
+            rb.mass = truth.mass;
+        }
+        rb.inertia = rb.inertia.map(|row| row.map(|j| j * inertia_factor));
+        rb.parasitic_drag = rb.parasitic_drag.map(|c| c * drag_factor);
+        rb.rotor_drag_xy *= drag_factor;
+        rb.rotor_drag_z *= drag_factor;
+    }
+    s.rigid_body_params()
 }
 
 /// Seed of run `index`: the first word of ChaCha8 stream `index` keyed by

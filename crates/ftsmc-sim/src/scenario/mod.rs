@@ -12,6 +12,7 @@ use serde::{Deserialize, Serialize};
 
 pub mod distributions;
 pub mod resolve;
+pub mod seed;
 pub mod tune_section;
 mod validate;
 
@@ -264,8 +265,10 @@ pub struct Scenario {
     pub description: String,
     /// Simulated time, s.
     pub duration: f64,
-    /// Master seed of every random stream (drag noise, Monte Carlo).
-    #[serde(default)]
+    /// Master seed of every random stream (drag noise, Monte Carlo); a seed
+    /// of 2^63 or more is written as a decimal string, since TOML integers
+    /// are i64 (see [`seed`]).
+    #[serde(default, with = "seed")]
     pub seed: u64,
     /// Controllers to run (registry names).
     #[serde(default = "default_controllers")]
@@ -471,6 +474,11 @@ impl Scenario {
             control_rate: self.simulation.control_rate,
             substeps: self.simulation.substeps,
             record_rate: self.simulation.record_rate,
+            signal_cost: {
+                let r = &self.reference;
+                let signals = [&r.x, &r.y, &r.z, &r.psi].into_iter().chain(self.disturbance.named().map(|(_, s)| s));
+                signals.chain(self.inertia_variation.as_ref()).map(crate::signal::Signal::evaluation_cost).sum()
+            },
             limits: &self.limits,
         }
     }

@@ -230,7 +230,16 @@ fn load_chain(source: Source<'_>, limits: &Limits) -> Result<Chain, ScenarioErro
     loop {
         let mut table: toml::Table = toml::from_str(&text).map_err(|e| ScenarioError::Parse {
             path: shown.clone(),
-            message: crate::text::parse_message(&text, &e),
+            // A file reached through `extends` may be anything (a system
+            // file): name it and the position, never quote its content.
+            message: match layers.last() {
+                None => crate::text::parse_message(&text, &e),
+                Some(by) => format!(
+                    "not a scenario file (`extends` target of {}): {} (content not shown)",
+                    by.shown,
+                    crate::text::parse_position(&text, &e)
+                ),
+            },
         })?;
         let extends = table.remove("extends");
         ids.push(id);

@@ -216,6 +216,28 @@ impl Scenario {
         if let Some(t) = &self.tune {
             t.check().map_err(|(key, e)| invalid(format!("tune.{key}"), show(e.value), e.expected))?;
         }
+        // The rigid body flies the payload too: its mass with the payload
+        // must stay in the rigid body's valid range.
+        if let (crate::vehicle::VehicleModel::RigidBody, Some(p)) = (self.vehicle.model, &self.payload) {
+            let mut rb = self.rigid_body_params();
+            let body_mass = rb.mass;
+            if rb.check().is_ok() {
+                rb.mass += p.mass;
+                if let Err(e) = rb.check() {
+                    return Err(invalid(
+                        "payload.mass".into(),
+                        show(p.mass),
+                        &format!(
+                            "a payload keeping the rigid body's {} ({} kg + payload = {}) in range: {}",
+                            e.field,
+                            show(body_mass),
+                            show(rb.mass),
+                            e.expected
+                        ),
+                    ));
+                }
+            }
+        }
         if let Some(mc) = &self.montecarlo {
             mc.check_against(self).map_err(|(key, value, expected)| invalid(key, value, &expected))?;
         }
@@ -238,6 +260,10 @@ impl Scenario {
 pub(super) fn check_realism(scenario: &Scenario) -> Result<(), (String, GainError)> {
     if let Some(rb) = &scenario.vehicle.rigid_body {
         rb.check().map_err(|e| ("vehicle.rigid_body".to_string(), e))?;
+    } else if matches!(scenario.vehicle.model, crate::vehicle::VehicleModel::RigidBody) {
+        // Built from the true plant: it must be a valid rigid body too.
+        let which = if scenario.actual_plant.is_some() { "actual_plant" } else { "plant" };
+        scenario.rigid_body_params().check().map_err(|e| (which.to_string(), e))?;
     }
     if let Some(a) = &scenario.actuators {
         a.check().map_err(|e| ("actuators".to_string(), e))?;

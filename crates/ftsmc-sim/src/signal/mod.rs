@@ -227,6 +227,25 @@ impl Signal {
         }
     }
 
+    /// Work of one evaluation, in term evaluations (an upper bound): 1 per
+    /// term, a polynomial's coefficient count, `1 + log2(n)` for `n`
+    /// waypoints (binary search), and for a piecewise term its piece count
+    /// (linear search) plus every piece's own cost. Priced by
+    /// [`crate::limits::check_flight`].
+    pub fn evaluation_cost(&self) -> f64 {
+        self.terms
+            .iter()
+            .map(|term| match term {
+                Term::Polynomial { coefficients } => coefficients.len().max(1) as f64,
+                Term::Waypoints(w) => 1.0 + (w.len().max(1) as f64).log2(),
+                Term::Piecewise { pieces } => {
+                    pieces.len() as f64 + pieces.iter().map(|p| p.signal.evaluation_cost()).sum::<f64>()
+                }
+                _ => 1.0,
+            })
+            .sum()
+    }
+
     /// A constant signal.
     pub fn constant(value: f64) -> Self {
         Self { terms: vec![Term::Constant { value }], window: None }

@@ -183,6 +183,16 @@ impl Waypoints {
         self.coefficients = segments(&self.spec);
     }
 
+    /// Number of waypoints.
+    pub fn len(&self) -> usize {
+        self.spec.t.len().min(self.spec.value.len())
+    }
+
+    /// True when there is no waypoint.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
     /// Value, rate and acceleration at `t` (s).
     pub fn sample(&self, t: f64) -> Sample {
         let n = self.spec.t.len().min(self.spec.value.len());

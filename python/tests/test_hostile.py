@@ -1,0 +1,111 @@
+"""Hostile calls raise Python exceptions; they never kill the interpreter:
+self-referencing or hugely nested overrides, huge dotted keys, Ctrl-C during
+a flight or a batch, a Python controller handed to the Monte Carlo, seeds of
+the full u64 range."""
+
+from __future__ import annotations
+
+import os
+import signal
+import threading
+import time
+from typing import Any, Dict
+
+import pytest
+
+import ftsmc
+
+
+def test_a_self_referencing_dict_raises_value_error() -> None:
+    d: Dict[str, Any] = {}
+    d["self"] = d
+    with pytest.raises(ValueError, match="deeper than"):
+        ftsmc.Scenario.builtin("paper-scenario-1").with_overrides({"payload": d})
+
+
+def test_nesting_fifteen_thousand_deep_raises_value_error() -> None:
+    deep: Any = 1.0
+    for _ in range(15_000):
+        deep = [deep]
+    with pytest.raises(ValueError, match="deeper than"):
+        ftsmc.Scenario.builtin("paper-scenario-1").with_overrides({"payload.mass": deep})
+    nested: Any = 1.0
+    for _ in range(15_000):
+        nested = {"a": nested}
+    with pytest.raises(ValueError, match="deeper than"):
+        ftsmc.Scenario.builtin("paper-scenario-1").with_overrides({"payload": nested})
+
+
+def test_very_long_dotted_keys_raise_value_error() -> None:
+    s = ftsmc.Scenario.builtin("paper-scenario-1")
+    with pytest.raises(ValueError, match="at most 256 characters") as e:
+        s.with_overrides({"a." * 500_000 + "b": 1.0})
+    assert len(str(e.value)) < 400
+    with pytest.raises(ValueError, match="16 parts"):
+        s.with_overrides({".".join(["a"] * 40): 1.0})
+
+
+def test_seeds_of_the_whole_u64_range_round_trip() -> None:
+    s = ftsmc.Scenario.builtin("paper-scenario-1")
+    for seed in (2**63, 2**64 - 1):
+        t = s.with_overrides({"seed": seed})
+        assert t.seed == seed
+        assert ftsmc.Scenario.from_toml(t.to_toml()).seed == seed
+    with pytest.raises(ValueError):
+        s.with_overrides({"seed": 2**64})
+
+
+def _interrupt_after(seconds: float) -> threading.Timer:
+    """Send SIGINT to this process after `seconds` (as Ctrl-C would)."""
+    timer = threading.Timer(seconds, lambda: os.kill(os.getpid(), signal.SIGINT))
+    timer.start()
+    return timer
+
+
+def _long(scenario: str) -> ftsmc.Scenario:
+    return ftsmc.Scenario.builtin(scenario).with_overrides(
+        {"duration": 1e5, "limits.max_steps": float("inf"), "simulation.record_rate": 0.0}
+    )
+
+
+def test_ctrl_c_stops_simulate_within_a_second() -> None:
+    s = _long("paper-scenario-1")
+    timer = _interrupt_after(0.5)
+    started = time.monotonic()
+    with pytest.raises(KeyboardInterrupt):
+        ftsmc.simulate(s, "pid")
+    timer.join()
+    assert time.monotonic() - started < 1.5
+
+
+def test_ctrl_c_stops_montecarlo_within_a_second() -> None:
+    s = ftsmc.Scenario.builtin("paper-scenario-2")
+    timer = _interrupt_after(0.5)
+    started = time.monotonic()
+    with pytest.raises(KeyboardInterrupt):
+        ftsmc.montecarlo(s, 100_000, controllers=["pid"])
+    timer.join()
+    assert time.monotonic() - started < 1.5
+
+
+def test_ctrl_c_stops_a_python_controller() -> None:
+    class Hover:
+        def update(self, state: ftsmc.State, reference: ftsmc.Reference, dt: float) -> ftsmc.Command:
+            return ftsmc.Command(0.74 * 9.81, (0.0, 0.0, 0.0))
+
+    s = _long("paper-scenario-1")
+    timer = _interrupt_after(0.5)
+    started = time.monotonic()
+    with pytest.raises(KeyboardInterrupt):
+        ftsmc.simulate(s, Hover())
+    timer.join()
+    assert time.monotonic() - started < 1.5
+
+
+def test_montecarlo_with_a_python_controller_says_why_and_what_to_do() -> None:
+    class Pd:
+        def update(self, state: ftsmc.State, reference: ftsmc.Reference, dt: float) -> ftsmc.Command:
+            return ftsmc.Command(0.74 * 9.81, (0.0, 0.0, 0.0))
+
+    with pytest.raises(TypeError, match="built-in controllers by name.*got a Pd object.*ftsmc.simulate"):
+        ftsmc.montecarlo(ftsmc.Scenario.builtin("paper-scenario-2"), 2, controllers=[Pd()])  # type: ignore[list-item]
