@@ -7,7 +7,7 @@ use ftsmc_core::ranftsmc::{RanftsmcAxis, RanftsmcGains};
 use ftsmc_core::tsm_sta::{TsmStaAxis, TsmStaGains};
 use ftsmc_sim::controllers::{ftaftsmc, ranftsmc, tsm_sta};
 use ftsmc_sim::scenario::tune_section::TuneSection;
-use ftsmc_sim::tune::{held_out_indices, training_indices, tune, tuned_toml, TuneOptions};
+use ftsmc_sim::tune::{held_out_indices, judge, training_indices, tune, tuned_toml, TuneOptions};
 use ftsmc_sim::Scenario;
 
 /// Fly `ë = v` with `law` sampled every `dt` (exact zero-order-hold
@@ -140,12 +140,25 @@ fn a_tiny_tune_is_identical_with_one_and_two_threads() {
     assert_eq!(a, b);
     // The search moved: not every candidate is the start.
     assert!(one.history.iter().any(|h| h.values != one.history[0].values));
+    // `judge` (what `reproduce` flies for the committed files) gives the
+    // tune's own held-out statistics: the same held-out draws.
+    let held = one.held_out.unwrap();
+    let judged = judge(&one.tuned, "ftaftsmc", 5, 2, 3, &|_| {}).unwrap();
+    assert_eq!(format!("{judged:?}"), format!("{:?}", held.tuned));
+    let judged = judge(&one.start, "ftaftsmc", 5, 2, 3, &|_| {}).unwrap();
+    assert_eq!(format!("{judged:?}"), format!("{:?}", held.start));
 }
 
 #[test]
 fn the_tuned_toml_round_trips_the_parameter_map() {
     for controller in ["pid", "se3", "tsm-sta"] {
-        let (base, r) = tiny(controller, 2);
+        let (base, mut r) = tiny(controller, 2);
+        // Whatever the tiny search found, map a point away from the start
+        // (every parameter moved) into the result, as a tune would.
+        let values = r.space.values(&vec![0.63; r.space.dims.len()]);
+        r.tuned = Scenario { controllers: vec![controller.to_string()], ..r.space.apply(&r.start, &values).unwrap() };
+        let best = r.best;
+        r.history[best].values = values;
         let text = tuned_toml(&r, "base.toml", "test").unwrap();
         let dir = std::env::temp_dir().join(format!("ftsmc-tune-test-{}-{controller}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();

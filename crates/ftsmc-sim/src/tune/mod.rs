@@ -144,7 +144,7 @@ fn fly(
         .par_iter()
         .map(|&(k, index)| {
             let (s, _, _) = spec.sample(&scenarios[k], master, index);
-            let out = crate::registry::run(controller, &s, RunOptions { record: false, progress: None })?;
+            let out = crate::registry::run(controller, &s, RunOptions { record: false, ..Default::default() })?;
             progress(1);
             Ok(Flight::of(&out))
         })
