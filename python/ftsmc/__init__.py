@@ -220,6 +220,8 @@ def montecarlo(
     seed: Optional[int] = None,
     controllers: Optional[Sequence[str]] = None,
     threads: Optional[int] = None,
+    client: Optional[Any] = None,
+    shards: Optional[int] = None,
 ) -> pandas.DataFrame:
     """A Monte Carlo batch: the rows of the CLI's ``runs.csv`` as a DataFrame.
 
@@ -230,6 +232,11 @@ def montecarlo(
     GIL released. Same rows and values as ``ftsmc montecarlo``: ``run`` and
     ``seed`` are uint64, empty CSV cells are NaN, ``completed``/``success``/
     ``crashed`` are bool.
+
+    With ``client`` (a ``dask.distributed.Client``; ``pip install
+    "./python[dask]"``) the batch is flown as ``shards`` Dask tasks of
+    contiguous runs, ``threads`` (default 1) threads each, and gives the same
+    rows; see :mod:`ftsmc.dask` and docs/campaigns.md.
     """
     import pandas
 
@@ -245,9 +252,16 @@ def montecarlo(
                     "controller) in a loop over the parameters you want to vary"
                 )
 
-    names, columns = _ftsmc.montecarlo_columns(
-        scenario, runs, seed, None if controllers is None else list(controllers), threads
-    )
+    names_arg = None if controllers is None else list(controllers)
+    if client is not None:
+        from .dask import montecarlo_columns
+
+        per_task = 1 if threads is None else threads
+        names, columns = montecarlo_columns(client, scenario, runs, seed, names_arg, shards, per_task)
+    else:
+        if shards is not None:
+            raise ValueError("shards needs a Dask client (client=...)")
+        names, columns = _ftsmc.montecarlo_columns(scenario, runs, seed, names_arg, threads)
     return pandas.DataFrame(dict(zip(names, columns)))
 
 

@@ -75,6 +75,7 @@ def montecarlo_columns(
     seed: Optional[int] = None,
     controllers: Optional[List[str]] = None,
     threads: Optional[int] = None,
+    run_range: Optional[Tuple[int, int]] = None,
 ) -> Tuple[List[str], List[Union[npt.NDArray[Any], List[str]]]]: ...
 def tune_native(
     scenario: Scenario,

@@ -4,6 +4,7 @@
 
 mod figures;
 mod fixed_time;
+mod merge;
 mod montecarlo;
 mod output;
 mod plot;
@@ -127,6 +128,22 @@ enum Command {
         /// max_output_bytes, max_flights, max_sweep_points, max_threads, max_scenario_bytes; see docs/scenarios.md).
         #[arg(long = "limit", value_name = "KEY=VALUE")]
         limit: Vec<String>,
+        /// Fly only shard K of N (a contiguous block of the runs) into OUT/<name>-shard-K-of-N/;
+        /// `ftsmc merge` joins the N shards into the unsharded result (docs/campaigns.md).
+        #[arg(long, value_name = "K/N")]
+        shard: Option<ftsmc_sim::batch::shard::Shard>,
+    },
+    /// Join the shard folders of `ftsmc montecarlo --shard K/N` into the unsharded result (runs.csv, summary.json).
+    Merge {
+        /// Shard folders (all N of one campaign, any order).
+        #[arg(required = true, value_name = "DIR")]
+        shards: Vec<PathBuf>,
+        /// Parent folder: the merged result goes to OUT/<scenario name>/.
+        #[arg(long, default_value = "results/montecarlo")]
+        out: PathBuf,
+        /// Skip the box-plot figure.
+        #[arg(long)]
+        no_figures: bool,
     },
     /// Tune one controller's declared gains on a scenario by CMA-ES over Monte Carlo flights; judge on held-out seeds.
     Tune {
@@ -267,13 +284,15 @@ fn run(cli: Cli) -> Result<()> {
             };
             fixed_time::run(&scenario, &controllers, &settings, &out)
         }
-        Command::Montecarlo { scenario, runs, seed, threads, controllers, out, no_figures, limit } => {
+        Command::Montecarlo { scenario, runs, seed, threads, controllers, out, no_figures, limit, shard } => {
             let mut scenario = load_scenario_with_limits(&scenario, &limit)?;
             let names = if controllers.is_empty() { scenario.controllers.clone() } else { controllers };
             check_names(&names)?;
             anyhow::ensure!(runs >= 1, "--runs must be at least 1");
             anyhow::ensure!(threads != Some(0), "--threads must be at least 1");
-            ftsmc_sim::limits::check_batch(&scenario.flight_size(), runs, names.len())?;
+            // A shard is priced by the runs it flies.
+            let own = shard.map_or(Ok(0..runs), |k| k.range(runs))?;
+            ftsmc_sim::limits::check_batch(&scenario.flight_size(), own.end - own.start, names.len())?;
             if let Some(n) = threads {
                 ftsmc_sim::limits::check_threads(&scenario.limits, n)?;
             }
@@ -281,7 +300,7 @@ fn run(cli: Cli) -> Result<()> {
             // the controllers flown, so re-running it gives the same batch.
             scenario.seed = seed.unwrap_or(scenario.seed);
             scenario.controllers = names;
-            montecarlo::run(&scenario, runs, threads, &out, !no_figures)
+            montecarlo::run(&scenario, runs, shard, threads, &out, !no_figures)
         }
         Command::Tune { scenario: arg, controller, budget, seed, threads, out, no_figures, limit } => {
             let scenario = load_scenario_with_limits(&arg, &limit)?;
@@ -295,6 +314,7 @@ fn run(cli: Cli) -> Result<()> {
             let seed = seed.unwrap_or(scenario.seed);
             tune::run(&scenario, &arg, &controller, budget, seed, threads, &out, !no_figures)
         }
+        Command::Merge { shards, out, no_figures } => merge::merge(&shards, &out, !no_figures),
         Command::TuneTsmSta { scenario } => {
             let scenario = load_scenario(&scenario)?;
             let r = ftsmc_sim::analysis::tuning::tune_tsm_sta(

@@ -5,8 +5,9 @@ use std::path::Path;
 use std::time::Instant;
 
 use anyhow::{Context, Result};
-use ftsmc_sim::batch::montecarlo::{run_batch, summarize, ControllerSummary, McRun, MonteCarloSpec};
+use ftsmc_sim::batch::montecarlo::{run_batch_range, summarize, ControllerSummary, McRun, MonteCarloSpec};
 use ftsmc_sim::batch::runs_table::runs_table;
+use ftsmc_sim::batch::shard::Shard;
 use ftsmc_sim::registry::label;
 use ftsmc_sim::run::planned_steps;
 use ftsmc_sim::scenario::Scenario;
@@ -77,11 +78,20 @@ pub fn mc_table(summaries: &[(String, ControllerSummary)]) -> String {
 }
 
 /// Run a batch of `scenario` (its `controllers`, master seed `seed`) and
-/// write its outputs to `out/<name>/`.
-pub fn run(scenario: &Scenario, runs: u64, threads: Option<usize>, out: &Path, figures: bool) -> Result<()> {
+/// write its outputs to `out/<name>/`; with `shard` = K/N only that shard's
+/// block of runs, to `out/<name>-shard-K-of-N/` (see [`crate::merge`]).
+pub fn run(
+    scenario: &Scenario,
+    runs: u64,
+    shard: Option<Shard>,
+    threads: Option<usize>,
+    out: &Path,
+    figures: bool,
+) -> Result<()> {
     let controllers = &scenario.controllers;
     let seed = scenario.seed;
-    let folder = out.join(&scenario.name);
+    let indices = shard.unwrap_or(Shard::WHOLE).range(runs)?;
+    let folder = out.join(shard.map_or_else(|| scenario.name.clone(), |s| s.folder_name(&scenario.name)));
     // Refuse a bad --out before any flight.
     let dir = ResultDir::begin(&folder, "montecarlo")?;
     let spec = scenario.montecarlo.clone().unwrap_or_else(|| {
@@ -93,11 +103,11 @@ pub fn run(scenario: &Scenario, runs: u64, threads: Option<usize>, out: &Path, f
         builder = builder.num_threads(t);
     }
     let pool = builder.build().context("cannot start the thread pool")?;
-    let flights = runs.saturating_mul(controllers.len() as u64);
+    let flights = (indices.end - indices.start).saturating_mul(controllers.len() as u64);
     let bar = steps_bar(flights.saturating_mul(planned_steps(scenario)), flights);
     let started = Instant::now();
     let rows = pool
-        .install(|| run_batch(scenario, &spec, controllers, runs, seed, &|n| bar.inc(n)))
+        .install(|| run_batch_range(scenario, &spec, controllers, indices.clone(), seed, &|n| bar.inc(n), None))
         .map_err(|known| anyhow::anyhow!("unknown controller (known: {known})"))?;
     bar.finish_and_clear();
     let elapsed = started.elapsed().as_secs_f64();
@@ -111,16 +121,59 @@ pub fn run(scenario: &Scenario, runs: u64, threads: Option<usize>, out: &Path, f
     for (name, s) in &summaries {
         per_controller.insert(name.clone(), serde_json::to_value(s)?);
     }
-    let summary = json!({
+    let mut summary = json!({
         "scenario": scenario.name,
         "runs": runs,
         "master_seed": seed,
         "controllers": Value::Object(per_controller),
         "provenance": provenance(&[file]),
     });
+    if let Some(shard) = shard {
+        summary["shard"] = crate::merge::shard_json(shard, &indices);
+    }
     dir.write("summary.json", serde_json::to_string_pretty(&summary)?.as_bytes())?;
 
     if figures {
+        let title = match shard {
+            Some(k) => format!("runs {}–{} (shard {k}) of {}", indices.start, indices.end - 1, scenario.name),
+            None => format!("{runs} runs of {}", scenario.name),
+        };
+        let completed: Vec<(&str, [f64; 4])> = rows
+            .iter()
+            .filter(|r| r.exit.is_completed())
+            .map(|r| (r.controller.as_str(), [r.metrics.ise.x, r.metrics.ise.y, r.metrics.ise.z, r.metrics.ise.psi]))
+            .collect();
+        write_ise_boxplots(&title, controllers, &summaries, &completed, &dir.path().join("montecarlo-ise"))?;
+    }
+    dir.commit()?;
+
+    let what = match shard {
+        Some(k) => format!("runs {}..{} (shard {k}) of {runs}", indices.start, indices.end),
+        None => format!("{runs} runs"),
+    };
+    println!("Monte Carlo: {} × {what} of {} (seed {seed})\n", controllers.len(), scenario.name);
+    println!("{}", mc_table(&summaries));
+    println!(
+        "\n{} flights in {elapsed:.2} s ({:.0} flights/s); wrote {}/ (runs.csv, summary.json, scenario.toml{})",
+        rows.len(),
+        rows.len() as f64 / elapsed.max(1e-9),
+        folder.display(),
+        if figures { ", montecarlo-ise.{svg,png}" } else { "" }
+    );
+    Ok(())
+}
+
+/// The box plots of ISE x, y, z, ψ over the completed runs, one box per
+/// controller: `completed` holds `(controller, [ISE x, y, z, ψ])` of every
+/// completed row; written to `path.{svg,png}`.
+pub fn write_ise_boxplots(
+    what: &str,
+    controllers: &[String],
+    summaries: &[(String, ControllerSummary)],
+    completed: &[(&str, [f64; 4])],
+    path: &Path,
+) -> Result<()> {
+    {
         let panels: Vec<BoxPanel> = ["x", "y", "z", "psi"]
             .iter()
             .map(|axis| BoxPanel {
@@ -134,14 +187,14 @@ pub fn run(scenario: &Scenario, runs: u64, threads: Option<usize>, out: &Path, f
                             label(c),
                             100.0 * summaries.iter().find(|(n, _)| n == c).map_or(0.0, |(_, s)| s.success_rate)
                         ),
-                        values: rows
+                        values: completed
                             .iter()
-                            .filter(|r| &r.controller == c && r.exit.is_completed())
-                            .map(|r| match *axis {
-                                "x" => r.metrics.ise.x,
-                                "y" => r.metrics.ise.y,
-                                "z" => r.metrics.ise.z,
-                                _ => r.metrics.ise.psi,
+                            .filter(|(name, _)| name == c)
+                            .map(|(_, ise)| match *axis {
+                                "x" => ise[0],
+                                "y" => ise[1],
+                                "z" => ise[2],
+                                _ => ise[3],
                             })
                             .collect(),
                         color: controller_color(c),
@@ -151,22 +204,11 @@ pub fn run(scenario: &Scenario, runs: u64, threads: Option<usize>, out: &Path, f
             })
             .collect();
         write_boxplots(
-            &format!("Monte Carlo — {} runs of {} (completed runs; boxes q1–q3, whiskers p5–p95)", runs, scenario.name),
+            &format!("Monte Carlo — {what} (completed runs; boxes q1–q3, whiskers p5–p95)"),
             &panels,
             2,
-            &dir.path().join("montecarlo-ise"),
+            path,
         )?;
     }
-    dir.commit()?;
-
-    println!("Monte Carlo: {} × {} runs of {} (seed {seed})\n", controllers.len(), runs, scenario.name);
-    println!("{}", mc_table(&summaries));
-    println!(
-        "\n{} flights in {elapsed:.2} s ({:.0} flights/s); wrote {}/ (runs.csv, summary.json, scenario.toml{})",
-        rows.len(),
-        rows.len() as f64 / elapsed.max(1e-9),
-        folder.display(),
-        if figures { ", montecarlo-ise.{svg,png}" } else { "" }
-    );
     Ok(())
 }

@@ -1,5 +1,5 @@
 //! Column dictionary: every CSV column and every JSON key that `reproduce`,
-//! `run`, `montecarlo` and `fixed-time` write is named in docs/outputs.md,
+//! `run`, `montecarlo` (and its shards), `merge` and `fixed-time` write is named in docs/outputs.md,
 //! so adding an output without documenting it fails here.
 //!
 //! The doc's notation generalises names: `<axis>` (x … psi), `<signal>`
@@ -133,6 +133,11 @@ fn every_csv_column_and_json_key_is_in_docs_outputs_md() {
     std::fs::write(dir.join("diverging.toml"), text).unwrap();
     ftsmc(&["run", "diverging.toml", "--no-figures", "--out", "run"], &dir);
     ftsmc(&["montecarlo", "paper-scenario-2", "--runs", "3", "--no-figures", "--out", "mc"], &dir);
+    ftsmc(
+        &["montecarlo", "paper-scenario-2", "--runs", "3", "--shard", "1/1", "--no-figures", "--out", "shards"],
+        &dir,
+    );
+    ftsmc(&["merge", "shards/paper-scenario-2-shard-1-of-1", "--no-figures", "--out", "merged"], &dir);
     ftsmc(&["fixed-time", "--per-decade", "1", "--out", "ft"], &dir);
 
     let doc = documented();
@@ -153,7 +158,13 @@ fn every_csv_column_and_json_key_is_in_docs_outputs_md() {
 
     let mut json_files = Vec::new();
     // `--out DIR` is the parent: montecarlo and fixed-time write `DIR/<scenario name>/`.
-    for rel in ["repro/summary.json", "mc/paper-scenario-2/summary.json", "ft/paper-scenario-1/fixed-time.json"] {
+    for rel in [
+        "repro/summary.json",
+        "mc/paper-scenario-2/summary.json",
+        "shards/paper-scenario-2-shard-1-of-1/summary.json",
+        "merged/paper-scenario-2/summary.json",
+        "ft/paper-scenario-1/fixed-time.json",
+    ] {
         json_files.push(dir.join(rel));
     }
     let run_summary = std::fs::read_dir(dir.join("run")).unwrap().flatten().next().unwrap().path().join("summary.json");
@@ -174,6 +185,8 @@ fn every_csv_column_and_json_key_is_in_docs_outputs_md() {
         "table3.<axis>.ours.<controller>",
         "controllers.<controller>.metrics.<metric>.median",
         "channels[].bound",
+        "shard.first_run",
+        "provenance.merged_from[].provenance.scenario_sha256",
     ] {
         assert!(all_paths.contains(p), "{p} not produced: {all_paths:?}");
     }

@@ -2,7 +2,7 @@
 //! released, or a Python controller), and Monte Carlo batches whose rows
 //! are `runs.csv`'s.
 
-use ftsmc_sim::batch::montecarlo::run_batch_cancellable;
+use ftsmc_sim::batch::montecarlo::run_batch_range;
 use ftsmc_sim::batch::runs_table::{runs_table, Column};
 use ftsmc_sim::run::{RunOptions, RunOutput};
 use numpy::PyArray1;
@@ -145,8 +145,11 @@ pub fn simulate_python(
 /// an empty cell, `bool`) or a list of str. Same checks, seed handling and
 /// rows as `ftsmc montecarlo`; flown with the GIL released on a pool of
 /// `threads` workers (default: all cores); the rows do not depend on it.
+/// `run_range = (start, end)` flies only the runs with index in
+/// `start..end` of the `runs`-run batch (a shard, for Dask tasks): their
+/// rows are bit-identical to those rows of the whole batch.
 #[pyfunction]
-#[pyo3(signature = (scenario, runs, seed=None, controllers=None, threads=None))]
+#[pyo3(signature = (scenario, runs, seed=None, controllers=None, threads=None, run_range=None))]
 pub fn montecarlo_columns<'py>(
     py: Python<'py>,
     scenario: PyRef<'_, Scenario>,
@@ -154,6 +157,7 @@ pub fn montecarlo_columns<'py>(
     seed: Option<u64>,
     controllers: Option<Vec<String>>,
     threads: Option<usize>,
+    run_range: Option<(u64, u64)>,
 ) -> PyResult<(Vec<String>, Vec<Bound<'py, PyAny>>)> {
     let mut scenario = scenario.inner.clone();
     let names = controllers.unwrap_or_else(|| scenario.controllers.clone());
@@ -167,7 +171,11 @@ pub fn montecarlo_columns<'py>(
     if threads == Some(0) {
         return Err(value_error("threads must be at least 1"));
     }
-    ftsmc_sim::limits::check_batch(&scenario.flight_size(), runs, names.len())
+    let (start, end) = run_range.unwrap_or((0, runs));
+    if start >= end || end > runs {
+        return Err(value_error(format!("run_range ({start}, {end}) must satisfy 0 <= start < end <= runs ({runs})")));
+    }
+    ftsmc_sim::limits::check_batch(&scenario.flight_size(), end - start, names.len())
         .map_err(|e| value_error(chain_message(&e)))?;
     if let Some(n) = threads {
         ftsmc_sim::limits::check_threads(&scenario.limits, n).map_err(|e| value_error(chain_message(&e)))?;
@@ -183,7 +191,7 @@ pub fn montecarlo_columns<'py>(
         }
         let pool = builder.build().map_err(|e| format!("cannot start the thread pool: {e}"))?;
         pool.install(|| {
-            run_batch_cancellable(&scenario, &spec, &scenario.controllers, runs, scenario.seed, &|_| {}, Some(cancel))
+            run_batch_range(&scenario, &spec, &scenario.controllers, start..end, scenario.seed, &|_| {}, Some(cancel))
                 .map_err(|known| format!("unknown controller (known: {known})"))
         })
     })?;

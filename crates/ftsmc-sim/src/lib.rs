@@ -20,6 +20,7 @@
 //!            tuning.rs          gain tuning
 //!          batch/               batches of flights
 //!            montecarlo.rs      run_batch, stats, summarize
+//!            shard.rs           K/N shards of a campaign (contiguous blocks of runs)
 //! floor 5  registry.rs          controllers by name for a scenario: build, run, label
 //! floor 4  run/                 the loop: controller on its clock, plant by RK4, environment, metrics
 //!            exit.rs            ExitStatus, Divergence, divergence checks

@@ -1,5 +1,7 @@
-//! Batches of flights: Monte Carlo runs and their statistics ([`montecarlo`])
-//! and the rows of `runs.csv` ([`runs_table`]).
+//! Batches of flights: Monte Carlo runs and their statistics ([`montecarlo`]),
+//! the rows of `runs.csv` ([`runs_table`]) and shards of a campaign that
+//! several machines fly ([`shard`]).
 
 pub mod montecarlo;
 pub mod runs_table;
+pub mod shard;

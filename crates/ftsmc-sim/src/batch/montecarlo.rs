@@ -62,11 +62,28 @@ pub fn run_batch_cancellable(
     progress: &(dyn Fn(u64) + Sync),
     cancel: Option<&std::sync::atomic::AtomicBool>,
 ) -> Result<Vec<McRun>, String> {
+    run_batch_range(base, spec, controllers, 0..runs, master_seed, progress, cancel)
+}
+
+/// [`run_batch_cancellable`] for the runs with index in `indices` only (a
+/// shard of a campaign, [`crate::batch::shard::Shard::range`]). Run `i`
+/// draws from [`run_seed`]`(master_seed, i)` alone, so its rows are
+/// bit-identical to those of run `i` in the whole batch; the output order is
+/// (run index, controller).
+pub fn run_batch_range(
+    base: &Scenario,
+    spec: &MonteCarloSpec,
+    controllers: &[String],
+    indices: std::ops::Range<u64>,
+    master_seed: u64,
+    progress: &(dyn Fn(u64) + Sync),
+    cancel: Option<&std::sync::atomic::AtomicBool>,
+) -> Result<Vec<McRun>, String> {
     for name in controllers {
         crate::registry::check_name(name)?;
     }
     let options = RunOptions { record: false, progress: Some(progress), cancel };
-    let rows: Vec<Vec<McRun>> = (0..runs)
+    let rows: Vec<Vec<McRun>> = indices
         .into_par_iter()
         .map(|index| {
             if options.cancelled() {
@@ -143,26 +160,63 @@ pub struct ControllerSummary {
     pub metrics: std::collections::BTreeMap<String, Stats>,
 }
 
+/// What [`summarize`] reads of one row of a batch: its controller, how it
+/// ended and its metrics as [`crate::metrics::Metrics::flat`] gives them
+/// (`NaN` for a value that does not apply). `ftsmc merge` rebuilds these
+/// from the `runs.csv` of shards, so a merged summary is computed by the
+/// same code, from the same numbers, as the unsharded one.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RowOutcome {
+    /// Controller name.
+    pub controller: String,
+    /// The run completed (no divergence, no crash).
+    pub completed: bool,
+    /// The run hit the ground too fast (`[ground]`).
+    pub crashed: bool,
+    /// Completed and inside the scenario's `[envelope]`.
+    pub success: bool,
+    /// `(metric name, value)` in [`crate::metrics::Metrics::flat`] order.
+    pub metrics: Vec<(String, f64)>,
+}
+
+impl From<&McRun> for RowOutcome {
+    fn from(r: &McRun) -> Self {
+        Self {
+            controller: r.controller.clone(),
+            completed: r.exit.is_completed(),
+            crashed: r.exit.is_crashed(),
+            success: r.success,
+            metrics: r.metrics.flat(),
+        }
+    }
+}
+
 /// Summaries per controller, in the order the controllers were given.
 pub fn summarize(rows: &[McRun], controllers: &[String]) -> Vec<(String, ControllerSummary)> {
+    let outcomes: Vec<RowOutcome> = rows.iter().map(RowOutcome::from).collect();
+    summarize_outcomes(&outcomes, controllers)
+}
+
+/// [`summarize`] over [`RowOutcome`]s (the rows of a batch, or of the
+/// merged shards of a campaign).
+pub fn summarize_outcomes(rows: &[RowOutcome], controllers: &[String]) -> Vec<(String, ControllerSummary)> {
     controllers
         .iter()
         .map(|name| {
-            let mine: Vec<&McRun> = rows.iter().filter(|r| &r.controller == name).collect();
-            let completed: Vec<&McRun> = mine.iter().copied().filter(|r| r.exit.is_completed()).collect();
+            let mine: Vec<&RowOutcome> = rows.iter().filter(|r| &r.controller == name).collect();
+            let completed: Vec<&RowOutcome> = mine.iter().copied().filter(|r| r.completed).collect();
             let mut metrics = std::collections::BTreeMap::new();
             if let Some(first) = completed.first() {
-                let names: Vec<String> = first.metrics.flat().into_iter().map(|(n, _)| n).collect();
-                let flats: Vec<Vec<(String, f64)>> = completed.iter().map(|r| r.metrics.flat()).collect();
-                for (k, n) in names.iter().enumerate() {
-                    let values: Vec<f64> = flats.iter().map(|f| f[k].1).collect();
+                for (k, (n, _)) in first.metrics.iter().enumerate() {
+                    let values: Vec<f64> =
+                        completed.iter().map(|r| r.metrics.get(k).map_or(f64::NAN, |m| m.1)).collect();
                     if let Some(st) = stats(&values) {
                         metrics.insert(n.clone(), st);
                     }
                 }
             }
             let runs = mine.len();
-            let crashed = mine.iter().filter(|r| r.exit.is_crashed()).count();
+            let crashed = mine.iter().filter(|r| r.crashed).count();
             let diverged = runs - completed.len() - crashed;
             let successes = mine.iter().filter(|r| r.success).count();
             let envelope_failures = completed.iter().filter(|r| !r.success).count();
