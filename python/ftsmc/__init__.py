@@ -41,6 +41,8 @@ __all__ = [
     "label",
     "montecarlo",
     "simulate",
+    "tune",
+    "Tuned",
 ]
 
 __version__: str = _ftsmc.__version__
@@ -324,3 +326,5 @@ class Controller:
     def __repr__(self) -> str:
         return f"Controller({self.name!r})"
 
+
+from .tuning import Tuned, tune  # noqa: E402  (re-export; the code lives in tuning.py)

@@ -129,5 +129,21 @@ def montecarlo_columns(
     run_range: Optional[Tuple[int, int]] = None,
     progress: Optional[Callable[[int, int], Any]] = None,
 ) -> Tuple[List[str], List[Union[npt.NDArray[Any], List[str]]]]: ...
+def tune_native(
+    scenario: Scenario,
+    controller: str,
+    budget: int = 2000,
+    seed: Optional[int] = None,
+    threads: Optional[int] = None,
+    extends: Optional[str] = None,
+    evaluator: Optional[Callable[[List[str], List[int]], List[List[float]]]] = None,
+) -> Tuple[Scenario, str, str]: ...
+def tune_evaluate(
+    tomls: List[str],
+    controller: str,
+    master: int,
+    indices: List[int],
+    threads: Optional[int] = None,
+) -> List[List[float]]: ...
 def controller_names() -> List[Tuple[str, str]]: ...
 def controller_label(name: str) -> str: ...

@@ -14,6 +14,8 @@ mod raster;
 mod reproduce;
 mod svg;
 mod ticks;
+mod tune;
+mod tuned;
 
 use std::path::PathBuf;
 
@@ -145,6 +147,32 @@ enum Command {
         #[arg(long)]
         no_figures: bool,
     },
+    /// Tune one controller's declared gains on a scenario by CMA-ES over Monte Carlo flights; judge on held-out seeds.
+    Tune {
+        /// Scenario file (TOML) or built-in name; its [tune] section (optional) narrows the parameters and sets the cost.
+        scenario: String,
+        /// Controller to tune.
+        #[arg(long, short = 'c')]
+        controller: String,
+        /// Training flights the search may fly (the start's included).
+        #[arg(long, default_value_t = tune::DEFAULT_BUDGET)]
+        budget: u64,
+        /// Seed of the search and of the Monte Carlo draws (default: the scenario's `seed`).
+        #[arg(long)]
+        seed: Option<u64>,
+        /// Worker threads (default: all cores). Results do not depend on it.
+        #[arg(long)]
+        threads: Option<usize>,
+        /// Parent folder: the results go to OUT/<scenario name>/.
+        #[arg(long, default_value = "results/tune")]
+        out: PathBuf,
+        /// Skip the convergence figure.
+        #[arg(long)]
+        no_figures: bool,
+        /// Raise a cost limit, e.g. `--limit max_flights=1e6` (repeatable; see docs/scenarios.md).
+        #[arg(long = "limit", value_name = "KEY=VALUE")]
+        limit: Vec<String>,
+    },
     /// Rerun the documented TSM-STA gain procedure (match RANFTSMC's scenario-1 settling times) and print the gains as TOML.
     TuneTsmSta {
         /// Scenario to tune on (file or built-in name).
@@ -275,6 +303,18 @@ fn run(cli: Cli) -> Result<()> {
             scenario.seed = seed.unwrap_or(scenario.seed);
             scenario.controllers = names;
             montecarlo::run(&scenario, runs, shard, threads, &out, !no_figures)
+        }
+        Command::Tune { scenario: arg, controller, budget, seed, threads, out, no_figures, limit } => {
+            let scenario = load_scenario_with_limits(&arg, &limit)?;
+            check_names(std::slice::from_ref(&controller))?;
+            anyhow::ensure!(threads != Some(0), "--threads must be at least 1");
+            let settings = scenario.tune.clone().unwrap_or_default();
+            ftsmc_sim::limits::check_batch(&scenario.flight_size(), budget + 2 * settings.validation_runs, 1)?;
+            if let Some(n) = threads {
+                ftsmc_sim::limits::check_threads(&scenario.limits, n)?;
+            }
+            let seed = seed.unwrap_or(scenario.seed);
+            tune::run(&scenario, &arg, &controller, budget, seed, threads, &out, !no_figures)
         }
         Command::Merge { shards, out, no_figures } => merge::merge(&shards, &out, !no_figures),
         Command::TuneTsmSta { scenario } => {

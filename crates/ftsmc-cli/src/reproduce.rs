@@ -510,6 +510,8 @@ pub fn reproduce(out: &Path, figures: bool, realistic_runs: u64) -> Result<()> {
     let beyond_started = Instant::now();
     let beyond = beyond_the_paper(&dir, figures, realistic_runs)?;
     let beyond_elapsed = beyond_started.elapsed().as_secs_f64();
+    // The committed tuned gains beside the defaults, on held-out draws (not re-tuned).
+    let tuned = crate::tuned::write(&dir, realistic_runs.min(crate::tuned::DEFAULT_TUNED_RUNS))?;
     dir.commit()?;
     let o = out.display();
     println!(
@@ -526,6 +528,9 @@ pub fn reproduce(out: &Path, figures: bool, realistic_runs: u64) -> Result<()> {
         beyond.flights,
         beyond_elapsed
     );
+    if let Some(tuned) = tuned {
+        println!("\n{tuned}\nwrote {o}/beyond/tuned.md");
+    }
     Ok(())
 }
 

@@ -16,6 +16,7 @@ mod flight;
 mod gym;
 mod progress;
 mod scenario;
+mod tune;
 
 /// A `ValueError` carrying `message` (the text the CLI prints after `error: `).
 pub(crate) fn value_error(message: impl std::fmt::Display) -> PyErr {
@@ -32,6 +33,8 @@ fn _ftsmc(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(flight::simulate_native, m)?)?;
     m.add_function(wrap_pyfunction!(flight::simulate_python, m)?)?;
     m.add_function(wrap_pyfunction!(flight::montecarlo_columns, m)?)?;
+    m.add_function(wrap_pyfunction!(tune::tune_native, m)?)?;
+    m.add_function(wrap_pyfunction!(tune::tune_evaluate, m)?)?;
     m.add_function(wrap_pyfunction!(controller_names, m)?)?;
     m.add_function(wrap_pyfunction!(controller_label, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;

@@ -11,6 +11,10 @@
 //! floor or below, never above (checked by `tests/layout.rs`):
 //!
 //! ```text
+//! floor 7  tune/                `ftsmc tune`: parameter space, cost, CMA-ES, held-out validation
+//!            cmaes.rs           ask/tell CMA-ES
+//!            cost.rs            flight statistics and the tuning cost
+//!            space.rs           declared + [tune] parameters, normalised coordinates, tuned TOML diff
 //! floor 6  analysis/            analyses built on flights
 //!            fixed_time.rs      fixed-time sweep, per-controller channel sweep, Eq. 38 bound
 //!            tuning.rs          gain tuning
@@ -34,6 +38,7 @@
 //!            resolve.rs         extends chains, deep merge, --set overrides, unit-slip warnings
 //!            distributions.rs   Dist, MonteCarloSpec, SAMPLED_COLUMNS, run_seed, per-run sampling
 //!            ladder.rs          the wind ladder's built-in scenarios realistic-<level>-<n>
+//!            tune_section.rs    `[tune]`: parameter set and cost weights of `ftsmc tune`
 //! floor 2  vehicle/             truth models
 //!            paper.rs           Eq. 1 (the paper's plant) and the generic rk4_step
 //!            rigid_body.rs      Newton–Euler rigid body with quaternion attitude
@@ -50,6 +55,8 @@
 //!          metrics.rs           ISE, IAE, ITAE, settling, chattering, online
 //!          sensors.rs           measured state: noise, bias, sample rate, latency (`[sensors]`)
 //!          controllers/         each controller declared once: name, label, gain section, constructor
+//!            tunable.rs         what `ftsmc tune` may change, by controller (declared in each file)
+//!            tune_param.rs      TuneParam / TuneTarget: the type of a declared tune parameter
 //!            mod.rs             the Declaration/GainSection traits and the one list (GainSections, CONTROLLERS)
 //!            ftaftsmc.rs        `ftaftsmc`, `ftaftsmc-no-mass` (`[ftaftsmc]`)
 //!            ranftsmc.rs        `ranftsmc` (`[ranftsmc]`)
@@ -78,6 +85,7 @@ pub mod scenario;
 pub mod sensors;
 pub mod signal;
 pub mod text;
+pub mod tune;
 pub mod vehicle;
 
 pub use run::{simulate, ExitStatus, RunOptions, RunOutput};

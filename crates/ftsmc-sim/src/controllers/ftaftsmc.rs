@@ -121,3 +121,121 @@ impl Declaration for FtaftsmcNoMass {
         Ftaftsmc::reaching_time_bound(config, axis)
     }
 }
+
+/// The gains that fly the channel law `ë = v` exactly `a` times faster:
+/// if `e(t)` is a closed-loop trajectory under `g`, then `e(a t)` is one
+/// under `time_scaled(g, a)` (from `(e, a ė)`, with δ̂ scaled by `a`).
+///
+/// Derivation (Eq. 5–17), writing `ẽ(t) = e(a t)`, so `dẽ/dt = a ė` and
+/// `d²ẽ/dt² = a² ë`: the surface `S = ė + Y(e)[λ sig^q(e) + γ S_Δ(e) + η e]`
+/// becomes `a S` when λ, γ, η → ×a (Y, S_Δ and ε depend on e only);
+/// `ϖ` (Eq. 13), a time derivative of the bracket, then scales by a².
+/// The reaching law (Eq. 15) must give `a² ϖ2` at `a S`:
+/// `λ2 sig^q2(S)` → λ2 × a^(2−q2), `γ2 sig^p2(S)` → γ2 × a^(2−p2),
+/// `η2 S` → η2 × a, and `δ̂/(2ξ²) S` with ξ unchanged needs δ̂ → ×a.
+/// Eq. 17 keeps δ̂ scaled by `a` when `dδ̂/dt` scales by a²:
+/// `α1 (a² S²/(2ξ²) − α2' a δ̂) = a² α1 (S²/(2ξ²) − α2 δ̂)` with α2' = a α2
+/// (α1 unchanged). Exponents, ℵ1–ℵ3, ε, ξ and α1 are unchanged.
+pub fn time_scaled(g: &FtaftsmcGains, a: f64) -> FtaftsmcGains {
+    FtaftsmcGains {
+        lambda: g.lambda * a,
+        gamma: g.gamma * a,
+        eta: g.eta * a,
+        lambda2: g.lambda2 * a.powf(2.0 - g.q2),
+        gamma2: g.gamma2 * a.powf(2.0 - g.p2),
+        eta2: g.eta2 * a,
+        alpha2: g.alpha2 * a,
+        delta_hat0: g.delta_hat0 * a,
+        ..*g
+    }
+}
+
+/// Apply `f` to the gain sets of the channels in `axes` (0..6 = x, y, z, φ, θ, ψ).
+fn each(config: &mut FtaftsmcConfig, axes: &[usize], f: impl Fn(&mut FtaftsmcGains)) {
+    for &axis in axes {
+        let g = match axis {
+            0 => &mut config.x,
+            1 => &mut config.y,
+            2 => &mut config.z,
+            3 => &mut config.phi,
+            4 => &mut config.theta,
+            _ => &mut config.psi,
+        };
+        f(g);
+    }
+}
+
+/// Time scale of the channels `axes` by `a` ([`time_scaled`]).
+fn scale_time(t: &mut super::tune_param::TuneTarget<'_>, axes: &[usize], a: f64) {
+    each(&mut t.gains.ftaftsmc, axes, |g| *g = time_scaled(g, a));
+}
+
+/// Reaching-law factor: λ2, γ2, η2 of the channels `axes` times `k`.
+fn scale_reaching(t: &mut super::tune_param::TuneTarget<'_>, axes: &[usize], k: f64) {
+    each(&mut t.gains.ftaftsmc, axes, |g| {
+        g.lambda2 *= k;
+        g.gamma2 *= k;
+        g.eta2 *= k;
+    });
+}
+
+/// What `ftsmc tune` searches for `ftaftsmc` (`with_mass`) and
+/// `ftaftsmc-no-mass`: an exact time scale per loop ([`time_scaled`]:
+/// x/y, z, φ/θ, ψ), reaching-law factors for the position and attitude
+/// loops, the δ̂ adaptation (α1, α2, ξ), the mass adaptation rate β1 (with
+/// mass adaptation only) and the command filter's ω_n.
+pub fn tune_parameters(with_mass: bool) -> Vec<super::tune_param::TuneParam> {
+    use super::tune_param::{TuneParam, COMMAND_FILTER};
+    let mut list = vec![
+        TuneParam::factor(
+            "time_xy",
+            "time scale a of the x, y laws (λ, γ, η, η2, α2 ×a; λ2 ×a^(2−q2); γ2 ×a^(2−p2))",
+            0.05,
+            20.0,
+            |t, a| scale_time(t, &[0, 1], a),
+        ),
+        TuneParam::factor("time_z", "time scale a of the z law (as time_xy)", 0.05, 20.0, |t, a| {
+            scale_time(t, &[2], a)
+        }),
+        TuneParam::factor("time_roll_pitch", "time scale a of the φ, θ laws (as time_xy)", 0.05, 20.0, |t, a| {
+            scale_time(t, &[3, 4], a)
+        }),
+        TuneParam::factor("time_yaw", "time scale a of the ψ law (as time_xy)", 0.05, 20.0, |t, a| {
+            scale_time(t, &[5], a)
+        }),
+        TuneParam::factor("reaching_position", "factor on λ2, γ2, η2 of x, y, z (Eq. 15)", 0.001, 20.0, |t, k| {
+            scale_reaching(t, &[0, 1, 2], k)
+        }),
+        TuneParam::factor(
+            "reaching_attitude",
+            "factor on λ2, γ2, η2 of φ, θ, ψ (Eq. 15)",
+            0.001,
+            20.0,
+            |t, k| scale_reaching(t, &[3, 4, 5], k),
+        ),
+        TuneParam::factor(
+            "alpha1",
+            "factor on the δ̂ adaptation rate α1 of every channel (Eq. 17)",
+            0.01,
+            100.0,
+            |t, k| each(&mut t.gains.ftaftsmc, &[0, 1, 2, 3, 4, 5], |g| g.alpha1 *= k),
+        ),
+        TuneParam::factor("alpha2", "factor on the δ̂ leakage α2 of every channel (Eq. 17)", 0.01, 100.0, |t, k| {
+            each(&mut t.gains.ftaftsmc, &[0, 1, 2, 3, 4, 5], |g| g.alpha2 *= k)
+        }),
+        TuneParam::factor("xi", "factor on ξ of every channel (Eq. 15, 17)", 0.1, 10.0, |t, k| {
+            each(&mut t.gains.ftaftsmc, &[0, 1, 2, 3, 4, 5], |g| g.xi *= k)
+        }),
+    ];
+    if with_mass {
+        list.push(TuneParam::factor(
+            "beta1",
+            "factor on the mass adaptation rate β1 (Eq. 44)",
+            0.01,
+            100.0,
+            |t, k| t.gains.ftaftsmc.mass_adaptation.beta1 *= k,
+        ));
+    }
+    list.push(COMMAND_FILTER);
+    list
+}

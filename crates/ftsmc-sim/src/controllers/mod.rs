@@ -84,6 +84,8 @@ pub mod pid;
 pub mod ranftsmc;
 pub mod se3;
 pub mod tsm_sta;
+pub mod tunable;
+pub mod tune_param;
 
 /// A boxed controller ready to fly.
 pub type BoxedController = Box<dyn Controller + Send>;

@@ -45,3 +45,34 @@ impl Declaration for Se3 {
         Ok(Box::new(Se3Controller::new(ctx.plant, *gains).map_err(|e| e.to_string())?))
     }
 }
+
+/// What `ftsmc tune` searches for `se3`: factors on k_x, k_v (horizontal and
+/// vertical) and k_R, k_Ω (roll-pitch and yaw). The thrust and tilt limits
+/// are not tuned.
+pub fn tune_parameters() -> Vec<super::tune_param::TuneParam> {
+    use super::tune_param::TuneParam;
+    /// Multiply elements `idx` of `arr` by `k`.
+    fn mul(arr: &mut [f64; 3], idx: &[usize], k: f64) {
+        for &i in idx {
+            arr[i] *= k;
+        }
+    }
+    const XY: &[usize] = &[0, 1];
+    const Z: &[usize] = &[2];
+    vec![
+        TuneParam::factor("kx_xy", "factor on k_x of x, y", 0.1, 10.0, |t, k| mul(&mut t.gains.se3.position, XY, k)),
+        TuneParam::factor("kx_z", "factor on k_x of z", 0.1, 10.0, |t, k| mul(&mut t.gains.se3.position, Z, k)),
+        TuneParam::factor("kv_xy", "factor on k_v of x, y", 0.1, 10.0, |t, k| mul(&mut t.gains.se3.velocity, XY, k)),
+        TuneParam::factor("kv_z", "factor on k_v of z", 0.1, 10.0, |t, k| mul(&mut t.gains.se3.velocity, Z, k)),
+        TuneParam::factor("kr_roll_pitch", "factor on k_R of roll, pitch", 0.1, 10.0, |t, k| {
+            mul(&mut t.gains.se3.attitude, XY, k)
+        }),
+        TuneParam::factor("kr_yaw", "factor on k_R of yaw", 0.1, 10.0, |t, k| mul(&mut t.gains.se3.attitude, Z, k)),
+        TuneParam::factor("komega_roll_pitch", "factor on k_Ω of roll, pitch", 0.1, 10.0, |t, k| {
+            mul(&mut t.gains.se3.angular_rate, XY, k)
+        }),
+        TuneParam::factor("komega_yaw", "factor on k_Ω of yaw", 0.1, 10.0, |t, k| {
+            mul(&mut t.gains.se3.angular_rate, Z, k)
+        }),
+    ]
+}

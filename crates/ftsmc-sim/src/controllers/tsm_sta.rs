@@ -41,3 +41,66 @@ impl Declaration for TsmSta {
         Some(visitor.visit(TsmStaAxis::new(gains.to_array()[axis])))
     }
 }
+
+/// The gains that fly the channel law `ë = v` exactly `a` times faster
+/// (`e(t)` → `e(a t)`, from `(e, a ė)` with ν ×a²): with `ẽ(t) = e(a t)`
+/// the surface `s = e + sig^(p/q)(ė)/λ` is unchanged when λ → λ a^(p/q); the
+/// equivalent term `−(λ q/p) |ė|^(2−p/q) sign(ė)` then scales by a², the
+/// super-twisting term `k1 |s|^½ sign(s)` needs k1 ×a², and `ν̇ = −k2 sign(s)`
+/// with ν ×a² needs k2 ×a³. p, q and the boundary layer are unchanged.
+pub fn time_scaled(g: &TsmStaGains, a: f64) -> TsmStaGains {
+    TsmStaGains { lambda: g.lambda * a.powf(g.p / g.q), k1: g.k1 * a * a, k2: g.k2 * a * a * a, ..*g }
+}
+
+/// Apply `f` to the channels `axes` (0..6 = x, y, z, φ, θ, ψ) of `[tsm-sta]`.
+fn each(t: &mut super::tune_param::TuneTarget<'_>, axes: &[usize], f: impl Fn(&mut TsmStaGains)) {
+    let set = &mut t.gains.tsm_sta;
+    for &axis in axes {
+        f(match axis {
+            0 => &mut set.x,
+            1 => &mut set.y,
+            2 => &mut set.z,
+            3 => &mut set.phi,
+            4 => &mut set.theta,
+            _ => &mut set.psi,
+        });
+    }
+}
+
+/// What `ftsmc tune` searches for `tsm-sta`: an exact time scale per loop
+/// ([`time_scaled`]), the super-twisting gains k1 and k2 per loop group
+/// (their ratio sets the twisting), and the command filter's ω_n.
+pub fn tune_parameters() -> Vec<super::tune_param::TuneParam> {
+    use super::tune_param::{TuneParam, COMMAND_FILTER};
+    vec![
+        TuneParam::factor(
+            "time_xy",
+            "time scale a of the x, y laws (λ ×a^(p/q), k1 ×a², k2 ×a³)",
+            0.05,
+            20.0,
+            |t, a| each(t, &[0, 1], |g| *g = time_scaled(g, a)),
+        ),
+        TuneParam::factor("time_z", "time scale a of the z law (as time_xy)", 0.05, 20.0, |t, a| {
+            each(t, &[2], |g| *g = time_scaled(g, a))
+        }),
+        TuneParam::factor("time_roll_pitch", "time scale a of the φ, θ laws (as time_xy)", 0.05, 20.0, |t, a| {
+            each(t, &[3, 4], |g| *g = time_scaled(g, a))
+        }),
+        TuneParam::factor("time_yaw", "time scale a of the ψ law (as time_xy)", 0.05, 20.0, |t, a| {
+            each(t, &[5], |g| *g = time_scaled(g, a))
+        }),
+        TuneParam::factor("k1_position", "factor on k1 of x, y, z", 0.05, 20.0, |t, k| {
+            each(t, &[0, 1, 2], |g| g.k1 *= k)
+        }),
+        TuneParam::factor("k2_position", "factor on k2 of x, y, z", 0.05, 20.0, |t, k| {
+            each(t, &[0, 1, 2], |g| g.k2 *= k)
+        }),
+        TuneParam::factor("k1_attitude", "factor on k1 of φ, θ, ψ", 0.05, 20.0, |t, k| {
+            each(t, &[3, 4, 5], |g| g.k1 *= k)
+        }),
+        TuneParam::factor("k2_attitude", "factor on k2 of φ, θ, ψ", 0.05, 20.0, |t, k| {
+            each(t, &[3, 4, 5], |g| g.k2 *= k)
+        }),
+        COMMAND_FILTER,
+    ]
+}

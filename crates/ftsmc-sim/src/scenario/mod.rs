@@ -14,6 +14,7 @@ pub mod distributions;
 pub mod ladder;
 pub mod resolve;
 pub mod seed;
+pub mod tune_section;
 mod validate;
 
 pub use crate::axes::AxisSet;
@@ -348,6 +349,10 @@ pub struct Scenario {
     /// What the controller measures (`[sensors]`, default: the true state).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub sensors: Option<crate::sensors::SensorParams>,
+    /// What `ftsmc tune` searches and its cost weights (`[tune]`; ignored
+    /// by every other command).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tune: Option<tune_section::TuneSection>,
 }
 
 fn is_default_limits(l: &Limits) -> bool {

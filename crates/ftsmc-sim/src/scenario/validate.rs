@@ -220,6 +220,9 @@ impl Scenario {
             })?;
         }
         check_realism(self).map_err(|(prefix, e)| gain(&prefix, e))?;
+        if let Some(t) = &self.tune {
+            t.check().map_err(|(key, e)| invalid(format!("tune.{key}"), show(e.value), e.expected))?;
+        }
         // The rigid body flies the payload too: its mass with the payload
         // must stay in the rigid body's valid range.
         if let (crate::vehicle::VehicleModel::RigidBody, Some(p)) = (self.vehicle.model, &self.payload) {

@@ -1,0 +1,148 @@
+//! The committed tuned gain files (`scenarios/tuned/`, made by `ftsmc tune`
+//! with the command recorded in each) flown by `reproduce` beside the
+//! controllers' default gains, on held-out Monte Carlo draws: the
+//! equal-budget comparison table of docs/tuning.md. Nothing is re-tuned.
+
+use anyhow::{Context, Result};
+use ftsmc_sim::registry::label;
+use ftsmc_sim::scenario::Scenario;
+use ftsmc_sim::tune::{judge, FlightStats};
+use rayon::prelude::*;
+
+use crate::console::{num, Table};
+
+/// Held-out flights per gain set in `reproduce` (capped by `--realistic-runs`).
+pub const DEFAULT_TUNED_RUNS: u64 = 200;
+
+/// The training flights per candidate the committed files were tuned with
+/// (`[tune] runs` default): the held-out indices skip their seeds.
+const TRAINING_RUNS: u64 = 4;
+
+/// `(scenario, controller, tuned file text)` of every committed tuned file.
+pub const TUNED_FILES: &[(&str, &str, &str)] = &[
+    ("realistic-scenario-1", "ftaftsmc", include_str!("../../../scenarios/tuned/realistic-scenario-1-ftaftsmc.toml")),
+    ("realistic-scenario-1", "ranftsmc", include_str!("../../../scenarios/tuned/realistic-scenario-1-ranftsmc.toml")),
+    ("realistic-scenario-1", "tsm-sta", include_str!("../../../scenarios/tuned/realistic-scenario-1-tsm-sta.toml")),
+    ("realistic-scenario-1", "pid", include_str!("../../../scenarios/tuned/realistic-scenario-1-pid.toml")),
+    ("realistic-scenario-1", "se3", include_str!("../../../scenarios/tuned/realistic-scenario-1-se3.toml")),
+    ("realistic-scenario-2", "ftaftsmc", include_str!("../../../scenarios/tuned/realistic-scenario-2-ftaftsmc.toml")),
+    ("realistic-scenario-2", "ranftsmc", include_str!("../../../scenarios/tuned/realistic-scenario-2-ranftsmc.toml")),
+    ("realistic-scenario-2", "tsm-sta", include_str!("../../../scenarios/tuned/realistic-scenario-2-tsm-sta.toml")),
+    ("realistic-scenario-2", "pid", include_str!("../../../scenarios/tuned/realistic-scenario-2-pid.toml")),
+    ("realistic-scenario-2", "se3", include_str!("../../../scenarios/tuned/realistic-scenario-2-se3.toml")),
+];
+
+/// One row of the table.
+pub struct Row {
+    /// Scenario name.
+    pub scenario: String,
+    /// Controller name.
+    pub controller: String,
+    /// Default gains on the held-out draws.
+    pub default: FlightStats,
+    /// Tuned gains on the same draws.
+    pub tuned: FlightStats,
+}
+
+/// Fly every committed tuned file and its controller's default gains on
+/// `runs` held-out draws each (seed: the scenario's); in file order.
+pub fn fly(runs: u64) -> Result<Vec<Row>> {
+    TUNED_FILES
+        .par_iter()
+        .map(|(scenario, controller, text)| {
+            let (file, base_text) = ftsmc_sim::scenario::resolve::built_in(scenario)
+                .with_context(|| format!("no built-in scenario `{scenario}`"))?;
+            let mut base = Scenario::from_toml_str(base_text, file)?;
+            base.controllers = vec![controller.to_string()];
+            let path = format!("scenarios/tuned/{scenario}-{controller}.toml");
+            let tuned = Scenario::from_toml_str(text, &path)?;
+            let seed = base.seed;
+            let default = judge(&base, controller, seed, TRAINING_RUNS, runs, &|_| {}).map_err(anyhow::Error::msg)?;
+            let tuned = judge(&tuned, controller, seed, TRAINING_RUNS, runs, &|_| {}).map_err(anyhow::Error::msg)?;
+            Ok(Row { scenario: scenario.to_string(), controller: controller.to_string(), default, tuned })
+        })
+        .collect()
+}
+
+/// The comparison table (Markdown), one per scenario, within 120 columns.
+pub fn table(rows: &[Row]) -> String {
+    let mut out = String::from(
+        "Default and tuned gains on held-out draws (RMS position error in m, over the completed runs; U1 act. = thrust \
+         activity, N/s; τ act. = torque activity, N·m/s; sat. = median saturated fraction of control periods):\n",
+    );
+    let mut scenarios: Vec<&str> = rows.iter().map(|r| r.scenario.as_str()).collect();
+    scenarios.dedup();
+    for scenario in scenarios {
+        let mut t = Table::new([
+            "controller",
+            "gains",
+            "success",
+            "completed",
+            "crashed",
+            "RMS med",
+            "RMS p95",
+            "U1 act.",
+            "τ act.",
+            "sat.",
+        ]);
+        for r in rows.iter().filter(|r| r.scenario == scenario) {
+            for (gains, s) in [("default", &r.default), ("tuned", &r.tuned)] {
+                t.row(vec![
+                    r.controller.clone(),
+                    gains.to_string(),
+                    format!("{}/{}", s.success, s.runs),
+                    s.completed.to_string(),
+                    s.crashed.to_string(),
+                    num(s.rms_median),
+                    num(s.rms_p95),
+                    num(s.thrust_activity),
+                    num(s.torque_activity),
+                    num(s.saturated),
+                ]);
+            }
+        }
+        out.push_str(&format!("\n{scenario} ({}):\n\n", label_list(rows, scenario)));
+        out.push_str(&t.render());
+    }
+    out
+}
+
+/// The controllers' labels of `scenario`'s rows, comma-separated.
+fn label_list(rows: &[Row], scenario: &str) -> String {
+    rows.iter().filter(|r| r.scenario == scenario).map(|r| label(&r.controller)).collect::<Vec<_>>().join(", ")
+}
+
+/// `reproduce`'s tuned-gains section: fly the table with `runs` held-out
+/// draws per gain set and write `beyond/tuned.md`; `None` (nothing flown)
+/// when `runs` is 0 (`--realistic-runs 0`).
+pub fn write(dir: &crate::output::ResultDir, runs: u64) -> Result<Option<String>> {
+    if runs == 0 {
+        return Ok(None);
+    }
+    let rows = fly(runs)?;
+    let mut md = String::from("# Tuned gains against default gains (held-out draws)\n\n");
+    md.push_str("The files are `scenarios/tuned/<scenario>-<controller>.toml` (each records the `ftsmc tune` command that made it; nothing is re-tuned here). docs/tuning.md explains the method.\n\n");
+    md.push_str(&table(&rows));
+    dir.write("beyond/tuned.md", md.as_bytes())?;
+    Ok(Some(table(&rows)))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_committed_tuned_file_loads_and_changes_only_its_controller() {
+        for (scenario, controller, text) in TUNED_FILES {
+            let tuned =
+                Scenario::from_toml_str(text, "tuned.toml").unwrap_or_else(|e| panic!("{scenario}/{controller}: {e}"));
+            assert_eq!(tuned.controllers, vec![controller.to_string()]);
+            assert!(text.contains("# Made by: ftsmc tune"), "{scenario}/{controller}: no command recorded");
+            let (file, base) = ftsmc_sim::scenario::resolve::built_in(scenario).unwrap();
+            let base = Scenario::from_toml_str(base, file).unwrap();
+            assert_ne!(tuned.gains, base.gains, "{scenario}/{controller}: nothing tuned");
+            assert_eq!(tuned.plant, base.plant);
+            assert_eq!(tuned.duration, base.duration);
+        }
+    }
+}

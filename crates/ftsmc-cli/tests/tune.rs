@@ -1,0 +1,116 @@
+//! `ftsmc tune` end to end, with a tiny budget on a short realistic
+//! scenario: the files it writes, that two controllers tuned into one
+//! `--out` keep both results, and that the tuned file does not depend on
+//! the thread count.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+/// A 1.5 s realistic scenario 2 with 2 training flights per candidate, 4
+/// candidates per generation and 3 held-out flights per gain set.
+const TINY: &str = r#"extends = "realistic-scenario-2"
+name = "tiny-tune"
+duration = 1.5
+
+[tune]
+runs = 2
+validation_runs = 3
+population = 4
+"#;
+
+/// Start + 3 generations of 4 candidates, 2 flights each.
+const BUDGET: &str = "26";
+
+fn ftsmc(args: &[&str], cwd: &Path) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_ftsmc")).args(args).current_dir(cwd).output().expect("binary runs")
+}
+
+fn ok(args: &[&str], cwd: &Path) {
+    let out = ftsmc(args, cwd);
+    assert!(out.status.success(), "ftsmc {args:?}: {}", String::from_utf8_lossy(&out.stderr));
+}
+
+fn temp_dir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("ftsmc-tune-cli-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    std::fs::write(d.join("tiny.toml"), TINY).unwrap();
+    d
+}
+
+fn tune(dir: &Path, controller: &str, threads: &str, out: &str, figures: bool) {
+    let mut args = vec!["tune", "tiny.toml", "-c", controller, "--budget", BUDGET, "--threads", threads, "--out", out];
+    if !figures {
+        args.push("--no-figures");
+    }
+    ok(&args, dir);
+}
+
+/// The tuned file without its `# Made by:` line (which names `--out` and
+/// `--threads`): the gains and statistics must be equal.
+fn tuned_without_command(path: &Path) -> String {
+    std::fs::read_to_string(path)
+        .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+        .lines()
+        .filter(|l| !l.starts_with("# Made by:"))
+        .collect::<Vec<_>>()
+        .join("\n")
+}
+
+#[test]
+fn two_controllers_tuned_into_one_folder_keep_both_results() {
+    let dir = temp_dir("two");
+    tune(&dir, "pid", "2", "out", true);
+    tune(&dir, "se3", "2", "out", false);
+    let folder = dir.join("out/tiny-tune");
+    for c in ["pid", "se3"] {
+        for f in ["tuned.toml", "history.csv", "summary.json", "scenario.toml"] {
+            assert!(folder.join(format!("{c}.{f}")).is_file(), "{c}.{f} missing after tuning pid then se3");
+        }
+        let manifest = std::fs::read_to_string(folder.join(format!(".ftsmc-tune-{c}.manifest"))).unwrap();
+        assert!(manifest.lines().any(|l| l == format!("{c}.tuned.toml")), "{c}'s manifest: {manifest}");
+        assert!(
+            manifest.lines().all(|l| l.starts_with(&format!("{c}.")) || l.starts_with(".ftsmc-")),
+            "{c} owns only its files: {manifest}"
+        );
+    }
+    // PID's figure survives SE(3)'s tune without figures.
+    assert!(folder.join("pid.convergence.svg").is_file() && folder.join("pid.convergence.png").is_file());
+    assert!(!folder.join("se3.convergence.svg").exists());
+
+    // Each tuned file is a scenario of its own controller that extends the input.
+    let pid = std::fs::read_to_string(folder.join("pid.tuned.toml")).unwrap();
+    assert!(pid.contains("controllers = [\"pid\"]") && pid.contains("tiny.toml"), "{pid}");
+    let se3 = std::fs::read_to_string(folder.join("se3.tuned.toml")).unwrap();
+    assert!(se3.contains("controllers = [\"se3\"]"), "{se3}");
+
+    // History: one row per evaluated candidate (start + 3 × 4), the summary names the controller.
+    let history = std::fs::read_to_string(folder.join("pid.history.csv")).unwrap();
+    assert_eq!(history.lines().count(), 1 + 1 + 3 * 4, "{history}");
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(folder.join("se3.summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["controller"], "se3");
+    assert_eq!(summary["held_out"]["tuned"]["runs"], 3);
+
+    // Re-tuning PID replaces PID's files and keeps SE(3)'s.
+    let se3_before = std::fs::read(folder.join("se3.summary.json")).unwrap();
+    tune(&dir, "pid", "1", "out", false);
+    assert_eq!(std::fs::read(folder.join("se3.summary.json")).unwrap(), se3_before);
+    assert!(!folder.join("pid.convergence.svg").exists(), "pid's old figure is pid's to remove");
+    assert!(folder.join("pid.tuned.toml").is_file());
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn one_and_two_threads_give_the_same_tuned_file() {
+    let dir = temp_dir("threads");
+    tune(&dir, "ftaftsmc", "1", "one", false);
+    tune(&dir, "ftaftsmc", "2", "two", false);
+    let one = tuned_without_command(&dir.join("one/tiny-tune/ftaftsmc.tuned.toml"));
+    let two = tuned_without_command(&dir.join("two/tiny-tune/ftaftsmc.tuned.toml"));
+    assert_eq!(one, two);
+    let h1 = std::fs::read(dir.join("one/tiny-tune/ftaftsmc.history.csv")).unwrap();
+    let h2 = std::fs::read(dir.join("two/tiny-tune/ftaftsmc.history.csv")).unwrap();
+    assert_eq!(h1, h2, "history.csv differs between 1 and 2 threads");
+    let _ = std::fs::remove_dir_all(&dir);
+}

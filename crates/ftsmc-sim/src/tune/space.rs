@@ -1,0 +1,248 @@
+//! The search space of a tune: the controller's declared parameters
+//! (`crate::controllers::tunable`) narrowed or extended by `[tune]`, their
+//! normalised coordinates for CMA-ES, and how a point becomes a scenario.
+
+use crate::controllers::tunable::{parameters, TuneParam, TuneTarget};
+use crate::scenario::tune_section::TuneSection;
+use crate::scenario::Scenario;
+
+/// What a dimension changes.
+#[derive(Clone, Debug)]
+pub enum DimKind {
+    /// A declared parameter: a factor on the scenario's gains.
+    Declared(TuneParam),
+    /// `[[tune.extra]]`: an absolute value at a dotted key.
+    Key(String),
+}
+
+/// One searched dimension.
+#[derive(Clone, Debug)]
+pub struct Dim {
+    /// Name: the declared name, or the dotted key of an extra parameter.
+    pub name: String,
+    /// Smallest value searched.
+    pub low: f64,
+    /// Largest value searched.
+    pub high: f64,
+    /// Searched on `ln(value)`.
+    pub log: bool,
+    /// Start value: 1 for a factor, the scenario's value for a key.
+    pub start: f64,
+    /// What it changes.
+    pub kind: DimKind,
+}
+
+impl Dim {
+    fn to_unit(&self, v: f64) -> f64 {
+        let t = |x: f64| if self.log { x.ln() } else { x };
+        (t(v) - t(self.low)) / (t(self.high) - t(self.low))
+    }
+
+    fn value_at(&self, u: f64) -> f64 {
+        let u = u.clamp(0.0, 1.0);
+        if self.log {
+            (self.low.ln() + u * (self.high.ln() - self.low.ln())).exp()
+        } else {
+            self.low + u * (self.high - self.low)
+        }
+    }
+}
+
+/// The search space of one controller on one scenario.
+#[derive(Clone, Debug)]
+pub struct Space {
+    /// The dimensions, declared ones first (declaration order), then extras.
+    pub dims: Vec<Dim>,
+}
+
+impl Space {
+    /// The declared parameters of `controller`, narrowed, re-bounded and
+    /// extended by `section`; extra keys must hold a number in `base`.
+    pub fn new(controller: &str, base: &Scenario, section: &TuneSection) -> Result<Self, String> {
+        let declared =
+            parameters(controller).map_err(|known| format!("unknown controller `{controller}` (known: {known})"))?;
+        let known = || declared.iter().map(|p| p.name).collect::<Vec<_>>().join(", ");
+        let chosen: Vec<TuneParam> = match &section.parameters {
+            None => declared.clone(),
+            Some(names) => {
+                let mut out = Vec::new();
+                for n in names {
+                    let p = declared.iter().find(|p| p.name == n).ok_or_else(|| {
+                        format!("`tune.parameters`: `{n}` is not a parameter of {controller} (known: {})", known())
+                    })?;
+                    out.push(*p);
+                }
+                out
+            }
+        };
+        for name in section.bounds.keys() {
+            if !declared.iter().any(|p| p.name == name) {
+                return Err(format!("`tune.bounds.{name}`: not a parameter of {controller} (known: {})", known()));
+            }
+        }
+        let mut dims: Vec<Dim> = chosen
+            .into_iter()
+            .map(|p| {
+                let [low, high] = section.bounds.get(p.name).copied().unwrap_or([p.low, p.high]);
+                Dim { name: p.name.to_string(), low, high, log: true, start: 1.0, kind: DimKind::Declared(p) }
+            })
+            .collect();
+        if !section.extra.is_empty() {
+            let table = scenario_table(base)?;
+            for (i, e) in section.extra.iter().enumerate() {
+                let v = get_number(&table, &e.key).ok_or_else(|| {
+                    format!("`tune.extra[{i}].key` = \"{}\": not a numeric key of the scenario", e.key)
+                })?;
+                dims.push(Dim {
+                    name: e.key.clone(),
+                    low: e.low,
+                    high: e.high,
+                    log: e.log,
+                    start: v.clamp(e.low, e.high),
+                    kind: DimKind::Key(e.key.clone()),
+                });
+            }
+        }
+        for d in &dims {
+            if !(d.start >= d.low && d.start <= d.high) {
+                return Err(format!(
+                    "`tune.bounds.{}` = [{}, {}] does not contain the start {}",
+                    d.name, d.low, d.high, d.start
+                ));
+            }
+        }
+        if dims.is_empty() {
+            return Err(format!(
+                "nothing to tune for {controller}: `tune.parameters` is empty and there is no `tune.extra`"
+            ));
+        }
+        Ok(Self { dims })
+    }
+
+    /// The start point in normalised coordinates (each dimension in [0, 1]).
+    pub fn start_unit(&self) -> Vec<f64> {
+        self.dims.iter().map(|d| d.to_unit(d.start)).collect()
+    }
+
+    /// Parameter values of a normalised point (clamped into the bounds).
+    pub fn values(&self, unit: &[f64]) -> Vec<f64> {
+        self.dims.iter().zip(unit).map(|(d, u)| d.value_at(*u)).collect()
+    }
+
+    /// The start values (1 for factors, the scenario's for keys).
+    pub fn start_values(&self) -> Vec<f64> {
+        self.dims.iter().map(|d| d.start).collect()
+    }
+
+    /// `base` with the parameter `values` applied (factors on `base`'s own
+    /// gains, then extra keys), validated; `Err` names the first invalid gain.
+    pub fn apply(&self, base: &Scenario, values: &[f64]) -> Result<Scenario, String> {
+        let mut s = base.clone();
+        {
+            let mut target = TuneTarget { gains: &mut s.gains, cascade: &mut s.cascade };
+            for (d, v) in self.dims.iter().zip(values) {
+                if let DimKind::Declared(p) = &d.kind {
+                    (p.apply)(&mut target, *v);
+                }
+            }
+        }
+        let keys: Vec<(&str, f64)> = self
+            .dims
+            .iter()
+            .zip(values)
+            .filter_map(|(d, v)| match &d.kind {
+                DimKind::Key(k) => Some((k.as_str(), *v)),
+                DimKind::Declared(_) => None,
+            })
+            .collect();
+        if !keys.is_empty() {
+            let mut table = scenario_table(&s)?;
+            for (k, v) in keys {
+                set_number(&mut table, k, v).ok_or_else(|| format!("`{k}`: not a numeric key of the scenario"))?;
+            }
+            let text = toml::to_string(&table).map_err(|e| e.to_string())?;
+            s = Scenario::from_toml_str(&text, "tune candidate").map_err(|e| e.to_string())?;
+        }
+        s.gains.check().map_err(|e| format!("`{}` = {} is invalid (expected {})", e.key, e.value, e.expected))?;
+        s.cascade
+            .check()
+            .map_err(|e| format!("`cascade.{}` = {} is invalid (expected {})", e.field, e.value, e.expected))?;
+        Ok(s)
+    }
+}
+
+/// The scenario as a TOML table (every default filled in).
+pub fn scenario_table(s: &Scenario) -> Result<toml::Table, String> {
+    let text = s.to_toml().map_err(|e| e.to_string())?;
+    text.parse::<toml::Table>().map_err(|e| e.to_string())
+}
+
+fn walk<'a>(table: &'a toml::Table, key: &str) -> Option<&'a toml::Value> {
+    let mut parts = key.split('.');
+    let mut v = table.get(parts.next()?)?;
+    for p in parts {
+        v = match v {
+            toml::Value::Table(t) => t.get(p)?,
+            toml::Value::Array(a) => a.get(p.parse::<usize>().ok()?)?,
+            _ => return None,
+        };
+    }
+    Some(v)
+}
+
+/// The number at dotted `key` (`a.b.0` indexes an array).
+pub fn get_number(table: &toml::Table, key: &str) -> Option<f64> {
+    match walk(table, key)? {
+        toml::Value::Float(f) => Some(*f),
+        toml::Value::Integer(i) => Some(*i as f64),
+        _ => None,
+    }
+}
+
+/// Set the number at dotted `key`; `None` when it is not a number there.
+pub fn set_number(table: &mut toml::Table, key: &str, value: f64) -> Option<()> {
+    let parts: Vec<&str> = key.split('.').collect();
+    let (first, rest) = parts.split_first()?;
+    set_in(table.get_mut(*first)?, rest, value)
+}
+
+fn set_in(v: &mut toml::Value, rest: &[&str], value: f64) -> Option<()> {
+    match rest.split_first() {
+        None => match v {
+            toml::Value::Float(_) | toml::Value::Integer(_) => {
+                *v = toml::Value::Float(value);
+                Some(())
+            }
+            _ => None,
+        },
+        Some((p, tail)) => {
+            let next = match v {
+                toml::Value::Table(t) => t.get_mut(*p)?,
+                toml::Value::Array(a) => a.get_mut(p.parse::<usize>().ok()?)?,
+                _ => return None,
+            };
+            set_in(next, tail, value)
+        }
+    }
+}
+
+/// The keys of `tuned` that differ from `base`, as a table of only those
+/// (tables recursed; arrays and other values compared whole).
+pub fn changed(base: &toml::Table, tuned: &toml::Table) -> toml::Table {
+    let mut out = toml::Table::new();
+    for (k, v) in tuned {
+        match (base.get(k), v) {
+            (Some(toml::Value::Table(b)), toml::Value::Table(t)) => {
+                let sub = changed(b, t);
+                if !sub.is_empty() {
+                    out.insert(k.clone(), toml::Value::Table(sub));
+                }
+            }
+            (Some(b), v) if b == v => {}
+            (_, v) => {
+                out.insert(k.clone(), v.clone());
+            }
+        }
+    }
+    out
+}

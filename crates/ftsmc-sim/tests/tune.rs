@@ -1,0 +1,211 @@
+//! `ftsmc tune`: the time-scaling maps, the parameter maps through the
+//! tuned TOML, held-out seeds, and thread-count independence.
+
+use ftsmc_core::ftaftsmc::{FtaftsmcAxis, FtaftsmcGains};
+use ftsmc_core::law::AxisLaw;
+use ftsmc_core::ranftsmc::{RanftsmcAxis, RanftsmcGains};
+use ftsmc_core::tsm_sta::{TsmStaAxis, TsmStaGains};
+use ftsmc_sim::controllers::{ftaftsmc, ranftsmc, tsm_sta};
+use ftsmc_sim::scenario::tune_section::TuneSection;
+use ftsmc_sim::tune::{
+    evaluate, held_out_indices, judge, training_indices, tune, tune_with, tuned_toml, FlightStats, TuneOptions,
+};
+use ftsmc_sim::Scenario;
+
+/// Fly `ë = v` with `law` sampled every `dt` (exact zero-order-hold
+/// integration of the double integrator) from `(e0, ė0)` for `steps`
+/// steps; `(e, ė, S)` after every step (`S` of the update that led there).
+fn fly<L: AxisLaw>(mut law: L, e0: f64, ed0: f64, dt: f64, steps: usize) -> Vec<(f64, f64, f64)> {
+    let (mut e, mut ed) = (e0, ed0);
+    (0..steps)
+        .map(|_| {
+            let v = law.update(e, ed, dt);
+            e += dt * ed + 0.5 * dt * dt * v;
+            ed += dt * v;
+            (e, ed, law.sliding_variable())
+        })
+        .collect()
+}
+
+/// The law with gains scaled by `a` flies `e(a t)`: the same states after
+/// the same number of steps of `dt / a`, with ė × a. While the loop
+/// reaches the surface the two agree to 1e-9 of the trajectory's size
+/// (rounding only); once it slides, the discrete chattering around S = 0
+/// (where `sig^p2` has an infinite slope) amplifies rounding, so the rest
+/// is held to 1e-4 — a wrong map is off by 1e-2 or more (checked below).
+fn assert_time_scaled<L: AxisLaw>(name: &str, plain: L, scaled: L, a: f64) {
+    let (e0, ed0, dt, steps) = (0.8, -0.3, 1e-3, 2000);
+    let slow = fly(plain, e0, ed0, dt, steps);
+    let fast = fly(scaled, e0, a * ed0, dt / a, steps);
+    let scale = slow.iter().map(|(e, ed, _)| e.abs().max(ed.abs())).fold(0.0, f64::max);
+    let s0 = slow[0].2.abs();
+    let mut reaching = true;
+    for (k, ((e, ed, s), (fe, fed, _))) in slow.iter().zip(&fast).enumerate() {
+        reaching &= s.abs() > 1e-3 * s0;
+        let tol = if reaching { 1e-9 } else { 1e-4 } * scale;
+        assert!((e - fe).abs() <= tol, "{name}, a = {a}, step {k}: e {e} vs {fe}");
+        assert!((a * ed - fed).abs() <= tol * a, "{name}, a = {a}, step {k}: a ė {} vs {fed}", a * ed);
+    }
+    assert!((slow[steps - 1].0 - e0).abs() > 1e-2, "{name}: the channel did not move");
+}
+
+#[test]
+fn ftaftsmc_time_scaling_gives_time_scaled_trajectories() {
+    let with_delta = FtaftsmcGains { delta_hat0: 0.3, ..FtaftsmcGains::PAPER_Z };
+    for (name, g) in [
+        ("xy", FtaftsmcGains::PAPER_XY),
+        ("z", with_delta),
+        ("roll-pitch", FtaftsmcGains::PAPER_ROLL_PITCH),
+        ("yaw", FtaftsmcGains::PAPER_YAW),
+    ] {
+        for a in [0.37, 2.5, 7.0] {
+            assert_time_scaled(name, FtaftsmcAxis::new(g), FtaftsmcAxis::new(ftaftsmc::time_scaled(&g, a)), a);
+        }
+    }
+    // Scaling only λ, γ, η (not the reaching law) is not a time scaling.
+    let g = FtaftsmcGains::PAPER_XY;
+    let partial = FtaftsmcGains { lambda: g.lambda * 2.5, gamma: g.gamma * 2.5, eta: g.eta * 2.5, ..g };
+    let slow = fly(FtaftsmcAxis::new(g), 0.8, -0.3, 1e-3, 2000);
+    let fast = fly(FtaftsmcAxis::new(partial), 0.8, -0.75, 1e-3 / 2.5, 2000);
+    let worst = slow.iter().zip(&fast).map(|(s, f)| (s.0 - f.0).abs()).fold(0.0, f64::max);
+    assert!(worst > 1e-2, "{worst}");
+}
+
+#[test]
+fn ranftsmc_time_scaling_gives_time_scaled_trajectories() {
+    let smooth = RanftsmcGains {
+        sign_smoothing: 0.05,
+        a0_hat0: 0.2,
+        a1_hat0: 0.1,
+        a2_hat0: 0.3,
+        ..RanftsmcGains::PAPER_POSITION
+    };
+    for (name, g) in [
+        ("smoothed position", smooth),
+        ("attitude", RanftsmcGains { sign_smoothing: 0.02, ..RanftsmcGains::PAPER_ATTITUDE }),
+    ] {
+        for a in [0.5, 3.0] {
+            assert_time_scaled(name, RanftsmcAxis::new(g), RanftsmcAxis::new(ranftsmc::time_scaled(&g, a)), a);
+        }
+    }
+}
+
+#[test]
+fn tsm_sta_time_scaling_gives_time_scaled_trajectories() {
+    for (name, g) in [
+        ("position", TsmStaGains { sign_smoothing: 0.05, ..TsmStaGains::BASE_POSITION }),
+        ("position, a = 1 base", TsmStaGains { sign_smoothing: 0.01, k1: 4.0, k2: 2.0, ..TsmStaGains::BASE_POSITION }),
+    ] {
+        for a in [0.5, 3.0] {
+            assert_time_scaled(name, TsmStaAxis::new(g), TsmStaAxis::new(tsm_sta::time_scaled(&g, a)), a);
+        }
+    }
+}
+
+#[test]
+fn held_out_seeds_never_meet_training_seeds() {
+    use ftsmc_sim::batch::montecarlo::run_seed;
+    for master in [0u64, 1, 7, 42, u64::MAX] {
+        let train: std::collections::HashSet<u64> =
+            training_indices(50).into_iter().map(|i| run_seed(master, i)).collect();
+        let held = held_out_indices(master, 50, 300);
+        assert_eq!(held.len(), 300);
+        assert!(held.iter().all(|i| !training_indices(50).contains(i)));
+        assert!(held.iter().all(|&i| !train.contains(&run_seed(master, i))), "seed {master}");
+    }
+}
+
+/// A short realistic scenario and a tiny tune of it.
+fn tiny(controller: &str, threads: usize) -> (Scenario, ftsmc_sim::tune::TuneResult) {
+    let mut s =
+        Scenario::from_toml_str(ftsmc_sim::scenario::REALISTIC_SCENARIO_2, "realistic-scenario-2.toml").unwrap();
+    s.duration = 1.5;
+    s.tune = Some(TuneSection { runs: 2, validation_runs: 3, population: Some(4), ..TuneSection::default() });
+    let options = TuneOptions { controller: controller.to_string(), budget: 2 * (1 + 4 * 3), seed: 5 };
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+    let r = pool.install(|| tune(&s, &options, &|_| {})).unwrap();
+    (s, r)
+}
+
+/// What `ftsmc.tune(..., client=...)` does: each generation's candidates
+/// sent as TOML text in batches of at most 3 to a "worker" that rebuilds
+/// them and evaluates them, the statistics sent back as numbers. The
+/// result equals the local tune's.
+#[test]
+fn a_tune_evaluated_in_batches_through_toml_equals_the_local_tune() {
+    let (s, local) = tiny("tsm-sta", 2);
+    let options = TuneOptions { controller: "tsm-sta".into(), budget: 2 * (1 + 4 * 3), seed: 5 };
+    let calls = std::sync::atomic::AtomicUsize::new(0);
+    let remote = |scenarios: &[Scenario], indices: &[u64]| -> Result<Vec<FlightStats>, String> {
+        calls.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        let mut out = Vec::new();
+        for batch in scenarios.chunks(3) {
+            let texts: Vec<String> = batch.iter().map(|c| c.to_toml().unwrap()).collect();
+            let rebuilt: Vec<Scenario> =
+                texts.iter().map(|t| Scenario::from_toml_str(t, "sent.toml").unwrap()).collect();
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
+            let stats = pool.install(|| evaluate(&rebuilt, "tsm-sta", 5, indices, &|_| {}))?;
+            out.extend(stats.iter().map(|st| FlightStats::from_values(&st.to_values()).unwrap()));
+        }
+        Ok(out)
+    };
+    let r = tune_with(&s, &options, &remote).unwrap();
+    assert_eq!(calls.into_inner(), 1 + 3 + 1, "start, three generations, held-out");
+    assert_eq!(format!("{:?}", r.history), format!("{:?}", local.history));
+    assert_eq!(r.tuned, local.tuned);
+    assert_eq!(format!("{:?}", r.held_out), format!("{:?}", local.held_out));
+    // A wrong count from the evaluator is an error, not a silently shorter history.
+    let short = |_: &[Scenario], _: &[u64]| -> Result<Vec<FlightStats>, String> { Ok(Vec::new()) };
+    assert!(tune_with(&s, &options, &short).unwrap_err().contains("returned 0 statistics for 1"));
+    assert!(FlightStats::from_values(&[1.5; FlightStats::VALUES]).is_none());
+}
+
+#[test]
+fn a_tiny_tune_is_identical_with_one_and_two_threads() {
+    let (_, one) = tiny("ftaftsmc", 1);
+    let (_, two) = tiny("ftaftsmc", 2);
+    // Debug strings: NaN statistics (no completed run) compare equal there.
+    assert_eq!(format!("{:?}", one.history), format!("{:?}", two.history));
+    assert_eq!(one.tuned, two.tuned);
+    assert_eq!(format!("{:?}", one.held_out), format!("{:?}", two.held_out));
+    assert_eq!(one.history.len(), 1 + 3 * 4);
+    assert_eq!(one.training_flights, 2 * 13);
+    let a = tuned_toml(&one, "realistic-scenario-2", "test").unwrap();
+    let b = tuned_toml(&two, "realistic-scenario-2", "test").unwrap();
+    assert_eq!(a, b);
+    // The search moved: not every candidate is the start.
+    assert!(one.history.iter().any(|h| h.values != one.history[0].values));
+    // `judge` (what `reproduce` flies for the committed files) gives the
+    // tune's own held-out statistics: the same held-out draws.
+    let held = one.held_out.unwrap();
+    let judged = judge(&one.tuned, "ftaftsmc", 5, 2, 3, &|_| {}).unwrap();
+    assert_eq!(format!("{judged:?}"), format!("{:?}", held.tuned));
+    let judged = judge(&one.start, "ftaftsmc", 5, 2, 3, &|_| {}).unwrap();
+    assert_eq!(format!("{judged:?}"), format!("{:?}", held.start));
+}
+
+#[test]
+fn the_tuned_toml_round_trips_the_parameter_map() {
+    for controller in ["pid", "se3", "tsm-sta"] {
+        let (base, mut r) = tiny(controller, 2);
+        // Whatever the tiny search found, map a point away from the start
+        // (every parameter moved) into the result, as a tune would.
+        let values = r.space.values(&vec![0.63; r.space.dims.len()]);
+        r.tuned = Scenario { controllers: vec![controller.to_string()], ..r.space.apply(&r.start, &values).unwrap() };
+        let best = r.best;
+        r.history[best].values = values;
+        let text = tuned_toml(&r, "base.toml", "test").unwrap();
+        let dir = std::env::temp_dir().join(format!("ftsmc-tune-test-{}-{controller}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        std::fs::write(dir.join("base.toml"), base.to_toml().unwrap()).unwrap();
+        std::fs::write(dir.join("tuned.toml"), &text).unwrap();
+        let loaded = Scenario::from_file(&dir.join("tuned.toml")).unwrap_or_else(|e| panic!("{e}\n{text}"));
+        let expected = Scenario { name: format!("{}-{controller}-tuned", base.name), ..r.tuned.clone() };
+        assert_eq!(loaded, expected, "{controller}\n{text}");
+        assert_ne!(r.tuned.gains, base.gains, "{controller}: the tune changed nothing");
+        // Only gain (and cascade) keys are written below the header.
+        let body: Vec<&str> = text.lines().filter(|l| l.starts_with('[')).collect();
+        assert!(body.iter().all(|l| l.starts_with(&format!("[{controller}")) || l.starts_with("[cascade")), "{body:?}");
+        std::fs::remove_dir_all(&dir).ok();
+    }
+}

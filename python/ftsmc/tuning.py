@@ -1,0 +1,81 @@
+"""``ftsmc.tune``: robust gains for a controller on a scenario (``ftsmc tune`` from Python).
+
+The search, its cost and the held-out validation are ftsmc's Rust code, the
+same as the ``ftsmc tune`` command's (docs/tuning.md); the same scenario,
+controller, budget and seed give the same result whatever ``threads`` is.
+"""
+
+from __future__ import annotations
+
+import json
+from typing import Any, Dict, List, NamedTuple, Optional
+
+from . import _ftsmc
+from ._ftsmc import Scenario
+
+
+class Tuned(NamedTuple):
+    """The result of :func:`tune`."""
+
+    scenario: Scenario
+    """The input scenario with the tuned gains applied (``controllers`` = the tuned one)."""
+    toml: str
+    """The tuned scenario file: ``extends`` the input, sets only the tuned gains, records the cost and statistics."""
+    summary: Dict[str, Any]
+    """Parameters, best candidate, every candidate (``history``), training and held-out statistics (NaN as None)."""
+
+
+def tune(
+    scenario: Scenario,
+    controller: str,
+    budget: int = 2000,
+    seed: Optional[int] = None,
+    threads: Optional[int] = None,
+    extends: Optional[str] = None,
+    client: Any = None,
+    batch: Optional[int] = None,
+) -> Tuned:
+    """Tune ``controller``'s declared gains on ``scenario`` by CMA-ES (``ftsmc tune``).
+
+    ``budget`` training flights (the start's included), ``seed`` for the
+    search and the Monte Carlo draws (default: the scenario's ``seed``),
+    ``threads`` workers (default: all cores), the GIL released. The
+    scenario's ``[tune]`` section narrows the parameters and sets the cost
+    weights. ``extends`` is what the returned TOML extends (default: the
+    scenario's name, right for a built-in scenario). Raises ``ValueError``
+    for an unknown controller, a budget below one generation, or a bad
+    ``[tune]`` value.
+
+    ``client``: a ``dask.distributed.Client``. The CMA-ES search stays in
+    this process; each generation's candidates (and the held-out flights)
+    are flown as Dask tasks of ``batch`` candidates each (default: one
+    candidate per task), each task the pure module-level objective
+    ``_ftsmc.tune_evaluate`` on ``threads`` worker threads (default 1),
+    gathered in order by :func:`ftsmc.dask.map_batches`. The result equals
+    the local call's: every candidate flies the same draws either way.
+    """
+    if client is None:
+        tuned, text, summary = _ftsmc.tune_native(scenario, controller, budget, seed, threads, extends)
+        return Tuned(tuned, text, json.loads(summary))
+    if batch is not None and batch < 1:
+        raise ValueError(f"batch must be at least 1, got {batch}")
+    from .dask import map_batches
+
+    master = scenario.seed if seed is None else seed
+    per_task = 1 if batch is None else batch
+    task_threads = 1 if threads is None else threads
+
+    def evaluator(tomls: List[str], indices: List[int]) -> List[List[float]]:
+        batches = [tomls[k : k + per_task] for k in range(0, len(tomls), per_task)]
+        results = map_batches(client, _evaluate_batch, batches, controller, master, indices, task_threads)
+        return [stats for result in results for stats in result]
+
+    tuned, text, summary = _ftsmc.tune_native(scenario, controller, budget, seed, threads, extends, evaluator)
+    return Tuned(tuned, text, json.loads(summary))
+
+
+def _evaluate_batch(
+    controller: str, master: int, indices: List[int], threads: int, tomls: List[str]
+) -> List[List[float]]:
+    """One Dask task: the statistics of a batch of candidates (on a worker)."""
+    return _ftsmc.tune_evaluate(tomls, controller, master, indices, threads)

@@ -1,0 +1,74 @@
+"""ftsmc.tune: the ``ftsmc tune`` search from Python, thread-independent,
+with a tuned TOML that loads back to the tuned scenario."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+import ftsmc
+
+
+def tiny() -> ftsmc.Scenario:
+    return ftsmc.Scenario.builtin("realistic-scenario-2").with_overrides(
+        {"duration": 1.5, "tune": {"runs": 2, "validation_runs": 3, "population": 4}}
+    )
+
+
+def test_a_tiny_tune_is_the_same_on_one_and_two_threads(tmp_path: Path) -> None:
+    s = tiny()
+    one = ftsmc.tune(s, "pid", budget=2 * 9, seed=3, threads=1, extends="base.toml")
+    two = ftsmc.tune(s, "pid", budget=2 * 9, seed=3, threads=2, extends="base.toml")
+    assert one.toml == two.toml
+    assert one.scenario == two.scenario
+    assert len(one.summary["history"]) == 1 + 2 * 4
+    assert one.summary["held_out"]["tuned"]["runs"] == 3
+    # The tuned file extends the input and loads back to the tuned gains.
+    (tmp_path / "base.toml").write_text(s.to_toml())
+    (tmp_path / "tuned.toml").write_text(one.toml)
+    loaded = ftsmc.Scenario.from_file(tmp_path / "tuned.toml")
+    assert loaded == one.scenario.with_overrides({"name": loaded.name})
+
+
+def test_bad_input_raises_value_error() -> None:
+    with pytest.raises(ValueError, match="unknown controller"):
+        ftsmc.tune(tiny(), "pidd", budget=100)
+    with pytest.raises(ValueError, match="budget"):
+        ftsmc.tune(tiny(), "pid", budget=3)
+    with pytest.raises(ValueError, match="tune.sigma"):
+        tiny().with_overrides({"tune.sigma": 2.0})
+
+
+def test_a_tune_through_dask_equals_the_local_tune() -> None:
+    distributed = pytest.importorskip("distributed")
+    import logging
+
+    s = tiny()
+    local = ftsmc.tune(s, "tsm-sta", budget=2 * 9, seed=3, threads=1, extends="base.toml")
+    cluster = distributed.LocalCluster(
+        n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None, silence_logs=logging.CRITICAL
+    )
+    client = distributed.Client(cluster)
+    try:
+        remote = ftsmc.tune(s, "tsm-sta", budget=2 * 9, seed=3, extends="base.toml", client=client)
+        batched = ftsmc.tune(s, "tsm-sta", budget=2 * 9, seed=3, extends="base.toml", client=client, batch=3)
+    finally:
+        client.close()
+        cluster.close()
+    for r in (remote, batched):
+        assert r.toml == local.toml
+        assert r.scenario == local.scenario
+        # NaN statistics (no completed run) are None in the JSON: equal either way.
+        assert r.summary == local.summary
+    with pytest.raises(ValueError, match="batch"):
+        ftsmc.tune(s, "tsm-sta", budget=2 * 9, client=object(), batch=0)
+
+
+def test_the_dask_objective_refuses_bad_input() -> None:
+    with pytest.raises(ValueError, match="unknown controller"):
+        ftsmc._ftsmc.tune_evaluate([tiny().to_toml()], "pidd", 1, [0])
+    with pytest.raises(ValueError, match="candidate 0"):
+        ftsmc._ftsmc.tune_evaluate(["duration = -1"], "pid", 1, [0])
+    stats = ftsmc._ftsmc.tune_evaluate([tiny().to_toml()], "pid", 3, [0, 1])
+    assert len(stats) == 1 and len(stats[0]) == 13 and stats[0][0] == 2
