@@ -185,7 +185,9 @@ pub fn run(
     });
     dir.write(format!("{controller}.summary.json"), serde_json::to_string_pretty(&summary)?.as_bytes())?;
     if figures {
-        write_convergence(&result, &dir.path().join(format!("{controller}.convergence")))?;
+        // The stem carries an extension of its own: `write_figure` swaps the
+        // last one for svg/png, which must not eat `.convergence`.
+        write_convergence(&result, &dir.path().join(format!("{controller}.convergence.svg")))?;
     }
     dir.commit()?;
 
