@@ -20,10 +20,11 @@ from typing import TYPE_CHECKING, Any, Dict, NamedTuple, Optional, Protocol, Seq
 
 import numpy as np
 
-from . import _ftsmc
+from . import _ftsmc, _progress
 from ._ftsmc import Scenario
 
 if TYPE_CHECKING:
+    import matplotlib.figure
     import pandas
 
 __all__ = [
@@ -191,6 +192,13 @@ class Run:
         """The time series exactly as the CLI writes ``<controller>.csv``."""
         return self._data.csv()
 
+    def plot(self, what: str = "position") -> matplotlib.figure.Figure:
+        """A matplotlib figure of this run: ``"position"``, ``"attitude"`` or
+        ``"rotors"`` (see :mod:`ftsmc.plot`)."""
+        from . import plot
+
+        return plot.run(self, what)
+
     def __repr__(self) -> str:
         return f"Run(controller={self.controller!r}, scenario={self.scenario!r}, exit={self.exit.text!r})"
 
@@ -220,6 +228,7 @@ def montecarlo(
     threads: Optional[int] = None,
     client: Optional[Any] = None,
     shards: Optional[int] = None,
+    progress: _progress.ProgressArg = None,
 ) -> pandas.DataFrame:
     """A Monte Carlo batch: the rows of the CLI's ``runs.csv`` as a DataFrame.
 
@@ -229,7 +238,10 @@ def montecarlo(
     workers (default: all cores; the rows do not depend on it), with the
     GIL released. Same rows and values as ``ftsmc montecarlo``: ``run`` and
     ``seed`` are uint64, empty CSV cells are NaN, ``completed``/``success``/
-    ``crashed`` are bool.
+    ``crashed`` are bool. ``progress`` (local batches): a tqdm bar (shown
+    after 1 s) when the session is interactive and tqdm is installed
+    (``None``), always (``True``), never (``False``), or a callable
+    ``progress(done, total)`` (control steps), called about every 0.2 s.
 
     With ``client`` (a ``dask.distributed.Client``; ``pip install
     "./python[dask]"``) the batch is flown as ``shards`` Dask tasks of
@@ -259,7 +271,12 @@ def montecarlo(
     else:
         if shards is not None:
             raise ValueError("shards needs a Dask client (client=...)")
-        names, columns = _ftsmc.montecarlo_columns(scenario, runs, seed, names_arg, threads)
+        flights = runs * len(scenario.controllers if names_arg is None else names_arg)
+        cb = _progress.callback(progress, flights, f"{scenario.name} Monte Carlo")
+        try:
+            names, columns = _ftsmc.montecarlo_columns(scenario, runs, seed, names_arg, threads, None, cb)
+        finally:
+            _progress.close(cb)
     return pandas.DataFrame(dict(zip(names, columns)))
 
 

@@ -2,7 +2,7 @@
 # Keep in step with crates/ftsmc-py/src/*.rs; `mypy --strict` checks the
 # package and the examples against it.
 from os import PathLike
-from typing import Any, List, Mapping, Optional, Sequence, Tuple, Union
+from typing import Any, Callable, List, Mapping, Optional, Sequence, Tuple, Union
 
 import numpy as np
 import numpy.typing as npt
@@ -76,6 +76,7 @@ def montecarlo_columns(
     controllers: Optional[List[str]] = None,
     threads: Optional[int] = None,
     run_range: Optional[Tuple[int, int]] = None,
+    progress: Optional[Callable[[int, int], Any]] = None,
 ) -> Tuple[List[str], List[Union[npt.NDArray[Any], List[str]]]]: ...
 def controller_names() -> List[Tuple[str, str]]: ...
 def controller_label(name: str) -> str: ...

@@ -38,7 +38,17 @@ import numpy as np
 
 from . import Scenario, _ftsmc
 
-__all__ = ["Controller", "euler_rates", "euler_zyx", "plant_from_rotorpy", "quaternion_zyx", "scenario_for"]
+__all__ = [
+    "Controller",
+    "FromRotorPy",
+    "body_rates",
+    "euler_rates",
+    "euler_zyx",
+    "from_rotorpy",
+    "plant_from_rotorpy",
+    "quaternion_zyx",
+    "scenario_for",
+]
 
 
 def euler_zyx(q: Sequence[float]) -> Tuple[float, float, float]:
@@ -229,3 +239,66 @@ class Controller:
             control["cmd_motor_speeds"] = np.sign(speeds) * np.sqrt(np.abs(speeds))
         self._last = control
         return control
+
+
+def body_rates(phi: float, theta: float, euler_rates_: Sequence[float]) -> Tuple[float, float, float]:
+    """Body rates ``(p, q, r)`` (rad/s) from Euler-angle rates ``(φ̇, θ̇, ψ̇)``
+    (rad/s) at roll ``phi`` and pitch ``theta``: the inverse of
+    :func:`euler_rates`, ``ω = W(φ, θ)⁻¹ (φ̇, θ̇, ψ̇)``."""
+    dphi, dtheta, dpsi = (float(v) for v in euler_rates_)
+    s, c = math.sin(phi), math.cos(phi)
+    st, ct = math.sin(theta), math.cos(theta)
+    return dphi - st * dpsi, c * dtheta + s * ct * dpsi, -s * dtheta + c * ct * dpsi
+
+
+class FromRotorPy:
+    """A RotorPy controller flying in ftsmc's plant: the bridge the other way.
+
+    ``ftsmc.simulate(scenario, FromRotorPy(rotorpy_controller))`` calls
+    ``rotorpy_controller.update(t, state, flat_output)`` once per control
+    period with ftsmc's state and reference in RotorPy's conventions
+    (``q`` body-to-world ``[x, y, z, w]``, ``w`` body rates, rad/s;
+    ``flat_output`` position, velocity, acceleration, yaw and its rates;
+    jerk and snap are zero: ftsmc's references do not carry them) and flies
+    its ``cmd_thrust`` (N) and ``cmd_moment`` (body torques, N·m), i.e.
+    RotorPy's ``cmd_ctbm`` abstraction. The RotorPy controller should be
+    built for the vehicle the scenario flies (:func:`scenario_for` gives a
+    scenario for a RotorPy vehicle)."""
+
+    def __init__(self, controller: Any, name: Optional[str] = None) -> None:
+        self.controller = controller
+        self.name: str = name or f"rotorpy-{type(controller).__name__}"
+        self._t = 0.0
+
+    def update(self, state: Any, reference: Any, dt: float) -> Any:
+        """ftsmc's controller call: the command for one control period of ``dt`` s."""
+        from . import Command
+
+        phi, theta, psi = state.attitude
+        rotorpy_state = {
+            "x": np.asarray(state.position, dtype=float),
+            "v": np.asarray(state.velocity, dtype=float),
+            "q": quaternion_zyx(phi, theta, psi),
+            "w": np.asarray(body_rates(phi, theta, state.angular_rate)),
+            "wind": np.zeros(3),
+            "rotor_speeds": np.zeros(4),
+        }
+        flat_output = {
+            "x": np.asarray(reference.position, dtype=float),
+            "x_dot": np.asarray(reference.velocity, dtype=float),
+            "x_ddot": np.asarray(reference.acceleration, dtype=float),
+            "x_dddot": np.zeros(3),
+            "x_ddddot": np.zeros(3),
+            "yaw": float(reference.yaw),
+            "yaw_dot": float(reference.yaw_rate),
+            "yaw_ddot": float(reference.yaw_acceleration),
+        }
+        control = self.controller.update(self._t, rotorpy_state, flat_output)
+        self._t += dt
+        moment = np.asarray(control["cmd_moment"], dtype=float).reshape(3)
+        return Command(float(control["cmd_thrust"]), (float(moment[0]), float(moment[1]), float(moment[2])))
+
+
+def from_rotorpy(controller: Any, name: Optional[str] = None) -> FromRotorPy:
+    """:class:`FromRotorPy` around ``controller`` (a RotorPy controller object)."""
+    return FromRotorPy(controller, name)

@@ -1,28 +1,64 @@
-"""Shared fixtures: the `ftsmc` binary built from this repository."""
+"""Shared fixtures: the `ftsmc` binary built from this repository.
+
+The byte-identity tests compare the Python package against the CLI built
+from the same sources. With no environment variable set, the binary is found
+in Cargo's target folder (``$CARGO_TARGET_DIR`` or ``target/``, release then
+debug) or built there with ``cargo build --release -p ftsmc-cli`` (the
+release profile ``pip install ./python`` already compiled); an ``ftsmc`` on
+``PATH`` is the last resort (it may be another version).
+"""
 
 from __future__ import annotations
 
 import os
+import shutil
 import subprocess
 from pathlib import Path
+from typing import List
 
 import pytest
 
 REPO = Path(__file__).resolve().parents[2]
 
 
+def _target_dirs() -> List[Path]:
+    dirs = []
+    env = os.environ.get("CARGO_TARGET_DIR")
+    if env:
+        dirs.append(Path(env) if Path(env).is_absolute() else REPO / env)
+    dirs.append(REPO / "target")
+    return dirs
+
+
+def _built() -> List[Path]:
+    return [d / profile / "ftsmc" for d in _target_dirs() for profile in ("release", "debug")]
+
+
 def _find_cli() -> Path:
-    """$FTSMC_BIN, else target/release/ftsmc, else target/debug/ftsmc."""
+    """$FTSMC_BIN; else the first of $CARGO_TARGET_DIR or target/ (release,
+    debug) that holds a binary; else build it; else `ftsmc` on PATH."""
     env = os.environ.get("FTSMC_BIN")
     if env:
         return Path(env)
-    for profile in ("release", "debug"):
-        candidate = REPO / "target" / profile / "ftsmc"
+    for candidate in _built():
         if candidate.is_file():
             return candidate
+    cargo = shutil.which("cargo")
+    if cargo is not None and (REPO / "Cargo.toml").is_file():
+        done = subprocess.run(
+            [cargo, "build", "--release", "--locked", "-p", "ftsmc-cli"], cwd=REPO, capture_output=True, text=True
+        )
+        if done.returncode != 0:
+            raise RuntimeError(f"cargo build --release -p ftsmc-cli failed:\n{done.stderr[-4000:]}")
+        for candidate in _built():
+            if candidate.is_file():
+                return candidate
+    installed = shutil.which("ftsmc")
+    if installed is not None:
+        return Path(installed)
     raise RuntimeError(
-        "no ftsmc binary: set FTSMC_BIN or build it (cargo build -p ftsmc-cli); "
-        "the byte-identity tests compare against it"
+        "no ftsmc binary: set FTSMC_BIN, or install Rust (cargo) so the tests can build it "
+        "(cargo build --release -p ftsmc-cli); the byte-identity tests compare against it"
     )
 
 

@@ -4,9 +4,14 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Result;
 use ftsmc_sim::registry::label;
-use ftsmc_sim::run::RunOutput;
+use ftsmc_sim::run::{Divergence, ExitStatus, RunOutput};
 
-use crate::plot::{controller_color, write_3d, write_figure, Figure, Panel, Rgb, Series, Series3};
+use ftsmc_sim::batch::montecarlo::McRun;
+use ftsmc_sim::Scenario;
+
+use crate::plot::{
+    controller_color, write_3d, write_boxplots, write_figure, BoxGroup, BoxPanel, Figure, Panel, Rgb, Series, Series3,
+};
 
 /// What a panel shows: recorded column, shared reference column, per-controller
 /// reference column, title and y label.
@@ -25,6 +30,29 @@ fn series(run: &RunOutput, column: &str, label: String, dashed: bool) -> Series 
         ys: run.recording.column(column).to_vec(),
         color: controller_color(&run.controller),
         dashed,
+        end: if dashed { None } else { end_note(&run.exit) },
+    }
+}
+
+/// The note at the end of a run that stopped early: "diverged (tilt) at
+/// 1.22 s", "crashed at 0.87 s", "interrupted at 3.00 s"; `None` for a
+/// completed run.
+pub fn end_note(exit: &ExitStatus) -> Option<String> {
+    match exit {
+        ExitStatus::Completed => None,
+        ExitStatus::Diverged { divergence, time } => {
+            let why = match divergence {
+                Divergence::NonFinite => "non-finite state",
+                Divergence::Tilt { .. } => "tilt",
+                Divergence::PositionError { .. } => "position error",
+                Divergence::RigidBodyOutOfRange { .. } => {
+                    return Some(format!("stopped (rigid body out of range) at {time:.2} s"))
+                }
+            };
+            Some(format!("diverged ({why}) at {time:.2} s"))
+        }
+        ExitStatus::Crashed { time, .. } => Some(format!("crashed at {time:.2} s")),
+        ExitStatus::Interrupted { time } => Some(format!("interrupted at {time:.2} s")),
     }
 }
 
@@ -40,6 +68,7 @@ fn comparison(title: &str, runs: &[&RunOutput], specs: &[PanelSpec], columns: us
                     ys: first.recording.column(col).to_vec(),
                     color: controller_color("reference"),
                     dashed: true,
+                    end: None,
                 });
             }
             for run in runs {
@@ -59,6 +88,68 @@ fn comparison(title: &str, runs: &[&RunOutput], specs: &[PanelSpec], columns: us
         })
         .collect();
     Figure { title: title.into(), panels, columns }
+}
+
+/// One panel per spec with the tracking error `column − reference` of each
+/// run (m or rad): the differences the position panels draw on top of each
+/// other, at a scale where they can be read.
+fn error_panels(runs: &[&RunOutput], specs: &[PanelSpec]) -> Vec<Panel> {
+    specs
+        .iter()
+        .filter_map(|spec| {
+            let reference = spec.shared_reference.or(spec.own_reference)?;
+            let series = runs
+                .iter()
+                .map(|run| {
+                    let mut s = series(run, spec.column, label(&run.controller).to_string(), false);
+                    s.ys = s.ys.iter().zip(run.recording.column(reference)).map(|(y, r)| y - r).collect();
+                    s
+                })
+                .collect();
+            let unit = spec.y_label.rsplit_once('(').map_or("", |(_, u)| u.trim_end_matches(')'));
+            Some(Panel {
+                title: format!("{} error", spec.title),
+                x_label: "time (s)".into(),
+                y_label: format!("{} − {}ref ({unit})", spec.title, spec.title),
+                series,
+                log_x: false,
+                log_y: false,
+            })
+        })
+        .collect()
+}
+
+/// The horizontal path y against x of each run, over the reference path
+/// (dashed): the view of a flight a plan of the ground gives.
+fn path_figure(title: &str, runs: &[&RunOutput]) -> Figure {
+    let mut s: Vec<Series> = Vec::new();
+    if let Some(first) = runs.first() {
+        s.push(Series {
+            label: "reference".into(),
+            xs: first.recording.column("x_ref").to_vec(),
+            ys: first.recording.column("y_ref").to_vec(),
+            color: controller_color("reference"),
+            dashed: true,
+            end: None,
+        });
+    }
+    for run in runs {
+        let mut one = series(run, "y", label(&run.controller).to_string(), false);
+        one.xs = run.recording.column("x").to_vec();
+        s.push(one);
+    }
+    Figure {
+        title: title.into(),
+        panels: vec![Panel {
+            title: "path seen from above".into(),
+            x_label: "x (m)".into(),
+            y_label: "y (m)".into(),
+            series: s,
+            log_x: false,
+            log_y: false,
+        }],
+        columns: 1,
+    }
 }
 
 fn attitude_specs<'a>() -> [PanelSpec<'a>; 3] {
@@ -204,10 +295,9 @@ pub fn scenario_1(runs: &[&RunOutput], dir: &Path) -> Result<Vec<PathBuf>> {
             _ => {}
         }
     }
-    out.extend(write_figure(
-        &comparison("Fig. 4 — position tracking (scenario 1)", runs, &position_specs(), 3),
-        &dir.join("fig4-position-scenario1"),
-    )?);
+    let mut fig4 = comparison("Fig. 4 — position tracking (scenario 1)", runs, &position_specs(), 3);
+    fig4.panels.extend(error_panels(runs, &position_specs()));
+    out.extend(write_figure(&fig4, &dir.join("fig4-position-scenario1"))?);
     Ok(out)
 }
 
@@ -226,6 +316,7 @@ pub fn scenario_2(runs: &[&RunOutput], no_mass: Option<&RunOutput>, dir: &Path) 
                 ys: first.recording.column(&format!("inertia_{i}")).to_vec(),
                 color: controller_color("reference"),
                 dashed: false,
+                end: None,
             }],
             log_x: false,
             log_y: false,
@@ -245,6 +336,7 @@ pub fn scenario_2(runs: &[&RunOutput], no_mass: Option<&RunOutput>, dir: &Path) 
         ys: first.recording.column("mass_true").to_vec(),
         color: controller_color("reference"),
         dashed: true,
+        end: None,
     }];
     for run in runs.iter().copied().filter(|r| r.controller == "ftaftsmc").chain(no_mass) {
         mass.push(series(run, "mass_estimate", format!("α̂·m, {}", label(&run.controller)), false));
@@ -307,6 +399,7 @@ pub fn generic(runs: &[&RunOutput], dir: &Path) -> Result<Vec<PathBuf>> {
         &comparison(&format!("thrust and torques ({name})"), runs, &control_specs(), 2),
         &dir.join("controls"),
     )?);
+    out.extend(write_figure(&path_figure(&format!("x–y path ({name})"), runs), &dir.join("path"))?);
     Ok(out)
 }
 
@@ -334,6 +427,8 @@ pub fn beyond(runs: &[&RunOutput], omega_max: f64, dir: &Path) -> Result<Vec<Pat
                     ys: run.recording.column(&format!("omega_{i}")).to_vec(),
                     color: shades[i - 1],
                     dashed: false,
+                    // One note per panel: on ω1.
+                    end: if i == 1 { end_note(&run.exit) } else { None },
                 })
                 .collect();
             if omega_max.is_finite() {
@@ -344,6 +439,7 @@ pub fn beyond(runs: &[&RunOutput], omega_max: f64, dir: &Path) -> Result<Vec<Pat
                     ys: vec![omega_max; 2],
                     color: controller_color("reference"),
                     dashed: true,
+                    end: None,
                 });
             }
             Panel {
@@ -361,4 +457,47 @@ pub fn beyond(runs: &[&RunOutput], omega_max: f64, dir: &Path) -> Result<Vec<Pat
         &dir.join(format!("{name}-rotors")),
     )?);
     Ok(out)
+}
+
+/// The Monte Carlo figure of `reproduce` (`<scenario>-montecarlo`): one box
+/// per controller of the RMS position error √(rms_x² + rms_y² + rms_z²) (m)
+/// of its completed runs, and how many runs completed, diverged or crashed.
+pub fn montecarlo(scenario: &Scenario, rows: &[McRun], controllers: &[String], dir: &Path) -> Result<Vec<PathBuf>> {
+    let groups = controllers
+        .iter()
+        .map(|c| {
+            let mine: Vec<&McRun> = rows.iter().filter(|r| &r.controller == c).collect();
+            let completed = mine.iter().filter(|r| r.exit.is_completed()).count();
+            let crashed = mine.iter().filter(|r| r.exit.is_crashed()).count();
+            let diverged = mine.len() - completed - crashed;
+            let mut tail = format!("{completed} of {} flew", mine.len());
+            if diverged > 0 {
+                tail.push_str(&format!(", {diverged} div."));
+            }
+            if crashed > 0 {
+                tail.push_str(&format!(", {crashed} crash."));
+            }
+            BoxGroup {
+                label: format!("{} ({tail})", label(c)),
+                values: mine
+                    .iter()
+                    .filter(|r| r.exit.is_completed())
+                    .map(|r| (r.metrics.rms.x.powi(2) + r.metrics.rms.y.powi(2) + r.metrics.rms.z.powi(2)).sqrt())
+                    .collect(),
+                color: controller_color(c),
+            }
+        })
+        .collect();
+    let runs = rows.len() / controllers.len().max(1);
+    write_boxplots(
+        &format!("Beyond the paper — Monte Carlo, {runs} runs of {} per controller", scenario.name),
+        &[BoxPanel {
+            title: "completed runs: box q1–q3, whiskers p5–p95".into(),
+            y_label: "RMS position error (m)".into(),
+            groups,
+            log_y: true,
+        }],
+        1,
+        &dir.join(format!("{}-montecarlo", scenario.name)),
+    )
 }

@@ -257,6 +257,7 @@ smallest |e0| that did not settle:\n\n{}",
                         ys: pts.iter().map(|p| p.1).collect(),
                         color: controller_color(c),
                         dashed: false,
+                        end: None,
                     });
                     if let (0, Some(b)) = (field, fixed_time::reaching_time_bound(c, scenario, axis)) {
                         series.push(Series {
@@ -265,6 +266,7 @@ smallest |e0| that did not settle:\n\n{}",
                             ys: vec![b, b],
                             color: controller_color(c),
                             dashed: true,
+                            end: None,
                         });
                     }
                 }
@@ -391,6 +393,7 @@ fn cascade_sweep(
                 ys,
                 color: controller_color(c),
                 dashed: false,
+                end: None,
             });
         }
         panels.push(Panel {

@@ -144,8 +144,9 @@ fn opt(v: Option<f64>, digits: usize) -> String {
 
 /// Fly `runs` Monte Carlo runs of every ladder rung with each of
 /// `controllers` and write `beyond/ladder-runs/<scenario>.csv`; return the
-/// table (Markdown) and its JSON.
-pub fn ladder(dir: &ResultDir, runs: u64, controllers: &[&str]) -> Result<Ladder> {
+/// table (Markdown) and its JSON. With `figures`, one box plot per rung
+/// ([`crate::figures::montecarlo`]) under `figures/beyond/`.
+pub fn ladder(dir: &ResultDir, runs: u64, controllers: &[&str], figures: bool) -> Result<Ladder> {
     let names: Vec<String> = controllers.iter().map(|c| (*c).to_string()).collect();
     let scenarios: Vec<Scenario> = LADDER
         .iter()
@@ -177,6 +178,9 @@ pub fn ladder(dir: &ResultDir, runs: u64, controllers: &[&str]) -> Result<Ladder
         let rows = run_batch(s, &spec, &names, runs, s.seed, &|n| bar.inc(n)).map_err(|e| anyhow!(e))?;
         flights += rows.len();
         dir.write(format!("beyond/ladder-runs/{}.csv", s.name), &crate::montecarlo::runs_csv(&rows)?)?;
+        if figures {
+            crate::figures::montecarlo(s, &rows, &names, &dir.path().join("figures").join("beyond"))?;
+        }
         let wind = s.wind.clone().unwrap_or_default().summary();
         if s.name.ends_with("-1") {
             wind_table.row(vec![

@@ -3,7 +3,10 @@
 //! font is the embedded DejaVu Sans. Legends sit above the panels, outside
 //! the data; legend samples are dashed and marked like their lines; tick
 //! labels use an offset/power of ten on tiny ranges (crate::ticks);
-//! chattering signals are drawn first, thin and translucent.
+//! references are drawn beneath the data; a chattering signal is drawn as
+//! its min/max band per pixel column with its mean line; a series with no
+//! drawable point has no legend entry; a run that stopped early ends in a ×
+//! with the reason.
 //!
 //! Two styles ([`Style`]): `screen` (readable at 100 %, text ≥ 14 px) and
 //! `paper` (3.5 in or 7 in wide, text ≥ 8 pt, PNG at 300 dpi, SVG in pt).
@@ -139,6 +142,9 @@ pub struct Series {
     pub color: Rgb,
     /// Dashed (references, bounds) or solid.
     pub dashed: bool,
+    /// Why the line stops early ("diverged (tilt) at 1.22 s"), if it does:
+    /// its last point gets a × marker with this text.
+    pub end: Option<String>,
 }
 
 /// One subplot.
@@ -260,11 +266,19 @@ fn has_markers(s: &Series) -> bool {
     !s.dashed && s.xs.iter().zip(&s.ys).filter(|(x, y)| x.is_finite() && y.is_finite()).count() <= MARKER_POINTS
 }
 
-/// One entry per distinct label, in order of first appearance.
-fn entries_of<'a>(series: impl Iterator<Item = &'a Series>) -> Vec<Entry> {
+/// True when at least one point of `s` can be drawn on `panel`'s axes.
+fn drawable(s: &Series, panel: &Panel) -> bool {
+    s.xs.iter()
+        .zip(&s.ys)
+        .any(|(x, y)| x.is_finite() && y.is_finite() && (!panel.log_x || *x > 0.0) && (!panel.log_y || *y > 0.0))
+}
+
+/// One entry per distinct label, in order of first appearance, for the
+/// series that are drawn (a series without a drawable point has no entry).
+fn entries_of<'a>(series: impl Iterator<Item = (&'a Series, &'a Panel)>) -> Vec<Entry> {
     let mut out: Vec<Entry> = Vec::new();
-    for s in series {
-        if s.label.is_empty() || out.iter().any(|e| e.label == s.label) {
+    for (s, panel) in series {
+        if s.label.is_empty() || out.iter().any(|e| e.label == s.label) || !drawable(s, panel) {
             continue;
         }
         out.push(Entry { label: s.label.clone(), color: s.color, dashed: s.dashed, marker: has_markers(s) });
@@ -336,7 +350,7 @@ pub fn write_figure(fig: &Figure, stem: &Path) -> Result<Vec<PathBuf>> {
     let columns = fig.columns.max(1);
     let rows = fig.panels.len().div_ceil(columns).max(1);
     let width = if columns == 1 { lk.narrow } else { lk.wide };
-    let entries = entries_of(fig.panels.iter().flat_map(|p| p.series.iter()));
+    let entries = entries_of(fig.panels.iter().flat_map(|p| p.series.iter().map(move |s| (s, p))));
     let inner = width - 2.0 * lk.pad;
     let (_, legend_h) = legend_rows(&entries, inner, &lk);
     let title_h = if lk.title > 0.0 && !fig.title.is_empty() { lk.title * 1.8 } else { lk.pad * 0.5 };
@@ -365,7 +379,8 @@ fn range(values: impl Iterator<Item = f64>, log: bool) -> Option<(f64, f64)> {
     }
     if log {
         let (lo, hi) = if hi / lo < 1.5 { (lo / 1.5, hi * 1.5) } else { (lo, hi) };
-        return Some((lo / 1.2, hi * 1.2));
+        // Padding stays within the positive finite doubles (values up to f64::MAX are legal).
+        return Some(((lo / 1.2).max(f64::MIN_POSITIVE), (hi * 1.2).min(f64::MAX)));
     }
     let (lo, hi) = if hi - lo <= 1e-12 * hi.abs().max(1.0) {
         let d = if lo == 0.0 { 1.0 } else { 0.1 * lo.abs() };
@@ -373,8 +388,8 @@ fn range(values: impl Iterator<Item = f64>, log: bool) -> Option<(f64, f64)> {
     } else {
         (lo, hi)
     };
-    let pad = 0.05 * (hi - lo);
-    Some((lo - pad, hi + pad))
+    let pad = 0.05 * (hi / 2.0 - lo / 2.0) * 2.0;
+    Some(((lo - pad).max(-f64::MAX), (hi + pad).min(f64::MAX)))
 }
 
 /// Split at non-finite points (and non-positive ones on log axes), then
@@ -525,33 +540,48 @@ fn draw_panel(svg: &mut Svg, rect: (f64, f64, f64, f64), panel: &Panel, lk: &Loo
     let ay = Axis { lo: y0, hi: y1, log: panel.log_y, a: f.y + f.h, b: f.y };
     draw_grid(svg, &f, Some(&ax), &ay, lk);
     let clip = svg.clip_rect(f.x, f.y, f.w, f.h);
-    // Chattering signals first (thin, translucent; the most agitated at the
-    // bottom), then lines, then dashed references on top.
+    // References (dashed) beneath everything, then chattering signals as
+    // min/max bands per pixel column with their mean (the most agitated at
+    // the bottom), then the other lines, then the end markers on top.
     let noisy: Vec<bool> = panel.series.iter().map(|s| chatters(s, panel, (y1 - y0) * 0.004)).collect();
     let mut order: Vec<(usize, f64)> = panel
         .series
         .iter()
         .enumerate()
         .map(|(i, s)| {
-            let rank = if noisy[i] {
+            let rank = if s.dashed {
+                f64::MIN
+            } else if noisy[i] {
                 -variation(&s.ys)
-            } else if s.dashed {
-                f64::MAX
             } else {
-                f64::MAX / 2.0
+                f64::MAX
             };
             (i, rank)
         })
         .collect();
     order.sort_by(|a, b| a.1.total_cmp(&b.1));
-    let order: Vec<(&Series, bool)> = order.iter().map(|&(i, _)| (&panel.series[i], noisy[i])).collect();
-    for (s, noisy) in order {
-        let stroke = Stroke {
-            color: s.color,
-            width: if noisy { lk.thin } else { lk.line },
-            dash: s.dashed.then_some(lk.dash),
-            opacity: if noisy { 0.45 } else { 1.0 },
-        };
+    let column = lk.line.max(lk.thin);
+    for &(i, _) in &order {
+        let s = &panel.series[i];
+        if noisy[i] {
+            // A chattering reference (the attitude command of a chattering
+            // outer loop) gets a fainter band and its mean dashed.
+            let (opacity, dash) = if s.dashed { (0.15, Some(lk.dash)) } else { (0.3, None) };
+            svg.group(if s.dashed { "reference band" } else { "band" });
+            for seg in segments(s, panel.log_x, panel.log_y) {
+                let pts: Vec<(f64, f64)> = seg.iter().map(|&(x, y)| (ax.map(x), ay.map(y))).collect();
+                let cols = pixel_columns(&pts, column);
+                let mut outline: Vec<(f64, f64)> = cols.iter().map(|c| (c.0, c.1)).collect();
+                outline.extend(cols.iter().rev().map(|c| (c.0, c.2)));
+                svg.polygon(&outline, s.color, opacity, Some(&clip));
+                let mean: Vec<(f64, f64)> = cols.iter().map(|c| (c.0, c.3)).collect();
+                svg.polyline(&mean, &Stroke { dash, ..Stroke::solid(s.color, lk.line) }, Some(&clip));
+            }
+            svg.end_group();
+            continue;
+        }
+        svg.group(if s.dashed { "reference" } else { "data" });
+        let stroke = Stroke { color: s.color, width: lk.line, dash: s.dashed.then_some(lk.dash), opacity: 1.0 };
         let markers = has_markers(s);
         for seg in segments(s, panel.log_x, panel.log_y) {
             let pts: Vec<(f64, f64)> = seg.iter().map(|&(x, y)| (ax.map(x), ay.map(y))).collect();
@@ -562,11 +592,68 @@ fn draw_panel(svg: &mut Svg, rect: (f64, f64, f64, f64), panel: &Panel, lk: &Loo
                 }
             }
         }
+        svg.end_group();
+    }
+    for s in panel.series.iter().filter(|s| s.end.is_some()) {
+        let last = segments(s, panel.log_x, panel.log_y).last().and_then(|seg| seg.last().copied());
+        if let (Some(note), Some((x, y))) = (&s.end, last) {
+            draw_end_marker(svg, &f, (ax.map(x), ay.map(y)), note, s.color, lk);
+        }
     }
     draw_axes(svg, &f, Some(&ax), &ay, lk);
     draw_x_label(svg, &f, &panel.x_label, 1, lk);
     draw_y_label(svg, &f, rect.0, &panel.y_label, lk);
     draw_panel_title(svg, &f, &panel.title, f.yt.note.as_deref(), lk);
+}
+
+/// Points in drawing coordinates grouped by pixel column of `width`:
+/// `(column centre x, max y, min y, mean y)` per non-empty column, in order
+/// (the drawing's y grows downwards, so "max" is the top edge).
+fn pixel_columns(pts: &[(f64, f64)], width: f64) -> Vec<(f64, f64, f64, f64)> {
+    let mut out: Vec<(f64, f64, f64, f64)> = Vec::new();
+    let mut current: Option<(i64, f64, f64, f64, usize)> = None;
+    for &(x, y) in pts {
+        let k = (x / width).floor() as i64;
+        match current.as_mut() {
+            Some((ck, top, bottom, sum, n)) if *ck == k => {
+                *top = top.min(y);
+                *bottom = bottom.max(y);
+                *sum += y;
+                *n += 1;
+            }
+            _ => {
+                if let Some((ck, top, bottom, sum, n)) = current.take() {
+                    out.push(((ck as f64 + 0.5) * width, top, bottom, sum / n as f64));
+                }
+                current = Some((k, y, y, y, 1));
+            }
+        }
+    }
+    if let Some((ck, top, bottom, sum, n)) = current {
+        out.push(((ck as f64 + 0.5) * width, top, bottom, sum / n as f64));
+    }
+    out
+}
+
+/// A × at `at` (drawing coordinates) in `color`, with `note` beside it,
+/// kept inside the plot.
+fn draw_end_marker(svg: &mut Svg, f: &Frame, at: (f64, f64), note: &str, color: Rgb, lk: &Look) {
+    svg.group("end");
+    let r = lk.marker * 1.8;
+    let stroke = Stroke::solid(color, lk.line * 1.3);
+    svg.line(at.0 - r, at.1 - r, at.0 + r, at.1 + r, &stroke);
+    svg.line(at.0 - r, at.1 + r, at.0 + r, at.1 - r, &stroke);
+    let size = lk.tick * 0.9;
+    let tw = text_width(note, size);
+    let right = at.0 + r * 1.5 + tw <= f.x + f.w;
+    let x = if right { at.0 + r * 1.5 } else { (at.0 - r * 1.5).max(f.x + tw) };
+    // Below the marker in the upper half of the plot, above it in the lower half.
+    let y = if at.1 < f.y + f.h / 2.0 { at.1 + r * 1.5 + size } else { at.1 - r * 1.5 };
+    let y = y.clamp(f.y + size * 1.1, f.y + f.h - size * 0.4);
+    let font =
+        Font { color, valign: VAlign::Baseline, ..Font::new(size, if right { Anchor::Start } else { Anchor::End }) };
+    svg.text(x, y, note, &font);
+    svg.end_group();
 }
 
 fn draw_grid(svg: &mut Svg, f: &Frame, ax: Option<&Axis>, ay: &Axis, lk: &Look) {
@@ -658,6 +745,7 @@ pub fn write_3d(title: &str, series: &[Series3], stem: &Path) -> Result<Vec<Path
     let inner = width - 2.0 * lk.pad;
     let entries: Vec<Entry> = series
         .iter()
+        .filter(|s| s.points.iter().any(|p| p.iter().all(|v| v.is_finite())))
         .map(|s| Entry { label: s.label.clone(), color: s.color, dashed: s.dashed, marker: false })
         .collect();
     let (_, legend_h) = legend_rows(&entries, inner, &lk);
@@ -774,9 +862,10 @@ pub fn write_3d(title: &str, series: &[Series3], stem: &Path) -> Result<Vec<Path
     edge_label(&mut svg, 0, &|v| [v, -1.0, -1.0], (sn * 0.6, 0.8), "x (m)");
     edge_label(&mut svg, 1, &|v| [-1.0, v, -1.0], (-c * 0.9, 0.45), "y (m)");
     edge_label(&mut svg, 2, &|v| [-1.0, 1.0, v], (-1.0, 0.0), "z (m)");
-    // Flights first, references (dashed) on top.
-    let ordered = series.iter().filter(|s| !s.dashed).chain(series.iter().filter(|s| s.dashed));
+    // References (dashed) beneath, flights on top.
+    let ordered = series.iter().filter(|s| s.dashed).chain(series.iter().filter(|s| !s.dashed));
     for s in ordered {
+        svg.group(if s.dashed { "reference" } else { "data" });
         let pts: Vec<[f64; 3]> = s.points.iter().copied().filter(|p| p.iter().all(|v| v.is_finite())).collect();
         let step = pts.len().div_ceil(MAX_POINTS).max(1);
         let px: Vec<(f64, f64)> =
@@ -788,6 +877,7 @@ pub fn write_3d(title: &str, series: &[Series3], stem: &Path) -> Result<Vec<Path
             opacity: 1.0,
         };
         svg.polyline(&px, &stroke, None);
+        svg.end_group();
     }
     write(stem, svg.finish(), &lk)
 }
@@ -934,6 +1024,7 @@ mod tests {
                             ys: t.iter().map(|v| v.sin()).collect(),
                             color: controller_color("ftaftsmc"),
                             dashed: false,
+                            end: None,
                         },
                         Series {
                             label: "nan".into(),
@@ -941,6 +1032,7 @@ mod tests {
                             ys: t.iter().map(|v| if *v > 5.0 && *v < 6.0 { f64::NAN } else { 1.0 }).collect(),
                             color: controller_color("reference"),
                             dashed: true,
+                            end: None,
                         },
                     ],
                     log_x: false,
@@ -996,6 +1088,35 @@ mod tests {
     }
 
     #[test]
+    fn a_box_plot_of_values_up_to_1e308_is_drawn_with_bounded_ticks() {
+        // A legal batch whose ISE reaches 1e308: the padded log axis passes
+        // f64::MAX, and the ticks once enumerated every decade to i32::MAX.
+        let dir = tmp_dir("huge");
+        let files = write_boxplots(
+            "huge",
+            &[BoxPanel {
+                title: "ISE".into(),
+                y_label: "ISE".into(),
+                groups: vec![BoxGroup {
+                    label: "a".into(),
+                    values: vec![1e-3, 1.0, 1e100, 1e308, f64::MAX],
+                    color: controller_color("pid"),
+                }],
+                log_y: true,
+            }],
+            1,
+            &dir.join("box"),
+        )
+        .unwrap();
+        let svg = std::fs::read_to_string(&files[0]).unwrap();
+        assert!(svg.len() < 200_000, "{} bytes", svg.len());
+        let decades = svg.matches(r#"text-anchor="end">10"#).count();
+        assert!(svg.contains(">10⁻³<") && (4..=12).contains(&decades), "decade labels from 1e-3 up: {decades}");
+        assert!(!svg.contains("NaN") && !svg.contains("inf"), "every coordinate is finite");
+        std::fs::remove_dir_all(&dir).ok();
+    }
+
+    #[test]
     fn decimation_keeps_extremes() {
         let n = 100_000;
         let mut ys = vec![0.0; n];
@@ -1006,6 +1127,7 @@ mod tests {
             ys,
             color: Rgb(0, 0, 0),
             dashed: false,
+            end: None,
         };
         let seg = segments(&s, false, false);
         let pts: usize = seg.iter().map(Vec::len).sum();

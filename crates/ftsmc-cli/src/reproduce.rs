@@ -575,13 +575,16 @@ pub fn reproduce(out: &Path, figures: bool, realistic_runs: u64) -> Result<()> {
         crate::figures::scenario_2(&s2_main, find(&runs, &s2.name, "ftaftsmc-no-mass"), &fig_dir)?;
     }
     dir.write("report.md", report.as_bytes())?;
+    // The paper's part is printed as soon as it is known (the beyond part,
+    // with its Monte Carlo, takes minutes); the files are written whole at
+    // the end, with the beyond part, and listed after the commit.
+    println!("{report}");
     // Beyond the paper: its own files under `beyond/` (and `figures/beyond/`),
     // so everything above stays exactly what the paper part wrote before.
     let beyond_started = Instant::now();
     let beyond = beyond_the_paper(&dir, figures, realistic_runs)?;
     let beyond_elapsed = beyond_started.elapsed().as_secs_f64();
     dir.commit()?;
-    println!("{report}");
     let o = out.display();
     println!(
         "wrote {o}/summary.json, {o}/report.md, per-run CSV and scenario.toml under {o}/<scenario>/{}; {} flights in {:.2} s",
@@ -896,7 +899,7 @@ pub fn beyond_the_paper(dir: &ResultDir, figures: bool, mc_runs: u64) -> Result<
     if mc_runs > 0 {
         // The wind ladder (crate::ladder): every rung realistic-<level>-<n>,
         // `mc_runs` Monte Carlo runs per rung and controller.
-        let l = crate::ladder::ladder(dir, mc_runs, BEYOND_MC_CONTROLLERS)?;
+        let l = crate::ladder::ladder(dir, mc_runs, BEYOND_MC_CONTROLLERS, figures)?;
         md.push_str(&l.markdown);
         flights += l.flights;
         json_mc = l.json;

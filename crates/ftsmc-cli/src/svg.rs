@@ -207,6 +207,36 @@ impl Svg {
         let _ = writeln!(self.buf, r#"<path d="{d}" {}{clip}/>"#, stroke.attrs());
     }
 
+    /// A closed polygon filled with `fill` at `opacity`, no outline (the
+    /// min/max band of a chattering signal).
+    pub fn polygon(&mut self, pts: &[(f64, f64)], fill: Rgb, opacity: f64, clip: Option<&str>) {
+        if pts.len() < 3 {
+            return;
+        }
+        let mut d = String::with_capacity(pts.len() * 14);
+        for (i, (x, y)) in pts.iter().enumerate() {
+            let _ = write!(d, "{}{} {}", if i == 0 { "M" } else { "L" }, n(*x), n(*y));
+        }
+        let clip = clip.map_or(String::new(), |c| format!(r#" clip-path="url(#{c})""#));
+        let _ = writeln!(
+            self.buf,
+            r#"<path d="{d}Z" fill="{}" fill-opacity="{}" stroke="none"{clip}/>"#,
+            fill.hex(),
+            n(opacity)
+        );
+    }
+
+    /// Open a group of the given class (`reference`, `reference band`, `data`, `band`, `end`):
+    /// what a drawn element is, for readers of the SVG and for the tests.
+    pub fn group(&mut self, class: &str) {
+        let _ = writeln!(self.buf, r#"<g class="{}">"#, escape(class));
+    }
+
+    /// Close the group opened by [`Svg::group`].
+    pub fn end_group(&mut self) {
+        self.buf.push_str("</g>\n");
+    }
+
     /// A straight line.
     pub fn line(&mut self, x1: f64, y1: f64, x2: f64, y2: f64, stroke: &Stroke) {
         self.polyline(&[(x1, y1), (x2, y2)], stroke, None);

@@ -94,8 +94,20 @@ pub fn general(v: f64) -> String {
 }
 
 /// Ticks on a linear axis over `[lo, hi]`, about `target` of them.
+/// Infinite or NaN bounds are taken as ±`f64::MAX` / 0, so the number of
+/// ticks stays about `target` whatever the input.
 pub fn linear(lo: f64, hi: f64, target: usize) -> Ticks {
-    let (lo, hi) = if lo <= hi { (lo, hi) } else { (hi, lo) };
+    let finite = |v: f64| if v.is_nan() { 0.0 } else { v.clamp(-f64::MAX, f64::MAX) };
+    let (lo, hi) = (finite(lo) / 2.0, finite(hi) / 2.0);
+    let (lo, hi) = if lo <= hi { (lo * 2.0, hi * 2.0) } else { (hi * 2.0, lo * 2.0) };
+    if hi - lo > f64::MAX / 4.0 {
+        // The span overflows: ticks at nice multiples of the largest bound.
+        let m = lo.abs().max(hi.abs());
+        let step = nice_step(m / 2.0).min(f64::MAX);
+        let values: Vec<f64> = (-2i32..=2).map(|k| f64::from(k) * step).filter(|v| *v >= lo && *v <= hi).collect();
+        let labels = values.iter().map(|v| general(*v)).collect();
+        return Ticks { values, labels, note: None, minor: Vec::new() };
+    }
     let span = (hi - lo).max(f64::MIN_POSITIVE * 1e3);
     let step = nice_step(span / target.max(2) as f64);
     let first = (lo / step - 1e-9).ceil() as i64;
@@ -152,14 +164,23 @@ pub fn linear(lo: f64, hi: f64, target: usize) -> Ticks {
     Ticks { values, labels, note, minor: Vec::new() }
 }
 
-/// Ticks on a logarithmic axis over `[lo, hi]` (both > 0): decades, or
-/// within less than two decades at most about `max_labels` labels.
+/// Ticks on a logarithmic axis over `[lo, hi]` (both > 0): decades (with
+/// 2 and 5 between them over at most three decades, enough labels to read
+/// a median), or within less than two decades at most about `max_labels`
+/// labels. The bounds are clamped to the positive finite doubles, so the
+/// work and the number of ticks stay bounded whatever the input (a range up
+/// to 1e308 gets about `max_labels` decade labels, no minor ticks).
 pub fn log(lo: f64, hi: f64, max_labels: usize) -> Ticks {
+    let positive = |v: f64| if v.is_nan() { f64::MIN_POSITIVE } else { v.clamp(f64::MIN_POSITIVE, f64::MAX) };
+    let (lo, hi) = (positive(lo), positive(hi));
+    let (lo, hi) = if lo <= hi { (lo, hi) } else { (hi, lo) };
     let (a, b) = (lo.log10(), hi.log10());
     let d0 = (a - 1e-9).ceil() as i32;
     let d1 = (b + 1e-9).floor() as i32;
     let mut minor = Vec::new();
-    for d in (a.floor() as i32)..=(b.ceil() as i32) {
+    // Minor ticks only where they can be told apart (at most 12 decades).
+    let minor_decades = (a.floor() as i32)..=(b.ceil() as i32);
+    for d in minor_decades.filter(|_| b - a <= 12.0) {
         for m in 2..10 {
             let v = f64::from(m) * 10f64.powi(d);
             if v >= lo && v <= hi {
@@ -168,9 +189,28 @@ pub fn log(lo: f64, hi: f64, max_labels: usize) -> Ticks {
         }
     }
     if d1 - d0 >= 1 {
-        let every = ((d1 - d0) / 6 + 1).max(1);
-        let values: Vec<f64> = (d0..=d1).filter(|d| (d - d0) % every == 0).map(|d| 10f64.powi(d)).collect();
-        let labels = values.iter().map(|v| format!("10{}", superscript(v.log10().round() as i32))).collect();
+        let every = ((d1 - d0) / max_labels.max(3) as i32 + 1).max(1);
+        let decades: Vec<i32> = (d0..=d1).filter(|d| (d - d0) % every == 0).collect();
+        // Over at most three decades, 2 and 5 between the decades: a median
+        // between two labels is read to a factor of about 2, not 10.
+        let mantissas: &[f64] = if b - a <= 3.2 { &[1.0, 2.0, 5.0] } else { &[1.0] };
+        let mut values: Vec<f64> = Vec::new();
+        for d in (d0 - 1)..=d1 {
+            for m in mantissas {
+                let v = m * 10f64.powi(d);
+                let decade = *m == 1.0 && decades.contains(&d);
+                if (decade || *m != 1.0) && v >= lo && v <= hi {
+                    values.push(v);
+                }
+            }
+        }
+        // Decades alone read "10ⁿ"; with 2 and 5 between them every label
+        // is a plain number ("0.02, 0.05, 0.1"), one style per axis.
+        let plain = mantissas.len() > 1;
+        let labels = values
+            .iter()
+            .map(|v| if plain { general(*v) } else { format!("10{}", superscript(v.log10().round() as i32)) })
+            .collect();
         return Ticks { values, labels, note: None, minor };
     }
     // Less than two decades: add mantissas by priority (1; 2, 5; 3; 4, 6, 8;
@@ -244,6 +284,36 @@ mod tests {
         assert_eq!(t.labels.first().unwrap(), "0");
         let t = linear(0.0, 20.0, 5);
         assert_eq!(t.labels, ["0", "5", "10", "15", "20"]);
+    }
+
+    #[test]
+    fn ticks_stay_bounded_up_to_the_largest_doubles() {
+        // A legal batch whose ISE reaches 1e308: the log axis padded by 20 %
+        // goes past f64::MAX; it must not enumerate billions of decades.
+        for (lo, hi) in [(1e-3, 1e308 * 1.5), (1e-300, f64::INFINITY), (f64::MIN_POSITIVE, f64::MAX), (0.0, f64::NAN)] {
+            let t = log(lo, hi, 6);
+            assert!(t.values.len() <= 12, "{lo} {hi}: {t:?}");
+            assert!(t.values.len() >= 2 || hi.is_nan(), "{lo} {hi}: {t:?}");
+            assert!(t.minor.len() <= 200, "{lo} {hi}: {} minor ticks", t.minor.len());
+            assert!(t.values.iter().all(|v| v.is_finite() && *v > 0.0), "{t:?}");
+        }
+        for (lo, hi) in [(-f64::MAX, f64::MAX), (0.0, f64::INFINITY), (f64::NEG_INFINITY, 1.0), (-1e308, 1e308)] {
+            let t = linear(lo, hi, 5);
+            assert!(t.values.len() <= 12, "{lo} {hi}: {t:?}");
+            assert!(t.values.iter().all(|v| v.is_finite()), "{t:?}");
+        }
+    }
+
+    #[test]
+    fn log_axes_over_a_few_decades_label_2_and_5() {
+        // 0.01 to 3: a median near 0.3 lies between labels 0.2 and 0.5.
+        let t = log(0.01, 3.0, 6);
+        for l in ["0.02", "0.05", "0.1", "0.2", "0.5", "1", "2"] {
+            assert!(t.labels.iter().any(|x| x == l), "{l} in {:?}", t.labels);
+        }
+        // Many decades: decades only.
+        let t = log(1e-6, 1e3, 6);
+        assert!(t.labels.iter().all(|l| l.starts_with("10")), "{:?}", t.labels);
     }
 
     #[test]

@@ -269,3 +269,28 @@ fn a_realistic_run_reports_success_and_rotor_demand() {
     assert!(run["ftaftsmc"]["peak_rotor_speed_demand"].as_f64().unwrap() > 350.0);
     assert!(stdout.lines().all(|l| l.chars().count() <= 120), "a line is wider than 120 columns");
 }
+
+#[test]
+fn reproduce_prints_the_papers_part_before_the_beyond_part_starts() {
+    // One pipe for stdout and stderr keeps their order: Table 3 and the
+    // verdicts must be on screen before the beyond part (and its minutes of
+    // Monte Carlo) starts, not after it.
+    let dir = temp_dir("order");
+    let exe = env!("CARGO_BIN_EXE_ftsmc");
+    let out = Command::new("sh")
+        .arg("-c")
+        .arg(format!("exec '{exe}' reproduce --out res --no-figures --realistic-runs 2 2>&1"))
+        .current_dir(&dir)
+        .output()
+        .expect("sh runs");
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{text}");
+    let at = |needle: &str| text.find(needle).unwrap_or_else(|| panic!("no {needle:?} in:\n{text}"));
+    let table3 = at("Table 3");
+    let verdict = at("Headline");
+    let beyond_starts = at("beyond the paper:");
+    let monte_carlo = at("Monte Carlo, 2 runs");
+    assert!(table3 < beyond_starts && verdict < beyond_starts, "paper part after the beyond part started:\n{text}");
+    assert!(verdict < monte_carlo, "{text}");
+    std::fs::remove_dir_all(&dir).ok();
+}

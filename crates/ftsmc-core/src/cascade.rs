@@ -13,7 +13,7 @@
 //!
 //! The paper assumes actuators that deliver any thrust and torque; its gains
 //! ask for a negative thrust and ±1.5 N·m torques at 6 Hz in scenario 1, and
-//! with a rotor-speed limit FTAFTSMC flips (issue 11). Four options of
+//! with a rotor-speed limit FTAFTSMC flips (docs/results.md, "Beyond the paper"). Four options of
 //! [`CascadeSettings`] and [`MassAdaptation`] make the cascade aware of
 //! saturation. Each is off or inert by default, and with the defaults the
 //! cascade is bit-identical to the paper's form (the paper scenarios print
@@ -210,7 +210,7 @@ pub struct MassAdaptation {
     #[cfg_attr(feature = "serde", serde(default = "one"))]
     pub alpha_hat0: f64,
     /// Use the estimated mass in the horizontal virtual controls,
-    /// `u_x = α̂ m a_x / U1` (default false: Remark 2 as SPEC fixes it,
+    /// `u_x = α̂ m a_x / U1` (default false: Remark 2 as printed,
     /// `u_x = m a_x / U1`, which leaves x and y uncompensated; see
     /// docs/paper-errata.md E12).
     #[cfg_attr(feature = "serde", serde(default))]

@@ -1,6 +1,6 @@
 //! RANFTSMC — robust adaptive nonsingular fast terminal sliding-mode control
 //! (Labbadi & Cherkaoui, ISA Trans. 2020; the paper's ref. \[19\]) on one
-//! channel, as fixed by SPEC §3:
+//! channel, in the form of its published equations:
 //!
 //! ```text
 //! σ    = e + b1 sig^α(e) + b2 sig^β(ė),                      1 < β < 2, α > β
@@ -19,7 +19,7 @@ use crate::law::{
 };
 use crate::math::{pow_abs, pow_abs_minus_one, sig, sign, tanh};
 
-/// Gains of one RANFTSMC channel (published table, SPEC §3).
+/// Gains of one RANFTSMC channel (the published gain table of ref. \[19\]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[cfg_attr(feature = "serde", derive(serde::Deserialize, serde::Serialize))]
 #[cfg_attr(feature = "serde", serde(deny_unknown_fields))]

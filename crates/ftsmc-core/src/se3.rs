@@ -1,6 +1,6 @@
 //! Geometric tracking control on SE(3): Lee, Leok & McClamroch, *Geometric
-//! tracking control of a quadrotor UAV on SE(3)*, CDC 2010, in the z-up form
-//! of REALISM §4 (world z up, body z along the thrust).
+//! tracking control of a quadrotor UAV on SE(3)*, CDC 2010, written
+//! with world z up and body z along the thrust (the paper has z down).
 //!
 //! ```text
 //! e_x = x − x_d,   e_v = v − v_d

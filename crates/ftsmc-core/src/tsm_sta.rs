@@ -1,6 +1,6 @@
 //! TSM-STA — nonsingular terminal sliding surface with a super-twisting
 //! reaching law (the paper's ref. \[2\]; that paper is not available, so this is
-//! the standard form fixed by SPEC §3) on one channel:
+//! the standard form, docs/controllers.md) on one channel:
 //!
 //! ```text
 //! s    = e + (1/λ) sig^(p/q)(ė),                 p, q odd, 1 < p/q < 2

@@ -88,7 +88,7 @@ pub fn simulate_native(py: Python<'_>, scenario: PyRef<'_, Scenario>, controller
 }
 
 /// How often the watcher checks for a signal (Ctrl-C), s.
-const SIGNAL_POLL: std::time::Duration = std::time::Duration::from_millis(50);
+pub(crate) const SIGNAL_POLL: std::time::Duration = std::time::Duration::from_millis(50);
 
 /// Run `work` on a worker thread without the GIL while this thread checks
 /// for signals every [`SIGNAL_POLL`] ([`Python::check_signals`]): on Ctrl-C
@@ -148,8 +148,12 @@ pub fn simulate_python(
 /// `run_range = (start, end)` flies only the runs with index in
 /// `start..end` of the `runs`-run batch (a shard, for Dask tasks): their
 /// rows are bit-identical to those rows of the whole batch.
+/// `progress(done, total)`, when given, is called about every 0.2 s with
+/// the control steps flown and planned (crate::progress).
 #[pyfunction]
-#[pyo3(signature = (scenario, runs, seed=None, controllers=None, threads=None, run_range=None))]
+#[pyo3(signature = (scenario, runs, seed=None, controllers=None, threads=None, run_range=None, progress=None))]
+// The arguments are Python's keyword arguments, one each.
+#[allow(clippy::too_many_arguments)]
 pub fn montecarlo_columns<'py>(
     py: Python<'py>,
     scenario: PyRef<'_, Scenario>,
@@ -158,6 +162,7 @@ pub fn montecarlo_columns<'py>(
     controllers: Option<Vec<String>>,
     threads: Option<usize>,
     run_range: Option<(u64, u64)>,
+    progress: Option<Bound<'py, PyAny>>,
 ) -> PyResult<(Vec<String>, Vec<Bound<'py, PyAny>>)> {
     let mut scenario = scenario.inner.clone();
     let names = controllers.unwrap_or_else(|| scenario.controllers.clone());
@@ -183,15 +188,16 @@ pub fn montecarlo_columns<'py>(
     scenario.seed = seed.unwrap_or(scenario.seed);
     scenario.controllers = names;
     let spec = scenario.montecarlo.clone().unwrap_or_default();
+    let total = (end - start) * scenario.controllers.len() as u64 * ftsmc_sim::run::planned_steps(&scenario);
 
-    let rows = with_ctrl_c(py, move |cancel| {
+    let rows = crate::progress::with_progress(py, total, progress.as_ref(), move |cancel, tick| {
         let mut builder = rayon::ThreadPoolBuilder::new();
         if let Some(t) = threads {
             builder = builder.num_threads(t);
         }
         let pool = builder.build().map_err(|e| format!("cannot start the thread pool: {e}"))?;
         pool.install(|| {
-            run_batch_range(&scenario, &spec, &scenario.controllers, start..end, scenario.seed, &|_| {}, Some(cancel))
+            run_batch_range(&scenario, &spec, &scenario.controllers, start..end, scenario.seed, tick, Some(cancel))
                 .map_err(|known| format!("unknown controller (known: {known})"))
         })
     })?;

@@ -13,6 +13,7 @@ use pyo3::prelude::*;
 
 mod controller;
 mod flight;
+mod progress;
 mod scenario;
 
 /// A `ValueError` carrying `message` (the text the CLI prints after `error: `).

@@ -1,4 +1,4 @@
-//! Performance metrics of SPEC §5, accumulated online at the control rate:
+//! Performance metrics (docs/outputs.md), accumulated online at the control rate:
 //! ISE, IAE, ITAE, RMS, maximum error after the transient, 2 % settling time
 //! per channel; control energy and chattering index per control signal.
 //!

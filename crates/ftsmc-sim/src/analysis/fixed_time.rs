@@ -1,4 +1,4 @@
-//! Measuring the fixed-time claim (paper Eq. 38, 63, 78; SPEC §7).
+//! Measuring the fixed-time claim (paper Eq. 38, 63, 78).
 //!
 //! The bound speaks of one channel with exact model cancellation: the error
 //! dynamics are a double integrator `ë = v_fb`. [`decoupled_channel`] flies

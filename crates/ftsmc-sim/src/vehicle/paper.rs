@@ -1,4 +1,4 @@
-//! The quadrotor plant of paper Eq. 1–2 with the errata of SPEC §1, as a
+//! The quadrotor plant of paper Eq. 1–2 with the errata of docs/paper-errata.md (section 1.A), as a
 //! pure derivative function `ẋ = f(x, U, Ω̄, params, D)`.
 
 use ftsmc_core::math::sin_cos;
@@ -17,7 +17,7 @@ pub mod index {
     pub const P: usize = 9;
 }
 
-/// Time derivative of the state (paper Eq. 1 corrected, SPEC §1):
+/// Time derivative of the state (paper Eq. 1 corrected, docs/paper-errata.md 1.A):
 ///
 /// ```text
 /// ẍ = −(K_f1x/m) ẋ + (U1/m)(cφ sθ cψ + sφ sψ) + D_x
