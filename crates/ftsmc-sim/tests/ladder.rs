@@ -3,8 +3,10 @@
 //! only in wind and envelope; `realistic-scenario-1/2` are the moderate
 //! rung; and a small Monte Carlo shows the calm rung flown by the
 //! practitioners' controllers with default gains inside its envelope and
-//! success falling on the moderate rung. The 200-run calibration is
-//! `ftsmc montecarlo realistic-calm-1 --runs 200 -c pid,se3` (docs/results.md).
+//! success falling on the moderate rung; scenario 2's rungs keep the
+//! payload within the Hummingbird's rated one, and SE(3) flies calm-2. The
+//! 200-run calibration is `ftsmc montecarlo realistic-<level>-<n> --runs 200
+//! -c pid,se3,ftaftsmc` (docs/results.md, "The wind ladder").
 
 use ftsmc_sim::actuators::MixerKind;
 use ftsmc_sim::batch::montecarlo::run_batch;
