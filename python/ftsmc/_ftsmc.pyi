@@ -2,7 +2,7 @@
 # Keep in step with crates/ftsmc-py/src/*.rs; `mypy --strict` checks the
 # package and the examples against it.
 from os import PathLike
-from typing import Any, Callable, List, Mapping, Optional, Sequence, Tuple, Union
+from typing import Any, Callable, Dict, List, Mapping, Optional, Sequence, Tuple, Union
 
 import numpy as np
 import numpy.typing as npt
@@ -66,6 +66,57 @@ class RunData:
     def column_names(self) -> List[str]: ...
     def columns(self) -> List[npt.NDArray[np.float64]]: ...
     def csv(self) -> bytes: ...
+
+class GymBatch:
+    """N environments of one scenario stepped in Rust (ftsmc.gym)."""
+
+    def __init__(
+        self,
+        scenario: Scenario,
+        seeds: Sequence[int],
+        task: str = "track",
+        target: Optional[Sequence[float]] = None,
+        action: str = "ctbr",
+        observe: str = "sensors",
+        agent_rate: float = 100.0,
+        max_episode_time: Optional[float] = None,
+        reward: Optional[Mapping[str, float]] = None,
+        rate_gain: Optional[Sequence[float]] = None,
+        max_rate: Optional[Sequence[float]] = None,
+        randomize: bool = False,
+    ) -> None: ...
+    @property
+    def num_envs(self) -> int: ...
+    def reset(self, seeds: npt.NDArray[np.uint64]) -> _GymOut: ...
+    def step(self, actions: npt.NDArray[np.float64], reset_seeds: npt.NDArray[np.uint64]) -> _GymOut: ...
+    def done(self) -> npt.NDArray[np.bool_]: ...
+    def seeds(self) -> npt.NDArray[np.uint64]: ...
+    @property
+    def step_time(self) -> float: ...
+    @property
+    def episode_time(self) -> float: ...
+    @property
+    def max_thrust(self) -> float: ...
+    @property
+    def rotor_speed_range(self) -> Tuple[float, float]: ...
+    @property
+    def mass(self) -> float: ...
+    @property
+    def max_rate(self) -> List[float]: ...
+    @property
+    def reward_weights(self) -> Dict[str, float]: ...
+    @staticmethod
+    def observation_names() -> List[str]: ...
+
+_GymOut = Tuple[
+    npt.NDArray[np.float32],
+    npt.NDArray[np.float64],
+    npt.NDArray[np.bool_],
+    npt.NDArray[np.bool_],
+    List[str],
+    npt.NDArray[np.float64],
+    npt.NDArray[np.bool_],
+]
 
 def simulate_native(scenario: Scenario, controller: str) -> RunData: ...
 def simulate_python(scenario: Scenario, controller: Any, state_cls: Any, reference_cls: Any, name: str) -> RunData: ...

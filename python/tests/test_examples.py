@@ -51,3 +51,12 @@ def test_mypy_strict_on_the_examples_and_package() -> None:
     for target in (["-p", "ftsmc"], [str(p) for p in sorted(EXAMPLES.glob("*.py"))]):
         done = subprocess.run([*mypy, *target], capture_output=True, text=True, cwd=REPO)
         assert done.returncode == 0, done.stdout + done.stderr
+
+
+def test_gym_hover_example(tmp_path: Path) -> None:
+    pytest.importorskip("gymnasium")
+    out = run([str(EXAMPLES / "gym_hover.py"), "--episodes", "1"], tmp_path)
+    # The scripted PD flies every episode to its end; the random policy does not.
+    assert "pd episode 0: return" in out and "steps, completed" in out, out
+    assert "random episode 0" in out and "random episode 0: return" in out and ", completed" not in out.split("pd episode")[0], out
+    assert "0 terminated" in out, out

@@ -15,9 +15,9 @@ use ftsmc_sim::scenario::Scenario;
 use rayon::prelude::*;
 use serde_json::json;
 
+use crate::console::Table;
 use crate::output::{format_number, provenance, ResultDir};
 use crate::plot::{controller_color, write_figure, Figure, Panel, Series};
-use crate::reproduce::Table;
 
 struct Row {
     controller: String,

@@ -14,8 +14,8 @@ use ftsmc_sim::scenario::ladder::LADDER;
 use ftsmc_sim::scenario::Scenario;
 use serde_json::{json, Map, Value};
 
+use crate::console::{steps_bar, Table};
 use crate::output::ResultDir;
-use crate::reproduce::{steps_bar, Table};
 
 /// What [`ladder`] produced.
 pub struct Ladder {

@@ -2,6 +2,7 @@
 //!
 //! Run `ftsmc --help` for the commands.
 
+mod console;
 mod figures;
 mod fixed_time;
 mod ladder;

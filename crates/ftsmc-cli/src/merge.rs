@@ -25,15 +25,8 @@ use ftsmc_sim::batch::shard::Shard;
 use ftsmc_sim::scenario::Scenario;
 use serde_json::{json, Map, Value};
 
-use crate::montecarlo::{mc_table, write_ise_boxplots};
+use crate::montecarlo::{mc_table, shard_json, write_ise_boxplots};
 use crate::output::{provenance, sha256_hex, ResultDir, ScenarioFile};
-
-/// The `shard` object of a shard's `summary.json`: `index` K and `count` N
-/// (`--shard K/N`) and the run indices it holds, `first_run` ..
-/// `end_run` (end excluded).
-pub fn shard_json(shard: Shard, indices: &Range<u64>) -> Value {
-    json!({"index": shard.index, "count": shard.count, "first_run": indices.start, "end_run": indices.end})
-}
 
 /// One shard folder, read and checked on its own.
 struct ShardFolder {
@@ -276,10 +269,16 @@ pub fn merge(dirs: &[PathBuf], out: &Path, figures: bool) -> Result<()> {
     let names: Vec<&str> = first.header.iter().collect();
     let tail = ["completed", "success", "crashed"];
     let metrics_from = 5 + SAMPLED_COLUMNS.len();
-    if names.len() < metrics_from + tail.len() || names[names.len() - 3..] != tail || names[2] != "controller" {
+    if names.len() < metrics_from + ftsmc_sim::batch::runs_table::STATS_COLUMNS.len() + tail.len()
+        || names[names.len() - 3..] != tail
+        || names[2] != "controller"
+    {
         bail!("shard `{}`: runs.csv columns are not those of `ftsmc montecarlo`", first.dir.display());
     }
-    let metric_columns = metrics_from..names.len() - 3;
+    // The flight-statistics columns sit between the metrics and the tail;
+    // summary.json summarises the metrics only.
+    let stats = ftsmc_sim::batch::runs_table::STATS_COLUMNS.len();
+    let metric_columns = metrics_from..names.len() - 3 - stats;
     let mut outcomes = Vec::with_capacity(shards.iter().map(|s| s.rows.len()).sum());
     let mut completed_ise: Vec<(String, [f64; 4])> = Vec::new();
     let ise_at: Vec<usize> = ["ise_x", "ise_y", "ise_z", "ise_psi"]

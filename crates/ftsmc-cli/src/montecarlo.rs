@@ -13,9 +13,9 @@ use ftsmc_sim::run::planned_steps;
 use ftsmc_sim::scenario::Scenario;
 use serde_json::{json, Map, Value};
 
+use crate::console::{num, steps_bar, Table};
 use crate::output::{provenance, ResultDir};
 use crate::plot::{controller_color, write_boxplots, BoxGroup, BoxPanel};
-use crate::reproduce::{num, steps_bar, Table};
 
 /// `runs.csv` text: one row per (run, controller), in run order (the
 /// columns of [`runs_table`], shared with the Python package). The integral
@@ -129,7 +129,7 @@ pub fn run(
         "provenance": provenance(&[file]),
     });
     if let Some(shard) = shard {
-        summary["shard"] = crate::merge::shard_json(shard, &indices);
+        summary["shard"] = shard_json(shard, &indices);
     }
     dir.write("summary.json", serde_json::to_string_pretty(&summary)?.as_bytes())?;
 
@@ -211,4 +211,11 @@ pub fn write_ise_boxplots(
         )?;
     }
     Ok(())
+}
+
+/// The `shard` object of a shard's `summary.json`: `index` K and `count` N
+/// (`--shard K/N`) and the run indices it holds, `first_run` ..
+/// `end_run` (end excluded).
+pub fn shard_json(shard: Shard, indices: &std::ops::Range<u64>) -> Value {
+    json!({"index": shard.index, "count": shard.count, "first_run": indices.start, "end_run": indices.end})
 }

@@ -10,10 +10,10 @@ use ftsmc_core::cascade::AttitudeDerivatives;
 use ftsmc_sim::registry::{self, label};
 use ftsmc_sim::run::{planned_steps, reference_at, RunOptions, RunOutput};
 use ftsmc_sim::scenario::Scenario;
-use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
 use serde_json::{json, Map, Value};
 
+use crate::console::{num, steps_bar, Table};
 use crate::output::{provenance, recording_csv, summary_json, ResultDir};
 
 /// Paper Table 3 (scenario 1 ISE): `(state, [RANFTSMC, TSM-STA, FTAFTSMC])`.
@@ -36,20 +36,6 @@ pub struct Job {
     pub controller: String,
     /// Output key (controller name or a variant name).
     pub key: String,
-}
-
-/// A progress bar over `total` simulated control steps (on stderr; hidden
-/// when stderr is not a terminal).
-pub fn steps_bar(total: u64, flights: u64) -> ProgressBar {
-    let bar = ProgressBar::new(total);
-    bar.set_style(
-        ProgressStyle::with_template(&format!(
-            "{{spinner}} [{{elapsed_precise}}] {{bar:30}} {{human_pos}}/{{human_len}} control steps of {flights} flight{} ({{percent}} %, eta {{eta}})",
-            if flights == 1 { "" } else { "s" }
-        ))
-        .expect("valid template"),
-    );
-    bar
 }
 
 /// Fly all jobs in parallel (deterministic: each job is independent). The
@@ -89,66 +75,6 @@ fn write_runs(runs: &[RunOutput], dir: &ResultDir, flat: bool) -> Result<()> {
 /// completed run's.
 pub fn not_comparable(run: &RunOutput) -> String {
     format!("— ({})", run.exit.short())
-}
-
-/// Four decimals, or scientific notation for small non-zero values (below
-/// 1e-3) and large ones (1e6 and above).
-pub fn num(v: f64) -> String {
-    if v != 0.0 && (v.abs() < 1e-3 || v.abs() >= 1e6) {
-        format!("{v:.3e}")
-    } else {
-        format!("{v:.4}")
-    }
-}
-
-/// A Markdown table with every column padded to its widest cell, so it
-/// reads aligned on a console too.
-pub struct Table {
-    header: Vec<String>,
-    rows: Vec<Vec<String>>,
-}
-
-impl Table {
-    /// A table with these column headers.
-    pub fn new<S: Into<String>>(header: impl IntoIterator<Item = S>) -> Self {
-        Self { header: header.into_iter().map(Into::into).collect(), rows: Vec::new() }
-    }
-
-    /// Add a row (as many cells as headers).
-    pub fn row(&mut self, cells: Vec<String>) {
-        debug_assert_eq!(cells.len(), self.header.len());
-        self.rows.push(cells);
-    }
-
-    /// The Markdown text, one line per row, each ending in a newline (a `|`
-    /// inside a cell is escaped as `\|`).
-    pub fn render(&self) -> String {
-        let width = |s: &str| s.chars().count();
-        let escape = |cells: &[String]| cells.iter().map(|c| c.replace('|', "\\|")).collect::<Vec<_>>();
-        let header = escape(&self.header);
-        let rows: Vec<Vec<String>> = self.rows.iter().map(|r| escape(r)).collect();
-        let widths: Vec<usize> = (0..header.len())
-            .map(|i| rows.iter().map(|r| width(&r[i])).chain([width(&header[i]), 3]).max().unwrap_or(3))
-            .collect();
-        let line = |cells: &[String]| {
-            let mut l = String::from("|");
-            for (cell, w) in cells.iter().zip(&widths) {
-                let _ = write!(l, " {cell}{} |", " ".repeat(w - width(cell)));
-            }
-            l.push('\n');
-            l
-        };
-        let mut md = line(&header);
-        md.push('|');
-        for w in &widths {
-            let _ = write!(md, "{}|", "-".repeat(w + 2));
-        }
-        md.push('\n');
-        for r in &rows {
-            md.push_str(&line(r));
-        }
-        md
-    }
 }
 
 fn find<'a>(runs: &'a [RunOutput], scenario: &str, key: &str) -> Option<&'a RunOutput> {
@@ -783,7 +709,7 @@ pub fn beyond_the_paper(dir: &ResultDir, figures: bool, mc_runs: u64) -> Result<
     let mut json_scenarios = Map::new();
     let mut notes = Vec::new();
     for s in &scenarios {
-        let omega_max = ftsmc_sim::run::truth::actuators(s).max_rotor_speed;
+        let omega_max = ftsmc_sim::run::actuators(s).max_rotor_speed;
         let mut per = Map::new();
         for name in BEYOND_CONTROLLERS {
             let Some(run) = find(&runs, &s.name, name) else { continue };
@@ -918,7 +844,7 @@ pub fn beyond_the_paper(dir: &ResultDir, figures: bool, mc_runs: u64) -> Result<
         let fig_dir = dir.path().join("figures").join("beyond");
         for s in &scenarios {
             let mine: Vec<&RunOutput> = runs.iter().filter(|r| r.scenario == s.name).collect();
-            crate::figures::beyond(&mine, ftsmc_sim::run::truth::actuators(s).max_rotor_speed, &fig_dir)?;
+            crate::figures::beyond(&mine, ftsmc_sim::run::actuators(s).max_rotor_speed, &fig_dir)?;
         }
     }
     Ok(Beyond { report: md, flights })

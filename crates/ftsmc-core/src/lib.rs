@@ -27,6 +27,7 @@ pub mod model;
 pub mod pid;
 pub mod ranftsmc;
 pub mod se3;
+mod setpoint;
 pub mod tsm_sta;
 
 pub use cascade::{Cascade, CascadeConfig, CascadeSettings, Controller, MassAdaptation, Telemetry};

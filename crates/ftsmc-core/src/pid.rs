@@ -106,7 +106,7 @@ use crate::math::{
     rotation_from_euler, sin, sin_cos, sqrt, Mat3, Vec3,
 };
 use crate::model::{Command, QuadState, QuadrotorParams, Reference};
-use crate::se3::{limit_tilt, reference_finite};
+use crate::setpoint::{limit_tilt, reference_finite};
 
 /// PX4 `MPC_THR_HOVER` default: hover at half the maximum thrust (T/W = 2).
 pub const PX4_HOVER_THRUST: f64 = 0.5;
@@ -408,6 +408,10 @@ pub struct PidController {
     last_torque: Vec3,
     actuator_saturated: bool,
     telemetry: Telemetry,
+    /// The derivative filters' `α = 1 − e^{−2π f_c dt}` (velocity, rates)
+    /// for the control period whose bits are `alpha_dt` (constant over a flight).
+    alphas: [f64; 2],
+    alpha_dt: u64,
 }
 
 /// Names of the [`Telemetry::estimates`] slots: slot 0 of x, y, z is the
@@ -433,6 +437,8 @@ impl PidController {
             last_torque: [0.0; 3],
             actuator_saturated: false,
             telemetry: Telemetry { alpha_hat: 1.0, ..Telemetry::default() },
+            alphas: [0.0; 2],
+            alpha_dt: f64::NAN.to_bits(),
         })
     }
 
@@ -451,11 +457,21 @@ impl PidController {
         self.rate_integral
     }
 
-    /// First-order low-pass of a finite difference, one step of `dt` at
-    /// cutoff `hz`; `previous` is updated to `value`.
-    fn filtered_derivative(value: &Vec3, previous: &mut Vec3, filtered: &mut Vec3, hz: f64, dt: f64) {
+    /// The low-pass weights `α = 1 − e^{−2π f_c dt}` of the velocity and
+    /// rate derivative filters for a period `dt` (s), computed when `dt` changes.
+    fn derivative_alphas(&mut self, dt: f64) -> [f64; 2] {
+        if self.alpha_dt != dt.to_bits() {
+            let alpha = |hz: f64| 1.0 - exp(-2.0 * core::f64::consts::PI * hz * dt);
+            self.alphas = [alpha(self.gains.velocity_derivative_cutoff), alpha(self.gains.rate_derivative_cutoff)];
+            self.alpha_dt = dt.to_bits();
+        }
+        self.alphas
+    }
+
+    /// First-order low-pass (weight `alpha`, [`Self::derivative_alphas`]) of
+    /// a finite difference over `dt`; `previous` is updated to `value`.
+    fn filtered_derivative(value: &Vec3, previous: &mut Vec3, filtered: &mut Vec3, alpha: f64, dt: f64) {
         if dt > 0.0 {
-            let alpha = 1.0 - exp(-2.0 * core::f64::consts::PI * hz * dt);
             for i in 0..3 {
                 let raw = saturate((value[i] - previous[i]) / dt, INPUT_LIMIT);
                 filtered[i] = saturate(filtered[i] + alpha * (raw - filtered[i]), INPUT_LIMIT);
@@ -518,20 +534,9 @@ impl Controller for PidController {
             self.previous_rates = omega;
             self.initialised = true;
         }
-        Self::filtered_derivative(
-            &velocity,
-            &mut self.previous_velocity,
-            &mut self.velocity_derivative,
-            k.velocity_derivative_cutoff,
-            dt,
-        );
-        Self::filtered_derivative(
-            &omega,
-            &mut self.previous_rates,
-            &mut self.rate_derivative,
-            k.rate_derivative_cutoff,
-            dt,
-        );
+        let alphas = self.derivative_alphas(dt);
+        Self::filtered_derivative(&velocity, &mut self.previous_velocity, &mut self.velocity_derivative, alphas[0], dt);
+        Self::filtered_derivative(&omega, &mut self.previous_rates, &mut self.rate_derivative, alphas[1], dt);
 
         // 1. Position P → velocity setpoint.
         let mut from_position = [0.0; 3];
@@ -700,6 +705,8 @@ impl Controller for PidController {
             last_torque: [0.0; 3],
             actuator_saturated: false,
             telemetry: Telemetry { alpha_hat: 1.0, ..Telemetry::default() },
+            alphas: self.alphas,
+            alpha_dt: self.alpha_dt,
         };
     }
 

@@ -53,10 +53,11 @@
 use crate::cascade::{Controller, Telemetry};
 use crate::law::{check_closed, check_gain, check_left_open, saturate, GainError, INPUT_LIMIT, MAX_ESTIMATES};
 use crate::math::{
-    body_rates_from_euler_rates, cos, cross, dot, euler_from_rotation, mat_t_mat, mat_t_vec, mat_vec, norm,
-    rotation_from_euler, sin, sin_cos, sqrt, Mat3, Vec3,
+    body_rates_from_euler_rates, cross, dot, euler_from_rotation, mat_t_mat, mat_t_vec, mat_vec, norm,
+    rotation_from_euler, sin_cos, Mat3, Vec3,
 };
 use crate::model::{Command, QuadState, QuadrotorParams, Reference};
+use crate::setpoint::{limit_tilt, reference_finite};
 
 /// Gains of [`Se3Controller`]. `Default` is [`Se3Gains::for_vehicle`] of the
 /// paper's quadrotor ([`QuadrotorParams::default`]).
@@ -186,20 +187,6 @@ pub fn attitude_error(r: &Mat3, r_d: &Mat3) -> Vec3 {
     let m = mat_t_mat(r_d, r);
     // (M − Mᵀ)^∨ with M = R_dᵀR (so Mᵀ = RᵀR_d).
     [0.5 * (m[2][1] - m[1][2]), 0.5 * (m[0][2] - m[2][0]), 0.5 * (m[1][0] - m[0][1])]
-}
-
-/// Rotate the unit vector `b` towards the vertical so that its angle to
-/// `e₃` is at most `max_tilt` (PX4 `ControlMath::limitTilt`, z up).
-pub(crate) fn limit_tilt(b: Vec3, max_tilt: f64) -> Vec3 {
-    let c = b[2];
-    let limit_cos = cos(max_tilt);
-    if c >= limit_cos {
-        return b;
-    }
-    let horizontal = sqrt(b[0] * b[0] + b[1] * b[1]);
-    let (hx, hy) = if horizontal > 1e-12 { (b[0] / horizontal, b[1] / horizontal) } else { (1.0, 0.0) };
-    let s = sin(max_tilt);
-    [s * hx, s * hy, limit_cos]
 }
 
 /// Lee et al.'s geometric controller ([module docs](self)).
@@ -333,14 +320,6 @@ impl Controller for Se3Controller {
     fn reset(&mut self) {
         self.telemetry = Self::initial_telemetry();
     }
-}
-
-/// Every component of the reference is finite.
-pub(crate) fn reference_finite(r: &Reference) -> bool {
-    r.position.iter().chain(&r.velocity).chain(&r.acceleration).all(|v| v.is_finite())
-        && r.yaw.is_finite()
-        && r.yaw_rate.is_finite()
-        && r.yaw_acceleration.is_finite()
 }
 
 #[cfg(test)]

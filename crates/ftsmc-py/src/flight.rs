@@ -87,11 +87,8 @@ pub fn simulate_native(py: Python<'_>, scenario: PyRef<'_, Scenario>, controller
     Ok(RunData { out: out.map_err(value_error)? })
 }
 
-/// How often the watcher checks for a signal (Ctrl-C), s.
-pub(crate) const SIGNAL_POLL: std::time::Duration = std::time::Duration::from_millis(50);
-
 /// Run `work` on a worker thread without the GIL while this thread checks
-/// for signals every [`SIGNAL_POLL`] ([`Python::check_signals`]): on Ctrl-C
+/// for signals every [`crate::progress::SIGNAL_POLL`] ([`Python::check_signals`]): on Ctrl-C
 /// the cancellation flag is set, the worker stops (within
 /// [`ftsmc_sim::run::PROGRESS_EVERY`] control steps), and the signal's
 /// exception (`KeyboardInterrupt`) is raised.
@@ -103,7 +100,7 @@ fn with_ctrl_c<T: Send>(py: Python<'_>, work: impl FnOnce(&std::sync::atomic::At
         let worker = scope.spawn(move || work(cancel));
         let mut interrupted = None;
         while !worker.is_finished() {
-            py.detach(|| std::thread::sleep(SIGNAL_POLL));
+            py.detach(|| std::thread::sleep(crate::progress::SIGNAL_POLL));
             if let Err(e) = py.check_signals() {
                 cancel.store(true, Ordering::Relaxed);
                 interrupted = Some(e);

@@ -13,6 +13,7 @@ use pyo3::prelude::*;
 
 mod controller;
 mod flight;
+mod gym;
 mod progress;
 mod scenario;
 
@@ -27,6 +28,7 @@ fn _ftsmc(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<scenario::Scenario>()?;
     m.add_class::<controller::NativeController>()?;
     m.add_class::<flight::RunData>()?;
+    m.add_class::<gym::GymBatch>()?;
     m.add_function(wrap_pyfunction!(flight::simulate_native, m)?)?;
     m.add_function(wrap_pyfunction!(flight::simulate_python, m)?)?;
     m.add_function(wrap_pyfunction!(flight::montecarlo_columns, m)?)?;

@@ -3,7 +3,7 @@
 //!
 //! The batch flies on its own thread with the GIL released and counts the
 //! control steps it has flown. The calling thread wakes every
-//! [`crate::flight::SIGNAL_POLL`] to check for signals (Ctrl-C sets the
+//! [`SIGNAL_POLL`] to check for signals (Ctrl-C sets the
 //! cancellation flag, the batch stops and `KeyboardInterrupt` is raised, as
 //! in the flight module's `with_ctrl_c`) and every [`INTERVAL`] takes the GIL to call
 //! `progress(done, total)` (steps), a last time with `done == total`. The
@@ -14,7 +14,9 @@ use std::time::{Duration, Instant};
 
 use pyo3::prelude::*;
 
-use crate::flight::SIGNAL_POLL;
+/// How often the watcher checks for a signal (Ctrl-C), s (shared by
+/// `flight.rs`'s `with_ctrl_c` and [`with_progress`]).
+pub(crate) const SIGNAL_POLL: std::time::Duration = std::time::Duration::from_millis(50);
 
 /// Time between two calls of the progress callable.
 pub const INTERVAL: Duration = Duration::from_millis(200);

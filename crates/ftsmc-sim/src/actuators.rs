@@ -60,7 +60,7 @@ pub struct MotorNoise {
 }
 
 /// How the mixer gives up authority when the rotors saturate
-/// (`[actuators] mixer = "thrust-first" | "px4" | "px4-airmode"`).
+/// (`[actuators] mixer = "thrust-first" | "px4" | "px4-airmode" | "clamp"`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, Serialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum MixerKind {
@@ -79,6 +79,11 @@ pub enum MixerKind {
     /// [`MixerKind::Px4`], but the collective thrust may also be raised
     /// (at low throttle) to keep roll/pitch authority.
     Px4Airmode,
+    /// Paper Eq. 2 inverted and each rotor speed clamped to `[ω_min, ω_max]`
+    /// on its own (thrust and torques change together; [`Mixer::mix_clamped`]).
+    /// The rotors reach the clamped speeds at once: no lag, no noise. What the
+    /// deprecated `simulation.max_rotor_speed` means.
+    Clamp,
 }
 
 fn is_thrust_first(m: &MixerKind) -> bool {
@@ -187,6 +192,24 @@ impl ActuatorParams {
                 NoiseScale::Relative => closed("noise.std", noise.std, 0.0, 10.0, "0 <= std <= 10 (fraction)")?,
             }
         }
+        if self.mixer == MixerKind::Clamp {
+            if self.time_constant_up != 0.0 || self.time_constant_down != 0.0 {
+                let value = self.time_constant_up.max(self.time_constant_down);
+                return Err(GainError {
+                    field: "mixer",
+                    value,
+                    expected: "mixer = \"clamp\" with time_constant_up = time_constant_down = 0 (or mixer = \"thrust-first\" for lagged motors)",
+                });
+            }
+            if let Some(noise) = self.noise {
+                return Err(GainError {
+                    field: "mixer",
+                    value: noise.std,
+                    expected:
+                        "mixer = \"clamp\" without [actuators.noise] (or mixer = \"thrust-first\" for noisy motors)",
+                });
+            }
+        }
         Ok(())
     }
 
@@ -250,6 +273,37 @@ impl Motors {
     /// Advance the motors by `h` seconds with `command` (rad/s) held.
     pub fn advance(&mut self, command: &[f64; 4], h: f64) {
         self.speeds = self.speeds_after(command, h);
+    }
+
+    /// The lag's decay factors `[e^{−dt/τ_up}, e^{−dt/τ_down}]` over `dt`
+    /// seconds (1 for τ = 0, where they are not used): computed once for a
+    /// step size that does not change, then [`Motors::speeds_decayed`].
+    pub fn decay(&self, dt: f64) -> [f64; 2] {
+        let f = |tau: f64| if tau == 0.0 { 1.0 } else { (-dt / tau).exp() };
+        [f(self.params.time_constant_up), f(self.params.time_constant_down)]
+    }
+
+    /// [`Motors::speeds_after`] with the decay factors of [`Motors::decay`]
+    /// for that `dt` (same formula, no exponential evaluated).
+    #[inline]
+    pub fn speeds_decayed(&self, command: &[f64; 4], decay: &[f64; 2]) -> [f64; 4] {
+        let p = &self.params;
+        core::array::from_fn(|i| {
+            let target = p.clamp_speed(command[i]);
+            let now = self.speeds[i];
+            let (tau, e) = if target > now { (p.time_constant_up, decay[0]) } else { (p.time_constant_down, decay[1]) };
+            if tau == 0.0 {
+                target
+            } else {
+                target + (now - target) * e
+            }
+        })
+    }
+
+    /// [`Motors::advance`] by the `dt` of `decay` ([`Motors::decay`]).
+    #[inline]
+    pub fn advance_decayed(&mut self, command: &[f64; 4], decay: &[f64; 2]) {
+        self.speeds = self.speeds_decayed(command, decay);
     }
 
     /// Draw one standard-normal sample per rotor (rotors 1..4 in order) for
@@ -487,8 +541,25 @@ impl Mixer {
         (thrust, s)
     }
 
+    /// Rotor speed commands for `command` with each squared speed clamped to
+    /// `[ω_min², ω_max²]` on its own ([`MixerKind::Clamp`]); `applied` is what
+    /// the clamped speeds produce (`A w`), `saturated` whether any rotor was clamped.
+    pub fn mix_clamped(&self, command: &Command) -> MixerOutput {
+        let finite = |v: f64| if v.is_finite() { v } else { 0.0 };
+        let commanded = Command { thrust: finite(command.thrust), torque: command.torque.map(finite) };
+        let u = [commanded.thrust, commanded.torque[0], commanded.torque[1], commanded.torque[2]];
+        let w = self.squared(&u);
+        let clamped = w.map(|wi| wi.clamp(self.w_min, self.w_max));
+        let saturated = commanded != *command || clamped != w;
+        let applied = if saturated { self.forces(&clamped) } else { commanded };
+        MixerOutput { commanded, applied, rotor_speeds: clamped.map(f64::sqrt), saturated }
+    }
+
     /// Rotor speed commands for `command` under the documented priority.
     pub fn mix(&self, command: &Command) -> MixerOutput {
+        if self.kind == MixerKind::Clamp {
+            return self.mix_clamped(command);
+        }
         let finite = |v: f64| if v.is_finite() { v } else { 0.0 };
         let commanded = Command { thrust: finite(command.thrust), torque: command.torque.map(finite) };
         let all_finite = commanded == *command;
@@ -505,7 +576,7 @@ impl Mixer {
         };
         let requested = commanded.thrust.clamp(self.thrust_range[0], self.thrust_range[1]);
         let (thrust, s_rp) = match self.kind {
-            MixerKind::ThrustFirst => (requested, self.max_scale(&column(0, requested), &rp)),
+            MixerKind::ThrustFirst | MixerKind::Clamp => (requested, self.max_scale(&column(0, requested), &rp)),
             MixerKind::Px4 => self.keep_roll_pitch(requested, &rp, false),
             MixerKind::Px4Airmode => self.keep_roll_pitch(requested, &rp, true),
         };

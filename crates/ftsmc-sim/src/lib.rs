@@ -17,11 +17,18 @@
 //!          batch/               batches of flights
 //!            montecarlo.rs      run_batch, stats, summarize
 //!            shard.rs           K/N shards of a campaign (contiguous blocks of runs)
+//!          gym/                 reinforcement-learning environments (Python's `ftsmc.gym`)
+//!            agent.rs           the agent as a controller: thrust + body rates, or rotor speeds
+//!            lane.rs            one environment: an owned Flight, observation, reward, episode end
+//!            batch.rs           N environments per call, next-step auto-reset
 //! floor 5  registry.rs          controllers by name for a scenario: build, run, label
-//! floor 4  run/                 the loop: controller on its clock, plant by RK4, environment, metrics
+//! floor 4  run/                 the one loop (docs/architecture.md): simulate, RunOptions, RunOutput
+//!            flight.rs          Flight: one flight, stepped one control period at a time
+//!            actuation.rs       the actuator stage: ideal, per-rotor clamp, mixer + lagged motors
+//!            truth.rs           TruthModel: paper Eq. 1 and the rigid body, RK4 substeps
+//!            observer.rs        Tick, Observer, FlightStats (tilt, saturation, rotor statistics)
 //!            exit.rs            ExitStatus, Divergence, divergence checks
 //!            recording.rs       Recording, recording_columns, CSV numbers
-//!            truth.rs           the realistic loop: mixer, motors, rigid body or Eq. 1, ground contact
 //! floor 3  scenario/            the file format; composes every part's parameters; validation
 //!            validate.rs        range checks, names, array lengths, cost limits
 //!            resolve.rs         extends chains, deep merge, --set overrides, unit-slip warnings
@@ -62,6 +69,7 @@ pub mod batch;
 pub mod controllers;
 pub mod envelope;
 pub mod environment;
+pub mod gym;
 pub mod limits;
 pub mod metrics;
 pub mod registry;

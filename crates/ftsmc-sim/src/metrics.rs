@@ -66,7 +66,8 @@ pub struct Metrics {
     /// `[0, duration]`, which is shorter than the scenario for a run that
     /// diverged.
     pub duration: f64,
-    /// Realistic flights only (`crate::run::truth`): the largest rotor speed the
+    /// Flights with any model beyond the paper's (rigid body, `[actuators]`,
+    /// ground, sensors, wind) only: the largest rotor speed the
     /// controller's commands asked for, without limits, rad/s.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub peak_rotor_speed_demand: Option<f64>,

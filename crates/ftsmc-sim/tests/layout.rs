@@ -26,6 +26,7 @@ const FLOORS: &[(&str, u32)] = &[
     ("registry", 5),
     ("analysis", 6),
     ("batch", 6),
+    ("gym", 6),
     // The crate root only re-exports.
     ("", 7),
 ];

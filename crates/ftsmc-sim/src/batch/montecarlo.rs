@@ -29,6 +29,8 @@ pub struct McRun {
     pub metrics: Metrics,
     /// Completed and inside the scenario's `[envelope]` ([`RunOutput::success`](crate::RunOutput::success)).
     pub success: bool,
+    /// Tilt, saturation and rotor statistics of the flight (observed, not recorded).
+    pub stats: crate::run::FlightStats,
 }
 
 /// Fly `runs` randomised copies of `base` with each controller, in parallel
@@ -102,6 +104,7 @@ pub fn run_batch_range(
                         exit: out.exit,
                         success: out.success(),
                         metrics: out.metrics,
+                        stats: out.stats,
                     }
                 })
                 .collect()

@@ -41,10 +41,16 @@ impl Column {
     }
 }
 
+/// The flight-statistics columns ([`crate::run::FlightStats`]), every flight:
+/// `max_tilt` (rad), `saturated_periods`, `rotor_speed_max` and
+/// `rotor_speed_mean` (rad/s).
+pub const STATS_COLUMNS: [&str; 4] = ["max_tilt", "saturated_periods", "rotor_speed_max", "rotor_speed_mean"];
+
 /// `runs.csv` as named columns of equal length, in run order (see
 /// docs/outputs.md): `run`, `seed`, `controller`, `exit`, `diverged_at`, the
 /// sampled values ([`SAMPLED_COLUMNS`]), every metric of
-/// [`crate::metrics::Metrics::flat`], `completed`, `success`, `crashed`.
+/// [`crate::metrics::Metrics::flat`], the flight statistics ([`STATS_COLUMNS`]),
+/// `completed`, `success`, `crashed`.
 /// The integral metrics of a diverged row cover `[0, duration]` (its
 /// `duration`-covered span) and `completed` says whether that is the whole
 /// scenario.
@@ -74,6 +80,7 @@ pub fn runs_table(rows: &[McRun]) -> RunsTable {
         ["run", "seed", "controller", "exit", "diverged_at"].iter().map(|s| s.to_string()).collect();
     names.extend(SAMPLED_COLUMNS.iter().map(|s| s.to_string()));
     names.extend(metric_names.iter().cloned());
+    names.extend(STATS_COLUMNS.map(String::from));
     names.extend(["completed", "success", "crashed"].map(String::from));
 
     let mut columns = vec![
@@ -109,6 +116,10 @@ pub fn runs_table(rows: &[McRun]) -> RunsTable {
             .collect();
         columns.push(Column::Number(cells));
     }
+    columns.push(Column::Number(rows.iter().map(|r| Some(r.stats.max_tilt)).collect()));
+    columns.push(Column::Integer(rows.iter().map(|r| r.stats.saturated_periods).collect()));
+    columns.push(Column::Number(rows.iter().map(|r| Some(r.stats.rotor_speed_max)).collect()));
+    columns.push(Column::Number(rows.iter().map(|r| Some(r.stats.rotor_speed_mean)).collect()));
     columns.push(Column::Boolean(rows.iter().map(|r| r.exit.is_completed()).collect()));
     columns.push(Column::Boolean(rows.iter().map(|r| r.success).collect()));
     columns.push(Column::Boolean(rows.iter().map(|r| r.exit.is_crashed()).collect()));

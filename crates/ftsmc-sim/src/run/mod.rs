@@ -1,29 +1,34 @@
-//! The run loop: a controller on its own clock (zero-order hold at the
-//! control period), the plant integrated by RK4 between control ticks
-//! (restarting at each tick, where the input jumps), metrics accumulated
-//! online and an optional time series recorded at a lower rate.
+//! The run loop, one for every flight: a controller on its own clock
+//! (zero-order hold at the control period) behind a sensor stage, an
+//! actuator stage ([`actuation`]), a truth model ([`truth`]: paper Eq. 1 or
+//! the rigid body) integrated by RK4 substeps between control ticks
+//! (restarting at each tick, where the input jumps), the environment
+//! (plant variations, wind, ground), and per-tick observers ([`observer`]:
+//! metrics, recording, envelope, flight statistics). [`Flight`] is one
+//! flight as a steppable object; [`simulate`] steps it to the end.
 //!
 //! A run that diverges is an outcome ([`ExitStatus::Diverged`] with the
 //! reason and time), never a panic.
 
-use ftsmc_core::allocation::{forces_from_squared_speeds, residual_speed, rotor_speeds};
 use ftsmc_core::cascade::{Controller, Telemetry};
-use ftsmc_core::model::{Command, QuadState, QuadrotorParams, Reference};
+use ftsmc_core::model::Reference;
 
-use crate::environment::{Environment, TimeVarying};
-use crate::metrics::{Metrics, MetricsAccumulator};
+use crate::metrics::Metrics;
 use crate::scenario::Scenario;
-use crate::vehicle::paper::{derivative, rk4_step};
 
+pub mod actuation;
 mod exit;
+pub mod flight;
+pub mod observer;
 mod recording;
 pub mod summary;
-pub mod truth;
+mod truth;
 
-use exit::check_divergence;
+pub use actuation::actuators;
 pub use exit::{Divergence, ExitStatus};
+pub use flight::{Flight, StepOutcome};
+pub use observer::{FlightStats, Observer, Tick};
 pub use recording::{push_number, recording_columns, Recording, MAX_RECORDING_COLUMNS};
-use recording::{Recorder, Tick};
 use std::sync::atomic::{AtomicBool, Ordering};
 
 /// Result of one flight.
@@ -43,6 +48,8 @@ pub struct RunOutput {
     pub steps: u64,
     /// The success envelope's verdict (`None`: the scenario has no `[envelope]`).
     pub envelope: Option<crate::envelope::Verdict>,
+    /// Tilt, saturation and rotor statistics ([`FlightStats`]).
+    pub stats: FlightStats,
 }
 
 impl RunOutput {
@@ -134,23 +141,11 @@ pub fn planned_steps(scenario: &Scenario) -> u64 {
     (scenario.duration / scenario.control_period()).round() as u64
 }
 
-/// The command as the rotors deliver it: the applied thrust and torques
-/// (after the rotor-speed limits, when set), the rotor speeds (rad/s) and
-/// their residual Ω̄.
-fn realise(command: &Command, plant: &QuadrotorParams, max_rotor_speed: Option<f64>) -> (Command, [f64; 4], f64) {
-    let omega = rotor_speeds(plant, command, max_rotor_speed.unwrap_or(f64::INFINITY));
-    let applied = match max_rotor_speed {
-        Some(_) => forces_from_squared_speeds(plant, &omega.map(|o| o * o)),
-        None => *command,
-    };
-    (applied, omega, residual_speed(&omega))
-}
-
 /// Tracking errors `[e_x, e_y, e_z, e_φ, e_θ, e_ψ]` the metrics integrate:
 /// position against the reference, roll and pitch against the attitude
 /// reference the controller tracks (its telemetry), yaw against ψ_d.
 /// `state` is `[x, y, z, φ, θ, ψ, …]`.
-fn tracking_errors(state: &[f64; 12], reference: &Reference, telemetry: &Telemetry) -> [f64; 6] {
+pub(crate) fn tracking_errors(state: &[f64; 12], reference: &Reference, telemetry: &Telemetry) -> [f64; 6] {
     [
         state[0] - reference.position[0],
         state[1] - reference.position[1],
@@ -161,102 +156,7 @@ fn tracking_errors(state: &[f64; 12], reference: &Reference, telemetry: &Telemet
     ]
 }
 
-/// Fly `controller` through `scenario`.
+/// Fly `controller` through `scenario` ([`Flight`] stepped to the end).
 pub fn simulate(scenario: &Scenario, controller: &mut dyn Controller, options: RunOptions<'_>) -> RunOutput {
-    // Hook (issue 11): rigid body, real actuators or a ground fly the realistic loop.
-    if truth::is_realistic(scenario) {
-        return truth::simulate_realistic(scenario, controller, options);
-    }
-    let sim = &scenario.simulation;
-    let dt = scenario.control_period();
-    let steps = (scenario.duration / dt).round() as u64;
-    let h = dt / sim.substeps as f64;
-
-    let mut env = Environment::new(scenario.environment());
-    let mut x = scenario.initial_state.state().to_array();
-    let mut metrics = MetricsAccumulator::new(dt, sim.settling_band, sim.settling_floor, sim.steady_state_after)
-        .with_window(sim.metrics_window);
-    let mut recorder = Recorder::new(scenario, options.record, steps, controller);
-    let mut exit = ExitStatus::Completed;
-    let mut executed = 0;
-    let mut envelope = crate::envelope::Tracker::new(scenario.envelope); // issue 11 hook
-    envelope.observe(0.0, &x[0..3], &reference_at(scenario, 0.0).position, &x[3..5]);
-
-    // Time-varying plant inputs are evaluated once per substep boundary and
-    // interpolated linearly inside the substep (RK4 stage times); this keeps
-    // the integration second-order in the inputs' time variation while
-    // evaluating each sinusoid once per substep instead of four times.
-    let mut tv_now = env.time_varying(0.0);
-    let mut reference = reference_at(scenario, 0.0);
-    for k in 0..steps {
-        let t = k as f64 * dt;
-        let state = QuadState::from_array(&x);
-        let command = controller.update(&state, &reference, dt);
-        let telemetry = controller.telemetry();
-        env.next_period();
-        let plant_now = env.params_with(&tv_now);
-        let (applied, omega, omega_bar) = realise(&command, &plant_now, sim.max_rotor_speed);
-
-        let errors = tracking_errors(&x, &reference, telemetry);
-        let u = [applied.thrust, applied.torque[0], applied.torque[1], applied.torque[2]];
-        if !(u.iter().all(|v| v.is_finite())) {
-            exit = ExitStatus::Diverged { divergence: Divergence::NonFinite, time: t };
-            break;
-        }
-        metrics.observe(t, &errors, &u);
-
-        if recorder.due(k) {
-            recorder.push(&Tick {
-                t,
-                state: x,
-                reference: &reference,
-                telemetry,
-                applied: u,
-                command: &command,
-                omega,
-                omega_bar,
-                nominal_mass: scenario.plant.mass,
-                mass: plant_now.mass,
-                inertia: plant_now.inertia,
-                disturbance: tv_now.disturbance,
-            });
-        }
-
-        // Plant between ticks: RK4 substeps with the command held.
-        for j in 0..sim.substeps {
-            let t0 = t + j as f64 * h;
-            let tv_next = env.time_varying(t0 + h);
-            let (a, b, env_ref) = (tv_now, tv_next, &env);
-            let f = |tau: f64, s: &[f64; 12]| {
-                let tv = TimeVarying::lerp(&a, &b, (tau - t0) / h);
-                derivative(s, &applied, omega_bar, &env_ref.params_with(&tv), &tv.disturbance)
-            };
-            x = rk4_step(f, t0, &x, h);
-            tv_now = tv_next;
-        }
-        executed = k + 1;
-        if options.step_done(executed) {
-            exit = ExitStatus::Interrupted { time: (k + 1) as f64 * dt };
-            break;
-        }
-
-        let t_next = (k + 1) as f64 * dt;
-        reference = reference_at(scenario, t_next);
-        envelope.observe(t_next, &x[0..3], &reference.position, &x[3..5]);
-        if let Some(divergence) = check_divergence(scenario, &x, &reference) {
-            exit = ExitStatus::Diverged { divergence, time: t_next };
-            break;
-        }
-    }
-
-    options.flight_done(steps, executed);
-    RunOutput {
-        controller: controller.name().to_string(),
-        scenario: scenario.name.clone(),
-        envelope: envelope.verdict((!exit.is_completed()).then(|| exit.to_string())),
-        exit,
-        metrics: metrics.finish(),
-        recording: recorder.recording,
-        steps: executed,
-    }
+    Flight::new(scenario, controller, options).run()
 }

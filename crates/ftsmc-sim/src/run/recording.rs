@@ -1,10 +1,11 @@
 //! The recorded time series: [`Recording`] and its columns.
 
-use ftsmc_core::cascade::{Controller, Telemetry};
+use ftsmc_core::cascade::Controller;
 use ftsmc_core::law::MAX_ESTIMATES;
-use ftsmc_core::model::{Command, Reference};
 
 use crate::scenario::Scenario;
+
+use super::observer::{Observer, Tick};
 
 pub use crate::limits::MAX_RECORDING_COLUMNS;
 
@@ -176,36 +177,8 @@ fn push_number_with(buffer: &mut zmij::Buffer, out: &mut Vec<u8>, v: f64) {
     }
 }
 
-/// What one recorded control tick holds (the columns of [`recording_columns`]).
-pub(super) struct Tick<'a> {
-    /// Time, s.
-    pub t: f64,
-    /// True state `[x, y, z, φ, θ, ψ, ẋ, ẏ, ż, φ̇, θ̇, ψ̇]`.
-    pub state: [f64; 12],
-    /// Reference of this tick.
-    pub reference: &'a Reference,
-    /// The controller's telemetry after this tick's update.
-    pub telemetry: &'a Telemetry,
-    /// Applied thrust and torques `[U1, u2, u3, u4]`.
-    pub applied: [f64; 4],
-    /// Commanded thrust and torques.
-    pub command: &'a Command,
-    /// Rotor speeds, rad/s.
-    pub omega: [f64; 4],
-    /// Residual rotor speed ω̄, rad/s.
-    pub omega_bar: f64,
-    /// Nominal mass (`plant.mass`), kg, for `mass_estimate`.
-    pub nominal_mass: f64,
-    /// True mass, kg.
-    pub mass: f64,
-    /// True principal inertia, kg·m².
-    pub inertia: [f64; 3],
-    /// Disturbances of this tick.
-    pub disturbance: [f64; 6],
-}
-
-/// The time series of one flight as it is flown, shared by the paper loop
-/// and the realistic loop: a [`Recording`] with its controller's columns,
+/// The time series of one flight as it is flown (an [`Observer`] of the
+/// run loop): a [`Recording`] with its controller's columns,
 /// a row every `every` ticks (none with 0), assembled on the stack.
 pub(super) struct Recorder {
     /// The rows recorded so far.
@@ -222,7 +195,7 @@ impl Recorder {
     /// a row every `control_rate / record_rate` ticks when `record` is on and
     /// `record_rate > 0`, none otherwise (room for all of them is reserved
     /// up front).
-    pub(super) fn new(scenario: &Scenario, record: bool, steps: u64, controller: &dyn Controller) -> Self {
+    pub(super) fn new<C: Controller + ?Sized>(scenario: &Scenario, record: bool, steps: u64, controller: &C) -> Self {
         let sim = &scenario.simulation;
         let every = if record && sim.record_rate > 0.0 {
             ((sim.control_rate / sim.record_rate).round() as u64).max(1)
@@ -263,7 +236,7 @@ impl Recorder {
     }
 
     /// Append the row of `tick`.
-    pub(super) fn push(&mut self, tick: &Tick<'_>) {
+    fn push(&mut self, tick: &Tick<'_>) {
         let telemetry = tick.telemetry;
         let command = tick.command;
         let mut row = Row::new();
@@ -290,6 +263,16 @@ impl Recorder {
         row.extend(&tick.inertia);
         row.extend(&tick.disturbance);
         self.recording.push_row(row.as_slice());
+    }
+}
+
+impl Observer for Recorder {
+    /// Record the tick when it is due (every `control_rate / record_rate` ticks).
+    #[inline]
+    fn tick(&mut self, tick: &Tick<'_>) {
+        if self.due(tick.k) {
+            self.push(tick);
+        }
     }
 }
 

@@ -451,7 +451,8 @@ fn angle_levels(signal: &Signal, prefix: &str, out: &mut Vec<(String, f64)>) {
     }
 }
 
-/// Warnings for values that are valid but look like unit slips: angles
+/// Warnings for deprecated keys (`simulation.max_rotor_speed`, naming the
+/// key that replaces it) and for values that are valid but look like unit slips: angles
 /// beyond 2π (degrees for radians), a payload above 10× the vehicle's
 /// mass (grams, or a typo), windows that start after the end of the run.
 pub fn unit_slip_warnings(s: &Scenario) -> Vec<Warning> {
@@ -460,6 +461,16 @@ pub fn unit_slip_warnings(s: &Scenario) -> Vec<Warning> {
     let degrees = |v: f64| {
         format!("angles are in radians (|angle| > 2π; if degrees were meant, {}° = {:.4} rad)", show(v), v.to_radians())
     };
+    if let (Some(w), None) = (s.simulation.max_rotor_speed, &s.actuators) {
+        warn(
+            "simulation.max_rotor_speed".into(),
+            show(w),
+            format!(
+                "deprecated: write [actuators] max_rotor_speed = {}, mixer = \"clamp\" (the per-rotor clamp this key means, on every truth model)",
+                show(w)
+            ),
+        );
+    }
     for (i, a) in s.initial_state.attitude.iter().enumerate() {
         if a.abs() > TWO_PI {
             warn(format!("initial_state.attitude[{i}]"), show(*a), degrees(*a));

@@ -132,6 +132,13 @@ impl Scenario {
         }
         if let Some(w) = sim.max_rotor_speed {
             positive("simulation.max_rotor_speed", w)?;
+            if self.actuators.is_some() {
+                return Err(invalid(
+                    "simulation.max_rotor_speed".into(),
+                    show(w),
+                    "not together with [actuators]: write it as [actuators] max_rotor_speed (and mixer = \"clamp\" for the per-rotor clamp this deprecated key means)",
+                ));
+            }
         }
 
         self.plant.check().map_err(|e| gain("plant", e))?;

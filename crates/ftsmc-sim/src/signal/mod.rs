@@ -15,7 +15,7 @@
 
 pub mod waypoints;
 
-use ftsmc_core::math::sin_cos;
+use ftsmc_core::math::{cos, sin, sin_cos};
 use serde::{Deserialize, Serialize};
 
 use crate::text::show;
@@ -128,6 +128,24 @@ impl Term {
                 _ => None,
             },
             _ => None,
+        }
+    }
+
+    /// The value of [`Term::sample`] alone, without the derivatives (one
+    /// `sin` or `cos` instead of both for the sinusoids; the same bits).
+    #[inline]
+    pub fn value(&self, t: f64) -> f64 {
+        match self {
+            Term::Constant { value } => *value,
+            Term::Sine { amplitude, phase, .. } => {
+                let w = self.angular_frequency().unwrap_or(0.0);
+                amplitude * sin(w * t + phase)
+            }
+            Term::Cosine { amplitude, phase, .. } => {
+                let w = self.angular_frequency().unwrap_or(0.0);
+                amplitude * cos(w * t + phase)
+            }
+            _ => self.sample(t).value,
         }
     }
 
@@ -270,9 +288,18 @@ impl Signal {
         out
     }
 
-    /// Value only, at `t` (s).
+    /// Value only, at `t` (s): the `value` of [`Signal::sample`], bit for bit.
     pub fn value(&self, t: f64) -> f64 {
-        self.sample(t).value
+        if let Some([start, end]) = self.window {
+            if t < start || t > end {
+                return 0.0;
+            }
+        }
+        let mut out = 0.0;
+        for term in &self.terms {
+            out += term.value(t);
+        }
+        out
     }
 
     /// Check every term and the window; errors name the sub-key.

@@ -254,6 +254,13 @@ impl RigidBodyParams {
     /// | thrust, moment coefficients | `[1e-12, 1e6]` (the mixer divides by them) |
     /// | rotor inertia, drag coefficients | `[0, 1e6]` |
     pub fn check(&self) -> Result<(), GainError> {
+        self.check_mass_inertia()?;
+        self.check_rest()
+    }
+
+    /// The mass, gravity and inertia rows of [`RigidBodyParams::check`], in
+    /// its order; on success the inertia inverse.
+    fn check_mass_inertia(&self) -> Result<Mat3, GainError> {
         closed("mass", self.mass, 1e-6, 1e6, "1e-6 <= mass <= 1e6 kg")?;
         closed("gravity", self.gravity, 0.0, 1e3, "0 <= gravity <= 1e3 m/s^2")?;
         const NAMES: [[&str; 3]; 3] = [
@@ -283,9 +290,14 @@ impl RigidBodyParams {
         if minor2 <= 0.0 {
             return Err(GainError { field: "inertia[1][1]", value: j[1][1], expected: PD });
         }
-        if det3(j) <= 0.0 || inverse3(j).is_none() {
-            return Err(GainError { field: "inertia[2][2]", value: j[2][2], expected: PD });
+        match inverse3(j) {
+            Some(inv) if det3(j) > 0.0 => Ok(inv),
+            _ => Err(GainError { field: "inertia[2][2]", value: j[2][2], expected: PD }),
         }
+    }
+
+    /// The rows of [`RigidBodyParams::check`] after the inertia.
+    fn check_rest(&self) -> Result<(), GainError> {
         closed("arm_length", self.arm_length, 1e-6, 1e6, "1e-6 <= arm_length <= 1e6 m")?;
         const COEF: &str = "1e-12 <= value <= 1e6 (the mixer divides by it)";
         closed("thrust_coefficient", self.thrust_coefficient, 1e-12, 1e6, COEF)?;
@@ -376,6 +388,16 @@ impl RigidBody {
         Ok(Self { params, inertia_inv, rotors: params.rotor_positions(), spin: params.spin.map(Spin::sign) })
     }
 
+    /// This body with another mass (kg) and inertia (kg·m²): the same
+    /// result as [`RigidBody::new`] of the changed parameters (only the mass
+    /// and inertia checks run again; the rotor geometry is kept), for a
+    /// payload or an inertia variation changing them during a flight.
+    pub fn with_mass_and_inertia(&self, mass: f64, inertia: Mat3) -> Result<Self, GainError> {
+        let params = RigidBodyParams { mass, inertia, ..self.params };
+        let inertia_inv = params.check_mass_inertia()?;
+        Ok(Self { params, inertia_inv, ..*self })
+    }
+
     /// The parameters.
     pub fn params(&self) -> &RigidBodyParams {
         &self.params
@@ -384,12 +406,16 @@ impl RigidBody {
     /// Rotor and aerodynamic wrench in the body frame at a state (without
     /// gravity, external inputs or the gyroscopic terms).
     pub fn body_wrench(&self, x: &RigidBodyState, input: &RigidBodyInput) -> Wrench {
+        self.body_wrench_in(x, input, &rotation(quaternion(x)))
+    }
+
+    /// [`RigidBody::body_wrench`] with the body-to-world rotation `r` of `x` given.
+    #[inline]
+    fn body_wrench_in(&self, x: &RigidBodyState, input: &RigidBodyInput, r: &Mat3) -> Wrench {
         let p = &self.params;
-        let q = quaternion(x);
         let v = block(x, index::VELOCITY);
         let omega = block(x, index::BODY_RATES);
-        let r = rotation(q);
-        let v_air = mat_t_vec(&r, sub(v, input.wind));
+        let v_air = mat_t_vec(r, sub(v, input.wind));
         let aero = p.rotor_drag_xy != 0.0 || p.rotor_drag_z != 0.0;
         let mut force = [0.0; 3];
         let mut torque = [0.0; 3];
@@ -428,7 +454,7 @@ impl RigidBody {
         let q = quaternion(x);
         let omega = block(x, index::BODY_RATES);
         let r = rotation(q);
-        let wrench = self.body_wrench(x, input);
+        let wrench = self.body_wrench_in(x, input, &r);
         let f_world = add(mat_vec(&r, wrench.force), input.force);
         let acc = [f_world[0] / p.mass, f_world[1] / p.mass, f_world[2] / p.mass - p.gravity];
         let j_omega = mat_vec(&p.inertia, omega);

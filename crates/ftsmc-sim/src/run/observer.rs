@@ -1,0 +1,133 @@
+//! Per-tick observers: whatever watches a flight (metrics, the recording,
+//! the success envelope, tilt/saturation/rotor statistics) sees the whole
+//! control tick through one [`Tick`] and implements [`Observer`].
+//!
+//! A new per-flight metric is one type implementing [`Observer`] (plus its
+//! row in docs/outputs.md); the loop does not change.
+
+use ftsmc_core::cascade::Telemetry;
+use ftsmc_core::model::{Command, QuadState, Reference};
+
+use crate::envelope::Tracker;
+use crate::metrics::MetricsAccumulator;
+
+/// Everything one control tick of a flight produced, as the loop hands it
+/// to every [`Observer`] (before the truth is integrated over the period).
+#[derive(Clone, Copy, Debug)]
+pub struct Tick<'a> {
+    /// Control step index `k` (0-based).
+    pub k: u64,
+    /// Time `t = k·dt`, s.
+    pub t: f64,
+    /// True state in Euler form `[x, y, z, φ, θ, ψ, ẋ, ẏ, ż, φ̇, θ̇, ψ̇]` (m, rad, m/s, rad/s).
+    pub state: [f64; 12],
+    /// What the controller was given (the sensors' output; the truth with perfect sensors).
+    pub measured: &'a QuadState,
+    /// Reference of this tick.
+    pub reference: &'a Reference,
+    /// The controller's telemetry after this tick's update.
+    pub telemetry: &'a Telemetry,
+    /// Tracking errors `[e_x, e_y, e_z, e_φ, e_θ, e_ψ]` of the truth ([`super::tracking_errors`]).
+    pub errors: [f64; 6],
+    /// Commanded thrust (N) and torques (N·m).
+    pub command: &'a Command,
+    /// Applied thrust and torques `[U1, u2, u3, u4]` after the actuator stage (N, N·m).
+    pub applied: [f64; 4],
+    /// Rotor speeds at the tick, rad/s.
+    pub omega: [f64; 4],
+    /// Residual rotor speed Ω̄ = ω1 − ω2 + ω3 − ω4 of `omega`, rad/s.
+    pub omega_bar: f64,
+    /// Rotor speeds the command asks for with no limit (paper Eq. 2 inverted), rad/s.
+    pub demand: [f64; 4],
+    /// The actuator stage could not deliver the command this period.
+    pub saturated: bool,
+    /// Nominal mass (`plant.mass`), kg.
+    pub nominal_mass: f64,
+    /// True mass, kg.
+    pub mass: f64,
+    /// True principal inertia, kg·m².
+    pub inertia: [f64; 3],
+    /// Disturbances `[D_x … D_ψ]` of this tick (m/s², rad/s²).
+    pub disturbance: [f64; 6],
+}
+
+/// Something that watches a flight.
+pub trait Observer {
+    /// A control tick that produced a finite applied command.
+    fn tick(&mut self, tick: &Tick<'_>);
+    /// The truth at a period boundary: `t = 0` and after every completed
+    /// control period (the state the next tick starts from, or the final one).
+    fn boundary(&mut self, t: f64, truth: &QuadState, reference: &Reference) {
+        let _ = (t, truth, reference);
+    }
+}
+
+impl Observer for MetricsAccumulator {
+    #[inline]
+    fn tick(&mut self, tick: &Tick<'_>) {
+        self.observe(tick.t, &tick.errors, &tick.applied);
+    }
+}
+
+impl Observer for Tracker {
+    #[inline]
+    fn tick(&mut self, _: &Tick<'_>) {}
+    #[inline]
+    fn boundary(&mut self, t: f64, truth: &QuadState, reference: &Reference) {
+        self.observe(t, &truth.position, &reference.position, &truth.attitude);
+    }
+}
+
+/// Tilt, saturation and rotor statistics of a flight, without recording.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct FlightStats {
+    /// Largest tilt `max(|φ|, |θ|)` of the truth at the period boundaries, rad.
+    pub max_tilt: f64,
+    /// Control periods in which the actuator stage saturated.
+    pub saturated_periods: u64,
+    /// Control periods observed.
+    pub periods: u64,
+    /// Largest rotor speed the commands asked for with no limit, rad/s (non-finite demands skipped).
+    pub peak_rotor_speed_demand: f64,
+    /// Largest rotor speed flown at a tick, rad/s.
+    pub rotor_speed_max: f64,
+    /// Mean over ticks and rotors of the rotor speed flown, rad/s.
+    pub rotor_speed_mean: f64,
+    sum_speed: f64,
+}
+
+impl FlightStats {
+    /// Fraction of the observed periods in which the actuator stage saturated (0 with none).
+    pub fn saturation_fraction(&self) -> f64 {
+        if self.periods > 0 {
+            self.saturated_periods as f64 / self.periods as f64
+        } else {
+            0.0
+        }
+    }
+}
+
+impl Observer for FlightStats {
+    #[inline]
+    fn tick(&mut self, tick: &Tick<'_>) {
+        self.periods += 1;
+        self.saturated_periods += u64::from(tick.saturated);
+        for &w in &tick.demand {
+            if w.is_finite() {
+                self.peak_rotor_speed_demand = self.peak_rotor_speed_demand.max(w);
+            }
+        }
+        for &w in &tick.omega {
+            self.rotor_speed_max = self.rotor_speed_max.max(w);
+            self.sum_speed += w;
+        }
+        self.rotor_speed_mean = self.sum_speed / (4 * self.periods) as f64;
+    }
+    #[inline]
+    fn boundary(&mut self, _: f64, truth: &QuadState, _: &Reference) {
+        let tilt = truth.attitude[0].abs().max(truth.attitude[1].abs());
+        if tilt > self.max_tilt {
+            self.max_tilt = tilt;
+        }
+    }
+}
