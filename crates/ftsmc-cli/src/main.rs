@@ -20,7 +20,7 @@ use std::path::PathBuf;
 use anyhow::{bail, Context, Result};
 use clap::{Parser, Subcommand};
 use ftsmc_sim::registry;
-use ftsmc_sim::scenario::{Scenario, BUILT_IN_SCENARIOS as PAPER_SCENARIOS};
+use ftsmc_sim::scenario::{Scenario, BUILT_IN_SCENARIOS};
 
 #[derive(Parser)]
 #[command(
@@ -184,12 +184,15 @@ pub fn load_scenario_with_limits(arg: &str, limits: &[String]) -> Result<Scenari
         }
         return Ok(loaded.scenario);
     }
-    bail!("no scenario file `{arg}` (and it is not a built-in scenario: paper-scenario-1, paper-scenario-2, ftaftsmc-tuned-scenario-1)")
+    bail!(
+        "no scenario file `{arg}` (and it is not a built-in scenario: {})",
+        ftsmc_sim::scenario::resolve::built_in_names_joined()
+    )
 }
 
 /// The built-in scenario names (file names without `.toml`), for `ftsmc scenario`.
 fn built_in_names() -> clap::builder::PossibleValuesParser {
-    clap::builder::PossibleValuesParser::new(PAPER_SCENARIOS.map(|(file, _)| file.trim_end_matches(".toml")))
+    clap::builder::PossibleValuesParser::new(ftsmc_sim::scenario::resolve::built_in_names())
 }
 
 fn check_names(names: &[String]) -> Result<()> {
@@ -298,11 +301,12 @@ fn run(cli: Cli) -> Result<()> {
             Ok(())
         }
         Command::Scenario { name } => {
-            let text = PAPER_SCENARIOS
-                .iter()
-                .find(|(file, _)| file.trim_end_matches(".toml") == name)
-                .map(|(_, text)| *text)
-                .with_context(|| format!("no built-in scenario `{name}`"))?;
+            let (_, text) = ftsmc_sim::scenario::resolve::built_in(&name).with_context(|| {
+                format!(
+                    "no built-in scenario `{name}` (built-in: {})",
+                    ftsmc_sim::scenario::resolve::built_in_names_joined()
+                )
+            })?;
             print!("{text}");
             Ok(())
         }
@@ -316,7 +320,7 @@ fn run(cli: Cli) -> Result<()> {
 /// `ftsmc list`: every controller of the registry and every built-in
 /// scenario (`BUILT_IN_SCENARIOS`), names in one aligned column.
 fn list_text() -> Result<String> {
-    let scenarios = PAPER_SCENARIOS
+    let scenarios = BUILT_IN_SCENARIOS
         .iter()
         .map(|(file, text)| {
             let s = Scenario::from_toml_str(text, file)?;
@@ -345,9 +349,18 @@ mod tests {
     use super::*;
 
     #[test]
+    fn the_unknown_scenario_error_lists_every_built_in_scenario() {
+        let err = load_scenario("no-such-scenario-anywhere").expect_err("unknown").to_string();
+        assert!(err.contains("no-such-scenario-anywhere"), "{err}");
+        for name in ftsmc_sim::scenario::resolve::built_in_names() {
+            assert!(err.contains(name), "{name} missing: {err}");
+        }
+    }
+
+    #[test]
     fn list_names_every_built_in_scenario_in_one_aligned_column() {
         let text = list_text().unwrap();
-        for (file, _) in PAPER_SCENARIOS {
+        for (file, _) in BUILT_IN_SCENARIOS {
             assert!(text.contains(file.trim_end_matches(".toml")), "{file} missing:\n{text}");
         }
         let starts: Vec<usize> = text
@@ -358,7 +371,7 @@ mod tests {
                 name_end + l[name_end..].chars().take_while(|c| *c == ' ').count()
             })
             .collect();
-        assert_eq!(starts.len(), registry::CONTROLLERS.len() + PAPER_SCENARIOS.len());
+        assert_eq!(starts.len(), registry::CONTROLLERS.len() + BUILT_IN_SCENARIOS.len());
         for (name, what) in registry::CONTROLLERS {
             assert!(text.lines().any(|l| l.trim_start().starts_with(name) && l.ends_with(what)), "{name}:\n{text}");
         }
