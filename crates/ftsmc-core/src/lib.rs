@@ -20,6 +20,7 @@
 
 pub mod allocation;
 pub mod cascade;
+pub mod controller;
 pub mod ftaftsmc;
 pub mod law;
 pub mod math;
@@ -30,7 +31,8 @@ pub mod se3;
 mod setpoint;
 pub mod tsm_sta;
 
-pub use cascade::{Cascade, CascadeConfig, CascadeSettings, Controller, MassAdaptation, Telemetry};
+pub use cascade::{Cascade, CascadeConfig, CascadeSettings, MassAdaptation};
+pub use controller::{Controller, Telemetry};
 pub use ftaftsmc::{FtaftsmcAxis, FtaftsmcGains};
 pub use law::{AxisLaw, GainError};
 pub use model::{Command, QuadState, QuadrotorParams, Reference};

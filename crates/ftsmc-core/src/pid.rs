@@ -96,7 +96,7 @@
 //! intended one only to first order about hover (`W ≈ I`). The PID law
 //! has no model terms to cancel, so nothing else differs.
 
-use crate::cascade::{Controller, Telemetry};
+use crate::controller::{Controller, Telemetry};
 use crate::law::{
     check_gain, check_gain_or_zero, check_left_open, check_open, saturate, GainError, INPUT_LIMIT, MAX_ESTIMATES,
     STATE_LIMIT,

@@ -50,7 +50,7 @@
 //! (but still stabilising near hover) moment. The translational part of
 //! Eq. 1 uses the same `R e₃`, so it is exact on both plants.
 
-use crate::cascade::{Controller, Telemetry};
+use crate::controller::{Controller, Telemetry};
 use crate::law::{check_closed, check_gain, check_left_open, saturate, GainError, INPUT_LIMIT, MAX_ESTIMATES};
 use crate::math::{
     body_rates_from_euler_rates, cross, dot, euler_from_rotation, mat_t_mat, mat_t_vec, mat_vec, norm,
