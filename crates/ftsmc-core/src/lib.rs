@@ -22,6 +22,7 @@ pub mod allocation;
 pub mod cascade;
 pub mod controller;
 pub mod ftaftsmc;
+pub mod kinematics;
 pub mod law;
 pub mod math;
 pub mod model;
