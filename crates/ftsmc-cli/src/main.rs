@@ -185,7 +185,8 @@ pub fn load_scenario_with_limits(arg: &str, limits: &[String]) -> Result<Scenari
         return Ok(loaded.scenario);
     }
     bail!(
-        "no scenario file `{arg}` (and it is not a built-in scenario: {})",
+        "no scenario file `{}` (and it is not a built-in scenario: {})",
+        ftsmc_sim::scenario::show_str(arg),
         ftsmc_sim::scenario::resolve::built_in_names_joined()
     )
 }
@@ -350,11 +351,21 @@ mod tests {
 
     #[test]
     fn the_unknown_scenario_error_lists_every_built_in_scenario() {
-        let err = load_scenario("no-such-scenario-anywhere").expect_err("unknown").to_string();
-        assert!(err.contains("no-such-scenario-anywhere"), "{err}");
-        for name in ftsmc_sim::scenario::resolve::built_in_names() {
-            assert!(err.contains(name), "{name} missing: {err}");
+        // As `main` prints it: one line of at most MAX_ERROR_CHARS, even for a long name.
+        let arg = "no-such-scenario-anywhere-with-a-rather-long-name-indeed.toml";
+        let err = load_scenario(arg).expect_err("unknown");
+        let line = output::one_line(&format!("{err:#}"), output::MAX_ERROR_CHARS);
+        assert!(line.starts_with("no scenario file `no-such-scenario") && line.ends_with(')'), "cut: {line}");
+        let list = line.rsplit_once(": ").unwrap().1.trim_end_matches(')');
+        let mut listed = Vec::new();
+        for group in list.split(", ") {
+            let mut parts = group.split('/');
+            let first = parts.next().unwrap();
+            listed.push(first.to_string());
+            listed.extend(parts.map(|last| format!("{}{last}", &first[..first.len() - 1])));
         }
+        let names: Vec<String> = ftsmc_sim::scenario::resolve::built_in_names().map(String::from).collect();
+        assert_eq!(listed, names, "{line}");
     }
 
     #[test]

@@ -57,7 +57,7 @@ impl Scenario {
         let Some((file, text)) = resolve::built_in(name) else {
             return Err(value_error(format!(
                 "no built-in scenario `{name}` (built-in: {})",
-                resolve::built_in_names_joined()
+                resolve::built_in_names().collect::<Vec<_>>().join(", ")
             )));
         };
         let loaded = ftsmc_sim::Scenario::from_toml_str_with_warnings(text, file, &[])

@@ -87,9 +87,25 @@ pub fn built_in_names() -> impl Iterator<Item = &'static str> {
     BUILT_IN_SCENARIOS.iter().map(|(f, _)| f.strip_suffix(".toml").unwrap_or(f))
 }
 
-/// [`built_in_names`] joined with `", "`, for error messages.
+/// [`built_in_names`] for error messages, short enough to survive the CLI's
+/// one-line error limit: names that differ only in their last character and
+/// follow each other are written once, `realistic-calm-1/2` for
+/// `realistic-calm-1, realistic-calm-2`; groups are joined with `", "`.
 pub fn built_in_names_joined() -> String {
-    built_in_names().collect::<Vec<_>>().join(", ")
+    let mut groups: Vec<String> = Vec::new();
+    let mut last: Option<&str> = None;
+    for name in built_in_names() {
+        let stem = &name[..name.len() - name.chars().last().map_or(0, char::len_utf8)];
+        match (last, groups.last_mut()) {
+            (Some(prev), Some(group)) if prev.len() == name.len() && prev.starts_with(stem) && !stem.is_empty() => {
+                group.push('/');
+                group.push_str(&name[stem.len()..]);
+            }
+            _ => groups.push(name.to_string()),
+        }
+        last = Some(name);
+    }
+    groups.join(", ")
 }
 
 /// Dotted keys whose values are replaced whole instead of merged.
