@@ -8,7 +8,7 @@ same N, measured in alternation so that both see the same machine load.
 
 Both fly 100 Hz environment steps with random collective-thrust/body-rate
 actions (RotorPy's ``cmd_ctbr``); ftsmc flies ``ftsmc/Hover-v0`` on
-``realistic-scenario-1`` (1 kHz control, rigid body, motors, sensors,
+``realistic-breeze-1`` (1 kHz control, rigid body, motors, sensors,
 Dryden turbulence, ground: 10 control periods per environment step),
 RotorPy its Crazyflie at ``sim_rate = 100`` (one RK4 step per environment
 step, no wind). RotorPy runs in the interpreter given (it needs torch and

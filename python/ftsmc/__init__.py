@@ -238,8 +238,8 @@ def montecarlo(
     flown by each controller (default: the scenario's list), master seed
     ``seed`` (default: the scenario's ``seed``, as the CLI), on ``threads``
     workers (default: all cores; the rows do not depend on it), with the
-    GIL released. Same rows and values as ``ftsmc montecarlo``: ``run`` and
-    ``seed`` are uint64, empty CSV cells are NaN, ``completed``/``success``/
+    GIL released. Same rows and values as ``ftsmc montecarlo``: ``run``,
+    ``seed`` and ``saturated_periods`` are uint64, empty CSV cells are NaN, ``completed``/``success``/
     ``crashed`` are bool. ``progress`` (local batches): a tqdm bar (shown
     after 1 s) when the session is interactive and tqdm is installed
     (``None``), always (``True``), never (``False``), or a callable

@@ -14,7 +14,10 @@ class Scenario:
 
     @staticmethod
     def builtin(name: str) -> Scenario:
-        """A built-in scenario: ``paper-scenario-1``, ``paper-scenario-2``, ``ftaftsmc-tuned-scenario-1``, ``realistic-scenario-1``, ``realistic-scenario-2``."""
+        """A built-in scenario by name (``.toml`` optional): any of :meth:`builtin_names`; an unknown name is a ``ValueError`` listing them all."""
+    @staticmethod
+    def builtin_names() -> List[str]:
+        """The names of every built-in scenario, in ``ftsmc list`` order."""
     @staticmethod
     def from_file(path: Union[str, PathLike[str]]) -> Scenario:
         """Read, resolve (``extends``) and validate a scenario file."""

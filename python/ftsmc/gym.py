@@ -9,9 +9,10 @@
 - ``ftsmc/Track-v0``: track the scenario's own reference from its initial
   state; collective thrust and body rates; the scenario's duration.
 
-The default scenario is ``realistic-scenario-1`` (an AscTec Hummingbird rigid
-body with lagged motors and a mixer, motion-capture and IMU noise at 200 Hz
-with 6 ms latency, moderate Dryden turbulence, the ground). Any scenario can
+The default scenario is ``realistic-breeze-1``, the breeze rung of the wind
+ladder (an AscTec Hummingbird rigid body with lagged motors and PX4's mixer,
+motion capture at 200 Hz / 6 ms and an IMU at 1 kHz / 1 ms, a 5 kt wind with
+its Dryden turbulence, the ground). Any scenario can
 be flown: ``gym.make("ftsmc/Hover-v0", scenario=ftsmc.Scenario.builtin(...))``
 or a file path or built-in name.
 
@@ -42,7 +43,7 @@ ObsArray = npt.NDArray[np.float32]
 ActArray = npt.NDArray[np.float32]
 AnyArray = npt.NDArray[Any]
 
-DEFAULT_SCENARIO = "realistic-scenario-1"
+DEFAULT_SCENARIO = "realistic-breeze-1"
 """The scenario flown when none is given."""
 
 OBSERVATION_NAMES: List[str] = list(_ftsmc.GymBatch.observation_names())
@@ -115,7 +116,7 @@ class FtsmcEnv(gym.Env[ObsArray, ActArray]):
     """One quadrotor flight of a scenario as a Gymnasium environment.
 
     scenario: a :class:`ftsmc.Scenario`, a built-in name or a file path
-        (default ``realistic-scenario-1``).
+        (default ``realistic-breeze-1``).
     task: ``"hover"`` (hold ``target``, m, world frame z up, yaw 0, starting
         there at rest) or ``"track"`` (the scenario's reference and initial state).
     action: ``"ctbr"``: ``a = (thrust, p, q, r)`` in [-1, 1]; thrust

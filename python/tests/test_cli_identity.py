@@ -51,7 +51,7 @@ def test_resolved_scenario_text_equals_the_cli_scenario_toml(cli: Path, tmp_path
 def _cli_runs(path: Path) -> pd.DataFrame:
     frame = pd.read_csv(path, float_precision="round_trip")
     # pandas reads integers as int64 where they fit; ftsmc gives uint64.
-    for column in ("run", "seed"):
+    for column in ("run", "seed", "saturated_periods"):
         frame[column] = frame[column].astype(np.uint64)
     return frame
 

@@ -108,7 +108,7 @@ def test_track_and_motors_fly_their_scenario() -> None:
     assert env.engine.step_time == pytest.approx(0.01)
     motors = FtsmcEnv(action="motors", observe="truth", max_episode_time=0.2)
     lo, hi = motors.engine.rotor_speed_range
-    assert (lo, hi) == (0.0, 838.0)  # realistic-scenario-1's [actuators]
+    assert (lo, hi) == (0.0, 838.0)  # realistic-breeze-1's [actuators]
     obs, _ = motors.reset(seed=1)
     for _ in range(20):
         obs, *_ = motors.step(np.ones(4, dtype=np.float32))

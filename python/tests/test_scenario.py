@@ -120,3 +120,14 @@ def test_vehicle_derived_gains_follow_a_plant_override_unless_set() -> None:
     pid = _section(tuned.to_toml(), "pid")
     assert "position_p = [2.0, 2.0, 1.5]" in pid
     assert "hover_thrust = 7.2594" in pid  # a changed section is kept whole
+
+
+def test_one_list_of_built_in_scenarios() -> None:
+    names = ftsmc.Scenario.builtin_names()
+    assert "paper-scenario-1" in names and "realistic-moderate-2" in names
+    for name in names:
+        assert ftsmc.Scenario.builtin(name).name
+    with pytest.raises(ValueError) as err:
+        ftsmc.Scenario.builtin("nope")
+    for name in names:
+        assert name in str(err.value), str(err.value)

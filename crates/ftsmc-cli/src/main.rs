@@ -22,7 +22,7 @@ use std::path::PathBuf;
 use anyhow::{bail, Context, Result};
 use clap::{Parser, Subcommand};
 use ftsmc_sim::registry;
-use ftsmc_sim::scenario::{Scenario, BUILT_IN_SCENARIOS as PAPER_SCENARIOS};
+use ftsmc_sim::scenario::{Scenario, BUILT_IN_SCENARIOS};
 
 #[derive(Parser)]
 #[command(
@@ -212,12 +212,16 @@ pub fn load_scenario_with_limits(arg: &str, limits: &[String]) -> Result<Scenari
         }
         return Ok(loaded.scenario);
     }
-    bail!("no scenario file `{arg}` (and it is not a built-in scenario: paper-scenario-1, paper-scenario-2, ftaftsmc-tuned-scenario-1)")
+    bail!(
+        "no scenario file `{}` (and it is not a built-in scenario: {})",
+        ftsmc_sim::scenario::show_str(arg),
+        ftsmc_sim::scenario::resolve::built_in_names_joined()
+    )
 }
 
 /// The built-in scenario names (file names without `.toml`), for `ftsmc scenario`.
 fn built_in_names() -> clap::builder::PossibleValuesParser {
-    clap::builder::PossibleValuesParser::new(PAPER_SCENARIOS.map(|(file, _)| file.trim_end_matches(".toml")))
+    clap::builder::PossibleValuesParser::new(ftsmc_sim::scenario::resolve::built_in_names())
 }
 
 fn check_names(names: &[String]) -> Result<()> {
@@ -338,11 +342,12 @@ fn run(cli: Cli) -> Result<()> {
             Ok(())
         }
         Command::Scenario { name } => {
-            let text = PAPER_SCENARIOS
-                .iter()
-                .find(|(file, _)| file.trim_end_matches(".toml") == name)
-                .map(|(_, text)| *text)
-                .with_context(|| format!("no built-in scenario `{name}`"))?;
+            let (_, text) = ftsmc_sim::scenario::resolve::built_in(&name).with_context(|| {
+                format!(
+                    "no built-in scenario `{name}` (built-in: {})",
+                    ftsmc_sim::scenario::resolve::built_in_names_joined()
+                )
+            })?;
             print!("{text}");
             Ok(())
         }
@@ -356,7 +361,7 @@ fn run(cli: Cli) -> Result<()> {
 /// `ftsmc list`: every controller of the registry and every built-in
 /// scenario (`BUILT_IN_SCENARIOS`), names in one aligned column.
 fn list_text() -> Result<String> {
-    let scenarios = PAPER_SCENARIOS
+    let scenarios = BUILT_IN_SCENARIOS
         .iter()
         .map(|(file, text)| {
             let s = Scenario::from_toml_str(text, file)?;
@@ -385,9 +390,28 @@ mod tests {
     use super::*;
 
     #[test]
+    fn the_unknown_scenario_error_lists_every_built_in_scenario() {
+        // As `main` prints it: one line of at most MAX_ERROR_CHARS, even for a long name.
+        let arg = "no-such-scenario-anywhere-with-a-rather-long-name-indeed.toml";
+        let err = load_scenario(arg).expect_err("unknown");
+        let line = output::one_line(&format!("{err:#}"), output::MAX_ERROR_CHARS);
+        assert!(line.starts_with("no scenario file `no-such-scenario") && line.ends_with(')'), "cut: {line}");
+        let list = line.rsplit_once(": ").unwrap().1.trim_end_matches(')');
+        let mut listed = Vec::new();
+        for group in list.split(", ") {
+            let mut parts = group.split('/');
+            let first = parts.next().unwrap();
+            listed.push(first.to_string());
+            listed.extend(parts.map(|last| format!("{}{last}", &first[..first.len() - 1])));
+        }
+        let names: Vec<String> = ftsmc_sim::scenario::resolve::built_in_names().map(String::from).collect();
+        assert_eq!(listed, names, "{line}");
+    }
+
+    #[test]
     fn list_names_every_built_in_scenario_in_one_aligned_column() {
         let text = list_text().unwrap();
-        for (file, _) in PAPER_SCENARIOS {
+        for (file, _) in BUILT_IN_SCENARIOS {
             assert!(text.contains(file.trim_end_matches(".toml")), "{file} missing:\n{text}");
         }
         let starts: Vec<usize> = text
@@ -398,7 +422,7 @@ mod tests {
                 name_end + l[name_end..].chars().take_while(|c| *c == ' ').count()
             })
             .collect();
-        assert_eq!(starts.len(), registry::CONTROLLERS.len() + PAPER_SCENARIOS.len());
+        assert_eq!(starts.len(), registry::CONTROLLERS.len() + BUILT_IN_SCENARIOS.len());
         for (name, what) in registry::CONTROLLERS {
             assert!(text.lines().any(|l| l.trim_start().starts_with(name) && l.ends_with(what)), "{name}:\n{text}");
         }

@@ -277,32 +277,39 @@ fn list_files(dir: &Path, prefix: &str, out: &mut Vec<String>) {
     }
 }
 
-/// Tell the user when this result replaces files another command's
-/// manifest (in `old`) lists.
-/// The manifests of the destination's parent folder count too (prefixed
-/// with the destination's name): `ftsmc run paper-scenario-1` after
-/// `ftsmc reproduce` replaces CSVs that `reproduce` lists.
-fn warn_replaced(old: &Path, owner: &str, written: &HashSet<String>, dest: &Path) {
+/// The other commands' manifests that concern the result in `dest`:
+/// `(command, manifest path, prefix)` for each `.ftsmc-<command>.manifest`
+/// in `folder` (prefix "", the owner's own manifest skipped) and in
+/// `dest`'s parent folder (prefix `<dest name>/`: `ftsmc run
+/// paper-scenario-1` after `ftsmc reproduce` replaces CSVs that `reproduce`
+/// lists there).
+fn other_manifests(folder: &Path, dest: &Path, owner: &str) -> Vec<(String, PathBuf, String)> {
     let name = dest.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
     let parent = dest.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
-    for (folder, prefix) in [(old, String::new()), (parent, format!("{name}/"))] {
-        warn_replaced_in(folder, &prefix, owner, written, dest);
+    let mut found = Vec::new();
+    for (dir, prefix) in [(folder, String::new()), (parent, format!("{name}/"))] {
+        let Ok(entries) = std::fs::read_dir(dir) else { continue };
+        for entry in entries.flatten() {
+            let file_name = entry.file_name().to_string_lossy().into_owned();
+            let Some(other) = file_name.strip_prefix(".ftsmc-").and_then(|r| r.strip_suffix(".manifest")) else {
+                continue;
+            };
+            if other == owner && prefix.is_empty() {
+                continue;
+            }
+            found.push((other.to_string(), entry.path(), prefix.clone()));
+        }
     }
+    found
 }
 
-fn warn_replaced_in(folder: &Path, prefix: &str, owner: &str, written: &HashSet<String>, dest: &Path) {
-    let Ok(entries) = std::fs::read_dir(folder) else { return };
-    for entry in entries.flatten() {
-        let file_name = entry.file_name().to_string_lossy().into_owned();
-        let Some(other) = file_name.strip_prefix(".ftsmc-").and_then(|r| r.strip_suffix(".manifest")) else {
-            continue;
-        };
-        if other == owner && prefix.is_empty() {
-            continue;
-        }
-        let mut replaced: Vec<String> = read_manifest(&entry.path())
+/// Tell the user when this result replaces files another command's
+/// manifest (in `old`, or in the parent folder) lists.
+fn warn_replaced(old: &Path, owner: &str, written: &HashSet<String>, dest: &Path) {
+    for (other, manifest, prefix) in other_manifests(old, dest, owner) {
+        let mut replaced: Vec<String> = read_manifest(&manifest)
             .into_iter()
-            .filter_map(|f| f.strip_prefix(prefix).map(str::to_string))
+            .filter_map(|f| f.strip_prefix(prefix.as_str()).map(str::to_string))
             .filter(|f| written.contains(f))
             .collect();
         if !replaced.is_empty() {
@@ -324,31 +331,20 @@ fn warn_replaced_in(folder: &Path, prefix: &str, owner: &str, written: &HashSet<
 /// manifest that cannot be rewritten keeps the entry (the file then stays
 /// listed twice, never unlisted).
 fn disown_replaced(dest: &Path, owner: &str, written: &HashSet<String>) {
-    let name = dest.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-    let parent = dest.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
-    for (folder, prefix) in [(dest, String::new()), (parent, format!("{name}/"))] {
-        let Ok(entries) = std::fs::read_dir(folder) else { continue };
-        for entry in entries.flatten() {
-            let file_name = entry.file_name().to_string_lossy().into_owned();
-            let Some(other) = file_name.strip_prefix(".ftsmc-").and_then(|r| r.strip_suffix(".manifest")) else {
-                continue;
-            };
-            if other == owner && prefix.is_empty() {
-                continue;
+    for (_, manifest, prefix) in other_manifests(dest, dest, owner) {
+        let Ok(text) = std::fs::read_to_string(&manifest) else { continue };
+        let listed: Vec<&str> = text.lines().filter(|l| !l.is_empty()).collect();
+        let kept: Vec<&str> = listed
+            .iter()
+            .copied()
+            .filter(|l| !l.strip_prefix(prefix.as_str()).is_some_and(|f| written.contains(f)))
+            .collect();
+        if kept.len() != listed.len() {
+            let mut out = kept.join("\n");
+            if !out.is_empty() {
+                out.push('\n');
             }
-            let Ok(text) = std::fs::read_to_string(entry.path()) else { continue };
-            let kept: Vec<&str> = text
-                .lines()
-                .filter(|l| !l.is_empty())
-                .filter(|l| !l.strip_prefix(prefix.as_str()).is_some_and(|f| written.contains(f)))
-                .collect();
-            if kept.len() != text.lines().filter(|l| !l.is_empty()).count() {
-                let mut out = kept.join("\n");
-                if !out.is_empty() {
-                    out.push('\n');
-                }
-                let _ = write_atomic(&entry.path(), out.as_bytes());
-            }
+            let _ = write_atomic(&manifest, out.as_bytes());
         }
     }
 }

@@ -67,6 +67,10 @@ use crate::law::{
 use crate::math::{asin, cos, sin_cos};
 use crate::model::{Command, QuadState, QuadrotorParams, Reference};
 
+// The controller interface lives in its own module; re-exported here so
+// `ftsmc_core::cascade::{Controller, Telemetry, channel}` keep compiling.
+pub use crate::controller::{channel, Controller, Telemetry};
+
 /// How the desired-attitude derivatives φ̇_d, φ̈_d, θ̇_d, θ̈_d are obtained
 /// (the paper does not say; see docs/paper-errata.md).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -284,91 +288,6 @@ pub struct CascadeConfig {
     pub settings: CascadeSettings,
     /// Mass adaptation (FTAFTSMC only; [`MassAdaptation::OFF`] for the baselines).
     pub mass_adaptation: MassAdaptation,
-}
-
-/// Channel indices into the six-element arrays of [`Telemetry`].
-pub mod channel {
-    /// x position.
-    pub const X: usize = 0;
-    /// y position.
-    pub const Y: usize = 1;
-    /// z position (altitude).
-    pub const Z: usize = 2;
-    /// Roll φ.
-    pub const PHI: usize = 3;
-    /// Pitch θ.
-    pub const THETA: usize = 4;
-    /// Yaw ψ.
-    pub const PSI: usize = 5;
-    /// Names as used in outputs.
-    pub const NAMES: [&str; 6] = ["x", "y", "z", "phi", "theta", "psi"];
-}
-
-/// What the controller computed at its last update, for recording.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct Telemetry {
-    /// Attitude reference actually tracked `[φ_ref, θ_ref, ψ_d]`, rad
-    /// (filtered when the command filter is on).
-    pub attitude_reference: [f64; 3],
-    /// Its rate, rad/s.
-    pub attitude_reference_rate: [f64; 3],
-    /// Its acceleration, rad/s².
-    pub attitude_reference_acceleration: [f64; 3],
-    /// Raw Eq. 52 output `[φ_d, θ_d]` before filtering, rad.
-    pub attitude_demand: [f64; 2],
-    /// Sliding variables `[S_x, S_y, S_z, S_φ, S_θ, S_ψ]`.
-    pub sliding: [f64; 6],
-    /// Adaptive / internal states of each channel ([`AxisLaw::estimates`]).
-    pub estimates: [[f64; MAX_ESTIMATES]; 6],
-    /// Commanded accelerations `[a_x, a_y, a_z]`, m/s².
-    pub commanded_acceleration: [f64; 3],
-    /// Thrust before mass adaptation u1, N.
-    pub nominal_thrust: f64,
-    /// Mass ratio estimate α̂ (estimated mass = α̂ m).
-    pub alpha_hat: f64,
-    /// The thrust bound ([`CascadeSettings::thrust_limits`]) changed `U1`
-    /// at this update.
-    pub thrust_limited: bool,
-    /// The adaptive states were held at this update
-    /// ([`CascadeSettings::freeze_adaptation_on_saturation`]).
-    pub adaptation_frozen: bool,
-}
-
-/// A complete quadrotor controller: state and reference in, command out.
-pub trait Controller {
-    /// Machine name (e.g. `"ftaftsmc"`).
-    fn name(&self) -> &'static str;
-    /// One control period: compute the command from the measured state and
-    /// the reference, and advance internal states by `dt` (s).
-    fn update(&mut self, state: &QuadState, reference: &Reference, dt: f64) -> Command;
-    /// Quantities computed at the last update.
-    fn telemetry(&self) -> &Telemetry;
-    /// Names of the channel laws' [`Telemetry::estimates`] slots
-    /// ([`AxisLaw::ESTIMATE_NAMES`], `""` for an unused slot). The default:
-    /// no internal states, every slot unnamed.
-    fn estimate_names(&self) -> [&'static str; MAX_ESTIMATES] {
-        [""; MAX_ESTIMATES]
-    }
-    /// True when the mass adaptation of §3.2 is on, i.e.
-    /// [`Telemetry::alpha_hat`] changes (otherwise it stays at its initial
-    /// value). The default: false.
-    fn adapts_mass(&self) -> bool {
-        false
-    }
-    /// Restore initial internal states.
-    fn reset(&mut self);
-    /// Actuator feedback: called by the simulator after it has mixed the
-    /// command of each control period into rotor speeds; `saturated` is true
-    /// when the mixer could not realise that command (a rotor limit was hit
-    /// and thrust or torque was given up). The report holds until the next
-    /// call and is cleared by [`Controller::reset`].
-    ///
-    /// The default ignores it. [`Cascade`] stores it and, with
-    /// [`CascadeSettings::freeze_adaptation_on_saturation`], holds its
-    /// adaptive states during the following updates while it is true.
-    fn actuator_feedback(&mut self, saturated: bool) {
-        let _ = saturated;
-    }
 }
 
 #[derive(Clone, Copy, Debug, Default)]

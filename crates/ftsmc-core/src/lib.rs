@@ -20,7 +20,9 @@
 
 pub mod allocation;
 pub mod cascade;
+pub mod controller;
 pub mod ftaftsmc;
+pub mod kinematics;
 pub mod law;
 pub mod math;
 pub mod model;
@@ -30,7 +32,8 @@ pub mod se3;
 mod setpoint;
 pub mod tsm_sta;
 
-pub use cascade::{Cascade, CascadeConfig, CascadeSettings, Controller, MassAdaptation, Telemetry};
+pub use cascade::{Cascade, CascadeConfig, CascadeSettings, MassAdaptation};
+pub use controller::{Controller, Telemetry};
 pub use ftaftsmc::{FtaftsmcAxis, FtaftsmcGains};
 pub use law::{AxisLaw, GainError};
 pub use model::{Command, QuadState, QuadrotorParams, Reference};

@@ -96,15 +96,13 @@
 //! intended one only to first order about hover (`W ≈ I`). The PID law
 //! has no model terms to cancel, so nothing else differs.
 
-use crate::cascade::{Controller, Telemetry};
+use crate::controller::{Controller, Telemetry};
+use crate::kinematics::{body_rates_from_euler_rates, euler_from_rotation, rotation_from_euler};
 use crate::law::{
     check_gain, check_gain_or_zero, check_left_open, check_open, saturate, GainError, INPUT_LIMIT, MAX_ESTIMATES,
     STATE_LIMIT,
 };
-use crate::math::{
-    acos, asin, body_rates_from_euler_rates, cos, cross, dot, euler_from_rotation, exp, mat_t_vec, norm,
-    rotation_from_euler, sin, sin_cos, sqrt, Mat3, Vec3,
-};
+use crate::math::{acos, asin, cos, cross, dot, exp, mat_t_vec, norm, sin, sin_cos, sqrt, Mat3, Vec3};
 use crate::model::{Command, QuadState, QuadrotorParams, Reference};
 use crate::setpoint::{limit_tilt, reference_finite};
 

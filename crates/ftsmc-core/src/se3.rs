@@ -37,8 +37,8 @@
 //!
 //! The controller receives the Euler state of paper Eq. 1 ([`QuadState`]).
 //! It builds `R = R_z(ψ) R_y(θ) R_x(φ)` and the body rates `Ω = W(φ, θ) η̇`
-//! exactly ([`crate::math::rotation_from_euler`],
-//! [`crate::math::body_rates_from_euler_rates`]). On the rigid-body truth
+//! exactly ([`crate::kinematics::rotation_from_euler`],
+//! [`crate::kinematics::body_rates_from_euler_rates`]). On the rigid-body truth
 //! model the simulator reports the Euler angles and rates of its rotation
 //! and body rates, so `R` and `Ω` are the true ones and the law is the
 //! paper's. The paper plant (Eq. 1) instead drives the Euler-angle
@@ -50,12 +50,10 @@
 //! (but still stabilising near hover) moment. The translational part of
 //! Eq. 1 uses the same `R e₃`, so it is exact on both plants.
 
-use crate::cascade::{Controller, Telemetry};
+use crate::controller::{Controller, Telemetry};
+use crate::kinematics::{body_rates_from_euler_rates, euler_from_rotation, rotation_from_euler};
 use crate::law::{check_closed, check_gain, check_left_open, saturate, GainError, INPUT_LIMIT, MAX_ESTIMATES};
-use crate::math::{
-    body_rates_from_euler_rates, cross, dot, euler_from_rotation, mat_t_mat, mat_t_vec, mat_vec, norm,
-    rotation_from_euler, sin_cos, Mat3, Vec3,
-};
+use crate::math::{cross, dot, mat_t_mat, mat_t_vec, mat_vec, norm, sin_cos, Mat3, Vec3};
 use crate::model::{Command, QuadState, QuadrotorParams, Reference};
 use crate::setpoint::{limit_tilt, reference_finite};
 

@@ -49,20 +49,27 @@ fn warn_all(py: Python<'_>, loaded: Loaded) -> PyResult<Scenario> {
 
 #[pymethods]
 impl Scenario {
-    /// A built-in scenario by name (`paper-scenario-1`, `paper-scenario-2`,
-    /// `ftaftsmc-tuned-scenario-1`; `.toml` optional).
+    /// A built-in scenario by name (`.toml` optional): any name `ftsmc list`
+    /// shows, e.g. `paper-scenario-1`, `realistic-calm-2`; the error for an
+    /// unknown name lists them all.
     #[staticmethod]
     fn builtin(py: Python<'_>, name: &str) -> PyResult<Self> {
         let Some((file, text)) = resolve::built_in(name) else {
-            let known: Vec<&str> = ftsmc_sim::scenario::BUILT_IN_SCENARIOS
-                .iter()
-                .map(|(f, _)| f.strip_suffix(".toml").unwrap_or(f))
-                .collect();
-            return Err(value_error(format!("no built-in scenario `{name}` (built-in: {})", known.join(", "))));
+            return Err(value_error(format!(
+                "no built-in scenario `{name}` (built-in: {})",
+                resolve::built_in_names().collect::<Vec<_>>().join(", ")
+            )));
         };
         let loaded = ftsmc_sim::Scenario::from_toml_str_with_warnings(text, file, &[])
             .map_err(|e| value_error(chain_message(&e)))?;
         warn_all(py, loaded)
+    }
+
+    /// The names of every built-in scenario, in `ftsmc list` order (the
+    /// simulator's one list, `ftsmc_sim::scenario::BUILT_IN_SCENARIOS`).
+    #[staticmethod]
+    fn builtin_names() -> Vec<&'static str> {
+        resolve::built_in_names().collect()
     }
 
     /// Read, resolve (`extends`) and validate a scenario file.

@@ -9,7 +9,7 @@ use ftsmc_sim::scenario::resolve::built_in;
 use ftsmc_sim::Scenario;
 
 fn realistic() -> Scenario {
-    let (file, text) = built_in("realistic-scenario-1").expect("built in");
+    let (file, text) = built_in("realistic-breeze-1").expect("built in");
     Scenario::from_toml_str(text, file).expect("valid")
 }
 
@@ -20,7 +20,7 @@ fn hover(action: ActionMode, max_time: f64) -> GymSpec {
         max_episode_time: Some(max_time),
         ..GymSettings::default()
     };
-    GymSpec::new(realistic(), "realistic-scenario-1", settings).expect("valid spec")
+    GymSpec::new(realistic(), "realistic-breeze-1", settings).expect("valid spec")
 }
 
 /// A PD on the observation (thrust + body rates): the scripted baseline of
@@ -71,9 +71,9 @@ fn pd_hovers_and_zero_thrust_crashes() {
     assert_eq!(ended, 500, "5 s at 100 Hz: the 500th step truncates");
     assert!(run.iter().all(|r| !r.terminated[0]), "the PD never crashes");
     assert_eq!(last.reason[0], "completed");
-    // Moderate Dryden turbulence (σ_u = 3 m/s) moves it, but it stays near the point.
+    // The breeze (2.5 m/s mean wind, σ_u = 0.5 m/s) moves it, but it stays near the point.
     let worst = run[200..].iter().flat_map(|r| r.observation[..3].iter().map(|v| v.abs())).fold(0.0f32, f32::max);
-    assert!(worst < 0.5, "hover error up to {worst} m in moderate turbulence");
+    assert!(worst < 0.5, "hover error up to {worst} m in the breeze");
     // Rotors idle: the vehicle falls from 1 m and hits the ground faster than 1 m/s.
     let fall = fly(&spec, &[7], 100, &|_| [-1.0, 0.0, 0.0, 0.0]);
     let k = fall.iter().position(|r| r.terminated[0]).expect("a crash");
@@ -142,7 +142,7 @@ fn motors_at_hover_speed_hold_altitude_with_truth() {
         max_episode_time: Some(1.0),
         ..GymSettings::default()
     };
-    let spec = GymSpec::new(realistic(), "realistic-scenario-1", settings).unwrap();
+    let spec = GymSpec::new(realistic(), "realistic-breeze-1", settings).unwrap();
     let s = ftsmc_sim::gym::agent::ActionScale::of(&spec.scenario);
     let rb = spec.scenario.vehicle.rigid_body.unwrap();
     let hover = (rb.mass * rb.gravity / s.allocation[0].iter().sum::<f64>()).sqrt();
@@ -157,7 +157,7 @@ fn motors_at_hover_speed_hold_altitude_with_truth() {
 
 #[test]
 fn bad_settings_are_refused_by_name() {
-    let bad = |settings: GymSettings| GymSpec::new(realistic(), "realistic-scenario-1", settings).unwrap_err();
+    let bad = |settings: GymSettings| GymSpec::new(realistic(), "realistic-breeze-1", settings).unwrap_err();
     let e = bad(GymSettings { agent_rate: 300.0, ..GymSettings::default() });
     assert!(e.contains("agent_rate") && e.contains("300"), "{e}");
     let e = bad(GymSettings { max_episode_time: Some(-1.0), ..GymSettings::default() });
@@ -166,6 +166,10 @@ fn bad_settings_are_refused_by_name() {
     settings.reward.position = f64::NAN;
     let e = bad(settings);
     assert!(e.contains("reward.position") && e.contains("NaN"), "{e}");
-    let e = bad(GymSettings { randomize: true, ..GymSettings::default() });
+    // `randomize` needs the scenario's `[montecarlo]` draws: paper scenario 1 has none.
+    let (file, text) = built_in("paper-scenario-1").expect("built in");
+    let plain = Scenario::from_toml_str(text, file).expect("valid");
+    let e =
+        GymSpec::new(plain, "paper-scenario-1", GymSettings { randomize: true, ..GymSettings::default() }).unwrap_err();
     assert!(e.contains("montecarlo"), "{e}");
 }

@@ -3,12 +3,15 @@
 //! only in wind and envelope; `realistic-scenario-1/2` are the moderate
 //! rung; and a small Monte Carlo shows the calm rung flown by the
 //! practitioners' controllers with default gains inside its envelope and
-//! success falling on the moderate rung. The 200-run calibration is
-//! `ftsmc montecarlo realistic-calm-1 --runs 200 -c pid,se3` (docs/results.md).
+//! success falling on the moderate rung; scenario 2's rungs keep the
+//! payload within the Hummingbird's rated one, and SE(3) flies calm-2. The
+//! 200-run calibration is `ftsmc montecarlo realistic-<level>-<n> --runs 200
+//! -c pid,se3,ftaftsmc` (docs/results.md, "The wind ladder").
 
 use ftsmc_sim::actuators::MixerKind;
 use ftsmc_sim::batch::montecarlo::run_batch;
 use ftsmc_sim::environment::wind::WindPreset;
+use ftsmc_sim::scenario::distributions::Dist;
 use ftsmc_sim::scenario::ladder::{LADDER, LEVELS};
 use ftsmc_sim::scenario::{Scenario, BUILT_IN_SCENARIOS, REALISTIC_SCENARIO_1, REALISTIC_SCENARIO_2};
 
@@ -56,6 +59,25 @@ fn realistic_scenario_1_and_2_are_the_moderate_rung() {
     }
 }
 
+/// AscTec's maximum payload for the Hummingbird, kg (manufacturer's
+/// specification; the scenario files cite it).
+const HUMMINGBIRD_RATED_PAYLOAD: f64 = 0.2;
+
+#[test]
+fn scenario_2_rungs_never_load_the_hummingbird_beyond_its_rated_payload() {
+    for level in LEVELS {
+        let s = load(&format!("realistic-{level}-2"));
+        let nominal = s.payload.as_ref().unwrap().mass;
+        assert!(nominal > 0.0 && nominal <= HUMMINGBIRD_RATED_PAYLOAD, "{}: payload {nominal} kg", s.name);
+        match s.montecarlo.as_ref().unwrap().payload_mass {
+            Some(Dist::Normal { low: Some(low), high: Some(high), .. }) => {
+                assert!(low >= 0.0 && high <= HUMMINGBIRD_RATED_PAYLOAD, "{}: draws in [{low}, {high}] kg", s.name);
+            }
+            ref other => panic!("{}: payload draws {other:?} are not bounded by the rated payload", s.name),
+        }
+    }
+}
+
 /// Successes out of `runs` Monte Carlo runs of `scenario` per controller.
 fn successes(scenario: &str, controllers: &[&str], runs: u64) -> Vec<usize> {
     let s = load(scenario);
@@ -63,6 +85,12 @@ fn successes(scenario: &str, controllers: &[&str], runs: u64) -> Vec<usize> {
     let names: Vec<String> = controllers.iter().map(|c| (*c).to_string()).collect();
     let rows = run_batch(&s, &spec, &names, runs, s.seed, &|_| {}).unwrap();
     names.iter().map(|n| rows.iter().filter(|r| &r.controller == n && r.success).count()).collect()
+}
+
+#[test]
+fn default_se3_flies_calm_scenario_2_within_the_rated_payload() {
+    let calm = successes("realistic-calm-2", &["se3"], 12);
+    assert_eq!(calm, vec![12], "calm-2 successes (se3) out of 12");
 }
 
 #[test]

@@ -68,6 +68,32 @@ fn yaw_torque_from_a_moment_imbalance() {
 }
 
 #[test]
+fn translational_lift_adds_k_h_times_the_in_plane_airspeed_squared_to_each_rotor() {
+    // RotorPy's translational lift: T_i += k_h (v_x² + v_y²) of rotor i's local
+    // airspeed in body axes. Off by default; on, a level vehicle flying at
+    // (3, −1, 0.5) m/s in still air gains 4 k_h (9 + 1) N of thrust.
+    let base = RigidBodyParams { rotor_inertia: 0.0, ..RigidBodyParams::from_paper(&QuadrotorParams::default()) };
+    assert_eq!(base.translational_lift, 0.0, "off by default");
+    let lifted = RigidBodyParams { translational_lift: 3.39e-3, ..base };
+    let omega = base.hover_rotor_speed();
+    let mut x = level_state(0.0);
+    x[index::VELOCITY..index::VELOCITY + 3].copy_from_slice(&[3.0, -1.0, 0.5]);
+    let input = RigidBodyInput { rotor_speeds: [omega; 4], ..Default::default() };
+    let off = RigidBody::new(base).unwrap().body_wrench(&x, &input);
+    let on = RigidBody::new(lifted).unwrap().body_wrench(&x, &input);
+    let extra = 4.0 * lifted.translational_lift * (9.0 + 1.0);
+    assert!((on.force[2] - off.force[2] - extra).abs() < 1e-12, "{} vs {}", on.force[2] - off.force[2], extra);
+    assert_eq!((on.force[0], on.force[1]), (off.force[0], off.force[1]), "lift acts along body z only");
+    // Equal on every rotor: no moment.
+    for k in 0..3 {
+        assert!((on.torque[k] - off.torque[k]).abs() < 1e-12, "torque {:?} vs {:?}", on.torque, off.torque);
+    }
+    // A negative coefficient is refused by name.
+    let bad = RigidBodyParams { translational_lift: -1.0, ..base };
+    assert_eq!(RigidBody::new(bad).unwrap_err().field, "translational_lift");
+}
+
+#[test]
 fn rotor_and_parasitic_drag_at_a_known_airspeed() {
     let params = RigidBodyParams {
         rotor_drag_xy: 1.0e-4,

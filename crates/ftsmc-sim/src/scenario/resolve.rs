@@ -79,6 +79,35 @@ pub fn built_in(name: &str) -> Option<(&'static str, &'static str)> {
     BUILT_IN_SCENARIOS.iter().copied().find(|(file, _)| file.strip_suffix(".toml") == Some(wanted))
 }
 
+/// The names of every built-in scenario ([`BUILT_IN_SCENARIOS`], file names
+/// without `.toml`), in the order `ftsmc list` shows them. The one list that
+/// `ftsmc list`, `ftsmc scenario`, the unknown-scenario errors, `extends` and
+/// Python's `Scenario.builtin` read.
+pub fn built_in_names() -> impl Iterator<Item = &'static str> {
+    BUILT_IN_SCENARIOS.iter().map(|(f, _)| f.strip_suffix(".toml").unwrap_or(f))
+}
+
+/// [`built_in_names`] for error messages, short enough to survive the CLI's
+/// one-line error limit: names that differ only in their last character and
+/// follow each other are written once, `realistic-calm-1/2` for
+/// `realistic-calm-1, realistic-calm-2`; groups are joined with `", "`.
+pub fn built_in_names_joined() -> String {
+    let mut groups: Vec<String> = Vec::new();
+    let mut last: Option<&str> = None;
+    for name in built_in_names() {
+        let stem = &name[..name.len() - name.chars().last().map_or(0, char::len_utf8)];
+        match (last, groups.last_mut()) {
+            (Some(prev), Some(group)) if prev.len() == name.len() && prev.starts_with(stem) && !stem.is_empty() => {
+                group.push('/');
+                group.push_str(&name[stem.len()..]);
+            }
+            _ => groups.push(name.to_string()),
+        }
+        last = Some(name);
+    }
+    groups.join(", ")
+}
+
 /// Dotted keys whose values are replaced whole instead of merged.
 fn is_atomic(path: &str) -> bool {
     let mut parts = path.split('.');
@@ -268,8 +297,6 @@ fn load_chain(source: Source<'_>, limits: &Limits) -> Result<Chain, ScenarioErro
                 let path: PathBuf = dir.as_deref().unwrap_or(Path::new("")).join(&target);
                 let next_shown = path.display().to_string();
                 if !path.exists() {
-                    let known: Vec<&str> =
-                        BUILT_IN_SCENARIOS.iter().map(|(f, _)| f.strip_suffix(".toml").unwrap_or(f)).collect();
                     return Err(ScenarioError::Parse {
                         path: shown,
                         message: format!(
@@ -277,7 +304,7 @@ fn load_chain(source: Source<'_>, limits: &Limits) -> Result<Chain, ScenarioErro
                              and not a built-in scenario ({})",
                             show_str(&target),
                             show_str(&next_shown),
-                            known.join(", ")
+                            built_in_names_joined()
                         ),
                     });
                 }

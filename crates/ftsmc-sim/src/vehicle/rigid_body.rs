@@ -157,6 +157,12 @@ pub struct RigidBodyParams {
     /// Axial rotor drag (induced inflow) coefficient k_z, N·s²/(m·rad)
     /// (default 0; RotorPy Crazyflie 7.553e-7, Hummingbird 2.32e-4).
     pub rotor_drag_z: f64,
+    /// Translational lift coefficient k_h, N·s²/m² (= kg/m): each rotor's
+    /// thrust grows by `k_h (v_x² + v_y²)` with the in-plane components of its
+    /// local airspeed in body axes (body airspeed plus `Ω × r_i`), as RotorPy's
+    /// `compute_body_wrench` models translational lift (default 0, off; RotorPy
+    /// Hummingbird 3.39e-3, Crazyflie 0).
+    pub translational_lift: f64,
 }
 
 impl Default for RigidBodyParams {
@@ -197,6 +203,7 @@ impl RigidBodyParams {
             parasitic_drag: [0.0; 3],
             rotor_drag_xy: 0.0,
             rotor_drag_z: 0.0,
+            translational_lift: 0.0,
         }
     }
 
@@ -219,12 +226,13 @@ impl RigidBodyParams {
             parasitic_drag: [0.0; 3],
             rotor_drag_xy: 1.02506e-6,
             rotor_drag_z: 7.553e-7,
+            translational_lift: 0.0,
         }
     }
 
     /// AscTec Hummingbird as RotorPy `rotorpy/vehicles/hummingbird_params.py`
     /// gives it: m 0.5 kg, J diag(3.65e-3, 3.68e-3, 7.03e-3) kg·m², l 0.17 m
-    /// "×", k_f 5.57e-6, k_m 1.36e-7, k_d 1.19e-4, k_z 2.32e-4,
+    /// "×", k_f 5.57e-6, k_m 1.36e-7, k_d 1.19e-4, k_z 2.32e-4, k_h 3.39e-3,
     /// c_D (0.5e-2, 0.5e-2, 1e-2). J_r is 0 (not in RotorPy).
     pub fn hummingbird() -> Self {
         Self {
@@ -240,6 +248,7 @@ impl RigidBodyParams {
             parasitic_drag: [0.5e-2, 0.5e-2, 1e-2],
             rotor_drag_xy: 1.19e-4,
             rotor_drag_z: 2.32e-4,
+            translational_lift: 3.39e-3,
         }
     }
 
@@ -252,7 +261,7 @@ impl RigidBodyParams {
     /// | inertia (kg·m²) | finite, symmetric (to 1e-12 relative), positive definite |
     /// | arm length (m) | `[1e-6, 1e6]` |
     /// | thrust, moment coefficients | `[1e-12, 1e6]` (the mixer divides by them) |
-    /// | rotor inertia, drag coefficients | `[0, 1e6]` |
+    /// | rotor inertia, drag and translational-lift coefficients | `[0, 1e6]` |
     pub fn check(&self) -> Result<(), GainError> {
         self.check_mass_inertia()?;
         self.check_rest()
@@ -309,7 +318,8 @@ impl RigidBodyParams {
             closed(name, v, 0.0, 1e6, NONNEG)?;
         }
         closed("rotor_drag_xy", self.rotor_drag_xy, 0.0, 1e6, NONNEG)?;
-        closed("rotor_drag_z", self.rotor_drag_z, 0.0, 1e6, NONNEG)
+        closed("rotor_drag_z", self.rotor_drag_z, 0.0, 1e6, NONNEG)?;
+        closed("translational_lift", self.translational_lift, 0.0, 1e6, NONNEG)
     }
 
     /// Rotor hub positions `r_i` in body axes, m (all in the plane z_b = 0).
@@ -416,7 +426,7 @@ impl RigidBody {
         let v = block(x, index::VELOCITY);
         let omega = block(x, index::BODY_RATES);
         let v_air = mat_t_vec(r, sub(v, input.wind));
-        let aero = p.rotor_drag_xy != 0.0 || p.rotor_drag_z != 0.0;
+        let aero = p.rotor_drag_xy != 0.0 || p.rotor_drag_z != 0.0 || p.translational_lift != 0.0;
         let mut force = [0.0; 3];
         let mut torque = [0.0; 3];
         for i in 0..4 {
@@ -427,6 +437,7 @@ impl RigidBody {
                 f[0] -= w * p.rotor_drag_xy * vi[0];
                 f[1] -= w * p.rotor_drag_xy * vi[1];
                 f[2] -= w * p.rotor_drag_z * vi[2];
+                f[2] += p.translational_lift * (vi[0] * vi[0] + vi[1] * vi[1]);
             }
             force = add(force, f);
             torque = add(torque, cross(self.rotors[i], f));
