@@ -25,11 +25,6 @@ pub const TUNED_FILES: &[(&str, &str, &str)] = &[
     ("realistic-scenario-1", "tsm-sta", include_str!("../../../scenarios/tuned/realistic-scenario-1-tsm-sta.toml")),
     ("realistic-scenario-1", "pid", include_str!("../../../scenarios/tuned/realistic-scenario-1-pid.toml")),
     ("realistic-scenario-1", "se3", include_str!("../../../scenarios/tuned/realistic-scenario-1-se3.toml")),
-    ("realistic-scenario-2", "ftaftsmc", include_str!("../../../scenarios/tuned/realistic-scenario-2-ftaftsmc.toml")),
-    ("realistic-scenario-2", "ranftsmc", include_str!("../../../scenarios/tuned/realistic-scenario-2-ranftsmc.toml")),
-    ("realistic-scenario-2", "tsm-sta", include_str!("../../../scenarios/tuned/realistic-scenario-2-tsm-sta.toml")),
-    ("realistic-scenario-2", "pid", include_str!("../../../scenarios/tuned/realistic-scenario-2-pid.toml")),
-    ("realistic-scenario-2", "se3", include_str!("../../../scenarios/tuned/realistic-scenario-2-se3.toml")),
 ];
 
 /// One row of the table.
