@@ -20,6 +20,16 @@ const TRAINING_RUNS: u64 = 4;
 
 /// `(scenario, controller, tuned file text)` of every committed tuned file.
 pub const TUNED_FILES: &[(&str, &str, &str)] = &[
+    ("realistic-calm-1", "ftaftsmc", include_str!("../../../scenarios/tuned/realistic-calm-1-ftaftsmc.toml")),
+    ("realistic-calm-1", "ranftsmc", include_str!("../../../scenarios/tuned/realistic-calm-1-ranftsmc.toml")),
+    ("realistic-calm-1", "tsm-sta", include_str!("../../../scenarios/tuned/realistic-calm-1-tsm-sta.toml")),
+    ("realistic-calm-1", "pid", include_str!("../../../scenarios/tuned/realistic-calm-1-pid.toml")),
+    ("realistic-calm-1", "se3", include_str!("../../../scenarios/tuned/realistic-calm-1-se3.toml")),
+    ("realistic-calm-2", "ftaftsmc", include_str!("../../../scenarios/tuned/realistic-calm-2-ftaftsmc.toml")),
+    ("realistic-calm-2", "ranftsmc", include_str!("../../../scenarios/tuned/realistic-calm-2-ranftsmc.toml")),
+    ("realistic-calm-2", "tsm-sta", include_str!("../../../scenarios/tuned/realistic-calm-2-tsm-sta.toml")),
+    ("realistic-calm-2", "pid", include_str!("../../../scenarios/tuned/realistic-calm-2-pid.toml")),
+    ("realistic-calm-2", "se3", include_str!("../../../scenarios/tuned/realistic-calm-2-se3.toml")),
     ("realistic-scenario-1", "ftaftsmc", include_str!("../../../scenarios/tuned/realistic-scenario-1-ftaftsmc.toml")),
     ("realistic-scenario-1", "ranftsmc", include_str!("../../../scenarios/tuned/realistic-scenario-1-ranftsmc.toml")),
     ("realistic-scenario-1", "tsm-sta", include_str!("../../../scenarios/tuned/realistic-scenario-1-tsm-sta.toml")),
