@@ -46,6 +46,21 @@ impl<T> AxisSet<T> {
         }
     }
 
+    /// Apply `f` to the channels `axes` (indices 0..6 = x, y, z, φ, θ, ψ;
+    /// 5 and above mean ψ).
+    pub fn each_mut(&mut self, axes: &[usize], f: impl Fn(&mut T)) {
+        for &axis in axes {
+            f(match axis {
+                0 => &mut self.x,
+                1 => &mut self.y,
+                2 => &mut self.z,
+                3 => &mut self.phi,
+                4 => &mut self.theta,
+                _ => &mut self.psi,
+            });
+        }
+    }
+
     /// As an array `[x, y, z, φ, θ, ψ]`.
     pub fn to_array(&self) -> [T; 6]
     where

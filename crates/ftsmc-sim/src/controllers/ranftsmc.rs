@@ -67,21 +67,6 @@ pub fn time_scaled(g: &RanftsmcGains, a: f64) -> RanftsmcGains {
     }
 }
 
-/// Apply `f` to the channels `axes` (0..6 = x, y, z, φ, θ, ψ) of `[ranftsmc]`.
-fn each(t: &mut super::tune_param::TuneTarget<'_>, axes: &[usize], f: impl Fn(&mut RanftsmcGains)) {
-    let set = &mut t.gains.ranftsmc;
-    for &axis in axes {
-        f(match axis {
-            0 => &mut set.x,
-            1 => &mut set.y,
-            2 => &mut set.z,
-            3 => &mut set.phi,
-            4 => &mut set.theta,
-            _ => &mut set.psi,
-        });
-    }
-}
-
 /// What `ftsmc tune` searches for `ranftsmc`: an exact time scale per loop
 /// ([`time_scaled`]), the linear reaching gain c and the adaptation rates
 /// μ per loop group, and the command filter's ω_n.
@@ -93,31 +78,31 @@ pub fn tune_parameters() -> Vec<super::tune_param::TuneParam> {
             "time scale a of the x, y laws (b2 ×a^−β; c, h ×a²; μ0, μ1 ×a^(4−β); μ2 ×a^(2−β))",
             0.05,
             20.0,
-            |t, a| each(t, &[0, 1], |g| *g = time_scaled(g, a)),
+            |t, a| t.gains.ranftsmc.each_mut(&[0, 1], |g| *g = time_scaled(g, a)),
         ),
         TuneParam::factor("time_z", "time scale a of the z law (as time_xy)", 0.05, 20.0, |t, a| {
-            each(t, &[2], |g| *g = time_scaled(g, a))
+            t.gains.ranftsmc.each_mut(&[2], |g| *g = time_scaled(g, a))
         }),
         TuneParam::factor("time_roll_pitch", "time scale a of the φ, θ laws (as time_xy)", 0.05, 20.0, |t, a| {
-            each(t, &[3, 4], |g| *g = time_scaled(g, a))
+            t.gains.ranftsmc.each_mut(&[3, 4], |g| *g = time_scaled(g, a))
         }),
         TuneParam::factor("time_yaw", "time scale a of the ψ law (as time_xy)", 0.05, 20.0, |t, a| {
-            each(t, &[5], |g| *g = time_scaled(g, a))
+            t.gains.ranftsmc.each_mut(&[5], |g| *g = time_scaled(g, a))
         }),
         TuneParam::factor("reaching_position", "factor on c and h of x, y, z", 0.05, 20.0, |t, k| {
-            each(t, &[0, 1, 2], |g| {
+            t.gains.ranftsmc.each_mut(&[0, 1, 2], |g| {
                 g.c *= k;
                 g.h *= k
             })
         }),
         TuneParam::factor("reaching_attitude", "factor on c and h of φ, θ, ψ", 0.05, 20.0, |t, k| {
-            each(t, &[3, 4, 5], |g| {
+            t.gains.ranftsmc.each_mut(&[3, 4, 5], |g| {
                 g.c *= k;
                 g.h *= k
             })
         }),
         TuneParam::factor("adaptation", "factor on μ0, μ1, μ2 of every channel", 0.01, 100.0, |t, k| {
-            each(t, &[0, 1, 2, 3, 4, 5], |g| {
+            t.gains.ranftsmc.each_mut(&[0, 1, 2, 3, 4, 5], |g| {
                 g.mu0 *= k;
                 g.mu1 *= k;
                 g.mu2 *= k

@@ -52,21 +52,6 @@ pub fn time_scaled(g: &TsmStaGains, a: f64) -> TsmStaGains {
     TsmStaGains { lambda: g.lambda * a.powf(g.p / g.q), k1: g.k1 * a * a, k2: g.k2 * a * a * a, ..*g }
 }
 
-/// Apply `f` to the channels `axes` (0..6 = x, y, z, φ, θ, ψ) of `[tsm-sta]`.
-fn each(t: &mut super::tune_param::TuneTarget<'_>, axes: &[usize], f: impl Fn(&mut TsmStaGains)) {
-    let set = &mut t.gains.tsm_sta;
-    for &axis in axes {
-        f(match axis {
-            0 => &mut set.x,
-            1 => &mut set.y,
-            2 => &mut set.z,
-            3 => &mut set.phi,
-            4 => &mut set.theta,
-            _ => &mut set.psi,
-        });
-    }
-}
-
 /// What `ftsmc tune` searches for `tsm-sta`: an exact time scale per loop
 /// ([`time_scaled`]), the super-twisting gains k1 and k2 per loop group
 /// (their ratio sets the twisting), and the command filter's ω_n.
@@ -78,28 +63,28 @@ pub fn tune_parameters() -> Vec<super::tune_param::TuneParam> {
             "time scale a of the x, y laws (λ ×a^(p/q), k1 ×a², k2 ×a³)",
             0.05,
             20.0,
-            |t, a| each(t, &[0, 1], |g| *g = time_scaled(g, a)),
+            |t, a| t.gains.tsm_sta.each_mut(&[0, 1], |g| *g = time_scaled(g, a)),
         ),
         TuneParam::factor("time_z", "time scale a of the z law (as time_xy)", 0.05, 20.0, |t, a| {
-            each(t, &[2], |g| *g = time_scaled(g, a))
+            t.gains.tsm_sta.each_mut(&[2], |g| *g = time_scaled(g, a))
         }),
         TuneParam::factor("time_roll_pitch", "time scale a of the φ, θ laws (as time_xy)", 0.05, 20.0, |t, a| {
-            each(t, &[3, 4], |g| *g = time_scaled(g, a))
+            t.gains.tsm_sta.each_mut(&[3, 4], |g| *g = time_scaled(g, a))
         }),
         TuneParam::factor("time_yaw", "time scale a of the ψ law (as time_xy)", 0.05, 20.0, |t, a| {
-            each(t, &[5], |g| *g = time_scaled(g, a))
+            t.gains.tsm_sta.each_mut(&[5], |g| *g = time_scaled(g, a))
         }),
         TuneParam::factor("k1_position", "factor on k1 of x, y, z", 0.05, 20.0, |t, k| {
-            each(t, &[0, 1, 2], |g| g.k1 *= k)
+            t.gains.tsm_sta.each_mut(&[0, 1, 2], |g| g.k1 *= k)
         }),
         TuneParam::factor("k2_position", "factor on k2 of x, y, z", 0.05, 20.0, |t, k| {
-            each(t, &[0, 1, 2], |g| g.k2 *= k)
+            t.gains.tsm_sta.each_mut(&[0, 1, 2], |g| g.k2 *= k)
         }),
         TuneParam::factor("k1_attitude", "factor on k1 of φ, θ, ψ", 0.05, 20.0, |t, k| {
-            each(t, &[3, 4, 5], |g| g.k1 *= k)
+            t.gains.tsm_sta.each_mut(&[3, 4, 5], |g| g.k1 *= k)
         }),
         TuneParam::factor("k2_attitude", "factor on k2 of φ, θ, ψ", 0.05, 20.0, |t, k| {
-            each(t, &[3, 4, 5], |g| g.k2 *= k)
+            t.gains.tsm_sta.each_mut(&[3, 4, 5], |g| g.k2 *= k)
         }),
         COMMAND_FILTER,
     ]
