@@ -16,7 +16,7 @@ use ftsmc_sim::tune::{tune, tuned_toml, FlightStats, TuneOptions, TuneResult};
 use indicatif::{ProgressBar, ProgressStyle};
 use serde_json::json;
 
-use crate::console::{num, Table};
+use crate::console::{num, stats_cells, Table};
 use crate::output::{provenance, ResultDir};
 use crate::plot::{controller_color, write_figure, Figure, Panel, Series};
 
@@ -89,17 +89,7 @@ pub fn comparison_table(r: &TuneResult) -> String {
         "saturated",
     ]);
     let mut row = |name: &str, s: &FlightStats| {
-        t.row(vec![
-            name.to_string(),
-            format!("{}/{}", s.success, s.runs),
-            s.completed.to_string(),
-            s.crashed.to_string(),
-            num(s.rms_median),
-            num(s.rms_p95),
-            num(s.thrust_activity),
-            num(s.torque_activity),
-            num(s.saturated),
-        ]);
+        t.row([name.to_string()].into_iter().chain(stats_cells(s)).collect());
     };
     row("start, training", &r.training.start);
     row("tuned, training", &r.training.tuned);

@@ -9,7 +9,7 @@ use ftsmc_sim::scenario::Scenario;
 use ftsmc_sim::tune::{judge, FlightStats};
 use rayon::prelude::*;
 
-use crate::console::{num, Table};
+use crate::console::{stats_cells, Table};
 
 /// Held-out flights per gain set in `reproduce` (capped by `--realistic-runs`).
 pub const DEFAULT_TUNED_RUNS: u64 = 200;
@@ -92,18 +92,7 @@ pub fn table(rows: &[Row]) -> String {
         ]);
         for r in rows.iter().filter(|r| r.scenario == scenario) {
             for (gains, s) in [("default", &r.default), ("tuned", &r.tuned)] {
-                t.row(vec![
-                    r.controller.clone(),
-                    gains.to_string(),
-                    format!("{}/{}", s.success, s.runs),
-                    s.completed.to_string(),
-                    s.crashed.to_string(),
-                    num(s.rms_median),
-                    num(s.rms_p95),
-                    num(s.thrust_activity),
-                    num(s.torque_activity),
-                    num(s.saturated),
-                ]);
+                t.row([r.controller.clone(), gains.to_string()].into_iter().chain(stats_cells(s)).collect());
             }
         }
         out.push_str(&format!("\n{scenario} ({}):\n\n", label_list(rows, scenario)));
