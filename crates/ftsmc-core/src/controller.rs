@@ -6,6 +6,7 @@
 //! new controller depends on this interface only.
 
 use crate::law::MAX_ESTIMATES;
+use crate::measured::Measurement;
 use crate::model::{Command, QuadState, Reference};
 
 /// Channel indices into the six-element arrays of [`Telemetry`].
@@ -63,6 +64,20 @@ pub trait Controller {
     /// One control period: compute the command from the measured state and
     /// the reference, and advance internal states by `dt` (s).
     fn update(&mut self, state: &QuadState, reference: &Reference, dt: f64) -> Command;
+    /// [`Controller::update`] from a [`Measurement`], which may carry the
+    /// attitude quaternion and body rates beside the Euler state. The
+    /// default flies the Euler state; full-state controllers (PID, SE(3))
+    /// take the quaternion and body rates when given, instead of rebuilding
+    /// them from the Euler angles (the same attitude to rounding).
+    fn update_measured(&mut self, measured: &Measurement, reference: &Reference, dt: f64) -> Command {
+        self.update(&measured.euler, reference, dt)
+    }
+    /// True when [`Controller::update_measured`] uses [`Measurement::body`]
+    /// (the simulator then provides it; otherwise it spares the conversion).
+    /// The default: false.
+    fn uses_body_attitude(&self) -> bool {
+        false
+    }
     /// Quantities computed at the last update.
     fn telemetry(&self) -> &Telemetry;
     /// Names of the channel laws' [`Telemetry::estimates`] slots

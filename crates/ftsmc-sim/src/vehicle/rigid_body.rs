@@ -408,6 +408,33 @@ impl RigidBody {
         Ok(Self { params, inertia_inv, ..*self })
     }
 
+    /// In place, the result of [`RigidBody::with_mass_and_inertia`] of
+    /// `mass` and the inertia `scale · base_inertia` (each entry times
+    /// `scale`, the same bits), where `base_inertia` is an inertia that
+    /// passed [`RigidBodyParams::check`]: for a finite `scale > 0` the scaled
+    /// matrix keeps its symmetry and positive definiteness, so only the
+    /// mass, the entry bound and the inverse are checked (a payload or an
+    /// inertia variation changing them every control period). Otherwise, or
+    /// when any of those fails, the full check answers (the same error as
+    /// [`RigidBody::with_mass_and_inertia`]); on error `self` is unchanged.
+    pub fn set_mass_and_scaled_inertia(&mut self, mass: f64, base_inertia: &Mat3, scale: f64) -> Result<(), GainError> {
+        let inertia = base_inertia.map(|r| r.map(|v| v * scale));
+        let fast = scale > 0.0
+            && scale.is_finite()
+            && (1e-6..=1e6).contains(&mass)
+            && inertia.iter().flatten().all(|v| (-1e6..=1e6).contains(v))
+            && det3(&inertia) > 0.0;
+        let inverse = if fast { inverse3(&inertia) } else { None };
+        let inverse = match inverse {
+            Some(inv) => inv,
+            None => RigidBodyParams { mass, inertia, ..self.params }.check_mass_inertia()?,
+        };
+        self.params.mass = mass;
+        self.params.inertia = inertia;
+        self.inertia_inv = inverse;
+        Ok(())
+    }
+
     /// The parameters.
     pub fn params(&self) -> &RigidBodyParams {
         &self.params
@@ -426,22 +453,31 @@ impl RigidBody {
         let v = block(x, index::VELOCITY);
         let omega = block(x, index::BODY_RATES);
         let v_air = mat_t_vec(r, sub(v, input.wind));
-        let aero = p.rotor_drag_xy != 0.0 || p.rotor_drag_z != 0.0 || p.translational_lift != 0.0;
         let mut force = [0.0; 3];
         let mut torque = [0.0; 3];
-        for i in 0..4 {
-            let w = input.rotor_speeds[i];
-            let mut f = [0.0, 0.0, p.thrust_coefficient * w * w];
-            if aero {
+        // Two loops of the same arithmetic, so neither carries the other's
+        // branch: rotor aerodynamics on (the realistic vehicles) or off.
+        if p.rotor_drag_xy != 0.0 || p.rotor_drag_z != 0.0 || p.translational_lift != 0.0 {
+            for i in 0..4 {
+                let w = input.rotor_speeds[i];
+                let mut f = [0.0, 0.0, p.thrust_coefficient * w * w];
                 let vi = add(v_air, cross(omega, self.rotors[i]));
                 f[0] -= w * p.rotor_drag_xy * vi[0];
                 f[1] -= w * p.rotor_drag_xy * vi[1];
                 f[2] -= w * p.rotor_drag_z * vi[2];
                 f[2] += p.translational_lift * (vi[0] * vi[0] + vi[1] * vi[1]);
+                force = add(force, f);
+                torque = add(torque, cross(self.rotors[i], f));
+                torque[2] -= self.spin[i] * p.moment_coefficient * w * w;
             }
-            force = add(force, f);
-            torque = add(torque, cross(self.rotors[i], f));
-            torque[2] -= self.spin[i] * p.moment_coefficient * w * w;
+        } else {
+            for i in 0..4 {
+                let w = input.rotor_speeds[i];
+                let f = [0.0, 0.0, p.thrust_coefficient * w * w];
+                force = add(force, f);
+                torque = add(torque, cross(self.rotors[i], f));
+                torque[2] -= self.spin[i] * p.moment_coefficient * w * w;
+            }
         }
         let cd = p.parasitic_drag;
         if cd != [0.0; 3] {
