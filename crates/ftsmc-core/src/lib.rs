@@ -36,7 +36,7 @@ mod setpoint;
 pub mod tsm_sta;
 
 pub use cascade::{Cascade, CascadeConfig, CascadeSettings, MassAdaptation};
-pub use controller::{Controller, Telemetry};
+pub use controller::{Controller, SlidingTelemetry, Telemetry};
 pub use ftaftsmc::{FtaftsmcAxis, FtaftsmcGains};
 pub use law::{AxisLaw, GainError};
 pub use measured::{BodyAttitude, Measurement};

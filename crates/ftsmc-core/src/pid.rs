@@ -437,7 +437,7 @@ impl PidController {
             initialised: false,
             last_torque: [0.0; 3],
             actuator_saturated: false,
-            telemetry: Telemetry { alpha_hat: 1.0, ..Telemetry::default() },
+            telemetry: Telemetry::default(),
             alphas: [0.0; 2],
             alpha_dt: f64::NAN.to_bits(),
         })
@@ -682,13 +682,11 @@ impl PidController {
             attitude_reference_rate: [0.0, 0.0, reference.yaw_rate],
             attitude_reference_acceleration: [0.0, 0.0, reference.yaw_acceleration],
             attitude_demand: [desired[0], desired[1]],
-            sliding: [0.0; 6],
             estimates,
             commanded_acceleration: accel,
             nominal_thrust,
-            alpha_hat: 1.0,
             thrust_limited: floored || z_capped || xy_capped || direction != unlimited,
-            adaptation_frozen: false,
+            sliding_mode: None,
         };
         Command { thrust: magnitude, torque }
     }
@@ -738,7 +736,7 @@ impl Controller for PidController {
             initialised: false,
             last_torque: [0.0; 3],
             actuator_saturated: false,
-            telemetry: Telemetry { alpha_hat: 1.0, ..Telemetry::default() },
+            telemetry: Telemetry::default(),
             alphas: self.alphas,
             alpha_dt: self.alpha_dt,
         };
@@ -912,7 +910,7 @@ mod tests {
         assert_eq!(before, after);
         c.reset();
         assert_eq!((c.velocity_integral(), c.rate_integral()), ([0.0; 3], [0.0; 3]));
-        assert_eq!(c.telemetry().alpha_hat, 1.0);
+        assert_eq!(c.telemetry().sliding_mode, None);
         assert_eq!(c.estimate_names(), PID_ESTIMATE_NAMES);
     }
 

@@ -213,7 +213,7 @@ impl Se3Controller {
     }
 
     fn initial_telemetry() -> Telemetry {
-        Telemetry { alpha_hat: 1.0, ..Telemetry::default() }
+        Telemetry::default()
     }
 
     /// Desired rotation from the desired force direction and heading ψ_d;
@@ -311,13 +311,11 @@ impl Se3Controller {
             attitude_reference_rate: [0.0, 0.0, yaw_rate],
             attitude_reference_acceleration: [0.0, 0.0, yaw_accel],
             attitude_demand: [desired[0], desired[1]],
-            sliding: [0.0; 6],
             estimates: [[0.0; MAX_ESTIMATES]; 6],
             commanded_acceleration: [force[0] / m, force[1] / m, force[2] / m - g],
             nominal_thrust: lee_thrust,
-            alpha_hat: 1.0,
             thrust_limited: thrust != lee_thrust || tilt_limited,
-            adaptation_frozen: false,
+            sliding_mode: None,
         };
         Command { thrust, torque }
     }
@@ -477,7 +475,7 @@ mod tests {
         let cmd = c.update(&QuadState::default(), &Reference { yaw: f64::NAN, ..reference }, 1e-3);
         assert!(cmd.thrust.is_nan());
         c.reset();
-        assert_eq!(c.telemetry().alpha_hat, 1.0);
+        assert_eq!(c.telemetry().sliding_mode, None);
         assert!(!c.adapts_mass());
     }
 }
