@@ -374,9 +374,7 @@ fn an_inertia_variation_leaving_the_range_stops_the_run_with_a_reason() {
 fn an_unvalidated_invalid_rigid_body_stops_at_once_instead_of_panicking() {
     use ftsmc_sim::{registry, run::Divergence, ExitStatus, RunOptions};
     let mut s = rigid("").unwrap();
-    let mut rb = s.rigid_body_params();
-    rb.mass = 1e-9; // below the rigid body's range, set behind validation's back
-    s.vehicle.rigid_body = Some(rb);
+    s.vehicle.mass = Some(1e-9); // below the rigid body's range, set behind validation's back
     let out = registry::run("pid", &s, RunOptions::default()).unwrap();
     assert!(
         matches!(out.exit, ExitStatus::Diverged { divergence: Divergence::RigidBodyOutOfRange { .. }, time } if time == 0.0),
