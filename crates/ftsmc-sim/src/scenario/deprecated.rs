@@ -199,7 +199,8 @@ pub(crate) fn convert(s: &mut Scenario, old: &OldKeys) -> Result<Vec<Warning>, R
     if let Some(a) = &actual {
         a.check().map_err(|e| range("actual_plant", e))?;
     }
-    if let (Some(rb), VehicleModel::RigidBody) = (&rigid, s.vehicle.model) {
+    // (On model = "paper" too: an invalid table was refused there before.)
+    if let Some(rb) = &rigid {
         rb.check().map_err(|e| range("vehicle.rigid_body", e))?;
     }
     let mut warnings = Vec::new();
