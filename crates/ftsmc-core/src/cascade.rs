@@ -132,7 +132,9 @@ pub struct CascadeSettings {
     /// Command filter parameters (used with `command-filter`).
     pub command_filter: CommandFilterParams,
     /// Maximum desired tilt, rad: the asin arguments of Eq. 52 are clamped to
-    /// `±sin(max_tilt)` (default 0.6 rad ≈ 34°).
+    /// `±sin(max_tilt)` (default 0.6 rad ≈ 34°). Scenario key
+    /// `max_demanded_tilt` (a limit on the demand, not on the flown tilt).
+    #[cfg_attr(feature = "serde", serde(rename = "max_demanded_tilt"))]
     pub max_tilt: f64,
     /// Initial state of the command filter, `"first-demand"` (default) or
     /// `"vehicle-attitude"` (rad and rad/s of the measured roll and pitch at

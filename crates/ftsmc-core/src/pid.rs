@@ -133,6 +133,8 @@ pub struct PidGains {
     /// Descent-rate limit, m/s (`MPC_Z_VEL_MAX_DN` 1.5).
     pub max_velocity_down: f64,
     /// Tilt limit of the thrust direction, rad (`MPC_TILTMAX_AIR` 45°).
+    /// Scenario key `max_demanded_tilt` (a limit on the demand, not on the flown tilt).
+    #[cfg_attr(feature = "serde", serde(rename = "max_demanded_tilt"))]
     pub max_tilt: f64,
     /// Hover thrust `H`, N (`MPC_THR_HOVER` × T_max = m g).
     pub hover_thrust: f64,

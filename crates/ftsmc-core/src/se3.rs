@@ -74,7 +74,9 @@ pub struct Se3Gains {
     /// Largest angle between the desired thrust direction `b₃d` and the
     /// vertical, rad (not in Lee et al.; default 0.6 rad ≈ 34°, the paper
     /// cascades' default `max_tilt`, so the five controllers share one
-    /// demand limit).
+    /// demand limit). Scenario key `max_demanded_tilt` (a limit on the
+    /// demand, not on the flown tilt).
+    #[cfg_attr(feature = "serde", serde(rename = "max_demanded_tilt"))]
     pub max_tilt: f64,
     /// Smallest thrust commanded, N (not in Lee et al., whose `f` may be
     /// negative; default `0.24 m g`, PX4's `MPC_THR_MIN` = 0.12 of a maximum

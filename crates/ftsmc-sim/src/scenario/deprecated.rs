@@ -295,3 +295,54 @@ pub(crate) fn convert(s: &mut Scenario, old: &OldKeys) -> Result<Vec<Warning>, R
     }
     Ok(warnings)
 }
+
+/// Renamed keys: `(section, old key, new key, what the key means)`. Before,
+/// `max_tilt` named both a limit on the flown tilt (`[simulation]`:
+/// divergence, `[envelope]`: success) and a limit on the controllers'
+/// demand; the demand limits are now `max_demanded_tilt`.
+pub(crate) const RENAMED: [(&str, &str, &str, &str); 3] = [
+    ("cascade", "max_tilt", "max_demanded_tilt", "the most tilt the paper cascades demand (Eq. 52's asin clamp)"),
+    ("pid", "max_tilt", "max_demanded_tilt", "the most tilt PID's thrust direction demands"),
+    ("se3", "max_tilt", "max_demanded_tilt", "the most tilt SE(3)'s thrust direction demands"),
+];
+
+/// Move each [`RENAMED`] old key of the resolved table to its new name,
+/// with a warning; `writer(path)` is the `extends` depth of the file that
+/// wrote `path` (0: the scenario itself; `None`: a default). The two names
+/// are one key: the file nearer the scenario wins, as for any key (a file
+/// extending `paper-scenario-1`, which writes the new name, may still write
+/// the old one); both names in one file are refused naming both. `Ok` lists
+/// `(old path, new path when the old value moved there, warning)`.
+pub(crate) fn rename_keys(
+    merged: &mut toml::Table,
+    writer: impl Fn(&str) -> Option<usize>,
+) -> Result<Vec<(String, Option<String>, Warning)>, Refusal> {
+    let mut out = Vec::new();
+    for (section, old, new, meaning) in RENAMED {
+        let Some(toml::Value::Table(table)) = merged.get_mut(section) else { continue };
+        let Some(value) = table.remove(old) else { continue };
+        let (old_path, new_path) = (format!("{section}.{old}"), format!("{section}.{new}"));
+        let shown = value.to_string();
+        let moved = match (writer(&old_path), writer(&new_path)) {
+            (Some(o), Some(n)) if o == n => {
+                return Err((
+                    old_path,
+                    shown,
+                    format!("not together with `{new_path}` (its new name) in one file: keep only `{new_path}`"),
+                ));
+            }
+            // The new name, written nearer the scenario, wins.
+            (Some(o), Some(n)) if n < o => None,
+            _ => {
+                table.insert(new.to_string(), value);
+                Some(new_path)
+            }
+        };
+        let message = format!(
+            "deprecated: write [{section}] {new} = {shown} ({meaning}; `max_tilt` now names only a limit on the \
+             flown tilt, in [simulation] and [envelope])"
+        );
+        out.push((old_path.clone(), moved, Warning { key: old_path, value: shown, message }));
+    }
+    Ok(out)
+}

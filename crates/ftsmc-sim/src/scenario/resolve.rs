@@ -385,6 +385,19 @@ pub fn load(source: Source<'_>, overrides: &[String]) -> Result<Loaded, Scenario
     }
 
     crate::scenario::check_core_array_lengths(&merged).map_err(|(path, message)| chain.parse_error(&path, &message))?;
+    // Renamed keys (`max_tilt` of the controllers' demand limits) move to
+    // their new names before the typed parse, each with a warning.
+    let renamed = super::deprecated::rename_keys(&mut merged, |path| chain.origin.get(path).copied()).map_err(
+        |(key, value, expected)| ScenarioError::Invalid { path: chain.shown(chain.writer(&key)), key, value, expected },
+    )?;
+    let mut renamed_warnings = Vec::new();
+    for (old, moved_to, warning) in renamed {
+        if let Some(new) = moved_to {
+            let file = chain.writer(&old);
+            chain.origin.insert(new, file);
+        }
+        renamed_warnings.push(warning);
+    }
     let describe = |e: &toml::de::Error, path: &str| {
         let mut message: String = e.message().split_whitespace().collect::<Vec<_>>().join(" ");
         if e.message().starts_with("missing field") {
@@ -431,8 +444,9 @@ pub fn load(source: Source<'_>, overrides: &[String]) -> Result<Loaded, Scenario
         }
         other => other,
     })?;
-    let warnings = deprecations
+    let warnings = renamed_warnings
         .into_iter()
+        .chain(deprecations)
         .chain(unit_slip_warnings(&scenario))
         .map(|w| format!("{}: `{}` = {}: {}", chain.shown(chain.writer(&w.key)), w.key, w.value, w.message))
         .collect();
