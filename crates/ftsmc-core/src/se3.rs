@@ -175,7 +175,13 @@ impl Se3Gains {
                 check_gain(name, value)?;
             }
         }
-        check_left_open("max_tilt", self.max_tilt, 0.0, core::f64::consts::FRAC_PI_2, "0 < max_tilt <= π/2 (rad)")?;
+        check_left_open(
+            "max_demanded_tilt",
+            self.max_tilt,
+            0.0,
+            core::f64::consts::FRAC_PI_2,
+            "0 < max_demanded_tilt <= π/2 (rad)",
+        )?;
         check_closed("min_thrust", self.min_thrust, 0.0, 1e6, "0 <= min_thrust <= 1e6 (N)")?;
         check_left_open("max_thrust", self.max_thrust, self.min_thrust, 1e6, "min_thrust < max_thrust <= 1e6 (N)")
     }
@@ -419,8 +425,8 @@ mod tests {
             (Se3Gains { velocity: [f64::NAN, 1.0, 1.0], ..Se3Gains::default() }, "velocity[0]"),
             (Se3Gains { attitude: [1.0, 1.0, 0.0], ..Se3Gains::default() }, "attitude[2]"),
             (Se3Gains { angular_rate: [1.0, 1e7, 1.0], ..Se3Gains::default() }, "angular_rate[1]"),
-            (Se3Gains { max_tilt: 2.0, ..Se3Gains::default() }, "max_tilt"),
-            (Se3Gains { max_tilt: 0.0, ..Se3Gains::default() }, "max_tilt"),
+            (Se3Gains { max_tilt: 2.0, ..Se3Gains::default() }, "max_demanded_tilt"),
+            (Se3Gains { max_tilt: 0.0, ..Se3Gains::default() }, "max_demanded_tilt"),
             (Se3Gains { min_thrust: -1.0, ..Se3Gains::default() }, "min_thrust"),
             (Se3Gains { max_thrust: 1.0, ..Se3Gains::default() }, "max_thrust"),
         ];

@@ -13,7 +13,6 @@
 
 use ftsmc_core::model::QuadrotorParams;
 
-use super::resolve::Warning;
 use super::Scenario;
 use crate::vehicle::{Inertia, RigidBodyParams, VehicleModel, VehicleSettings};
 
@@ -38,6 +37,10 @@ pub(crate) fn old_keys(merged: &toml::Table) -> OldKeys {
 
 /// `(dotted key, value, expected)` of a refused mix of spellings.
 pub(crate) type Refusal = (String, String, String);
+
+/// `(dotted key, value, message)` of a deprecation warning (the loader
+/// adds the file that wrote the key).
+pub(crate) type Note = (String, String, String);
 
 /// A value as TOML writes it.
 fn shown<T: serde::Serialize>(v: &T) -> String {
@@ -156,7 +159,7 @@ const FILLED: &str = "the old table replaced [plant] whole, so its missing keys 
 /// Move the old tables of `s` into `s.vehicle`; `old` names the keys they
 /// were written with. `Ok(warnings)`, one per old key (and one for the
 /// missing keys written out); `Err` for a mix of spellings.
-pub(crate) fn convert(s: &mut Scenario, old: &OldKeys) -> Result<Vec<Warning>, Refusal> {
+pub(crate) fn convert(s: &mut Scenario, old: &OldKeys) -> Result<Vec<Note>, Refusal> {
     let actual = s.actual_plant.take();
     let rigid = s.vehicle.rigid_body.take();
     if actual.is_none() && rigid.is_none() {
@@ -204,7 +207,7 @@ pub(crate) fn convert(s: &mut Scenario, old: &OldKeys) -> Result<Vec<Warning>, R
         rb.check().map_err(|e| range("vehicle.rigid_body", e))?;
     }
     let mut warnings = Vec::new();
-    let mut warn = |key: String, value: String, message: String| warnings.push(Warning { key, value, message });
+    let mut warn = |key: String, value: String, message: String| warnings.push((key, value, message));
     let plant = s.plant;
     let model = s.vehicle.model;
     if let Some(a) = actual {
@@ -316,7 +319,7 @@ pub(crate) const RENAMED: [(&str, &str, &str, &str); 3] = [
 pub(crate) fn rename_keys(
     merged: &mut toml::Table,
     writer: impl Fn(&str) -> Option<usize>,
-) -> Result<Vec<(String, Option<String>, Warning)>, Refusal> {
+) -> Result<Vec<(String, Option<String>, Note)>, Refusal> {
     let mut out = Vec::new();
     for (section, old, new, meaning) in RENAMED {
         let Some(toml::Value::Table(table)) = merged.get_mut(section) else { continue };
@@ -342,7 +345,7 @@ pub(crate) fn rename_keys(
             "deprecated: write [{section}] {new} = {shown} ({meaning}; `max_tilt` now names only a limit on the \
              flown tilt, in [simulation] and [envelope])"
         );
-        out.push((old_path.clone(), moved, Warning { key: old_path, value: shown, message }));
+        out.push((old_path.clone(), moved, (old_path, shown, message)));
     }
     Ok(out)
 }

@@ -396,7 +396,8 @@ pub fn load(source: Source<'_>, overrides: &[String]) -> Result<Loaded, Scenario
             let file = chain.writer(&old);
             chain.origin.insert(new, file);
         }
-        renamed_warnings.push(warning);
+        let (key, value, message) = warning;
+        renamed_warnings.push(Warning { key, value, message });
     }
     let describe = |e: &toml::de::Error, path: &str| {
         let mut message: String = e.message().split_whitespace().collect::<Vec<_>>().join(" ");
@@ -446,7 +447,7 @@ pub fn load(source: Source<'_>, overrides: &[String]) -> Result<Loaded, Scenario
     })?;
     let warnings = renamed_warnings
         .into_iter()
-        .chain(deprecations)
+        .chain(deprecations.into_iter().map(|(key, value, message)| Warning { key, value, message }))
         .chain(unit_slip_warnings(&scenario))
         .map(|w| format!("{}: `{}` = {}: {}", chain.shown(chain.writer(&w.key)), w.key, w.value, w.message))
         .collect();
