@@ -26,13 +26,17 @@ pub(crate) struct OldKeys {
     rigid_body: Option<Vec<String>>,
 }
 
-/// The old tables' key names in `merged`.
-pub(crate) fn old_keys(merged: &toml::Table) -> OldKeys {
+/// The old tables taken out of `merged` (so the typed parse never sees
+/// them): `(actual_plant, vehicle.rigid_body, their key names)`.
+pub(crate) fn take_old_tables(merged: &mut toml::Table) -> (Option<toml::Value>, Option<toml::Value>, OldKeys) {
     let keys = |v: Option<&toml::Value>| v.and_then(toml::Value::as_table).map(|t| t.keys().cloned().collect());
-    OldKeys {
-        actual_plant: keys(merged.get("actual_plant")),
-        rigid_body: keys(merged.get("vehicle").and_then(|v| v.get("rigid_body"))),
-    }
+    let actual = merged.remove("actual_plant");
+    let rigid = match merged.get_mut("vehicle") {
+        Some(toml::Value::Table(v)) => v.remove("rigid_body"),
+        _ => None,
+    };
+    let old = OldKeys { actual_plant: keys(actual.as_ref()), rigid_body: keys(rigid.as_ref()) };
+    (actual, rigid, old)
 }
 
 /// `(dotted key, value, expected)` of a refused mix of spellings.
@@ -156,12 +160,16 @@ fn contains(keys: &Option<Vec<String>>, f: &str) -> bool {
 const FILLED: &str = "the old table replaced [plant] whole, so its missing keys took the paper vehicle's values; \
                       [vehicle] takes a missing key from [plant] instead, so to keep this meaning write";
 
-/// Move the old tables of `s` into `s.vehicle`; `old` names the keys they
-/// were written with. `Ok(warnings)`, one per old key (and one for the
-/// missing keys written out); `Err` for a mix of spellings.
-pub(crate) fn convert(s: &mut Scenario, old: &OldKeys) -> Result<Vec<Note>, Refusal> {
-    let actual = s.actual_plant.take();
-    let rigid = s.vehicle.rigid_body.take();
+/// Move the old tables (as parsed: missing keys the paper vehicle's) into
+/// `s.vehicle`; `old` names the keys they were written with.
+/// `Ok(warnings)`, one per old key (and one for the missing keys written
+/// out); `Err` for a mix of spellings.
+pub(crate) fn convert(
+    s: &mut Scenario,
+    actual: Option<QuadrotorParams>,
+    rigid: Option<RigidBodyParams>,
+    old: &OldKeys,
+) -> Result<Vec<Note>, Refusal> {
     if actual.is_none() && rigid.is_none() {
         return Ok(Vec::new());
     }

@@ -290,11 +290,6 @@ pub struct Scenario {
     /// too, key by key, unless `[vehicle]` says otherwise).
     #[serde(default)]
     pub plant: QuadrotorParams,
-    /// The deprecated `[actual_plant]` table as parsed (missing keys the
-    /// paper's); the loader moves it into `[vehicle]` and clears it
-    /// (`deprecated.rs`). Never written.
-    #[serde(default, skip_serializing)]
-    pub(crate) actual_plant: Option<QuadrotorParams>,
     /// Initial state.
     #[serde(default)]
     pub initial_state: InitialState,

@@ -419,7 +419,19 @@ pub fn load(source: Source<'_>, overrides: &[String]) -> Result<Loaded, Scenario
             gain_tables.insert(key.to_string(), section);
         }
     }
-    let old = super::deprecated::old_keys(&merged);
+    let (old_actual, old_rigid, old) = super::deprecated::take_old_tables(&mut merged);
+    let prefixed = |prefix: &str, e: &toml::de::Error| {
+        let inner = error_path(e);
+        describe(e, &if inner.is_empty() { prefix.to_string() } else { format!("{prefix}.{inner}") })
+    };
+    let old_actual = old_actual
+        .map(ftsmc_core::model::QuadrotorParams::deserialize)
+        .transpose()
+        .map_err(|e| prefixed("actual_plant", &e))?;
+    let old_rigid = old_rigid
+        .map(crate::vehicle::RigidBodyParams::deserialize)
+        .transpose()
+        .map_err(|e| prefixed("vehicle.rigid_body", &e))?;
     let mut scenario = Scenario::deserialize(merged).map_err(|e| {
         let path = error_path(&e);
         match with_gain_sections(e.message()) {
@@ -428,9 +440,10 @@ pub fn load(source: Source<'_>, overrides: &[String]) -> Result<Loaded, Scenario
             _ => describe(&e, &path),
         }
     })?;
-    let deprecations = super::deprecated::convert(&mut scenario, &old).map_err(|(key, value, expected)| {
-        ScenarioError::Invalid { path: chain.shown(chain.writer(&key)), key, value, expected }
-    })?;
+    let deprecations =
+        super::deprecated::convert(&mut scenario, old_actual, old_rigid, &old).map_err(|(key, value, expected)| {
+            ScenarioError::Invalid { path: chain.shown(chain.writer(&key)), key, value, expected }
+        })?;
     scenario.gains = GainSections::take_from(&mut gain_tables, &scenario.nominal_vehicle()).map_err(
         |SectionParseError { section, error }| {
             let inner = error_path(&error);

@@ -145,11 +145,6 @@ pub struct VehicleSettings {
     /// Rigid body only: translational lift k_h, N·s²/m² (default 0).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub translational_lift: Option<f64>,
-    /// The deprecated `[vehicle.rigid_body]` table as parsed (missing keys
-    /// the paper vehicle's). The loader moves it into the keys above and
-    /// clears it (`scenario/deprecated.rs`); never written.
-    #[serde(default, skip_serializing)]
-    pub(crate) rigid_body: Option<RigidBodyParams>,
 }
 
 /// The keys of `[vehicle]` that describe the true vehicle (all but `model`).
