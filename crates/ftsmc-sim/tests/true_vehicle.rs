@@ -94,9 +94,7 @@ fn every_actual_plant_key_loads_with_a_warning_and_flies_like_the_new_spelling()
         let new = loaded(&new_text);
         assert!(deprecations(&new).is_empty(), "{:?}", new.warnings);
         assert_eq!(old.scenario, new.scenario, "{old_key}");
-        if matches!(old_key, "mass" | "lift_coefficient" | "drag_rotational") {
-            assert_eq!(flight_bits(&old.scenario), flight_bits(&new.scenario), "{old_key}");
-        }
+        assert_eq!(flight_bits(&old.scenario), flight_bits(&new.scenario), "{old_key}");
     }
 }
 
@@ -139,9 +137,7 @@ fn every_rigid_body_key_loads_with_a_warning_and_flies_like_the_new_spelling() {
         let new = loaded(&new_text);
         assert!(deprecations(&new).is_empty(), "{:?}", new.warnings);
         assert_eq!(old.scenario, new.scenario, "{key}");
-        if matches!(key, "mass" | "inertia" | "parasitic_drag" | "configuration") {
-            assert_eq!(flight_bits(&old.scenario), flight_bits(&new.scenario), "{key}");
-        }
+        assert_eq!(flight_bits(&old.scenario), flight_bits(&new.scenario), "{key}");
     }
 }
 
