@@ -299,3 +299,42 @@ fn a_converted_scenario_is_written_in_the_new_spelling_and_reloads_identically()
     assert!(deprecations(&back).is_empty(), "{:?}", back.warnings);
     assert_eq!(back.scenario, old.scenario);
 }
+
+/// `[actual_plant]` on the rigid body: the rigid body was built from the
+/// table (missing keys the paper's); the conversion keeps it.
+#[test]
+fn actual_plant_on_the_rigid_body_keeps_the_rigid_body_it_built() {
+    let old =
+        loaded("[vehicle]\nmodel = \"rigid-body\"\n[actual_plant]\nmass = 0.8\ninertia = [4.2e-3, 4.3e-3, 8.1e-3]\n");
+    let table: QuadrotorParams = toml::from_str("mass = 0.8\ninertia = [4.2e-3, 4.3e-3, 8.1e-3]").unwrap();
+    assert_eq!(old.scenario.rigid_body_params(), RigidBodyParams::from_paper(&table));
+    assert_eq!(old.scenario.vehicle.drag_translational, None, "no Eq. 1 drag on the rigid body");
+}
+
+/// Monte Carlo draws act on the true vehicle exactly as they acted on the
+/// old `actual_plant` (paper model: mass drawn, inertia and both linear
+/// drags scaled), and never on the controllers' `[plant]`.
+#[test]
+fn monte_carlo_draws_act_on_the_true_vehicle_as_before() {
+    let s = loaded(
+        "[vehicle]\nmass = 0.8\n[montecarlo]\nmass = { dist = \"uniform\", low = 0.7, high = 0.9 }\n\
+         inertia_factor = { dist = \"uniform\", low = 0.8, high = 1.2 }\ndrag_factor = { dist = \"uniform\", low = 0.5, high = 2.0 }\n",
+    )
+    .scenario;
+    let spec = s.montecarlo.clone().unwrap();
+    let base = s.true_plant();
+    for index in 0..4 {
+        let (flown, _, sampled) = spec.sample(&s, s.seed, index);
+        let (mass, fi, fd) = (sampled[0], sampled[2], sampled[3]);
+        let expected = QuadrotorParams {
+            mass,
+            inertia: base.inertia.map(|j| j * fi),
+            drag_translational: base.drag_translational.map(|k| k * fd),
+            drag_rotational: base.drag_rotational.map(|k| k * fd),
+            ..base
+        };
+        assert_eq!(flown.true_plant(), expected, "run {index}");
+        assert_eq!(flown.plant, s.plant, "the controllers' model is never drawn");
+        assert!(flown.validate("mc.toml").is_ok());
+    }
+}
