@@ -131,3 +131,28 @@ def test_one_list_of_built_in_scenarios() -> None:
         ftsmc.Scenario.builtin("nope")
     for name in names:
         assert name in str(err.value), str(err.value)
+
+
+def test_true_vehicle_overrides_use_the_vehicle_section() -> None:
+    base = ftsmc.Scenario.builtin("paper-scenario-1").with_overrides({"duration": 2.0})
+    new = base.with_overrides({"vehicle.mass": 0.85, "vehicle.inertia": [4.2e-3, 4.2e-3, 8.1e-3]})
+    vehicle = _section(new.to_toml(), "vehicle")
+    assert "mass = 0.85" in vehicle and "inertia = [0.0042, 0.0042, 0.0081]" in vehicle
+    assert "mass = 0.74" in _section(new.to_toml(), "plant"), "the controllers' model stays [plant]"
+    # The old spelling still loads, warns naming the new key, and is the same scenario.
+    with pytest.warns(UserWarning, match=r"actual_plant\.mass.*\[vehicle\] mass"):
+        old = base.with_overrides({"actual_plant.mass": 0.85, "actual_plant.inertia": [4.2e-3, 4.2e-3, 8.1e-3]})
+    assert old.to_toml() == new.to_toml()
+    flown_new = ftsmc.simulate(new, "ftaftsmc").columns
+    flown_old = ftsmc.simulate(old, "ftaftsmc").columns
+    assert all((flown_new[c] == flown_old[c]).all() for c in flown_new)
+    # The true vehicle is what flies: the recorded true mass is the override's.
+    assert flown_new["mass_true"][0] == 0.85
+    # A key only the rigid body flies is refused on the paper model, naming the model.
+    with pytest.raises(ValueError, match=r"vehicle\.parasitic_drag.*model = \"paper\""):
+        base.with_overrides({"vehicle.parasitic_drag": [0.01, 0.01, 0.02]})
+    rigid = base.with_overrides({"vehicle.model": "rigid-body", "vehicle.parasitic_drag": [0.01, 0.01, 0.02]})
+    assert "parasitic_drag = [0.01, 0.01, 0.02]" in _section(rigid.to_toml(), "vehicle")
+    # Mixing the spellings is refused, naming both keys.
+    with pytest.raises(ValueError, match=r"vehicle\.mass.*actual_plant\.gravity"):
+        new.with_overrides({"actual_plant.gravity": 9.8})

@@ -585,13 +585,6 @@ fn exit_kind(run: &RunOutput) -> &'static str {
     }
 }
 
-/// Largest `max(|φ|, |θ|)` recorded in a run, rad.
-fn max_tilt(run: &RunOutput) -> f64 {
-    let phi = run.recording.column("phi");
-    let theta = run.recording.column("theta");
-    phi.iter().chain(theta).fold(0.0f64, |m, v| m.max(v.abs()))
-}
-
 /// Price `reproduce --realistic-runs N` before any flight, like
 /// `ftsmc montecarlo`: N runs × [`BEYOND_MC_CONTROLLERS`] flights of every
 /// wind-ladder rung (`ftsmc_sim::scenario::ladder::LADDER`), each against
@@ -709,7 +702,7 @@ pub fn beyond_the_paper(dir: &ResultDir, figures: bool, mc_runs: u64) -> Result<
         "peak_rotor_speed_demand",
         "max_rotor_speed",
         "saturation_fraction",
-        "max_tilt",
+        "peak_tilt",
     ])?;
     let mut json_scenarios = Map::new();
     let mut notes = Vec::new();
@@ -723,7 +716,7 @@ pub fn beyond_the_paper(dir: &ResultDir, figures: bool, mc_runs: u64) -> Result<
             let v = |x: f64| if ok { num(x) } else { "—".to_string() };
             let violation = run.envelope.as_ref().and_then(|e| e.violation.clone());
             let shown = label(name).to_string();
-            let tilt = max_tilt(run);
+            let tilt = run.stats.peak_tilt;
             outcome.row(vec![
                 s.name.clone(),
                 shown.clone(),
@@ -802,7 +795,7 @@ pub fn beyond_the_paper(dir: &ResultDir, figures: bool, mc_runs: u64) -> Result<
                     "peak_rotor_speed_demand": m.peak_rotor_speed_demand,
                     "max_rotor_speed": omega_max,
                     "saturation_fraction": m.saturation_fraction,
-                    "max_tilt": tilt,
+                    "peak_tilt": tilt,
                     "duration": m.duration,
                 }),
             );

@@ -188,8 +188,8 @@ fn extra_array_elements() {
 fn payload_against_the_true_plant() {
     run_refused(
         "payload",
-        "[actual_plant]\nmass = 0.3\n[payload]\nmass = -0.5\nstart = 0.0\n",
-        &["payload.mass", "actual_plant.mass"],
+        "[vehicle]\nmass = 0.3\n[payload]\nmass = -0.5\nstart = 0.0\n",
+        &["payload.mass", "vehicle.mass"],
     );
 }
 
@@ -233,7 +233,7 @@ fn a_negative_mass_draw() {
 
 #[test]
 fn payload_draws_against_the_true_plant() {
-    let text = "name = \"t\"\nduration = 1.0\n[actual_plant]\nmass = 0.3\n[payload]\nmass = 0.2\nstart = 0.0\n\
+    let text = "name = \"t\"\nduration = 1.0\n[vehicle]\nmass = 0.3\n[payload]\nmass = 0.2\nstart = 0.0\n\
                 [montecarlo]\npayload_mass = { dist = \"uniform\", low = -0.5, high = 0.5 }\n";
     refused("mc-payload", &["montecarlo", "s.toml", "--runs", "2"], Some(text), &["montecarlo.payload_mass"]);
 }

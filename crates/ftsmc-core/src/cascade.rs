@@ -132,7 +132,9 @@ pub struct CascadeSettings {
     /// Command filter parameters (used with `command-filter`).
     pub command_filter: CommandFilterParams,
     /// Maximum desired tilt, rad: the asin arguments of Eq. 52 are clamped to
-    /// `±sin(max_tilt)` (default 0.6 rad ≈ 34°).
+    /// `±sin(max_tilt)` (default 0.6 rad ≈ 34°). Scenario key
+    /// `max_demanded_tilt` (a limit on the demand, not on the flown tilt).
+    #[cfg_attr(feature = "serde", serde(rename = "max_demanded_tilt"))]
     pub max_tilt: f64,
     /// Initial state of the command filter, `"first-demand"` (default) or
     /// `"vehicle-attitude"` (rad and rad/s of the measured roll and pitch at
@@ -184,7 +186,13 @@ impl CascadeSettings {
     pub fn check(&self) -> Result<(), GainError> {
         check_gain("command_filter.natural_frequency", self.command_filter.natural_frequency)?;
         check_gain("command_filter.damping", self.command_filter.damping)?;
-        check_open("max_tilt", self.max_tilt, 0.0, core::f64::consts::FRAC_PI_2, "0 < max_tilt < π/2")?;
+        check_open(
+            "max_demanded_tilt",
+            self.max_tilt,
+            0.0,
+            core::f64::consts::FRAC_PI_2,
+            "0 < max_demanded_tilt < π/2",
+        )?;
         if let Some([lo, hi]) = self.thrust_limits {
             check_closed("thrust_limits[0]", lo, 0.0, STATE_LIMIT, "0 <= thrust_limits[0] < 1e100 (N)")?;
             check_left_open(
@@ -631,7 +639,7 @@ mod tests {
     fn new_rejects_a_nan_max_tilt_and_unchecked_does_not_panic() {
         let settings = CascadeSettings { max_tilt: f64::NAN, ..CascadeSettings::default() };
         let err = Cascade::new(paper_config(settings, MassAdaptation::PAPER), paper_laws()).unwrap_err();
-        assert_eq!(err.field, "max_tilt");
+        assert_eq!(err.field, "max_demanded_tilt");
         let mut c = Cascade::new_unchecked(paper_config(settings, MassAdaptation::PAPER), paper_laws());
         let reference = Reference { position: [0.3, -0.2, 1.0], ..Reference::default() };
         c.update(&QuadState::default(), &reference, 1e-3);

@@ -136,6 +136,8 @@ pub struct PidGains {
     /// Descent-rate limit, m/s (`MPC_Z_VEL_MAX_DN` 1.5).
     pub max_velocity_down: f64,
     /// Tilt limit of the thrust direction, rad (`MPC_TILTMAX_AIR` 45°).
+    /// Scenario key `max_demanded_tilt` (a limit on the demand, not on the flown tilt).
+    #[cfg_attr(feature = "serde", serde(rename = "max_demanded_tilt"))]
     pub max_tilt: f64,
     /// Hover thrust `H`, N (`MPC_THR_HOVER` × T_max = m g).
     pub hover_thrust: f64,
@@ -284,7 +286,13 @@ impl PidGains {
         check_gain("max_velocity_xy", self.max_velocity_xy)?;
         check_gain("max_velocity_up", self.max_velocity_up)?;
         check_gain("max_velocity_down", self.max_velocity_down)?;
-        check_open("max_tilt", self.max_tilt, 0.0, core::f64::consts::FRAC_PI_2, "0 < max_tilt < π/2 (rad)")?;
+        check_open(
+            "max_demanded_tilt",
+            self.max_tilt,
+            0.0,
+            core::f64::consts::FRAC_PI_2,
+            "0 < max_demanded_tilt < π/2 (rad)",
+        )?;
         check_left_open("yaw_weight", self.yaw_weight, 0.0, 1.0, "0 < yaw_weight <= 1")?;
         check_gain("hover_thrust", self.hover_thrust)?;
         check_gain("thrust_max", self.thrust_max)?;
@@ -878,7 +886,7 @@ mod tests {
             (PidGains { velocity_i: [0.0, 0.0, -1.0], ..d }, "velocity_i[2]"),
             (PidGains { rate_p: [f64::NAN, 1.0, 1.0], ..d }, "rate_p[0]"),
             (PidGains { rate_integral_limit: [0.1, -0.1, 0.1], ..d }, "rate_integral_limit[1]"),
-            (PidGains { max_tilt: 1.6, ..d }, "max_tilt"),
+            (PidGains { max_tilt: 1.6, ..d }, "max_demanded_tilt"),
             (PidGains { yaw_weight: 0.0, ..d }, "yaw_weight"),
             (PidGains { thrust_min: d.hover_thrust, ..d }, "thrust_min"),
             (PidGains { thrust_max: d.hover_thrust, ..d }, "thrust_max"),

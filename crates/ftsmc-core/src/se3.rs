@@ -77,7 +77,9 @@ pub struct Se3Gains {
     /// Largest angle between the desired thrust direction `b₃d` and the
     /// vertical, rad (not in Lee et al.; default 0.6 rad ≈ 34°, the paper
     /// cascades' default `max_tilt`, so the five controllers share one
-    /// demand limit).
+    /// demand limit). Scenario key `max_demanded_tilt` (a limit on the
+    /// demand, not on the flown tilt).
+    #[cfg_attr(feature = "serde", serde(rename = "max_demanded_tilt"))]
     pub max_tilt: f64,
     /// Smallest thrust commanded, N (not in Lee et al., whose `f` may be
     /// negative; default `0.24 m g`, PX4's `MPC_THR_MIN` = 0.12 of a maximum
@@ -176,7 +178,13 @@ impl Se3Gains {
                 check_gain(name, value)?;
             }
         }
-        check_left_open("max_tilt", self.max_tilt, 0.0, core::f64::consts::FRAC_PI_2, "0 < max_tilt <= π/2 (rad)")?;
+        check_left_open(
+            "max_demanded_tilt",
+            self.max_tilt,
+            0.0,
+            core::f64::consts::FRAC_PI_2,
+            "0 < max_demanded_tilt <= π/2 (rad)",
+        )?;
         check_closed("min_thrust", self.min_thrust, 0.0, 1e6, "0 <= min_thrust <= 1e6 (N)")?;
         check_left_open("max_thrust", self.max_thrust, self.min_thrust, 1e6, "min_thrust < max_thrust <= 1e6 (N)")
     }
@@ -451,8 +459,8 @@ mod tests {
             (Se3Gains { velocity: [f64::NAN, 1.0, 1.0], ..Se3Gains::default() }, "velocity[0]"),
             (Se3Gains { attitude: [1.0, 1.0, 0.0], ..Se3Gains::default() }, "attitude[2]"),
             (Se3Gains { angular_rate: [1.0, 1e7, 1.0], ..Se3Gains::default() }, "angular_rate[1]"),
-            (Se3Gains { max_tilt: 2.0, ..Se3Gains::default() }, "max_tilt"),
-            (Se3Gains { max_tilt: 0.0, ..Se3Gains::default() }, "max_tilt"),
+            (Se3Gains { max_tilt: 2.0, ..Se3Gains::default() }, "max_demanded_tilt"),
+            (Se3Gains { max_tilt: 0.0, ..Se3Gains::default() }, "max_demanded_tilt"),
             (Se3Gains { min_thrust: -1.0, ..Se3Gains::default() }, "min_thrust"),
             (Se3Gains { max_thrust: 1.0, ..Se3Gains::default() }, "max_thrust"),
         ];

@@ -39,11 +39,12 @@
 //!            distributions.rs   Dist, MonteCarloSpec, SAMPLED_COLUMNS, run_seed, per-run sampling
 //!            ladder.rs          the wind ladder's built-in scenarios realistic-<level>-<n>
 //!            tune_section.rs    `[tune]`: parameter set and cost weights of `ftsmc tune`
+//!            deprecated.rs      old spellings ([actual_plant], [vehicle.rigid_body], max_tilt) moved to the new keys
 //! floor 2  vehicle/             truth models
 //!            paper.rs           Eq. 1 (the paper's plant) and the generic rk4_step
 //!            rigid_body.rs      Newton–Euler rigid body with quaternion attitude
 //!            math.rs            small vector/quaternion helpers
-//!            (mod.rs)           VehicleSettings: which truth model flies (`[vehicle]`)
+//!            section.rs         `[vehicle]`: the truth model and every true parameter, one key set
 //!          actuators.rs         motor limits, lag, noise; mixer under saturation
 //!          environment/         plant-side variations, built from their own sections
 //!            disturbance.rs     DisturbanceSignals

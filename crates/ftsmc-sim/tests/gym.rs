@@ -58,7 +58,7 @@ fn fly(spec: &GymSpec, seeds: &[u64], steps: usize, policy: &dyn Fn(&[f32]) -> [
 
 fn scale(spec: &GymSpec) -> (f64, f64) {
     let s = ftsmc_sim::gym::agent::ActionScale::of(&spec.scenario);
-    (s.max_thrust, spec.scenario.vehicle.rigid_body.expect("rigid body").mass)
+    (s.max_thrust, spec.scenario.rigid_body_params().mass)
 }
 
 #[test]
@@ -144,7 +144,7 @@ fn motors_at_hover_speed_hold_altitude_with_truth() {
     };
     let spec = GymSpec::new(realistic(), "realistic-breeze-1", settings).unwrap();
     let s = ftsmc_sim::gym::agent::ActionScale::of(&spec.scenario);
-    let rb = spec.scenario.vehicle.rigid_body.unwrap();
+    let rb = spec.scenario.rigid_body_params();
     let hover = (rb.mass * rb.gravity / s.allocation[0].iter().sum::<f64>()).sqrt();
     let a = 2.0 * (hover - s.min_rotor_speed) / (s.max_rotor_speed - s.min_rotor_speed) - 1.0;
     let run = fly(&spec, &[2], 20, &|_| [a; 4]);

@@ -210,6 +210,10 @@ fn arrays_of_the_wrong_length_are_refused() {
     assert!(msg.contains("drag_rotational") && msg.contains("invalid length 2"), "{msg}");
     let msg = refused("[actual_plant]\ndrag_translational = [0.0, 0.0, 0.0, 1.0]\n");
     assert!(msg.contains("actual_plant.drag_translational") && msg.contains("invalid length 4"), "{msg}");
+    let msg = refused("[vehicle]\ndrag_translational = [0.0, 0.0, 0.0, 1.0]\n");
+    assert!(msg.contains("vehicle.drag_translational") && msg.contains("invalid length 4"), "{msg}");
+    let msg = refused("[vehicle]\nmodel = \"rigid-body\"\nparasitic_drag = [0.0, 0.0]\n");
+    assert!(msg.contains("vehicle.parasitic_drag") && msg.contains("invalid length 2"), "{msg}");
     accepted("[ftaftsmc.mass_adaptation]\nenabled = true\nbeta1 = 0.8\nbeta2 = 0.01\nalpha_hat_bounds = [0.5, 2.0]\n");
     let s = accepted("[initial_state]\nposition = [0.5, 0.25, 0.0]\n[simulation]\nmetrics_window = [0.0, 1.0]\n");
     assert_eq!(s.initial_state.position, [0.5, 0.25, 0.0]);
@@ -218,9 +222,9 @@ fn arrays_of_the_wrong_length_are_refused() {
 #[test]
 fn payload_is_checked_against_the_true_plant() {
     // Nominal mass 0.74, true mass 0.3: a payload of -0.5 makes the true mass negative.
-    let msg = refused("[actual_plant]\nmass = 0.3\n[payload]\nmass = -0.5\nstart = 0.0\n");
-    assert!(msg.contains("payload.mass") && msg.contains("actual_plant.mass"), "{msg}");
-    accepted("[actual_plant]\nmass = 0.8\n[payload]\nmass = -0.5\nstart = 0.0\n");
+    let msg = refused("[vehicle]\nmass = 0.3\n[payload]\nmass = -0.5\nstart = 0.0\n");
+    assert!(msg.contains("payload.mass") && msg.contains("vehicle.mass"), "{msg}");
+    accepted("[vehicle]\nmass = 0.8\n[payload]\nmass = -0.5\nstart = 0.0\n");
 }
 
 const MC: &str = "[payload]\nmass = 0.2\nstart = 0.0\n[montecarlo]\n";
@@ -275,7 +279,7 @@ fn monte_carlo_draws_stay_in_the_physical_ranges() {
     }
     // Mass and payload draws together, against the true plant.
     let msg = refused(&format!(
-        "[actual_plant]\nmass = 0.3\n{MC}payload_mass = {{ dist = \"uniform\", low = -0.5, high = 0.5 }}\n"
+        "[vehicle]\nmass = 0.3\n{MC}payload_mass = {{ dist = \"uniform\", low = -0.5, high = 0.5 }}\n"
     ));
     assert!(msg.contains("`montecarlo.payload_mass`"), "{msg}");
     let msg = refused(
@@ -374,9 +378,7 @@ fn an_inertia_variation_leaving_the_range_stops_the_run_with_a_reason() {
 fn an_unvalidated_invalid_rigid_body_stops_at_once_instead_of_panicking() {
     use ftsmc_sim::{registry, run::Divergence, ExitStatus, RunOptions};
     let mut s = rigid("").unwrap();
-    let mut rb = s.rigid_body_params();
-    rb.mass = 1e-9; // below the rigid body's range, set behind validation's back
-    s.vehicle.rigid_body = Some(rb);
+    s.vehicle.mass = Some(1e-9); // below the rigid body's range, set behind validation's back
     let out = registry::run("pid", &s, RunOptions::default()).unwrap();
     assert!(
         matches!(out.exit, ExitStatus::Diverged { divergence: Divergence::RigidBodyOutOfRange { .. }, time } if time == 0.0),

@@ -8,59 +8,11 @@
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 
+#[path = "common/source.rs"]
+mod source;
+use source::{module_of, paths_after, rust_files, without_comments};
+
 const CRATES: [&str; 4] = ["ftsmc-core", "ftsmc-sim", "ftsmc-cli", "ftsmc-py"];
-
-fn rust_files(dir: &Path, out: &mut Vec<PathBuf>) {
-    for entry in std::fs::read_dir(dir).expect("read src") {
-        let path = entry.expect("dir entry").path();
-        if path.is_dir() {
-            rust_files(&path, out);
-        } else if path.extension().is_some_and(|e| e == "rs") {
-            out.push(path);
-        }
-    }
-}
-
-/// `src/run/exit.rs` → `["run", "exit"]`; `src/run/mod.rs` → `["run"]`; `src/lib.rs` → `[]`.
-fn module_of(src: &Path, file: &Path) -> Vec<String> {
-    let rel = file.strip_prefix(src).expect("under src").with_extension("");
-    let mut parts: Vec<String> = rel.iter().map(|p| p.to_string_lossy().into_owned()).collect();
-    if matches!(parts.last().map(String::as_str), Some("mod" | "lib" | "main")) {
-        parts.pop();
-    }
-    parts
-}
-
-/// The segments of every path starting with `prefix` (`crate::` or
-/// `super::`), grouped imports expanded one level (`use crate::{a::X, b};`).
-fn paths_after(code: &str, prefix: &str) -> Vec<Vec<String>> {
-    let mut out = Vec::new();
-    let mut rest = code;
-    while let Some(i) = rest.find(prefix) {
-        let boundary = i == 0 || !rest[..i].ends_with(|c: char| c.is_alphanumeric() || c == '_' || c == ':');
-        rest = &rest[i + prefix.len()..];
-        if !boundary {
-            continue;
-        }
-        let head: String = rest.chars().take_while(|c| c.is_alphanumeric() || *c == '_' || *c == ':').collect();
-        let mut base: Vec<String> = head.split("::").filter(|s| !s.is_empty()).map(String::from).collect();
-        if head.ends_with("::") && rest[head.len()..].starts_with('{') {
-            let inner = &rest[head.len() + 1..];
-            let inner = &inner[..inner.find('}').unwrap_or(inner.len())];
-            for item in inner.split(',') {
-                let mut p = base.clone();
-                p.extend(item.trim().split("::").map(|s| s.trim().to_string()).filter(|s| !s.is_empty()));
-                out.push(p);
-            }
-            continue;
-        }
-        if base.is_empty() {
-            continue;
-        }
-        out.push(std::mem::take(&mut base));
-    }
-    out
-}
 
 #[test]
 fn no_file_imports_a_file_that_imports_it_back() {
@@ -68,8 +20,7 @@ fn no_file_imports_a_file_that_imports_it_back() {
     let mut circles = Vec::new();
     for krate in CRATES {
         let src = root.join(krate).join("src");
-        let mut files = Vec::new();
-        rust_files(&src, &mut files);
+        let files = rust_files(&src);
         let modules: BTreeMap<Vec<String>, PathBuf> = files.iter().map(|f| (module_of(&src, f), f.clone())).collect();
         // The file of the longest module prefix of `path`.
         let resolve = |path: &[String]| -> Option<Vec<String>> {
@@ -78,14 +29,7 @@ fn no_file_imports_a_file_that_imports_it_back() {
         let mut edges: BTreeMap<Vec<String>, BTreeSet<Vec<String>>> = BTreeMap::new();
         for (module, file) in &modules {
             let text = std::fs::read_to_string(file).unwrap();
-            let code: String = text
-                .lines()
-                .map(|l| match l.find("//") {
-                    Some(i) => &l[..i],
-                    None => l,
-                })
-                .collect::<Vec<_>>()
-                .join("\n");
+            let code = without_comments(&text);
             let is_mod_file = file.file_stem().is_some_and(|s| s == "mod" || s == "lib" || s == "main");
             let parent: Vec<String> = if is_mod_file {
                 module[..module.len().saturating_sub(1)].to_vec()
@@ -145,4 +89,14 @@ fn no_file_imports_a_file_that_imports_it_back() {
         circles.extend(found.into_iter().map(|c| format!("{krate}: {c}")));
     }
     assert!(circles.is_empty(), "file-level import circles:\n{}", circles.join("\n"));
+}
+
+#[test]
+fn the_parser_sees_the_paths_a_circle_is_made_of() {
+    let seg = |v: &[&str]| v.iter().map(|s| s.to_string()).collect::<Vec<_>>();
+    assert_eq!(paths_after("use crate::{pid::Pid, se3};", "crate::"), [seg(&["pid", "Pid"]), seg(&["se3"])]);
+    assert_eq!(paths_after("use super::console::Table;", "super::"), [seg(&["console", "Table"])]);
+    assert_eq!(paths_after("let t = super::super::x::f();", "super::").first(), Some(&seg(&["super", "x", "f"])));
+    assert!(paths_after(&without_comments("// crate::pid::Pid"), "crate::").is_empty());
+    assert!(paths_after("$crate::pid::Pid", "crate::").is_empty());
 }

@@ -5,7 +5,11 @@
 //! that reaches a module on a higher floor.
 
 use std::collections::BTreeMap;
-use std::path::{Path, PathBuf};
+use std::path::Path;
+
+#[path = "common/source.rs"]
+mod source;
+use source::{module_of, paths_after, rust_files, without_comments};
 
 /// Module path (as written after `crate::`) → floor. The longest matching
 /// prefix decides, so a sub-module may sit on another floor than its parent.
@@ -41,79 +45,34 @@ fn floor_of(module: &str) -> u32 {
         .unwrap_or_else(|| panic!("module `{module}` has no floor in tests/layout.rs; add it to FLOORS"))
 }
 
-fn rust_files(dir: &Path, out: &mut Vec<PathBuf>) {
-    for entry in std::fs::read_dir(dir).expect("read src") {
-        let path = entry.expect("dir entry").path();
-        if path.is_dir() {
-            rust_files(&path, out);
-        } else if path.extension().is_some_and(|e| e == "rs") {
-            out.push(path);
-        }
-    }
-}
-
 /// `src/run/exit.rs` → `run::exit`; `src/signal/mod.rs` → `signal`; `src/lib.rs` → ``.
-fn module_of(src: &Path, file: &Path) -> String {
-    let rel = file.strip_prefix(src).expect("under src").with_extension("");
-    let mut parts: Vec<String> = rel.iter().map(|p| p.to_string_lossy().into_owned()).collect();
-    if matches!(parts.last().map(String::as_str), Some("mod" | "lib")) {
-        parts.pop();
-    }
-    parts.join("::")
+fn module_name(src: &Path, file: &Path) -> String {
+    module_of(src, file).join("::")
 }
 
-/// Every `crate::a::b…` path in `code` (comments removed), including the
-/// items of grouped imports `use crate::{a::X, b};`.
+/// The module part of every `crate::…` path in `code` (comments removed),
+/// including the items of grouped imports `use crate::{a::X, b};`: the
+/// segments up to the first that does not start with a lower-case letter
+/// (`run::exit::ExitStatus` → `run::exit`).
 fn crate_paths(code: &str) -> Vec<String> {
-    let code: String = code
-        .lines()
-        .map(|l| match l.find("//") {
-            Some(i) => &l[..i],
-            None => l,
+    paths_after(&without_comments(code), "crate::")
+        .into_iter()
+        .map(|p| {
+            p.iter()
+                .take_while(|s| s.chars().next().is_some_and(|c| c.is_lowercase()))
+                .cloned()
+                .collect::<Vec<_>>()
+                .join("::")
         })
-        .collect::<Vec<_>>()
-        .join("\n");
-    let mut out = Vec::new();
-    let mut rest = code.as_str();
-    while let Some(i) = rest.find("crate::") {
-        let boundary = i == 0 || !rest[..i].ends_with(|c: char| c.is_alphanumeric() || c == '_' || c == '$');
-        rest = &rest[i + "crate::".len()..];
-        if !boundary {
-            continue;
-        }
-        if let Some(group) = rest.strip_prefix('{') {
-            let end = group.find('}').unwrap_or(group.len());
-            for item in group[..end].split(',') {
-                let item = item.trim();
-                if !item.is_empty() {
-                    out.push(path_head(item));
-                }
-            }
-        } else {
-            out.push(path_head(rest));
-        }
-    }
-    out
-}
-
-/// The module part of a path: `run::exit::ExitStatus` → `run::exit`
-/// (segments up to the first that starts with an upper-case letter).
-fn path_head(path: &str) -> String {
-    let end = path.find(|c: char| !(c.is_alphanumeric() || c == '_' || c == ':')).unwrap_or(path.len());
-    path[..end]
-        .split("::")
-        .take_while(|s| !s.is_empty() && s.chars().next().is_some_and(|c| c.is_lowercase()))
-        .collect::<Vec<_>>()
-        .join("::")
+        .filter(|m| !m.is_empty())
+        .collect()
 }
 
 fn violations(src: &Path) -> Vec<String> {
-    let mut files = Vec::new();
-    rust_files(src, &mut files);
-    files.sort();
+    let files = rust_files(src);
     let mut found = Vec::new();
     for file in &files {
-        let module = module_of(src, file);
+        let module = module_name(src, file);
         let own = floor_of(&module);
         let text = std::fs::read_to_string(file).expect("read source");
         let mut seen = BTreeMap::new();
@@ -140,10 +99,9 @@ fn no_module_imports_one_on_a_higher_floor() {
 #[test]
 fn every_top_level_module_has_a_floor() {
     let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
-    let mut files = Vec::new();
-    rust_files(&src, &mut files);
+    let files = rust_files(&src);
     for file in files {
-        let module = module_of(&src, &file);
+        let module = module_name(&src, &file);
         let top = module.split("::").next().unwrap_or("");
         assert!(
             FLOORS.iter().any(|(m, _)| *m == top),

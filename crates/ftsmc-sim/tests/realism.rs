@@ -95,6 +95,7 @@ fn bad_realism_keys_are_refused_naming_file_key_and_value() {
         ("[envelope]\nmax_tilt = -0.1\n", "envelope.max_tilt"),
         ("[actuators]\nmax_rotor_speed = -5.0\n", "actuators.max_rotor_speed"),
         ("[vehicle.rigid_body]\nmass = -1.0\n", "vehicle.rigid_body.mass"),
+        ("[vehicle]\nmodel = \"rigid-body\"\nmass = -1.0\n", "vehicle.mass"),
     ] {
         let text = format!("extends = \"paper-scenario-1\"\nname = \"t\"\n{extra}");
         let err = Scenario::from_toml_str(&text, "bad.toml").unwrap_err().to_string();
@@ -233,7 +234,7 @@ fn a_steady_wind_pushes_the_paper_plant_through_its_drag() {
 fn turbulence_is_deterministic_per_seed_and_moves_the_rigid_body() {
     let text = |seed: u64| {
         format!(
-            "seed = {seed}\nduration = 2.0\n[vehicle]\nmodel = \"rigid-body\"\n[vehicle.rigid_body]\nparasitic_drag = [0.5, 0.5, 0.5]\n\
+            "seed = {seed}\nduration = 2.0\n[vehicle]\nmodel = \"rigid-body\"\nparasitic_drag = [0.5, 0.5, 0.5]\n\
              [wind]\nturbulence = {{ intensity = \"moderate\" }}\n[initial_state]\nposition = [0.0, 0.0, 1.0]\n"
         )
     };

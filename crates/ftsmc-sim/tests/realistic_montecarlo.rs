@@ -78,15 +78,16 @@ fn realistic_monte_carlo_rates_do_not_depend_on_the_thread_count() {
     assert_eq!(one_summary, two_summary);
 }
 
-/// The draws of true mass, inertia and drag reach an explicit
-/// `[vehicle.rigid_body]` (the truth model), not only `actual_plant`.
+/// The draws of true mass, inertia and drag reach the rigid body the
+/// scenario's `[vehicle]` describes (the truth model).
 #[test]
 fn mass_inertia_and_drag_draws_reach_the_rigid_body() {
     let s = scenario();
-    let base = s.vehicle.rigid_body.expect("realistic scenario 2 names its rigid body");
+    assert!(s.vehicle.parasitic_drag.is_some(), "realistic scenario 2 names its rigid body's aerodynamics");
+    let base = s.rigid_body_params();
     let spec = s.montecarlo.clone().unwrap();
     let (flown, _, sampled) = spec.sample(&s, s.seed, 3);
-    let rb = flown.vehicle.rigid_body.unwrap();
+    let rb = flown.rigid_body_params();
     let (mass, inertia_factor, drag_factor) = (sampled[0], sampled[2], sampled[3]);
     assert_ne!(mass, base.mass, "the draw must differ from the nominal mass");
     assert_eq!(rb.mass, mass);

@@ -121,9 +121,9 @@ fn a_flight_stepped_by_hand_is_the_simulated_flight_and_observers_see_every_tick
         assert_eq!(steps + 1, whole.steps, "the last step reports Done");
         assert_eq!(counter.ticks, whole.steps);
         assert_eq!(counter.boundaries, whole.steps + 1, "t = 0 and after every period");
-        assert!(whole.stats.max_tilt >= counter.max_roll);
+        assert!(whole.stats.peak_tilt >= counter.max_roll);
         // The statistics see every period; the 100 Hz recording a subset.
         let recorded = whole.recording.column("phi").iter().chain(whole.recording.column("theta")).fold(0.0f64, |m, v| m.max(v.abs()));
-        assert!(whole.stats.max_tilt >= recorded && whole.stats.max_tilt < recorded + 0.01, "{} vs {recorded}", whole.stats.max_tilt);
+        assert!(whole.stats.peak_tilt >= recorded && whole.stats.peak_tilt < recorded + 0.01, "{} vs {recorded}", whole.stats.peak_tilt);
     }
 }

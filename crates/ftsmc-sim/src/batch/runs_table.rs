@@ -42,9 +42,9 @@ impl Column {
 }
 
 /// The flight-statistics columns ([`crate::run::FlightStats`]), every flight:
-/// `max_tilt` (rad), `saturated_periods`, `rotor_speed_max` and
+/// `peak_tilt` (rad), `saturated_periods`, `rotor_speed_max` and
 /// `rotor_speed_mean` (rad/s).
-pub const STATS_COLUMNS: [&str; 4] = ["max_tilt", "saturated_periods", "rotor_speed_max", "rotor_speed_mean"];
+pub const STATS_COLUMNS: [&str; 4] = ["peak_tilt", "saturated_periods", "rotor_speed_max", "rotor_speed_mean"];
 
 /// `runs.csv` as named columns of equal length, in run order (see
 /// docs/outputs.md): `run`, `seed`, `controller`, `exit`, `diverged_at`, the
@@ -116,7 +116,7 @@ pub fn runs_table(rows: &[McRun]) -> RunsTable {
             .collect();
         columns.push(Column::Number(cells));
     }
-    columns.push(Column::Number(rows.iter().map(|r| Some(r.stats.max_tilt)).collect()));
+    columns.push(Column::Number(rows.iter().map(|r| Some(r.stats.peak_tilt)).collect()));
     columns.push(Column::Integer(rows.iter().map(|r| r.stats.saturated_periods).collect()));
     columns.push(Column::Number(rows.iter().map(|r| Some(r.stats.rotor_speed_max)).collect()));
     columns.push(Column::Number(rows.iter().map(|r| Some(r.stats.rotor_speed_mean)).collect()));

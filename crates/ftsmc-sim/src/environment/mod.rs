@@ -23,7 +23,8 @@ use crate::signal::Signal;
 /// held, e.g. [`crate::scenario::Scenario::environment`]).
 #[derive(Clone, Copy, Debug)]
 pub struct EnvironmentParams<'a> {
-    /// The true plant before variations (the scenario's `actual_plant`,
+    /// The true plant before variations (the scenario's true vehicle in
+    /// paper form: `[plant]` with the keys `[vehicle]` gives,
     /// or its `plant` when the controller's model is exact).
     pub plant: QuadrotorParams,
     /// Payload profile, if any.

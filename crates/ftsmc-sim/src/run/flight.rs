@@ -143,7 +143,7 @@ impl<'s, C: Controller + ?Sized> Flight<'s, C> {
             truth,
             actuators,
             demand_params,
-            base_plant: scenario.actual_plant.unwrap_or(scenario.plant),
+            base_plant: scenario.true_plant(),
             sensors,
             wind,
             ground: scenario.ground.filter(|g| g.enabled),

@@ -81,8 +81,9 @@ impl Observer for Tracker {
 /// Tilt, saturation and rotor statistics of a flight, without recording.
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
 pub struct FlightStats {
-    /// Largest tilt `max(|φ|, |θ|)` of the truth at the period boundaries, rad.
-    pub max_tilt: f64,
+    /// Largest tilt `max(|φ|, |θ|)` of the truth at the period boundaries, rad
+    /// (a measurement; the limits on it are `simulation.max_tilt` and `envelope.max_tilt`).
+    pub peak_tilt: f64,
     /// Control periods in which the actuator stage saturated.
     pub saturated_periods: u64,
     /// Control periods observed.
@@ -126,8 +127,8 @@ impl Observer for FlightStats {
     #[inline]
     fn boundary(&mut self, _: f64, truth: &QuadState, _: &Reference) {
         let tilt = truth.attitude[0].abs().max(truth.attitude[1].abs());
-        if tilt > self.max_tilt {
-            self.max_tilt = tilt;
+        if tilt > self.peak_tilt {
+            self.peak_tilt = tilt;
         }
     }
 }

@@ -11,7 +11,8 @@
 //! the rigid body's mass and the inertia variation scales its inertia matrix,
 //! both updated once per control period. The paper's linear drags
 //! (`K_f1`, `K_f2`) and their noise act on the paper truth model only; the
-//! rigid body uses its own aerodynamics (`[vehicle.rigid_body]`).
+//! rigid body uses its own aerodynamics (`[vehicle] parasitic_drag`,
+//! `rotor_drag_xy`, `rotor_drag_z`, `translational_lift`).
 //!
 //! With `[wind]` both models see air-relative drag: Eq. 1's `K_f1` drag on
 //! `v − w`, the rigid body's parasitic and rotor drag.
@@ -213,7 +214,7 @@ pub(crate) struct TruthSetup {
 /// The truth model `scenario` flies (`[vehicle] model`).
 pub(crate) fn truth_of(scenario: &Scenario) -> TruthSetup {
     let (allocation, demand) = scenario.truth_allocation();
-    let p = scenario.actual_plant.unwrap_or(scenario.plant);
+    let p = scenario.true_plant();
     let paper_hover = (p.mass * p.gravity / (4.0 * p.lift_coefficient)).sqrt();
     let paper = || Box::new(PaperTruth(scenario.initial_state.state().to_array()));
     let (truth, hover, invalid): (Box<dyn TruthModel + Send>, f64, Option<Divergence>) = match scenario.vehicle.model {

@@ -237,7 +237,7 @@ impl MonteCarloSpec {
         let range = |(lo, hi): (f64, f64)| format!("draws in [{}, {}]", show(lo), show(hi));
         let err =
             |name: &str, d: &Dist, expected: String| Err((format!("montecarlo.{name}"), range(d.support()), expected));
-        let truth = base.actual_plant.unwrap_or(base.plant);
+        let truth = base.true_plant();
         let mut mass_low = truth.mass;
         if let Some(d) = &self.mass {
             let (lo, _) = d.support();
@@ -386,33 +386,14 @@ impl MonteCarloSpec {
         };
         let mut s = base.clone();
         s.seed = seed;
-        let mut truth = s.actual_plant.unwrap_or(s.plant);
-        if let Some(d) = &self.mass {
-            truth.mass = d.sample(&mut stream(0));
-        }
+        let mass = self.mass.map(|d| d.sample(&mut stream(0)));
         if let (Some(d), Some(p)) = (&self.payload_mass, s.payload.as_mut()) {
             p.mass = d.sample(&mut stream(1));
         }
         let inertia_factor = self.inertia_factor.map_or(1.0, |d| d.sample(&mut stream(2)));
-        for i in &mut truth.inertia {
-            *i *= inertia_factor;
-        }
         let drag_factor = self.drag_factor.map_or(1.0, |d| d.sample(&mut stream(3)));
-        for k in truth.drag_translational.iter_mut().chain(truth.drag_rotational.iter_mut()) {
-            *k *= drag_factor;
-        }
-        s.actual_plant = Some(truth);
-        // An explicit rigid body is the truth model: the draws act on it too
-        // (without one, the rigid body is built from `actual_plant`).
-        if let Some(rb) = s.vehicle.rigid_body.as_mut() {
-            if self.mass.is_some() {
-                rb.mass = truth.mass;
-            }
-            rb.inertia = rb.inertia.map(|row| row.map(|j| j * inertia_factor));
-            rb.parasitic_drag = rb.parasitic_drag.map(|c| c * drag_factor);
-            rb.rotor_drag_xy *= drag_factor;
-            rb.rotor_drag_z *= drag_factor;
-        }
+        draw_true_vehicle(&mut s.vehicle, &base.plant, mass, inertia_factor, drag_factor);
+        let truth = s.true_plant();
         let amplitude = self.disturbance_amplitude.map_or(1.0, |d| d.sample(&mut stream(4)));
         let mut phase_rng = stream(5);
         let mut first_phase = 0.0;
@@ -477,6 +458,42 @@ impl MonteCarloSpec {
     }
 }
 
+/// Apply one run's draws to the true vehicle `[vehicle]` (over `plant`,
+/// the controllers' model its missing keys come from): the true mass
+/// (`None`: not drawn), the inertia (diagonal or matrix) scaled by
+/// `inertia_factor`, and the drag the model flies scaled by `drag_factor` —
+/// Eq. 1's `K_f1`, `K_f2` on the paper model, the parasitic and rotor drag
+/// on the rigid body. The controllers' `[plant]` is never touched.
+fn draw_true_vehicle(
+    v: &mut crate::vehicle::VehicleSettings,
+    plant: &ftsmc_core::model::QuadrotorParams,
+    mass: Option<f64>,
+    inertia_factor: f64,
+    drag_factor: f64,
+) {
+    use crate::vehicle::{Inertia, VehicleModel};
+    if let Some(m) = mass {
+        v.mass = Some(m);
+    }
+    v.inertia = Some(match v.inertia {
+        Some(Inertia::Matrix(m)) => Inertia::Matrix(m.map(|row| row.map(|j| j * inertia_factor))),
+        Some(Inertia::Diagonal(d)) => Inertia::Diagonal(d.map(|j| j * inertia_factor)),
+        None => Inertia::Diagonal(plant.inertia.map(|j| j * inertia_factor)),
+    });
+    let scale = |k: [f64; 3]| k.map(|k| k * drag_factor);
+    match v.model {
+        VehicleModel::Paper => {
+            v.drag_translational = Some(scale(v.drag_translational.unwrap_or(plant.drag_translational)));
+            v.drag_rotational = Some(scale(v.drag_rotational.unwrap_or(plant.drag_rotational)));
+        }
+        VehicleModel::RigidBody => {
+            v.parasitic_drag = v.parasitic_drag.map(scale);
+            v.rotor_drag_xy = v.rotor_drag_xy.map(|k| k * drag_factor);
+            v.rotor_drag_z = v.rotor_drag_z.map(|k| k * drag_factor);
+        }
+    }
+}
+
 /// The rigid-body truth parameters of a run whose true mass is drawn as
 /// `mass` (`None`: not drawn) and whose inertia and drag are scaled by
 /// `inertia_factor` and `drag_factor`, exactly as [`MonteCarloSpec::sample`]
@@ -487,23 +504,9 @@ fn drawn_rigid_body(
     inertia_factor: f64,
     drag_factor: f64,
 ) -> crate::vehicle::RigidBodyParams {
-    let mut s = base.clone();
-    let mut truth = s.actual_plant.unwrap_or(s.plant);
-    if let Some(m) = mass {
-        truth.mass = m;
-    }
-    truth.inertia = truth.inertia.map(|i| i * inertia_factor);
-    s.actual_plant = Some(truth);
-    if let Some(rb) = s.vehicle.rigid_body.as_mut() {
-        if mass.is_some() {
-            rb.mass = truth.mass;
-        }
-        rb.inertia = rb.inertia.map(|row| row.map(|j| j * inertia_factor));
-        rb.parasitic_drag = rb.parasitic_drag.map(|c| c * drag_factor);
-        rb.rotor_drag_xy *= drag_factor;
-        rb.rotor_drag_z *= drag_factor;
-    }
-    s.rigid_body_params()
+    let mut v = base.vehicle;
+    draw_true_vehicle(&mut v, &base.plant, mass, inertia_factor, drag_factor);
+    v.rigid_body(&base.plant)
 }
 
 /// Seed of run `index`: the first word of ChaCha8 stream `index` keyed by

@@ -10,6 +10,7 @@ use ftsmc_core::law::GainError;
 use ftsmc_core::model::{QuadState, QuadrotorParams};
 use serde::{Deserialize, Serialize};
 
+mod deprecated;
 pub mod distributions;
 pub mod ladder;
 pub mod resolve;
@@ -285,13 +286,10 @@ pub struct Scenario {
     /// Integration and metric settings.
     #[serde(default)]
     pub simulation: SimulationSettings,
-    /// Nominal plant parameters (the controllers' model).
+    /// Nominal plant parameters (the controllers' model; the true vehicle's
+    /// too, key by key, unless `[vehicle]` says otherwise).
     #[serde(default)]
     pub plant: QuadrotorParams,
-    /// True plant parameters when they differ from the nominal `[plant]`
-    /// (model mismatch; Monte Carlo writes its draws here). Default: `[plant]`.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub actual_plant: Option<QuadrotorParams>,
     /// Initial state.
     #[serde(default)]
     pub initial_state: InitialState,
@@ -331,7 +329,9 @@ pub struct Scenario {
     #[serde(default, skip_serializing_if = "is_default_limits")]
     pub limits: Limits,
     // --- issue 11: truth model, actuators, ground, success envelope ---
-    /// Truth model (`[vehicle]`, default: the paper plant).
+    /// The true vehicle (`[vehicle]`): which truth model flies and every
+    /// true parameter that differs from `[plant]` (default: the paper plant
+    /// of Eq. 1 flying `[plant]`).
     #[serde(default, skip_serializing_if = "crate::vehicle::VehicleSettings::is_default")]
     pub vehicle: crate::vehicle::VehicleSettings,
     /// Rotor limits, motor lag and noise (`[actuators]`, default: ideal).
@@ -360,11 +360,26 @@ fn is_default_limits(l: &Limits) -> bool {
 }
 
 impl Scenario {
-    /// Rigid-body parameters of the truth model: `[vehicle.rigid_body]`, or
-    /// the paper vehicle built from the true plant (aerodynamics off).
+    /// The true vehicle in paper form (Eq. 1's parameters): `[plant]` with
+    /// the keys `[vehicle]` gives ([`crate::vehicle::VehicleSettings::true_plant`]).
+    pub fn true_plant(&self) -> QuadrotorParams {
+        self.vehicle.true_plant(&self.plant)
+    }
+
+    /// The true mass before any payload, kg, and the key it comes from
+    /// (`vehicle.mass`, else `plant.mass`).
+    pub fn true_mass(&self) -> (f64, &'static str) {
+        match self.vehicle.mass {
+            Some(m) => (m, "vehicle.mass"),
+            None => (self.plant.mass, "plant.mass"),
+        }
+    }
+
+    /// Rigid-body parameters of the true vehicle
+    /// ([`crate::vehicle::VehicleSettings::rigid_body`]): `[plant]` with the
+    /// keys `[vehicle]` gives, "+" layout, no aerodynamics unless given.
     pub fn rigid_body_params(&self) -> crate::vehicle::RigidBodyParams {
-        let base = self.actual_plant.unwrap_or(self.plant);
-        self.vehicle.rigid_body.unwrap_or_else(|| crate::vehicle::RigidBodyParams::from_paper(&base))
+        self.vehicle.rigid_body(&self.plant)
     }
 
     /// What the controllers' vehicle-derived default gains are built for:
@@ -379,7 +394,7 @@ impl Scenario {
     /// Allocation matrix of the truth model and the paper-form parameters used
     /// for the unsaturated rotor-speed demand.
     pub fn truth_allocation(&self) -> ([[f64; 4]; 4], QuadrotorParams) {
-        let base = self.actual_plant.unwrap_or(self.plant);
+        let base = self.true_plant();
         match self.vehicle.model {
             crate::vehicle::VehicleModel::Paper => (crate::actuators::paper_allocation_matrix(&base), base),
             crate::vehicle::VehicleModel::RigidBody => {
@@ -496,7 +511,7 @@ impl Scenario {
     /// variation, drag noise, disturbances, seed) for [`crate::environment::Environment`].
     pub fn environment(&self) -> EnvironmentParams<'_> {
         EnvironmentParams {
-            plant: self.actual_plant.unwrap_or(self.plant),
+            plant: self.true_plant(),
             payload: self.payload.as_ref(),
             inertia_variation: self.inertia_variation.as_ref(),
             drag_noise: self.drag_noise,

@@ -27,10 +27,9 @@
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
-use ftsmc_core::model::QuadrotorParams;
 use serde::Deserialize;
 
-use crate::controllers::{GainSections, NominalVehicle, SectionParseError};
+use crate::controllers::{GainSections, SectionParseError};
 use crate::limits::Limits;
 use crate::scenario::{read_scenario_text, Scenario, ScenarioError, BUILT_IN_SCENARIOS};
 use crate::signal::{Signal, Term};
@@ -386,6 +385,20 @@ pub fn load(source: Source<'_>, overrides: &[String]) -> Result<Loaded, Scenario
     }
 
     crate::scenario::check_core_array_lengths(&merged).map_err(|(path, message)| chain.parse_error(&path, &message))?;
+    // Renamed keys (`max_tilt` of the controllers' demand limits) move to
+    // their new names before the typed parse, each with a warning.
+    let renamed = super::deprecated::rename_keys(&mut merged, |path| chain.origin.get(path).copied()).map_err(
+        |(key, value, expected)| ScenarioError::Invalid { path: chain.shown(chain.writer(&key)), key, value, expected },
+    )?;
+    let mut renamed_warnings = Vec::new();
+    for (old, moved_to, warning) in renamed {
+        if let Some(new) = moved_to {
+            let file = chain.writer(&old);
+            chain.origin.insert(new, file);
+        }
+        let (key, value, message) = warning;
+        renamed_warnings.push(Warning { key, value, message });
+    }
     let describe = |e: &toml::de::Error, path: &str| {
         let mut message: String = e.message().split_whitespace().collect::<Vec<_>>().join(" ");
         if e.message().starts_with("missing field") {
@@ -398,23 +411,27 @@ pub fn load(source: Source<'_>, overrides: &[String]) -> Result<Loaded, Scenario
         }
         chain.parse_error(path, &message)
     };
-    // The nominal plant the vehicle-derived default gains are built for; an
-    // invalid `[plant]` is reported by the scenario's own parse below.
-    let plant: QuadrotorParams =
-        merged.get("plant").cloned().and_then(|v| QuadrotorParams::deserialize(v).ok()).unwrap_or_default();
-    let rotor_limit = |section: &str| {
-        merged
-            .get(section)
-            .and_then(|t| t.get("max_rotor_speed"))
-            .and_then(|v| v.as_float().or(v.as_integer().map(|i| i as f64)))
-            .filter(|w| w.is_finite())
+    // The gain sections wait for the typed scenario: their vehicle-derived
+    // defaults are built for its nominal vehicle (`Scenario::nominal_vehicle`).
+    let mut gain_tables = toml::Table::new();
+    for key in GainSections::KEYS {
+        if let Some(section) = merged.remove(*key) {
+            gain_tables.insert(key.to_string(), section);
+        }
+    }
+    let (old_actual, old_rigid, old) = super::deprecated::take_old_tables(&mut merged);
+    let prefixed = |prefix: &str, e: &toml::de::Error| {
+        let inner = error_path(e);
+        describe(e, &if inner.is_empty() { prefix.to_string() } else { format!("{prefix}.{inner}") })
     };
-    let vehicle = NominalVehicle::new(plant, rotor_limit("actuators").or_else(|| rotor_limit("simulation")));
-    let gains = GainSections::take_from(&mut merged, &vehicle).map_err(|SectionParseError { section, error }| {
-        let inner = error_path(&error);
-        let path = if inner.is_empty() { section.to_string() } else { format!("{section}.{inner}") };
-        describe(&error, &path)
-    })?;
+    let old_actual = old_actual
+        .map(ftsmc_core::model::QuadrotorParams::deserialize)
+        .transpose()
+        .map_err(|e| prefixed("actual_plant", &e))?;
+    let old_rigid = old_rigid
+        .map(crate::vehicle::RigidBodyParams::deserialize)
+        .transpose()
+        .map_err(|e| prefixed("vehicle.rigid_body", &e))?;
     let mut scenario = Scenario::deserialize(merged).map_err(|e| {
         let path = error_path(&e);
         match with_gain_sections(e.message()) {
@@ -423,7 +440,17 @@ pub fn load(source: Source<'_>, overrides: &[String]) -> Result<Loaded, Scenario
             _ => describe(&e, &path),
         }
     })?;
-    scenario.gains = gains;
+    let deprecations =
+        super::deprecated::convert(&mut scenario, old_actual, old_rigid, &old).map_err(|(key, value, expected)| {
+            ScenarioError::Invalid { path: chain.shown(chain.writer(&key)), key, value, expected }
+        })?;
+    scenario.gains = GainSections::take_from(&mut gain_tables, &scenario.nominal_vehicle()).map_err(
+        |SectionParseError { section, error }| {
+            let inner = error_path(&error);
+            let path = if inner.is_empty() { section.to_string() } else { format!("{section}.{inner}") };
+            describe(&error, &path)
+        },
+    )?;
     scenario.limits.apply_overrides(overrides).map_err(|message| ScenarioError::Parse { path: top_name, message })?;
     scenario.validate(&chain.layers[0].shown).map_err(|e| match e {
         ScenarioError::Invalid { key, value, expected, .. } => {
@@ -431,8 +458,10 @@ pub fn load(source: Source<'_>, overrides: &[String]) -> Result<Loaded, Scenario
         }
         other => other,
     })?;
-    let warnings = unit_slip_warnings(&scenario)
+    let warnings = renamed_warnings
         .into_iter()
+        .chain(deprecations.into_iter().map(|(key, value, message)| Warning { key, value, message }))
+        .chain(unit_slip_warnings(&scenario))
         .map(|w| format!("{}: `{}` = {}: {}", chain.shown(chain.writer(&w.key)), w.key, w.value, w.message))
         .collect();
     Ok(Loaded { scenario, files: chain.layers.iter().map(|l| l.shown.clone()).collect(), warnings })
@@ -511,10 +540,7 @@ pub fn unit_slip_warnings(s: &Scenario) -> Vec<Warning> {
         }
     }
     if let Some(p) = &s.payload {
-        let (mass, which) = match &s.actual_plant {
-            Some(a) => (a.mass, "actual_plant.mass"),
-            None => (s.plant.mass, "plant.mass"),
-        };
+        let (mass, which) = s.true_mass();
         if p.mass > 10.0 * mass {
             warn(
                 "payload.mass".into(),

@@ -9,13 +9,17 @@ use super::*;
 /// which ignores extra elements, so their lengths are checked on the TOML
 /// tree before deserializing. The gain sections declare their own
 /// ([`crate::controllers::GainSection::CORE_ARRAYS`]).
-const CORE_ARRAYS: [(&str, usize); 6] = [
+const CORE_ARRAYS: [(&str, usize); 10] = [
     ("plant.inertia", 3),
     ("plant.drag_translational", 3),
     ("plant.drag_rotational", 3),
     ("actual_plant.inertia", 3),
     ("actual_plant.drag_translational", 3),
     ("actual_plant.drag_rotational", 3),
+    ("vehicle.drag_translational", 3),
+    ("vehicle.drag_rotational", 3),
+    ("vehicle.parasitic_drag", 3),
+    ("vehicle.spin", 4),
 ];
 
 /// Longest scenario `name`, characters.
@@ -142,9 +146,10 @@ impl Scenario {
         }
 
         self.plant.check().map_err(|e| gain("plant", e))?;
-        if let Some(p) = &self.actual_plant {
-            p.check().map_err(|e| gain("actual_plant", e))?;
-        }
+        // The true vehicle: no key the model cannot fly, and the values it
+        // flies (the keys [vehicle] gives, or [plant]'s) in range.
+        self.vehicle.check_model_keys().map_err(|(key, value, expected)| invalid(key, value, &expected))?;
+        self.vehicle.check(&self.plant).map_err(|(prefix, e)| gain(&prefix, e))?;
         let init = &self.initial_state;
         for (name, v) in [
             ("position", init.position),
@@ -173,10 +178,7 @@ impl Scenario {
         }
         if let Some(p) = &self.payload {
             finite("payload.mass", p.mass)?;
-            let (true_mass, which) = match &self.actual_plant {
-                Some(a) => (a.mass, "actual_plant.mass"),
-                None => (self.plant.mass, "plant.mass"),
-            };
+            let (true_mass, which) = self.true_mass();
             if p.mass <= -true_mass {
                 return Err(invalid(
                     "payload.mass".into(),
@@ -265,13 +267,6 @@ impl Scenario {
 /// Validation of the realism keys (`[vehicle]`, `[actuators]`, `[ground]`, `[envelope]`):
 /// `(dotted key prefix, error)` of the first bad value.
 pub(super) fn check_realism(scenario: &Scenario) -> Result<(), (String, GainError)> {
-    if let Some(rb) = &scenario.vehicle.rigid_body {
-        rb.check().map_err(|e| ("vehicle.rigid_body".to_string(), e))?;
-    } else if matches!(scenario.vehicle.model, crate::vehicle::VehicleModel::RigidBody) {
-        // Built from the true plant: it must be a valid rigid body too.
-        let which = if scenario.actual_plant.is_some() { "actual_plant" } else { "plant" };
-        scenario.rigid_body_params().check().map_err(|e| (which.to_string(), e))?;
-    }
     if let Some(a) = &scenario.actuators {
         a.check().map_err(|e| ("actuators".to_string(), e))?;
         let (allocation, _) = scenario.truth_allocation();

@@ -9,12 +9,16 @@
 //!   with conversions to the Euler [`ftsmc_core::model::QuadState`] the
 //!   paper's controllers expect.
 //!
+//! - [`section`] — `[vehicle]`: which model flies and the true vehicle's
+//!   parameters, one key set for both models.
+//!
 //! Models here depend only on `ftsmc-core` and on the integrator in
 //! [`paper`]; nothing here knows about scenarios or the run loop.
 
 mod math;
 pub mod paper;
 pub mod rigid_body;
+pub mod section;
 
 pub use rigid_body::{
     body_rates_to_euler_rates, euler_rates_to_body_rates, euler_to_quaternion, from_quad_state, quaternion_to_euler,
@@ -22,36 +26,4 @@ pub use rigid_body::{
     RigidBodyState, Spin, Wrench,
 };
 
-use serde::{Deserialize, Serialize};
-
-/// Which truth model flies (`[vehicle] model`).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, Serialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum VehicleModel {
-    /// Paper Eq. 1 (default).
-    #[default]
-    Paper,
-    /// Newton–Euler rigid body ([`rigid_body`]).
-    RigidBody,
-}
-
-/// `[vehicle]`.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Deserialize, Serialize)]
-#[serde(deny_unknown_fields)]
-pub struct VehicleSettings {
-    /// Truth model (default `paper`).
-    #[serde(default)]
-    pub model: VehicleModel,
-    /// Rigid-body parameters (default: [`RigidBodyParams::from_paper`] of
-    /// the true plant, aerodynamics off). A given table is complete: its
-    /// missing keys take the [`RigidBodyParams`] defaults (paper vehicle).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub rigid_body: Option<RigidBodyParams>,
-}
-
-impl VehicleSettings {
-    /// True when nothing is set (for `skip_serializing_if`).
-    pub fn is_default(&self) -> bool {
-        *self == Self::default()
-    }
-}
+pub use section::{Inertia, VehicleModel, VehicleSettings};
