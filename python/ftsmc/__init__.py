@@ -113,14 +113,16 @@ class Telemetry:
 
     attitude_reference: ``(φ_ref, θ_ref, ψ_d)`` tracked by the attitude loop, rad.
     attitude_reference_rate: its rate, rad/s.
-    sliding: sliding variables ``(S_x, S_y, S_z, S_φ, S_θ, S_ψ)``.
-    alpha_hat: mass-ratio estimate α̂ (estimated mass = α̂ · plant mass).
+    sliding: sliding variables ``(S_x, S_y, S_z, S_φ, S_θ, S_ψ)`` of the
+        sliding-mode controllers; ``None`` for ``pid`` and ``se3`` (no sliding surfaces).
+    alpha_hat: mass-ratio estimate α̂ (estimated mass = α̂ · plant mass);
+        ``None`` for ``pid`` and ``se3``.
     """
 
     attitude_reference: Vec3
     attitude_reference_rate: Vec3
-    sliding: Tuple[float, float, float, float, float, float]
-    alpha_hat: float
+    sliding: Optional[Tuple[float, float, float, float, float, float]]
+    alpha_hat: Optional[float]
 
 
 class CommandLike(Protocol):
@@ -321,7 +323,9 @@ class Controller:
     def telemetry(self) -> Telemetry:
         """What the last update computed (attitude reference, sliding variables, α̂)."""
         att, rate, sliding, alpha = self._inner.telemetry()
-        return Telemetry(tuple(att), tuple(rate), tuple(sliding), alpha)  # type: ignore[arg-type]
+        return Telemetry(
+            tuple(att), tuple(rate), None if sliding is None else tuple(sliding), alpha  # type: ignore[arg-type]
+        )
 
     def __repr__(self) -> str:
         return f"Controller({self.name!r})"

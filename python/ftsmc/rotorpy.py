@@ -53,38 +53,28 @@ __all__ = [
 
 def euler_zyx(q: Sequence[float]) -> Tuple[float, float, float]:
     """Z-Y-X Euler angles ``(φ, θ, ψ)`` (rad) of the body-to-world
-    quaternion ``q = [x, y, z, w]`` (RotorPy's and scipy's order)."""
+    quaternion ``q = [x, y, z, w]`` (RotorPy's and scipy's order), normalised
+    first; ftsmc-core's ``kinematics::euler_from_quaternion``."""
     x, y, z, w = (float(v) for v in q)
     n = math.sqrt(x * x + y * y + z * z + w * w)
-    x, y, z, w = x / n, y / n, z / n, w / n
-    phi = math.atan2(2.0 * (w * x + y * z), 1.0 - 2.0 * (x * x + y * y))
-    theta = math.asin(max(-1.0, min(1.0, 2.0 * (w * y - z * x))))
-    psi = math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
-    return phi, theta, psi
+    phi, theta, psi = _ftsmc.kinematics_euler_from_quaternion([w / n, x / n, y / n, z / n])
+    return float(phi), float(theta), float(psi)
 
 
 def quaternion_zyx(phi: float, theta: float, psi: float) -> np.ndarray:
-    """The body-to-world quaternion ``[x, y, z, w]`` of Z-Y-X Euler angles (rad)."""
-    cr, sr = math.cos(phi / 2), math.sin(phi / 2)
-    cp, sp = math.cos(theta / 2), math.sin(theta / 2)
-    cy, sy = math.cos(psi / 2), math.sin(psi / 2)
-    return np.array(
-        [
-            sr * cp * cy - cr * sp * sy,
-            cr * sp * cy + sr * cp * sy,
-            cr * cp * sy - sr * sp * cy,
-            cr * cp * cy + sr * sp * sy,
-        ]
-    )
+    """The body-to-world quaternion ``[x, y, z, w]`` of Z-Y-X Euler angles
+    (rad); ftsmc-core's ``kinematics::quaternion_from_euler``."""
+    w, x, y, z = _ftsmc.kinematics_quaternion_from_euler([phi, theta, psi])
+    return np.array([x, y, z, w])
 
 
 def euler_rates(phi: float, theta: float, body_rates: Sequence[float]) -> Tuple[float, float, float]:
     """Euler-angle rates ``(φ̇, θ̇, ψ̇)`` (rad/s) from body rates ``(p, q, r)``
-    (rad/s) at roll ``phi`` and pitch ``theta`` (rad): ``W(φ, θ) ω``."""
-    p, q, r = (float(v) for v in body_rates)
-    s, c = math.sin(phi), math.cos(phi)
-    ct = math.cos(theta)
-    return p + (q * s + r * c) * math.tan(theta), q * c - r * s, (q * s + r * c) / ct
+    (rad/s) at roll ``phi`` and pitch ``theta`` (rad): ``W(φ, θ) ω``
+    (ftsmc-core's ``kinematics::euler_rates_from_body_rates``; ``cos θ``
+    clamped to ±1e-6 at gimbal lock)."""
+    a, b, c = _ftsmc.kinematics_euler_rates([phi, theta, 0.0], [float(v) for v in body_rates])
+    return float(a), float(b), float(c)
 
 
 def plant_from_rotorpy(quad_params: Mapping[str, Any], aero: bool = True) -> Dict[str, Any]:
@@ -244,11 +234,10 @@ class Controller:
 def body_rates(phi: float, theta: float, euler_rates_: Sequence[float]) -> Tuple[float, float, float]:
     """Body rates ``(p, q, r)`` (rad/s) from Euler-angle rates ``(φ̇, θ̇, ψ̇)``
     (rad/s) at roll ``phi`` and pitch ``theta``: the inverse of
-    :func:`euler_rates`, ``ω = W(φ, θ)⁻¹ (φ̇, θ̇, ψ̇)``."""
-    dphi, dtheta, dpsi = (float(v) for v in euler_rates_)
-    s, c = math.sin(phi), math.cos(phi)
-    st, ct = math.sin(theta), math.cos(theta)
-    return dphi - st * dpsi, c * dtheta + s * ct * dpsi, -s * dtheta + c * ct * dpsi
+    :func:`euler_rates`, ``ω = W(φ, θ)⁻¹ (φ̇, θ̇, ψ̇)`` (ftsmc-core's
+    ``kinematics::body_rates_from_euler_rates``)."""
+    p, q, r = _ftsmc.kinematics_body_rates([phi, theta, 0.0], [float(v) for v in euler_rates_])
+    return float(p), float(q), float(r)
 
 
 class FromRotorPy:

@@ -56,7 +56,7 @@
 //!   the adaptive gains do not grow on errors the actuators cannot remove.
 //!   Only the simulator's report freezes: the thrust bound clipping `U1` by
 //!   itself does not. With no report, or reports of `false`, the cascade is
-//!   bit-identical to the option off. [`Telemetry::adaptation_frozen`]
+//!   bit-identical to the option off. [`SlidingTelemetry::adaptation_frozen`]
 //!   reports when the states were held.
 
 use crate::allocation::{residual_speed, rotor_speeds};
@@ -69,7 +69,7 @@ use crate::model::{Command, QuadState, QuadrotorParams, Reference};
 
 // The controller interface lives in its own module; re-exported here so
 // `ftsmc_core::cascade::{Controller, Telemetry, channel}` keep compiling.
-pub use crate::controller::{channel, Controller, Telemetry};
+pub use crate::controller::{channel, Controller, SlidingTelemetry, Telemetry};
 
 /// How the desired-attitude derivatives φ̇_d, φ̈_d, θ̇_d, θ̈_d are obtained
 /// (the paper does not say; see docs/paper-errata.md).
@@ -327,6 +327,14 @@ pub struct Cascade<L: AxisLaw> {
 }
 
 impl<L: AxisLaw> Cascade<L> {
+    /// The telemetry before the first update: zeros, and α̂ at `alpha_hat`.
+    fn initial_telemetry(alpha_hat: f64) -> Telemetry {
+        Telemetry {
+            sliding_mode: Some(SlidingTelemetry { alpha_hat, ..SlidingTelemetry::default() }),
+            ..Telemetry::default()
+        }
+    }
+
     /// Build from a configuration and the six channel laws `[x, y, z, φ, θ, ψ]`,
     /// after validating everything: the nominal model
     /// ([`QuadrotorParams::check`]), the settings ([`CascadeSettings::check`],
@@ -360,7 +368,7 @@ impl<L: AxisLaw> Cascade<L> {
             filter: [FilterState::default(); 2],
             alpha_hat: config.mass_adaptation.alpha_hat0,
             last_command: hover,
-            telemetry: Telemetry { alpha_hat: config.mass_adaptation.alpha_hat0, ..Telemetry::default() },
+            telemetry: Self::initial_telemetry(config.mass_adaptation.alpha_hat0),
             tilt_limit: crate::math::sin(config.settings.max_tilt),
             actuator_saturated: false,
         }
@@ -559,13 +567,11 @@ impl<L: AxisLaw> Controller for Cascade<L> {
             attitude_reference_rate: reference_rate,
             attitude_reference_acceleration: reference_accel,
             attitude_demand: demand,
-            sliding,
             estimates,
             commanded_acceleration: accel,
             nominal_thrust,
-            alpha_hat: self.alpha_hat,
             thrust_limited: thrust != unbounded_thrust,
-            adaptation_frozen: frozen,
+            sliding_mode: Some(SlidingTelemetry { sliding, alpha_hat: self.alpha_hat, adaptation_frozen: frozen }),
         };
         command
     }
@@ -591,7 +597,7 @@ impl<L: AxisLaw> Controller for Cascade<L> {
         self.alpha_hat = self.config.mass_adaptation.alpha_hat0;
         self.last_command = hover;
         self.actuator_saturated = false;
-        self.telemetry = Telemetry { alpha_hat: self.alpha_hat, ..Telemetry::default() };
+        self.telemetry = Self::initial_telemetry(self.alpha_hat);
     }
 
     fn actuator_feedback(&mut self, saturated: bool) {
@@ -891,7 +897,7 @@ mod tests {
             assert_eq!(command_bits(&c), command_bits(&b), "step {k}");
             assert_eq!(on.telemetry(), off.telemetry());
             assert_eq!(ignored.telemetry(), off.telemetry());
-            assert!(!on.telemetry().adaptation_frozen);
+            assert!(!on.telemetry().sliding_mode.unwrap().adaptation_frozen);
         }
 
         on.actuator_feedback(true);
@@ -905,7 +911,7 @@ mod tests {
             assert!(cmd.thrust.is_finite() && cmd.torque.iter().all(|t| t.is_finite()));
             commands[i] = command_bits(&cmd);
             let t = on.telemetry();
-            assert!(t.adaptation_frozen);
+            assert!(t.sliding_mode.unwrap().adaptation_frozen);
             assert_eq!((t.estimates.map(|e| e.map(f64::to_bits)), on.alpha_hat().to_bits()), held_bits, "step {k}");
         }
         assert!(commands.windows(2).all(|w| w[0] != w[1]), "frozen commands ignore the error");
@@ -913,14 +919,14 @@ mod tests {
         on.actuator_feedback(false);
         let (state, reference) = wobble(50);
         on.update(&state, &reference, 1e-3);
-        assert!(!on.telemetry().adaptation_frozen);
+        assert!(!on.telemetry().sliding_mode.unwrap().adaptation_frozen);
         assert_ne!(on.telemetry().estimates, held.0, "released states do not move");
 
         on.actuator_feedback(true);
         on.reset();
         assert!(!on.actuator_saturated());
         on.update(&state, &reference, 1e-3);
-        assert!(!on.telemetry().adaptation_frozen);
+        assert!(!on.telemetry().sliding_mode.unwrap().adaptation_frozen);
     }
 
     #[test]

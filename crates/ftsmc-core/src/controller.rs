@@ -1,11 +1,14 @@
 //! The controller interface: the [`Controller`] trait every complete
 //! quadrotor controller implements (the paper's cascade of §3.1–3.3, PID,
-//! SE(3)), the [`Telemetry`] it reports after each update, and the
+//! SE(3)), the [`Telemetry`] it reports after each update (what every
+//! controller computes, and the sliding-mode part, [`SlidingTelemetry`],
+//! only the paper's cascade has), and the
 //! [`channel`] indices of its six-element arrays. Kept apart from the laws
 //! (`law`, `ftaftsmc`, ...) and from the cascade that combines them, so a
 //! new controller depends on this interface only.
 
 use crate::law::MAX_ESTIMATES;
+use crate::measured::Measurement;
 use crate::model::{Command, QuadState, Reference};
 
 /// Channel indices into the six-element arrays of [`Telemetry`].
@@ -26,7 +29,24 @@ pub mod channel {
     pub const NAMES: [&str; 6] = ["x", "y", "z", "phi", "theta", "psi"];
 }
 
-/// What the controller computed at its last update, for recording.
+/// The sliding-mode part of [`Telemetry`]: what only the paper's cascade of
+/// sliding-mode laws (FTAFTSMC, RANFTSMC, TSM-STA) computes.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct SlidingTelemetry {
+    /// Sliding variables `[S_x, S_y, S_z, S_φ, S_θ, S_ψ]` (paper Eq. 5 for
+    /// FTAFTSMC; each law's own surface otherwise).
+    pub sliding: [f64; 6],
+    /// Mass ratio estimate α̂ (estimated mass = α̂ m, paper Eq. 20; its
+    /// initial value when the adaptation is off).
+    pub alpha_hat: f64,
+    /// The adaptive states were held at this update
+    /// ([`CascadeSettings::freeze_adaptation_on_saturation`](crate::cascade::CascadeSettings::freeze_adaptation_on_saturation)).
+    pub adaptation_frozen: bool,
+}
+
+/// What the controller computed at its last update, for recording: the
+/// quantities every controller has, and [`Telemetry::sliding_mode`] for the
+/// sliding-mode cascade.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Telemetry {
     /// Attitude reference actually tracked `[φ_ref, θ_ref, ψ_d]`, rad
@@ -38,22 +58,19 @@ pub struct Telemetry {
     pub attitude_reference_acceleration: [f64; 3],
     /// Raw Eq. 52 output `[φ_d, θ_d]` before filtering, rad.
     pub attitude_demand: [f64; 2],
-    /// Sliding variables `[S_x, S_y, S_z, S_φ, S_θ, S_ψ]`.
-    pub sliding: [f64; 6],
     /// Adaptive / internal states of each channel ([`AxisLaw::estimates`](crate::law::AxisLaw::estimates)).
     pub estimates: [[f64; MAX_ESTIMATES]; 6],
     /// Commanded accelerations `[a_x, a_y, a_z]`, m/s².
     pub commanded_acceleration: [f64; 3],
     /// Thrust before mass adaptation u1, N.
     pub nominal_thrust: f64,
-    /// Mass ratio estimate α̂ (estimated mass = α̂ m).
-    pub alpha_hat: f64,
     /// The thrust bound ([`CascadeSettings::thrust_limits`](crate::cascade::CascadeSettings::thrust_limits)) changed `U1`
     /// at this update.
     pub thrust_limited: bool,
-    /// The adaptive states were held at this update
-    /// ([`CascadeSettings::freeze_adaptation_on_saturation`](crate::cascade::CascadeSettings::freeze_adaptation_on_saturation)).
-    pub adaptation_frozen: bool,
+    /// Sliding variables, α̂ and the adaptation hold: `Some` for the paper's
+    /// sliding-mode cascade, `None` for controllers without sliding
+    /// surfaces (PID, SE(3)).
+    pub sliding_mode: Option<SlidingTelemetry>,
 }
 
 /// A complete quadrotor controller: state and reference in, command out.
@@ -63,6 +80,20 @@ pub trait Controller {
     /// One control period: compute the command from the measured state and
     /// the reference, and advance internal states by `dt` (s).
     fn update(&mut self, state: &QuadState, reference: &Reference, dt: f64) -> Command;
+    /// [`Controller::update`] from a [`Measurement`], which may carry the
+    /// attitude quaternion and body rates beside the Euler state. The
+    /// default flies the Euler state; full-state controllers (PID, SE(3))
+    /// take the quaternion and body rates when given, instead of rebuilding
+    /// them from the Euler angles (the same attitude to rounding).
+    fn update_measured(&mut self, measured: &Measurement, reference: &Reference, dt: f64) -> Command {
+        self.update(&measured.euler, reference, dt)
+    }
+    /// True when [`Controller::update_measured`] uses [`Measurement::body`]
+    /// (the simulator then provides it; otherwise it spares the conversion).
+    /// The default: false.
+    fn uses_body_attitude(&self) -> bool {
+        false
+    }
     /// Quantities computed at the last update.
     fn telemetry(&self) -> &Telemetry;
     /// Names of the channel laws' [`Telemetry::estimates`] slots
@@ -72,7 +103,7 @@ pub trait Controller {
         [""; MAX_ESTIMATES]
     }
     /// True when the mass adaptation of §3.2 is on, i.e.
-    /// [`Telemetry::alpha_hat`] changes (otherwise it stays at its initial
+    /// [`SlidingTelemetry::alpha_hat`] changes (otherwise it stays at its initial
     /// value). The default: false.
     fn adapts_mass(&self) -> bool {
         false

@@ -1,6 +1,7 @@
 //! Z-Y-X Euler-angle kinematics of the paper's Eq. 1 attitude `[φ, θ, ψ]`:
-//! the body-to-world rotation, its inverse, and the Euler-rate to body-rate
-//! map. The one place the control laws take these from (PID and SE(3) use
+//! the body-to-world rotation, its inverse, the Euler-rate to body-rate
+//! map, and the unit quaternion `[w, x, y, z]` (scalar first, Hamilton
+//! product, body → world) of the same rotation. The one place the control laws take these from (PID and SE(3) use
 //! them to leave the Euler interface); built on [`crate::math`]'s `libm`
 //! trigonometry, so bit-identical on every platform.
 
@@ -39,10 +40,116 @@ pub fn body_rates_from_euler_rates(euler: &Vec3, rates: &Vec3) -> Vec3 {
     [df - ds * st, dt * cf + ds * ct * sf, -dt * sf + ds * ct * cf]
 }
 
+/// Unit quaternion `[w, x, y, z]` of Z-Y-X Euler angles `[φ, θ, ψ]` (rad):
+/// `q = q_z(ψ) ⊗ q_y(θ) ⊗ q_x(φ)`, so that
+/// [`rotation_from_quaternion`]`(q)` = [`rotation_from_euler`]`(euler)`.
+pub fn quaternion_from_euler(euler: &Vec3) -> [f64; 4] {
+    let (sr, cr) = sin_cos(0.5 * euler[0]);
+    let (sp, cp) = sin_cos(0.5 * euler[1]);
+    let (sy, cy) = sin_cos(0.5 * euler[2]);
+    [cr * cp * cy + sr * sp * sy, sr * cp * cy - cr * sp * sy, cr * sp * cy + sr * cp * sy, cr * cp * sy - sr * sp * cy]
+}
+
+/// Body-to-world rotation matrix of a unit quaternion `[w, x, y, z]`
+/// (`v_w = R v_b`; no trigonometry).
+#[inline]
+pub fn rotation_from_quaternion(q: &[f64; 4]) -> Mat3 {
+    let [w, x, y, z] = *q;
+    [
+        [1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y - w * z), 2.0 * (x * z + w * y)],
+        [2.0 * (x * y + w * z), 1.0 - 2.0 * (x * x + z * z), 2.0 * (y * z - w * x)],
+        [2.0 * (x * z - w * y), 2.0 * (y * z + w * x), 1.0 - 2.0 * (x * x + y * y)],
+    ]
+}
+
+/// Z-Y-X Euler angles `[φ, θ, ψ]` (rad) of a unit quaternion: φ, ψ in
+/// `[−π, π]`, θ in `[−π/2, π/2]`; `q` and `−q` give the same angles. At
+/// θ = ±π/2 only φ ∓ ψ is defined.
+pub fn euler_from_quaternion(q: &[f64; 4]) -> Vec3 {
+    let [w, x, y, z] = *q;
+    let s = crate::law::saturate(2.0 * (w * y - x * z), 1.0);
+    [
+        atan2(2.0 * (w * x + y * z), 1.0 - 2.0 * (x * x + y * y)),
+        asin(s),
+        atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z)),
+    ]
+}
+
+/// Smallest `|cos θ|` [`euler_rates_from_body_rates`] divides by: within
+/// about 1e-6 rad of θ = ±π/2 (gimbal lock) `cos θ` is clamped to
+/// `±GIMBAL_LOCK_COS`, so the rates stay finite.
+pub const GIMBAL_LOCK_COS: f64 = 1e-6;
+
+/// Z-Y-X Euler rates `η̇ = W⁻¹(φ, θ) Ω` (rad/s) from body rates Ω at
+/// `euler`: `φ̇ = p + (q sφ + r cφ) tθ`, `θ̇ = q cφ − r sφ`,
+/// `ψ̇ = (q sφ + r cφ)/cθ`, with `cos θ` clamped to `±`[`GIMBAL_LOCK_COS`]
+/// (the sign of cos θ; positive at 0) near the singularity.
+pub fn euler_rates_from_body_rates(euler: &Vec3, body_rates: &Vec3) -> Vec3 {
+    let (sf, cf) = sin_cos(euler[0]);
+    let (st, c) = sin_cos(euler[1]);
+    let c = if c.abs() >= GIMBAL_LOCK_COS {
+        c
+    } else if c < 0.0 {
+        -GIMBAL_LOCK_COS
+    } else {
+        GIMBAL_LOCK_COS
+    };
+    let [p, q, r] = *body_rates;
+    let a = q * sf + r * cf;
+    [p + a * st / c, q * cf - r * sf, a / c]
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::math::{cross, mat_t_mat, mat_t_vec, mat_vec, norm};
+
+    use proptest::prelude::*;
+
+    proptest! {
+        /// Euler → quaternion → rotation equals Euler → rotation; rotation and
+        /// quaternion both give the angles back; Euler rates → body rates →
+        /// Euler rates is the identity (away from gimbal lock).
+        #[test]
+        fn euler_quaternion_rotation_round_trips(
+            phi in -3.1f64..3.1, theta in -1.5f64..1.5, psi in -3.1f64..3.1,
+            dphi in -10.0f64..10.0, dtheta in -10.0f64..10.0, dpsi in -10.0f64..10.0,
+        ) {
+            let e = [phi, theta, psi];
+            let q = quaternion_from_euler(&e);
+            let n = q.iter().map(|v| v * v).sum::<f64>();
+            prop_assert!((n - 1.0).abs() < 1e-14);
+            let rq = rotation_from_quaternion(&q);
+            let re = rotation_from_euler(&e);
+            for i in 0..3 {
+                for j in 0..3 {
+                    prop_assert!((rq[i][j] - re[i][j]).abs() < 1e-14);
+                }
+            }
+            let tol = 1e-12 / theta.cos();
+            let from_q = euler_from_quaternion(&q);
+            let from_r = euler_from_rotation(&re);
+            let minus_q = euler_from_quaternion(&q.map(|v| -v));
+            for i in 0..3 {
+                prop_assert!((from_q[i] - e[i]).abs() < tol, "{:?} -> {:?}", e, from_q);
+                prop_assert!((from_r[i] - e[i]).abs() < tol);
+                prop_assert!((minus_q[i] - e[i]).abs() < tol);
+            }
+            let rates = [dphi, dtheta, dpsi];
+            let body = body_rates_from_euler_rates(&e, &rates);
+            let back = euler_rates_from_body_rates(&e, &body);
+            for i in 0..3 {
+                prop_assert!((back[i] - rates[i]).abs() < 1e-9 * (1.0 + rates[i].abs()) / theta.cos());
+            }
+        }
+    }
+
+    #[test]
+    fn euler_rates_stay_finite_at_gimbal_lock() {
+        let w = euler_rates_from_body_rates(&[0.2, core::f64::consts::FRAC_PI_2, 0.0], &[0.1, 0.2, 0.3]);
+        assert!(w.iter().all(|v| v.is_finite()));
+        assert!(w[2].abs() > 1e4);
+    }
 
     #[test]
     fn rotation_and_euler_round_trip_and_body_rates() {

@@ -10,6 +10,8 @@
 //! - [`allocation`]: rotor allocation (Eq. 2).
 //! - [`model`]: physical parameters (Table 2, corrected), state, reference, command.
 //! - [`law`]: the [`law::AxisLaw`] interface all cascaded sliding-mode laws implement.
+//! - [`measured`]: the measurement a controller receives (Euler state, and quaternion and body rates when known).
+//! - [`kinematics`]: Z-Y-X Euler angles, quaternions, rotation matrices and their rates.
 //! - [`pid`]: the PX4 multicopter cascade (P/PID position, quaternion P attitude, PID rates).
 //! - [`se3`]: Lee, Leok & McClamroch 2010 geometric control on SE(3).
 //!
@@ -25,6 +27,7 @@ pub mod ftaftsmc;
 pub mod kinematics;
 pub mod law;
 pub mod math;
+pub mod measured;
 pub mod model;
 pub mod pid;
 pub mod ranftsmc;
@@ -33,9 +36,10 @@ mod setpoint;
 pub mod tsm_sta;
 
 pub use cascade::{Cascade, CascadeConfig, CascadeSettings, MassAdaptation};
-pub use controller::{Controller, Telemetry};
+pub use controller::{Controller, SlidingTelemetry, Telemetry};
 pub use ftaftsmc::{FtaftsmcAxis, FtaftsmcGains};
 pub use law::{AxisLaw, GainError};
+pub use measured::{BodyAttitude, Measurement};
 pub use model::{Command, QuadState, QuadrotorParams, Reference};
 pub use pid::{PidController, PidGains};
 pub use se3::{Se3Controller, Se3Gains};

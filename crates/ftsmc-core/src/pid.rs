@@ -97,12 +97,15 @@
 //! has no model terms to cancel, so nothing else differs.
 
 use crate::controller::{Controller, Telemetry};
-use crate::kinematics::{body_rates_from_euler_rates, euler_from_rotation, rotation_from_euler};
+use crate::kinematics::{
+    body_rates_from_euler_rates, euler_from_rotation, rotation_from_euler, rotation_from_quaternion,
+};
 use crate::law::{
     check_gain, check_gain_or_zero, check_left_open, check_open, saturate, GainError, INPUT_LIMIT, MAX_ESTIMATES,
     STATE_LIMIT,
 };
 use crate::math::{acos, asin, cos, cross, dot, exp, mat_t_vec, norm, sin, sin_cos, sqrt, Mat3, Vec3};
+use crate::measured::{BodyAttitude, Measurement};
 use crate::model::{Command, QuadState, QuadrotorParams, Reference};
 use crate::setpoint::{limit_tilt, reference_finite};
 
@@ -442,7 +445,7 @@ impl PidController {
             initialised: false,
             last_torque: [0.0; 3],
             actuator_saturated: false,
-            telemetry: Telemetry { alpha_hat: 1.0, ..Telemetry::default() },
+            telemetry: Telemetry::default(),
             alphas: [0.0; 2],
             alpha_dt: f64::NAN.to_bits(),
         })
@@ -515,26 +518,37 @@ impl PidController {
         }
         rate
     }
-}
 
-impl Controller for PidController {
-    fn name(&self) -> &'static str {
-        "pid"
-    }
-
-    /// One period of the cascade of the [module docs](self). A non-finite
-    /// state, reference or `dt` gives a NaN command and leaves every
-    /// internal state unchanged. Errors and rates are clamped to
-    /// `±INPUT_LIMIT` and the integrators to `±STATE_LIMIT` (no-ops in flight).
-    fn update(&mut self, state: &QuadState, reference: &Reference, dt: f64) -> Command {
-        if !(dt.is_finite() && state.to_array().iter().all(|v| v.is_finite()) && reference_finite(reference)) {
+    /// The body of [`Controller::update`] / [`Controller::update_measured`]:
+    /// the rotation `R`, its quaternion and the body rates come from
+    /// `attitude` when given, else from the Euler state (`R = R_z R_y R_x`,
+    /// Shepperd's quaternion, `Ω = W η̇`).
+    fn update_with(
+        &mut self,
+        state: &QuadState,
+        attitude: Option<&BodyAttitude>,
+        reference: &Reference,
+        dt: f64,
+    ) -> Command {
+        if !(dt.is_finite()
+            && state.to_array().iter().all(|v| v.is_finite())
+            && attitude.is_none_or(BodyAttitude::is_finite)
+            && reference_finite(reference))
+        {
             return Command { thrust: f64::NAN, torque: [f64::NAN; 3] };
         }
         let k = self.gains;
         let g = self.model.gravity;
         let dt = dt.max(0.0);
         let velocity = state.velocity.map(|v| saturate(v, INPUT_LIMIT));
-        let omega = body_rates_from_euler_rates(&state.attitude, &state.angular_rate).map(|w| saturate(w, INPUT_LIMIT));
+        let (r, q, omega) = match attitude {
+            Some(b) => (rotation_from_quaternion(&b.quaternion), b.quaternion, b.body_rates),
+            None => {
+                let r = rotation_from_euler(&state.attitude);
+                (r, quat_from_rotation(&r), body_rates_from_euler_rates(&state.attitude, &state.angular_rate))
+            }
+        };
+        let omega = omega.map(|w| saturate(w, INPUT_LIMIT));
         if !self.initialised {
             self.previous_velocity = velocity;
             self.previous_rates = omega;
@@ -642,8 +656,6 @@ impl Controller for PidController {
         let r_d = [[b1[0], b2[0], b3[0]], [b1[1], b2[1], b3[1]], [b1[2], b2[2], b3[2]]];
 
         // 7. Attitude P → body-rate setpoint.
-        let r = rotation_from_euler(&state.attitude);
-        let q = quat_from_rotation(&r);
         let rate_setpoint = self.rate_setpoint(&r, &q, &r_d, saturate(reference.yaw_rate, INPUT_LIMIT));
 
         // 8. Rate PID → torques.
@@ -678,15 +690,37 @@ impl Controller for PidController {
             attitude_reference_rate: [0.0, 0.0, reference.yaw_rate],
             attitude_reference_acceleration: [0.0, 0.0, reference.yaw_acceleration],
             attitude_demand: [desired[0], desired[1]],
-            sliding: [0.0; 6],
             estimates,
             commanded_acceleration: accel,
             nominal_thrust,
-            alpha_hat: 1.0,
             thrust_limited: floored || z_capped || xy_capped || direction != unlimited,
-            adaptation_frozen: false,
+            sliding_mode: None,
         };
         Command { thrust: magnitude, torque }
+    }
+}
+
+impl Controller for PidController {
+    fn name(&self) -> &'static str {
+        "pid"
+    }
+
+    /// One period of the cascade of the [module docs](self). A non-finite
+    /// state, reference or `dt` gives a NaN command and leaves every
+    /// internal state unchanged. Errors and rates are clamped to
+    /// `±INPUT_LIMIT` and the integrators to `±STATE_LIMIT` (no-ops in flight).
+    fn update(&mut self, state: &QuadState, reference: &Reference, dt: f64) -> Command {
+        self.update_with(state, None, reference, dt)
+    }
+
+    /// As [`Controller::update`]; with [`Measurement::body`] the rotation is
+    /// that of its quaternion and `Ω` its body rates (no Euler conversion).
+    fn update_measured(&mut self, measured: &Measurement, reference: &Reference, dt: f64) -> Command {
+        self.update_with(&measured.euler, measured.body.as_ref(), reference, dt)
+    }
+
+    fn uses_body_attitude(&self) -> bool {
+        true
     }
 
     fn telemetry(&self) -> &Telemetry {
@@ -710,7 +744,7 @@ impl Controller for PidController {
             initialised: false,
             last_torque: [0.0; 3],
             actuator_saturated: false,
-            telemetry: Telemetry { alpha_hat: 1.0, ..Telemetry::default() },
+            telemetry: Telemetry::default(),
             alphas: self.alphas,
             alpha_dt: self.alpha_dt,
         };
@@ -884,7 +918,7 @@ mod tests {
         assert_eq!(before, after);
         c.reset();
         assert_eq!((c.velocity_integral(), c.rate_integral()), ([0.0; 3], [0.0; 3]));
-        assert_eq!(c.telemetry().alpha_hat, 1.0);
+        assert_eq!(c.telemetry().sliding_mode, None);
         assert_eq!(c.estimate_names(), PID_ESTIMATE_NAMES);
     }
 

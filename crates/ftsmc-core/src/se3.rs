@@ -51,9 +51,12 @@
 //! Eq. 1 uses the same `R e₃`, so it is exact on both plants.
 
 use crate::controller::{Controller, Telemetry};
-use crate::kinematics::{body_rates_from_euler_rates, euler_from_rotation, rotation_from_euler};
+use crate::kinematics::{
+    body_rates_from_euler_rates, euler_from_rotation, rotation_from_euler, rotation_from_quaternion,
+};
 use crate::law::{check_closed, check_gain, check_left_open, saturate, GainError, INPUT_LIMIT, MAX_ESTIMATES};
 use crate::math::{cross, dot, mat_t_mat, mat_t_vec, mat_vec, norm, sin_cos, Mat3, Vec3};
+use crate::measured::{BodyAttitude, Measurement};
 use crate::model::{Command, QuadState, QuadrotorParams, Reference};
 use crate::setpoint::{limit_tilt, reference_finite};
 
@@ -218,7 +221,7 @@ impl Se3Controller {
     }
 
     fn initial_telemetry() -> Telemetry {
-        Telemetry { alpha_hat: 1.0, ..Telemetry::default() }
+        Telemetry::default()
     }
 
     /// Desired rotation from the desired force direction and heading ψ_d;
@@ -240,20 +243,22 @@ impl Se3Controller {
         let r_d = [[b1[0], b2[0], b3[0]], [b1[1], b2[1], b3[1]], [b1[2], b2[2], b3[2]]];
         (r_d, tilt_limited)
     }
-}
 
-impl Controller for Se3Controller {
-    fn name(&self) -> &'static str {
-        "se3"
-    }
-
-    /// One period of the law of the [module docs](self). A non-finite state,
-    /// reference or `dt` gives a NaN command and leaves the telemetry as it
-    /// was (the law has no internal state). Errors, rates and the reference
-    /// acceleration are clamped to `±INPUT_LIMIT` (no-op in flight) so the
-    /// command is finite for every finite input.
-    fn update(&mut self, state: &QuadState, reference: &Reference, dt: f64) -> Command {
-        if !(dt.is_finite() && state.to_array().iter().all(|v| v.is_finite()) && reference_finite(reference)) {
+    /// The law of [`Controller::update`] / [`Controller::update_measured`]:
+    /// `R` and `Ω` from `attitude` when given, else from the Euler state
+    /// (`R = R_z R_y R_x`, `Ω = W η̇`).
+    fn update_with(
+        &mut self,
+        state: &QuadState,
+        attitude: Option<&BodyAttitude>,
+        reference: &Reference,
+        dt: f64,
+    ) -> Command {
+        if !(dt.is_finite()
+            && state.to_array().iter().all(|v| v.is_finite())
+            && attitude.is_none_or(BodyAttitude::is_finite)
+            && reference_finite(reference))
+        {
             return Command { thrust: f64::NAN, torque: [f64::NAN; 3] };
         }
         let m = self.model.mass;
@@ -261,8 +266,14 @@ impl Controller for Se3Controller {
         let j = self.model.inertia;
         let k = self.gains;
 
-        let r = rotation_from_euler(&state.attitude);
-        let omega = body_rates_from_euler_rates(&state.attitude, &state.angular_rate).map(|w| saturate(w, INPUT_LIMIT));
+        let (r, omega) = match attitude {
+            Some(b) => (rotation_from_quaternion(&b.quaternion), b.body_rates),
+            None => (
+                rotation_from_euler(&state.attitude),
+                body_rates_from_euler_rates(&state.attitude, &state.angular_rate),
+            ),
+        };
+        let omega = omega.map(|w| saturate(w, INPUT_LIMIT));
 
         // Translational loop: desired force.
         let mut force = [0.0; 3];
@@ -308,15 +319,38 @@ impl Controller for Se3Controller {
             attitude_reference_rate: [0.0, 0.0, yaw_rate],
             attitude_reference_acceleration: [0.0, 0.0, yaw_accel],
             attitude_demand: [desired[0], desired[1]],
-            sliding: [0.0; 6],
             estimates: [[0.0; MAX_ESTIMATES]; 6],
             commanded_acceleration: [force[0] / m, force[1] / m, force[2] / m - g],
             nominal_thrust: lee_thrust,
-            alpha_hat: 1.0,
             thrust_limited: thrust != lee_thrust || tilt_limited,
-            adaptation_frozen: false,
+            sliding_mode: None,
         };
         Command { thrust, torque }
+    }
+}
+
+impl Controller for Se3Controller {
+    fn name(&self) -> &'static str {
+        "se3"
+    }
+
+    /// One period of the law of the [module docs](self). A non-finite state,
+    /// reference or `dt` gives a NaN command and leaves the telemetry as it
+    /// was (the law has no internal state). Errors, rates and the reference
+    /// acceleration are clamped to `±INPUT_LIMIT` (no-op in flight) so the
+    /// command is finite for every finite input.
+    fn update(&mut self, state: &QuadState, reference: &Reference, dt: f64) -> Command {
+        self.update_with(state, None, reference, dt)
+    }
+
+    /// As [`Controller::update`]; with [`Measurement::body`] `R` is the
+    /// rotation of its quaternion and `Ω` its body rates (no Euler conversion).
+    fn update_measured(&mut self, measured: &Measurement, reference: &Reference, dt: f64) -> Command {
+        self.update_with(&measured.euler, measured.body.as_ref(), reference, dt)
+    }
+
+    fn uses_body_attitude(&self) -> bool {
+        true
     }
 
     fn telemetry(&self) -> &Telemetry {
@@ -449,7 +483,7 @@ mod tests {
         let cmd = c.update(&QuadState::default(), &Reference { yaw: f64::NAN, ..reference }, 1e-3);
         assert!(cmd.thrust.is_nan());
         c.reset();
-        assert_eq!(c.telemetry().alpha_hat, 1.0);
+        assert_eq!(c.telemetry().sliding_mode, None);
         assert!(!c.adapts_mass());
     }
 }

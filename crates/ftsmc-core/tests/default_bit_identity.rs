@@ -50,7 +50,8 @@ fn sequence_hash<L: AxisLaw>(mut c: Cascade<L>) -> u64 {
             fnv(&mut hash, tau.to_bits());
         }
         let telemetry = c.telemetry();
-        fnv(&mut hash, telemetry.alpha_hat.to_bits());
+        // α̂ moved into the sliding-mode part of the telemetry (same value).
+        fnv(&mut hash, telemetry.sliding_mode.expect("the cascade reports its sliding part").alpha_hat.to_bits());
         for x in telemetry.estimates.iter().flatten().chain(telemetry.attitude_demand.iter()) {
             fnv(&mut hash, x.to_bits());
         }

@@ -45,8 +45,9 @@ pub(crate) fn build(name: &str, scenario: &ftsmc_sim::Scenario) -> PyResult<Boxe
     registry::build(name, scenario).map_err(value_error)
 }
 
-/// `(attitude_reference, attitude_reference_rate, sliding, alpha_hat)`.
-type TelemetryTuple = ([f64; 3], [f64; 3], [f64; 6], f64);
+/// `(attitude_reference, attitude_reference_rate, sliding, alpha_hat)`;
+/// the last two `None` for a controller without sliding surfaces (PID, SE(3)).
+type TelemetryTuple = ([f64; 3], [f64; 3], Option<[f64; 6]>, Option<f64>);
 
 /// One of ftsmc's controllers, stepped from Python (`ftsmc.Controller`
 /// wraps it with dataclasses).
@@ -105,11 +106,13 @@ impl NativeController {
     }
 
     /// What the last update computed: `(attitude_reference[3] rad,
-    /// attitude_reference_rate[3] rad/s, sliding[6], alpha_hat)`.
+    /// attitude_reference_rate[3] rad/s, sliding[6], alpha_hat)`; `sliding`
+    /// and `alpha_hat` are `None` for PID and SE(3) (no sliding surfaces).
     fn telemetry(&self) -> PyResult<TelemetryTuple> {
         let c = self.inner.lock().map_err(|_| value_error("controller poisoned by an earlier panic"))?;
         let t = c.telemetry();
-        Ok((t.attitude_reference, t.attitude_reference_rate, t.sliding, t.alpha_hat))
+        let sm = t.sliding_mode;
+        Ok((t.attitude_reference, t.attitude_reference_rate, sm.map(|s| s.sliding), sm.map(|s| s.alpha_hat)))
     }
 }
 

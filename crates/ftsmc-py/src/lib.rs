@@ -14,6 +14,7 @@ use pyo3::prelude::*;
 mod controller;
 mod flight;
 mod gym;
+mod kinematics;
 mod progress;
 mod scenario;
 mod tune;
@@ -35,6 +36,10 @@ fn _ftsmc(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(flight::montecarlo_columns, m)?)?;
     m.add_function(wrap_pyfunction!(tune::tune_native, m)?)?;
     m.add_function(wrap_pyfunction!(tune::tune_evaluate, m)?)?;
+    m.add_function(wrap_pyfunction!(kinematics::kinematics_euler_from_quaternion, m)?)?;
+    m.add_function(wrap_pyfunction!(kinematics::kinematics_quaternion_from_euler, m)?)?;
+    m.add_function(wrap_pyfunction!(kinematics::kinematics_euler_rates, m)?)?;
+    m.add_function(wrap_pyfunction!(kinematics::kinematics_body_rates, m)?)?;
     m.add_function(wrap_pyfunction!(controller_names, m)?)?;
     m.add_function(wrap_pyfunction!(controller_label, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;

@@ -32,7 +32,9 @@
 //! writes into it. A run loop calling `measure` every step does not touch the
 //! heap (asserted by `tests/sensors_alloc.rs` with a counting allocator).
 
+use ftsmc_core::kinematics::quaternion_from_euler;
 use ftsmc_core::law::GainError;
+use ftsmc_core::measured::{BodyAttitude, Measurement};
 use ftsmc_core::model::QuadState;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -273,6 +275,11 @@ struct Line {
     held: QuadState,
     /// Ring of the last `latency + 1` readings.
     ring: Vec<QuadState>,
+    /// The measured body rates of the held reading (rad/s), `None` when
+    /// not measured as such (see [`Sensors::measure_full`]).
+    held_rates: Option<[f64; 3]>,
+    /// Their ring, beside `ring` (kept apart so the Euler readings move as before).
+    rates_ring: Vec<Option<[f64; 3]>>,
     /// Slot the next reading goes into.
     head: usize,
 }
@@ -288,6 +295,8 @@ impl Line {
             last_sample: 0,
             held: QuadState::default(),
             ring: vec![QuadState::default(); clock.latency as usize + 1],
+            held_rates: None,
+            rates_ring: vec![None; clock.latency as usize + 1],
             head: 0,
         }
     }
@@ -310,11 +319,18 @@ impl Line {
     fn delayed(&mut self, period: u64) -> QuadState {
         if period == 0 {
             self.ring.fill(self.held);
+            self.rates_ring.fill(self.held_rates);
         }
         let n = self.ring.len();
         self.ring[self.head] = self.held;
+        self.rates_ring[self.head] = self.held_rates;
         self.head = (self.head + 1) % n;
         self.ring[self.head]
+    }
+
+    /// The body rates of the reading [`Line::delayed`] returned last.
+    fn delayed_rates(&self) -> Option<[f64; 3]> {
+        self.rates_ring[self.head]
     }
 }
 
@@ -368,58 +384,90 @@ impl Sensors {
     /// control period: the sample clocks and the latency lines advance by
     /// one period per call. Never allocates.
     pub fn measure(&mut self, truth: &QuadState) -> QuadState {
+        self.measure_full(&Measurement::euler(*truth)).euler
+    }
+
+    /// [`Sensors::measure`] of a truth that may carry its quaternion and
+    /// body rates ([`Measurement::body`]). With them and `rates = "body"`,
+    /// the reading carries the measured attitude as a quaternion
+    /// ([`quaternion_from_euler`] of the measured angles) with the measured
+    /// body rates, so a full-state controller needs no Euler conversion.
+    /// Otherwise the reading has no body attitude. The Euler reading, the
+    /// clocks, latency and random draws are those of [`Sensors::measure`],
+    /// bit for bit.
+    pub fn measure_full(&mut self, truth: &Measurement) -> Measurement {
         let k = self.period;
         self.period += 1;
         match &mut self.imu {
             None => {
                 if self.main.due(k) {
-                    self.main.held = self.read(truth);
+                    let (held, rates) = self.read(truth);
+                    self.main.held = held;
+                    self.main.held_rates = rates;
                 }
-                self.main.delayed(k)
+                let euler = self.main.delayed(k);
+                Measurement { euler, body: body_of(&euler, self.main.delayed_rates()) }
             }
             Some(_) => {
                 if self.main.due(k) {
-                    let position = self.position.corrupt(truth.position);
-                    let velocity = self.velocity.corrupt(truth.velocity);
+                    let position = self.position.corrupt(truth.euler.position);
+                    let velocity = self.velocity.corrupt(truth.euler.velocity);
                     self.main.held = QuadState { position, velocity, ..self.main.held };
                 }
                 let imu_due = self.imu.as_mut().is_some_and(|l| l.due(k));
                 if imu_due {
-                    let (attitude, angular_rate) = self.read_rotation(truth);
+                    let (attitude, angular_rate, rates) = self.read_rotation(truth);
                     if let Some(l) = &mut self.imu {
                         l.held = QuadState { attitude, angular_rate, ..l.held };
+                        l.held_rates = rates;
                     }
                 }
                 let translation = self.main.delayed(k);
-                let rotation = self.imu.as_mut().map_or(translation, |l| l.delayed(k));
-                QuadState {
+                let (rotation, rates) = match self.imu.as_mut() {
+                    Some(l) => (l.delayed(k), l.delayed_rates()),
+                    None => (translation, self.main.delayed_rates()),
+                };
+                let euler = QuadState {
                     position: translation.position,
                     velocity: translation.velocity,
                     attitude: rotation.attitude,
                     angular_rate: rotation.angular_rate,
-                }
+                };
+                Measurement { euler, body: body_of(&euler, rates) }
             }
         }
     }
 
-    /// One reading of attitude and angular rate with their errors.
-    fn read_rotation(&mut self, truth: &QuadState) -> ([f64; 3], [f64; 3]) {
-        let attitude = self.attitude.corrupt(truth.attitude);
-        let angular_rate = match self.params.rates {
-            RateFrame::Euler => self.angular_rate.corrupt(truth.angular_rate),
+    /// One reading of attitude and angular rate with their errors (Euler
+    /// angles, Euler rates, and the body attitude when measured in body rates
+    /// of a truth that has them).
+    fn read_rotation(&mut self, truth: &Measurement) -> ([f64; 3], [f64; 3], Option<[f64; 3]>) {
+        let euler = &truth.euler;
+        let attitude = self.attitude.corrupt(euler.attitude);
+        match self.params.rates {
+            RateFrame::Euler => (attitude, self.angular_rate.corrupt(euler.angular_rate), None),
             RateFrame::Body => {
-                let body = euler_rates_to_body_rates(&truth.attitude, &truth.angular_rate);
-                euler_rates_clamped(&attitude, &self.angular_rate.corrupt(body))
+                // The body rates of the Euler state (not `truth.body`'s own,
+                // equal to rounding): the Euler reading stays bit-identical
+                // whatever the truth carries.
+                let body = euler_rates_to_body_rates(&euler.attitude, &euler.angular_rate);
+                let body_rates = self.angular_rate.corrupt(body);
+                (attitude, euler_rates_clamped(&attitude, &body_rates), truth.body.map(|_| body_rates))
             }
-        };
-        (attitude, angular_rate)
+        }
     }
 
     /// One reading of the truth with every error applied.
-    fn read(&mut self, truth: &QuadState) -> QuadState {
-        let position = self.position.corrupt(truth.position);
-        let velocity = self.velocity.corrupt(truth.velocity);
-        let (attitude, angular_rate) = self.read_rotation(truth);
-        QuadState { position, attitude, velocity, angular_rate }
+    fn read(&mut self, truth: &Measurement) -> (QuadState, Option<[f64; 3]>) {
+        let position = self.position.corrupt(truth.euler.position);
+        let velocity = self.velocity.corrupt(truth.euler.velocity);
+        let (attitude, angular_rate, rates) = self.read_rotation(truth);
+        (QuadState { position, attitude, velocity, angular_rate }, rates)
     }
+}
+
+/// The body attitude of a delivered reading: the quaternion of its measured
+/// angles with its measured body rates (when they were measured as such).
+fn body_of(euler: &QuadState, rates: Option<[f64; 3]>) -> Option<BodyAttitude> {
+    rates.map(|body_rates| BodyAttitude { quaternion: quaternion_from_euler(&euler.attitude), body_rates })
 }

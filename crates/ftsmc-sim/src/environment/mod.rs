@@ -78,7 +78,7 @@ impl<'a> Environment<'a> {
 
     /// The smooth time-varying plant inputs at `t` (s): true mass, inertia
     /// and disturbances (drag noise is per control period and kept apart).
-    #[inline]
+    #[inline(always)] // the loop calls it every substep; LLVM's heuristics left it out of line
     pub fn time_varying(&self, t: f64) -> TimeVarying {
         let s = &self.params;
         let base = s.plant;

@@ -21,6 +21,7 @@
 
 use ftsmc_core::allocation::{residual_speed, rotor_speeds};
 use ftsmc_core::cascade::Controller;
+use ftsmc_core::measured::{BodyAttitude, Measurement};
 use ftsmc_core::model::{QuadState, QuadrotorParams, Reference};
 
 use crate::envelope::Tracker;
@@ -61,6 +62,10 @@ pub struct Flight<'s, C: Controller + ?Sized> {
     truth: Box<dyn TruthModel + Send>,
     /// The truth's Euler state at the current period boundary (converted once per period).
     state: QuadState,
+    /// The truth's quaternion and body rates at the same boundary, if it has them.
+    body: Option<BodyAttitude>,
+    /// The controller flies [`Measurement::body`] (`Controller::uses_body_attitude`).
+    wants_body: bool,
     actuators: ActuatorStage,
     demand_params: QuadrotorParams,
     base_plant: QuadrotorParams,
@@ -81,6 +86,8 @@ pub struct Flight<'s, C: Controller + ?Sized> {
     /// The measurement of the coming tick when it was taken ahead of
     /// [`Flight::step`] by [`Flight::measurement`].
     measured_ahead: Option<QuadState>,
+    /// Its body attitude (full-state controllers only).
+    body_ahead: Option<BodyAttitude>,
 }
 
 /// True when the two rotor metrics of [`crate::metrics::Metrics`]
@@ -120,6 +127,7 @@ impl<'s, C: Controller + ?Sized> Flight<'s, C> {
         let recorder = Recorder::new(scenario, options.record, steps, &*controller);
         let tv_now = env.time_varying(0.0);
         let reference = reference_at(scenario, 0.0);
+        let wants_body = controller.uses_body_attitude();
         let mut flight = Self {
             scenario,
             controller,
@@ -130,6 +138,8 @@ impl<'s, C: Controller + ?Sized> Flight<'s, C> {
             k: 0,
             env,
             state: truth.quad_state(),
+            body: if wants_body { truth.body_attitude() } else { None },
+            wants_body,
             truth,
             actuators,
             demand_params,
@@ -149,6 +159,7 @@ impl<'s, C: Controller + ?Sized> Flight<'s, C> {
             saturated_periods: 0,
             exit: None,
             measured_ahead: None,
+            body_ahead: None,
         };
         flight.boundary(0.0);
         if let Some(divergence) = invalid {
@@ -190,10 +201,19 @@ impl<'s, C: Controller + ?Sized> Flight<'s, C> {
         if let Some(m) = self.measured_ahead {
             return m;
         }
-        let state = self.state;
-        let m = self.sensors.as_mut().map_or(state, |s| s.measure(&state));
-        self.measured_ahead = Some(m);
-        m
+        let m = self.measure();
+        self.measured_ahead = Some(m.euler);
+        self.body_ahead = m.body;
+        m.euler
+    }
+
+    /// The sensor stage's reading of the truth at the current boundary.
+    fn measure(&mut self) -> Measurement {
+        let truth = Measurement { euler: self.state, body: self.body };
+        match self.sensors.as_mut() {
+            Some(s) => s.measure_full(&truth),
+            None => truth,
+        }
     }
 
     /// The truth's Euler state at the current period boundary.
@@ -238,11 +258,21 @@ impl<'s, C: Controller + ?Sized> Flight<'s, C> {
         let (k, dt, h) = (self.k, self.dt, self.h);
         let t = k as f64 * dt;
         let state = self.state;
-        let measured = match self.measured_ahead.take() {
-            Some(m) => m,
-            None => self.sensors.as_mut().map_or(state, |s| s.measure(&state)),
+        let (measured, command) = if self.wants_body {
+            let reading = match self.measured_ahead.take() {
+                Some(euler) => Measurement { euler, body: self.body_ahead.take() },
+                None => self.measure(),
+            };
+            (reading.euler, self.controller.update_measured(&reading, &self.reference, dt))
+        } else {
+            // The Euler state alone: no body attitude is built or copied.
+            let measured = match self.measured_ahead.take() {
+                Some(m) => m,
+                None => self.sensors.as_mut().map_or(state, |s| s.measure(&state)),
+            };
+            (measured, self.controller.update(&measured, &self.reference, dt))
         };
-        let command = self.controller.update(&measured, &self.reference, dt);
+        let measured = &measured;
         self.env.next_period();
         let plant_now = self.env.params_with(&self.tv_now);
         let delivered: Delivered = self.actuators.deliver(&command, &plant_now);
@@ -268,7 +298,7 @@ impl<'s, C: Controller + ?Sized> Flight<'s, C> {
                 k,
                 t,
                 state: x,
-                measured: &measured,
+                measured,
                 reference: &self.reference,
                 telemetry,
                 errors: tracking_errors(&x, &self.reference, telemetry),
@@ -324,6 +354,9 @@ impl<'s, C: Controller + ?Sized> Flight<'s, C> {
         let t_next = (k + 1) as f64 * dt;
         self.reference = reference_at(self.scenario, t_next);
         self.state = self.truth.quad_state();
+        if self.wants_body {
+            self.body = self.truth.body_attitude();
+        }
         self.boundary(t_next);
         if let Some(divergence) = check_divergence(self.scenario, &self.state.to_array(), &self.reference) {
             return self.end(ExitStatus::Diverged { divergence, time: t_next });

@@ -11,11 +11,13 @@ pub use crate::limits::MAX_RECORDING_COLUMNS;
 
 /// Column names of a [`Recording`], in order (docs/outputs.md explains each):
 /// `t`, the state, the references, the commanded and applied inputs, rotor
-/// speeds, sliding variables, the named estimates `<name>_<axis>` of each
+/// speeds, the sliding variables `s_<axis>` (only for a controller whose
+/// telemetry has a sliding-mode part, `sliding`: the paper's cascade; PID
+/// and SE(3) have none), the named estimates `<name>_<axis>` of each
 /// channel law (`estimate_names`, e.g. `["delta_hat", "", ""]`; `""` slots
 /// are not written), `alpha_hat` and `mass_estimate` (only with mass
 /// adaptation, `adapts_mass`), true mass and inertia, disturbances.
-pub fn recording_columns(estimate_names: &[&str; MAX_ESTIMATES], adapts_mass: bool) -> Vec<String> {
+pub fn recording_columns(estimate_names: &[&str; MAX_ESTIMATES], sliding: bool, adapts_mass: bool) -> Vec<String> {
     let mut names: Vec<String> = [
         "t",
         "x",
@@ -55,8 +57,10 @@ pub fn recording_columns(estimate_names: &[&str; MAX_ESTIMATES], adapts_mass: bo
     .iter()
     .map(|s| s.to_string())
     .collect();
-    for axis in ftsmc_core::cascade::channel::NAMES {
-        names.push(format!("s_{axis}"));
+    if sliding {
+        for axis in ftsmc_core::cascade::channel::NAMES {
+            names.push(format!("s_{axis}"));
+        }
     }
     for axis in ftsmc_core::cascade::channel::NAMES {
         for name in estimate_names.iter().filter(|n| !n.is_empty()) {
@@ -187,6 +191,8 @@ pub(super) struct Recorder {
     /// The estimate slots written (those with a name).
     named_slots: [usize; MAX_ESTIMATES],
     n_named: usize,
+    /// The controller reports sliding variables (`Telemetry::sliding_mode`).
+    sliding: bool,
     adapts_mass: bool,
 }
 
@@ -204,8 +210,9 @@ impl Recorder {
         };
         let estimate_names = controller.estimate_names();
         let adapts_mass = controller.adapts_mass();
+        let sliding = controller.telemetry().sliding_mode.is_some();
         let mut recording = if every > 0 {
-            Recording::with_columns(recording_columns(&estimate_names, adapts_mass))
+            Recording::with_columns(recording_columns(&estimate_names, sliding, adapts_mass))
         } else {
             Recording::default()
         };
@@ -226,7 +233,7 @@ impl Recorder {
                 n_named += 1;
             }
         }
-        Self { recording, every, named_slots, n_named, adapts_mass }
+        Self { recording, every, named_slots, n_named, sliding, adapts_mass }
     }
 
     /// True when tick `k` is recorded.
@@ -249,15 +256,18 @@ impl Recorder {
         row.extend(&[command.thrust, command.torque[0], command.torque[1], command.torque[2]]);
         row.extend(&tick.omega);
         row.push(tick.omega_bar);
-        row.extend(&telemetry.sliding);
+        let sliding_mode = telemetry.sliding_mode.unwrap_or_default();
+        if self.sliding {
+            row.extend(&sliding_mode.sliding);
+        }
         for est in &telemetry.estimates {
             for &slot in &self.named_slots[..self.n_named] {
                 row.push(est[slot]);
             }
         }
         if self.adapts_mass {
-            row.push(telemetry.alpha_hat);
-            row.push(telemetry.alpha_hat * tick.nominal_mass);
+            row.push(sliding_mode.alpha_hat);
+            row.push(sliding_mode.alpha_hat * tick.nominal_mass);
         }
         row.push(tick.mass);
         row.extend(&tick.inertia);

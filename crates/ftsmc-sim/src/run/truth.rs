@@ -18,6 +18,7 @@
 //! `v − w`, the rigid body's parasitic and rotor drag.
 
 use ftsmc_core::allocation::{forces_from_squared_speeds, residual_speed};
+use ftsmc_core::measured::BodyAttitude;
 use ftsmc_core::model::{Command, QuadState, QuadrotorParams};
 
 use crate::environment::{Environment, TimeVarying};
@@ -51,6 +52,12 @@ pub(crate) struct Substep<'a> {
 pub(crate) trait TruthModel {
     /// The state in the Euler form every controller takes.
     fn quad_state(&self) -> QuadState;
+    /// The attitude as quaternion and body rates, when the model has them
+    /// (handed to full-state controllers beside the Euler state). The
+    /// default: none (the model's state is the Euler state).
+    fn body_attitude(&self) -> Option<BodyAttitude> {
+        None
+    }
     /// The start of a control period with the plant variation `tv` (the
     /// rigid body's payload and inertia scaling); `base` is the true plant.
     /// An error stops the run: the model cannot represent this variation.
@@ -140,16 +147,20 @@ impl TruthModel for RigidTruth {
         to_quad_state(&self.x)
     }
 
+    #[inline]
+    fn body_attitude(&self) -> Option<BodyAttitude> {
+        let x = &self.x;
+        Some(BodyAttitude { quaternion: [x[6], x[7], x[8], x[9]], body_rates: [x[10], x[11], x[12]] })
+    }
+
     fn begin_period(&mut self, tv: &TimeVarying, base_plant: &QuadrotorParams) -> Result<(), Divergence> {
         let added = tv.mass - base_plant.mass;
         let scale = tv.inertia[0] / base_plant.inertia[0];
         if (added, scale) != self.key {
             let mass = self.base.mass + added;
-            let inertia = self.base.inertia.map(|r| r.map(|v| v * scale));
-            match self.body.with_mass_and_inertia(mass, inertia) {
-                Ok(b) => self.body = b,
+            if self.body.set_mass_and_scaled_inertia(mass, &self.base.inertia, scale).is_err() {
                 // Never fly a mass or inertia other than the recorded one.
-                Err(_) => return Err(Divergence::RigidBodyOutOfRange { mass, inertia_scale: scale }),
+                return Err(Divergence::RigidBodyOutOfRange { mass, inertia_scale: scale });
             }
             self.key = (added, scale);
         }

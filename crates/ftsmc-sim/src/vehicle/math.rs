@@ -68,15 +68,11 @@ pub(crate) fn inverse3(m: &Mat3) -> Option<Mat3> {
     Some(adj.map(|row| row.map(|v| v / det)))
 }
 
-/// Rotation matrix of a unit quaternion (body → world: `v_w = R v_b`).
+/// Rotation matrix of a unit quaternion (body → world: `v_w = R v_b`): the
+/// core's [`ftsmc_core::kinematics::rotation_from_quaternion`].
 #[inline]
 pub(crate) fn rotation(q: Quat) -> Mat3 {
-    let [w, x, y, z] = q;
-    [
-        [1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y - w * z), 2.0 * (x * z + w * y)],
-        [2.0 * (x * y + w * z), 1.0 - 2.0 * (x * x + z * z), 2.0 * (y * z - w * x)],
-        [2.0 * (x * z - w * y), 2.0 * (y * z + w * x), 1.0 - 2.0 * (x * x + y * y)],
-    ]
+    ftsmc_core::kinematics::rotation_from_quaternion(&q)
 }
 
 /// `q̇ = ½ q ⊗ (0, Ω)` for body rates Ω.

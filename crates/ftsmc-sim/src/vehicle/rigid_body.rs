@@ -16,6 +16,19 @@
 //! - Rotors: numbering, positions and spin directions of paper Eq. 2
 //!   ([`ftsmc_core::allocation`]), see [`Configuration`] and [`Spin`].
 //!
+//! # Trigonometry
+//!
+//! The conversions below are those of `ftsmc_core::kinematics` (the one
+//! Euler/quaternion module of the controllers, the simulator and Python).
+//! [`quaternion_to_euler`] and the rotation matrix call the core's;
+//! [`euler_to_quaternion`], [`euler_rates_to_body_rates`] and the
+//! body-to-Euler rates keep the same formulas with the platform's `sin_cos`
+//! (glibc), because switching them to the core's `libm` moves the realistic
+//! results by more than rounding: flights of the sliding-mode controllers in
+//! turbulence amplify a last-bit change into a different flight (measured
+//! with `reproduce --realistic-runs 20`: success and crash counts of
+//! FTAFTSMC and TSM-STA on the wind ladder change by one or two of 20).
+//!
 //! # State
 //!
 //! `[p (3), v (3), q (4), Ω (3)]` = 13 numbers, world position (m), world
@@ -56,6 +69,7 @@
 //! therefore have the opposite sign to this model's. The test
 //! `gyroscopic_torque_is_opposite_to_the_paper_plant` pins this down.
 
+use ftsmc_core::kinematics;
 use ftsmc_core::law::GainError;
 use ftsmc_core::model::{QuadState, QuadrotorParams};
 use serde::{Deserialize, Serialize};
@@ -408,6 +422,33 @@ impl RigidBody {
         Ok(Self { params, inertia_inv, ..*self })
     }
 
+    /// In place, the result of [`RigidBody::with_mass_and_inertia`] of
+    /// `mass` and the inertia `scale · base_inertia` (each entry times
+    /// `scale`, the same bits), where `base_inertia` is an inertia that
+    /// passed [`RigidBodyParams::check`]: for a finite `scale > 0` the scaled
+    /// matrix keeps its symmetry and positive definiteness, so only the
+    /// mass, the entry bound and the inverse are checked (a payload or an
+    /// inertia variation changing them every control period). Otherwise, or
+    /// when any of those fails, the full check answers (the same error as
+    /// [`RigidBody::with_mass_and_inertia`]); on error `self` is unchanged.
+    pub fn set_mass_and_scaled_inertia(&mut self, mass: f64, base_inertia: &Mat3, scale: f64) -> Result<(), GainError> {
+        let inertia = base_inertia.map(|r| r.map(|v| v * scale));
+        let fast = scale > 0.0
+            && scale.is_finite()
+            && (1e-6..=1e6).contains(&mass)
+            && inertia.iter().flatten().all(|v| (-1e6..=1e6).contains(v))
+            && det3(&inertia) > 0.0;
+        let inverse = if fast { inverse3(&inertia) } else { None };
+        let inverse = match inverse {
+            Some(inv) => inv,
+            None => RigidBodyParams { mass, inertia, ..self.params }.check_mass_inertia()?,
+        };
+        self.params.mass = mass;
+        self.params.inertia = inertia;
+        self.inertia_inv = inverse;
+        Ok(())
+    }
+
     /// The parameters.
     pub fn params(&self) -> &RigidBodyParams {
         &self.params
@@ -426,22 +467,31 @@ impl RigidBody {
         let v = block(x, index::VELOCITY);
         let omega = block(x, index::BODY_RATES);
         let v_air = mat_t_vec(r, sub(v, input.wind));
-        let aero = p.rotor_drag_xy != 0.0 || p.rotor_drag_z != 0.0 || p.translational_lift != 0.0;
         let mut force = [0.0; 3];
         let mut torque = [0.0; 3];
-        for i in 0..4 {
-            let w = input.rotor_speeds[i];
-            let mut f = [0.0, 0.0, p.thrust_coefficient * w * w];
-            if aero {
+        // Two loops of the same arithmetic, so neither carries the other's
+        // branch: rotor aerodynamics on (the realistic vehicles) or off.
+        if p.rotor_drag_xy != 0.0 || p.rotor_drag_z != 0.0 || p.translational_lift != 0.0 {
+            for i in 0..4 {
+                let w = input.rotor_speeds[i];
+                let mut f = [0.0, 0.0, p.thrust_coefficient * w * w];
                 let vi = add(v_air, cross(omega, self.rotors[i]));
                 f[0] -= w * p.rotor_drag_xy * vi[0];
                 f[1] -= w * p.rotor_drag_xy * vi[1];
                 f[2] -= w * p.rotor_drag_z * vi[2];
                 f[2] += p.translational_lift * (vi[0] * vi[0] + vi[1] * vi[1]);
+                force = add(force, f);
+                torque = add(torque, cross(self.rotors[i], f));
+                torque[2] -= self.spin[i] * p.moment_coefficient * w * w;
             }
-            force = add(force, f);
-            torque = add(torque, cross(self.rotors[i], f));
-            torque[2] -= self.spin[i] * p.moment_coefficient * w * w;
+        } else {
+            for i in 0..4 {
+                let w = input.rotor_speeds[i];
+                let f = [0.0, 0.0, p.thrust_coefficient * w * w];
+                force = add(force, f);
+                torque = add(torque, cross(self.rotors[i], f));
+                torque[2] -= self.spin[i] * p.moment_coefficient * w * w;
+            }
         }
         let cd = p.parasitic_drag;
         if cd != [0.0; 3] {
@@ -542,6 +592,9 @@ pub fn rotation_matrix(q: &[f64; 4]) -> [[f64; 3]; 3] {
 
 /// Unit quaternion `[w, x, y, z]` of Z-Y-X Euler angles `[φ, θ, ψ]` (rad):
 /// `q = q_z(ψ) ⊗ q_y(θ) ⊗ q_x(φ)`, so `R(q) = R_z(ψ) R_y(θ) R_x(φ)`.
+///
+/// The formula of the core's [`kinematics::quaternion_from_euler`], kept here
+/// with the platform's `sin_cos` (see the module docs, "Trigonometry").
 pub fn euler_to_quaternion(euler: &[f64; 3]) -> [f64; 4] {
     let (sr, cr) = (0.5 * euler[0]).sin_cos();
     let (sp, cp) = (0.5 * euler[1]).sin_cos();
@@ -553,12 +606,10 @@ pub fn euler_to_quaternion(euler: &[f64; 3]) -> [f64; 4] {
 /// `(−π, π]`, θ in `[−π/2, π/2]`. At θ = ±π/2 (gimbal lock) only φ ∓ ψ is
 /// defined; the split returned there is whatever `atan2` gives and is not
 /// continuous. `q` and `−q` give the same angles.
+///
+/// The core's [`kinematics::euler_from_quaternion`].
 pub fn quaternion_to_euler(q: &[f64; 4]) -> [f64; 3] {
-    let [w, x, y, z] = *q;
-    let phi = (2.0 * (w * x + y * z)).atan2(1.0 - 2.0 * (x * x + y * y));
-    let theta = (2.0 * (w * y - x * z)).clamp(-1.0, 1.0).asin();
-    let psi = (2.0 * (w * z + x * y)).atan2(1.0 - 2.0 * (y * y + z * z));
-    [phi, theta, psi]
+    kinematics::euler_from_quaternion(q)
 }
 
 /// Body rates `Ω = [p, q, r]` (rad/s) from Z-Y-X Euler rates at `euler`:
@@ -569,7 +620,9 @@ pub fn quaternion_to_euler(q: &[f64; 4]) -> [f64; 3] {
 /// r = −θ̇ sφ + ψ̇ cθ cφ
 /// ```
 ///
-/// Defined everywhere.
+/// Defined everywhere. The formula of the core's
+/// [`kinematics::body_rates_from_euler_rates`] with the platform's `sin_cos`
+/// (module docs, "Trigonometry").
 pub fn euler_rates_to_body_rates(euler: &[f64; 3], euler_rates: &[f64; 3]) -> [f64; 3] {
     let (sphi, cphi) = euler[0].sin_cos();
     let (stheta, ctheta) = euler[1].sin_cos();
@@ -578,8 +631,9 @@ pub fn euler_rates_to_body_rates(euler: &[f64; 3], euler_rates: &[f64; 3]) -> [f
 }
 
 /// Smallest `|cos θ|` at which [`body_rates_to_euler_rates`] answers
-/// (|θ| within about 1e-6 rad of π/2 is refused).
-pub const GIMBAL_LOCK_COS: f64 = 1e-6;
+/// (|θ| within about 1e-6 rad of π/2 is refused); the core's
+/// [`kinematics::GIMBAL_LOCK_COS`].
+pub const GIMBAL_LOCK_COS: f64 = kinematics::GIMBAL_LOCK_COS;
 
 /// The Euler-rate map is singular at θ = ±π/2.
 #[derive(Clone, Copy, Debug, PartialEq, thiserror::Error)]
@@ -618,7 +672,7 @@ fn euler_rates_with_cos(euler: &[f64; 3], body_rates: &[f64; 3], ctheta: f64) ->
 /// velocity, Z-Y-X angles ([`quaternion_to_euler`]) and Euler rates
 /// ([`body_rates_to_euler_rates`]). Errors with [`GimbalLock`] at θ = ±π/2.
 pub fn try_to_quad_state(x: &RigidBodyState) -> Result<QuadState, GimbalLock> {
-    let attitude = quaternion_to_euler(&quaternion(x));
+    let attitude = kinematics::euler_from_quaternion(&quaternion(x));
     let angular_rate = body_rates_to_euler_rates(&attitude, &block(x, index::BODY_RATES))?;
     Ok(QuadState { position: block(x, index::POSITION), attitude, velocity: block(x, index::VELOCITY), angular_rate })
 }
@@ -629,7 +683,7 @@ pub fn try_to_quad_state(x: &RigidBodyState) -> Result<QuadState, GimbalLock> {
 /// rather than infinite. A controller flying there has already lost its
 /// Euler-angle model; use [`try_to_quad_state`] to detect it.
 pub fn to_quad_state(x: &RigidBodyState) -> QuadState {
-    let attitude = quaternion_to_euler(&quaternion(x));
+    let attitude = kinematics::euler_from_quaternion(&quaternion(x));
     let c = attitude[1].cos();
     let c = if c.abs() >= GIMBAL_LOCK_COS {
         c
