@@ -41,7 +41,7 @@ use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};
 use serde::{Deserialize, Serialize};
 
-use crate::vehicle::rigid_body::{euler_rates_to_body_rates, GIMBAL_LOCK_COS};
+use crate::vehicle::rigid_body::{euler_rates_clamped, euler_rates_to_body_rates};
 
 /// ChaCha stream of the position-noise generator (scenario seed). Streams in
 /// use elsewhere: 1–6 drag noise (`environment`), 16 motor noise
@@ -242,25 +242,6 @@ impl Source {
         }
         out
     }
-}
-
-/// Z-Y-X Euler rates from body rates at `euler`, never failing: within
-/// [`GIMBAL_LOCK_COS`] of θ = ±π/2, `cos θ` is clamped to `±GIMBAL_LOCK_COS`
-/// as in [`crate::vehicle::to_quad_state`]. (Local because the clamped form
-/// in `vehicle` is private to it.)
-fn euler_rates_clamped(euler: &[f64; 3], body: &[f64; 3]) -> [f64; 3] {
-    let (sphi, cphi) = euler[0].sin_cos();
-    let (stheta, c) = euler[1].sin_cos();
-    let c = if c.abs() >= GIMBAL_LOCK_COS {
-        c
-    } else if c < 0.0 {
-        -GIMBAL_LOCK_COS
-    } else {
-        GIMBAL_LOCK_COS
-    };
-    let [p, q, r] = *body;
-    let a = q * sphi + r * cphi;
-    [p + a * stheta / c, q * cphi - r * sphi, a / c]
 }
 
 /// The sample clock, held sample and latency line of one group of

@@ -22,8 +22,8 @@
 //! Euler/quaternion module of the controllers, the simulator and Python).
 //! [`quaternion_to_euler`] and the rotation matrix call the core's;
 //! [`euler_to_quaternion`], [`euler_rates_to_body_rates`] and the
-//! body-to-Euler rates keep the same formulas with the platform's `sin_cos`
-//! (glibc), because switching them to the core's `libm` moves the realistic
+//! body-to-Euler rates call the core's formulas with the platform's
+//! `sin_cos` ([`PlatformTrig`], glibc), because the core's `libm` moves the realistic
 //! results by more than rounding: flights of the sliding-mode controllers in
 //! turbulence amplify a last-bit change into a different flight (measured
 //! with `reproduce --realistic-runs 20`: success and crash counts of
@@ -590,16 +590,25 @@ pub fn rotation_matrix(q: &[f64; 4]) -> [[f64; 3]; 3] {
     rotation(*q)
 }
 
+/// The platform's `sin_cos` (`f64::sin_cos`: glibc on Linux) as the core's
+/// [`kinematics::Trig`]: the truth model's conversions evaluate the core's
+/// formulas with it (module docs, "Trigonometry").
+#[derive(Clone, Copy, Debug, Default)]
+pub struct PlatformTrig;
+
+impl kinematics::Trig for PlatformTrig {
+    #[inline]
+    fn sin_cos(x: f64) -> (f64, f64) {
+        x.sin_cos()
+    }
+}
+
 /// Unit quaternion `[w, x, y, z]` of Z-Y-X Euler angles `[φ, θ, ψ]` (rad):
 /// `q = q_z(ψ) ⊗ q_y(θ) ⊗ q_x(φ)`, so `R(q) = R_z(ψ) R_y(θ) R_x(φ)`.
 ///
-/// The formula of the core's [`kinematics::quaternion_from_euler`], kept here
-/// with the platform's `sin_cos` (see the module docs, "Trigonometry").
+/// The core's [`kinematics::quaternion_from_euler_in`] with [`PlatformTrig`].
 pub fn euler_to_quaternion(euler: &[f64; 3]) -> [f64; 4] {
-    let (sr, cr) = (0.5 * euler[0]).sin_cos();
-    let (sp, cp) = (0.5 * euler[1]).sin_cos();
-    let (sy, cy) = (0.5 * euler[2]).sin_cos();
-    [cr * cp * cy + sr * sp * sy, sr * cp * cy - cr * sp * sy, cr * sp * cy + sr * cp * sy, cr * cp * sy - sr * sp * cy]
+    kinematics::quaternion_from_euler_in::<PlatformTrig>(euler)
 }
 
 /// Z-Y-X Euler angles `[φ, θ, ψ]` (rad) of a unit quaternion: φ, ψ in
@@ -620,14 +629,10 @@ pub fn quaternion_to_euler(q: &[f64; 4]) -> [f64; 3] {
 /// r = −θ̇ sφ + ψ̇ cθ cφ
 /// ```
 ///
-/// Defined everywhere. The formula of the core's
-/// [`kinematics::body_rates_from_euler_rates`] with the platform's `sin_cos`
-/// (module docs, "Trigonometry").
+/// Defined everywhere. The core's
+/// [`kinematics::body_rates_from_euler_rates_in`] with [`PlatformTrig`].
 pub fn euler_rates_to_body_rates(euler: &[f64; 3], euler_rates: &[f64; 3]) -> [f64; 3] {
-    let (sphi, cphi) = euler[0].sin_cos();
-    let (stheta, ctheta) = euler[1].sin_cos();
-    let [dphi, dtheta, dpsi] = *euler_rates;
-    [dphi - dpsi * stheta, dtheta * cphi + dpsi * ctheta * sphi, -dtheta * sphi + dpsi * ctheta * cphi]
+    kinematics::body_rates_from_euler_rates_in::<PlatformTrig>(euler, euler_rates)
 }
 
 /// Smallest `|cos θ|` at which [`body_rates_to_euler_rates`] answers
@@ -653,19 +658,18 @@ pub struct GimbalLock {
 ///
 /// Errors with [`GimbalLock`] when `|cos θ| < GIMBAL_LOCK_COS`.
 pub fn body_rates_to_euler_rates(euler: &[f64; 3], body_rates: &[f64; 3]) -> Result<[f64; 3], GimbalLock> {
-    let ctheta = euler[1].cos();
-    if ctheta.abs() < GIMBAL_LOCK_COS {
+    if euler[1].cos().abs() < GIMBAL_LOCK_COS {
         return Err(GimbalLock { theta: euler[1] });
     }
-    Ok(euler_rates_with_cos(euler, body_rates, ctheta))
+    // Away from the singularity the clamp of `cos θ` is a no-op.
+    Ok(euler_rates_clamped(euler, body_rates))
 }
 
-fn euler_rates_with_cos(euler: &[f64; 3], body_rates: &[f64; 3], ctheta: f64) -> [f64; 3] {
-    let (sphi, cphi) = euler[0].sin_cos();
-    let stheta = euler[1].sin();
-    let [p, q, r] = *body_rates;
-    let a = q * sphi + r * cphi;
-    [p + a * stheta / ctheta, q * cphi - r * sphi, a / ctheta]
+/// Z-Y-X Euler rates from body rates with `cos θ` clamped to
+/// `±`[`GIMBAL_LOCK_COS`] near the singularity (finite everywhere): the
+/// core's [`kinematics::euler_rates_from_body_rates_in`] with [`PlatformTrig`].
+pub fn euler_rates_clamped(euler: &[f64; 3], body_rates: &[f64; 3]) -> [f64; 3] {
+    kinematics::euler_rates_from_body_rates_in::<PlatformTrig>(euler, body_rates)
 }
 
 /// The Euler state the paper's controllers were designed for: position,
@@ -684,19 +688,11 @@ pub fn try_to_quad_state(x: &RigidBodyState) -> Result<QuadState, GimbalLock> {
 /// Euler-angle model; use [`try_to_quad_state`] to detect it.
 pub fn to_quad_state(x: &RigidBodyState) -> QuadState {
     let attitude = kinematics::euler_from_quaternion(&quaternion(x));
-    let c = attitude[1].cos();
-    let c = if c.abs() >= GIMBAL_LOCK_COS {
-        c
-    } else if c < 0.0 {
-        -GIMBAL_LOCK_COS
-    } else {
-        GIMBAL_LOCK_COS
-    };
     QuadState {
         position: block(x, index::POSITION),
         attitude,
         velocity: block(x, index::VELOCITY),
-        angular_rate: euler_rates_with_cos(&attitude, &block(x, index::BODY_RATES), c),
+        angular_rate: euler_rates_clamped(&attitude, &block(x, index::BODY_RATES)),
     }
 }
 
