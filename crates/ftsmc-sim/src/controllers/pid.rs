@@ -67,56 +67,46 @@ impl Declaration for Pid {
 /// (attitude and rate loops) group. The limits (velocities, tilt, thrust) are
 /// not tuned: they are the vehicle's, not the controller's.
 pub fn tune_parameters() -> Vec<super::tune_param::TuneParam> {
-    use super::tune_param::TuneParam;
-    /// Multiply elements `idx` of `arr` by `k`.
-    fn mul(arr: &mut [f64; 3], idx: &[usize], k: f64) {
-        for &i in idx {
-            arr[i] *= k;
-        }
-    }
-    const XY: &[usize] = &[0, 1];
-    const Z: &[usize] = &[2];
-    const RP: &[usize] = &[0, 1];
-    const YAW: &[usize] = &[2];
+    use super::tune_param::{scale, TuneParam, HORIZONTAL, VERTICAL};
     vec![
         TuneParam::factor("position_p_xy", "factor on MPC_XY_P (position_p x, y)", 0.1, 10.0, |t, k| {
-            mul(&mut t.gains.pid.position_p, XY, k)
+            scale(&mut t.gains.pid.position_p, HORIZONTAL, k)
         }),
         TuneParam::factor("position_p_z", "factor on MPC_Z_P (position_p z)", 0.1, 10.0, |t, k| {
-            mul(&mut t.gains.pid.position_p, Z, k)
+            scale(&mut t.gains.pid.position_p, VERTICAL, k)
         }),
         TuneParam::factor("velocity_p_xy", "factor on MPC_XY_VEL_P_ACC", 0.1, 10.0, |t, k| {
-            mul(&mut t.gains.pid.velocity_p, XY, k)
+            scale(&mut t.gains.pid.velocity_p, HORIZONTAL, k)
         }),
         TuneParam::factor("velocity_p_z", "factor on MPC_Z_VEL_P_ACC", 0.1, 10.0, |t, k| {
-            mul(&mut t.gains.pid.velocity_p, Z, k)
+            scale(&mut t.gains.pid.velocity_p, VERTICAL, k)
         }),
         TuneParam::factor("velocity_i_xy", "factor on MPC_XY_VEL_I_ACC", 0.01, 100.0, |t, k| {
-            mul(&mut t.gains.pid.velocity_i, XY, k)
+            scale(&mut t.gains.pid.velocity_i, HORIZONTAL, k)
         }),
         TuneParam::factor("velocity_i_z", "factor on MPC_Z_VEL_I_ACC", 0.01, 100.0, |t, k| {
-            mul(&mut t.gains.pid.velocity_i, Z, k)
+            scale(&mut t.gains.pid.velocity_i, VERTICAL, k)
         }),
         TuneParam::factor("velocity_d_xy", "factor on MPC_XY_VEL_D_ACC", 0.01, 100.0, |t, k| {
-            mul(&mut t.gains.pid.velocity_d, XY, k)
+            scale(&mut t.gains.pid.velocity_d, HORIZONTAL, k)
         }),
         TuneParam::factor("attitude_p_roll_pitch", "factor on MC_ROLL_P, MC_PITCH_P", 0.1, 10.0, |t, k| {
-            mul(&mut t.gains.pid.attitude_p, RP, k)
+            scale(&mut t.gains.pid.attitude_p, HORIZONTAL, k)
         }),
         TuneParam::factor("attitude_p_yaw", "factor on MC_YAW_P", 0.1, 10.0, |t, k| {
-            mul(&mut t.gains.pid.attitude_p, YAW, k)
+            scale(&mut t.gains.pid.attitude_p, VERTICAL, k)
         }),
         TuneParam::factor("rate_p_roll_pitch", "factor on MC_ROLLRATE_P, MC_PITCHRATE_P", 0.1, 10.0, |t, k| {
-            mul(&mut t.gains.pid.rate_p, RP, k)
+            scale(&mut t.gains.pid.rate_p, HORIZONTAL, k)
         }),
         TuneParam::factor("rate_p_yaw", "factor on MC_YAWRATE_P", 0.1, 10.0, |t, k| {
-            mul(&mut t.gains.pid.rate_p, YAW, k)
+            scale(&mut t.gains.pid.rate_p, VERTICAL, k)
         }),
         TuneParam::factor("rate_i_roll_pitch", "factor on MC_ROLLRATE_I, MC_PITCHRATE_I", 0.01, 100.0, |t, k| {
-            mul(&mut t.gains.pid.rate_i, RP, k)
+            scale(&mut t.gains.pid.rate_i, HORIZONTAL, k)
         }),
         TuneParam::factor("rate_d_roll_pitch", "factor on MC_ROLLRATE_D, MC_PITCHRATE_D", 0.01, 100.0, |t, k| {
-            mul(&mut t.gains.pid.rate_d, RP, k)
+            scale(&mut t.gains.pid.rate_d, HORIZONTAL, k)
         }),
     ]
 }

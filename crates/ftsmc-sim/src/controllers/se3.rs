@@ -50,29 +50,31 @@ impl Declaration for Se3 {
 /// vertical) and k_R, k_Ω (roll-pitch and yaw). The thrust and tilt limits
 /// are not tuned.
 pub fn tune_parameters() -> Vec<super::tune_param::TuneParam> {
-    use super::tune_param::TuneParam;
-    /// Multiply elements `idx` of `arr` by `k`.
-    fn mul(arr: &mut [f64; 3], idx: &[usize], k: f64) {
-        for &i in idx {
-            arr[i] *= k;
-        }
-    }
-    const XY: &[usize] = &[0, 1];
-    const Z: &[usize] = &[2];
+    use super::tune_param::{scale, TuneParam, HORIZONTAL, VERTICAL};
     vec![
-        TuneParam::factor("kx_xy", "factor on k_x of x, y", 0.1, 10.0, |t, k| mul(&mut t.gains.se3.position, XY, k)),
-        TuneParam::factor("kx_z", "factor on k_x of z", 0.1, 10.0, |t, k| mul(&mut t.gains.se3.position, Z, k)),
-        TuneParam::factor("kv_xy", "factor on k_v of x, y", 0.1, 10.0, |t, k| mul(&mut t.gains.se3.velocity, XY, k)),
-        TuneParam::factor("kv_z", "factor on k_v of z", 0.1, 10.0, |t, k| mul(&mut t.gains.se3.velocity, Z, k)),
-        TuneParam::factor("kr_roll_pitch", "factor on k_R of roll, pitch", 0.1, 10.0, |t, k| {
-            mul(&mut t.gains.se3.attitude, XY, k)
+        TuneParam::factor("kx_xy", "factor on k_x of x, y", 0.1, 10.0, |t, k| {
+            scale(&mut t.gains.se3.position, HORIZONTAL, k)
         }),
-        TuneParam::factor("kr_yaw", "factor on k_R of yaw", 0.1, 10.0, |t, k| mul(&mut t.gains.se3.attitude, Z, k)),
+        TuneParam::factor("kx_z", "factor on k_x of z", 0.1, 10.0, |t, k| {
+            scale(&mut t.gains.se3.position, VERTICAL, k)
+        }),
+        TuneParam::factor("kv_xy", "factor on k_v of x, y", 0.1, 10.0, |t, k| {
+            scale(&mut t.gains.se3.velocity, HORIZONTAL, k)
+        }),
+        TuneParam::factor("kv_z", "factor on k_v of z", 0.1, 10.0, |t, k| {
+            scale(&mut t.gains.se3.velocity, VERTICAL, k)
+        }),
+        TuneParam::factor("kr_roll_pitch", "factor on k_R of roll, pitch", 0.1, 10.0, |t, k| {
+            scale(&mut t.gains.se3.attitude, HORIZONTAL, k)
+        }),
+        TuneParam::factor("kr_yaw", "factor on k_R of yaw", 0.1, 10.0, |t, k| {
+            scale(&mut t.gains.se3.attitude, VERTICAL, k)
+        }),
         TuneParam::factor("komega_roll_pitch", "factor on k_Ω of roll, pitch", 0.1, 10.0, |t, k| {
-            mul(&mut t.gains.se3.angular_rate, XY, k)
+            scale(&mut t.gains.se3.angular_rate, HORIZONTAL, k)
         }),
         TuneParam::factor("komega_yaw", "factor on k_Ω of yaw", 0.1, 10.0, |t, k| {
-            mul(&mut t.gains.se3.angular_rate, Z, k)
+            scale(&mut t.gains.se3.angular_rate, VERTICAL, k)
         }),
     ]
 }

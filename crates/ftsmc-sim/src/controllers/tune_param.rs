@@ -55,3 +55,18 @@ pub const COMMAND_FILTER: TuneParam = TuneParam::factor(
     4.0,
     |t, a| t.cascade.command_filter.natural_frequency *= a,
 );
+
+/// Indices of the horizontal axes x, y (or roll, pitch) in a per-axis
+/// `[f64; 3]` gain.
+pub const HORIZONTAL: &[usize] = &[0, 1];
+
+/// Index of the vertical axis z (or yaw) in a per-axis `[f64; 3]` gain.
+pub const VERTICAL: &[usize] = &[2];
+
+/// Multiply the elements `idx` of a per-axis gain by `factor` (a factor
+/// parameter's `apply` on a group of axes).
+pub fn scale(gain: &mut [f64; 3], idx: &[usize], factor: f64) {
+    for &i in idx {
+        gain[i] *= factor;
+    }
+}
