@@ -473,7 +473,7 @@ struct Axis {
 
 impl Axis {
     fn map(&self, v: f64) -> f64 {
-        let t = |v: f64| if self.log { v.log10() } else { v };
+        let t = |v: f64| if self.log { ftsmc_core::math::log10(v) } else { v };
         self.a + (t(v) - t(self.lo)) / (t(self.hi) - t(self.lo)) * (self.b - self.a)
     }
 }
@@ -767,9 +767,9 @@ pub fn write_3d(title: &str, series: &[Series3], stem: &Path) -> Result<Vec<Path
     let (yaw, pitch) = (0.7f64, 0.45f64);
     let norm = |k: usize, v: f64| 2.0 * (v - ranges[k].0) / (ranges[k].1 - ranges[k].0) - 1.0;
     let project = |n: [f64; 3]| {
-        let u = n[0] * yaw.cos() - n[1] * yaw.sin();
-        let depth = n[0] * yaw.sin() + n[1] * yaw.cos();
-        let v = n[2] * pitch.cos() * 0.9 + depth * pitch.sin();
+        let u = n[0] * ftsmc_core::math::cos(yaw) - n[1] * ftsmc_core::math::sin(yaw);
+        let depth = n[0] * ftsmc_core::math::sin(yaw) + n[1] * ftsmc_core::math::cos(yaw);
+        let v = n[2] * ftsmc_core::math::cos(pitch) * 0.9 + depth * ftsmc_core::math::sin(pitch);
         (u, v)
     };
     let mut corners = Vec::new();
@@ -858,7 +858,7 @@ pub fn write_3d(title: &str, series: &[Series3], stem: &Path) -> Result<Vec<Path
         }
     };
     // Outward directions on screen: perpendicular-ish to each edge, away from the box.
-    let (c, sn) = (yaw.cos(), yaw.sin());
+    let (c, sn) = (ftsmc_core::math::cos(yaw), ftsmc_core::math::sin(yaw));
     edge_label(&mut svg, 0, &|v| [v, -1.0, -1.0], (sn * 0.6, 0.8), "x (m)");
     edge_label(&mut svg, 1, &|v| [-1.0, v, -1.0], (-c * 0.9, 0.45), "y (m)");
     edge_label(&mut svg, 2, &|v| [-1.0, 1.0, v], (-1.0, 0.0), "z (m)");
@@ -1021,7 +1021,7 @@ mod tests {
                         Series {
                             label: "a".into(),
                             xs: t.clone(),
-                            ys: t.iter().map(|v| v.sin()).collect(),
+                            ys: t.iter().map(|v| ftsmc_core::math::sin(*v)).collect(),
                             color: controller_color("ftaftsmc"),
                             dashed: false,
                             end: None,

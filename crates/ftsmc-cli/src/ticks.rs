@@ -18,8 +18,8 @@ pub struct Ticks {
 
 /// 1, 2 or 5 × 10ⁿ, the smallest such step ≥ `raw`.
 pub fn nice_step(raw: f64) -> f64 {
-    let e = raw.log10().floor();
-    let base = 10f64.powf(e);
+    let e = ftsmc_core::math::log10(raw).floor();
+    let base = ftsmc_core::math::powf(10f64, e);
     let f = raw / base;
     let m = if f <= 1.0 + 1e-9 {
         1.0
@@ -72,7 +72,7 @@ pub fn general(v: f64) -> String {
     if v == 0.0 || !v.is_finite() {
         return if v.is_nan() { "NaN".into() } else { fixed(v, 0) };
     }
-    let e = v.abs().log10().floor() as i32;
+    let e = ftsmc_core::math::log10(v.abs()).floor() as i32;
     if (-3..4).contains(&e) {
         let d = (2 - e).max(0) as usize;
         let s = fixed(v, d);
@@ -116,8 +116,8 @@ pub fn linear(lo: f64, hi: f64, target: usize) -> Ticks {
     let mag = lo.abs().max(hi.abs());
     // An offset when the labels would need five or more identical leading digits.
     let offset = if mag / step >= 1e4 {
-        let oexp = span.log10().floor() + 1.0;
-        let unit = 10f64.powf(oexp);
+        let oexp = ftsmc_core::math::log10(span).floor() + 1.0;
+        let unit = ftsmc_core::math::powf(10f64, oexp);
         let o = ((lo + hi) / 2.0 / unit).round() * unit;
         (o != 0.0).then_some((o, (-oexp).max(0.0) as usize))
     } else {
@@ -129,15 +129,15 @@ pub fn linear(lo: f64, hi: f64, target: usize) -> Ticks {
     };
     // An engineering power of ten when the labels would be long.
     let exp3 = if offset.is_some() {
-        3 * (step.log10() / 3.0).floor() as i32
+        3 * (ftsmc_core::math::log10(step) / 3.0).floor() as i32
     } else if !(1e-2..1e5).contains(&shifted_mag) {
-        3 * (shifted_mag.log10() / 3.0).floor() as i32
+        3 * (ftsmc_core::math::log10(shifted_mag) / 3.0).floor() as i32
     } else {
         0
     };
     let scale = 10f64.powi(exp3);
     let scaled_step = step / scale;
-    let decimals = (-(scaled_step.log10()) - 1e-9).ceil().max(0.0) as usize;
+    let decimals = (-(ftsmc_core::math::log10(scaled_step)) - 1e-9).ceil().max(0.0) as usize;
     let o = offset.map_or(0.0, |(o, _)| o);
     let labels = values
         .iter()
@@ -174,7 +174,7 @@ pub fn log(lo: f64, hi: f64, max_labels: usize) -> Ticks {
     let positive = |v: f64| if v.is_nan() { f64::MIN_POSITIVE } else { v.clamp(f64::MIN_POSITIVE, f64::MAX) };
     let (lo, hi) = (positive(lo), positive(hi));
     let (lo, hi) = if lo <= hi { (lo, hi) } else { (hi, lo) };
-    let (a, b) = (lo.log10(), hi.log10());
+    let (a, b) = (ftsmc_core::math::log10(lo), ftsmc_core::math::log10(hi));
     let d0 = (a - 1e-9).ceil() as i32;
     let d1 = (b + 1e-9).floor() as i32;
     let mut minor = Vec::new();
@@ -209,7 +209,13 @@ pub fn log(lo: f64, hi: f64, max_labels: usize) -> Ticks {
         let plain = mantissas.len() > 1;
         let labels = values
             .iter()
-            .map(|v| if plain { general(*v) } else { format!("10{}", superscript(v.log10().round() as i32)) })
+            .map(|v| {
+                if plain {
+                    general(*v)
+                } else {
+                    format!("10{}", superscript(ftsmc_core::math::log10(*v).round() as i32))
+                }
+            })
             .collect();
         return Ticks { values, labels, note: None, minor };
     }
@@ -217,7 +223,9 @@ pub fn log(lo: f64, hi: f64, max_labels: usize) -> Ticks {
     // 7, 9) while at most `max_labels` fit.
     let mut candidates: Vec<f64> = minor.iter().copied().chain((d0..=d1).map(|d| 10f64.powi(d))).collect();
     candidates.sort_by(f64::total_cmp);
-    let class = |v: f64| match (v / 10f64.powf((v.log10() + 1e-9).floor())).round() as i32 {
+    let class = |v: f64| match (v / ftsmc_core::math::powf(10f64, (ftsmc_core::math::log10(v) + 1e-9).floor())).round()
+        as i32
+    {
         1 => 0,
         2 | 5 => 1,
         3 => 2,

@@ -694,9 +694,9 @@ mod tests {
     #[test]
     fn desired_attitude_inverts_eq2_exactly() {
         for &(phi, theta, psi) in &[(0.1, -0.2, 0.3), (-0.3, 0.25, -1.2), (0.0, 0.4, 2.0)] {
-            let (sp, cp) = (f64::sin(phi), f64::cos(phi));
-            let (st, _) = (f64::sin(theta), f64::cos(theta));
-            let (ss, cs) = (f64::sin(psi), f64::cos(psi));
+            let (sp, cp) = (crate::math::sin(phi), crate::math::cos(phi));
+            let (st, _) = (crate::math::sin(theta), crate::math::cos(theta));
+            let (ss, cs) = (crate::math::sin(psi), crate::math::cos(psi));
             let ux = cp * st * cs + sp * ss;
             let uy = cp * st * ss - sp * cs;
             let [r, p] = Cascade::<FtaftsmcAxis>::desired_roll_pitch(ux, uy, psi, 1.2);
@@ -723,7 +723,7 @@ mod tests {
         };
         let (spec, compensated) = (demand(false), demand(true));
         assert!(spec != 0.0);
-        assert!((compensated.sin() / spec.sin() - 1.5).abs() < 1e-9, "{spec} {compensated}");
+        assert!((crate::math::sin(compensated) / crate::math::sin(spec) - 1.5).abs() < 1e-9, "{spec} {compensated}");
     }
 
     /// The filter's first output is the first Eq. 52 demand by default, and
@@ -862,10 +862,10 @@ mod tests {
     fn wobble(k: usize) -> (QuadState, Reference) {
         let t = k as f64 * 1e-3;
         let state = QuadState {
-            position: [0.2 * (3.0 * t).sin(), -0.1 * (2.0 * t).cos(), 0.5 * t],
-            velocity: [0.6 * (3.0 * t).cos(), 0.2 * (2.0 * t).sin(), 0.5],
-            attitude: [0.1 * (7.0 * t).sin(), -0.08 * (5.0 * t).cos(), 0.02 * t],
-            angular_rate: [0.7 * (7.0 * t).cos(), 0.4 * (5.0 * t).sin(), 0.02],
+            position: [0.2 * crate::math::sin(3.0 * t), -0.1 * crate::math::cos(2.0 * t), 0.5 * t],
+            velocity: [0.6 * crate::math::cos(3.0 * t), 0.2 * crate::math::sin(2.0 * t), 0.5],
+            attitude: [0.1 * crate::math::sin(7.0 * t), -0.08 * crate::math::cos(5.0 * t), 0.02 * t],
+            angular_rate: [0.7 * crate::math::cos(7.0 * t), 0.4 * crate::math::sin(5.0 * t), 0.02],
         };
         let reference = Reference { position: [1.0, -0.5, 2.0], ..Reference::default() };
         (state, reference)

@@ -492,8 +492,8 @@ mod tests {
         // Along a smooth trajectory e(t), S − ė = Y·shape(e); its time
         // derivative must equal −ϖ.
         let g = FtaftsmcGains::PAPER_Z;
-        let e = |t: f64| 0.8 * (1.3 * t).sin() - 0.1;
-        let e_dot = |t: f64| 0.8 * 1.3 * (1.3 * t).cos();
+        let e = |t: f64| 0.8 * crate::math::sin(1.3 * t) - 0.1;
+        let e_dot = |t: f64| 0.8 * 1.3 * crate::math::cos(1.3 * t);
         let h = 1e-6;
         for &t in &[0.1, 0.5, 1.0, 2.2, 3.0] {
             let part = |t: f64| {

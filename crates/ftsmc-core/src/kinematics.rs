@@ -1,14 +1,10 @@
 //! Z-Y-X Euler-angle kinematics of the paper's Eq. 1 attitude `[φ, θ, ψ]`:
 //! the body-to-world rotation, its inverse, the Euler-rate to body-rate
 //! map, and the unit quaternion `[w, x, y, z]` (scalar first, Hamilton
-//! product, body → world) of the same rotation. The one place the control laws take these from (PID and SE(3) use
-//! them to leave the Euler interface); built on [`crate::math`]'s `libm`
-//! trigonometry, so bit-identical on every platform.
-//!
-//! The formulas that take a sine or cosine are written once, generic over
-//! [`Trig`] (`*_in::<T>`); the plain functions use [`Libm`]. The simulator's
-//! truth model evaluates the same formulas with the platform's `sin_cos`
-//! (its own [`Trig`]), so its realistic flights keep their bits.
+//! product, body → world) of the same rotation. The one place the control
+//! laws, the simulator's truth model and Python take these from (PID and
+//! SE(3) use them to leave the Euler interface); built on [`crate::math`]'s
+//! `libm` trigonometry, so bit-identical on every platform.
 
 use crate::math::{asin, atan2, sin_cos, Mat3, Vec3};
 
@@ -38,50 +34,22 @@ pub fn euler_from_rotation(r: &Mat3) -> Vec3 {
 /// Body rates `Ω = W(φ, θ) η̇` (rad/s) from Z-Y-X Euler rates `η̇` at
 /// `euler`: `p = φ̇ − ψ̇ sθ`, `q = θ̇ cφ + ψ̇ cθ sφ`, `r = −θ̇ sφ + ψ̇ cθ cφ`.
 /// Exact, defined everywhere.
-pub fn body_rates_from_euler_rates(euler: &Vec3, rates: &Vec3) -> Vec3 {
-    body_rates_from_euler_rates_in::<Libm>(euler, rates)
-}
-
-/// [`body_rates_from_euler_rates`] with the sines and cosines of `T`.
 #[inline]
-pub fn body_rates_from_euler_rates_in<T: Trig>(euler: &Vec3, rates: &Vec3) -> Vec3 {
-    let (sf, cf) = T::sin_cos(euler[0]);
-    let (st, ct) = T::sin_cos(euler[1]);
+pub fn body_rates_from_euler_rates(euler: &Vec3, rates: &Vec3) -> Vec3 {
+    let (sf, cf) = sin_cos(euler[0]);
+    let (st, ct) = sin_cos(euler[1]);
     let [df, dt, ds] = *rates;
     [df - ds * st, dt * cf + ds * ct * sf, -dt * sf + ds * ct * cf]
-}
-
-/// Where the formulas of this module take `(sin x, cos x)` from.
-pub trait Trig {
-    /// `(sin x, cos x)` of `x` (rad).
-    fn sin_cos(x: f64) -> (f64, f64);
-}
-
-/// The pure-Rust `libm` kernels ([`crate::math::sin_cos`]): the core's
-/// trigonometry, bit-identical on every platform.
-#[derive(Clone, Copy, Debug, Default)]
-pub struct Libm;
-
-impl Trig for Libm {
-    #[inline]
-    fn sin_cos(x: f64) -> (f64, f64) {
-        sin_cos(x)
-    }
 }
 
 /// Unit quaternion `[w, x, y, z]` of Z-Y-X Euler angles `[φ, θ, ψ]` (rad):
 /// `q = q_z(ψ) ⊗ q_y(θ) ⊗ q_x(φ)`, so that
 /// [`rotation_from_quaternion`]`(q)` = [`rotation_from_euler`]`(euler)`.
-pub fn quaternion_from_euler(euler: &Vec3) -> [f64; 4] {
-    quaternion_from_euler_in::<Libm>(euler)
-}
-
-/// [`quaternion_from_euler`] with the sines and cosines of `T`.
 #[inline]
-pub fn quaternion_from_euler_in<T: Trig>(euler: &Vec3) -> [f64; 4] {
-    let (sr, cr) = T::sin_cos(0.5 * euler[0]);
-    let (sp, cp) = T::sin_cos(0.5 * euler[1]);
-    let (sy, cy) = T::sin_cos(0.5 * euler[2]);
+pub fn quaternion_from_euler(euler: &Vec3) -> [f64; 4] {
+    let (sr, cr) = sin_cos(0.5 * euler[0]);
+    let (sp, cp) = sin_cos(0.5 * euler[1]);
+    let (sy, cy) = sin_cos(0.5 * euler[2]);
     [cr * cp * cy + sr * sp * sy, sr * cp * cy - cr * sp * sy, cr * sp * cy + sr * cp * sy, cr * cp * sy - sr * sp * cy]
 }
 
@@ -119,15 +87,10 @@ pub const GIMBAL_LOCK_COS: f64 = 1e-6;
 /// `euler`: `φ̇ = p + (q sφ + r cφ) tθ`, `θ̇ = q cφ − r sφ`,
 /// `ψ̇ = (q sφ + r cφ)/cθ`, with `cos θ` clamped to `±`[`GIMBAL_LOCK_COS`]
 /// (the sign of cos θ; positive at 0) near the singularity.
-pub fn euler_rates_from_body_rates(euler: &Vec3, body_rates: &Vec3) -> Vec3 {
-    euler_rates_from_body_rates_in::<Libm>(euler, body_rates)
-}
-
-/// [`euler_rates_from_body_rates`] with the sines and cosines of `T`.
 #[inline]
-pub fn euler_rates_from_body_rates_in<T: Trig>(euler: &Vec3, body_rates: &Vec3) -> Vec3 {
-    let (sf, cf) = T::sin_cos(euler[0]);
-    let (st, c) = T::sin_cos(euler[1]);
+pub fn euler_rates_from_body_rates(euler: &Vec3, body_rates: &Vec3) -> Vec3 {
+    let (sf, cf) = sin_cos(euler[0]);
+    let (st, c) = sin_cos(euler[1]);
     let c = if c.abs() >= GIMBAL_LOCK_COS {
         c
     } else if c < 0.0 {
@@ -167,7 +130,7 @@ mod tests {
                     prop_assert!((rq[i][j] - re[i][j]).abs() < 1e-14);
                 }
             }
-            let tol = 1e-12 / theta.cos();
+            let tol = 1e-12 / crate::math::cos(theta);
             let from_q = euler_from_quaternion(&q);
             let from_r = euler_from_rotation(&re);
             let minus_q = euler_from_quaternion(&q.map(|v| -v));
@@ -180,7 +143,7 @@ mod tests {
             let body = body_rates_from_euler_rates(&e, &rates);
             let back = euler_rates_from_body_rates(&e, &body);
             for i in 0..3 {
-                prop_assert!((back[i] - rates[i]).abs() < 1e-9 * (1.0 + rates[i].abs()) / theta.cos());
+                prop_assert!((back[i] - rates[i]).abs() < 1e-9 * (1.0 + rates[i].abs()) / crate::math::cos(theta));
             }
         }
     }

@@ -15,8 +15,9 @@
 //! - [`pid`]: the PX4 multicopter cascade (P/PID position, quaternion P attitude, PID rates).
 //! - [`se3`]: Lee, Leok & McClamroch 2010 geometric control on SE(3).
 //!
-//! Built without the default `std` feature, every transcendental function
-//! goes through the pure-Rust `libm` crate.
+//! Every transcendental function, with or without the default `std`
+//! feature, is the pure-Rust `libm` crate's ([`math`]): the same bits on
+//! every CPU. `std` only links the standard library for the simulator.
 #![cfg_attr(not(feature = "std"), no_std)]
 #![warn(missing_docs)]
 

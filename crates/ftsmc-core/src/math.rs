@@ -1,7 +1,20 @@
-//! Scalar maths used by the control laws, dispatched to `std` (platform libm)
-//! or to the pure-Rust [`libm`] crate when built without the `std` feature.
+//! Scalar maths of the whole toolkit: the control laws, the simulator, the
+//! tuner and Python all take their transcendental functions from here.
 //!
-//! Trigonometric functions always use the pure-Rust `libm` (see [`sin_cos`]).
+//! # One maths library
+//!
+//! Every function below is the pure-Rust [`libm`] crate (a port of musl's
+//! libm), with or without `std`. The platform's libm is never called:
+//! glibc picks an FMA or a non-FMA build of `sin`, `atan2`, `exp`, `pow` …
+//! by the CPU at run time, and the two differ in the last bit for some
+//! arguments, so the same seed gave different numbers on different
+//! machines (measured: the runs.csv of `ftsmc montecarlo` of the paper's
+//! scenarios and of realistic-scenario-2 differ from their second row on
+//! when glibc is told to ignore AVX2 and FMA with
+//! `GLIBC_TUNABLES=glibc.cpu.hwcaps=-AVX2,-FMA`). `libm` is plain Rust
+//! arithmetic, and Rust never fuses a multiply and an add on its own, so
+//! its results are the same bits on every CPU and every feature level.
+//! `clippy.toml` forbids the `f64` methods these functions replace.
 //!
 //! Powers with small integer exponents (2, 3, 4 appear in the paper's gains)
 //! take the exact multiplication path; this is both faster and bit-for-bit
@@ -77,57 +90,52 @@ pub fn pow_abs_minus_one(x: f64, a: f64) -> f64 {
     }
 }
 
-macro_rules! dispatch {
-    ($(#[$m:meta])* $name:ident ( $($arg:ident),* ) => $std:ident, $libm:ident) => {
+/// Define a scalar function of the one maths library: the pure-Rust
+/// [`libm`] crate, with or without `std`.
+macro_rules! one_libm {
+    ($(#[$m:meta])* $name:ident ( $($arg:ident),* ) => $libm:ident) => {
         $(#[$m])*
         #[inline]
         pub fn $name($($arg: f64),*) -> f64 {
-            #[cfg(feature = "std")]
-            { dispatch!(@std $std, $($arg),*) }
-            #[cfg(not(feature = "std"))]
-            { libm::$libm($($arg),*) }
+            libm::$libm($($arg),*)
         }
     };
-    (@std $std:ident, $first:ident) => { $first.$std() };
-    (@std $std:ident, $first:ident, $second:ident) => { $first.$std($second) };
 }
 
-dispatch!(/// `x^y` (real power).
-    powf(x, y) => powf, pow);
-dispatch!(/// Square root.
-    sqrt(x) => sqrt, sqrt);
-dispatch!(/// Cube root.
-    cbrt(x) => cbrt, cbrt);
-dispatch!(/// Natural exponential.
-    exp(x) => exp, exp);
-/// Sine (rad), through the pure-Rust `libm` crate (faster than glibc's and
-/// bit-identical on every platform).
-#[inline]
-pub fn sin(x: f64) -> f64 {
-    libm::sin(x)
-}
+one_libm!(/// `x^y` (real power).
+    powf(x, y) => pow);
+one_libm!(/// Square root (correctly rounded, as IEEE 754 requires).
+    sqrt(x) => sqrt);
+one_libm!(/// Cube root.
+    cbrt(x) => cbrt);
+one_libm!(/// Natural exponential `eˣ`.
+    exp(x) => exp);
+one_libm!(/// `eˣ − 1`, accurate for small `x`.
+    exp_m1(x) => expm1);
+one_libm!(/// Sine (rad).
+    sin(x) => sin);
+one_libm!(/// Cosine (rad).
+    cos(x) => cos);
+one_libm!(/// Arcsine (rad), in `[−π/2, π/2]`.
+    asin(x) => asin);
+one_libm!(/// Arccosine (rad), in `[0, π]`.
+    acos(x) => acos);
+one_libm!(/// Arctangent (rad), in `(−π/2, π/2)`.
+    atan(x) => atan);
+one_libm!(/// Four-quadrant arctangent of `y / x` (rad), in `[−π, π]`.
+    atan2(y, x) => atan2);
+one_libm!(/// Hyperbolic tangent.
+    tanh(x) => tanh);
+one_libm!(/// Natural logarithm.
+    ln(x) => log);
+one_libm!(/// Base-2 logarithm.
+    log2(x) => log2);
+one_libm!(/// Base-10 logarithm.
+    log10(x) => log10);
+one_libm!(/// `√(x² + y²)` without undue overflow.
+    hypot(x, y) => hypot);
 
-/// Cosine (rad), through the pure-Rust `libm` crate.
-#[inline]
-pub fn cos(x: f64) -> f64 {
-    libm::cos(x)
-}
-dispatch!(/// Arcsine (rad).
-    asin(x) => asin, asin);
-dispatch!(/// Hyperbolic tangent.
-    tanh(x) => tanh, tanh);
-dispatch!(/// Natural logarithm.
-    ln(x) => ln, log);
-
-dispatch!(/// Arccosine (rad).
-    acos(x) => acos, acos);
-dispatch!(/// Four-quadrant arctangent of `y / x` (rad), in `[−π, π]`.
-    atan2(y, x) => atan2, atan2);
-
-/// `(sin x, cos x)` in one call, through the pure-Rust `libm` crate: about
-/// 35 % faster than glibc's `sincos` (which saves and restores the rounding
-/// mode on every call) and bit-identical on every platform. Powers and
-/// exponentials stay on the platform libm, where glibc is faster.
+/// `(sin x, cos x)` in one call (rad).
 #[inline]
 pub fn sin_cos(x: f64) -> (f64, f64) {
     libm::sincos(x)

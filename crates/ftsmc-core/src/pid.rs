@@ -819,7 +819,7 @@ mod tests {
         let state = QuadState { velocity: [-20.0, 15.0, 0.0], ..QuadState::default() };
         c.update(&state, &reference, 1e-3);
         let [phi, theta, _] = c.telemetry().attitude_reference;
-        let tilt = (phi.cos() * theta.cos()).acos();
+        let tilt = crate::math::acos(crate::math::cos(phi) * crate::math::cos(theta));
         assert!(tilt <= PidGains::default().max_tilt + 1e-12, "{tilt}");
         assert!(tilt > PidGains::default().max_tilt - 1e-9, "{tilt}");
         assert!(c.telemetry().commanded_acceleration[0].abs() > 20.0);

@@ -36,7 +36,7 @@ const CASCADE_CASES: u32 = 1000;
 
 /// `10^x` for `x` uniform in `[lo, hi]`: a log-uniform positive number.
 fn log_uniform(lo: f64, hi: f64) -> impl Strategy<Value = f64> {
-    (lo..=hi).prop_map(|x| 10f64.powf(x))
+    (lo..=hi).prop_map(|x| ftsmc_core::math::powf(10f64, x))
 }
 
 /// A finite input: exact 0, or ±10^x with x uniform in [-300, 300].
@@ -50,7 +50,7 @@ fn finite_input() -> impl Strategy<Value = f64> {
 
 /// A legal control period: 0, or log-uniform in [1e-300, DT_MAX].
 fn legal_dt() -> impl Strategy<Value = f64> {
-    prop_oneof![1 => Just(0.0), 6 => log_uniform(-300.0, DT_MAX.log10()), 3 => log_uniform(-5.0, -1.0)]
+    prop_oneof![1 => Just(0.0), 6 => log_uniform(-300.0, ftsmc_core::math::log10(DT_MAX)), 3 => log_uniform(-5.0, -1.0)]
 }
 
 fn non_finite() -> impl Strategy<Value = f64> {

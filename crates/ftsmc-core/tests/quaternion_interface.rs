@@ -15,10 +15,10 @@ use ftsmc_core::{PidController, PidGains, Se3Controller, Se3Gains};
 
 fn state(t: f64) -> QuadState {
     QuadState {
-        position: [0.3 * (1.3 * t).sin(), -0.2 * (0.7 * t).cos(), 1.0 + 0.1 * t],
-        velocity: [0.4 * (1.3 * t).cos(), 0.1 * (0.7 * t).sin(), 0.1],
-        attitude: [0.9 * (2.0 * t).sin(), -0.7 * (1.5 * t).cos(), -3.0 + 1.7 * t],
-        angular_rate: [1.8 * (2.0 * t).cos(), 1.05 * (1.5 * t).sin(), 1.7],
+        position: [0.3 * ftsmc_core::math::sin(1.3 * t), -0.2 * ftsmc_core::math::cos(0.7 * t), 1.0 + 0.1 * t],
+        velocity: [0.4 * ftsmc_core::math::cos(1.3 * t), 0.1 * ftsmc_core::math::sin(0.7 * t), 0.1],
+        attitude: [0.9 * ftsmc_core::math::sin(2.0 * t), -0.7 * ftsmc_core::math::cos(1.5 * t), -3.0 + 1.7 * t],
+        angular_rate: [1.8 * ftsmc_core::math::cos(2.0 * t), 1.05 * ftsmc_core::math::sin(1.5 * t), 1.7],
     }
 }
 

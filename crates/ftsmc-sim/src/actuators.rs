@@ -265,7 +265,7 @@ impl Motors {
             if tau == 0.0 {
                 target
             } else {
-                target + (now - target) * (-dt / tau).exp()
+                target + (now - target) * ftsmc_core::math::exp(-dt / tau)
             }
         })
     }
@@ -279,7 +279,7 @@ impl Motors {
     /// seconds (1 for τ = 0, where they are not used): computed once for a
     /// step size that does not change, then [`Motors::speeds_decayed`].
     pub fn decay(&self, dt: f64) -> [f64; 2] {
-        let f = |tau: f64| if tau == 0.0 { 1.0 } else { (-dt / tau).exp() };
+        let f = |tau: f64| if tau == 0.0 { 1.0 } else { ftsmc_core::math::exp(-dt / tau) };
         [f(self.params.time_constant_up), f(self.params.time_constant_down)]
     }
 

@@ -31,7 +31,7 @@ fn motor_step_response_matches_the_first_order_curve() {
         for k in 1..=n {
             motors.advance(&[600.0; 4], h);
             let t = k as f64 * h;
-            let exact = 600.0 + (200.0 - 600.0) * (-t / p.time_constant_up).exp();
+            let exact = 600.0 + (200.0 - 600.0) * ftsmc_core::math::exp(-t / p.time_constant_up);
             for w in motors.speeds() {
                 assert!((w - exact).abs() <= 1e-12 * exact, "h {h}, t {t}: {w} vs {exact}");
             }
@@ -40,7 +40,7 @@ fn motor_step_response_matches_the_first_order_curve() {
         for k in 1..=n {
             motors.advance(&[100.0; 4], h);
             let t = k as f64 * h;
-            let exact = 100.0 + (start - 100.0) * (-t / p.time_constant_down).exp();
+            let exact = 100.0 + (start - 100.0) * ftsmc_core::math::exp(-t / p.time_constant_down);
             for w in motors.speeds() {
                 assert!((w - exact).abs() <= 1e-12 * start, "h {h}, t {t}: {w} vs {exact}");
             }
@@ -49,8 +49,8 @@ fn motor_step_response_matches_the_first_order_curve() {
     // Mixed directions in one step, and the closed form inside a step.
     let motors = Motors::new(&p, [300.0, 300.0, 300.0, 300.0]);
     let after = motors.speeds_after(&[400.0, 200.0, 300.0, 800.0], 0.01);
-    let up = |to: f64| to + (300.0 - to) * (-0.01f64 / 0.05).exp();
-    let down = |to: f64| to + (300.0 - to) * (-0.01f64 / 0.02).exp();
+    let up = |to: f64| to + (300.0 - to) * ftsmc_core::math::exp(-0.01f64 / 0.05);
+    let down = |to: f64| to + (300.0 - to) * ftsmc_core::math::exp(-0.01f64 / 0.02);
     let expected = [up(400.0), down(200.0), 300.0, up(800.0)];
     for i in 0..4 {
         assert!((after[i] - expected[i]).abs() < 1e-12 * expected[i], "{after:?} vs {expected:?}");

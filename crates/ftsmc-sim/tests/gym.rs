@@ -27,7 +27,7 @@ fn hover(action: ActionMode, max_time: f64) -> GymSpec {
 /// the Python example, in Rust.
 fn pd(obs: &[f32], max_thrust: f64, mass: f64) -> [f64; ACTION_LEN] {
     let o: Vec<f64> = obs.iter().map(|&v| v as f64).collect();
-    let (phi, theta) = (o[13].atan2(o[14]), -o[12].asin());
+    let (phi, theta) = (ftsmc_core::math::atan2(o[13], o[14]), -ftsmc_core::math::asin(o[12]));
     let g = 9.81;
     let ax = -2.0 * o[0] - 2.5 * o[3];
     let ay = -2.0 * o[1] - 2.5 * o[4];
@@ -36,7 +36,7 @@ fn pd(obs: &[f32], max_thrust: f64, mass: f64) -> [f64; ACTION_LEN] {
     let (theta_d, phi_d) = (ax / g, -ay / g);
     let p = 8.0 * (phi_d - phi) / 7.0;
     let q = 8.0 * (theta_d - theta) / 7.0;
-    let r = -2.0 * o[7].atan2(o[6]) / 3.0;
+    let r = -2.0 * ftsmc_core::math::atan2(o[7], o[6]) / 3.0;
     [2.0 * thrust / max_thrust - 1.0, p, q, r]
 }
 

@@ -148,7 +148,9 @@ fn se3_recovers_from_a_170_degree_attitude_error_on_the_rigid_body() {
     let t = run.recording.column("t");
     let phi = run.recording.column("phi");
     let theta = run.recording.column("theta");
-    let upright = t.iter().zip(phi.iter().zip(theta)).find(|(_, (p, q))| p.cos() * q.cos() > 10f64.to_radians().cos());
+    let upright = t.iter().zip(phi.iter().zip(theta)).find(|(_, (p, q))| {
+        ftsmc_core::math::cos(**p) * ftsmc_core::math::cos(**q) > ftsmc_core::math::cos(10f64.to_radians())
+    });
     let lowest = run.recording.column("z").iter().copied().fold(f64::INFINITY, f64::min);
     let tilt_end = max_error_after(&run, "phi", 0.0, 8.0).max(max_error_after(&run, "theta", 0.0, 8.0));
     let pos_end =

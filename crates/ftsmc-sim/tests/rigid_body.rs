@@ -331,9 +331,9 @@ fn euler_quaternion_and_rate_conversions_round_trip() {
     // Euler angles via the quaternion give the paper's thrust direction.
     let euler = [0.3, -0.2, 1.0];
     let r = ftsmc_sim::vehicle::rigid_body::rotation_matrix(&euler_to_quaternion(&euler));
-    let (sf, cf) = euler[0].sin_cos();
-    let (st, ct) = euler[1].sin_cos();
-    let (sp, cp) = euler[2].sin_cos();
+    let (sf, cf) = ftsmc_core::math::sin_cos(euler[0]);
+    let (st, ct) = ftsmc_core::math::sin_cos(euler[1]);
+    let (sp, cp) = ftsmc_core::math::sin_cos(euler[2]);
     let z_b = [cf * st * cp + sf * sp, cf * st * sp - sf * cp, cf * ct];
     for k in 0..3 {
         assert!((r[k][2] - z_b[k]).abs() < 1e-15);

@@ -67,15 +67,16 @@ fn plant_sees_payload_inertia_and_disturbances_at_documented_times() {
     let m = s.plant.mass;
     assert_eq!(env.params(9.9).mass, m);
     assert!((env.params(25.0).mass - (m + 0.37)).abs() < 1e-12);
-    assert!((env.params(43.0).mass - (m + 0.37 * (-1.0f64).exp())).abs() < 1e-12);
+    assert!((env.params(43.0).mass - (m + 0.37 * ftsmc_core::math::exp(-1.0f64))).abs() < 1e-12);
     let t = 10.3;
-    let scale =
-        1.0 + 0.15 * (2.0 * std::f64::consts::PI * 0.5 * t).sin() + 0.10 * (2.0 * std::f64::consts::PI * 2.0 * t).sin();
+    let scale = 1.0
+        + 0.15 * ftsmc_core::math::sin(2.0 * std::f64::consts::PI * 0.5 * t)
+        + 0.10 * ftsmc_core::math::sin(2.0 * std::f64::consts::PI * 2.0 * t);
     assert!((env.params(t).inertia[0] - s.plant.inertia[0] * scale).abs() < 1e-15);
     assert_eq!(env.params(45.0).inertia, s.plant.inertia);
     let d = env.disturbance(20.0);
-    assert!((d[0] - (0.5 * 8.0f64.sin() + 0.3 * 26.0f64.sin())).abs() < 1e-12);
-    assert!((d[2] - (0.5 * 14.0f64.cos() + 0.7 * 6.0f64.sin())).abs() < 1e-12);
+    assert!((d[0] - (0.5 * ftsmc_core::math::sin(8.0f64) + 0.3 * ftsmc_core::math::sin(26.0f64))).abs() < 1e-12);
+    assert!((d[2] - (0.5 * ftsmc_core::math::cos(14.0f64) + 0.7 * ftsmc_core::math::sin(6.0f64))).abs() < 1e-12);
     assert_eq!(env.disturbance(5.0), [0.0; 6]);
 }
 

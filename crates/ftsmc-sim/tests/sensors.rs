@@ -181,7 +181,7 @@ fn the_perfect_default_returns_the_truth_bit_exactly() {
         let v = f64::from(n) * 0.123_456_789 - 50.0;
         let truth = QuadState {
             position: [v, -0.0, 1e-300],
-            attitude: [v.sin(), -v.cos(), 0.0],
+            attitude: [ftsmc_core::math::sin(v), -ftsmc_core::math::cos(v), 0.0],
             velocity: [-v, f64::MIN_POSITIVE, 3.0],
             angular_rate: [v * 1e-7, -0.0, -v],
         };

@@ -15,9 +15,9 @@ fn truth(n: u32) -> QuadState {
     let t = f64::from(n) * 1e-3;
     QuadState {
         position: [t, -t, 1.0],
-        attitude: [0.3 * (5.0 * t).sin(), -0.2 * (3.0 * t).cos(), 1.0 + t],
+        attitude: [0.3 * ftsmc_core::math::sin(5.0 * t), -0.2 * ftsmc_core::math::cos(3.0 * t), 1.0 + t],
         velocity: [1.0, 0.5, 0.0],
-        angular_rate: [1.5 * (5.0 * t).cos(), 0.6 * (3.0 * t).sin(), 1.0],
+        angular_rate: [1.5 * ftsmc_core::math::cos(5.0 * t), 0.6 * ftsmc_core::math::sin(3.0 * t), 1.0],
     }
 }
 

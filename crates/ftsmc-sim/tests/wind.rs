@@ -48,7 +48,7 @@ fn one_minus_cosine_gust_shape() {
     // Matches the formula everywhere inside.
     for k in 0..=400 {
         let t = 2.0 + 4.0 * k as f64 / 400.0;
-        let want = 0.5 * (1.0 - (2.0 * PI * (t - 2.0) / 4.0).cos());
+        let want = 0.5 * (1.0 - ftsmc_core::math::cos(2.0 * PI * (t - 2.0) / 4.0));
         assert!((g.velocity(t)[1] - (-2.0) * want).abs() < 1e-12);
     }
 }
@@ -124,7 +124,7 @@ fn fft(re: &mut [f64], im: &mut [f64]) {
     let mut len = 2;
     while len <= n {
         let ang = -2.0 * PI / len as f64;
-        let (wr, wi) = (ang.cos(), ang.sin());
+        let (wr, wi) = (ftsmc_core::math::cos(ang), ftsmc_core::math::sin(ang));
         for start in (0..n).step_by(len) {
             let (mut cr, mut ci) = (1.0, 0.0);
             for k in 0..len / 2 {
@@ -146,7 +146,7 @@ fn fft(re: &mut [f64], im: &mut [f64]) {
 
 /// Welch one-sided PSD per Hz, Hann windows, 50 % overlap; bins 0..nseg/2.
 fn welch(x: &[f64], nseg: usize, dt: f64) -> Vec<f64> {
-    let w: Vec<f64> = (0..nseg).map(|i| 0.5 - 0.5 * (2.0 * PI * i as f64 / nseg as f64).cos()).collect();
+    let w: Vec<f64> = (0..nseg).map(|i| 0.5 - 0.5 * ftsmc_core::math::cos(2.0 * PI * i as f64 / nseg as f64)).collect();
     let wss: f64 = w.iter().map(|v| v * v).sum();
     let mut acc = vec![0.0; nseg / 2 + 1];
     let mut count = 0;
@@ -205,8 +205,8 @@ fn psd_band_ratios(seed: u64, v: f64) -> [Vec<f64>; 3] {
         let bands = 10;
         let mut ratios = Vec::new();
         for b in 0..bands {
-            let e0 = f_lo * (f_hi / f_lo).powf(b as f64 / bands as f64);
-            let e1 = f_lo * (f_hi / f_lo).powf((b + 1) as f64 / bands as f64);
+            let e0 = f_lo * ftsmc_core::math::powf(f_hi / f_lo, b as f64 / bands as f64);
+            let e1 = f_lo * ftsmc_core::math::powf(f_hi / f_lo, (b + 1) as f64 / bands as f64);
             let (mut est, mut ana) = (0.0, 0.0);
             for (k, pk) in p.iter().enumerate() {
                 let f = k as f64 * df;

@@ -32,7 +32,7 @@ impl SweepSettings {
     /// `per_decade` log-spaced magnitudes from `10^lo` to `10^hi`.
     pub fn log_magnitudes(lo: i32, hi: i32, per_decade: usize) -> Vec<f64> {
         let n = ((hi - lo) as usize) * per_decade;
-        (0..=n).map(|k| 10f64.powf(lo as f64 + k as f64 / per_decade as f64)).collect()
+        (0..=n).map(|k| ftsmc_core::math::powf(10f64, lo as f64 + k as f64 / per_decade as f64)).collect()
     }
 }
 
@@ -264,7 +264,8 @@ fn continuous_channel<L: AxisLaw>(law: &mut L, e0: f64, settings: &SweepSettings
         let y1: Y = core::array::from_fn(|i| y[i] + h0 * f[i]);
         let (f1, _) = sys.rhs(&y1);
         let d2 = rms(&y, &y, &scale, |i| f1[i] - f[i]) / h0;
-        let h1 = if d1.max(d2) <= 1e-15 { (h0 * 1e-3).max(1e-6) } else { (0.01 / d1.max(d2)).powf(0.2) };
+        let h1 =
+            if d1.max(d2) <= 1e-15 { (h0 * 1e-3).max(1e-6) } else { ftsmc_core::math::powf(0.01 / d1.max(d2), 0.2) };
         (100.0 * h0).min(h1).min(settings.dt)
     };
     let mut t = 0.0;
@@ -337,13 +338,13 @@ fn continuous_channel<L: AxisLaw>(law: &mut L, e0: f64, settings: &SweepSettings
             f = f_new;
             // PI step-size controller (Gustafsson): exponents 0.7/5 and 0.4/5.
             let err = err.max(1e-10);
-            let mut fac = 0.9 * err.powf(-0.14) * err_prev.powf(0.08);
+            let mut fac = 0.9 * ftsmc_core::math::powf(err, -0.14) * ftsmc_core::math::powf(err_prev, 0.08);
             fac = fac.clamp(0.2, if rejected_last { 1.0 } else { 5.0 });
             err_prev = err;
             rejected_last = false;
             h = (h * fac).min(settings.dt);
         } else {
-            let fac = if err.is_finite() { (0.9 * err.powf(-0.2)).clamp(0.1, 0.9) } else { 0.1 };
+            let fac = if err.is_finite() { (0.9 * ftsmc_core::math::powf(err, -0.2)).clamp(0.1, 0.9) } else { 0.1 };
             h *= fac;
             rejected_last = true;
         }
@@ -593,7 +594,7 @@ mod tests {
         let band = settings.reaching_band;
         for &e0 in &[1e-3f64, 0.05, -1.0, 100.0] {
             for &(c, k) in &[(1.0, 2.0), (3.0, 50.0), (0.5, 0.3)] {
-                let exact = (c * e0.abs() / band).ln() / k;
+                let exact = ftsmc_core::math::ln(c * e0.abs() / band) / k;
                 let mut law = Linear { c, k, s: 0.0 };
                 let r = decoupled_channel(&mut law, e0, &settings, Sampling::Continuous);
                 if exact <= 0.0 {
@@ -604,7 +605,7 @@ mod tests {
                 assert!((t / exact - 1.0).abs() < 1e-6, "linear e0 {e0} c {c} k {k}: {t} vs {exact}");
             }
             for &(c, a, z0) in &[(1.0, 5.0, 0.5), (2.0, 1e4, 1.0), (0.5, 0.1, 3.0)] {
-                let l = (c * e0.abs() / band).ln();
+                let l = ftsmc_core::math::ln(c * e0.abs() / band);
                 if l <= 0.0 {
                     continue;
                 }

@@ -21,7 +21,12 @@ use crate::scenario::Scenario;
 
 /// Scale a base gain set by the time-scale factor `a`.
 pub fn time_scaled(base: &TsmStaGains, a: f64) -> TsmStaGains {
-    TsmStaGains { lambda: base.lambda * a.powf(base.p / base.q), k1: base.k1 * a * a, k2: base.k2 * a * a * a, ..*base }
+    TsmStaGains {
+        lambda: base.lambda * ftsmc_core::math::powf(a, base.p / base.q),
+        k1: base.k1 * a * a,
+        k2: base.k2 * a * a * a,
+        ..*base
+    }
 }
 
 /// Result of the procedure.
@@ -51,16 +56,16 @@ fn settling(scenario: &Scenario, name: &str) -> Result<[f64; 2], String> {
 
 fn bisect(mut f: impl FnMut(f64) -> Result<f64, String>, target: f64) -> Result<f64, String> {
     // Settling time decreases with a: find a with f(a) = target on a log grid.
-    let (mut lo, mut hi) = ((0.02f64).ln(), (50.0f64).ln());
+    let (mut lo, mut hi) = (ftsmc_core::math::ln(0.02f64), ftsmc_core::math::ln(50.0f64));
     for _ in 0..40 {
         let mid = 0.5 * (lo + hi);
-        if f(mid.exp())? > target {
+        if f(ftsmc_core::math::exp(mid))? > target {
             lo = mid;
         } else {
             hi = mid;
         }
     }
-    Ok((0.5 * (lo + hi)).exp())
+    Ok(ftsmc_core::math::exp(0.5 * (lo + hi)))
 }
 
 /// Run the procedure on `scenario` (normally paper scenario 1), starting

@@ -54,12 +54,12 @@ impl Declaration for Ranftsmc {
 pub fn time_scaled(g: &RanftsmcGains, a: f64) -> RanftsmcGains {
     let a2 = a * a;
     RanftsmcGains {
-        b2: g.b2 * a.powf(-g.beta),
+        b2: g.b2 * ftsmc_core::math::powf(a, -g.beta),
         c: g.c * a2,
         h: g.h * a2,
-        mu0: g.mu0 * a.powf(4.0 - g.beta),
-        mu1: g.mu1 * a.powf(4.0 - g.beta),
-        mu2: g.mu2 * a.powf(2.0 - g.beta),
+        mu0: g.mu0 * ftsmc_core::math::powf(a, 4.0 - g.beta),
+        mu1: g.mu1 * ftsmc_core::math::powf(a, 4.0 - g.beta),
+        mu2: g.mu2 * ftsmc_core::math::powf(a, 2.0 - g.beta),
         a0_hat0: g.a0_hat0 * a2,
         a1_hat0: g.a1_hat0 * a2,
         a2_hat0: g.a2_hat0 * a,

@@ -49,7 +49,12 @@ impl Declaration for TsmSta {
 /// super-twisting term `k1 |s|^½ sign(s)` needs k1 ×a², and `ν̇ = −k2 sign(s)`
 /// with ν ×a² needs k2 ×a³. p, q and the boundary layer are unchanged.
 pub fn time_scaled(g: &TsmStaGains, a: f64) -> TsmStaGains {
-    TsmStaGains { lambda: g.lambda * a.powf(g.p / g.q), k1: g.k1 * a * a, k2: g.k2 * a * a * a, ..*g }
+    TsmStaGains {
+        lambda: g.lambda * ftsmc_core::math::powf(a, g.p / g.q),
+        k1: g.k1 * a * a,
+        k2: g.k2 * a * a * a,
+        ..*g
+    }
 }
 
 /// What `ftsmc tune` searches for `tsm-sta`: an exact time scale per loop

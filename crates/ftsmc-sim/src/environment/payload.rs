@@ -26,7 +26,7 @@ impl Payload {
             return 0.0;
         }
         match (self.decay_start, self.tau) {
-            (Some(t2), Some(tau)) if t >= t2 => self.mass * (-(t - t2) / tau).exp(),
+            (Some(t2), Some(tau)) if t >= t2 => self.mass * ftsmc_core::math::exp(-(t - t2) / tau),
             _ => self.mass,
         }
     }

@@ -161,8 +161,8 @@ impl TurbulenceParams {
         let h_ft = self.altitude / FOOT;
         let k = 0.177 + 0.000823 * h_ft;
         let sigma_w = 0.1 * self.intensity.w20();
-        let sigma_uv = sigma_w / k.powf(0.4);
-        let l_uv = h_ft / k.powf(1.2) * FOOT;
+        let sigma_uv = sigma_w / ftsmc_core::math::powf(k, 0.4);
+        let l_uv = h_ft / ftsmc_core::math::powf(k, 1.2) * FOOT;
         DrydenScales { sigma: [sigma_uv, sigma_uv, sigma_w], length: [l_uv, l_uv, self.altitude] }
     }
 }
@@ -184,7 +184,8 @@ impl DrydenScales {
     /// has its energy at higher frequencies (gusts); carried at a 1 m/s
     /// floor it is a slowly wandering wind.
     pub fn u_variance_share_below(&self, frequency: f64, airspeed: f64) -> f64 {
-        core::f64::consts::FRAC_2_PI * (core::f64::consts::TAU * frequency * self.length[0] / airspeed).atan()
+        core::f64::consts::FRAC_2_PI
+            * ftsmc_core::math::atan(core::f64::consts::TAU * frequency * self.length[0] / airspeed)
     }
 }
 
@@ -243,7 +244,7 @@ impl Gust {
         if t < self.start || t > self.start + self.duration {
             return [0.0; 3];
         }
-        let s = 0.5 * (1.0 - (2.0 * core::f64::consts::PI * (t - self.start) / self.duration).cos());
+        let s = 0.5 * (1.0 - ftsmc_core::math::cos(2.0 * core::f64::consts::PI * (t - self.start) / self.duration));
         self.amplitude.map(|a| a * s)
     }
 }
@@ -291,7 +292,7 @@ pub fn mean_wind_at(w20: f64, altitude: f64) -> f64 {
     if altitude <= ROUGHNESS_LENGTH {
         return 0.0;
     }
-    w20 * (altitude / ROUGHNESS_LENGTH).ln() / (20.0 * FOOT / ROUGHNESS_LENGTH).ln()
+    w20 * ftsmc_core::math::ln(altitude / ROUGHNESS_LENGTH) / ftsmc_core::math::ln(20.0 * FOOT / ROUGHNESS_LENGTH)
 }
 
 fn is_zero(v: &f64) -> bool {
@@ -428,7 +429,7 @@ impl WindParams {
             (None, None) => None,
         };
         if let Some(v) = speed {
-            let (s, c) = self.direction.to_radians().sin_cos();
+            let (s, c) = ftsmc_core::math::sin_cos(self.direction.to_radians());
             out.mean = [v * c, v * s, 0.0];
         }
         if let Some(p) = self.preset {
@@ -471,7 +472,7 @@ fn j_integrals(x: f64) -> [f64; 3] {
         }
         out
     } else {
-        let e = (-x).exp();
+        let e = ftsmc_core::math::exp(-x);
         [(1.0 - e) / x, (1.0 - e * (1.0 + x)) / (x * x), (2.0 - e * (2.0 + 2.0 * x + x * x)) / (x * x * x)]
     }
 }
@@ -488,12 +489,12 @@ enum AxisFilter {
 impl AxisFilter {
     fn first(sigma: f64, a: f64, dt: f64) -> Self {
         let y = a * dt;
-        AxisFilter::First { phi: (-y).exp(), gain: sigma * (-(-2.0 * y).exp_m1()).sqrt() }
+        AxisFilter::First { phi: ftsmc_core::math::exp(-y), gain: sigma * (-ftsmc_core::math::exp_m1(-2.0 * y)).sqrt() }
     }
 
     fn second(sigma: f64, a: f64, dt: f64) -> Self {
         let y = a * dt;
-        let e = (-y).exp();
+        let e = ftsmc_core::math::exp(-y);
         let phi = [[e * (1.0 + y), e * y], [-e * y, e * (1.0 - y)]];
         let [j0, j1, j2] = j_integrals(2.0 * y);
         let s2 = sigma * sigma;
@@ -637,7 +638,7 @@ impl Wind {
             return Err(GainError { field: "dt", value: dt, expected: "0 < dt <= 10 s" });
         }
         let [mx, my, mz] = params.mean;
-        let horizontal = mx.hypot(my);
+        let horizontal = ftsmc_core::math::hypot(mx, my);
         let e_u = if horizontal > 1e-9 { [mx / horizontal, my / horizontal, 0.0] } else { [1.0, 0.0, 0.0] };
         let axes = [e_u, [-e_u[1], e_u[0], 0.0], [0.0, 0.0, 1.0]];
         let speed = (horizontal * horizontal + mz * mz).sqrt();

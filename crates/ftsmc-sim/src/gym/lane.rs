@@ -101,9 +101,9 @@ pub fn observation(state: &QuadState, reference: &Reference) -> [f64; OBSERVATIO
         o[3 + i] = state.velocity[i] - reference.velocity[i];
     }
     let [phi, theta, psi] = state.attitude;
-    let (sf, cf) = phi.sin_cos();
-    let (st, ct) = theta.sin_cos();
-    let (sp, cp) = psi.sin_cos();
+    let (sf, cf) = ftsmc_core::math::sin_cos(phi);
+    let (st, ct) = ftsmc_core::math::sin_cos(theta);
+    let (sp, cp) = ftsmc_core::math::sin_cos(psi);
     let r = [
         [cp * ct, cp * st * sf - sp * cf, cp * st * cf + sp * sf],
         [sp * ct, sp * st * sf + cp * cf, sp * st * cf - cp * sf],

@@ -75,7 +75,7 @@ impl Dist {
                 clamp(v, low, high)
             }
             Dist::LogNormal { mu, sigma, low, high } => {
-                let v = LogNormal::new(mu, sigma).map(|d| d.sample(rng)).unwrap_or(mu.exp());
+                let v = LogNormal::new(mu, sigma).map(|d| d.sample(rng)).unwrap_or(ftsmc_core::math::exp(mu));
                 clamp(v, low, high)
             }
         }
@@ -156,9 +156,10 @@ impl Dist {
             Dist::Normal { mean, std, low, high } => {
                 (clamp(mean - Z * std, low, high), clamp(mean + Z * std, low, high))
             }
-            Dist::LogNormal { mu, sigma, low, high } => {
-                (clamp((mu - Z * sigma).exp(), low, high), clamp((mu + Z * sigma).exp(), low, high))
-            }
+            Dist::LogNormal { mu, sigma, low, high } => (
+                clamp(ftsmc_core::math::exp(mu - Z * sigma), low, high),
+                clamp(ftsmc_core::math::exp(mu + Z * sigma), low, high),
+            ),
         }
     }
 }

@@ -255,7 +255,7 @@ impl Signal {
             .iter()
             .map(|term| match term {
                 Term::Polynomial { coefficients } => coefficients.len().max(1) as f64,
-                Term::Waypoints(w) => 1.0 + (w.len().max(1) as f64).log2(),
+                Term::Waypoints(w) => 1.0 + ftsmc_core::math::log2(w.len().max(1) as f64),
                 Term::Piecewise { pieces } => {
                     pieces.len() as f64 + pieces.iter().map(|p| p.signal.evaluation_cost()).sum::<f64>()
                 }
@@ -396,20 +396,20 @@ mod tests {
     fn terms_evaluate_to_their_formulas() {
         let sine = Term::Sine { amplitude: 0.5, omega: Some(0.4), frequency: None, phase: 0.0 };
         let s = sine.sample(2.0);
-        assert_relative_eq!(s.value, 0.5 * (0.8f64).sin(), epsilon = 1e-15);
-        assert_relative_eq!(s.rate, 0.5 * 0.4 * (0.8f64).cos(), epsilon = 1e-15);
-        assert_relative_eq!(s.acceleration, -0.5 * 0.16 * (0.8f64).sin(), epsilon = 1e-15);
+        assert_relative_eq!(s.value, 0.5 * ftsmc_core::math::sin(0.8f64), epsilon = 1e-15);
+        assert_relative_eq!(s.rate, 0.5 * 0.4 * ftsmc_core::math::cos(0.8f64), epsilon = 1e-15);
+        assert_relative_eq!(s.acceleration, -0.5 * 0.16 * ftsmc_core::math::sin(0.8f64), epsilon = 1e-15);
 
         let hz = Term::Sine { amplitude: 0.15, omega: None, frequency: Some(0.5), phase: 0.0 };
         assert_relative_eq!(
             hz.sample(0.3).value,
-            0.15 * (2.0 * std::f64::consts::PI * 0.5 * 0.3).sin(),
+            0.15 * ftsmc_core::math::sin(2.0 * std::f64::consts::PI * 0.5 * 0.3),
             epsilon = 1e-15
         );
 
         let cosine = Term::Cosine { amplitude: 1.0, omega: Some(0.5), frequency: None, phase: 0.0 };
-        assert_relative_eq!(cosine.sample(1.0).value, (0.5f64).cos(), epsilon = 1e-15);
-        assert_relative_eq!(cosine.sample(1.0).rate, -0.5 * (0.5f64).sin(), epsilon = 1e-15);
+        assert_relative_eq!(cosine.sample(1.0).value, ftsmc_core::math::cos(0.5f64), epsilon = 1e-15);
+        assert_relative_eq!(cosine.sample(1.0).rate, -0.5 * ftsmc_core::math::sin(0.5f64), epsilon = 1e-15);
 
         let poly = Term::Polynomial { coefficients: vec![1.0, 0.1, 0.3] };
         let p = poly.sample(2.0);
@@ -432,7 +432,7 @@ mod tests {
             window: Some([10.0, 40.0]),
         };
         assert_eq!(d.value(9.99), 0.0);
-        assert_relative_eq!(d.value(20.0), 0.2 + 0.3 * (26.0f64).sin(), epsilon = 1e-15);
+        assert_relative_eq!(d.value(20.0), 0.2 + 0.3 * ftsmc_core::math::sin(26.0f64), epsilon = 1e-15);
         assert_eq!(d.value(40.01), 0.0);
     }
 

@@ -34,14 +34,16 @@ pub struct Dim {
 
 impl Dim {
     fn to_unit(&self, v: f64) -> f64 {
-        let t = |x: f64| if self.log { x.ln() } else { x };
+        let t = |x: f64| if self.log { ftsmc_core::math::ln(x) } else { x };
         (t(v) - t(self.low)) / (t(self.high) - t(self.low))
     }
 
     fn value_at(&self, u: f64) -> f64 {
         let u = u.clamp(0.0, 1.0);
         if self.log {
-            (self.low.ln() + u * (self.high.ln() - self.low.ln())).exp()
+            ftsmc_core::math::exp(
+                ftsmc_core::math::ln(self.low) + u * (ftsmc_core::math::ln(self.high) - ftsmc_core::math::ln(self.low)),
+            )
         } else {
             self.low + u * (self.high - self.low)
         }

@@ -108,7 +108,7 @@ mod tests {
     #[test]
     fn rotation_of_a_quarter_turn_about_z() {
         let h = core::f64::consts::FRAC_PI_4;
-        let r = rotation([h.cos(), 0.0, 0.0, h.sin()]);
+        let r = rotation([ftsmc_core::math::cos(h), 0.0, 0.0, ftsmc_core::math::sin(h)]);
         let v = mat_vec(&r, [1.0, 0.0, 0.0]);
         assert!((v[0]).abs() < 1e-15 && (v[1] - 1.0).abs() < 1e-15);
         let back = mat_t_vec(&r, v);

@@ -19,15 +19,9 @@
 //! # Trigonometry
 //!
 //! The conversions below are those of `ftsmc_core::kinematics` (the one
-//! Euler/quaternion module of the controllers, the simulator and Python).
-//! [`quaternion_to_euler`] and the rotation matrix call the core's;
-//! [`euler_to_quaternion`], [`euler_rates_to_body_rates`] and the
-//! body-to-Euler rates call the core's formulas with the platform's
-//! `sin_cos` ([`PlatformTrig`], glibc), because the core's `libm` moves the realistic
-//! results by more than rounding: flights of the sliding-mode controllers in
-//! turbulence amplify a last-bit change into a different flight (measured
-//! with `reproduce --realistic-runs 20`: success and crash counts of
-//! FTAFTSMC and TSM-STA on the wind ladder change by one or two of 20).
+//! Euler/quaternion module of the controllers, the simulator and Python),
+//! on the one maths library of `ftsmc_core::math`: the same bits on every
+//! CPU.
 //!
 //! # State
 //!
@@ -590,25 +584,12 @@ pub fn rotation_matrix(q: &[f64; 4]) -> [[f64; 3]; 3] {
     rotation(*q)
 }
 
-/// The platform's `sin_cos` (`f64::sin_cos`: glibc on Linux) as the core's
-/// [`kinematics::Trig`]: the truth model's conversions evaluate the core's
-/// formulas with it (module docs, "Trigonometry").
-#[derive(Clone, Copy, Debug, Default)]
-pub struct PlatformTrig;
-
-impl kinematics::Trig for PlatformTrig {
-    #[inline]
-    fn sin_cos(x: f64) -> (f64, f64) {
-        x.sin_cos()
-    }
-}
-
 /// Unit quaternion `[w, x, y, z]` of Z-Y-X Euler angles `[φ, θ, ψ]` (rad):
 /// `q = q_z(ψ) ⊗ q_y(θ) ⊗ q_x(φ)`, so `R(q) = R_z(ψ) R_y(θ) R_x(φ)`.
 ///
-/// The core's [`kinematics::quaternion_from_euler_in`] with [`PlatformTrig`].
+/// The core's [`kinematics::quaternion_from_euler`].
 pub fn euler_to_quaternion(euler: &[f64; 3]) -> [f64; 4] {
-    kinematics::quaternion_from_euler_in::<PlatformTrig>(euler)
+    kinematics::quaternion_from_euler(euler)
 }
 
 /// Z-Y-X Euler angles `[φ, θ, ψ]` (rad) of a unit quaternion: φ, ψ in
@@ -630,9 +611,9 @@ pub fn quaternion_to_euler(q: &[f64; 4]) -> [f64; 3] {
 /// ```
 ///
 /// Defined everywhere. The core's
-/// [`kinematics::body_rates_from_euler_rates_in`] with [`PlatformTrig`].
+/// [`kinematics::body_rates_from_euler_rates`].
 pub fn euler_rates_to_body_rates(euler: &[f64; 3], euler_rates: &[f64; 3]) -> [f64; 3] {
-    kinematics::body_rates_from_euler_rates_in::<PlatformTrig>(euler, euler_rates)
+    kinematics::body_rates_from_euler_rates(euler, euler_rates)
 }
 
 /// Smallest `|cos θ|` at which [`body_rates_to_euler_rates`] answers
@@ -658,7 +639,7 @@ pub struct GimbalLock {
 ///
 /// Errors with [`GimbalLock`] when `|cos θ| < GIMBAL_LOCK_COS`.
 pub fn body_rates_to_euler_rates(euler: &[f64; 3], body_rates: &[f64; 3]) -> Result<[f64; 3], GimbalLock> {
-    if euler[1].cos().abs() < GIMBAL_LOCK_COS {
+    if ftsmc_core::math::cos(euler[1]).abs() < GIMBAL_LOCK_COS {
         return Err(GimbalLock { theta: euler[1] });
     }
     // Away from the singularity the clamp of `cos θ` is a no-op.
@@ -667,9 +648,9 @@ pub fn body_rates_to_euler_rates(euler: &[f64; 3], body_rates: &[f64; 3]) -> Res
 
 /// Z-Y-X Euler rates from body rates with `cos θ` clamped to
 /// `±`[`GIMBAL_LOCK_COS`] near the singularity (finite everywhere): the
-/// core's [`kinematics::euler_rates_from_body_rates_in`] with [`PlatformTrig`].
+/// core's [`kinematics::euler_rates_from_body_rates`].
 pub fn euler_rates_clamped(euler: &[f64; 3], body_rates: &[f64; 3]) -> [f64; 3] {
-    kinematics::euler_rates_from_body_rates_in::<PlatformTrig>(euler, body_rates)
+    kinematics::euler_rates_from_body_rates(euler, body_rates)
 }
 
 /// The Euler state the paper's controllers were designed for: position,
