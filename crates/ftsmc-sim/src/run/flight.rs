@@ -118,14 +118,15 @@ impl<'s, C: Controller + ?Sized> Flight<'s, C> {
             // no draws that feed nothing.
             env_params.drag_noise = None;
         }
-        let env = Environment::new(env_params);
+        // Sampled at the substep boundaries t_m = m·h: the sinusoids rotate along the grid.
+        let mut env = Environment::new(env_params).on_grid(h);
         let wind = scenario.wind.clone().and_then(|w| Wind::new(w, h, scenario.seed).ok());
         let sensors =
             scenario.sensors.filter(|s| !s.is_perfect()).map(|s| Sensors::new(s, sim.control_rate, scenario.seed));
         let metrics = MetricsAccumulator::new(dt, sim.settling_band, sim.settling_floor, sim.steady_state_after)
             .with_window(sim.metrics_window);
         let recorder = Recorder::new(scenario, options.record, steps, &*controller);
-        let tv_now = env.time_varying(0.0);
+        let tv_now = env.time_varying_on_grid(0, 0.0);
         let reference = reference_at(scenario, 0.0);
         let wants_body = controller.uses_body_attitude();
         let mut flight = Self {
@@ -322,10 +323,11 @@ impl<'s, C: Controller + ?Sized> Flight<'s, C> {
         }
 
         let omega_bar = residual_speed(&delivered.target);
-        for j in 0..self.scenario.simulation.substeps {
+        let substeps = self.scenario.simulation.substeps;
+        for j in 0..substeps {
             let t0 = t + j as f64 * h;
             let wind = self.wind.as_mut().map(|w| w.step(t0));
-            let tv_next = self.env.time_varying(t0 + h);
+            let tv_next = self.env.time_varying_on_grid(k * u64::from(substeps) + u64::from(j) + 1, t0 + h);
             let z_prev = *self.truth.vertical().0;
             self.truth.substep(&Substep {
                 t0,

@@ -13,6 +13,7 @@
 //! All three mean the same thing as the full form with that one term, and
 //! serialize as the full form.
 
+pub mod grid;
 pub mod waypoints;
 
 use ftsmc_core::math::{cos, sin, sin_cos};
