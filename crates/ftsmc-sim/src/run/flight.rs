@@ -31,13 +31,46 @@ use crate::environment::{Environment, TimeVarying};
 use crate::metrics::MetricsAccumulator;
 use crate::scenario::Scenario;
 use crate::sensors::Sensors;
+use crate::signal::grid::GridSignal;
 
 use super::actuation::{ActuatorStage, Delivered};
 use super::exit::check_divergence;
 use super::observer::{FlightStats, Observer, Tick};
 use super::recording::Recorder;
 use super::truth::{truth_of, Substep, TruthModel, TruthSetup};
-use super::{reference_at, tracking_errors, Divergence, ExitStatus, RunOptions, RunOutput};
+use super::{tracking_errors, Divergence, ExitStatus, RunOptions, RunOutput};
+
+/// The scenario's reference signals `x, y, z, ψ` on the control grid
+/// `t_k = k·dt`: [`super::reference_at`] with the sines and cosines rotated
+/// along the grid ([`crate::signal::grid`]), equal to it to the rounding
+/// of their arguments.
+struct ReferenceGrid {
+    x: GridSignal,
+    y: GridSignal,
+    z: GridSignal,
+    psi: GridSignal,
+}
+
+impl ReferenceGrid {
+    fn new(scenario: &Scenario, dt: f64) -> Self {
+        let r = &scenario.reference;
+        let g = |s| GridSignal::new(s, dt);
+        Self { x: g(&r.x), y: g(&r.y), z: g(&r.z), psi: g(&r.psi) }
+    }
+
+    /// The reference at control step `k`, whose time the loop computed as `t` (s).
+    fn at(&mut self, k: u64, t: f64) -> Reference {
+        let (x, y, z, psi) = (self.x.sample(k, t), self.y.sample(k, t), self.z.sample(k, t), self.psi.sample(k, t));
+        Reference {
+            position: [x.value, y.value, z.value],
+            velocity: [x.rate, y.rate, z.rate],
+            acceleration: [x.acceleration, y.acceleration, z.acceleration],
+            yaw: psi.value,
+            yaw_rate: psi.rate,
+            yaw_acceleration: psi.acceleration,
+        }
+    }
+}
 
 /// What one [`Flight::step`] did.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -74,6 +107,7 @@ pub struct Flight<'s, C: Controller + ?Sized> {
     ground: Option<GroundSettings>,
     tv_now: TimeVarying,
     reference: Reference,
+    reference_grid: ReferenceGrid,
     metrics: MetricsAccumulator,
     recorder: Recorder,
     envelope: Tracker,
@@ -127,7 +161,8 @@ impl<'s, C: Controller + ?Sized> Flight<'s, C> {
             .with_window(sim.metrics_window);
         let recorder = Recorder::new(scenario, options.record, steps, &*controller);
         let tv_now = env.time_varying_on_grid(0, 0.0);
-        let reference = reference_at(scenario, 0.0);
+        let mut reference_grid = ReferenceGrid::new(scenario, dt);
+        let reference = reference_grid.at(0, 0.0);
         let wants_body = controller.uses_body_attitude();
         let mut flight = Self {
             scenario,
@@ -150,6 +185,7 @@ impl<'s, C: Controller + ?Sized> Flight<'s, C> {
             ground: scenario.ground.filter(|g| g.enabled),
             tv_now,
             reference,
+            reference_grid,
             metrics,
             recorder,
             envelope: Tracker::new(scenario.envelope),
@@ -354,7 +390,7 @@ impl<'s, C: Controller + ?Sized> Flight<'s, C> {
         }
 
         let t_next = (k + 1) as f64 * dt;
-        self.reference = reference_at(self.scenario, t_next);
+        self.reference = self.reference_grid.at(k + 1, t_next);
         self.state = self.truth.quad_state();
         if self.wants_body {
             self.body = self.truth.body_attitude();
