@@ -74,7 +74,7 @@ impl<'a> Environment<'a> {
     /// on the grid `t_m = m·step` (s): the run loop's substep boundaries.
     /// Its sines and cosines are rotated along the grid
     /// ([`crate::signal::grid`]), equal to [`Environment::time_varying`]'s
-    /// to the rounding of their arguments.
+    /// to rounding.
     pub fn on_grid(mut self, step: f64) -> Self {
         let d = self.params.disturbance;
         let g = |s: &Signal| GridSignal::new(s, step);
@@ -141,7 +141,9 @@ impl<'a> Environment<'a> {
                 *i *= scale;
             }
         }
-        let disturbance = core::array::from_fn(|i| grid.disturbance[i].value(m, t));
+        let [x, y, z, phi, theta, psi] = &mut grid.disturbance;
+        let disturbance =
+            [x.value(m, t), y.value(m, t), z.value(m, t), phi.value(m, t), theta.value(m, t), psi.value(m, t)];
         TimeVarying { mass, inertia, disturbance }
     }
 

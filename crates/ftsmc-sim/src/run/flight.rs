@@ -42,8 +42,7 @@ use super::{tracking_errors, Divergence, ExitStatus, RunOptions, RunOutput};
 
 /// The scenario's reference signals `x, y, z, ψ` on the control grid
 /// `t_k = k·dt`: [`super::reference_at`] with the sines and cosines rotated
-/// along the grid ([`crate::signal::grid`]), equal to it to the rounding
-/// of their arguments.
+/// along the grid ([`crate::signal::grid`]), equal to it to rounding.
 struct ReferenceGrid {
     x: GridSignal,
     y: GridSignal,
