@@ -27,7 +27,8 @@
 //! order of the calls), so a flight stays deterministic.
 //!
 //! The other terms (constants, steps, polynomials, waypoints, piecewise)
-//! and the window are evaluated at the caller's time `t` exactly as
+//! and the window are evaluated at the caller's time `t` exactly (bit for
+//! bit) as
 //! [`Signal::value`] and [`Signal::sample`] do.
 
 use ftsmc_core::math::sin_cos;
@@ -69,19 +70,26 @@ impl Phasor {
         Self { amplitude, omega, phase, cosine, block: u64::MAX, anchor: (0.0, 0.0, 1.0), table }
     }
 
+    /// Take the anchor of `block` (once every `BLOCK` samples).
+    #[cold]
+    #[inline(never)]
+    fn set_anchor(&mut self, block: u64, step: f64) {
+        let theta_a = self.omega * ((block * BLOCK) as f64 * step) + self.phase;
+        let (s, c) = sin_cos(theta_a);
+        self.anchor = (theta_a, s, c);
+        self.block = block;
+    }
+
     /// `(sin θ, cos θ)` of the term's argument `θ = ω t + φ` (formed as
     /// [`Term::sample`] forms it) at grid point `m` of time `t ≈ m·δ`: the
     /// anchor rotated by the table's `τ_n`, then by the residual
     /// `r = θ − θ_a − τ_n` (a few units in the last place of `θ`) to first
     /// order (`r²/2` is below 1e-25).
-    #[inline]
+    #[inline(always)]
     fn sin_cos_at(&mut self, m: u64, t: f64, step: f64) -> (f64, f64) {
         let block = m / BLOCK;
         if block != self.block {
-            let theta_a = self.omega * ((block * BLOCK) as f64 * step) + self.phase;
-            let (s, c) = sin_cos(theta_a);
-            self.anchor = (theta_a, s, c);
-            self.block = block;
+            self.set_anchor(block, step);
         }
         let (theta_a, s_a, c_a) = self.anchor;
         let (tau, s_n, c_n) = self.table[(m % BLOCK) as usize];
@@ -117,6 +125,10 @@ impl Phasor {
 enum GridTerm {
     /// A sine or cosine, rotated along the grid.
     Sinusoid(Phasor),
+    /// [`Term::Constant`].
+    Constant(f64),
+    /// [`Term::Polynomial`]: its coefficients from degree 0 upward.
+    Polynomial(Vec<f64>),
     /// Any other term, evaluated at `t` as [`Term::sample`] does.
     Other(Term),
 }
@@ -143,6 +155,8 @@ impl GridSignal {
                     let cosine = matches!(term, Term::Cosine { .. });
                     GridTerm::Sinusoid(Phasor::new(*amplitude, omega, *phase, cosine, step))
                 }
+                Term::Constant { value } => GridTerm::Constant(*value),
+                Term::Polynomial { coefficients } => GridTerm::Polynomial(coefficients.clone()),
                 other => GridTerm::Other(other.clone()),
             })
             .collect();
@@ -156,7 +170,7 @@ impl GridSignal {
 
     /// The value at grid point `m`, whose time the caller computed as `t`
     /// (s, `≈ m·step`; the window and the non-sinusoid terms use it).
-    #[inline]
+    #[inline(always)] // the loop calls it for every signal at every substep
     pub fn value(&mut self, m: u64, t: f64) -> f64 {
         if let Some([start, end]) = self.window {
             if t < start || t > end {
@@ -168,6 +182,8 @@ impl GridSignal {
         for term in &mut self.terms {
             out += match term {
                 GridTerm::Sinusoid(p) => p.value(m, t, step),
+                GridTerm::Constant(value) => *value,
+                GridTerm::Polynomial(coefficients) => super::polynomial(coefficients, t).value,
                 GridTerm::Other(term) => term.value(t),
             };
         }
@@ -175,7 +191,7 @@ impl GridSignal {
     }
 
     /// Value and derivatives at grid point `m` of time `t` (as [`GridSignal::value`]).
-    #[inline]
+    #[inline(always)]
     pub fn sample(&mut self, m: u64, t: f64) -> Sample {
         if let Some([start, end]) = self.window {
             if t < start || t > end {
@@ -187,6 +203,8 @@ impl GridSignal {
         for term in &mut self.terms {
             out += match term {
                 GridTerm::Sinusoid(p) => p.sample(m, t, step),
+                GridTerm::Constant(value) => Sample { value: *value, ..Sample::default() },
+                GridTerm::Polynomial(coefficients) => super::polynomial(coefficients, t),
                 GridTerm::Other(term) => term.sample(t),
             };
         }
