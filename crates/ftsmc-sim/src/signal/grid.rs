@@ -39,6 +39,11 @@ use super::{Sample, Signal, Term};
 /// samples (a power of two, so the block index and offset are a shift and a mask).
 pub const BLOCK: u64 = 64;
 
+/// Sine and cosine terms of one signal that get a table (1.5 KiB each); any
+/// beyond are evaluated directly, as [`Term::sample`] does, so a signal of
+/// thousands of terms does not hold megabytes per flight.
+pub const MAX_PHASORS: usize = 256;
+
 /// One `A·sin(ω t + φ)` or `A·cos(ω t + φ)` term on the grid.
 #[derive(Clone, Debug)]
 struct Phasor {
@@ -144,13 +149,18 @@ pub struct GridSignal {
 
 impl GridSignal {
     /// `signal` on the grid of spacing `step` (s, > 0). Tabulates
-    /// `BLOCK` sine/cosine pairs per sinusoid term (1 KiB each).
+    /// `BLOCK` angles with their sines and cosines for each of the first
+    /// [`MAX_PHASORS`] sinusoid terms (1.5 KiB each).
     pub fn new(signal: &Signal, step: f64) -> Self {
+        let mut phasors = 0;
         let terms = signal
             .terms
             .iter()
             .map(|term| match term {
-                Term::Sine { amplitude, phase, .. } | Term::Cosine { amplitude, phase, .. } => {
+                Term::Sine { amplitude, phase, .. } | Term::Cosine { amplitude, phase, .. }
+                    if phasors < MAX_PHASORS =>
+                {
+                    phasors += 1;
                     let omega = term.angular_frequency().unwrap_or(0.0);
                     let cosine = matches!(term, Term::Cosine { .. });
                     GridTerm::Sinusoid(Phasor::new(*amplitude, omega, *phase, cosine, step))
@@ -303,5 +313,24 @@ mod tests {
             assert_eq!(grid.sample(m, t), signal.sample(t));
         }
         assert!(GridSignal::new(&Signal::default(), 0.01).is_zero());
+    }
+
+    /// Sinusoids beyond [`MAX_PHASORS`] are evaluated directly (their bits
+    /// are those of the signal); the sum still agrees to rounding.
+    #[test]
+    fn sinusoids_beyond_the_table_budget_are_evaluated_directly() {
+        let n = MAX_PHASORS + 3;
+        let terms: Vec<Term> = (0..n)
+            .map(|i| Term::Sine { amplitude: 1e-3, omega: Some(0.1 * i as f64), frequency: None, phase: 0.0 })
+            .collect();
+        let mut grid = GridSignal::new(&Signal { terms: terms.clone(), window: None }, 1e-3);
+        let tabulated = grid.terms.iter().filter(|t| matches!(t, GridTerm::Sinusoid(_))).count();
+        assert_eq!(tabulated, MAX_PHASORS);
+        assert!(matches!(grid.terms[n - 1], GridTerm::Other(_)));
+        let signal = Signal { terms, window: None };
+        for m in [0u64, 1, 777, 12_345] {
+            let t = m as f64 * 1e-3;
+            assert!((grid.value(m, t) - signal.value(t)).abs() <= 1e-15, "t = {t}");
+        }
     }
 }
