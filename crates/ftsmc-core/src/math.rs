@@ -32,26 +32,109 @@
 /// ([`powf`]), whose extra-precise logarithm buys the last bit only. The
 /// limits are those of `pow`: `0^a = 0` and `∞^a = ∞` for `a > 0`
 /// (`exp(−∞) = 0`, `exp(∞) = ∞`), `0^a = ∞` and `∞^a = 0` for `a < 0`.
+///
+/// A law that raises to the same exponent every period chooses the path
+/// once with [`Power::new`]; this function is `Power::new(a).abs(x)`.
 #[inline]
 pub fn pow_abs(x: f64, a: f64) -> f64 {
-    let ax = x.abs();
-    if a == 1.0 {
-        ax
-    } else if a == 2.0 {
-        ax * ax
-    } else if a == 3.0 {
-        ax * ax * ax
-    } else if a == 4.0 {
-        let s = ax * ax;
-        s * s
-    } else if a == 0.5 {
-        sqrt(ax)
-    } else if a == 1.5 {
-        ax * sqrt(ax)
-    } else if a == 0.0 {
-        1.0
+    Power::new(a).abs(x)
+}
+
+/// An exponent `a` with the evaluation path of [`pow_abs`] chosen once
+/// (at construction), so that a law raising to its gains' exponents every
+/// period does not compare `a` with 0, ½, 1, 3/2, 2, 3, 4 each time. Every
+/// method gives the same bits as the free function it names.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Power {
+    /// `a = 0`: `|x|⁰ = 1`.
+    Zero,
+    /// `a = ½`: `sqrt|x|`.
+    Half,
+    /// `a = 1`: `|x|`.
+    One,
+    /// `a = 3/2`: `|x| sqrt|x|`.
+    ThreeHalves,
+    /// `a = 2`: `|x| |x|`.
+    Two,
+    /// `a = 3`: `|x| |x| |x|`.
+    Three,
+    /// `a = 4`: `(|x| |x|)²`.
+    Four,
+    /// Any other `a`: `exp(a ln|x|)`.
+    General(f64),
+}
+
+impl Power {
+    /// The path of [`pow_abs`] for the exponent `a` (dimensionless).
+    #[inline]
+    pub fn new(a: f64) -> Self {
+        if a == 1.0 {
+            Self::One
+        } else if a == 2.0 {
+            Self::Two
+        } else if a == 3.0 {
+            Self::Three
+        } else if a == 4.0 {
+            Self::Four
+        } else if a == 0.5 {
+            Self::Half
+        } else if a == 1.5 {
+            Self::ThreeHalves
+        } else if a == 0.0 {
+            Self::Zero
+        } else {
+            Self::General(a)
+        }
+    }
+
+    /// `|x|^a` (same bits as [`pow_abs`]).
+    #[inline]
+    pub fn abs(self, x: f64) -> f64 {
+        let ax = x.abs();
+        match self {
+            Self::One => ax,
+            Self::Two => ax * ax,
+            Self::Three => ax * ax * ax,
+            Self::Four => {
+                let s = ax * ax;
+                s * s
+            }
+            Self::Half => sqrt(ax),
+            Self::ThreeHalves => ax * sqrt(ax),
+            Self::Zero => 1.0,
+            Self::General(a) => exp(a * ln(ax)),
+        }
+    }
+
+    /// `min(|x|^a, POWER_LIMIT)` (same bits as [`pow_abs_sat`]).
+    #[inline]
+    pub fn abs_sat(self, x: f64) -> f64 {
+        saturate_power(self.abs(x))
+    }
+
+    /// `(|x|^a, |x|^b)` for two exponents of the same base: for two
+    /// [`Power::General`] exponents `ln|x|` is taken once (the same bits
+    /// as two [`Power::abs`] calls, one logarithm fewer).
+    #[inline]
+    pub fn abs_pair(a: Self, b: Self, x: f64) -> (f64, f64) {
+        match (a, b) {
+            (Self::General(ea), Self::General(eb)) => {
+                let l = ln(x.abs());
+                (exp(ea * l), exp(eb * l))
+            }
+            _ => (a.abs(x), b.abs(x)),
+        }
+    }
+}
+
+/// `min(v, POWER_LIMIT)`: `v` saturated at [`crate::law::POWER_LIMIT`]
+/// (1e100), the bound of [`pow_abs_sat`].
+#[inline]
+pub fn saturate_power(v: f64) -> f64 {
+    if v > crate::law::POWER_LIMIT {
+        crate::law::POWER_LIMIT
     } else {
-        exp(a * ln(ax))
+        v
     }
 }
 
@@ -60,12 +143,7 @@ pub fn pow_abs(x: f64, a: f64) -> f64 {
 /// infinity; identical to [`pow_abs`] below the limit.
 #[inline]
 pub fn pow_abs_sat(x: f64, a: f64) -> f64 {
-    let v = pow_abs(x, a);
-    if v > crate::law::POWER_LIMIT {
-        crate::law::POWER_LIMIT
-    } else {
-        v
-    }
+    saturate_power(pow_abs(x, a))
 }
 
 /// `sign(x)`: −1, 0 or +1 (0 at exactly 0, unlike `f64::signum`).
