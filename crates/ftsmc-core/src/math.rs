@@ -232,6 +232,40 @@ pub fn sin_cos(x: f64) -> (f64, f64) {
     libm::sincos(x)
 }
 
+/// `(sin x, cos x)` of the last argument, kept so that an angle that stays
+/// the same from one control period to the next (a constant heading
+/// reference) is not reduced and expanded again: [`SinCosCache::get`]
+/// returns exactly [`sin_cos`]`(x)`, computed only when the bits of `x`
+/// change.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SinCosCache {
+    bits: u64,
+    value: (f64, f64),
+}
+
+impl Default for SinCosCache {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl SinCosCache {
+    /// A cache holding `sin_cos(0)`.
+    pub fn new() -> Self {
+        Self { bits: 0.0f64.to_bits(), value: sin_cos(0.0) }
+    }
+
+    /// `(sin x, cos x)` (rad), the same bits as [`sin_cos`]`(x)`.
+    #[inline]
+    pub fn get(&mut self, x: f64) -> (f64, f64) {
+        if x.to_bits() != self.bits {
+            self.value = sin_cos(x);
+            self.bits = x.to_bits();
+        }
+        self.value
+    }
+}
+
 /// A 3-vector.
 pub type Vec3 = [f64; 3];
 /// A 3×3 matrix, row-major: `m[row][column]`.
@@ -327,6 +361,16 @@ mod tests {
         }
         assert_eq!(pow_abs(0.0, 0.0), 1.0);
         assert_eq!(pow_abs(1e300, 9.7), f64::INFINITY);
+    }
+
+    #[test]
+    fn sin_cos_cache_gives_the_bits_of_sin_cos() {
+        let mut cache = SinCosCache::new();
+        for &x in &[0.0, -0.0, 0.3, 0.3, 1e6, f64::NAN, 0.0, -2.5, -2.5, f64::INFINITY] {
+            let (s, c) = cache.get(x);
+            let (ws, wc) = sin_cos(x);
+            assert_eq!((s.to_bits(), c.to_bits()), (ws.to_bits(), wc.to_bits()), "x = {x}");
+        }
     }
 
     #[test]
