@@ -465,26 +465,24 @@ impl<L: AxisLaw> Controller for Cascade<L> {
     /// used in the cancellation terms clamped to `±INPUT_LIMIT`; `S_z` in
     /// Eq. 44, α̂ and the command-filter states saturated to `±STATE_LIMIT`.
     fn update(&mut self, state: &QuadState, reference: &Reference, dt: f64) -> Command {
-        if !(dt.is_finite()
-            && state.to_array().iter().all(|v| v.is_finite())
-            && reference.position.iter().all(|v| v.is_finite())
-            && reference.velocity.iter().all(|v| v.is_finite())
-            && reference.acceleration.iter().all(|v| v.is_finite())
-            && reference.yaw.is_finite()
-            && reference.yaw_rate.is_finite()
-            && reference.yaw_acceleration.is_finite())
-        {
+        if !(dt.is_finite() && state.is_finite() && crate::setpoint::reference_finite(reference)) {
             return Command { thrust: f64::NAN, torque: [f64::NAN; 3] };
         }
         // Finite inputs whose differences overflow (x = 1e308, x_d = -1e308)
         // are non-finite intermediates: the same NaN, before any state moves
         // (otherwise the attitude reference filter keeps a NaN for good).
         let yaw = [state.attitude[2] - reference.yaw, state.angular_rate[2] - reference.yaw_rate];
-        if !((0..3).all(|i| {
-            (state.position[i] - reference.position[i]).is_finite()
-                && (state.velocity[i] - reference.velocity[i]).is_finite()
-        }) && yaw.iter().all(|v| v.is_finite()))
-        {
+        let differences = [
+            state.position[0] - reference.position[0],
+            state.position[1] - reference.position[1],
+            state.position[2] - reference.position[2],
+            state.velocity[0] - reference.velocity[0],
+            state.velocity[1] - reference.velocity[1],
+            state.velocity[2] - reference.velocity[2],
+            yaw[0],
+            yaw[1],
+        ];
+        if crate::math::finite_probe(&differences) != 0.0 {
             return Command { thrust: f64::NAN, torque: [f64::NAN; 3] };
         }
         let model = self.config.model;

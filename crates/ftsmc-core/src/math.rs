@@ -146,16 +146,12 @@ pub fn pow_abs_sat(x: f64, a: f64) -> f64 {
     saturate_power(pow_abs(x, a))
 }
 
-/// `sign(x)`: −1, 0 or +1 (0 at exactly 0, unlike `f64::signum`).
+/// `sign(x)`: −1, 0 or +1 (0 at exactly ±0 and for NaN, unlike
+/// `f64::signum`). Computed as `(x > 0) − (x < 0)` in integers and
+/// converted (exact), which compiles without branches.
 #[inline]
 pub fn sign(x: f64) -> f64 {
-    if x > 0.0 {
-        1.0
-    } else if x < 0.0 {
-        -1.0
-    } else {
-        0.0
-    }
+    f64::from(i32::from(x > 0.0) - i32::from(x < 0.0))
 }
 
 /// `sig^a(x) = |x|^a sign(x)` (paper notation after Eq. 5).
@@ -266,6 +262,21 @@ impl SinCosCache {
     }
 }
 
+/// `Σ (vᵢ − vᵢ)`: 0 when every element is finite, NaN when one is infinite
+/// or NaN (`∞ − ∞` and `NaN − NaN` are NaN, and NaN survives the sum).
+/// `finite_probe(a) + finite_probe(b) == 0.0` checks many values with
+/// neither a branch per value nor a copy; the compiler may not fold
+/// `v − v` to 0 (IEEE 754).
+#[inline]
+#[allow(clippy::eq_op)] // v − v is the point: NaN for a non-finite v.
+pub fn finite_probe(values: &[f64]) -> f64 {
+    let mut sum = 0.0;
+    for v in values {
+        sum += v - v;
+    }
+    sum
+}
+
 /// A 3-vector.
 pub type Vec3 = [f64; 3];
 /// A 3×3 matrix, row-major: `m[row][column]`.
@@ -370,6 +381,36 @@ mod tests {
             let (s, c) = cache.get(x);
             let (ws, wc) = sin_cos(x);
             assert_eq!((s.to_bits(), c.to_bits()), (ws.to_bits(), wc.to_bits()), "x = {x}");
+        }
+    }
+
+    #[test]
+    fn sign_is_minus_one_zero_or_one() {
+        for (x, want) in [
+            (0.0, 0.0),
+            (-0.0, 0.0),
+            (f64::NAN, 0.0),
+            (1e-310, 1.0),
+            (-1e-310, -1.0),
+            (3.5, 1.0),
+            (-3.5, -1.0),
+            (f64::INFINITY, 1.0),
+            (f64::NEG_INFINITY, -1.0),
+        ] {
+            assert_eq!(sign(x).to_bits(), f64::to_bits(want), "sign({x})");
+        }
+    }
+
+    #[test]
+    fn finite_probe_is_zero_exactly_when_every_value_is_finite() {
+        assert_eq!(finite_probe(&[]), 0.0);
+        assert_eq!(finite_probe(&[0.0, -0.0, 1e308, -1e308, 1e-310, f64::MAX]), 0.0);
+        for bad in [f64::INFINITY, f64::NEG_INFINITY, f64::NAN] {
+            for at in 0..3 {
+                let mut v = [1.0, -2e300, 3.0];
+                v[at] = bad;
+                assert!(finite_probe(&v).is_nan(), "{v:?}");
+            }
         }
     }
 

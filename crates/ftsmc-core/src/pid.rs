@@ -537,7 +537,7 @@ impl PidController {
         dt: f64,
     ) -> Command {
         if !(dt.is_finite()
-            && state.to_array().iter().all(|v| v.is_finite())
+            && state.is_finite()
             && attitude.is_none_or(BodyAttitude::is_finite)
             && reference_finite(reference))
         {

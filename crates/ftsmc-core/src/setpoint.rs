@@ -3,7 +3,7 @@
 //! check of a reference. Their own module, so neither controller imports
 //! the other for them.
 
-use crate::math::{cos, sin, sqrt, Vec3};
+use crate::math::{cos, finite_probe, sin, sqrt, Vec3};
 use crate::model::Reference;
 
 /// The tilt limit of a thrust direction with `cos(max_tilt)` and
@@ -37,9 +37,11 @@ impl TiltLimit {
 }
 
 /// Every component of the reference is finite.
+#[inline]
 pub(crate) fn reference_finite(r: &Reference) -> bool {
-    r.position.iter().chain(&r.velocity).chain(&r.acceleration).all(|v| v.is_finite())
-        && r.yaw.is_finite()
-        && r.yaw_rate.is_finite()
-        && r.yaw_acceleration.is_finite()
+    finite_probe(&r.position)
+        + finite_probe(&r.velocity)
+        + finite_probe(&r.acceleration)
+        + finite_probe(&[r.yaw, r.yaw_rate, r.yaw_acceleration])
+        == 0.0
 }
