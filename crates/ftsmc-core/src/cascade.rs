@@ -64,7 +64,7 @@ use crate::law::{
     check_closed, check_gain, check_left_open, check_open, saturate, AxisLaw, GainError, INPUT_LIMIT, MAX_ESTIMATES,
     STATE_LIMIT,
 };
-use crate::math::{asin, cos, sin_cos, SinCosCache};
+use crate::math::{asin, cos, sin_cos, sqrt, SinCosCache};
 use crate::model::{Command, QuadState, QuadrotorParams, Reference};
 
 // The controller interface lives in its own module; re-exported here so
@@ -414,8 +414,12 @@ impl<L: AxisLaw> Cascade<L> {
     #[inline]
     fn desired_roll_pitch_at(ux: f64, uy: f64, (s_psi, c_psi): (f64, f64), limit: f64) -> [f64; 2] {
         // `saturate`, not `f64::clamp`: it does not panic on a NaN limit.
-        let roll = asin(saturate(ux * s_psi - uy * c_psi, limit));
-        let pitch = asin(saturate((ux * c_psi + uy * s_psi) / cos(roll), limit));
+        let sin_roll = saturate(ux * s_psi - uy * c_psi, limit);
+        let roll = asin(sin_roll);
+        // cos φ_d = √((1 − sin φ_d)(1 + sin φ_d)), equal to cos(asin(·)) to
+        // rounding (|sin φ_d| <= sin(max_tilt) < 1), without the cosine.
+        let cos_roll = sqrt((1.0 - sin_roll) * (1.0 + sin_roll));
+        let pitch = asin(saturate((ux * c_psi + uy * s_psi) / cos_roll, limit));
         [roll, pitch]
     }
 
