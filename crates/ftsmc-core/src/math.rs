@@ -28,7 +28,7 @@
 /// `(|a ln|x|| + 2) · 2⁻⁵²` (the rounding of `ln|x|` and of the product
 /// `a ln|x|`, times the unit slope of `exp`, plus `exp`'s own rounding):
 /// a few units in the last place for the arguments of the sliding laws,
-/// at about 110 instructions instead of the 270 of the full `pow`
+/// at about 120 instructions (`ln` 63, `exp` 54) instead of the 270 of the full `pow`
 /// ([`powf`]), whose extra-precise logarithm buys the last bit only. The
 /// limits are those of `pow`: `0^a = 0` and `∞^a = ∞` for `a > 0`
 /// (`exp(−∞) = 0`, `exp(∞) = ∞`), `0^a = ∞` and `∞^a = 0` for `a < 0`.
