@@ -23,7 +23,7 @@ use ftsmc_core::model::{Command, QuadState, QuadrotorParams};
 
 use crate::environment::{Environment, TimeVarying};
 use crate::scenario::Scenario;
-use crate::vehicle::paper::{derivative, derivative_in_wind, rk4_step};
+use crate::vehicle::paper::{derivative, derivative_in_wind, rk4_step_staged};
 use crate::vehicle::rigid_body::{normalize_quaternion, RigidBodyState};
 use crate::vehicle::{from_quad_state, to_quad_state, RigidBody, RigidBodyInput, RigidBodyParams, VehicleModel};
 
@@ -83,33 +83,40 @@ impl TruthModel for PaperTruth {
     #[inline]
     fn substep(&mut self, s: &Substep<'_>) {
         let (t0, h, a, b, env, wind) = (s.t0, s.h, s.a, s.b, s.env, s.wind);
+        // The plant of each RK4 stage time, made once (the second and third
+        // stages share theirs).
         self.0 = match s.drive {
-            Drive::Held { applied, omega_bar, .. } => match wind {
-                None => {
-                    let f = |tau: f64, x: &[f64; 12]| {
-                        let tv = TimeVarying::lerp(&a, &b, (tau - t0) / h);
-                        derivative(x, applied, omega_bar, &env.params_with(&tv), &tv.disturbance)
-                    };
-                    rk4_step(f, t0, &self.0, h)
+            Drive::Held { applied, omega_bar, .. } => {
+                let inputs = |tau: f64| {
+                    let tv = TimeVarying::lerp(&a, &b, (tau - t0) / h);
+                    (env.params_with(&tv), tv.disturbance)
+                };
+                match wind {
+                    None => {
+                        rk4_step_staged(inputs, |(p, d), x| derivative(x, applied, omega_bar, p, d), t0, &self.0, h)
+                    }
+                    Some(wind) => rk4_step_staged(
+                        inputs,
+                        |(p, d), x| derivative_in_wind(x, applied, omega_bar, p, d, &wind),
+                        t0,
+                        &self.0,
+                        h,
+                    ),
                 }
-                Some(wind) => {
-                    let f = |tau: f64, x: &[f64; 12]| {
-                        let tv = TimeVarying::lerp(&a, &b, (tau - t0) / h);
-                        derivative_in_wind(x, applied, omega_bar, &env.params_with(&tv), &tv.disturbance, &wind)
-                    };
-                    rk4_step(f, t0, &self.0, h)
-                }
-            },
+            }
             drive @ Drive::Lagged { .. } => {
                 let wind = wind.unwrap_or([0.0; 3]);
-                let f = |tau: f64, x: &[f64; 12]| {
+                let inputs = |tau: f64| {
                     let tv = TimeVarying::lerp(&a, &b, (tau - t0) / h);
                     let p = env.params_with(&tv);
                     let w = drive.speeds_after(tau - t0);
                     let delivered: Command = forces_from_squared_speeds(&p, &w.map(|o| o * o));
-                    derivative_in_wind(x, &delivered, residual_speed(&w), &p, &tv.disturbance, &wind)
+                    (p, delivered, residual_speed(&w), tv.disturbance)
                 };
-                rk4_step(f, t0, &self.0, h)
+                let f = |(p, delivered, omega_bar, d): &(QuadrotorParams, Command, f64, [f64; 6]), x: &[f64; 12]| {
+                    derivative_in_wind(x, delivered, *omega_bar, p, d, &wind)
+                };
+                rk4_step_staged(inputs, f, t0, &self.0, h)
             }
         };
     }
@@ -174,18 +181,19 @@ impl TruthModel for RigidTruth {
         let body = &self.body;
         let inertia = body.params().inertia;
         let mass = body.params().mass;
-        let f = |tau: f64, x: &RigidBodyState| {
+        // The inputs at each RK4 stage time, made once (the second and third
+        // stages share theirs).
+        let inputs = |tau: f64| {
             let tv = TimeVarying::lerp(&a, &b, (tau - t0) / h);
             let d = tv.disturbance;
-            let input = RigidBodyInput {
+            body.prepare(&RigidBodyInput {
                 rotor_speeds: drive.speeds_after(tau - t0),
                 wind,
                 force: [mass * d[0], mass * d[1], mass * d[2]],
                 torque: core::array::from_fn(|r| (0..3).map(|c| inertia[r][c] * d[3 + c]).sum()),
-            };
-            body.derivative(x, &input)
+            })
         };
-        self.x = rk4_step(f, t0, &self.x, h);
+        self.x = rk4_step_staged(inputs, |input, x| body.derivative_prepared(x, input), t0, &self.x, h);
         normalize_quaternion(&mut self.x);
     }
 

@@ -379,6 +379,25 @@ pub struct RigidBodyInput {
     pub torque: [f64; 3],
 }
 
+/// [`RigidBodyInput`] with the terms of the body wrench that depend on the
+/// rotor speeds alone worked out ([`RigidBody::prepare`]): once per RK4
+/// stage time instead of once per derivative.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PreparedInput {
+    /// The inputs.
+    pub input: RigidBodyInput,
+    /// Thrust per rotor `k_f ω_i²`, N.
+    thrust: [f64; 4],
+    /// Reaction torque per rotor `s_i k_m ω_i²`, N·m.
+    reaction: [f64; 4],
+    /// In-plane rotor drag per unit airspeed `ω_i k_d`, N·s/m.
+    drag_xy: [f64; 4],
+    /// Axial rotor drag per unit airspeed `ω_i k_z`, N·s/m.
+    drag_z: [f64; 4],
+    /// Rotor angular momentum `h_r` ([`RigidBody::rotor_momentum`]), kg·m²/s.
+    momentum: [f64; 3],
+}
+
 /// Force and moment in the body frame.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Wrench {
@@ -451,13 +470,30 @@ impl RigidBody {
     /// Rotor and aerodynamic wrench in the body frame at a state (without
     /// gravity, external inputs or the gyroscopic terms).
     pub fn body_wrench(&self, x: &RigidBodyState, input: &RigidBodyInput) -> Wrench {
-        self.body_wrench_in(x, input, &rotation(quaternion(x)))
+        self.body_wrench_in(x, &self.prepare(input), &rotation(quaternion(x)))
+    }
+
+    /// The rotor terms of `input` ([`PreparedInput`]) for
+    /// [`RigidBody::derivative_prepared`].
+    #[inline]
+    pub fn prepare(&self, input: &RigidBodyInput) -> PreparedInput {
+        let p = &self.params;
+        let w = input.rotor_speeds;
+        PreparedInput {
+            input: *input,
+            thrust: w.map(|w| p.thrust_coefficient * w * w),
+            reaction: [0, 1, 2, 3].map(|i| self.spin[i] * p.moment_coefficient * w[i] * w[i]),
+            drag_xy: w.map(|w| w * p.rotor_drag_xy),
+            drag_z: w.map(|w| w * p.rotor_drag_z),
+            momentum: self.rotor_momentum(&w),
+        }
     }
 
     /// [`RigidBody::body_wrench`] with the body-to-world rotation `r` of `x` given.
     #[inline]
-    fn body_wrench_in(&self, x: &RigidBodyState, input: &RigidBodyInput, r: &Mat3) -> Wrench {
+    fn body_wrench_in(&self, x: &RigidBodyState, prepared: &PreparedInput, r: &Mat3) -> Wrench {
         let p = &self.params;
+        let input = &prepared.input;
         let v = block(x, index::VELOCITY);
         let omega = block(x, index::BODY_RATES);
         let v_air = mat_t_vec(r, sub(v, input.wind));
@@ -467,24 +503,22 @@ impl RigidBody {
         // branch: rotor aerodynamics on (the realistic vehicles) or off.
         if p.rotor_drag_xy != 0.0 || p.rotor_drag_z != 0.0 || p.translational_lift != 0.0 {
             for i in 0..4 {
-                let w = input.rotor_speeds[i];
-                let mut f = [0.0, 0.0, p.thrust_coefficient * w * w];
+                let mut f = [0.0, 0.0, prepared.thrust[i]];
                 let vi = add(v_air, cross(omega, self.rotors[i]));
-                f[0] -= w * p.rotor_drag_xy * vi[0];
-                f[1] -= w * p.rotor_drag_xy * vi[1];
-                f[2] -= w * p.rotor_drag_z * vi[2];
+                f[0] -= prepared.drag_xy[i] * vi[0];
+                f[1] -= prepared.drag_xy[i] * vi[1];
+                f[2] -= prepared.drag_z[i] * vi[2];
                 f[2] += p.translational_lift * (vi[0] * vi[0] + vi[1] * vi[1]);
                 force = add(force, f);
                 torque = add(torque, cross(self.rotors[i], f));
-                torque[2] -= self.spin[i] * p.moment_coefficient * w * w;
+                torque[2] -= prepared.reaction[i];
             }
         } else {
             for i in 0..4 {
-                let w = input.rotor_speeds[i];
-                let f = [0.0, 0.0, p.thrust_coefficient * w * w];
+                let f = [0.0, 0.0, prepared.thrust[i]];
                 force = add(force, f);
                 torque = add(torque, cross(self.rotors[i], f));
-                torque[2] -= self.spin[i] * p.moment_coefficient * w * w;
+                torque[2] -= prepared.reaction[i];
             }
         }
         let cd = p.parasitic_drag;
@@ -505,16 +539,24 @@ impl RigidBody {
 
     /// Time derivative of the state (module docs for the equations).
     pub fn derivative(&self, x: &RigidBodyState, input: &RigidBodyInput) -> RigidBodyState {
+        self.derivative_prepared(x, &self.prepare(input))
+    }
+
+    /// [`RigidBody::derivative`] of the inputs [`RigidBody::prepare`] made,
+    /// bit for bit: the form for several states with the same inputs (the
+    /// second and third RK4 stages).
+    #[inline]
+    pub fn derivative_prepared(&self, x: &RigidBodyState, prepared: &PreparedInput) -> RigidBodyState {
         let p = &self.params;
+        let input = &prepared.input;
         let q = quaternion(x);
         let omega = block(x, index::BODY_RATES);
         let r = rotation(q);
-        let wrench = self.body_wrench_in(x, input, &r);
+        let wrench = self.body_wrench_in(x, prepared, &r);
         let f_world = add(mat_vec(&r, wrench.force), input.force);
         let acc = [f_world[0] / p.mass, f_world[1] / p.mass, f_world[2] / p.mass - p.gravity];
         let j_omega = mat_vec(&p.inertia, omega);
-        let h_r = self.rotor_momentum(&input.rotor_speeds);
-        let m = sub(add(wrench.torque, input.torque), cross(omega, add(j_omega, h_r)));
+        let m = sub(add(wrench.torque, input.torque), cross(omega, add(j_omega, prepared.momentum)));
         let omega_dot = mat_vec(&self.inertia_inv, m);
         let q_dot = quat_derivative(q, omega);
         let mut d = [0.0; STATE_LEN];
