@@ -176,7 +176,7 @@ impl TruthModel for RigidTruth {
 
     #[inline]
     fn substep(&mut self, s: &Substep<'_>) {
-        let (t0, h, a, b, drive) = (s.t0, s.h, s.a, s.b, s.drive);
+        let (t0, h, a, b, drive) = (s.t0, s.h, &s.a, &s.b, &s.drive);
         let wind = s.wind.unwrap_or([0.0; 3]);
         let body = &self.body;
         let inertia = body.params().inertia;
@@ -184,7 +184,7 @@ impl TruthModel for RigidTruth {
         // The inputs at each RK4 stage time, made once (the second and third
         // stages share theirs).
         let inputs = |tau: f64| {
-            let tv = TimeVarying::lerp(&a, &b, (tau - t0) / h);
+            let tv = TimeVarying::lerp(a, b, (tau - t0) / h);
             let d = tv.disturbance;
             body.prepare(&RigidBodyInput {
                 rotor_speeds: drive.speeds_after(tau - t0),

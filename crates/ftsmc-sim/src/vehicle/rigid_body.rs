@@ -413,8 +413,41 @@ pub struct Wrench {
 pub struct RigidBody {
     params: RigidBodyParams,
     inertia_inv: Mat3,
+    /// The inertia (and so its inverse) has zero products of inertia: the
+    /// products `J Ω` and `J⁻¹ M` skip the zero entries.
+    diagonal: bool,
+    /// Rotor hub positions, all with `z = 0` ([`RigidBodyParams::rotor_positions`]).
     rotors: [Vec3; 4],
     spin: [f64; 4],
+}
+
+/// No products of inertia: every off-diagonal entry is zero.
+fn is_diagonal(j: &Mat3) -> bool {
+    j[0][1] == 0.0 && j[0][2] == 0.0 && j[1][0] == 0.0 && j[1][2] == 0.0 && j[2][0] == 0.0 && j[2][1] == 0.0
+}
+
+/// `m v`, or for a `diagonal` `m` only its diagonal times `v`: the same
+/// values (the skipped products are zeros added to a sum).
+#[inline]
+fn mat_vec_or_diagonal(m: &Mat3, diagonal: bool, v: Vec3) -> Vec3 {
+    if diagonal {
+        [m[0][0] * v[0], m[1][1] * v[1], m[2][2] * v[2]]
+    } else {
+        mat_vec(m, v)
+    }
+}
+
+/// `a × r` for a rotor position `r` with `r_z = 0` (the terms with `r_z`
+/// are zeros).
+#[inline]
+fn cross_rotor(a: Vec3, r: Vec3) -> Vec3 {
+    [-(a[2] * r[1]), a[2] * r[0], a[0] * r[1] - a[1] * r[0]]
+}
+
+/// `r × f` for a rotor position `r` with `r_z = 0`.
+#[inline]
+fn rotor_cross(r: Vec3, f: Vec3) -> Vec3 {
+    [r[1] * f[2], -(r[0] * f[2]), r[0] * f[1] - r[1] * f[0]]
 }
 
 impl RigidBody {
@@ -422,7 +455,13 @@ impl RigidBody {
     pub fn new(params: RigidBodyParams) -> Result<Self, GainError> {
         params.check()?;
         let inertia_inv = inverse3(&params.inertia).expect("checked positive definite");
-        Ok(Self { params, inertia_inv, rotors: params.rotor_positions(), spin: params.spin.map(Spin::sign) })
+        Ok(Self {
+            params,
+            inertia_inv,
+            diagonal: is_diagonal(&params.inertia),
+            rotors: params.rotor_positions(),
+            spin: params.spin.map(Spin::sign),
+        })
     }
 
     /// This body with another mass (kg) and inertia (kg·m²): the same
@@ -432,7 +471,7 @@ impl RigidBody {
     pub fn with_mass_and_inertia(&self, mass: f64, inertia: Mat3) -> Result<Self, GainError> {
         let params = RigidBodyParams { mass, inertia, ..self.params };
         let inertia_inv = params.check_mass_inertia()?;
-        Ok(Self { params, inertia_inv, ..*self })
+        Ok(Self { params, inertia_inv, diagonal: is_diagonal(&inertia), ..*self })
     }
 
     /// In place, the result of [`RigidBody::with_mass_and_inertia`] of
@@ -459,6 +498,7 @@ impl RigidBody {
         self.params.mass = mass;
         self.params.inertia = inertia;
         self.inertia_inv = inverse;
+        self.diagonal = is_diagonal(&inertia);
         Ok(())
     }
 
@@ -504,20 +544,22 @@ impl RigidBody {
         if p.rotor_drag_xy != 0.0 || p.rotor_drag_z != 0.0 || p.translational_lift != 0.0 {
             for i in 0..4 {
                 let mut f = [0.0, 0.0, prepared.thrust[i]];
-                let vi = add(v_air, cross(omega, self.rotors[i]));
+                let vi = add(v_air, cross_rotor(omega, self.rotors[i]));
                 f[0] -= prepared.drag_xy[i] * vi[0];
                 f[1] -= prepared.drag_xy[i] * vi[1];
                 f[2] -= prepared.drag_z[i] * vi[2];
                 f[2] += p.translational_lift * (vi[0] * vi[0] + vi[1] * vi[1]);
                 force = add(force, f);
-                torque = add(torque, cross(self.rotors[i], f));
+                torque = add(torque, rotor_cross(self.rotors[i], f));
                 torque[2] -= prepared.reaction[i];
             }
         } else {
+            // The thrust alone: `f = [0, 0, T]`, `r × f = [r_y T, −r_x T, 0]`.
             for i in 0..4 {
-                let f = [0.0, 0.0, prepared.thrust[i]];
-                force = add(force, f);
-                torque = add(torque, cross(self.rotors[i], f));
+                let (r, t) = (self.rotors[i], prepared.thrust[i]);
+                force[2] += t;
+                torque[0] += r[1] * t;
+                torque[1] += -(r[0] * t);
                 torque[2] -= prepared.reaction[i];
             }
         }
@@ -555,9 +597,9 @@ impl RigidBody {
         let wrench = self.body_wrench_in(x, prepared, &r);
         let f_world = add(mat_vec(&r, wrench.force), input.force);
         let acc = [f_world[0] / p.mass, f_world[1] / p.mass, f_world[2] / p.mass - p.gravity];
-        let j_omega = mat_vec(&p.inertia, omega);
+        let j_omega = mat_vec_or_diagonal(&p.inertia, self.diagonal, omega);
         let m = sub(add(wrench.torque, input.torque), cross(omega, add(j_omega, prepared.momentum)));
-        let omega_dot = mat_vec(&self.inertia_inv, m);
+        let omega_dot = mat_vec_or_diagonal(&self.inertia_inv, self.diagonal, m);
         let q_dot = quat_derivative(q, omega);
         let mut d = [0.0; STATE_LEN];
         d[0..3].copy_from_slice(&x[3..6]);
@@ -730,4 +772,84 @@ pub fn from_quad_state(s: &QuadState) -> RigidBodyState {
     x[6..10].copy_from_slice(&q);
     x[10..13].copy_from_slice(&omega);
     x
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::{RngExt, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    /// The module's equations written out with full 3×3 products and cross
+    /// products, in the order of the sums of [`RigidBody::derivative`].
+    fn reference_derivative(body: &RigidBody, x: &RigidBodyState, input: &RigidBodyInput) -> RigidBodyState {
+        let p = body.params();
+        let rotors = p.rotor_positions();
+        let spin = p.spin.map(Spin::sign);
+        let q = quaternion(x);
+        let r = rotation(q);
+        let (v, omega) = (block(x, index::VELOCITY), block(x, index::BODY_RATES));
+        let v_air = mat_t_vec(&r, sub(v, input.wind));
+        let (mut force, mut torque) = ([0.0; 3], [0.0; 3]);
+        for i in 0..4 {
+            let w = input.rotor_speeds[i];
+            let vi = add(v_air, cross(omega, rotors[i]));
+            let mut f = [0.0, 0.0, p.thrust_coefficient * w * w];
+            f[0] -= w * p.rotor_drag_xy * vi[0];
+            f[1] -= w * p.rotor_drag_xy * vi[1];
+            f[2] -= w * p.rotor_drag_z * vi[2];
+            f[2] += p.translational_lift * (vi[0] * vi[0] + vi[1] * vi[1]);
+            force = add(force, f);
+            torque = add(torque, cross(rotors[i], f));
+            torque[2] -= spin[i] * p.moment_coefficient * w * w;
+        }
+        let speed = norm(v_air);
+        for k in 0..3 {
+            force[k] -= speed * p.parasitic_drag[k] * v_air[k];
+        }
+        let f_world = add(mat_vec(&r, force), input.force);
+        let h_r = body.rotor_momentum(&input.rotor_speeds);
+        let m = sub(add(torque, input.torque), cross(omega, add(mat_vec(&p.inertia, omega), h_r)));
+        let omega_dot = mat_vec(&inverse3(&p.inertia).unwrap(), m);
+        let mut d = [0.0; STATE_LEN];
+        d[0..3].copy_from_slice(&x[3..6]);
+        d[3..6].copy_from_slice(&[f_world[0] / p.mass, f_world[1] / p.mass, f_world[2] / p.mass - p.gravity]);
+        d[6..10].copy_from_slice(&quat_derivative(q, omega));
+        d[10..13].copy_from_slice(&omega_dot);
+        d
+    }
+
+    /// The derivative skips the zero terms of the rotor positions (`r_z = 0`),
+    /// of a thrust without aerodynamics and of a diagonal inertia: the same
+    /// values as the full products, for both layouts, aerodynamics on and
+    /// off, diagonal and full inertia.
+    #[test]
+    fn derivative_equals_the_full_products() {
+        let mut rng = ChaCha8Rng::seed_from_u64(3);
+        let full = RigidBodyParams {
+            inertia: [[3.8e-3, 1e-4, -2e-4], [1e-4, 3.9e-3, 5e-5], [-2e-4, 5e-5, 7.6e-3]],
+            ..RigidBodyParams::hummingbird()
+        };
+        let bodies = [RigidBodyParams::default(), RigidBodyParams::hummingbird(), RigidBodyParams::crazyflie(), full];
+        for params in bodies {
+            let body = RigidBody::new(params).unwrap();
+            assert_eq!(body.diagonal, is_diagonal(&params.inertia));
+            for _ in 0..200 {
+                let mut u = || -> f64 { rng.random_range(-3.0..3.0) };
+                let q = [1.0 + u().abs(), u(), u(), u()];
+                let n = q.iter().map(|c| c * c).sum::<f64>().sqrt();
+                let mut x: RigidBodyState = core::array::from_fn(|_| u());
+                x[6..10].copy_from_slice(&q.map(|c| c / n));
+                let input = RigidBodyInput {
+                    rotor_speeds: core::array::from_fn(|_| 300.0 * (2.0 + u())),
+                    wind: [u(), u(), u()],
+                    force: [u(), u(), u()],
+                    torque: [0.01 * u(), 0.01 * u(), 0.01 * u()],
+                };
+                let got = body.derivative(&x, &input);
+                let want = reference_derivative(&body, &x, &input);
+                assert_eq!(got, want, "{params:?}");
+            }
+        }
+    }
 }
