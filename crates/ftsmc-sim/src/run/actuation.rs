@@ -205,8 +205,11 @@ impl ActuatorStage {
 pub(crate) struct DecayCache {
     /// Factors over a whole substep `h` (motor advance).
     pub whole: [f64; 2],
-    slots: [Cell<(u64, [f64; 2])>; 16],
+    slots: [Cell<(u64, [f64; 2])>; 1 << SLOT_BITS],
 }
+
+/// log2 of the number of [`DecayCache`] slots.
+const SLOT_BITS: u32 = 6;
 
 impl DecayCache {
     /// A cache for `motors` and substeps of `h` seconds.
@@ -222,7 +225,11 @@ impl DecayCache {
             return [1.0; 2];
         }
         let key = dt.to_bits();
-        let slot = &self.slots[((key ^ (key >> 4) ^ (key >> 9)) & 15) as usize];
+        // An offset is `(t0 + h/2) − t0` or `(t0 + h) − t0`, a multiple of
+        // the ulp of `t0`: its low mantissa bits are zeros and its variants
+        // differ in the middle bits, so the slot comes from all the bits
+        // (Fibonacci hashing), not the low ones.
+        let slot = &self.slots[(key.wrapping_mul(0x9E37_79B9_7F4A_7C15) >> (64 - SLOT_BITS)) as usize];
         let (k, v) = slot.get();
         if k == key {
             return v;

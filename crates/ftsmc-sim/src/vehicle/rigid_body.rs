@@ -69,7 +69,8 @@ use ftsmc_core::model::{QuadState, QuadrotorParams};
 use serde::{Deserialize, Serialize};
 
 use super::math::{
-    add, cross, det3, inverse3, mat_t_vec, mat_vec, norm, quat_derivative, rotation, sub, Mat3, Quat, Vec3,
+    add, cross, det3, inverse3, inverse3_positive, mat_t_vec, mat_vec, norm, quat_derivative, rotation, sub, Mat3,
+    Quat, Vec3,
 };
 use crate::vehicle::paper::rk4_step;
 
@@ -488,9 +489,8 @@ impl RigidBody {
         let fast = scale > 0.0
             && scale.is_finite()
             && (1e-6..=1e6).contains(&mass)
-            && inertia.iter().flatten().all(|v| (-1e6..=1e6).contains(v))
-            && det3(&inertia) > 0.0;
-        let inverse = if fast { inverse3(&inertia) } else { None };
+            && inertia.iter().flatten().all(|v| (-1e6..=1e6).contains(v));
+        let inverse = if fast { inverse3_positive(&inertia) } else { None };
         let inverse = match inverse {
             Some(inv) => inv,
             None => RigidBodyParams { mass, inertia, ..self.params }.check_mass_inertia()?,
