@@ -384,17 +384,24 @@ impl HeldCommand {
     #[inline]
     pub fn speeds(&self, decay: &[f64; 2]) -> [f64; 4] {
         let [lo, hi] = self.limits;
-        let mut w = [0.0; 4];
+        let mut w = self.target;
         for i in 0..4 {
-            let s = match self.factor[i] {
-                None => self.target[i],
-                Some(k) => self.target[i] + self.gap[i] * decay[k],
-            };
-            w[i] = match &self.noise {
-                None => s,
-                Some((NoiseScale::Absolute, add)) => (s + add[i]).clamp(lo, hi),
-                Some((NoiseScale::Relative, mul)) => (s * mul[i]).clamp(lo, hi),
-            };
+            if let Some(k) = self.factor[i] {
+                w[i] += self.gap[i] * decay[k];
+            }
+        }
+        match &self.noise {
+            None => {}
+            Some((NoiseScale::Absolute, add)) => {
+                for i in 0..4 {
+                    w[i] = (w[i] + add[i]).clamp(lo, hi);
+                }
+            }
+            Some((NoiseScale::Relative, mul)) => {
+                for i in 0..4 {
+                    w[i] = (w[i] * mul[i]).clamp(lo, hi);
+                }
+            }
         }
         w
     }

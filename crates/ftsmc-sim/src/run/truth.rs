@@ -179,18 +179,19 @@ impl TruthModel for RigidTruth {
         let (t0, h, a, b, drive) = (s.t0, s.h, &s.a, &s.b, &s.drive);
         let wind = s.wind.unwrap_or([0.0; 3]);
         let body = &self.body;
-        let inertia = body.params().inertia;
         let mass = body.params().mass;
         // The inputs at each RK4 stage time, made once (the second and third
         // stages share theirs).
         let inputs = |tau: f64| {
-            let tv = TimeVarying::lerp(a, b, (tau - t0) / h);
-            let d = tv.disturbance;
+            // The disturbance of `TimeVarying::lerp` (its mass and inertia
+            // are not used here: the body's are those of the period).
+            let w = (tau - t0) / h;
+            let d: [f64; 6] = core::array::from_fn(|i| a.disturbance[i] + w * (b.disturbance[i] - a.disturbance[i]));
             body.prepare(&RigidBodyInput {
                 rotor_speeds: drive.speeds_after(tau - t0),
                 wind,
                 force: [mass * d[0], mass * d[1], mass * d[2]],
-                torque: core::array::from_fn(|r| (0..3).map(|c| inertia[r][c] * d[3 + c]).sum()),
+                torque: body.inertia_times([d[3], d[4], d[5]]),
             })
         };
         self.x = rk4_step_staged(inputs, |input, x| body.derivative_prepared(x, input), t0, &self.x, h);

@@ -502,6 +502,14 @@ impl RigidBody {
         Ok(())
     }
 
+    /// `J v` for a body-frame vector `v` (the inertia times an angular
+    /// acceleration, rad/s² → N·m): the same values as the full product,
+    /// the zero products of a diagonal inertia skipped.
+    #[inline]
+    pub fn inertia_times(&self, v: [f64; 3]) -> [f64; 3] {
+        mat_vec_or_diagonal(&self.params.inertia, self.diagonal, v)
+    }
+
     /// The parameters.
     pub fn params(&self) -> &RigidBodyParams {
         &self.params
