@@ -132,6 +132,8 @@ impl TruthModel for PaperTruth {
 pub(crate) struct RigidTruth {
     body: RigidBody,
     base: RigidBodyParams,
+    /// The added mass (kg) and inertia scale the body flies: its mass is
+    /// `base.mass + key.0`, its inertia `key.1 · base.inertia`.
     key: (f64, f64),
     x: RigidBodyState,
 }
@@ -144,7 +146,7 @@ impl RigidTruth {
         let base = scenario.rigid_body_params();
         let body = RigidBody::new(base)
             .map_err(|_| Divergence::RigidBodyOutOfRange { mass: base.mass, inertia_scale: 1.0 })?;
-        Ok(Self { body, base, key: (1.0, 0.0), x: from_quad_state(&scenario.initial_state.state()) })
+        Ok(Self { body, base, key: (0.0, 1.0), x: from_quad_state(&scenario.initial_state.state()) })
     }
 }
 
@@ -165,7 +167,14 @@ impl TruthModel for RigidTruth {
         let scale = tv.inertia[0] / base_plant.inertia[0];
         if (added, scale) != self.key {
             let mass = self.base.mass + added;
-            if self.body.set_mass_and_scaled_inertia(mass, &self.base.inertia, scale).is_err() {
+            // The body's inertia is `scale · base` already when the scale
+            // has not changed (a payload alone): then only the mass moves.
+            let updated = if scale == self.key.1 {
+                self.body.set_mass(mass)
+            } else {
+                self.body.set_mass_and_scaled_inertia(mass, &self.base.inertia, scale)
+            };
+            if updated.is_err() {
                 // Never fly a mass or inertia other than the recorded one.
                 return Err(Divergence::RigidBodyOutOfRange { mass, inertia_scale: scale });
             }

@@ -510,6 +510,17 @@ impl RigidBody {
         mat_vec_or_diagonal(&self.params.inertia, self.diagonal, v)
     }
 
+    /// In place, the result of [`RigidBody::with_mass_and_inertia`] of `mass`
+    /// (kg) and this body's inertia: only the mass check runs (the inertia
+    /// and its inverse are kept); on error `self` is unchanged.
+    pub fn set_mass(&mut self, mass: f64) -> Result<(), GainError> {
+        if !(1e-6..=1e6).contains(&mass) {
+            RigidBodyParams { mass, ..self.params }.check_mass_inertia()?;
+        }
+        self.params.mass = mass;
+        Ok(())
+    }
+
     /// The parameters.
     pub fn params(&self) -> &RigidBodyParams {
         &self.params
