@@ -82,13 +82,13 @@ impl TruthModel for PaperTruth {
 
     #[inline]
     fn substep(&mut self, s: &Substep<'_>) {
-        let (t0, h, a, b, env, wind) = (s.t0, s.h, s.a, s.b, s.env, s.wind);
+        let (t0, h, a, b, env, wind) = (s.t0, s.h, &s.a, &s.b, s.env, s.wind);
         // The plant of each RK4 stage time, made once (the second and third
         // stages share theirs).
         self.0 = match s.drive {
             Drive::Held { applied, omega_bar, .. } => {
                 let inputs = |tau: f64| {
-                    let tv = TimeVarying::lerp(&a, &b, (tau - t0) / h);
+                    let tv = TimeVarying::lerp(a, b, (tau - t0) / h);
                     (env.params_with(&tv), tv.disturbance)
                 };
                 match wind {
@@ -107,7 +107,7 @@ impl TruthModel for PaperTruth {
             drive @ Drive::Lagged { .. } => {
                 let wind = wind.unwrap_or([0.0; 3]);
                 let inputs = |tau: f64| {
-                    let tv = TimeVarying::lerp(&a, &b, (tau - t0) / h);
+                    let tv = TimeVarying::lerp(a, b, (tau - t0) / h);
                     let p = env.params_with(&tv);
                     let w = drive.speeds_after(tau - t0);
                     let delivered: Command = forces_from_squared_speeds(&p, &w.map(|o| o * o));
