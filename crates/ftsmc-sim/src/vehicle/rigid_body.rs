@@ -756,12 +756,40 @@ pub fn euler_rates_clamped(euler: &[f64; 3], body_rates: &[f64; 3]) -> [f64; 3] 
     kinematics::euler_rates_from_body_rates(euler, body_rates)
 }
 
+/// [`euler_rates_clamped`] at the Z-Y-X angles `euler` of the unit
+/// quaternion `q` ([`kinematics::euler_from_quaternion`]), with the sines and
+/// cosines of φ and θ read off `q` instead of evaluated: with
+/// `a = 2(wx + yz) = cθ sφ`, `b = 1 − 2(x² + y²) = cθ cφ` (the arguments of
+/// φ's `atan2`) and `s = 2(wy − xz) = sθ` (θ's `asin`), `cθ = √(a² + b²)`,
+/// `sφ = a/cθ`, `cφ = b/cθ`: the same values to rounding, without two
+/// `sin_cos`. Within `cθ < 1e-3` of gimbal lock, where `a` and `b` lose
+/// their relative precision, the core's formula on the angles answers.
+fn euler_rates_of_quaternion(q: &Quat, euler: &Vec3, body_rates: &Vec3) -> Vec3 {
+    let [w, x, y, z] = *q;
+    let a = 2.0 * (w * x + y * z);
+    let b = 1.0 - 2.0 * (x * x + y * y);
+    let ct = (a * a + b * b).sqrt();
+    if !(ct >= 1e-3) {
+        return kinematics::euler_rates_from_body_rates(euler, body_rates);
+    }
+    let (sf, cf) = (a / ct, b / ct);
+    let st = ftsmc_core::law::saturate(2.0 * (w * y - x * z), 1.0);
+    // kinematics::euler_rates_from_body_rates, term for term.
+    let [p, q, r] = *body_rates;
+    let e = q * sf + r * cf;
+    [p + e * st / ct, q * cf - r * sf, e / ct]
+}
+
 /// The Euler state the paper's controllers were designed for: position,
 /// velocity, Z-Y-X angles ([`quaternion_to_euler`]) and Euler rates
 /// ([`body_rates_to_euler_rates`]). Errors with [`GimbalLock`] at θ = ±π/2.
 pub fn try_to_quad_state(x: &RigidBodyState) -> Result<QuadState, GimbalLock> {
-    let attitude = kinematics::euler_from_quaternion(&quaternion(x));
-    let angular_rate = body_rates_to_euler_rates(&attitude, &block(x, index::BODY_RATES))?;
+    let q = quaternion(x);
+    let attitude = kinematics::euler_from_quaternion(&q);
+    if ftsmc_core::math::cos(attitude[1]).abs() < GIMBAL_LOCK_COS {
+        return Err(GimbalLock { theta: attitude[1] });
+    }
+    let angular_rate = euler_rates_of_quaternion(&q, &attitude, &block(x, index::BODY_RATES));
     Ok(QuadState { position: block(x, index::POSITION), attitude, velocity: block(x, index::VELOCITY), angular_rate })
 }
 
@@ -771,12 +799,13 @@ pub fn try_to_quad_state(x: &RigidBodyState) -> Result<QuadState, GimbalLock> {
 /// rather than infinite. A controller flying there has already lost its
 /// Euler-angle model; use [`try_to_quad_state`] to detect it.
 pub fn to_quad_state(x: &RigidBodyState) -> QuadState {
-    let attitude = kinematics::euler_from_quaternion(&quaternion(x));
+    let q = quaternion(x);
+    let attitude = kinematics::euler_from_quaternion(&q);
     QuadState {
         position: block(x, index::POSITION),
         attitude,
         velocity: block(x, index::VELOCITY),
-        angular_rate: euler_rates_clamped(&attitude, &block(x, index::BODY_RATES)),
+        angular_rate: euler_rates_of_quaternion(&q, &attitude, &block(x, index::BODY_RATES)),
     }
 }
 
@@ -836,6 +865,42 @@ mod tests {
         d[6..10].copy_from_slice(&quat_derivative(q, omega));
         d[10..13].copy_from_slice(&omega_dot);
         d
+    }
+
+    /// The Euler rates with sines and cosines read off the quaternion equal
+    /// the core's formula on the angles to rounding, at any attitude,
+    /// including near and at gimbal lock (where the core's formula answers).
+    /// "To rounding" near gimbal lock is the angle path's: its
+    /// `cos θ = cos(asin s)` has an absolute error of about `ε/cθ`, so the
+    /// rates (∝ 1/cθ) differ by up to about `ε ‖Ω‖/cθ³`; the quaternion's
+    /// `cθ = √(a² + b²)` keeps its relative precision there.
+    #[test]
+    fn euler_rates_from_the_quaternion_agree_with_the_angles() {
+        let mut rng = ChaCha8Rng::seed_from_u64(5);
+        let mut worst: f64 = 0.0;
+        for k in 0..20_000 {
+            let mut u = || -> f64 { rng.random_range(-1.0..1.0) };
+            // Every third sample close to θ = ±π/2 (down to exactly there).
+            let theta = if k % 3 == 0 {
+                (core::f64::consts::FRAC_PI_2 - 10f64.powi(-(k % 17))) * u().signum()
+            } else {
+                1.5 * u()
+            };
+            let euler = [3.1 * u(), theta, 3.1 * u()];
+            let q = kinematics::quaternion_from_euler(&euler);
+            let angles = kinematics::euler_from_quaternion(&q);
+            let rates = [2.0 * u(), 2.0 * u(), 2.0 * u()];
+            let want = euler_rates_clamped(&angles, &rates);
+            let got = euler_rates_of_quaternion(&q, &angles, &rates);
+            let ct = ftsmc_core::math::cos(angles[1]).abs();
+            for i in 0..3 {
+                // Relative to the angle path's precision ‖Ω‖/cθ³ (‖Ω‖ ≤ 2√3).
+                let err = (got[i] - want[i]).abs() * ct.max(GIMBAL_LOCK_COS).powi(3) / 4.0;
+                worst = worst.max(err);
+                assert!(err <= 1e-14, "{euler:?} {rates:?}: {got:?} vs {want:?}");
+            }
+        }
+        assert!(worst > 0.0, "the two forms are not the same bits everywhere");
     }
 
     /// The derivative skips the zero terms of the rotor positions (`r_z = 0`),
