@@ -567,7 +567,10 @@ impl RigidBody {
                 f[0] -= prepared.drag_xy[i] * vi[0];
                 f[1] -= prepared.drag_xy[i] * vi[1];
                 f[2] -= prepared.drag_z[i] * vi[2];
-                f[2] += p.translational_lift * (vi[0] * vi[0] + vi[1] * vi[1]);
+                // Off (k_h = 0) it would add a zero.
+                if p.translational_lift != 0.0 {
+                    f[2] += p.translational_lift * (vi[0] * vi[0] + vi[1] * vi[1]);
+                }
                 force = add(force, f);
                 torque = add(torque, rotor_cross(self.rotors[i], f));
                 torque[2] -= prepared.reaction[i];
