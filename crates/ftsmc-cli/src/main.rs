@@ -3,6 +3,7 @@
 //! Run `ftsmc --help` for the commands.
 
 mod console;
+mod cpu;
 mod figures;
 mod fixed_time;
 mod ladder;

@@ -106,11 +106,16 @@ pub fn run(
     let flights = (indices.end - indices.start).saturating_mul(controllers.len() as u64);
     let bar = steps_bar(flights.saturating_mul(planned_steps(scenario)), flights);
     let started = Instant::now();
+    let cpu_started = crate::cpu::process_cpu_seconds();
     let rows = pool
         .install(|| run_batch_range(scenario, &spec, controllers, indices.clone(), seed, &|n| bar.inc(n), None))
         .map_err(|known| anyhow::anyhow!("unknown controller (known: {known})"))?;
     bar.finish_and_clear();
     let elapsed = started.elapsed().as_secs_f64();
+    let cpu = crate::cpu::process_cpu_seconds().zip(cpu_started).map(|(end, start)| end - start);
+    // Control steps flown: diverged and crashed runs stop early.
+    let period = scenario.control_period();
+    let steps: u64 = rows.iter().map(|r| (r.metrics.duration / period).round() as u64).sum();
 
     dir.write("runs.csv", &runs_csv(&rows)?)?;
     // The resolved scenario, with the master seed and the controllers flown:
@@ -154,9 +159,11 @@ pub fn run(
     println!("Monte Carlo: {} × {what} of {} (seed {seed})\n", controllers.len(), scenario.name);
     println!("{}", mc_table(&summaries));
     println!(
-        "\n{} flights in {elapsed:.2} s ({:.0} flights/s); wrote {}/ (runs.csv, summary.json, scenario.toml{})",
+        "\n{} flights, {:.2} M control steps in {elapsed:.2} s ({:.0} flights/s{}); wrote {}/ (runs.csv, summary.json, scenario.toml{})",
         rows.len(),
+        steps as f64 / 1e6,
         rows.len() as f64 / elapsed.max(1e-9),
+        crate::cpu::steps_per_cpu_second(steps, cpu),
         folder.display(),
         if figures { ", montecarlo-ise.{svg,png}" } else { "" }
     );

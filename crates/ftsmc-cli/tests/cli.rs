@@ -111,6 +111,12 @@ fn montecarlo_csv_is_byte_identical_across_thread_counts() {
             &dir,
         );
         assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        // 4 runs × 3 controllers × 4 s at 1 kHz, none diverges: 48,000 steps.
+        let said = String::from_utf8_lossy(&out.stdout);
+        assert!(said.contains("12 flights, 0.05 M control steps in "), "{said}");
+        if cfg!(unix) {
+            assert!(said.contains(" M steps flown per CPU-second"), "{said}");
+        }
     }
     // `--out` is the parent: the batch goes to `<out>/<scenario name>/`.
     let one = std::fs::read(dir.join("mc1/paper-scenario-2/runs.csv")).unwrap();

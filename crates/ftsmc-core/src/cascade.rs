@@ -64,7 +64,7 @@ use crate::law::{
     check_closed, check_gain, check_left_open, check_open, saturate, AxisLaw, GainError, INPUT_LIMIT, MAX_ESTIMATES,
     STATE_LIMIT,
 };
-use crate::math::{asin, cos, sin_cos};
+use crate::math::{asin, cos, sin_cos, sqrt, SinCosCache};
 use crate::model::{Command, QuadState, QuadrotorParams, Reference};
 
 // The controller interface lives in its own module; re-exported here so
@@ -324,6 +324,8 @@ pub struct Cascade<L: AxisLaw> {
     tilt_limit: f64,
     /// Last [`Controller::actuator_feedback`] report.
     actuator_saturated: bool,
+    /// `sin`, `cos` of the last reference heading ψ_d (Eq. 52).
+    yaw_sin_cos: SinCosCache,
 }
 
 impl<L: AxisLaw> Cascade<L> {
@@ -371,6 +373,7 @@ impl<L: AxisLaw> Cascade<L> {
             telemetry: Self::initial_telemetry(config.mass_adaptation.alpha_hat0),
             tilt_limit: crate::math::sin(config.settings.max_tilt),
             actuator_saturated: false,
+            yaw_sin_cos: SinCosCache::new(),
         }
     }
 
@@ -404,10 +407,19 @@ impl<L: AxisLaw> Cascade<L> {
     /// [`Cascade::desired_roll_pitch`] with the clamp `limit = sin(max_tilt)` precomputed.
     #[inline]
     pub fn desired_roll_pitch_limited(ux: f64, uy: f64, yaw_d: f64, limit: f64) -> [f64; 2] {
-        let (s_psi, c_psi) = sin_cos(yaw_d);
+        Self::desired_roll_pitch_at(ux, uy, sin_cos(yaw_d), limit)
+    }
+
+    /// [`Cascade::desired_roll_pitch_limited`] with `(sin ψ_d, cos ψ_d)` given.
+    #[inline]
+    fn desired_roll_pitch_at(ux: f64, uy: f64, (s_psi, c_psi): (f64, f64), limit: f64) -> [f64; 2] {
         // `saturate`, not `f64::clamp`: it does not panic on a NaN limit.
-        let roll = asin(saturate(ux * s_psi - uy * c_psi, limit));
-        let pitch = asin(saturate((ux * c_psi + uy * s_psi) / cos(roll), limit));
+        let sin_roll = saturate(ux * s_psi - uy * c_psi, limit);
+        let roll = asin(sin_roll);
+        // cos φ_d = √((1 − sin φ_d)(1 + sin φ_d)), equal to cos(asin(·)) to
+        // rounding (|sin φ_d| <= sin(max_tilt) < 1), without the cosine.
+        let cos_roll = sqrt((1.0 - sin_roll) * (1.0 + sin_roll));
+        let pitch = asin(saturate((ux * c_psi + uy * s_psi) / cos_roll, limit));
         [roll, pitch]
     }
 
@@ -457,26 +469,24 @@ impl<L: AxisLaw> Controller for Cascade<L> {
     /// used in the cancellation terms clamped to `±INPUT_LIMIT`; `S_z` in
     /// Eq. 44, α̂ and the command-filter states saturated to `±STATE_LIMIT`.
     fn update(&mut self, state: &QuadState, reference: &Reference, dt: f64) -> Command {
-        if !(dt.is_finite()
-            && state.to_array().iter().all(|v| v.is_finite())
-            && reference.position.iter().all(|v| v.is_finite())
-            && reference.velocity.iter().all(|v| v.is_finite())
-            && reference.acceleration.iter().all(|v| v.is_finite())
-            && reference.yaw.is_finite()
-            && reference.yaw_rate.is_finite()
-            && reference.yaw_acceleration.is_finite())
-        {
+        if !(dt.is_finite() && state.is_finite() && crate::setpoint::reference_finite(reference)) {
             return Command { thrust: f64::NAN, torque: [f64::NAN; 3] };
         }
         // Finite inputs whose differences overflow (x = 1e308, x_d = -1e308)
         // are non-finite intermediates: the same NaN, before any state moves
         // (otherwise the attitude reference filter keeps a NaN for good).
         let yaw = [state.attitude[2] - reference.yaw, state.angular_rate[2] - reference.yaw_rate];
-        if !((0..3).all(|i| {
-            (state.position[i] - reference.position[i]).is_finite()
-                && (state.velocity[i] - reference.velocity[i]).is_finite()
-        }) && yaw.iter().all(|v| v.is_finite()))
-        {
+        let differences = [
+            state.position[0] - reference.position[0],
+            state.position[1] - reference.position[1],
+            state.position[2] - reference.position[2],
+            state.velocity[0] - reference.velocity[0],
+            state.velocity[1] - reference.velocity[1],
+            state.velocity[2] - reference.velocity[2],
+            yaw[0],
+            yaw[1],
+        ];
+        if crate::math::finite_probe(&differences) != 0.0 {
             return Command { thrust: f64::NAN, torque: [f64::NAN; 3] };
         }
         let model = self.config.model;
@@ -529,7 +539,7 @@ impl<L: AxisLaw> Controller for Cascade<L> {
         let thrust_for_inversion = thrust.max(1e-3 * m * g);
         let ux = horizontal_mass * accel[0] / thrust_for_inversion;
         let uy = horizontal_mass * accel[1] / thrust_for_inversion;
-        let demand = Self::desired_roll_pitch_limited(ux, uy, reference.yaw, self.tilt_limit);
+        let demand = Self::desired_roll_pitch_at(ux, uy, self.yaw_sin_cos.get(reference.yaw), self.tilt_limit);
         let (att_ref, att_rate, att_accel) = self.attitude_reference(demand, state, dt);
         let reference_attitude = [att_ref[0], att_ref[1], reference.yaw];
         let reference_rate = [att_rate[0], att_rate[1], reference.yaw_rate];

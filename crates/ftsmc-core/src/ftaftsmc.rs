@@ -9,7 +9,7 @@ use crate::law::{
     check_closed, check_gain, check_initial_state, check_left_open, check_open, inputs_finite, saturate, AxisLaw,
     ContinuousRhs, GainError, INPUT_LIMIT, MAX_ESTIMATES, STATE_LIMIT,
 };
-use crate::math::{exp, pow_abs, pow_abs_minus_one, pow_abs_sat, sig, sign};
+use crate::math::{exp, pow_abs, pow_abs_minus_one, saturate_power, sig, sign, Power};
 
 /// Gains of one FTAFTSMC channel (paper Tables 4 and 5).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -231,19 +231,70 @@ pub struct SurfaceTerms {
     pub varpi: f64,
 }
 
+/// What the gains fix for a whole flight, computed once per channel: `κ1`,
+/// `κ2` (Eq. 9), `2ξ²` (Eq. 15, 17) and the evaluation path of each
+/// exponent ([`Power`]). Every function below that takes it gives the same
+/// bits as its public counterpart, which builds it from the gains per call.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Constants {
+    /// `[κ1, κ2]` of Eq. 9.
+    kappa: [f64; 2],
+    /// `2 ξ²`, computed as `2.0 * ξ * ξ` (the order of Eq. 15 and 17).
+    two_xi_sq: f64,
+    /// p (Eq. 5, 7).
+    p: Power,
+    /// q (Eq. 5).
+    q: Power,
+    /// q2 (Eq. 15).
+    q2: Power,
+    /// p2 (Eq. 15).
+    p2: Power,
+    /// ℵ3 (Eq. 6).
+    aleph3: Power,
+    /// ℵ3 − 1 (Eq. 11).
+    aleph3_minus_one: Power,
+}
+
+impl Constants {
+    fn new(g: &FtaftsmcGains, kappa: [f64; 2]) -> Self {
+        Self {
+            kappa,
+            two_xi_sq: 2.0 * g.xi * g.xi,
+            p: Power::new(g.p),
+            q: Power::new(g.q),
+            q2: Power::new(g.q2),
+            p2: Power::new(g.p2),
+            aleph3: Power::new(g.aleph3),
+            aleph3_minus_one: Power::new(g.aleph3 - 1.0),
+        }
+    }
+}
+
 /// `Y(e) = 1 / (ℵ1 + (1 − ℵ1) exp(−ℵ2 |e|^ℵ3))` and its time derivative
 /// (Eq. 6 with the erratum, Eq. 11).
 #[inline]
 pub fn gain_shaping(g: &FtaftsmcGains, e: f64, e_dot: f64) -> (f64, f64) {
+    gain_shaping_c(g, &Constants::new(g, [0.0; 2]), e, e_dot)
+}
+
+#[inline]
+fn gain_shaping_c(g: &FtaftsmcGains, c: &Constants, e: f64, e_dot: f64) -> (f64, f64) {
     if g.aleph1 == 1.0 {
         return (1.0, 0.0);
     }
-    let decay = exp(-g.aleph2 * pow_abs(e, g.aleph3));
+    let decay = exp(-g.aleph2 * c.aleph3.abs(e));
     let den = g.aleph1 + (1.0 - g.aleph1) * decay;
     let y = 1.0 / den;
     // When |e|^ℵ3 overflows, decay is 0 and |e|^(ℵ3−1) may be ∞: the limit
     // of their product is 0 (the exponential wins), not 0·∞ = NaN.
-    let pow = if decay == 0.0 { 0.0 } else { pow_abs_minus_one(e, g.aleph3) };
+    // |e|^(ℵ3−1) as `pow_abs_minus_one` (0 at e = 0 for ℵ3 > 1, 1 for ℵ3 = 1).
+    let pow = if decay == 0.0 {
+        0.0
+    } else if e == 0.0 {
+        pow_abs_minus_one(e, g.aleph3)
+    } else {
+        c.aleph3_minus_one.abs(e)
+    };
     let y_dot = (1.0 - g.aleph1) * decay * g.aleph2 * g.aleph3 * pow * e_dot * sign(e) / (den * den);
     (y, y_dot)
 }
@@ -263,10 +314,16 @@ pub fn nonsingular_term(g: &FtaftsmcGains, e: f64, e_dot: f64) -> (f64, f64) {
 
 /// [`nonsingular_term`] with precomputed `[κ1, κ2]`.
 #[inline]
-pub fn nonsingular_term_with(g: &FtaftsmcGains, [kappa1, kappa2]: [f64; 2], e: f64, e_dot: f64) -> (f64, f64) {
+pub fn nonsingular_term_with(g: &FtaftsmcGains, kappa: [f64; 2], e: f64, e_dot: f64) -> (f64, f64) {
+    nonsingular_term_c(g, &Constants::new(g, kappa), e, e_dot)
+}
+
+#[inline]
+fn nonsingular_term_c(g: &FtaftsmcGains, c: &Constants, e: f64, e_dot: f64) -> (f64, f64) {
+    let [kappa1, kappa2] = c.kappa;
     let ae = e.abs();
     if ae > g.epsilon {
-        let pow_p = pow_abs(e, g.p);
+        let pow_p = c.p.abs(e);
         (pow_p * sign(e), g.p * e_dot * pow_p / ae)
     } else {
         (kappa1 * e + kappa2 * sig(e, 2.0), kappa1 * e_dot + 2.0 * kappa2 * ae * e_dot)
@@ -282,9 +339,14 @@ pub fn sliding_surface(g: &FtaftsmcGains, e: f64, e_dot: f64) -> SurfaceTerms {
 /// [`sliding_surface`] with precomputed `[κ1, κ2]` (see [`kappa`]).
 #[inline]
 pub fn sliding_surface_with(g: &FtaftsmcGains, kappa: [f64; 2], e: f64, e_dot: f64) -> SurfaceTerms {
-    let (y, y_dot) = gain_shaping(g, e, e_dot);
-    let (s_delta, s_delta_dot) = nonsingular_term_with(g, kappa, e, e_dot);
-    let pow_q = pow_abs(e, g.q);
+    sliding_surface_c(g, &Constants::new(g, kappa), e, e_dot)
+}
+
+#[inline]
+fn sliding_surface_c(g: &FtaftsmcGains, c: &Constants, e: f64, e_dot: f64) -> SurfaceTerms {
+    let (y, y_dot) = gain_shaping_c(g, c, e, e_dot);
+    let (s_delta, s_delta_dot) = nonsingular_term_c(g, c, e, e_dot);
+    let pow_q = c.q.abs(e);
     // λ sig^q(e) + γ S_Δ + η e
     let shape = g.lambda * pow_q * sign(e) + g.gamma * s_delta + g.eta * e;
     // d/dt of the same bracket: λ q |e|^(q−1) ė + γ Ṡ_Δ + η ė
@@ -298,16 +360,29 @@ pub fn sliding_surface_with(g: &FtaftsmcGains, kappa: [f64; 2], e: f64, e_dot: f
 /// [`crate::law::POWER_LIMIT`] so that it never overflows.
 #[inline]
 pub fn reaching_law(g: &FtaftsmcGains, s: f64, delta_hat: f64) -> f64 {
-    -(g.lambda2 * pow_abs_sat(s, g.q2) * sign(s)
-        + g.gamma2 * sig(s, g.p2)
+    reaching_law_c(g, &Constants::new(g, [0.0; 2]), s, delta_hat)
+}
+
+#[inline]
+fn reaching_law_c(g: &FtaftsmcGains, c: &Constants, s: f64, delta_hat: f64) -> f64 {
+    // |S|^q2 and |S|^p2 share ln|S| when both are general powers.
+    let (pow_q2, pow_p2) = Power::abs_pair(c.q2, c.p2, s);
+    let sign_s = sign(s);
+    -(g.lambda2 * saturate_power(pow_q2) * sign_s
+        + g.gamma2 * (pow_p2 * sign_s)
         + g.eta2 * s
-        + delta_hat / (2.0 * g.xi * g.xi) * s)
+        + delta_hat / c.two_xi_sq * s)
 }
 
 /// `dδ̂/dt = α1 (S²/(2ξ²) − α2 δ̂)` (Eq. 17).
 #[inline]
 pub fn delta_hat_rate(g: &FtaftsmcGains, s: f64, delta_hat: f64) -> f64 {
-    g.alpha1 * (s * s / (2.0 * g.xi * g.xi) - g.alpha2 * delta_hat)
+    delta_hat_rate_c(g, &Constants::new(g, [0.0; 2]), s, delta_hat)
+}
+
+#[inline]
+fn delta_hat_rate_c(g: &FtaftsmcGains, c: &Constants, s: f64, delta_hat: f64) -> f64 {
+    g.alpha1 * (s * s / c.two_xi_sq - g.alpha2 * delta_hat)
 }
 
 /// One FTAFTSMC channel: gains, the estimate δ̂ and the last surface terms.
@@ -321,8 +396,9 @@ pub struct FtaftsmcAxis {
     pub last: SurfaceTerms,
     /// `ϖ2` of the last update (Eq. 15).
     pub last_reaching: f64,
-    /// `[κ1, κ2]` of Eq. 9, computed once from the gains.
-    kappa: [f64; 2],
+    /// `κ1`, `κ2` of Eq. 9, `2ξ²` and the exponents' paths, computed once
+    /// from the gains.
+    constants: Constants,
     /// δ̂ held (Eq. 17 not integrated) while true; see
     /// [`AxisLaw::set_adaptation_frozen`].
     frozen: bool,
@@ -349,7 +425,7 @@ impl FtaftsmcAxis {
             delta_hat: gains.delta_hat0,
             last: SurfaceTerms::default(),
             last_reaching: 0.0,
-            kappa: kappa(&gains),
+            constants: Constants::new(&gains, kappa(&gains)),
             frozen: false,
         }
     }
@@ -380,10 +456,11 @@ impl AxisLaw for FtaftsmcAxis {
             return f64::NAN;
         }
         let (e, e_dot) = (saturate(e, INPUT_LIMIT), saturate(e_dot, INPUT_LIMIT));
-        let terms = sliding_surface_with(&self.gains, self.kappa, e, e_dot);
-        let reaching = reaching_law(&self.gains, terms.s, self.delta_hat);
+        let terms = sliding_surface_c(&self.gains, &self.constants, e, e_dot);
+        let reaching = reaching_law_c(&self.gains, &self.constants, terms.s, self.delta_hat);
         if !self.frozen {
-            let delta_hat = self.delta_hat + dt * delta_hat_rate(&self.gains, terms.s, self.delta_hat);
+            let delta_hat =
+                self.delta_hat + dt * delta_hat_rate_c(&self.gains, &self.constants, terms.s, self.delta_hat);
             self.delta_hat = delta_hat.clamp(0.0, STATE_LIMIT);
         }
         self.last = terms;
@@ -416,12 +493,17 @@ impl AxisLaw for FtaftsmcAxis {
     /// from δ̂ ≥ 0 by itself); `dδ̂/dt = 0` while frozen.
     fn continuous_rhs(&self, e: f64, e_dot: f64, estimates: [f64; 3]) -> Option<ContinuousRhs> {
         let (e, e_dot) = (saturate(e, INPUT_LIMIT), saturate(e_dot, INPUT_LIMIT));
-        let terms = sliding_surface_with(&self.gains, self.kappa, e, e_dot);
+        let c = &self.constants;
+        let terms = sliding_surface_c(&self.gains, c, e, e_dot);
         let delta_hat = estimates[0];
         Some(ContinuousRhs {
-            v: terms.varpi + reaching_law(&self.gains, terms.s, delta_hat),
+            v: terms.varpi + reaching_law_c(&self.gains, c, terms.s, delta_hat),
             s: terms.s,
-            estimates_rate: [if self.frozen { 0.0 } else { delta_hat_rate(&self.gains, terms.s, delta_hat) }, 0.0, 0.0],
+            estimates_rate: [
+                if self.frozen { 0.0 } else { delta_hat_rate_c(&self.gains, c, terms.s, delta_hat) },
+                0.0,
+                0.0,
+            ],
         })
     }
 }
@@ -515,6 +597,64 @@ mod tests {
                 let mut axis = FtaftsmcAxis::new(g);
                 let u = axis.update(e, ed, 1e-3);
                 assert!(u.is_finite() && axis.delta_hat.is_finite(), "e={e} ė={ed} → {u}");
+            }
+        }
+    }
+
+    /// The channel's update with the exponents' paths, κ and 2ξ² chosen at
+    /// construction (and ln|S| shared by the two reaching powers) gives the
+    /// same bits as Eq. 5–17 written term by term with the free powers,
+    /// as the law was before the hoisting.
+    #[test]
+    fn update_matches_the_term_by_term_formulas_bit_for_bit() {
+        use crate::math::pow_abs_sat;
+        fn reference(g: &FtaftsmcGains, delta_hat: f64, e: f64, e_dot: f64, dt: f64) -> (f64, f64) {
+            let (y, y_dot) = if g.aleph1 == 1.0 {
+                (1.0, 0.0)
+            } else {
+                let decay = exp(-g.aleph2 * pow_abs(e, g.aleph3));
+                let den = g.aleph1 + (1.0 - g.aleph1) * decay;
+                let pow = if decay == 0.0 { 0.0 } else { pow_abs_minus_one(e, g.aleph3) };
+                (1.0 / den, (1.0 - g.aleph1) * decay * g.aleph2 * g.aleph3 * pow * e_dot * sign(e) / (den * den))
+            };
+            let [k1, k2] = kappa(g);
+            let (sd, sd_dot) = if e.abs() > g.epsilon {
+                let pp = pow_abs(e, g.p);
+                (pp * sign(e), g.p * e_dot * pp / e.abs())
+            } else {
+                (k1 * e + k2 * sig(e, 2.0), k1 * e_dot + 2.0 * k2 * e.abs() * e_dot)
+            };
+            let pq = pow_abs(e, g.q);
+            let shape = g.lambda * pq * sign(e) + g.gamma * sd + g.eta * e;
+            let pq1 = if e == 0.0 { pow_abs_minus_one(e, g.q) } else { pq / e.abs() };
+            let shape_dot = g.lambda * g.q * pq1 * e_dot + g.gamma * sd_dot + g.eta * e_dot;
+            let s = e_dot + y * shape;
+            let varpi = -y_dot * shape - y * shape_dot;
+            let reaching = -(g.lambda2 * pow_abs_sat(s, g.q2) * sign(s)
+                + g.gamma2 * sig(s, g.p2)
+                + g.eta2 * s
+                + delta_hat / (2.0 * g.xi * g.xi) * s);
+            let rate = g.alpha1 * (s * s / (2.0 * g.xi * g.xi) - g.alpha2 * delta_hat);
+            (varpi + reaching, (delta_hat + dt * rate).clamp(0.0, STATE_LIMIT))
+        }
+        let general_q = FtaftsmcGains { q: 1.3, aleph3: 2.5, q2: 1.7, ..FtaftsmcGains::PAPER_Z };
+        for g in [
+            FtaftsmcGains::PAPER_XY,
+            FtaftsmcGains::PAPER_Z,
+            FtaftsmcGains::PAPER_ROLL_PITCH,
+            FtaftsmcGains::PAPER_YAW,
+            general_q,
+        ] {
+            for &e in &[-3.0, -0.4, -0.05, -0.01, 0.0, 1e-7, 0.02, 0.05, 0.3, 2.5] {
+                for &e_dot in &[-2.0, -0.1, 0.0, 0.03, 1.5] {
+                    for &delta_hat in &[0.0, 0.7] {
+                        let mut axis = FtaftsmcAxis::new(FtaftsmcGains { delta_hat0: delta_hat, ..g });
+                        let u = axis.update(e, e_dot, 1e-3);
+                        let (want_u, want_delta_hat) = reference(&g, delta_hat, e, e_dot, 1e-3);
+                        assert_eq!(u.to_bits(), want_u.to_bits(), "{g:?} e={e} ė={e_dot}");
+                        assert_eq!(axis.delta_hat.to_bits(), want_delta_hat.to_bits(), "{g:?} e={e} ė={e_dot}");
+                    }
+                }
             }
         }
     }

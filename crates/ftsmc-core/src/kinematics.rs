@@ -31,6 +31,15 @@ pub fn euler_from_rotation(r: &Mat3) -> Vec3 {
     [atan2(r[2][1], r[2][2]), asin(s), atan2(r[1][0], r[0][0])]
 }
 
+/// Roll and pitch `[φ, θ]` (rad) of a rotation matrix: the first two
+/// components of [`euler_from_rotation`], same bits, without the yaw's
+/// `atan2` (for the controllers that report only the demanded tilt).
+#[inline]
+pub fn roll_pitch_from_rotation(r: &Mat3) -> [f64; 2] {
+    let s = crate::law::saturate(-r[2][0], 1.0);
+    [atan2(r[2][1], r[2][2]), asin(s)]
+}
+
 /// Body rates `Ω = W(φ, θ) η̇` (rad/s) from Z-Y-X Euler rates `η̇` at
 /// `euler`: `p = φ̇ − ψ̇ sθ`, `q = θ̇ cφ + ψ̇ cθ sφ`, `r = −θ̇ sφ + ψ̇ cθ cφ`.
 /// Exact, defined everywhere.

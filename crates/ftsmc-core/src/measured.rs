@@ -27,8 +27,9 @@ pub struct BodyAttitude {
 
 impl BodyAttitude {
     /// True when every component is finite.
+    #[inline]
     pub fn is_finite(&self) -> bool {
-        self.quaternion.iter().chain(&self.body_rates).all(|v| v.is_finite())
+        crate::math::finite_probe(&self.quaternion) + crate::math::finite_probe(&self.body_rates) == 0.0
     }
 }
 

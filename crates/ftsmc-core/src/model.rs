@@ -119,6 +119,18 @@ pub struct QuadState {
 }
 
 impl QuadState {
+    /// True when all twelve components are finite (branch-free,
+    /// [`crate::math::finite_probe`]).
+    #[inline]
+    pub fn is_finite(&self) -> bool {
+        use crate::math::finite_probe;
+        finite_probe(&self.position)
+            + finite_probe(&self.attitude)
+            + finite_probe(&self.velocity)
+            + finite_probe(&self.angular_rate)
+            == 0.0
+    }
+
     /// Flatten to `[x, y, z, φ, θ, ψ, ẋ, ẏ, ż, φ̇, θ̇, ψ̇]`.
     pub fn to_array(&self) -> [f64; 12] {
         let mut a = [0.0; 12];

@@ -98,16 +98,16 @@
 
 use crate::controller::{Controller, Telemetry};
 use crate::kinematics::{
-    body_rates_from_euler_rates, euler_from_rotation, rotation_from_euler, rotation_from_quaternion,
+    body_rates_from_euler_rates, roll_pitch_from_rotation, rotation_from_euler, rotation_from_quaternion,
 };
 use crate::law::{
     check_gain, check_gain_or_zero, check_left_open, check_open, saturate, GainError, INPUT_LIMIT, MAX_ESTIMATES,
     STATE_LIMIT,
 };
-use crate::math::{acos, asin, cos, cross, dot, exp, mat_t_vec, norm, sin, sin_cos, sqrt, Mat3, Vec3};
+use crate::math::{acos, asin, cos, cross, dot, exp, mat_t_vec, norm, sin, sqrt, Mat3, SinCosCache, Vec3};
 use crate::measured::{BodyAttitude, Measurement};
 use crate::model::{Command, QuadState, QuadrotorParams, Reference};
-use crate::setpoint::{limit_tilt, reference_finite};
+use crate::setpoint::{reference_finite, TiltLimit};
 
 /// PX4 `MPC_THR_HOVER` default: hover at half the maximum thrust (T/W = 2).
 pub const PX4_HOVER_THRUST: f64 = 0.5;
@@ -421,6 +421,10 @@ pub struct PidController {
     /// for the control period whose bits are `alpha_dt` (constant over a flight).
     alphas: [f64; 2],
     alpha_dt: u64,
+    /// `cos`, `sin` of [`PidGains::max_tilt`], taken once.
+    tilt_limit: TiltLimit,
+    /// `sin`, `cos` of the last reference heading ψ_d.
+    yaw_sin_cos: SinCosCache,
 }
 
 /// Names of the [`Telemetry::estimates`] slots: slot 0 of x, y, z is the
@@ -448,6 +452,8 @@ impl PidController {
             telemetry: Telemetry::default(),
             alphas: [0.0; 2],
             alpha_dt: f64::NAN.to_bits(),
+            tilt_limit: TiltLimit::new(gains.max_tilt),
+            yaw_sin_cos: SinCosCache::new(),
         })
     }
 
@@ -531,7 +537,7 @@ impl PidController {
         dt: f64,
     ) -> Command {
         if !(dt.is_finite()
-            && state.to_array().iter().all(|v| v.is_finite())
+            && state.is_finite()
             && attitude.is_none_or(BodyAttitude::is_finite)
             && reference_finite(reference))
         {
@@ -595,7 +601,7 @@ impl PidController {
             let n = norm(&v);
             [v[0] / n, v[1] / n, v[2] / n]
         };
-        let direction = limit_tilt(unlimited, k.max_tilt);
+        let direction = self.tilt_limit.apply(unlimited);
         let nominal_thrust = k.hover_thrust * (accel[2] + g) / g / direction[2];
         let floored = nominal_thrust < k.thrust_min;
         let collective = if floored { k.thrust_min } else { nominal_thrust };
@@ -648,7 +654,7 @@ impl PidController {
         // 6. Thrust vector → desired attitude and collective thrust.
         let magnitude = norm(&thrust);
         let b3 = if magnitude > 0.0 { thrust.map(|t| t / magnitude) } else { [0.0, 0.0, 1.0] };
-        let (s, c) = sin_cos(reference.yaw);
+        let (s, c) = self.yaw_sin_cos.get(reference.yaw);
         let b1 = cross(&[-s, c, 0.0], &b3);
         let n1 = norm(&b1);
         let b1 = if n1 > 1e-9 { b1.map(|v| v / n1) } else { [1.0, 0.0, 0.0] };
@@ -679,7 +685,8 @@ impl PidController {
         }
         self.last_torque = torque;
 
-        let desired = euler_from_rotation(&r_d);
+        // Only the demanded roll and pitch are reported (the heading is ψ_d).
+        let desired = roll_pitch_from_rotation(&r_d);
         let mut estimates = [[0.0; MAX_ESTIMATES]; 6];
         for i in 0..3 {
             estimates[i][0] = self.velocity_integral[i];
@@ -747,6 +754,8 @@ impl Controller for PidController {
             telemetry: Telemetry::default(),
             alphas: self.alphas,
             alpha_dt: self.alpha_dt,
+            tilt_limit: self.tilt_limit,
+            yaw_sin_cos: self.yaw_sin_cos,
         };
     }
 

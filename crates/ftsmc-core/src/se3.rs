@@ -55,10 +55,10 @@ use crate::kinematics::{
     body_rates_from_euler_rates, euler_from_rotation, rotation_from_euler, rotation_from_quaternion,
 };
 use crate::law::{check_closed, check_gain, check_left_open, saturate, GainError, INPUT_LIMIT, MAX_ESTIMATES};
-use crate::math::{cross, dot, mat_t_mat, mat_t_vec, mat_vec, norm, sin_cos, Mat3, Vec3};
+use crate::math::{cross, dot, mat_t_mat, mat_t_vec, mat_vec, norm, Mat3, SinCosCache, Vec3};
 use crate::measured::{BodyAttitude, Measurement};
 use crate::model::{Command, QuadState, QuadrotorParams, Reference};
-use crate::setpoint::{limit_tilt, reference_finite};
+use crate::setpoint::{reference_finite, TiltLimit};
 
 /// Gains of [`Se3Controller`]. `Default` is [`Se3Gains::for_vehicle`] of the
 /// paper's quadrotor ([`QuadrotorParams::default`]).
@@ -204,6 +204,10 @@ pub struct Se3Controller {
     model: QuadrotorParams,
     gains: Se3Gains,
     telemetry: Telemetry,
+    /// `cos`, `sin` of [`Se3Gains::max_tilt`], taken once.
+    tilt_limit: TiltLimit,
+    /// `sin`, `cos` of the last reference heading ψ_d.
+    yaw_sin_cos: SinCosCache,
 }
 
 impl Se3Controller {
@@ -212,7 +216,13 @@ impl Se3Controller {
     pub fn new(model: QuadrotorParams, gains: Se3Gains) -> Result<Self, GainError> {
         model.check()?;
         gains.check()?;
-        Ok(Self { model, gains, telemetry: Self::initial_telemetry() })
+        Ok(Self {
+            model,
+            gains,
+            telemetry: Self::initial_telemetry(),
+            tilt_limit: TiltLimit::new(gains.max_tilt),
+            yaw_sin_cos: SinCosCache::new(),
+        })
     }
 
     /// The gains in use.
@@ -226,13 +236,13 @@ impl Se3Controller {
 
     /// Desired rotation from the desired force direction and heading ψ_d;
     /// the second value is true when the tilt limit changed `b₃d`.
-    fn desired_rotation(&self, force: &Vec3, yaw: f64) -> (Mat3, bool) {
+    fn desired_rotation(&mut self, force: &Vec3, yaw: f64) -> (Mat3, bool) {
         let f = norm(force);
         let b3 = if f > 1e-9 { [force[0] / f, force[1] / f, force[2] / f] } else { [0.0, 0.0, 1.0] };
-        let limited = limit_tilt(b3, self.gains.max_tilt);
+        let limited = self.tilt_limit.apply(b3);
         let tilt_limited = limited != b3;
         let b3 = limited;
-        let (s, c) = sin_cos(yaw);
+        let (s, c) = self.yaw_sin_cos.get(yaw);
         let b1c = [c, s, 0.0];
         let b2 = cross(&b3, &b1c);
         let n2 = norm(&b2);
@@ -255,7 +265,7 @@ impl Se3Controller {
         dt: f64,
     ) -> Command {
         if !(dt.is_finite()
-            && state.to_array().iter().all(|v| v.is_finite())
+            && state.is_finite()
             && attitude.is_none_or(BodyAttitude::is_finite)
             && reference_finite(reference))
         {
