@@ -21,7 +21,11 @@
 //! The conversions below are those of `ftsmc_core::kinematics` (the one
 //! Euler/quaternion module of the controllers, the simulator and Python),
 //! on the one maths library of `ftsmc_core::math`: the same bits on every
-//! CPU.
+//! CPU. One exception, for speed: the Euler rates of [`to_quad_state`] and
+//! [`try_to_quad_state`] evaluate the core's formula
+//! ([`kinematics::euler_rates_from_body_rates`]) with the sines and cosines of
+//! roll and pitch read off the quaternion instead of `sin_cos` of the
+//! angles (the same values to rounding; the core's formula near gimbal lock).
 //!
 //! # State
 //!
