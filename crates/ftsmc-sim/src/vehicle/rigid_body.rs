@@ -776,15 +776,17 @@ fn euler_rates_of_quaternion(q: &Quat, euler: &Vec3, body_rates: &Vec3) -> Vec3 
     let a = 2.0 * (w * x + y * z);
     let b = 1.0 - 2.0 * (x * x + y * y);
     let ct = (a * a + b * b).sqrt();
-    if !(ct >= 1e-3) {
-        return kinematics::euler_rates_from_body_rates(euler, body_rates);
+    if ct >= 1e-3 {
+        let (sf, cf) = (a / ct, b / ct);
+        let st = ftsmc_core::law::saturate(2.0 * (w * y - x * z), 1.0);
+        // kinematics::euler_rates_from_body_rates, term for term.
+        let [p, q, r] = *body_rates;
+        let e = q * sf + r * cf;
+        [p + e * st / ct, q * cf - r * sf, e / ct]
+    } else {
+        // Near gimbal lock, or a non-finite quaternion.
+        kinematics::euler_rates_from_body_rates(euler, body_rates)
     }
-    let (sf, cf) = (a / ct, b / ct);
-    let st = ftsmc_core::law::saturate(2.0 * (w * y - x * z), 1.0);
-    // kinematics::euler_rates_from_body_rates, term for term.
-    let [p, q, r] = *body_rates;
-    let e = q * sf + r * cf;
-    [p + e * st / ct, q * cf - r * sf, e / ct]
 }
 
 /// The Euler state the paper's controllers were designed for: position,
