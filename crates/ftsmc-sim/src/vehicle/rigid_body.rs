@@ -23,7 +23,7 @@
 //! on the one maths library of `ftsmc_core::math`: the same bits on every
 //! CPU. One exception, for speed: the Euler rates of [`to_quad_state`] and
 //! [`try_to_quad_state`] evaluate the core's formula
-//! ([`kinematics::euler_rates_from_body_rates`]) with the sines and cosines of
+//! ([`kinematics::euler_rates_from_body_rates_with`]) with the sines and cosines of
 //! roll and pitch read off the quaternion instead of `sin_cos` of the
 //! angles (the same values to rounding; the core's formula near gimbal lock).
 //!
@@ -777,12 +777,8 @@ fn euler_rates_of_quaternion(q: &Quat, euler: &Vec3, body_rates: &Vec3) -> Vec3 
     let b = 1.0 - 2.0 * (x * x + y * y);
     let ct = (a * a + b * b).sqrt();
     if ct >= 1e-3 {
-        let (sf, cf) = (a / ct, b / ct);
         let st = ftsmc_core::law::saturate(2.0 * (w * y - x * z), 1.0);
-        // kinematics::euler_rates_from_body_rates, term for term.
-        let [p, q, r] = *body_rates;
-        let e = q * sf + r * cf;
-        [p + e * st / ct, q * cf - r * sf, e / ct]
+        kinematics::euler_rates_from_body_rates_with([a / ct, b / ct], [st, ct], body_rates)
     } else {
         // Near gimbal lock, or a non-finite quaternion.
         kinematics::euler_rates_from_body_rates(euler, body_rates)
