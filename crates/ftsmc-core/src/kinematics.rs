@@ -107,6 +107,15 @@ pub fn euler_rates_from_body_rates(euler: &Vec3, body_rates: &Vec3) -> Vec3 {
     } else {
         GIMBAL_LOCK_COS
     };
+    euler_rates_from_body_rates_with([sf, cf], [st, c], body_rates)
+}
+
+/// [`euler_rates_from_body_rates`] from the sines and cosines of φ and θ,
+/// `[sφ, cφ]` and `[sθ, cθ]`, however they were obtained (the truth model
+/// reads them off its quaternion); `cθ` must be away from 0 (the caller's
+/// clamp or check).
+#[inline]
+pub fn euler_rates_from_body_rates_with([sf, cf]: [f64; 2], [st, c]: [f64; 2], body_rates: &Vec3) -> Vec3 {
     let [p, q, r] = *body_rates;
     let a = q * sf + r * cf;
     [p + a * st / c, q * cf - r * sf, a / c]

@@ -306,6 +306,31 @@ impl Motors {
         self.speeds = self.speeds_decayed(command, decay);
     }
 
+    /// The motors from now on with `command` (rad/s) and the noise draws `z`
+    /// ([`Motors::sample_noise`]) held, prepared for [`HeldCommand::speeds`].
+    pub fn held(&self, command: &[f64; 4], z: &[f64; 4]) -> HeldCommand {
+        let p = &self.params;
+        let mut held = HeldCommand {
+            target: [0.0; 4],
+            gap: [0.0; 4],
+            factor: [None; 4],
+            noise: p.noise.map(|n| match n.scale {
+                NoiseScale::Absolute => (n.scale, z.map(|zi| n.std * zi)),
+                NoiseScale::Relative => (n.scale, z.map(|zi| 1.0 + n.std * zi)),
+            }),
+            limits: [p.min_rotor_speed, p.max_rotor_speed],
+        };
+        for i in 0..4 {
+            let target = p.clamp_speed(command[i]);
+            let now = self.speeds[i];
+            let (tau, k) = if target > now { (p.time_constant_up, 0) } else { (p.time_constant_down, 1) };
+            held.target[i] = target;
+            held.gap[i] = now - target;
+            held.factor[i] = (tau != 0.0).then_some(k);
+        }
+        held
+    }
+
     /// Draw one standard-normal sample per rotor (rotors 1..4 in order) for
     /// the next period's noise; all zeros, **without touching `rng`**, when
     /// the noise is off.
@@ -329,6 +354,56 @@ impl Motors {
                 self.params.clamp_speed(w)
             }),
         }
+    }
+}
+
+/// The motors over one plant step with a command and the period's noise
+/// held ([`Motors::held`]): the clamped command, the gap `ω − ω_cmd`, which
+/// time constant applies and the noise term of each rotor, worked out once,
+/// so that the speeds at each RK4 stage time ([`HeldCommand::speeds`]) are
+/// one multiply-add and the noise away.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct HeldCommand {
+    /// Commands clamped to `[ω_min, ω_max]`, rad/s.
+    target: [f64; 4],
+    /// `ω − ω_cmd` at the start of the step, rad/s.
+    gap: [f64; 4],
+    /// Index of the decay factor per rotor (0: spin-up τ, 1: spin-down τ),
+    /// `None` where that τ is 0 (the command is reached at once).
+    factor: [Option<usize>; 4],
+    /// The noise, per rotor: `σ z` (absolute) or `1 + σ z` (relative).
+    noise: Option<(NoiseScale, [f64; 4])>,
+    /// `[ω_min, ω_max]`, rad/s.
+    limits: [f64; 2],
+}
+
+impl HeldCommand {
+    /// Rotor speeds after the `dt` of `decay` ([`Motors::decay`]), rad/s:
+    /// `motors.with_noise(&motors.speeds_decayed(command, decay), z)` of the
+    /// [`Motors::held`] call that made this, bit for bit.
+    #[inline]
+    pub fn speeds(&self, decay: &[f64; 2]) -> [f64; 4] {
+        let [lo, hi] = self.limits;
+        let mut w = self.target;
+        for i in 0..4 {
+            if let Some(k) = self.factor[i] {
+                w[i] += self.gap[i] * decay[k];
+            }
+        }
+        match &self.noise {
+            None => {}
+            Some((NoiseScale::Absolute, add)) => {
+                for i in 0..4 {
+                    w[i] = (w[i] + add[i]).clamp(lo, hi);
+                }
+            }
+            Some((NoiseScale::Relative, mul)) => {
+                for i in 0..4 {
+                    w[i] = (w[i] * mul[i]).clamp(lo, hi);
+                }
+            }
+        }
+        w
     }
 }
 

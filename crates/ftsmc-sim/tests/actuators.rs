@@ -323,3 +323,35 @@ fn params_check_and_serde() {
     assert!(toml::from_str::<ActuatorParams>("max_rotor_sped = 1.0").is_err());
     assert!(toml::from_str::<ActuatorParams>("noise = { std = 1.0, scale = \"absolute\", mean = 0.0 }").is_err());
 }
+
+/// The speeds the truth model sees at each RK4 stage, prepared once per
+/// substep (`Motors::held`), are the lagged speeds with the period's noise
+/// bit for bit, for every mix of spin-up, spin-down, no lag, limits and
+/// noise scale.
+#[test]
+fn held_command_speeds_are_the_lagged_noisy_speeds_bit_for_bit() {
+    let mut rng = ChaCha8Rng::seed_from_u64(7);
+    let noises = [
+        None,
+        Some(MotorNoise { std: 50.0, scale: NoiseScale::Absolute }),
+        Some(MotorNoise { std: 0.3, scale: NoiseScale::Relative }),
+    ];
+    let lags = [(0.05, 0.02), (0.0, 0.02), (0.05, 0.0), (0.0, 0.0)];
+    for noise in noises {
+        for (up, down) in lags {
+            let p = ActuatorParams { time_constant_up: up, time_constant_down: down, noise, ..lagged() };
+            for _ in 0..50 {
+                let start: [f64; 4] = core::array::from_fn(|_| rng.random_range(0.0..1000.0));
+                let motors = Motors::new(&p, start);
+                let command: [f64; 4] = core::array::from_fn(|_| rng.random_range(-100.0..1100.0));
+                let z = motors.sample_noise(&mut rng);
+                let held = motors.held(&command, &z);
+                for dt in [0.0, 5e-4, 1e-3, 0.37] {
+                    let decay = motors.decay(dt);
+                    let expected = motors.with_noise(&motors.speeds_decayed(&command, &decay), &z);
+                    assert_eq!(held.speeds(&decay).map(f64::to_bits), expected.map(f64::to_bits), "{p:?} dt {dt}");
+                }
+            }
+        }
+    }
+}

@@ -43,3 +43,32 @@ fn the_fast_update_refuses_what_the_check_refuses_and_keeps_the_body() {
         assert_eq!(fast, body, "a refused update leaves the body as it was");
     }
 }
+
+/// A payload alone (the inertia scale unchanged) moves only the mass:
+/// `set_mass` gives the body `with_mass_and_inertia` builds with the same
+/// inertia, and refuses (with the same error, the body unchanged) a mass
+/// the check refuses.
+#[test]
+fn the_mass_only_update_is_the_checked_body_and_refuses_what_it_refuses() {
+    let p = base();
+    let mut scaled = RigidBody::new(p).unwrap();
+    scaled.set_mass_and_scaled_inertia(0.6, &p.inertia, 1.3).unwrap();
+    for body in [RigidBody::new(p).unwrap(), scaled] {
+        let inertia = body.params().inertia;
+        for mass in [0.5, 0.87, 1e-6, 1e6] {
+            let mut fast = body;
+            fast.set_mass(mass).unwrap();
+            assert_eq!(fast, body.with_mass_and_inertia(mass, inertia).unwrap(), "mass {mass}");
+        }
+        for mass in [0.0, -1.0, 2e6, f64::NAN, f64::INFINITY] {
+            let checked = body.with_mass_and_inertia(mass, inertia).map(|_| ()).unwrap_err();
+            let mut fast = body;
+            let err = fast.set_mass(mass).unwrap_err();
+            assert_eq!(
+                (err.field, err.value.to_bits(), err.expected),
+                (checked.field, checked.value.to_bits(), checked.expected)
+            );
+            assert_eq!(fast, body, "a refused update leaves the body as it was");
+        }
+    }
+}

@@ -18,7 +18,7 @@ use ftsmc_core::model::{Command, QuadrotorParams};
 
 use rand_chacha::ChaCha8Rng;
 
-use crate::actuators::{motor_noise_rng, ActuatorParams, Mixer, MixerKind, Motors};
+use crate::actuators::{motor_noise_rng, ActuatorParams, HeldCommand, Mixer, MixerKind, Motors};
 use crate::scenario::Scenario;
 use crate::vehicle::VehicleModel;
 
@@ -65,29 +65,29 @@ pub(crate) enum Drive<'a> {
         /// Their residual Ω̄, rad/s.
         omega_bar: f64,
     },
-    /// Lagged motors following `target` from their state at the substep start.
+    /// Lagged motors following the period's commands from their state at
+    /// the substep start.
     Lagged {
         /// The motors at the start of the substep.
         motors: &'a Motors,
         /// The lag's decay factors, cached per stage step ([`DecayCache`]).
         decay: &'a DecayCache,
-        /// Rotor speed commands, rad/s.
-        target: &'a [f64; 4],
-        /// Motor noise draws of the period.
-        noise: &'a [f64; 4],
+        /// The commands and noise draws of the period, prepared for this
+        /// substep ([`Motors::held`]).
+        held: HeldCommand,
     },
 }
 
 impl Drive<'_> {
     /// Rotor speeds `dt` seconds into the substep (an RK4 stage time minus
-    /// the substep's start), rad/s.
+    /// the substep's start), rad/s: the lagged speeds
+    /// ([`Motors::speeds_decayed`]) with the period's noise
+    /// ([`Motors::with_noise`]).
     #[inline]
     pub(crate) fn speeds_after(&self, dt: f64) -> [f64; 4] {
         match self {
             Drive::Held { speeds, .. } => **speeds,
-            Drive::Lagged { motors, target, noise, decay } => {
-                motors.with_noise(&motors.speeds_decayed(target, &decay.get(motors, dt)), noise)
-            }
+            Drive::Lagged { motors, decay, held } => held.speeds(&decay.get(motors, dt)),
         }
     }
 }
@@ -181,7 +181,7 @@ impl ActuatorStage {
     pub(crate) fn drive<'a>(&'a self, delivered: &'a Delivered, omega_bar: f64) -> Drive<'a> {
         match self {
             ActuatorStage::Rotors { motors, decay, .. } => {
-                Drive::Lagged { motors, target: &delivered.target, noise: &delivered.noise, decay }
+                Drive::Lagged { motors, decay, held: motors.held(&delivered.target, &delivered.noise) }
             }
             _ => Drive::Held { applied: &delivered.applied, speeds: &delivered.target, omega_bar },
         }
@@ -205,8 +205,11 @@ impl ActuatorStage {
 pub(crate) struct DecayCache {
     /// Factors over a whole substep `h` (motor advance).
     pub whole: [f64; 2],
-    slots: [Cell<(u64, [f64; 2])>; 16],
+    slots: [Cell<(u64, [f64; 2])>; 1 << SLOT_BITS],
 }
+
+/// log2 of the number of [`DecayCache`] slots.
+const SLOT_BITS: u32 = 6;
 
 impl DecayCache {
     /// A cache for `motors` and substeps of `h` seconds.
@@ -222,7 +225,11 @@ impl DecayCache {
             return [1.0; 2];
         }
         let key = dt.to_bits();
-        let slot = &self.slots[((key ^ (key >> 4) ^ (key >> 9)) & 15) as usize];
+        // An offset is `(t0 + h/2) − t0` or `(t0 + h) − t0`, a multiple of
+        // the ulp of `t0`: its low mantissa bits are zeros and its variants
+        // differ in the middle bits, so the slot comes from all the bits
+        // (Fibonacci hashing), not the low ones.
+        let slot = &self.slots[(key.wrapping_mul(0x9E37_79B9_7F4A_7C15) >> (64 - SLOT_BITS)) as usize];
         let (k, v) = slot.get();
         if k == key {
             return v;

@@ -23,7 +23,7 @@ use ftsmc_core::model::{Command, QuadState, QuadrotorParams};
 
 use crate::environment::{Environment, TimeVarying};
 use crate::scenario::Scenario;
-use crate::vehicle::paper::{derivative, derivative_in_wind, rk4_step};
+use crate::vehicle::paper::{derivative, derivative_in_wind, rk4_step_staged};
 use crate::vehicle::rigid_body::{normalize_quaternion, RigidBodyState};
 use crate::vehicle::{from_quad_state, to_quad_state, RigidBody, RigidBodyInput, RigidBodyParams, VehicleModel};
 
@@ -82,34 +82,41 @@ impl TruthModel for PaperTruth {
 
     #[inline]
     fn substep(&mut self, s: &Substep<'_>) {
-        let (t0, h, a, b, env, wind) = (s.t0, s.h, s.a, s.b, s.env, s.wind);
+        let (t0, h, a, b, env, wind) = (s.t0, s.h, &s.a, &s.b, s.env, s.wind);
+        // The plant of each RK4 stage time, made once (the second and third
+        // stages share theirs).
         self.0 = match s.drive {
-            Drive::Held { applied, omega_bar, .. } => match wind {
-                None => {
-                    let f = |tau: f64, x: &[f64; 12]| {
-                        let tv = TimeVarying::lerp(&a, &b, (tau - t0) / h);
-                        derivative(x, applied, omega_bar, &env.params_with(&tv), &tv.disturbance)
-                    };
-                    rk4_step(f, t0, &self.0, h)
+            Drive::Held { applied, omega_bar, .. } => {
+                let inputs = |tau: f64| {
+                    let tv = TimeVarying::lerp(a, b, (tau - t0) / h);
+                    (env.params_with(&tv), tv.disturbance)
+                };
+                match wind {
+                    None => {
+                        rk4_step_staged(inputs, |(p, d), x| derivative(x, applied, omega_bar, p, d), t0, &self.0, h)
+                    }
+                    Some(wind) => rk4_step_staged(
+                        inputs,
+                        |(p, d), x| derivative_in_wind(x, applied, omega_bar, p, d, &wind),
+                        t0,
+                        &self.0,
+                        h,
+                    ),
                 }
-                Some(wind) => {
-                    let f = |tau: f64, x: &[f64; 12]| {
-                        let tv = TimeVarying::lerp(&a, &b, (tau - t0) / h);
-                        derivative_in_wind(x, applied, omega_bar, &env.params_with(&tv), &tv.disturbance, &wind)
-                    };
-                    rk4_step(f, t0, &self.0, h)
-                }
-            },
+            }
             drive @ Drive::Lagged { .. } => {
                 let wind = wind.unwrap_or([0.0; 3]);
-                let f = |tau: f64, x: &[f64; 12]| {
-                    let tv = TimeVarying::lerp(&a, &b, (tau - t0) / h);
+                let inputs = |tau: f64| {
+                    let tv = TimeVarying::lerp(a, b, (tau - t0) / h);
                     let p = env.params_with(&tv);
                     let w = drive.speeds_after(tau - t0);
                     let delivered: Command = forces_from_squared_speeds(&p, &w.map(|o| o * o));
-                    derivative_in_wind(x, &delivered, residual_speed(&w), &p, &tv.disturbance, &wind)
+                    (p, delivered, residual_speed(&w), tv.disturbance)
                 };
-                rk4_step(f, t0, &self.0, h)
+                let f = |(p, delivered, omega_bar, d): &(QuadrotorParams, Command, f64, [f64; 6]), x: &[f64; 12]| {
+                    derivative_in_wind(x, delivered, *omega_bar, p, d, &wind)
+                };
+                rk4_step_staged(inputs, f, t0, &self.0, h)
             }
         };
     }
@@ -125,6 +132,8 @@ impl TruthModel for PaperTruth {
 pub(crate) struct RigidTruth {
     body: RigidBody,
     base: RigidBodyParams,
+    /// The added mass (kg) and inertia scale the body flies: its mass is
+    /// `base.mass + key.0`, its inertia `key.1 · base.inertia`.
     key: (f64, f64),
     x: RigidBodyState,
 }
@@ -137,7 +146,7 @@ impl RigidTruth {
         let base = scenario.rigid_body_params();
         let body = RigidBody::new(base)
             .map_err(|_| Divergence::RigidBodyOutOfRange { mass: base.mass, inertia_scale: 1.0 })?;
-        Ok(Self { body, base, key: (1.0, 0.0), x: from_quad_state(&scenario.initial_state.state()) })
+        Ok(Self { body, base, key: (0.0, 1.0), x: from_quad_state(&scenario.initial_state.state()) })
     }
 }
 
@@ -158,7 +167,14 @@ impl TruthModel for RigidTruth {
         let scale = tv.inertia[0] / base_plant.inertia[0];
         if (added, scale) != self.key {
             let mass = self.base.mass + added;
-            if self.body.set_mass_and_scaled_inertia(mass, &self.base.inertia, scale).is_err() {
+            // The body's inertia is `scale · base` already when the scale
+            // has not changed (a payload alone): then only the mass moves.
+            let updated = if scale == self.key.1 {
+                self.body.set_mass(mass)
+            } else {
+                self.body.set_mass_and_scaled_inertia(mass, &self.base.inertia, scale)
+            };
+            if updated.is_err() {
                 // Never fly a mass or inertia other than the recorded one.
                 return Err(Divergence::RigidBodyOutOfRange { mass, inertia_scale: scale });
             }
@@ -169,23 +185,25 @@ impl TruthModel for RigidTruth {
 
     #[inline]
     fn substep(&mut self, s: &Substep<'_>) {
-        let (t0, h, a, b, drive) = (s.t0, s.h, s.a, s.b, s.drive);
+        let (t0, h, a, b, drive) = (s.t0, s.h, &s.a, &s.b, &s.drive);
         let wind = s.wind.unwrap_or([0.0; 3]);
         let body = &self.body;
-        let inertia = body.params().inertia;
         let mass = body.params().mass;
-        let f = |tau: f64, x: &RigidBodyState| {
-            let tv = TimeVarying::lerp(&a, &b, (tau - t0) / h);
-            let d = tv.disturbance;
-            let input = RigidBodyInput {
+        // The inputs at each RK4 stage time, made once (the second and third
+        // stages share theirs).
+        let inputs = |tau: f64| {
+            // The disturbance of `TimeVarying::lerp` (its mass and inertia
+            // are not used here: the body's are those of the period).
+            let w = (tau - t0) / h;
+            let d: [f64; 6] = core::array::from_fn(|i| a.disturbance[i] + w * (b.disturbance[i] - a.disturbance[i]));
+            body.prepare(&RigidBodyInput {
                 rotor_speeds: drive.speeds_after(tau - t0),
                 wind,
                 force: [mass * d[0], mass * d[1], mass * d[2]],
-                torque: core::array::from_fn(|r| (0..3).map(|c| inertia[r][c] * d[3 + c]).sum()),
-            };
-            body.derivative(x, &input)
+                torque: body.inertia_times([d[3], d[4], d[5]]),
+            })
         };
-        self.x = rk4_step(f, t0, &self.x, h);
+        self.x = rk4_step_staged(inputs, |input, x| body.derivative_prepared(x, input), t0, &self.x, h);
         normalize_quaternion(&mut self.x);
     }
 

@@ -56,16 +56,26 @@ pub(crate) fn det3(m: &Mat3) -> f64 {
 /// positive or negative number.
 pub(crate) fn inverse3(m: &Mat3) -> Option<Mat3> {
     let det = det3(m);
-    if !det.is_normal() {
-        return None;
-    }
+    det.is_normal().then(|| adjugate_over(m, det))
+}
+
+/// [`inverse3`] when the determinant is also positive, else `None`: one
+/// determinant for the check and the inverse.
+pub(crate) fn inverse3_positive(m: &Mat3) -> Option<Mat3> {
+    let det = det3(m);
+    (det > 0.0 && det.is_normal()).then(|| adjugate_over(m, det))
+}
+
+/// The adjugate of `m` divided by `det`.
+#[inline]
+fn adjugate_over(m: &Mat3, det: f64) -> Mat3 {
     let c = |r0: usize, c0: usize, r1: usize, c1: usize| m[r0][c0] * m[r1][c1] - m[r0][c1] * m[r1][c0];
     let adj = [
         [c(1, 1, 2, 2), -c(0, 1, 2, 2), c(0, 1, 1, 2)],
         [-c(1, 0, 2, 2), c(0, 0, 2, 2), -c(0, 0, 1, 2)],
         [c(1, 0, 2, 1), -c(0, 0, 2, 1), c(0, 0, 1, 1)],
     ];
-    Some(adj.map(|row| row.map(|v| v / det)))
+    adj.map(|row| row.map(|v| v / det))
 }
 
 /// Rotation matrix of a unit quaternion (body → world: `v_w = R v_b`): the

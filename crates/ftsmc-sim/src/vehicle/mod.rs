@@ -22,8 +22,8 @@ pub mod section;
 
 pub use rigid_body::{
     body_rates_to_euler_rates, euler_rates_to_body_rates, euler_to_quaternion, from_quad_state, quaternion_to_euler,
-    to_quad_state, try_to_quad_state, Configuration, GimbalLock, RigidBody, RigidBodyInput, RigidBodyParams,
-    RigidBodyState, Spin, Wrench,
+    to_quad_state, try_to_quad_state, Configuration, GimbalLock, PreparedInput, RigidBody, RigidBodyInput,
+    RigidBodyParams, RigidBodyState, Spin, Wrench,
 };
 
 pub use section::{Inertia, VehicleModel, VehicleSettings};

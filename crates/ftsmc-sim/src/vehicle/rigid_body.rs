@@ -21,7 +21,11 @@
 //! The conversions below are those of `ftsmc_core::kinematics` (the one
 //! Euler/quaternion module of the controllers, the simulator and Python),
 //! on the one maths library of `ftsmc_core::math`: the same bits on every
-//! CPU.
+//! CPU. One exception, for speed: the Euler rates of [`to_quad_state`] and
+//! [`try_to_quad_state`] evaluate the core's formula
+//! ([`kinematics::euler_rates_from_body_rates_with`]) with the sines and cosines of
+//! roll and pitch read off the quaternion instead of `sin_cos` of the
+//! angles (the same values to rounding; the core's formula near gimbal lock).
 //!
 //! # State
 //!
@@ -69,7 +73,8 @@ use ftsmc_core::model::{QuadState, QuadrotorParams};
 use serde::{Deserialize, Serialize};
 
 use super::math::{
-    add, cross, det3, inverse3, mat_t_vec, mat_vec, norm, quat_derivative, rotation, sub, Mat3, Quat, Vec3,
+    add, cross, det3, inverse3, inverse3_positive, mat_t_vec, mat_vec, norm, quat_derivative, rotation, sub, Mat3,
+    Quat, Vec3,
 };
 use crate::vehicle::paper::rk4_step;
 
@@ -379,6 +384,25 @@ pub struct RigidBodyInput {
     pub torque: [f64; 3],
 }
 
+/// [`RigidBodyInput`] with the terms of the body wrench that depend on the
+/// rotor speeds alone worked out ([`RigidBody::prepare`]): once per RK4
+/// stage time instead of once per derivative.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PreparedInput {
+    /// The inputs.
+    pub input: RigidBodyInput,
+    /// Thrust per rotor `k_f ω_i²`, N.
+    thrust: [f64; 4],
+    /// Reaction torque per rotor `s_i k_m ω_i²`, N·m.
+    reaction: [f64; 4],
+    /// In-plane rotor drag per unit airspeed `ω_i k_d`, N·s/m.
+    drag_xy: [f64; 4],
+    /// Axial rotor drag per unit airspeed `ω_i k_z`, N·s/m.
+    drag_z: [f64; 4],
+    /// Rotor angular momentum `h_r` ([`RigidBody::rotor_momentum`]), kg·m²/s.
+    momentum: [f64; 3],
+}
+
 /// Force and moment in the body frame.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Wrench {
@@ -394,8 +418,41 @@ pub struct Wrench {
 pub struct RigidBody {
     params: RigidBodyParams,
     inertia_inv: Mat3,
+    /// The inertia (and so its inverse) has zero products of inertia: the
+    /// products `J Ω` and `J⁻¹ M` skip the zero entries.
+    diagonal: bool,
+    /// Rotor hub positions, all with `z = 0` ([`RigidBodyParams::rotor_positions`]).
     rotors: [Vec3; 4],
     spin: [f64; 4],
+}
+
+/// No products of inertia: every off-diagonal entry is zero.
+fn is_diagonal(j: &Mat3) -> bool {
+    j[0][1] == 0.0 && j[0][2] == 0.0 && j[1][0] == 0.0 && j[1][2] == 0.0 && j[2][0] == 0.0 && j[2][1] == 0.0
+}
+
+/// `m v`, or for a `diagonal` `m` only its diagonal times `v`: the same
+/// values (the skipped products are zeros added to a sum).
+#[inline]
+fn mat_vec_or_diagonal(m: &Mat3, diagonal: bool, v: Vec3) -> Vec3 {
+    if diagonal {
+        [m[0][0] * v[0], m[1][1] * v[1], m[2][2] * v[2]]
+    } else {
+        mat_vec(m, v)
+    }
+}
+
+/// `a × r` for a rotor position `r` with `r_z = 0` (the terms with `r_z`
+/// are zeros).
+#[inline]
+fn cross_rotor(a: Vec3, r: Vec3) -> Vec3 {
+    [-(a[2] * r[1]), a[2] * r[0], a[0] * r[1] - a[1] * r[0]]
+}
+
+/// `r × f` for a rotor position `r` with `r_z = 0`.
+#[inline]
+fn rotor_cross(r: Vec3, f: Vec3) -> Vec3 {
+    [r[1] * f[2], -(r[0] * f[2]), r[0] * f[1] - r[1] * f[0]]
 }
 
 impl RigidBody {
@@ -403,7 +460,13 @@ impl RigidBody {
     pub fn new(params: RigidBodyParams) -> Result<Self, GainError> {
         params.check()?;
         let inertia_inv = inverse3(&params.inertia).expect("checked positive definite");
-        Ok(Self { params, inertia_inv, rotors: params.rotor_positions(), spin: params.spin.map(Spin::sign) })
+        Ok(Self {
+            params,
+            inertia_inv,
+            diagonal: is_diagonal(&params.inertia),
+            rotors: params.rotor_positions(),
+            spin: params.spin.map(Spin::sign),
+        })
     }
 
     /// This body with another mass (kg) and inertia (kg·m²): the same
@@ -413,7 +476,7 @@ impl RigidBody {
     pub fn with_mass_and_inertia(&self, mass: f64, inertia: Mat3) -> Result<Self, GainError> {
         let params = RigidBodyParams { mass, inertia, ..self.params };
         let inertia_inv = params.check_mass_inertia()?;
-        Ok(Self { params, inertia_inv, ..*self })
+        Ok(Self { params, inertia_inv, diagonal: is_diagonal(&inertia), ..*self })
     }
 
     /// In place, the result of [`RigidBody::with_mass_and_inertia`] of
@@ -430,9 +493,8 @@ impl RigidBody {
         let fast = scale > 0.0
             && scale.is_finite()
             && (1e-6..=1e6).contains(&mass)
-            && inertia.iter().flatten().all(|v| (-1e6..=1e6).contains(v))
-            && det3(&inertia) > 0.0;
-        let inverse = if fast { inverse3(&inertia) } else { None };
+            && inertia.iter().flatten().all(|v| (-1e6..=1e6).contains(v));
+        let inverse = if fast { inverse3_positive(&inertia) } else { None };
         let inverse = match inverse {
             Some(inv) => inv,
             None => RigidBodyParams { mass, inertia, ..self.params }.check_mass_inertia()?,
@@ -440,6 +502,26 @@ impl RigidBody {
         self.params.mass = mass;
         self.params.inertia = inertia;
         self.inertia_inv = inverse;
+        self.diagonal = is_diagonal(&inertia);
+        Ok(())
+    }
+
+    /// `J v` for a body-frame vector `v` (the inertia times an angular
+    /// acceleration, rad/s² → N·m): the same values as the full product,
+    /// the zero products of a diagonal inertia skipped.
+    #[inline]
+    pub fn inertia_times(&self, v: [f64; 3]) -> [f64; 3] {
+        mat_vec_or_diagonal(&self.params.inertia, self.diagonal, v)
+    }
+
+    /// In place, the result of [`RigidBody::with_mass_and_inertia`] of `mass`
+    /// (kg) and this body's inertia: only the mass check runs (the inertia
+    /// and its inverse are kept); on error `self` is unchanged.
+    pub fn set_mass(&mut self, mass: f64) -> Result<(), GainError> {
+        if !(1e-6..=1e6).contains(&mass) {
+            RigidBodyParams { mass, ..self.params }.check_mass_inertia()?;
+        }
+        self.params.mass = mass;
         Ok(())
     }
 
@@ -451,13 +533,30 @@ impl RigidBody {
     /// Rotor and aerodynamic wrench in the body frame at a state (without
     /// gravity, external inputs or the gyroscopic terms).
     pub fn body_wrench(&self, x: &RigidBodyState, input: &RigidBodyInput) -> Wrench {
-        self.body_wrench_in(x, input, &rotation(quaternion(x)))
+        self.body_wrench_in(x, &self.prepare(input), &rotation(quaternion(x)))
+    }
+
+    /// The rotor terms of `input` ([`PreparedInput`]) for
+    /// [`RigidBody::derivative_prepared`].
+    #[inline]
+    pub fn prepare(&self, input: &RigidBodyInput) -> PreparedInput {
+        let p = &self.params;
+        let w = input.rotor_speeds;
+        PreparedInput {
+            input: *input,
+            thrust: w.map(|w| p.thrust_coefficient * w * w),
+            reaction: [0, 1, 2, 3].map(|i| self.spin[i] * p.moment_coefficient * w[i] * w[i]),
+            drag_xy: w.map(|w| w * p.rotor_drag_xy),
+            drag_z: w.map(|w| w * p.rotor_drag_z),
+            momentum: self.rotor_momentum(&w),
+        }
     }
 
     /// [`RigidBody::body_wrench`] with the body-to-world rotation `r` of `x` given.
     #[inline]
-    fn body_wrench_in(&self, x: &RigidBodyState, input: &RigidBodyInput, r: &Mat3) -> Wrench {
+    fn body_wrench_in(&self, x: &RigidBodyState, prepared: &PreparedInput, r: &Mat3) -> Wrench {
         let p = &self.params;
+        let input = &prepared.input;
         let v = block(x, index::VELOCITY);
         let omega = block(x, index::BODY_RATES);
         let v_air = mat_t_vec(r, sub(v, input.wind));
@@ -467,24 +566,27 @@ impl RigidBody {
         // branch: rotor aerodynamics on (the realistic vehicles) or off.
         if p.rotor_drag_xy != 0.0 || p.rotor_drag_z != 0.0 || p.translational_lift != 0.0 {
             for i in 0..4 {
-                let w = input.rotor_speeds[i];
-                let mut f = [0.0, 0.0, p.thrust_coefficient * w * w];
-                let vi = add(v_air, cross(omega, self.rotors[i]));
-                f[0] -= w * p.rotor_drag_xy * vi[0];
-                f[1] -= w * p.rotor_drag_xy * vi[1];
-                f[2] -= w * p.rotor_drag_z * vi[2];
-                f[2] += p.translational_lift * (vi[0] * vi[0] + vi[1] * vi[1]);
+                let mut f = [0.0, 0.0, prepared.thrust[i]];
+                let vi = add(v_air, cross_rotor(omega, self.rotors[i]));
+                f[0] -= prepared.drag_xy[i] * vi[0];
+                f[1] -= prepared.drag_xy[i] * vi[1];
+                f[2] -= prepared.drag_z[i] * vi[2];
+                // Off (k_h = 0) it would add a zero.
+                if p.translational_lift != 0.0 {
+                    f[2] += p.translational_lift * (vi[0] * vi[0] + vi[1] * vi[1]);
+                }
                 force = add(force, f);
-                torque = add(torque, cross(self.rotors[i], f));
-                torque[2] -= self.spin[i] * p.moment_coefficient * w * w;
+                torque = add(torque, rotor_cross(self.rotors[i], f));
+                torque[2] -= prepared.reaction[i];
             }
         } else {
+            // The thrust alone: `f = [0, 0, T]`, `r × f = [r_y T, −r_x T, 0]`.
             for i in 0..4 {
-                let w = input.rotor_speeds[i];
-                let f = [0.0, 0.0, p.thrust_coefficient * w * w];
-                force = add(force, f);
-                torque = add(torque, cross(self.rotors[i], f));
-                torque[2] -= self.spin[i] * p.moment_coefficient * w * w;
+                let (r, t) = (self.rotors[i], prepared.thrust[i]);
+                force[2] += t;
+                torque[0] += r[1] * t;
+                torque[1] += -(r[0] * t);
+                torque[2] -= prepared.reaction[i];
             }
         }
         let cd = p.parasitic_drag;
@@ -505,17 +607,25 @@ impl RigidBody {
 
     /// Time derivative of the state (module docs for the equations).
     pub fn derivative(&self, x: &RigidBodyState, input: &RigidBodyInput) -> RigidBodyState {
+        self.derivative_prepared(x, &self.prepare(input))
+    }
+
+    /// [`RigidBody::derivative`] of the inputs [`RigidBody::prepare`] made,
+    /// bit for bit: the form for several states with the same inputs (the
+    /// second and third RK4 stages).
+    #[inline]
+    pub fn derivative_prepared(&self, x: &RigidBodyState, prepared: &PreparedInput) -> RigidBodyState {
         let p = &self.params;
+        let input = &prepared.input;
         let q = quaternion(x);
         let omega = block(x, index::BODY_RATES);
         let r = rotation(q);
-        let wrench = self.body_wrench_in(x, input, &r);
+        let wrench = self.body_wrench_in(x, prepared, &r);
         let f_world = add(mat_vec(&r, wrench.force), input.force);
         let acc = [f_world[0] / p.mass, f_world[1] / p.mass, f_world[2] / p.mass - p.gravity];
-        let j_omega = mat_vec(&p.inertia, omega);
-        let h_r = self.rotor_momentum(&input.rotor_speeds);
-        let m = sub(add(wrench.torque, input.torque), cross(omega, add(j_omega, h_r)));
-        let omega_dot = mat_vec(&self.inertia_inv, m);
+        let j_omega = mat_vec_or_diagonal(&p.inertia, self.diagonal, omega);
+        let m = sub(add(wrench.torque, input.torque), cross(omega, add(j_omega, prepared.momentum)));
+        let omega_dot = mat_vec_or_diagonal(&self.inertia_inv, self.diagonal, m);
         let q_dot = quat_derivative(q, omega);
         let mut d = [0.0; STATE_LEN];
         d[0..3].copy_from_slice(&x[3..6]);
@@ -653,12 +763,38 @@ pub fn euler_rates_clamped(euler: &[f64; 3], body_rates: &[f64; 3]) -> [f64; 3] 
     kinematics::euler_rates_from_body_rates(euler, body_rates)
 }
 
+/// [`euler_rates_clamped`] at the Z-Y-X angles `euler` of the unit
+/// quaternion `q` ([`kinematics::euler_from_quaternion`]), with the sines and
+/// cosines of φ and θ read off `q` instead of evaluated: with
+/// `a = 2(wx + yz) = cθ sφ`, `b = 1 − 2(x² + y²) = cθ cφ` (the arguments of
+/// φ's `atan2`) and `s = 2(wy − xz) = sθ` (θ's `asin`), `cθ = √(a² + b²)`,
+/// `sφ = a/cθ`, `cφ = b/cθ`: the same values to rounding, without two
+/// `sin_cos`. Within `cθ < 1e-3` of gimbal lock, where `a` and `b` lose
+/// their relative precision, the core's formula on the angles answers.
+fn euler_rates_of_quaternion(q: &Quat, euler: &Vec3, body_rates: &Vec3) -> Vec3 {
+    let [w, x, y, z] = *q;
+    let a = 2.0 * (w * x + y * z);
+    let b = 1.0 - 2.0 * (x * x + y * y);
+    let ct = (a * a + b * b).sqrt();
+    if ct >= 1e-3 {
+        let st = ftsmc_core::law::saturate(2.0 * (w * y - x * z), 1.0);
+        kinematics::euler_rates_from_body_rates_with([a / ct, b / ct], [st, ct], body_rates)
+    } else {
+        // Near gimbal lock, or a non-finite quaternion.
+        kinematics::euler_rates_from_body_rates(euler, body_rates)
+    }
+}
+
 /// The Euler state the paper's controllers were designed for: position,
 /// velocity, Z-Y-X angles ([`quaternion_to_euler`]) and Euler rates
 /// ([`body_rates_to_euler_rates`]). Errors with [`GimbalLock`] at θ = ±π/2.
 pub fn try_to_quad_state(x: &RigidBodyState) -> Result<QuadState, GimbalLock> {
-    let attitude = kinematics::euler_from_quaternion(&quaternion(x));
-    let angular_rate = body_rates_to_euler_rates(&attitude, &block(x, index::BODY_RATES))?;
+    let q = quaternion(x);
+    let attitude = kinematics::euler_from_quaternion(&q);
+    if ftsmc_core::math::cos(attitude[1]).abs() < GIMBAL_LOCK_COS {
+        return Err(GimbalLock { theta: attitude[1] });
+    }
+    let angular_rate = euler_rates_of_quaternion(&q, &attitude, &block(x, index::BODY_RATES));
     Ok(QuadState { position: block(x, index::POSITION), attitude, velocity: block(x, index::VELOCITY), angular_rate })
 }
 
@@ -668,12 +804,13 @@ pub fn try_to_quad_state(x: &RigidBodyState) -> Result<QuadState, GimbalLock> {
 /// rather than infinite. A controller flying there has already lost its
 /// Euler-angle model; use [`try_to_quad_state`] to detect it.
 pub fn to_quad_state(x: &RigidBodyState) -> QuadState {
-    let attitude = kinematics::euler_from_quaternion(&quaternion(x));
+    let q = quaternion(x);
+    let attitude = kinematics::euler_from_quaternion(&q);
     QuadState {
         position: block(x, index::POSITION),
         attitude,
         velocity: block(x, index::VELOCITY),
-        angular_rate: euler_rates_clamped(&attitude, &block(x, index::BODY_RATES)),
+        angular_rate: euler_rates_of_quaternion(&q, &attitude, &block(x, index::BODY_RATES)),
     }
 }
 
@@ -688,4 +825,120 @@ pub fn from_quad_state(s: &QuadState) -> RigidBodyState {
     x[6..10].copy_from_slice(&q);
     x[10..13].copy_from_slice(&omega);
     x
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::{RngExt, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    /// The module's equations written out with full 3×3 products and cross
+    /// products, in the order of the sums of [`RigidBody::derivative`].
+    fn reference_derivative(body: &RigidBody, x: &RigidBodyState, input: &RigidBodyInput) -> RigidBodyState {
+        let p = body.params();
+        let rotors = p.rotor_positions();
+        let spin = p.spin.map(Spin::sign);
+        let q = quaternion(x);
+        let r = rotation(q);
+        let (v, omega) = (block(x, index::VELOCITY), block(x, index::BODY_RATES));
+        let v_air = mat_t_vec(&r, sub(v, input.wind));
+        let (mut force, mut torque) = ([0.0; 3], [0.0; 3]);
+        for i in 0..4 {
+            let w = input.rotor_speeds[i];
+            let vi = add(v_air, cross(omega, rotors[i]));
+            let mut f = [0.0, 0.0, p.thrust_coefficient * w * w];
+            f[0] -= w * p.rotor_drag_xy * vi[0];
+            f[1] -= w * p.rotor_drag_xy * vi[1];
+            f[2] -= w * p.rotor_drag_z * vi[2];
+            f[2] += p.translational_lift * (vi[0] * vi[0] + vi[1] * vi[1]);
+            force = add(force, f);
+            torque = add(torque, cross(rotors[i], f));
+            torque[2] -= spin[i] * p.moment_coefficient * w * w;
+        }
+        let speed = norm(v_air);
+        for k in 0..3 {
+            force[k] -= speed * p.parasitic_drag[k] * v_air[k];
+        }
+        let f_world = add(mat_vec(&r, force), input.force);
+        let h_r = body.rotor_momentum(&input.rotor_speeds);
+        let m = sub(add(torque, input.torque), cross(omega, add(mat_vec(&p.inertia, omega), h_r)));
+        let omega_dot = mat_vec(&inverse3(&p.inertia).unwrap(), m);
+        let mut d = [0.0; STATE_LEN];
+        d[0..3].copy_from_slice(&x[3..6]);
+        d[3..6].copy_from_slice(&[f_world[0] / p.mass, f_world[1] / p.mass, f_world[2] / p.mass - p.gravity]);
+        d[6..10].copy_from_slice(&quat_derivative(q, omega));
+        d[10..13].copy_from_slice(&omega_dot);
+        d
+    }
+
+    /// The Euler rates with sines and cosines read off the quaternion equal
+    /// the core's formula on the angles to rounding, at any attitude,
+    /// including near and at gimbal lock (where the core's formula answers).
+    /// "To rounding" near gimbal lock is the angle path's: its
+    /// `cos θ = cos(asin s)` has an absolute error of about `ε/cθ`, so the
+    /// rates (∝ 1/cθ) differ by up to about `ε ‖Ω‖/cθ³`; the quaternion's
+    /// `cθ = √(a² + b²)` keeps its relative precision there.
+    #[test]
+    fn euler_rates_from_the_quaternion_agree_with_the_angles() {
+        let mut rng = ChaCha8Rng::seed_from_u64(5);
+        let mut worst: f64 = 0.0;
+        for k in 0..20_000 {
+            let mut u = || -> f64 { rng.random_range(-1.0..1.0) };
+            // Every third sample close to θ = ±π/2 (down to exactly there).
+            let theta = if k % 3 == 0 {
+                (core::f64::consts::FRAC_PI_2 - 10f64.powi(-(k % 17))) * u().signum()
+            } else {
+                1.5 * u()
+            };
+            let euler = [3.1 * u(), theta, 3.1 * u()];
+            let q = kinematics::quaternion_from_euler(&euler);
+            let angles = kinematics::euler_from_quaternion(&q);
+            let rates = [2.0 * u(), 2.0 * u(), 2.0 * u()];
+            let want = euler_rates_clamped(&angles, &rates);
+            let got = euler_rates_of_quaternion(&q, &angles, &rates);
+            let ct = ftsmc_core::math::cos(angles[1]).abs();
+            for i in 0..3 {
+                // Relative to the angle path's precision ‖Ω‖/cθ³ (‖Ω‖ ≤ 2√3).
+                let err = (got[i] - want[i]).abs() * ct.max(GIMBAL_LOCK_COS).powi(3) / 4.0;
+                worst = worst.max(err);
+                assert!(err <= 1e-14, "{euler:?} {rates:?}: {got:?} vs {want:?}");
+            }
+        }
+        assert!(worst > 0.0, "the two forms are not the same bits everywhere");
+    }
+
+    /// The derivative skips the zero terms of the rotor positions (`r_z = 0`),
+    /// of a thrust without aerodynamics and of a diagonal inertia: the same
+    /// values as the full products, for both layouts, aerodynamics on and
+    /// off, diagonal and full inertia.
+    #[test]
+    fn derivative_equals_the_full_products() {
+        let mut rng = ChaCha8Rng::seed_from_u64(3);
+        let full = RigidBodyParams {
+            inertia: [[3.8e-3, 1e-4, -2e-4], [1e-4, 3.9e-3, 5e-5], [-2e-4, 5e-5, 7.6e-3]],
+            ..RigidBodyParams::hummingbird()
+        };
+        let bodies = [RigidBodyParams::default(), RigidBodyParams::hummingbird(), RigidBodyParams::crazyflie(), full];
+        for params in bodies {
+            let body = RigidBody::new(params).unwrap();
+            assert_eq!(body.diagonal, is_diagonal(&params.inertia));
+            for _ in 0..200 {
+                let mut u = || -> f64 { rng.random_range(-3.0..3.0) };
+                let q = [1.0 + u().abs(), u(), u(), u()];
+                let n = q.iter().map(|c| c * c).sum::<f64>().sqrt();
+                let mut x: RigidBodyState = core::array::from_fn(|_| u());
+                x[6..10].copy_from_slice(&q.map(|c| c / n));
+                let input = RigidBodyInput {
+                    rotor_speeds: core::array::from_fn(|_| 300.0 * (2.0 + u())),
+                    wind: [u(), u(), u()],
+                    force: [u(), u(), u()],
+                    torque: [0.01 * u(), 0.01 * u(), 0.01 * u()],
+                };
+                let got = body.derivative(&x, &input);
+                let want = reference_derivative(&body, &x, &input);
+                assert_eq!(got, want, "{params:?}");
+            }
+        }
+    }
 }
