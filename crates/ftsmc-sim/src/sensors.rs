@@ -214,11 +214,16 @@ pub fn sensor_noise_rng(seed: u64, stream: u64) -> ChaCha8Rng {
 struct Source {
     error: QuantityError,
     rng: ChaCha8Rng,
+    /// [`QuantityError::has_noise`], decided once.
+    noisy: bool,
+    /// Any axis has a bias.
+    biased: bool,
 }
 
 impl Source {
     fn new(error: QuantityError, seed: u64, stream: u64) -> Self {
-        Self { error, rng: sensor_noise_rng(seed, stream) }
+        let biased = error.bias.iter().any(|b| *b != 0.0);
+        Self { error, rng: sensor_noise_rng(seed, stream), noisy: error.has_noise(), biased }
     }
 
     /// `truth + bias + std · z` per axis. Three draws per reading whenever
@@ -227,7 +232,7 @@ impl Source {
     /// perfect quantity is returned bit-exactly (`-0.0 + 0.0` would not be).
     fn corrupt(&mut self, truth: [f64; 3]) -> [f64; 3] {
         let mut out = truth;
-        if self.error.has_noise() {
+        if self.noisy {
             for k in 0..3 {
                 let z: f64 = StandardNormal.sample(&mut self.rng);
                 if self.error.std[k] != 0.0 {
@@ -235,9 +240,11 @@ impl Source {
                 }
             }
         }
-        for k in 0..3 {
-            if self.error.bias[k] != 0.0 {
-                out[k] += self.error.bias[k];
+        if self.biased {
+            for k in 0..3 {
+                if self.error.bias[k] != 0.0 {
+                    out[k] += self.error.bias[k];
+                }
             }
         }
         out
@@ -250,6 +257,8 @@ impl Source {
 struct Line {
     /// Samples per control period, clamped to at most 1.
     samples_per_period: f64,
+    /// `samples_per_period == 1`: a sample is due every period.
+    every_period: bool,
     /// Index of the last sample taken (`⌊period · samples_per_period⌋`).
     last_sample: u64,
     /// The reading held between samples.
@@ -273,6 +282,7 @@ impl Line {
         };
         Self {
             samples_per_period,
+            every_period: samples_per_period == 1.0,
             last_sample: 0,
             held: QuadState::default(),
             ring: vec![QuadState::default(); clock.latency as usize + 1],
@@ -286,6 +296,11 @@ impl Line {
     /// index ⌊k · f_s / f_c⌋ moves on (the 1e-9 guards exact ratios, 100 Hz
     /// at 1 kHz: every 10th period, against rounding down).
     fn due(&mut self, period: u64) -> bool {
+        if self.every_period {
+            // ⌊k · 1 + 1e-9⌋ = k moves on every period.
+            self.last_sample = period;
+            return true;
+        }
         let index = (period as f64 * self.samples_per_period + 1e-9).floor() as u64;
         if period == 0 || index != self.last_sample {
             self.last_sample = index;
@@ -305,7 +320,7 @@ impl Line {
         let n = self.ring.len();
         self.ring[self.head] = self.held;
         self.rates_ring[self.head] = self.held_rates;
-        self.head = (self.head + 1) % n;
+        self.head = if self.head + 1 == n { 0 } else { self.head + 1 };
         self.ring[self.head]
     }
 

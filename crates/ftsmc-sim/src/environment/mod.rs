@@ -17,6 +17,7 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};
 
+use crate::signal::grid::GridSignal;
 use crate::signal::Signal;
 
 /// The environment's parameter sections (borrowed from wherever they are
@@ -45,6 +46,14 @@ pub struct Environment<'a> {
     params: EnvironmentParams<'a>,
     drag_rngs: Option<[ChaCha8Rng; 6]>,
     drag_factor: [f64; 6],
+    grid: Option<Grid>,
+}
+
+/// The environment's signals prepared for the run loop's time grid
+/// ([`Environment::on_grid`]).
+struct Grid {
+    disturbance: [GridSignal; 6],
+    inertia_variation: Option<GridSignal>,
 }
 
 impl<'a> Environment<'a> {
@@ -58,7 +67,22 @@ impl<'a> Environment<'a> {
                 rng
             })
         });
-        Self { params, drag_rngs, drag_factor: [1.0; 6] }
+        Self { params, drag_rngs, drag_factor: [1.0; 6], grid: None }
+    }
+
+    /// The same environment sampled by [`Environment::time_varying_on_grid`]
+    /// on the grid `t_m = m·step` (s): the run loop's substep boundaries.
+    /// Its sines and cosines are rotated along the grid
+    /// ([`crate::signal::grid`]), equal to [`Environment::time_varying`]'s
+    /// to rounding.
+    pub fn on_grid(mut self, step: f64) -> Self {
+        let d = self.params.disturbance;
+        let g = |s: &Signal| GridSignal::new(s, step);
+        self.grid = Some(Grid {
+            disturbance: [g(&d.x), g(&d.y), g(&d.z), g(&d.phi), g(&d.theta), g(&d.psi)],
+            inertia_variation: self.params.inertia_variation.map(g),
+        });
+        self
     }
 
     /// Draw the drag multipliers for the next control period.
@@ -94,6 +118,33 @@ impl<'a> Environment<'a> {
             }
         }
         TimeVarying { mass, inertia, disturbance: s.disturbance.at(t) }
+    }
+
+    /// [`Environment::time_varying`] at grid point `m` of
+    /// [`Environment::on_grid`], whose time the caller computed as `t` (s):
+    /// the payload, the windows and the non-sinusoid terms at `t`, the
+    /// sinusoids rotated to `m`. Without a grid, `time_varying(t)`.
+    #[inline(always)] // the loop calls it every substep
+    pub fn time_varying_on_grid(&mut self, m: u64, t: f64) -> TimeVarying {
+        let Some(grid) = self.grid.as_mut() else {
+            return self.time_varying(t);
+        };
+        let base = self.params.plant;
+        let mut mass = base.mass;
+        if let Some(payload) = &self.params.payload {
+            mass += payload.added_mass(t);
+        }
+        let mut inertia = base.inertia;
+        if let Some(var) = &mut grid.inertia_variation {
+            let scale = 1.0 + var.value(m, t);
+            for i in &mut inertia {
+                *i *= scale;
+            }
+        }
+        let [x, y, z, phi, theta, psi] = &mut grid.disturbance;
+        let disturbance =
+            [x.value(m, t), y.value(m, t), z.value(m, t), phi.value(m, t), theta.value(m, t), psi.value(m, t)];
+        TimeVarying { mass, inertia, disturbance }
     }
 
     /// Plant parameters for given time-varying inputs and the current

@@ -31,13 +31,45 @@ use crate::environment::{Environment, TimeVarying};
 use crate::metrics::MetricsAccumulator;
 use crate::scenario::Scenario;
 use crate::sensors::Sensors;
+use crate::signal::grid::GridSignal;
 
 use super::actuation::{ActuatorStage, Delivered};
 use super::exit::check_divergence;
 use super::observer::{FlightStats, Observer, Tick};
 use super::recording::Recorder;
 use super::truth::{truth_of, Substep, TruthModel, TruthSetup};
-use super::{reference_at, tracking_errors, Divergence, ExitStatus, RunOptions, RunOutput};
+use super::{tracking_errors, Divergence, ExitStatus, RunOptions, RunOutput};
+
+/// The scenario's reference signals `x, y, z, ψ` on the control grid
+/// `t_k = k·dt`: [`super::reference_at`] with the sines and cosines rotated
+/// along the grid ([`crate::signal::grid`]), equal to it to rounding.
+struct ReferenceGrid {
+    x: GridSignal,
+    y: GridSignal,
+    z: GridSignal,
+    psi: GridSignal,
+}
+
+impl ReferenceGrid {
+    fn new(scenario: &Scenario, dt: f64) -> Self {
+        let r = &scenario.reference;
+        let g = |s| GridSignal::new(s, dt);
+        Self { x: g(&r.x), y: g(&r.y), z: g(&r.z), psi: g(&r.psi) }
+    }
+
+    /// The reference at control step `k`, whose time the loop computed as `t` (s).
+    fn at(&mut self, k: u64, t: f64) -> Reference {
+        let (x, y, z, psi) = (self.x.sample(k, t), self.y.sample(k, t), self.z.sample(k, t), self.psi.sample(k, t));
+        Reference {
+            position: [x.value, y.value, z.value],
+            velocity: [x.rate, y.rate, z.rate],
+            acceleration: [x.acceleration, y.acceleration, z.acceleration],
+            yaw: psi.value,
+            yaw_rate: psi.rate,
+            yaw_acceleration: psi.acceleration,
+        }
+    }
+}
 
 /// What one [`Flight::step`] did.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -74,6 +106,7 @@ pub struct Flight<'s, C: Controller + ?Sized> {
     ground: Option<GroundSettings>,
     tv_now: TimeVarying,
     reference: Reference,
+    reference_grid: ReferenceGrid,
     metrics: MetricsAccumulator,
     recorder: Recorder,
     envelope: Tracker,
@@ -118,15 +151,17 @@ impl<'s, C: Controller + ?Sized> Flight<'s, C> {
             // no draws that feed nothing.
             env_params.drag_noise = None;
         }
-        let env = Environment::new(env_params);
+        // Sampled at the substep boundaries t_m = m·h: the sinusoids rotate along the grid.
+        let mut env = Environment::new(env_params).on_grid(h);
         let wind = scenario.wind.clone().and_then(|w| Wind::new(w, h, scenario.seed).ok());
         let sensors =
             scenario.sensors.filter(|s| !s.is_perfect()).map(|s| Sensors::new(s, sim.control_rate, scenario.seed));
         let metrics = MetricsAccumulator::new(dt, sim.settling_band, sim.settling_floor, sim.steady_state_after)
             .with_window(sim.metrics_window);
         let recorder = Recorder::new(scenario, options.record, steps, &*controller);
-        let tv_now = env.time_varying(0.0);
-        let reference = reference_at(scenario, 0.0);
+        let tv_now = env.time_varying_on_grid(0, 0.0);
+        let mut reference_grid = ReferenceGrid::new(scenario, dt);
+        let reference = reference_grid.at(0, 0.0);
         let wants_body = controller.uses_body_attitude();
         let mut flight = Self {
             scenario,
@@ -149,6 +184,7 @@ impl<'s, C: Controller + ?Sized> Flight<'s, C> {
             ground: scenario.ground.filter(|g| g.enabled),
             tv_now,
             reference,
+            reference_grid,
             metrics,
             recorder,
             envelope: Tracker::new(scenario.envelope),
@@ -322,10 +358,11 @@ impl<'s, C: Controller + ?Sized> Flight<'s, C> {
         }
 
         let omega_bar = residual_speed(&delivered.target);
-        for j in 0..self.scenario.simulation.substeps {
+        let substeps = self.scenario.simulation.substeps;
+        for j in 0..substeps {
             let t0 = t + j as f64 * h;
             let wind = self.wind.as_mut().map(|w| w.step(t0));
-            let tv_next = self.env.time_varying(t0 + h);
+            let tv_next = self.env.time_varying_on_grid(k * u64::from(substeps) + u64::from(j) + 1, t0 + h);
             let z_prev = *self.truth.vertical().0;
             self.truth.substep(&Substep {
                 t0,
@@ -352,7 +389,7 @@ impl<'s, C: Controller + ?Sized> Flight<'s, C> {
         }
 
         let t_next = (k + 1) as f64 * dt;
-        self.reference = reference_at(self.scenario, t_next);
+        self.reference = self.reference_grid.at(k + 1, t_next);
         self.state = self.truth.quad_state();
         if self.wants_body {
             self.body = self.truth.body_attitude();

@@ -13,6 +13,7 @@
 //! All three mean the same thing as the full form with that one term, and
 //! serialize as the full form.
 
+pub mod grid;
 pub mod waypoints;
 
 use ftsmc_core::math::{cos, sin, sin_cos};
@@ -166,16 +167,7 @@ impl Term {
                 let (s, c) = sin_cos(w * t + phase);
                 Sample { value: amplitude * c, rate: -amplitude * w * s, acceleration: -amplitude * w * w * c }
             }
-            Term::Polynomial { coefficients } => {
-                let mut out = Sample::default();
-                // Horner for value and both derivatives.
-                for &c in coefficients.iter().rev() {
-                    out.acceleration = out.acceleration * t + 2.0 * out.rate;
-                    out.rate = out.rate * t + out.value;
-                    out.value = out.value * t + c;
-                }
-                out
-            }
+            Term::Polynomial { coefficients } => polynomial(coefficients, t),
             Term::Waypoints(w) => w.sample(t),
             Term::Piecewise { pieces } => {
                 let active = pieces.iter().find(|p| p.until.is_none_or(|until| t < until));
@@ -183,6 +175,18 @@ impl Term {
             }
         }
     }
+}
+
+/// `Σ_k coefficients[k] · t^k` and its two derivatives at `t` (s), by Horner.
+#[inline]
+fn polynomial(coefficients: &[f64], t: f64) -> Sample {
+    let mut out = Sample::default();
+    for &c in coefficients.iter().rev() {
+        out.acceleration = out.acceleration * t + 2.0 * out.rate;
+        out.rate = out.rate * t + out.value;
+        out.value = out.value * t + c;
+    }
+    out
 }
 
 /// A sum of terms, active only inside `window = [start, end]` (s) when given

@@ -1,0 +1,336 @@
+//! A [`Signal`] evaluated on a uniform time grid `t_m = m·δ` (`m` = 0, 1,
+//! 2, …), as the run loop samples its disturbances, parameter variations
+//! and reference: the same sum of terms, with every sine and cosine term
+//! turned into a rotation instead of a call of `sin`/`cos` per sample.
+//!
+//! For a term `A·sin(ω t + φ)` the grid is cut into blocks of
+//! [`BLOCK`] points. At the first point `a` of a block the term takes
+//! `(sin θ_a, cos θ_a) = sin_cos(ω·(a·δ) + φ)` once; the `n`-th point after
+//! it uses the angle-addition formulas
+//!
+//! ```text
+//! sin(θ_a + nωδ) = sin θ_a · cos(nωδ) + cos θ_a · sin(nωδ)
+//! cos(θ_a + nωδ) = cos θ_a · cos(nωδ) − sin θ_a · sin(nωδ)
+//! ```
+//!
+//! with `(sin nωδ, cos nωδ)` tabulated once per term when the grid is built.
+//! The sample's own argument `θ = ω t + φ`, formed from the caller's `t` as
+//! [`Term::sample`] forms it, differs from `θ_a + nωδ` by a residual `r` of
+//! a few units in its last place (the rounding of `t` and of `θ`); one more
+//! first-order rotation by `r` (`sin(x + r) = sin x + r cos x`, the `r²/2`
+//! left out is below 1e-25) lands on `θ` itself. Every sample is a few
+//! products and sums away from `libm` values, so nothing accumulates from
+//! one sample to the next: it agrees with [`Signal::value`] to a few units
+//! in the last place of the amplitude (`tests` below bound it), as two
+//! correctly rounded `sin` implementations would. The bits are not those of
+//! [`Signal::value`]; they are a function of `(m, t)` alone (not of the
+//! order of the calls), so a flight stays deterministic.
+//!
+//! The other terms (constants, steps, polynomials, waypoints, piecewise)
+//! and the window are evaluated at the caller's time `t` exactly (bit for
+//! bit) as
+//! [`Signal::value`] and [`Signal::sample`] do.
+
+use ftsmc_core::math::sin_cos;
+
+use super::{Sample, Signal, Term};
+
+/// Grid points per block: one `sin_cos` per sinusoid term every `BLOCK`
+/// samples (a power of two, so the block index and offset are a shift and a mask).
+pub const BLOCK: u64 = 64;
+
+/// Sine and cosine terms of one signal that get a table (1.5 KiB each); any
+/// beyond are evaluated directly, as [`Term::sample`] does, so a signal of
+/// thousands of terms does not hold megabytes per flight.
+pub const MAX_PHASORS: usize = 256;
+
+/// One `A·sin(ω t + φ)` or `A·cos(ω t + φ)` term on the grid.
+#[derive(Clone, Debug)]
+struct Phasor {
+    /// Amplitude `A` (units of the signal).
+    amplitude: f64,
+    /// ω, rad/s.
+    omega: f64,
+    /// φ, rad.
+    phase: f64,
+    /// A cosine term (else a sine).
+    cosine: bool,
+    /// Block whose anchor `anchor` holds (`u64::MAX`: none yet).
+    block: u64,
+    /// The anchor's argument `θ_a = ω·(a·δ) + φ` (rad) and `(sin θ_a, cos θ_a)`.
+    anchor: (f64, f64, f64),
+    /// `(τ_n, sin τ_n, cos τ_n)` with `τ_n = ω·(n·δ)` for `n = 0 … BLOCK − 1`.
+    table: Box<[(f64, f64, f64)]>,
+}
+
+impl Phasor {
+    fn new(amplitude: f64, omega: f64, phase: f64, cosine: bool, step: f64) -> Self {
+        let table = (0..BLOCK)
+            .map(|n| {
+                let tau = omega * (n as f64 * step);
+                let (s, c) = sin_cos(tau);
+                (tau, s, c)
+            })
+            .collect();
+        Self { amplitude, omega, phase, cosine, block: u64::MAX, anchor: (0.0, 0.0, 1.0), table }
+    }
+
+    /// Take the anchor of `block` (once every `BLOCK` samples).
+    #[cold]
+    #[inline(never)]
+    fn set_anchor(&mut self, block: u64, step: f64) {
+        let theta_a = self.omega * ((block * BLOCK) as f64 * step) + self.phase;
+        let (s, c) = sin_cos(theta_a);
+        self.anchor = (theta_a, s, c);
+        self.block = block;
+    }
+
+    /// `(sin θ, cos θ)` of the term's argument `θ = ω t + φ` (formed as
+    /// [`Term::sample`] forms it) at grid point `m` of time `t ≈ m·δ`: the
+    /// anchor rotated by the table's `τ_n`, then by the residual
+    /// `r = θ − θ_a − τ_n` (a few units in the last place of `θ`) to first
+    /// order (`r²/2` is below 1e-25).
+    #[inline(always)]
+    fn sin_cos_at(&mut self, m: u64, t: f64, step: f64) -> (f64, f64) {
+        let block = m / BLOCK;
+        if block != self.block {
+            self.set_anchor(block, step);
+        }
+        let (theta_a, s_a, c_a) = self.anchor;
+        let (tau, s_n, c_n) = self.table[(m % BLOCK) as usize];
+        let theta = self.omega * t + self.phase;
+        let r = (theta - theta_a) - tau;
+        let (s, c) = (s_a * c_n + c_a * s_n, c_a * c_n - s_a * s_n);
+        (s + c * r, c - s * r)
+    }
+
+    /// The term's value at grid point `m` of time `t`.
+    #[inline]
+    fn value(&mut self, m: u64, t: f64, step: f64) -> f64 {
+        let (s, c) = self.sin_cos_at(m, t, step);
+        self.amplitude * if self.cosine { c } else { s }
+    }
+
+    /// The term's value and derivatives at grid point `m` of time `t` (the
+    /// formulas of [`Term::sample`]).
+    #[inline]
+    fn sample(&mut self, m: u64, t: f64, step: f64) -> Sample {
+        let (s, c) = self.sin_cos_at(m, t, step);
+        let (a, w) = (self.amplitude, self.omega);
+        if self.cosine {
+            Sample { value: a * c, rate: -a * w * s, acceleration: -a * w * w * c }
+        } else {
+            Sample { value: a * s, rate: a * w * c, acceleration: -a * w * w * s }
+        }
+    }
+}
+
+/// One term of a [`GridSignal`].
+#[derive(Clone, Debug)]
+enum GridTerm {
+    /// A sine or cosine, rotated along the grid.
+    Sinusoid(Phasor),
+    /// [`Term::Constant`].
+    Constant(f64),
+    /// [`Term::Polynomial`]: its coefficients from degree 0 upward.
+    Polynomial(Vec<f64>),
+    /// Any other term, evaluated at `t` as [`Term::sample`] does.
+    Other(Term),
+}
+
+/// A [`Signal`] prepared for sampling on the grid `t_m = m·step` (module
+/// documentation).
+#[derive(Clone, Debug)]
+pub struct GridSignal {
+    step: f64,
+    window: Option<[f64; 2]>,
+    terms: Vec<GridTerm>,
+}
+
+impl GridSignal {
+    /// `signal` on the grid of spacing `step` (s, > 0). Tabulates
+    /// `BLOCK` angles with their sines and cosines for each of the first
+    /// [`MAX_PHASORS`] sinusoid terms (1.5 KiB each).
+    pub fn new(signal: &Signal, step: f64) -> Self {
+        let mut phasors = 0;
+        let terms = signal
+            .terms
+            .iter()
+            .map(|term| match term {
+                Term::Sine { amplitude, phase, .. } | Term::Cosine { amplitude, phase, .. }
+                    if phasors < MAX_PHASORS =>
+                {
+                    phasors += 1;
+                    let omega = term.angular_frequency().unwrap_or(0.0);
+                    let cosine = matches!(term, Term::Cosine { .. });
+                    GridTerm::Sinusoid(Phasor::new(*amplitude, omega, *phase, cosine, step))
+                }
+                Term::Constant { value } => GridTerm::Constant(*value),
+                Term::Polynomial { coefficients } => GridTerm::Polynomial(coefficients.clone()),
+                other => GridTerm::Other(other.clone()),
+            })
+            .collect();
+        Self { step, window: signal.window, terms }
+    }
+
+    /// True when the signal has no terms (identically zero).
+    pub fn is_zero(&self) -> bool {
+        self.terms.is_empty()
+    }
+
+    /// The value at grid point `m`, whose time the caller computed as `t`
+    /// (s, `≈ m·step`; the window and the non-sinusoid terms use it).
+    #[inline(always)] // the loop calls it for every signal at every substep
+    pub fn value(&mut self, m: u64, t: f64) -> f64 {
+        if let Some([start, end]) = self.window {
+            if t < start || t > end {
+                return 0.0;
+            }
+        }
+        let step = self.step;
+        let mut out = 0.0;
+        for term in &mut self.terms {
+            out += match term {
+                GridTerm::Sinusoid(p) => p.value(m, t, step),
+                GridTerm::Constant(value) => *value,
+                GridTerm::Polynomial(coefficients) => super::polynomial(coefficients, t).value,
+                GridTerm::Other(term) => term.value(t),
+            };
+        }
+        out
+    }
+
+    /// Value and derivatives at grid point `m` of time `t` (as [`GridSignal::value`]).
+    #[inline(always)]
+    pub fn sample(&mut self, m: u64, t: f64) -> Sample {
+        if let Some([start, end]) = self.window {
+            if t < start || t > end {
+                return Sample::default();
+            }
+        }
+        let step = self.step;
+        let mut out = Sample::default();
+        for term in &mut self.terms {
+            out += match term {
+                GridTerm::Sinusoid(p) => p.sample(m, t, step),
+                GridTerm::Constant(value) => Sample { value: *value, ..Sample::default() },
+                GridTerm::Polynomial(coefficients) => super::polynomial(coefficients, t),
+                GridTerm::Other(term) => term.sample(t),
+            };
+        }
+        out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn sinusoids() -> Signal {
+        Signal {
+            terms: vec![
+                Term::Sine { amplitude: 0.5, omega: Some(0.4), frequency: None, phase: 5.1 },
+                Term::Cosine { amplitude: 0.3, omega: Some(1.3), frequency: None, phase: 0.2 },
+                Term::Sine { amplitude: 0.1, omega: None, frequency: Some(2.0), phase: 3.7 },
+                Term::Constant { value: 0.25 },
+                Term::Polynomial { coefficients: vec![0.0, 0.01] },
+            ],
+            window: Some([10.0, 40.0]),
+        }
+    }
+
+    /// Over a 50 s flight at 1 kHz (arguments up to 632 rad), every sample
+    /// agrees with the direct evaluation to a few units in the last place
+    /// of the amplitudes, its derivatives likewise (times ω and ω²).
+    #[test]
+    fn grid_samples_agree_with_the_direct_evaluation_to_rounding() {
+        let signal = sinusoids();
+        let step = 1e-3;
+        let mut grid = GridSignal::new(&signal, step);
+        // Amplitudes 0.9 in all, ω up to 12.6 rad/s.
+        let bound = 4.0 * f64::EPSILON * 0.9;
+        let mut inside = 0;
+        for m in 0..=50_000u64 {
+            let t = m as f64 * step;
+            let (direct, on_grid) = (signal.value(t), grid.value(m, t));
+            let s = signal.sample(t);
+            let g = grid.sample(m, t);
+            assert!((direct - on_grid).abs() <= bound, "t = {t}: {on_grid} vs {direct}");
+            assert!((s.value - g.value).abs() <= bound, "t = {t}: {} vs {}", g.value, s.value);
+            assert!((s.rate - g.rate).abs() <= 12.6 * bound, "t = {t}: rate {} vs {}", g.rate, s.rate);
+            assert!((s.acceleration - g.acceleration).abs() <= 158.0 * bound, "t = {t}");
+            if (10.0..=40.0).contains(&t) {
+                inside += 1;
+            } else {
+                assert_eq!(on_grid, 0.0);
+            }
+        }
+        assert!(inside > 29_000, "the two evaluations were compared inside the window");
+    }
+
+    /// The same at the substeps of a 1 kHz loop with 4 substeps, with times
+    /// formed as the run loop forms them (`k·dt + j·h + h`, not `m·h`).
+    #[test]
+    fn grid_samples_at_the_loops_substep_times_agree_to_rounding() {
+        let signal = sinusoids();
+        let (dt, substeps) = (1e-3, 4u64);
+        let h = dt / substeps as f64;
+        let mut grid = GridSignal::new(&signal, h);
+        for k in 0..50_000u64 {
+            for j in 0..substeps {
+                let t = k as f64 * dt + j as f64 * h + h;
+                let m = k * substeps + j + 1;
+                let (direct, on_grid) = (signal.value(t), grid.value(m, t));
+                assert!((direct - on_grid).abs() <= 4.0 * f64::EPSILON * 0.9, "t = {t}: {on_grid} vs {direct}");
+            }
+        }
+    }
+
+    /// The value at a grid point does not depend on which points were
+    /// evaluated before it (a flight stays deterministic however it is stepped).
+    #[test]
+    fn grid_values_depend_on_the_point_alone() {
+        let signal = sinusoids();
+        let mut stepped = GridSignal::new(&signal, 1e-3);
+        let mut jumping = GridSignal::new(&signal, 1e-3);
+        let at = |m: u64| m as f64 * 1e-3;
+        let seq: Vec<f64> = (0..40_000u64).map(|m| stepped.value(m, at(m))).collect();
+        for m in [39_999u64, 12_345, 20_000, 12_346, 30_063, 30_064, 10_000] {
+            assert_eq!(jumping.value(m, at(m)).to_bits(), seq[m as usize].to_bits(), "m = {m}");
+        }
+    }
+
+    #[test]
+    fn the_other_terms_and_the_window_are_those_of_the_signal() {
+        let signal = Signal {
+            terms: vec![Term::Step { time: 1.0, height: 2.0 }, Term::Polynomial { coefficients: vec![1.0, 0.1, 0.3] }],
+            window: Some([0.5, 3.0]),
+        };
+        let mut grid = GridSignal::new(&signal, 0.01);
+        for m in 0..400u64 {
+            let t = m as f64 * 0.01;
+            assert_eq!(grid.value(m, t).to_bits(), signal.value(t).to_bits());
+            assert_eq!(grid.sample(m, t), signal.sample(t));
+        }
+        assert!(GridSignal::new(&Signal::default(), 0.01).is_zero());
+    }
+
+    /// Sinusoids beyond [`MAX_PHASORS`] are evaluated directly (their bits
+    /// are those of the signal); the sum still agrees to rounding.
+    #[test]
+    fn sinusoids_beyond_the_table_budget_are_evaluated_directly() {
+        let n = MAX_PHASORS + 3;
+        let terms: Vec<Term> = (0..n)
+            .map(|i| Term::Sine { amplitude: 1e-3, omega: Some(0.1 * i as f64), frequency: None, phase: 0.0 })
+            .collect();
+        let mut grid = GridSignal::new(&Signal { terms: terms.clone(), window: None }, 1e-3);
+        let tabulated = grid.terms.iter().filter(|t| matches!(t, GridTerm::Sinusoid(_))).count();
+        assert_eq!(tabulated, MAX_PHASORS);
+        assert!(matches!(grid.terms[n - 1], GridTerm::Other(_)));
+        let signal = Signal { terms, window: None };
+        for m in [0u64, 1, 777, 12_345] {
+            let t = m as f64 * 1e-3;
+            assert!((grid.value(m, t) - signal.value(t)).abs() <= 1e-15, "t = {t}");
+        }
+    }
+}
