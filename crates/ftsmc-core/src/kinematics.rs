@@ -56,10 +56,46 @@ pub fn body_rates_from_euler_rates(euler: &Vec3, rates: &Vec3) -> Vec3 {
 /// [`rotation_from_quaternion`]`(q)` = [`rotation_from_euler`]`(euler)`.
 #[inline]
 pub fn quaternion_from_euler(euler: &Vec3) -> [f64; 4] {
-    let (sr, cr) = sin_cos(0.5 * euler[0]);
-    let (sp, cp) = sin_cos(0.5 * euler[1]);
-    let (sy, cy) = sin_cos(0.5 * euler[2]);
+    quaternion_from_half_angles(half_angle(euler[0]), half_angle(euler[1]), half_angle(euler[2]))
+}
+
+/// `[sin(a/2), cos(a/2)]` of an angle `a` (rad), the inputs of
+/// [`quaternion_from_half_angles`] and [`full_angle`].
+#[inline]
+pub fn half_angle(a: f64) -> [f64; 2] {
+    let (s, c) = sin_cos(0.5 * a);
+    [s, c]
+}
+
+/// [`quaternion_from_euler`] from the sines and cosines of the half angles
+/// `[sin(φ/2), cos(φ/2)]`, `[sin(θ/2), cos(θ/2)]`, `[sin(ψ/2), cos(ψ/2)]`
+/// ([`half_angle`]).
+#[inline]
+pub fn quaternion_from_half_angles([sr, cr]: [f64; 2], [sp, cp]: [f64; 2], [sy, cy]: [f64; 2]) -> [f64; 4] {
     [cr * cp * cy + sr * sp * sy, sr * cp * cy - cr * sp * sy, cr * sp * cy + sr * cp * sy, cr * cp * sy - sr * sp * cy]
+}
+
+/// `[sin a, cos a]` from `[sin(a/2), cos(a/2)]` by the double-angle formulas
+/// `sin a = 2 s c`, `cos a = (c − s)(c + s)`: equal to `sin_cos(a)` within a
+/// few units in the last place, without a second evaluation (a reading
+/// that needs both its quaternion and its Euler rates takes the half
+/// angles once).
+#[inline]
+pub fn full_angle([s, c]: [f64; 2]) -> [f64; 2] {
+    [2.0 * s * c, (c - s) * (c + s)]
+}
+
+/// `cos θ` clamped away from 0 to `±`[`GIMBAL_LOCK_COS`] (the sign of
+/// `cos θ`; positive at 0), as [`euler_rates_from_body_rates`] divides by it.
+#[inline]
+pub fn gimbal_clamped_cos(c: f64) -> f64 {
+    if c.abs() >= GIMBAL_LOCK_COS {
+        c
+    } else if c < 0.0 {
+        -GIMBAL_LOCK_COS
+    } else {
+        GIMBAL_LOCK_COS
+    }
 }
 
 /// Body-to-world rotation matrix of a unit quaternion `[w, x, y, z]`
@@ -100,13 +136,7 @@ pub const GIMBAL_LOCK_COS: f64 = 1e-6;
 pub fn euler_rates_from_body_rates(euler: &Vec3, body_rates: &Vec3) -> Vec3 {
     let (sf, cf) = sin_cos(euler[0]);
     let (st, c) = sin_cos(euler[1]);
-    let c = if c.abs() >= GIMBAL_LOCK_COS {
-        c
-    } else if c < 0.0 {
-        -GIMBAL_LOCK_COS
-    } else {
-        GIMBAL_LOCK_COS
-    };
+    let c = gimbal_clamped_cos(c);
     euler_rates_from_body_rates_with([sf, cf], [st, c], body_rates)
 }
 
@@ -127,6 +157,18 @@ mod tests {
     use crate::math::{cross, mat_t_mat, mat_t_vec, mat_vec, norm};
 
     use proptest::prelude::*;
+
+    #[test]
+    fn full_angles_from_half_angles_are_sin_cos_to_a_few_ulp() {
+        let mut worst = 0.0f64;
+        for k in -4000..=4000 {
+            let a = f64::from(k) * 1e-3 * core::f64::consts::PI;
+            let [s, c] = full_angle(half_angle(a));
+            let (ws, wc) = sin_cos(a);
+            worst = worst.max((s - ws).abs()).max((c - wc).abs());
+        }
+        assert!(worst <= 4.0 * f64::EPSILON, "{worst:e}");
+    }
 
     proptest! {
         /// Euler → quaternion → rotation equals Euler → rotation; rotation and

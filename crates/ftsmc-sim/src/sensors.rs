@@ -32,7 +32,9 @@
 //! writes into it. A run loop calling `measure` every step does not touch the
 //! heap (asserted by `tests/sensors_alloc.rs` with a counting allocator).
 
-use ftsmc_core::kinematics::quaternion_from_euler;
+use ftsmc_core::kinematics::{
+    euler_rates_from_body_rates_with, full_angle, gimbal_clamped_cos, half_angle, quaternion_from_half_angles,
+};
 use ftsmc_core::law::GainError;
 use ftsmc_core::measured::{BodyAttitude, Measurement};
 use ftsmc_core::model::QuadState;
@@ -265,11 +267,12 @@ struct Line {
     held: QuadState,
     /// Ring of the last `latency + 1` readings.
     ring: Vec<QuadState>,
-    /// The measured body rates of the held reading (rad/s), `None` when
-    /// not measured as such (see [`Sensors::measure_full`]).
-    held_rates: Option<[f64; 3]>,
-    /// Their ring, beside `ring` (kept apart so the Euler readings move as before).
-    rates_ring: Vec<Option<[f64; 3]>>,
+    /// The held reading's attitude as a quaternion with its measured body
+    /// rates (rad/s), `None` when the rates were not measured as such (see
+    /// [`Sensors::measure_full`]).
+    held_body: Option<BodyAttitude>,
+    /// Their ring, beside `ring`.
+    body_ring: Vec<Option<BodyAttitude>>,
     /// Slot the next reading goes into.
     head: usize,
 }
@@ -286,8 +289,8 @@ impl Line {
             last_sample: 0,
             held: QuadState::default(),
             ring: vec![QuadState::default(); clock.latency as usize + 1],
-            held_rates: None,
-            rates_ring: vec![None; clock.latency as usize + 1],
+            held_body: None,
+            body_ring: vec![None; clock.latency as usize + 1],
             head: 0,
         }
     }
@@ -315,18 +318,18 @@ impl Line {
     fn delayed(&mut self, period: u64) -> QuadState {
         if period == 0 {
             self.ring.fill(self.held);
-            self.rates_ring.fill(self.held_rates);
+            self.body_ring.fill(self.held_body);
         }
         let n = self.ring.len();
         self.ring[self.head] = self.held;
-        self.rates_ring[self.head] = self.held_rates;
+        self.body_ring[self.head] = self.held_body;
         self.head = if self.head + 1 == n { 0 } else { self.head + 1 };
         self.ring[self.head]
     }
 
     /// The body rates of the reading [`Line::delayed`] returned last.
-    fn delayed_rates(&self) -> Option<[f64; 3]> {
-        self.rates_ring[self.head]
+    fn delayed_body(&self) -> Option<BodyAttitude> {
+        self.body_ring[self.head]
     }
 }
 
@@ -387,22 +390,25 @@ impl Sensors {
     /// body rates ([`Measurement::body`]). With them and `rates = "body"`,
     /// the reading carries the measured attitude as a quaternion
     /// ([`quaternion_from_euler`] of the measured angles) with the measured
-    /// body rates, so a full-state controller needs no Euler conversion.
-    /// Otherwise the reading has no body attitude. The Euler reading, the
-    /// clocks, latency and random draws are those of [`Sensors::measure`],
-    /// bit for bit.
+    /// body rates, so a full-state controller needs no Euler conversion;
+    /// the gyroscope then reads the truth's own body rates. Otherwise the
+    /// reading has no body attitude. The clocks, latency and random draws
+    /// are those of [`Sensors::measure`], and so are the readings of
+    /// position, velocity and angles, bit for bit; the Euler rates agree to
+    /// rounding (with body rates the sines and cosines of the measured
+    /// angles come from the quaternion's half angles).
     pub fn measure_full(&mut self, truth: &Measurement) -> Measurement {
         let k = self.period;
         self.period += 1;
         match &mut self.imu {
             None => {
                 if self.main.due(k) {
-                    let (held, rates) = self.read(truth);
+                    let (held, body) = self.read(truth);
                     self.main.held = held;
-                    self.main.held_rates = rates;
+                    self.main.held_body = body;
                 }
                 let euler = self.main.delayed(k);
-                Measurement { euler, body: body_of(&euler, self.main.delayed_rates()) }
+                Measurement { euler, body: self.main.delayed_body() }
             }
             Some(_) => {
                 if self.main.due(k) {
@@ -412,16 +418,16 @@ impl Sensors {
                 }
                 let imu_due = self.imu.as_mut().is_some_and(|l| l.due(k));
                 if imu_due {
-                    let (attitude, angular_rate, rates) = self.read_rotation(truth);
+                    let (attitude, angular_rate, body) = self.read_rotation(truth);
                     if let Some(l) = &mut self.imu {
                         l.held = QuadState { attitude, angular_rate, ..l.held };
-                        l.held_rates = rates;
+                        l.held_body = body;
                     }
                 }
                 let translation = self.main.delayed(k);
-                let (rotation, rates) = match self.imu.as_mut() {
-                    Some(l) => (l.delayed(k), l.delayed_rates()),
-                    None => (translation, self.main.delayed_rates()),
+                let (rotation, body) = match self.imu.as_mut() {
+                    Some(l) => (l.delayed(k), l.delayed_body()),
+                    None => (translation, self.main.delayed_body()),
                 };
                 let euler = QuadState {
                     position: translation.position,
@@ -429,41 +435,49 @@ impl Sensors {
                     attitude: rotation.attitude,
                     angular_rate: rotation.angular_rate,
                 };
-                Measurement { euler, body: body_of(&euler, rates) }
+                Measurement { euler, body }
             }
         }
     }
 
-    /// One reading of attitude and angular rate with their errors (Euler
-    /// angles, Euler rates, and the body attitude when measured in body rates
-    /// of a truth that has them).
-    fn read_rotation(&mut self, truth: &Measurement) -> ([f64; 3], [f64; 3], Option<[f64; 3]>) {
+    /// One reading of attitude and angular rate with their errors: Euler
+    /// angles, Euler rates, and, when the rates are measured in the body
+    /// frame of a truth that has them, the body attitude (the quaternion of
+    /// the measured angles with the measured body rates).
+    fn read_rotation(&mut self, truth: &Measurement) -> ([f64; 3], [f64; 3], Option<BodyAttitude>) {
         let euler = &truth.euler;
         let attitude = self.attitude.corrupt(euler.attitude);
-        match self.params.rates {
-            RateFrame::Euler => (attitude, self.angular_rate.corrupt(euler.angular_rate), None),
-            RateFrame::Body => {
-                // The body rates of the Euler state (not `truth.body`'s own,
-                // equal to rounding): the Euler reading stays bit-identical
-                // whatever the truth carries.
-                let body = euler_rates_to_body_rates(&euler.attitude, &euler.angular_rate);
-                let body_rates = self.angular_rate.corrupt(body);
-                (attitude, euler_rates_clamped(&attitude, &body_rates), truth.body.map(|_| body_rates))
+        match (self.params.rates, truth.body) {
+            (RateFrame::Euler, _) => (attitude, self.angular_rate.corrupt(euler.angular_rate), None),
+            (RateFrame::Body, None) => {
+                // A truth without body rates (the paper's plant): the body
+                // rates of its Euler state.
+                let body_rates =
+                    self.angular_rate.corrupt(euler_rates_to_body_rates(&euler.attitude, &euler.angular_rate));
+                (attitude, euler_rates_clamped(&attitude, &body_rates), None)
+            }
+            (RateFrame::Body, Some(truth_body)) => {
+                // The gyroscope reads the truth's body rates. The half
+                // angles of the measured attitude give its quaternion, and
+                // by the double-angle formulas the sines and cosines of φ
+                // and θ for its Euler rates (equal to `sin_cos` within a few
+                // units in the last place).
+                let body_rates = self.angular_rate.corrupt(truth_body.body_rates);
+                let halves = attitude.map(half_angle);
+                let quaternion = quaternion_from_half_angles(halves[0], halves[1], halves[2]);
+                let [st, ct] = full_angle(halves[1]);
+                let rates =
+                    euler_rates_from_body_rates_with(full_angle(halves[0]), [st, gimbal_clamped_cos(ct)], &body_rates);
+                (attitude, rates, Some(BodyAttitude { quaternion, body_rates }))
             }
         }
     }
 
     /// One reading of the truth with every error applied.
-    fn read(&mut self, truth: &Measurement) -> (QuadState, Option<[f64; 3]>) {
+    fn read(&mut self, truth: &Measurement) -> (QuadState, Option<BodyAttitude>) {
         let position = self.position.corrupt(truth.euler.position);
         let velocity = self.velocity.corrupt(truth.euler.velocity);
-        let (attitude, angular_rate, rates) = self.read_rotation(truth);
-        (QuadState { position, attitude, velocity, angular_rate }, rates)
+        let (attitude, angular_rate, body) = self.read_rotation(truth);
+        (QuadState { position, attitude, velocity, angular_rate }, body)
     }
-}
-
-/// The body attitude of a delivered reading: the quaternion of its measured
-/// angles with its measured body rates (when they were measured as such).
-fn body_of(euler: &QuadState, rates: Option<[f64; 3]>) -> Option<BodyAttitude> {
-    rates.map(|body_rates| BodyAttitude { quaternion: quaternion_from_euler(&euler.attitude), body_rates })
 }
