@@ -137,6 +137,8 @@ pub struct MetricsAccumulator {
     band_floor: f64,
     steady_after: f64,
     window: Option<[f64; 2]>,
+    /// The sums below are of the samples alone (`Σ e²`, `Σ |e|`, `Σ t |e|`,
+    /// `Σ u²`); [`MetricsAccumulator::finish`] multiplies them by `dt` once.
     ise_window: [f64; 6],
     started: bool,
     band: [f64; 6],
@@ -195,19 +197,17 @@ impl MetricsAccumulator {
             self.last_u = *u;
             self.started = true;
         }
-        let dt = self.dt;
         let after = t >= self.steady_after;
         self.reached_after |= after;
+        let in_window = matches!(self.window, Some([start, end]) if t >= start && t <= end);
         for i in 0..6 {
             let e = errors[i];
             let a = e.abs();
-            self.ise[i] += e * e * dt;
-            self.iae[i] += a * dt;
-            self.itae[i] += t * a * dt;
-            if let Some([start, end]) = self.window {
-                if t >= start && t <= end {
-                    self.ise_window[i] += e * e * dt;
-                }
+            self.ise[i] += e * e;
+            self.iae[i] += a;
+            self.itae[i] += t * a;
+            if in_window {
+                self.ise_window[i] += e * e;
             }
             if after && a > self.max_after[i] {
                 self.max_after[i] = a;
@@ -217,11 +217,11 @@ impl MetricsAccumulator {
             }
         }
         for j in 0..4 {
-            self.energy[j] += u[j] * u[j] * dt;
+            self.energy[j] += u[j] * u[j];
             self.variation[j] += (u[j] - self.last_u[j]).abs();
         }
         self.last_u = *u;
-        self.time = t + dt;
+        self.time = t + self.dt;
     }
 
     /// Final metrics over the observed time.
@@ -233,12 +233,14 @@ impl MetricsAccumulator {
             Some(t) if t + self.dt < duration - 0.5 * self.dt => Some(t + self.dt),
             Some(_) => None,
         });
-        let rms = self.ise.map(|v| if duration > 0.0 { (v / duration).sqrt() } else { 0.0 });
+        let dt = self.dt;
+        let ise = self.ise.map(|v| v * dt);
+        let rms = ise.map(|v| if duration > 0.0 { (v / duration).sqrt() } else { 0.0 });
         let per_second = self.variation.map(|v| if duration > 0.0 { v / duration } else { 0.0 });
         Metrics {
-            ise: axes(self.ise),
-            iae: axes(self.iae),
-            itae: axes(self.itae),
+            ise: axes(ise),
+            iae: axes(self.iae.map(|v| v * dt)),
+            itae: axes(self.itae.map(|v| v * dt)),
             rms: axes(rms),
             max_error_after: {
                 let after = self.max_after.map(|v| self.reached_after.then_some(v));
@@ -252,9 +254,9 @@ impl MetricsAccumulator {
                 theta: settled[4],
                 psi: settled[5],
             },
-            control_energy: SignalSet::from_array(self.energy),
+            control_energy: SignalSet::from_array(self.energy.map(|v| v * dt)),
             chattering: SignalSet::from_array(per_second),
-            ise_window: self.window.map(|_| axes(self.ise_window)),
+            ise_window: self.window.map(|_| axes(self.ise_window.map(|v| v * dt))),
             duration,
             peak_rotor_speed_demand: None,
             saturation_fraction: None,
