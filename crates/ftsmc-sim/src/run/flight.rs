@@ -59,15 +59,7 @@ impl ReferenceGrid {
 
     /// The reference at control step `k`, whose time the loop computed as `t` (s).
     fn at(&mut self, k: u64, t: f64) -> Reference {
-        let (x, y, z, psi) = (self.x.sample(k, t), self.y.sample(k, t), self.z.sample(k, t), self.psi.sample(k, t));
-        Reference {
-            position: [x.value, y.value, z.value],
-            velocity: [x.rate, y.rate, z.rate],
-            acceleration: [x.acceleration, y.acceleration, z.acceleration],
-            yaw: psi.value,
-            yaw_rate: psi.rate,
-            yaw_acceleration: psi.acceleration,
-        }
+        super::reference_of([self.x.sample(k, t), self.y.sample(k, t), self.z.sample(k, t), self.psi.sample(k, t)])
     }
 }
 

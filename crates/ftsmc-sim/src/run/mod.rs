@@ -63,7 +63,12 @@ impl RunOutput {
 #[inline]
 pub fn reference_at(scenario: &Scenario, t: f64) -> Reference {
     let r = &scenario.reference;
-    let (x, y, z, psi) = (r.x.sample(t), r.y.sample(t), r.z.sample(t), r.psi.sample(t));
+    reference_of([r.x.sample(t), r.y.sample(t), r.z.sample(t), r.psi.sample(t)])
+}
+
+/// The [`Reference`] of the samples of its x, y, z and ψ signals.
+#[inline]
+pub(crate) fn reference_of([x, y, z, psi]: [crate::signal::Sample; 4]) -> Reference {
     Reference {
         position: [x.value, y.value, z.value],
         velocity: [x.rate, y.rate, z.rate],
