@@ -104,20 +104,29 @@ impl<'a> Environment<'a> {
     /// and disturbances (drag noise is per control period and kept apart).
     #[inline(always)] // the loop calls it every substep; LLVM's heuristics left it out of line
     pub fn time_varying(&self, t: f64) -> TimeVarying {
-        let s = &self.params;
-        let base = s.plant;
+        let variation = self.params.inertia_variation.as_ref().map(|var| var.value(t));
+        self.time_varying_from(t, variation, self.params.disturbance.at(t))
+    }
+
+    /// The time-varying inputs at `t` (s) from the values of the inertia
+    /// variation (relative, when there is one) and of the disturbances: the
+    /// true mass (with the payload at `t`) and the inertia scaled by
+    /// `1 + variation`.
+    #[inline(always)]
+    fn time_varying_from(&self, t: f64, variation: Option<f64>, disturbance: [f64; 6]) -> TimeVarying {
+        let base = self.params.plant;
         let mut mass = base.mass;
-        if let Some(payload) = &s.payload {
+        if let Some(payload) = &self.params.payload {
             mass += payload.added_mass(t);
         }
         let mut inertia = base.inertia;
-        if let Some(var) = &s.inertia_variation {
-            let scale = 1.0 + var.value(t);
+        if let Some(v) = variation {
+            let scale = 1.0 + v;
             for i in &mut inertia {
                 *i *= scale;
             }
         }
-        TimeVarying { mass, inertia, disturbance: s.disturbance.at(t) }
+        TimeVarying { mass, inertia, disturbance }
     }
 
     /// [`Environment::time_varying`] at grid point `m` of
@@ -129,22 +138,11 @@ impl<'a> Environment<'a> {
         let Some(grid) = self.grid.as_mut() else {
             return self.time_varying(t);
         };
-        let base = self.params.plant;
-        let mut mass = base.mass;
-        if let Some(payload) = &self.params.payload {
-            mass += payload.added_mass(t);
-        }
-        let mut inertia = base.inertia;
-        if let Some(var) = &mut grid.inertia_variation {
-            let scale = 1.0 + var.value(m, t);
-            for i in &mut inertia {
-                *i *= scale;
-            }
-        }
+        let variation = grid.inertia_variation.as_mut().map(|var| var.value(m, t));
         let [x, y, z, phi, theta, psi] = &mut grid.disturbance;
         let disturbance =
             [x.value(m, t), y.value(m, t), z.value(m, t), phi.value(m, t), theta.value(m, t), psi.value(m, t)];
-        TimeVarying { mass, inertia, disturbance }
+        self.time_varying_from(t, variation, disturbance)
     }
 
     /// Plant parameters for given time-varying inputs and the current
