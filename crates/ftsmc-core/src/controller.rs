@@ -7,6 +7,7 @@
 //! (`law`, `ftaftsmc`, ...) and from the cascade that combines them, so a
 //! new controller depends on this interface only.
 
+use crate::lanes::Real;
 use crate::law::MAX_ESTIMATES;
 use crate::measured::Measurement;
 use crate::model::{Command, QuadState, Reference};
@@ -32,60 +33,77 @@ pub mod channel {
 /// The sliding-mode part of [`Telemetry`]: what only the paper's cascade of
 /// sliding-mode laws (FTAFTSMC, RANFTSMC, TSM-STA) computes.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct SlidingTelemetry {
+pub struct SlidingTelemetry<R: Real = f64> {
     /// Sliding variables `[S_x, S_y, S_z, S_φ, S_θ, S_ψ]` (paper Eq. 5 for
     /// FTAFTSMC; each law's own surface otherwise).
-    pub sliding: [f64; 6],
+    pub sliding: [R; 6],
     /// Mass ratio estimate α̂ (estimated mass = α̂ m, paper Eq. 20; its
     /// initial value when the adaptation is off).
-    pub alpha_hat: f64,
+    pub alpha_hat: R,
     /// The adaptive states were held at this update
     /// ([`CascadeSettings::freeze_adaptation_on_saturation`](crate::cascade::CascadeSettings::freeze_adaptation_on_saturation)).
-    pub adaptation_frozen: bool,
+    pub adaptation_frozen: R::Mask,
 }
 
 /// What the controller computed at its last update, for recording: the
 /// quantities every controller has, and [`Telemetry::sliding_mode`] for the
 /// sliding-mode cascade.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct Telemetry {
+pub struct Telemetry<R: Real = f64> {
     /// Attitude reference actually tracked `[φ_ref, θ_ref, ψ_d]`, rad
     /// (filtered when the command filter is on).
-    pub attitude_reference: [f64; 3],
+    pub attitude_reference: [R; 3],
     /// Its rate, rad/s.
-    pub attitude_reference_rate: [f64; 3],
+    pub attitude_reference_rate: [R; 3],
     /// Its acceleration, rad/s².
-    pub attitude_reference_acceleration: [f64; 3],
+    pub attitude_reference_acceleration: [R; 3],
     /// Raw Eq. 52 output `[φ_d, θ_d]` before filtering, rad.
-    pub attitude_demand: [f64; 2],
+    pub attitude_demand: [R; 2],
     /// Adaptive / internal states of each channel ([`AxisLaw::estimates`](crate::law::AxisLaw::estimates)).
-    pub estimates: [[f64; MAX_ESTIMATES]; 6],
+    pub estimates: [[R; MAX_ESTIMATES]; 6],
     /// Commanded accelerations `[a_x, a_y, a_z]`, m/s².
-    pub commanded_acceleration: [f64; 3],
+    pub commanded_acceleration: [R; 3],
     /// Thrust before mass adaptation u1, N.
-    pub nominal_thrust: f64,
+    pub nominal_thrust: R,
     /// The thrust bound ([`CascadeSettings::thrust_limits`](crate::cascade::CascadeSettings::thrust_limits)) changed `U1`
     /// at this update.
-    pub thrust_limited: bool,
+    pub thrust_limited: R::Mask,
     /// Sliding variables, α̂ and the adaptation hold: `Some` for the paper's
     /// sliding-mode cascade, `None` for controllers without sliding
     /// surfaces (PID, SE(3)).
-    pub sliding_mode: Option<SlidingTelemetry>,
+    pub sliding_mode: Option<SlidingTelemetry<R>>,
 }
+crate::lanewise_struct!(SlidingTelemetry { sliding, alpha_hat, adaptation_frozen });
+crate::lanewise_struct!(Telemetry {
+    attitude_reference,
+    attitude_reference_rate,
+    attitude_reference_acceleration,
+    attitude_demand,
+    estimates,
+    commanded_acceleration,
+    nominal_thrust,
+    thrust_limited,
+    sliding_mode,
+});
 
 /// A complete quadrotor controller: state and reference in, command out.
-pub trait Controller {
+///
+/// `R` is the number type ([`crate::lanes`]): `f64` (the default) flies one
+/// flight; a lane type flies several side by side, each lane its own flight
+/// with the controller's gains, and every lane's command has the bits the
+/// same controller would compute for that flight alone.
+pub trait Controller<R: Real = f64> {
     /// Machine name (e.g. `"ftaftsmc"`).
     fn name(&self) -> &'static str;
     /// One control period: compute the command from the measured state and
     /// the reference, and advance internal states by `dt` (s).
-    fn update(&mut self, state: &QuadState, reference: &Reference, dt: f64) -> Command;
+    fn update(&mut self, state: &QuadState<R>, reference: &Reference<R>, dt: f64) -> Command<R>;
     /// [`Controller::update`] from a [`Measurement`], which may carry the
     /// attitude quaternion and body rates beside the Euler state. The
     /// default flies the Euler state; full-state controllers (PID, SE(3))
     /// take the quaternion and body rates when given, instead of rebuilding
     /// them from the Euler angles (the same attitude to rounding).
-    fn update_measured(&mut self, measured: &Measurement, reference: &Reference, dt: f64) -> Command {
+    fn update_measured(&mut self, measured: &Measurement<R>, reference: &Reference<R>, dt: f64) -> Command<R> {
         self.update(&measured.euler, reference, dt)
     }
     /// True when [`Controller::update_measured`] uses [`Measurement::body`]
@@ -95,7 +113,7 @@ pub trait Controller {
         false
     }
     /// Quantities computed at the last update.
-    fn telemetry(&self) -> &Telemetry;
+    fn telemetry(&self) -> &Telemetry<R>;
     /// Names of the channel laws' [`Telemetry::estimates`] slots
     /// ([`AxisLaw::ESTIMATE_NAMES`](crate::law::AxisLaw::ESTIMATE_NAMES), `""` for an unused slot). The default:
     /// no internal states, every slot unnamed.
@@ -108,18 +126,26 @@ pub trait Controller {
     fn adapts_mass(&self) -> bool {
         false
     }
-    /// Restore initial internal states.
+    /// Restore initial internal states (every lane).
     fn reset(&mut self);
+    /// Restore lane `lane`'s initial internal states, leaving the other
+    /// lanes as they are: a new flight starts in that lane. The default,
+    /// [`Controller::reset`], is right for one flight only; a controller
+    /// that flies lanes overrides it.
+    fn reset_lane(&mut self, lane: usize) {
+        let _ = lane;
+        self.reset();
+    }
     /// Actuator feedback: called by the simulator after it has mixed the
     /// command of each control period into rotor speeds; `saturated` is true
-    /// when the mixer could not realise that command (a rotor limit was hit
-    /// and thrust or torque was given up). The report holds until the next
-    /// call and is cleared by [`Controller::reset`].
+    /// (per lane) when the mixer could not realise that command (a rotor
+    /// limit was hit and thrust or torque was given up). The report holds
+    /// until the next call and is cleared by [`Controller::reset`].
     ///
     /// The default ignores it. [`Cascade`](crate::cascade::Cascade) stores it and, with
     /// [`CascadeSettings::freeze_adaptation_on_saturation`](crate::cascade::CascadeSettings::freeze_adaptation_on_saturation), holds its
     /// adaptive states during the following updates while it is true.
-    fn actuator_feedback(&mut self, saturated: bool) {
+    fn actuator_feedback(&mut self, saturated: R::Mask) {
         let _ = saturated;
     }
 }

@@ -138,13 +138,9 @@ pub const POWER_LIMIT: f64 = 1e100;
 /// (NaN in `x` passes through both) instead of two compare-and-branch
 /// pairs: the laws call it dozens of times per period.
 #[inline]
-pub fn saturate(x: f64, limit: f64) -> f64 {
-    let upper = if limit < x { limit } else { x };
-    if -limit > upper {
-        -limit
-    } else {
-        upper
-    }
+pub fn saturate<R: crate::lanes::Real>(x: R, limit: R) -> R {
+    let upper = R::select(limit.lt(x), limit, x);
+    R::select((-limit).gt(upper), -limit, upper)
 }
 
 /// True when `e`, `ė` and `dt` are all finite. Every law returns NaN and

@@ -26,6 +26,7 @@ pub mod cascade;
 pub mod controller;
 pub mod ftaftsmc;
 pub mod kinematics;
+pub mod lanes;
 pub mod law;
 pub mod math;
 pub mod measured;

@@ -154,6 +154,14 @@ pub fn sign(x: f64) -> f64 {
     f64::from(i32::from(x > 0.0) - i32::from(x < 0.0))
 }
 
+/// [`sign`] of one flight or of lanes: −1, 0 or +1 per lane (0 at ±0 and
+/// NaN), the same bits as [`sign`] in every lane.
+#[inline]
+pub fn sign_of<R: Real>(x: R) -> R {
+    let zero = R::splat(0.0);
+    R::select(x.gt(zero), R::splat(1.0), R::select(x.lt(zero), R::splat(-1.0), zero))
+}
+
 /// `sig^a(x) = |x|^a sign(x)` (paper notation after Eq. 5).
 #[inline]
 pub fn sig(x: f64, a: f64) -> f64 {
@@ -176,6 +184,8 @@ pub fn pow_abs_minus_one(x: f64, a: f64) -> f64 {
         pow_abs(x, a - 1.0)
     }
 }
+
+use crate::lanes::Real;
 
 /// Define a scalar function of the one maths library: the pure-Rust
 /// [`libm`] crate, with or without `std`.
@@ -290,63 +300,53 @@ impl SinCosCache {
 /// `v − v` to 0 (IEEE 754).
 #[inline]
 #[allow(clippy::eq_op)] // v − v is the point: NaN for a non-finite v.
-pub fn finite_probe(values: &[f64]) -> f64 {
-    let mut sum = 0.0;
-    for v in values {
+pub fn finite_probe<R: Real>(values: &[R]) -> R {
+    let mut sum = R::splat(0.0);
+    for &v in values {
         sum += v - v;
     }
     sum
 }
 
-/// A 3-vector.
-pub type Vec3 = [f64; 3];
+/// A 3-vector (of one flight, or of lanes: [`crate::lanes`]).
+pub type Vec3<R = f64> = [R; 3];
 /// A 3×3 matrix, row-major: `m[row][column]`.
-pub type Mat3 = [[f64; 3]; 3];
+pub type Mat3<R = f64> = [[R; 3]; 3];
 
 /// `a · b`.
 #[inline]
-pub fn dot(a: &Vec3, b: &Vec3) -> f64 {
+pub fn dot<R: Real>(a: &Vec3<R>, b: &Vec3<R>) -> R {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
 /// `a × b`.
 #[inline]
-pub fn cross(a: &Vec3, b: &Vec3) -> Vec3 {
+pub fn cross<R: Real>(a: &Vec3<R>, b: &Vec3<R>) -> Vec3<R> {
     [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
 }
 
 /// Euclidean norm `‖a‖`.
 #[inline]
-pub fn norm(a: &Vec3) -> f64 {
-    sqrt(dot(a, a))
+pub fn norm<R: Real>(a: &Vec3<R>) -> R {
+    dot(a, a).sqrt()
 }
 
 /// `m a`.
 #[inline]
-pub fn mat_vec(m: &Mat3, a: &Vec3) -> Vec3 {
+pub fn mat_vec<R: Real>(m: &Mat3<R>, a: &Vec3<R>) -> Vec3<R> {
     [dot(&m[0], a), dot(&m[1], a), dot(&m[2], a)]
 }
 
 /// `mᵀ a`.
 #[inline]
-pub fn mat_t_vec(m: &Mat3, a: &Vec3) -> Vec3 {
-    let mut out = [0.0; 3];
-    for (i, o) in out.iter_mut().enumerate() {
-        *o = m[0][i] * a[0] + m[1][i] * a[1] + m[2][i] * a[2];
-    }
-    out
+pub fn mat_t_vec<R: Real>(m: &Mat3<R>, a: &Vec3<R>) -> Vec3<R> {
+    core::array::from_fn(|i| m[0][i] * a[0] + m[1][i] * a[1] + m[2][i] * a[2])
 }
 
 /// `aᵀ b` of two 3×3 matrices.
 #[inline]
-pub fn mat_t_mat(a: &Mat3, b: &Mat3) -> Mat3 {
-    let mut out = [[0.0; 3]; 3];
-    for (i, row) in out.iter_mut().enumerate() {
-        for (j, o) in row.iter_mut().enumerate() {
-            *o = a[0][i] * b[0][j] + a[1][i] * b[1][j] + a[2][i] * b[2][j];
-        }
-    }
-    out
+pub fn mat_t_mat<R: Real>(a: &Mat3<R>, b: &Mat3<R>) -> Mat3<R> {
+    core::array::from_fn(|i| core::array::from_fn(|j| a[0][i] * b[0][j] + a[1][i] * b[1][j] + a[2][i] * b[2][j]))
 }
 
 #[cfg(test)]
@@ -424,7 +424,7 @@ mod tests {
 
     #[test]
     fn finite_probe_is_zero_exactly_when_every_value_is_finite() {
-        assert_eq!(finite_probe(&[]), 0.0);
+        assert_eq!(finite_probe::<f64>(&[]), 0.0);
         assert_eq!(finite_probe(&[0.0, -0.0, 1e308, -1e308, 1e-310, f64::MAX]), 0.0);
         for bad in [f64::INFINITY, f64::NEG_INFINITY, f64::NAN] {
             for at in 0..3 {

@@ -1,6 +1,7 @@
 //! Quadrotor physical parameters (paper Table 2, corrected) and the plain
 //! data types that cross the controller boundary: state, reference, command.
 
+use crate::lanes::Real;
 use crate::law::{check_closed, check_gain, check_gain_or_zero, GainError};
 
 /// Physical parameters of the quadrotor (paper Table 2 with the errata of
@@ -105,32 +106,36 @@ impl QuadrotorParams {
     }
 }
 
-/// The 12-dimensional state of paper Eq. 1 (world frame, z up, Z-Y-X Euler).
+/// The 12-dimensional state of paper Eq. 1 (world frame, z up, Z-Y-X Euler),
+/// of one flight (`R = f64`) or of several side by side ([`crate::lanes`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct QuadState {
+pub struct QuadState<R = f64> {
     /// Position `[x, y, z]`, m.
-    pub position: [f64; 3],
+    pub position: [R; 3],
     /// Euler angles `[φ, θ, ψ]` (roll, pitch, yaw), rad.
-    pub attitude: [f64; 3],
+    pub attitude: [R; 3],
     /// Velocity `[ẋ, ẏ, ż]`, m/s.
-    pub velocity: [f64; 3],
+    pub velocity: [R; 3],
     /// Euler-angle rates `[φ̇, θ̇, ψ̇]`, rad/s.
-    pub angular_rate: [f64; 3],
+    pub angular_rate: [R; 3],
+}
+crate::lanewise_struct!(QuadState { position, attitude, velocity, angular_rate });
+
+impl<R: Real> QuadState<R> {
+    /// True (per lane) when all twelve components are finite (branch-free,
+    /// [`crate::math::finite_probe`]).
+    #[inline]
+    pub fn is_finite(&self) -> R::Mask {
+        use crate::math::finite_probe;
+        (finite_probe(&self.position)
+            + finite_probe(&self.attitude)
+            + finite_probe(&self.velocity)
+            + finite_probe(&self.angular_rate))
+        .eq(R::splat(0.0))
+    }
 }
 
 impl QuadState {
-    /// True when all twelve components are finite (branch-free,
-    /// [`crate::math::finite_probe`]).
-    #[inline]
-    pub fn is_finite(&self) -> bool {
-        use crate::math::finite_probe;
-        finite_probe(&self.position)
-            + finite_probe(&self.attitude)
-            + finite_probe(&self.velocity)
-            + finite_probe(&self.angular_rate)
-            == 0.0
-    }
-
     /// Flatten to `[x, y, z, φ, θ, ψ, ẋ, ẏ, ż, φ̇, θ̇, ψ̇]`.
     pub fn to_array(&self) -> [f64; 12] {
         let mut a = [0.0; 12];
@@ -156,26 +161,28 @@ impl QuadState {
 /// with two derivatives); roll and pitch references are produced by the
 /// cascade (Eq. 52).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct Reference {
+pub struct Reference<R = f64> {
     /// `[x_d, y_d, z_d]`, m.
-    pub position: [f64; 3],
+    pub position: [R; 3],
     /// `[ẋ_d, ẏ_d, ż_d]`, m/s.
-    pub velocity: [f64; 3],
+    pub velocity: [R; 3],
     /// `[ẍ_d, ÿ_d, z̈_d]`, m/s².
-    pub acceleration: [f64; 3],
+    pub acceleration: [R; 3],
     /// ψ_d, rad.
-    pub yaw: f64,
+    pub yaw: R,
     /// ψ̇_d, rad/s.
-    pub yaw_rate: f64,
+    pub yaw_rate: R,
     /// ψ̈_d, rad/s².
-    pub yaw_acceleration: f64,
+    pub yaw_acceleration: R,
 }
+crate::lanewise_struct!(Reference { position, velocity, acceleration, yaw, yaw_rate, yaw_acceleration });
 
 /// Control command: total thrust and body torques (paper Eq. 2).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct Command {
+pub struct Command<R = f64> {
     /// Total thrust U1, N.
-    pub thrust: f64,
+    pub thrust: R,
     /// Torques `[u2, u3, u4]` about the roll, pitch, yaw axes, N·m.
-    pub torque: [f64; 3],
+    pub torque: [R; 3],
 }
+crate::lanewise_struct!(Command { thrust, torque });
