@@ -181,7 +181,11 @@ pub struct ContinuousRhs {
 ///
 /// Implementations hold only their gains and their adaptive / integral
 /// states; they never allocate and never perform I/O.
-pub trait AxisLaw {
+///
+/// `R` is the number type ([`crate::lanes`]): `f64` (the default) for one
+/// flight, a lane type for several flights side by side sharing the gains,
+/// each lane with the bits of the one-flight law.
+pub trait AxisLaw<R: crate::lanes::Real = f64> {
     /// Short machine name used in scenario files and outputs (e.g. `"ftaftsmc"`).
     const NAME: &'static str;
 
@@ -201,18 +205,27 @@ pub trait AxisLaw {
     /// finite (inputs are clamped to [`INPUT_LIMIT`], states saturated to
     /// [`STATE_LIMIT`]). If `e`, `e_dot` or `dt` is not finite the result is
     /// NaN and the law is left exactly as it was before the call.
-    fn update(&mut self, e: f64, e_dot: f64, dt: f64) -> f64;
+    fn update(&mut self, e: R, e_dot: R, dt: f64) -> R;
 
     /// Sliding variable evaluated in the last [`AxisLaw::update`].
-    fn sliding_variable(&self) -> f64;
+    fn sliding_variable(&self) -> R;
 
     /// Adaptive / internal states after the last update (unused slots are 0),
     /// e.g. `[δ̂, 0, 0]` for FTAFTSMC, `[â0, â1, â2]` for RANFTSMC, `[ν, 0, 0]`
     /// for TSM-STA.
-    fn estimates(&self) -> [f64; MAX_ESTIMATES];
+    fn estimates(&self) -> [R; MAX_ESTIMATES];
 
-    /// Restore the initial adaptive / internal states.
+    /// Restore the initial adaptive / internal states (every lane).
     fn reset(&mut self);
+
+    /// Restore lane `lane`'s initial states, leaving the other lanes as
+    /// they are (a new flight starts in that lane). The default,
+    /// [`AxisLaw::reset`], is right for one flight only; a law that flies
+    /// lanes overrides it.
+    fn reset_lane(&mut self, lane: usize) {
+        let _ = lane;
+        self.reset();
+    }
 
     /// Freeze (`true`) or release (`false`) the law's adaptive / integral
     /// states (δ̂ of FTAFTSMC, `â` of RANFTSMC, ν of TSM-STA).
@@ -229,7 +242,7 @@ pub trait AxisLaw {
     /// [`crate::cascade::CascadeSettings::freeze_adaptation_on_saturation`]:
     /// the cascade sets it on all six laws before each update. The default
     /// does nothing (a law without adaptive states has nothing to freeze).
-    fn set_adaptation_frozen(&mut self, frozen: bool) {
+    fn set_adaptation_frozen(&mut self, frozen: R::Mask) {
         let _ = frozen;
     }
 
