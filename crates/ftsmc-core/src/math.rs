@@ -36,7 +36,7 @@
 /// A law that raises to the same exponent every period chooses the path
 /// once with [`Power::new`]; this function is `Power::new(a).abs(x)`.
 #[inline]
-pub fn pow_abs(x: f64, a: f64) -> f64 {
+pub fn pow_abs<R: Real>(x: R, a: f64) -> R {
     Power::new(a).abs(x)
 }
 
@@ -87,9 +87,9 @@ impl Power {
         }
     }
 
-    /// `|x|^a` (same bits as [`pow_abs`]).
+    /// `|x|^a` (same bits as [`pow_abs`]), per lane for lanes.
     #[inline]
-    pub fn abs(self, x: f64) -> f64 {
+    pub fn abs<R: Real>(self, x: R) -> R {
         let ax = x.abs();
         match self {
             Self::One => ax,
@@ -99,16 +99,16 @@ impl Power {
                 let s = ax * ax;
                 s * s
             }
-            Self::Half => sqrt(ax),
-            Self::ThreeHalves => ax * sqrt(ax),
-            Self::Zero => 1.0,
-            Self::General(a) => exp(a * ln(ax)),
+            Self::Half => ax.sqrt(),
+            Self::ThreeHalves => ax * ax.sqrt(),
+            Self::Zero => R::splat(1.0),
+            Self::General(a) => (ax.ln() * a).exp(),
         }
     }
 
     /// `min(|x|^a, POWER_LIMIT)` (same bits as [`pow_abs_sat`]).
     #[inline]
-    pub fn abs_sat(self, x: f64) -> f64 {
+    pub fn abs_sat<R: Real>(self, x: R) -> R {
         saturate_power(self.abs(x))
     }
 
@@ -116,11 +116,11 @@ impl Power {
     /// [`Power::General`] exponents `ln|x|` is taken once (the same bits
     /// as two [`Power::abs`] calls, one logarithm fewer).
     #[inline]
-    pub fn abs_pair(a: Self, b: Self, x: f64) -> (f64, f64) {
+    pub fn abs_pair<R: Real>(a: Self, b: Self, x: R) -> (R, R) {
         match (a, b) {
             (Self::General(ea), Self::General(eb)) => {
-                let l = ln(x.abs());
-                (exp(ea * l), exp(eb * l))
+                let l = x.abs().ln();
+                ((l * ea).exp(), (l * eb).exp())
             }
             _ => (a.abs(x), b.abs(x)),
         }
@@ -130,19 +130,16 @@ impl Power {
 /// `min(v, POWER_LIMIT)`: `v` saturated at [`crate::law::POWER_LIMIT`]
 /// (1e100), the bound of [`pow_abs_sat`].
 #[inline]
-pub fn saturate_power(v: f64) -> f64 {
-    if v > crate::law::POWER_LIMIT {
-        crate::law::POWER_LIMIT
-    } else {
-        v
-    }
+pub fn saturate_power<R: Real>(v: R) -> R {
+    let limit = R::splat(crate::law::POWER_LIMIT);
+    R::select(v.gt(limit), limit, v)
 }
 
 /// `min(|x|^a, POWER_LIMIT)`: [`pow_abs`] saturated at
 /// [`crate::law::POWER_LIMIT`] (1e100), so that it never overflows to
 /// infinity; identical to [`pow_abs`] below the limit.
 #[inline]
-pub fn pow_abs_sat(x: f64, a: f64) -> f64 {
+pub fn pow_abs_sat<R: Real>(x: R, a: f64) -> R {
     saturate_power(pow_abs(x, a))
 }
 
@@ -164,25 +161,16 @@ pub fn sign_of<R: Real>(x: R) -> R {
 
 /// `sig^a(x) = |x|^a sign(x)` (paper notation after Eq. 5).
 #[inline]
-pub fn sig(x: f64, a: f64) -> f64 {
-    pow_abs(x, a) * sign(x)
+pub fn sig<R: Real>(x: R, a: f64) -> R {
+    pow_abs(x, a) * sign_of(x)
 }
 
 /// `|x|^(a−1)` used in derivatives of `sig^a`; returns 0 at `x = 0` when the
 /// power would be singular (`a < 1`) so that callers stay finite.
 #[inline]
-pub fn pow_abs_minus_one(x: f64, a: f64) -> f64 {
-    if x == 0.0 {
-        if a > 1.0 {
-            0.0
-        } else if a == 1.0 {
-            1.0
-        } else {
-            0.0
-        }
-    } else {
-        pow_abs(x, a - 1.0)
-    }
+pub fn pow_abs_minus_one<R: Real>(x: R, a: f64) -> R {
+    let at_zero = R::splat(if a == 1.0 { 1.0 } else { 0.0 });
+    crate::lanes::branch(x.eq(R::splat(0.0)), || at_zero, || pow_abs(x, a - 1.0))
 }
 
 use crate::lanes::Real;
