@@ -34,6 +34,34 @@ pub fn build(name: &str, scenario: &Scenario) -> Result<BoxedController, String>
     crate::controllers::build(name, &scenario.gains, &scenario.build_context())
 }
 
+/// The declared controller `name` with the gains of `scenario` on `N`
+/// lanes ([`ftsmc_core::lanes`]): every lane a flight of that controller.
+pub fn build_lanes<const N: usize>(
+    name: &str,
+    scenario: &Scenario,
+) -> Result<Box<dyn ftsmc_core::cascade::Controller<ftsmc_core::lanes::Lanes<N>> + Send>, String> {
+    let mut flights = Vec::with_capacity(N);
+    for _ in 0..N {
+        flights.push(build(name, scenario)?);
+    }
+    let flights: [BoxedController; N] = flights.try_into().map_err(|_| "lane count".to_string())?;
+    Ok(Box::new(crate::controllers::per_lane::PerLane::new(flights)))
+}
+
+/// True when flights of `a` and `b` may share one batch of lanes: the same
+/// controller gains, nominal plant, cascade settings and simulation
+/// settings (a Monte Carlo run's sampled true vehicle, payload,
+/// disturbances and initial state may differ).
+pub fn lane_compatible(a: &Scenario, b: &Scenario) -> bool {
+    a.gains == b.gains
+        && a.build_context() == b.build_context()
+        && a.simulation == b.simulation
+        && a.vehicle.model == b.vehicle.model
+        && a.sensors.is_some() == b.sensors.is_some()
+        && a.wind.is_some() == b.wind.is_some()
+        && a.duration == b.duration
+}
+
 /// Build controller `name` for `scenario` and fly it; the output's
 /// `controller` field is `name`.
 pub fn run(name: &str, scenario: &Scenario, options: crate::run::RunOptions) -> Result<crate::run::RunOutput, String> {

@@ -8,7 +8,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::metrics::Metrics;
-use crate::run::{ExitStatus, RunOptions};
+use crate::run::{ExitStatus, RunOptions, RunOutput};
 pub use crate::scenario::distributions::{run_seed, Dist, MonteCarloSpec, SAMPLED_COLUMNS};
 use crate::scenario::Scenario;
 
@@ -71,7 +71,8 @@ pub fn run_batch_cancellable(
 /// shard of a campaign, [`crate::batch::shard::Shard::range`]). Run `i`
 /// draws from [`run_seed`]`(master_seed, i)` alone, so its rows are
 /// bit-identical to those of run `i` in the whole batch; the output order is
-/// (run index, controller).
+/// (run index, controller). Flown [`DEFAULT_LANES`] flights side by side
+/// ([`run_batch_lanes`]).
 pub fn run_batch_range(
     base: &Scenario,
     spec: &MonteCarloSpec,
@@ -81,39 +82,142 @@ pub fn run_batch_range(
     progress: &(dyn Fn(u64) + Sync),
     cancel: Option<&std::sync::atomic::AtomicBool>,
 ) -> Result<Vec<McRun>, String> {
+    run_batch_lanes(base, spec, controllers, indices, master_seed, progress, cancel, DEFAULT_LANES)
+}
+
+/// The lane counts a batch can fly side by side ([`run_batch_lanes`]).
+pub const LANE_COUNTS: [usize; 4] = [1, 2, 4, 8];
+
+/// Flights a batch flies side by side unless told otherwise: four `f64`
+/// lanes, one AVX2 register.
+pub const DEFAULT_LANES: usize = 4;
+
+/// Runs a worker takes at a time: enough to keep its lanes full as flights
+/// end at different times, few enough to share a batch out among threads.
+const RUNS_PER_TASK: usize = 16;
+
+/// [`run_batch_range`] flying `lanes` flights side by side
+/// ([`crate::run::Flight::new_lanes`]; one of [`LANE_COUNTS`], 1 flies each
+/// flight alone): a lane whose flight ends starts the next run. Every row
+/// has exactly the bits it has whatever `lanes`, the lane it lands in and
+/// the thread count.
+#[allow(clippy::too_many_arguments)]
+pub fn run_batch_lanes(
+    base: &Scenario,
+    spec: &MonteCarloSpec,
+    controllers: &[String],
+    indices: std::ops::Range<u64>,
+    master_seed: u64,
+    progress: &(dyn Fn(u64) + Sync),
+    cancel: Option<&std::sync::atomic::AtomicBool>,
+    lanes: usize,
+) -> Result<Vec<McRun>, String> {
     for name in controllers {
         crate::registry::check_name(name)?;
     }
+    if !LANE_COUNTS.contains(&lanes) {
+        return Err(format!("lanes = {lanes}: expected one of {LANE_COUNTS:?}"));
+    }
     let options = RunOptions { record: false, progress: Some(progress), cancel };
+    let indices: Vec<u64> = indices.collect();
     let rows: Vec<Vec<McRun>> = indices
-        .into_par_iter()
-        .map(|index| {
+        .par_chunks(RUNS_PER_TASK)
+        .map(|chunk| {
             if options.cancelled() {
                 return Vec::new();
             }
-            let (scenario, seed, sampled) = spec.sample(base, master_seed, index);
-            controllers
+            let samples: Vec<(u64, Scenario, u64, [f64; 12])> = chunk
                 .iter()
-                .map(|name| {
-                    let out = crate::registry::run(name, &scenario, options).expect("controller names checked above");
-                    McRun {
+                .map(|&index| {
+                    let (scenario, seed, sampled) = spec.sample(base, master_seed, index);
+                    (index, scenario, seed, sampled)
+                })
+                .collect();
+            let scenarios: Vec<&Scenario> = samples.iter().map(|s| &s.1).collect();
+            let mut flown: Vec<std::vec::IntoIter<RunOutput>> =
+                controllers.iter().map(|name| fly(name, &scenarios, lanes, options).into_iter()).collect();
+            let mut out = Vec::with_capacity(samples.len() * controllers.len());
+            for &(index, _, seed, sampled) in &samples {
+                for (name, outputs) in controllers.iter().zip(&mut flown) {
+                    let out_run = outputs.next().expect("one output per run");
+                    out.push(McRun {
                         index,
                         seed,
                         sampled,
                         controller: name.clone(),
-                        exit: out.exit,
-                        success: out.success(),
-                        metrics: out.metrics,
-                        stats: out.stats,
-                    }
-                })
-                .collect()
+                        exit: out_run.exit.clone(),
+                        success: out_run.success(),
+                        metrics: out_run.metrics,
+                        stats: out_run.stats,
+                    });
+                }
+            }
+            out
         })
         .collect();
     if options.cancelled() {
         return Err(INTERRUPTED.to_string());
     }
     Ok(rows.into_iter().flatten().collect())
+}
+
+/// Fly controller `name` through each of `scenarios` (in order), `lanes`
+/// at a time.
+fn fly(name: &str, scenarios: &[&Scenario], lanes: usize, options: RunOptions<'_>) -> Vec<RunOutput> {
+    let one = |s: &&Scenario| crate::registry::run(name, s, options).expect("controller names checked above");
+    let together = scenarios.iter().all(|s| crate::registry::lane_compatible(scenarios[0], s));
+    match lanes {
+        2 if together => fly_lanes::<2>(name, scenarios, options),
+        4 if together => fly_lanes::<4>(name, scenarios, options),
+        8 if together => fly_lanes::<8>(name, scenarios, options),
+        _ => scenarios.iter().map(one).collect(),
+    }
+}
+
+/// [`fly`] on `N` lanes: each lane flies the next run when its flight ends.
+fn fly_lanes<const N: usize>(name: &str, scenarios: &[&Scenario], options: RunOptions<'_>) -> Vec<RunOutput> {
+    use crate::run::Flight;
+    use ftsmc_core::cascade::Controller;
+    use ftsmc_core::lanes::Lanes;
+    let n = scenarios.len();
+    if n == 0 {
+        return Vec::new();
+    }
+    let mut controller = crate::registry::build_lanes::<N>(name, scenarios[0]).expect("controller names checked above");
+    let first: Vec<&Scenario> = (0..N).map(|i| scenarios[i.min(n - 1)]).collect();
+    let mut flight =
+        Flight::<dyn Controller<Lanes<N>> + Send, Lanes<N>>::new_lanes(&first, controller.as_mut(), options);
+    // The run each lane flies (`None`: idle).
+    let mut run_of: [Option<usize>; N] = core::array::from_fn(|i| (i < n).then_some(i));
+    for (i, run) in run_of.iter().enumerate() {
+        if run.is_none() {
+            flight.stop_lane(i);
+        }
+    }
+    let mut next = N.min(n);
+    let mut out: Vec<Option<RunOutput>> = (0..n).map(|_| None).collect();
+    loop {
+        for (i, slot) in run_of.iter_mut().enumerate() {
+            let Some(run) = *slot else { continue };
+            if flight.lane_flying(i) {
+                continue;
+            }
+            let mut output = flight.lane_output(i);
+            output.controller = name.to_string();
+            out[run] = Some(output);
+            *slot = None;
+            if next < n {
+                flight.start_lane(i, scenarios[next]);
+                *slot = Some(next);
+                next += 1;
+            }
+        }
+        if run_of.iter().all(Option::is_none) {
+            break;
+        }
+        flight.step();
+    }
+    out.into_iter().map(|o| o.expect("every run flown")).collect()
 }
 
 /// Order statistics of one metric over the completed runs of a controller.

@@ -92,6 +92,20 @@ impl Drive<'_> {
     }
 }
 
+impl Delivered {
+    /// Nothing delivered yet (a flight before its first period).
+    pub(crate) fn none() -> Self {
+        Self {
+            applied: Command::default(),
+            target: [0.0; 4],
+            omega: [0.0; 4],
+            saturated: false,
+            noise: [0.0; 4],
+            demand: None,
+        }
+    }
+}
+
 /// The actuator stage of one flight.
 // One value per flight: the size difference between variants does not matter.
 #[allow(clippy::large_enum_variant)]

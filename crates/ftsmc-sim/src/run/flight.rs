@@ -19,10 +19,25 @@
 //!    substep and the ground checked after each.
 //! 7. The next reference; divergence checks.
 
+//!
+//! # Lanes
+//!
+//! A flight's numbers may be `f64` (one flight, [`Flight::new`]) or lanes
+//! of `N` flights side by side ([`Flight::new_lanes`], `R = Lanes<N>`,
+//! [`ftsmc_core::lanes`]). The controller and the truth model compute on
+//! the lanes at once; what is cheap or random (sensors, environment,
+//! actuator stage, wind, observers) runs flight by flight on the same
+//! one-flight code. Each lane is an independent flight with its own
+//! scenario, clock and exit: lane `i` has exactly the bits the same flight
+//! has alone, whatever `N` and whatever lane it lands in, and a batch
+//! starts the next flight in a lane whose flight ended
+//! ([`Flight::start_lane`]).
+
 use ftsmc_core::allocation::{residual_speed, rotor_speeds};
-use ftsmc_core::cascade::Controller;
+use ftsmc_core::cascade::{Controller, Telemetry};
+use ftsmc_core::lanes::{Lanewise, Mask, Real};
 use ftsmc_core::measured::{BodyAttitude, Measurement};
-use ftsmc_core::model::{QuadState, QuadrotorParams, Reference};
+use ftsmc_core::model::{Command, QuadState, QuadrotorParams, Reference};
 
 use crate::envelope::Tracker;
 use crate::environment::ground::GroundSettings;
@@ -37,7 +52,7 @@ use super::actuation::{ActuatorStage, Delivered};
 use super::exit::check_divergence;
 use super::observer::{FlightStats, Observer, Tick};
 use super::recording::Recorder;
-use super::truth::{truth_of, Substep, TruthModel, TruthSetup};
+use super::truth::{truth_lanes, truth_of, Substep, TruthModel, TruthSetup};
 use super::{tracking_errors, Divergence, ExitStatus, RunOptions, RunOutput};
 
 /// The scenario's reference signals `x, y, z, ψ` on the control grid
@@ -66,53 +81,11 @@ impl ReferenceGrid {
 /// What one [`Flight::step`] did.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum StepOutcome {
-    /// The period was flown; the flight goes on.
+    /// The period was flown; the flight goes on (with lanes: some lane's does).
     Flying,
-    /// The flight is over (completed, diverged or crashed: [`Flight::exit`]).
+    /// The flight is over (completed, diverged or crashed: [`Flight::exit`];
+    /// with lanes: every lane's).
     Done,
-}
-
-/// One flight of a controller through a scenario, advanced one control
-/// period at a time.
-pub struct Flight<'s, C: Controller + ?Sized> {
-    scenario: &'s Scenario,
-    controller: &'s mut C,
-    options: RunOptions<'s>,
-    dt: f64,
-    h: f64,
-    steps: u64,
-    k: u64,
-    env: Environment<'s>,
-    truth: Box<dyn TruthModel + Send>,
-    /// The truth's Euler state at the current period boundary (converted once per period).
-    state: QuadState,
-    /// The truth's quaternion and body rates at the same boundary, if it has them.
-    body: Option<BodyAttitude>,
-    /// The controller flies [`Measurement::body`] (`Controller::uses_body_attitude`).
-    wants_body: bool,
-    actuators: ActuatorStage,
-    demand_params: QuadrotorParams,
-    base_plant: QuadrotorParams,
-    sensors: Option<Sensors>,
-    wind: Option<Wind>,
-    ground: Option<GroundSettings>,
-    tv_now: TimeVarying,
-    reference: Reference,
-    reference_grid: ReferenceGrid,
-    metrics: MetricsAccumulator,
-    recorder: Recorder,
-    envelope: Tracker,
-    stats: FlightStats,
-    observers: Vec<&'s mut dyn Observer>,
-    legacy_rotor_metrics: bool,
-    peak_demand: f64,
-    saturated_periods: u64,
-    exit: Option<ExitStatus>,
-    /// The measurement of the coming tick when it was taken ahead of
-    /// [`Flight::step`] by [`Flight::measurement`].
-    measured_ahead: Option<QuadState>,
-    /// Its body attitude (full-state controllers only).
-    body_ahead: Option<BodyAttitude>,
 }
 
 /// True when the two rotor metrics of [`crate::metrics::Metrics`]
@@ -127,15 +100,56 @@ fn reports_rotor_metrics(scenario: &Scenario) -> bool {
         || scenario.wind.is_some()
 }
 
-impl<'s, C: Controller + ?Sized> Flight<'s, C> {
-    /// A flight of `controller` through `scenario` at `t = 0` (the scenario
-    /// validated: `Scenario::validate`).
-    pub fn new(scenario: &'s Scenario, controller: &'s mut C, options: RunOptions<'s>) -> Self {
+/// Everything of one flight that is not in lanes: its scenario, clock,
+/// environment, sensors, actuator stage, wind, observers and exit.
+struct Lane<'s> {
+    scenario: &'s Scenario,
+    dt: f64,
+    h: f64,
+    substeps: u32,
+    steps: u64,
+    k: u64,
+    env: Environment<'s>,
+    actuators: ActuatorStage,
+    demand_params: QuadrotorParams,
+    base_plant: QuadrotorParams,
+    sensors: Option<Sensors>,
+    wind: Option<Wind>,
+    ground: Option<GroundSettings>,
+    tv_now: TimeVarying,
+    /// The next substep boundary's plant variation, wind and height (set
+    /// before the truth integrates the lanes).
+    tv_next: TimeVarying,
+    wind_now: Option<[f64; 3]>,
+    z_prev: f64,
+    reference_grid: ReferenceGrid,
+    metrics: MetricsAccumulator,
+    recorder: Recorder,
+    envelope: Tracker,
+    stats: FlightStats,
+    legacy_rotor_metrics: bool,
+    peak_demand: f64,
+    saturated_periods: u64,
+    /// This period's delivery (the truth reads its drive during the substeps),
+    /// its unlimited rotor-speed demand and the true plant of the period.
+    delivered: Delivered,
+    demand: [f64; 4],
+    plant_now: QuadrotorParams,
+    omega_bar: f64,
+    /// The lane completed a period at this step (its boundary is observed).
+    at_boundary: bool,
+    exit: Option<ExitStatus>,
+}
+
+impl<'s> Lane<'s> {
+    /// The flight of `scenario` at `t = 0`, its allocation set up; the
+    /// reference at `t = 0`; why the truth cannot fly it.
+    fn new(scenario: &'s Scenario, options: &RunOptions<'_>, recorder: Recorder) -> (Self, Reference) {
         let sim = &scenario.simulation;
         let dt = scenario.control_period();
         let steps = super::planned_steps(scenario);
         let h = dt / sim.substeps as f64;
-        let TruthSetup { truth, allocation, demand: demand_params, hover, invalid } = truth_of(scenario);
+        let TruthSetup { allocation, demand: demand_params, hover, .. } = truth_of(scenario);
         let actuators = ActuatorStage::of(scenario, allocation, hover, h);
         let mut env_params = scenario.environment();
         if scenario.vehicle.model == crate::vehicle::VehicleModel::RigidBody {
@@ -150,24 +164,18 @@ impl<'s, C: Controller + ?Sized> Flight<'s, C> {
             scenario.sensors.filter(|s| !s.is_perfect()).map(|s| Sensors::new(s, sim.control_rate, scenario.seed));
         let metrics = MetricsAccumulator::new(dt, sim.settling_band, sim.settling_floor, sim.steady_state_after)
             .with_window(sim.metrics_window);
-        let recorder = Recorder::new(scenario, options.record, steps, &*controller);
         let tv_now = env.time_varying_on_grid(0, 0.0);
         let mut reference_grid = ReferenceGrid::new(scenario, dt);
         let reference = reference_grid.at(0, 0.0);
-        let wants_body = controller.uses_body_attitude();
-        let mut flight = Self {
+        let _ = options;
+        let lane = Self {
             scenario,
-            controller,
-            options,
             dt,
             h,
+            substeps: sim.substeps,
             steps,
             k: 0,
             env,
-            state: truth.quad_state(),
-            body: if wants_body { truth.body_attitude() } else { None },
-            wants_body,
-            truth,
             actuators,
             demand_params,
             base_plant: scenario.true_plant(),
@@ -175,49 +183,109 @@ impl<'s, C: Controller + ?Sized> Flight<'s, C> {
             wind,
             ground: scenario.ground.filter(|g| g.enabled),
             tv_now,
-            reference,
+            tv_next: tv_now,
+            wind_now: None,
+            z_prev: 0.0,
             reference_grid,
             metrics,
             recorder,
             envelope: Tracker::new(scenario.envelope),
             stats: FlightStats::default(),
-            observers: Vec::new(),
             legacy_rotor_metrics: reports_rotor_metrics(scenario),
             peak_demand: 0.0,
             saturated_periods: 0,
+            delivered: Delivered::none(),
+            demand: [0.0; 4],
+            plant_now: scenario.true_plant(),
+            omega_bar: 0.0,
+            at_boundary: false,
             exit: None,
-            measured_ahead: None,
-            body_ahead: None,
         };
-        flight.boundary(0.0);
-        if let Some(divergence) = invalid {
-            flight.exit = Some(ExitStatus::Diverged { divergence, time: 0.0 });
+        (lane, reference)
+    }
+
+    #[inline]
+    fn flying(&self) -> bool {
+        self.exit.is_none()
+    }
+
+    /// The sensor stage's reading of `truth` (the truth itself with perfect sensors).
+    #[inline]
+    fn measure(&mut self, truth: &Measurement) -> Measurement {
+        match self.sensors.as_mut() {
+            Some(s) => s.measure_full(truth),
+            None => *truth,
         }
-        flight
+    }
+
+    /// The envelope and the statistics see the truth at a period boundary.
+    #[inline]
+    fn boundary(&mut self, t: f64, state: &QuadState, reference: &Reference) {
+        self.envelope.boundary(t, state, reference);
+        self.stats.boundary(t, state, reference);
+    }
+
+    /// The outcome of this lane's flight (a flight stopped early reports
+    /// `Completed` over the steps flown).
+    fn output(self, controller: &str, options: &RunOptions<'_>) -> RunOutput {
+        let exit = self.exit.unwrap_or(ExitStatus::Completed);
+        options.flight_done(self.steps, self.k);
+        let mut metrics = self.metrics.finish();
+        if self.legacy_rotor_metrics {
+            metrics.peak_rotor_speed_demand = Some(self.peak_demand);
+            metrics.saturation_fraction =
+                Some(if self.k > 0 { self.saturated_periods as f64 / self.k as f64 } else { 0.0 });
+        }
+        RunOutput {
+            controller: controller.to_string(),
+            scenario: self.scenario.name.clone(),
+            envelope: self.envelope.verdict((!exit.is_completed()).then(|| exit.to_string())),
+            exit,
+            metrics,
+            recording: self.recorder.recording,
+            steps: self.k,
+            stats: self.stats,
+        }
+    }
+}
+
+/// One flight of a controller through a scenario (or, with lanes, `N`
+/// flights side by side), advanced one control period at a time.
+pub struct Flight<'s, C: Controller<R> + ?Sized, R: Real = f64> {
+    controller: &'s mut C,
+    options: RunOptions<'s>,
+    truth: Box<dyn TruthModel<R> + Send>,
+    /// The truth's Euler state at the current period boundary (converted once per period).
+    state: QuadState<R>,
+    /// The truth's quaternion and body rates at the same boundary, if it has them.
+    body: Option<BodyAttitude<R>>,
+    /// The controller flies [`Measurement::body`] (`Controller::uses_body_attitude`).
+    wants_body: bool,
+    reference: Reference<R>,
+    lanes: Vec<Lane<'s>>,
+    observers: Vec<&'s mut dyn Observer>,
+    /// The measurement of the coming tick when it was taken ahead of
+    /// [`Flight::step`] by [`Flight::measurement`] (one flight only).
+    measured_ahead: Option<QuadState>,
+    /// Its body attitude (full-state controllers only).
+    body_ahead: Option<BodyAttitude>,
+}
+
+impl<'s, C: Controller + ?Sized> Flight<'s, C, f64> {
+    /// A flight of `controller` through `scenario` at `t = 0` (the scenario
+    /// validated: `Scenario::validate`).
+    pub fn new(scenario: &'s Scenario, controller: &'s mut C, options: RunOptions<'s>) -> Self {
+        Self::new_lanes(&[scenario], controller, options)
     }
 
     /// Add an observer of every tick and period boundary from now on; it
     /// first sees the boundary the flight is at (`t = 0` for a new flight).
     pub fn observe_with(&mut self, observer: &'s mut dyn Observer) {
-        if self.exit.is_none() {
-            observer.boundary(self.k as f64 * self.dt, &self.state, &self.reference);
+        if self.lanes[0].flying() {
+            let t = self.lanes[0].k as f64 * self.lanes[0].dt;
+            observer.boundary(t, &self.state, &self.reference);
         }
         self.observers.push(observer);
-    }
-
-    /// Control steps flown so far.
-    pub fn steps_flown(&self) -> u64 {
-        self.k
-    }
-
-    /// Control steps the flight plans.
-    pub fn planned_steps(&self) -> u64 {
-        self.steps
-    }
-
-    /// How the flight ended (`None` while it is flying).
-    pub fn exit(&self) -> Option<&ExitStatus> {
-        self.exit.as_ref()
     }
 
     /// The measurement the controller will be given at the coming tick
@@ -229,19 +297,11 @@ impl<'s, C: Controller + ?Sized> Flight<'s, C> {
         if let Some(m) = self.measured_ahead {
             return m;
         }
-        let m = self.measure();
+        let truth = Measurement { euler: self.state, body: self.body };
+        let m = self.lanes[0].measure(&truth);
         self.measured_ahead = Some(m.euler);
         self.body_ahead = m.body;
         m.euler
-    }
-
-    /// The sensor stage's reading of the truth at the current boundary.
-    fn measure(&mut self) -> Measurement {
-        let truth = Measurement { euler: self.state, body: self.body };
-        match self.sensors.as_mut() {
-            Some(s) => s.measure_full(&truth),
-            None => truth,
-        }
     }
 
     /// The truth's Euler state at the current period boundary.
@@ -254,146 +314,19 @@ impl<'s, C: Controller + ?Sized> Flight<'s, C> {
         &self.reference
     }
 
-    /// The controller being flown (e.g. to hand an external agent's
-    /// command to it between two steps).
-    pub fn controller_mut(&mut self) -> &mut C {
-        self.controller
+    /// Control steps flown so far.
+    pub fn steps_flown(&self) -> u64 {
+        self.lanes[0].k
     }
 
-    fn boundary(&mut self, t: f64) {
-        let s = self.state;
-        self.envelope.boundary(t, &s, &self.reference);
-        self.stats.boundary(t, &s, &self.reference);
-        for o in &mut self.observers {
-            o.boundary(t, &s, &self.reference);
-        }
+    /// Control steps the flight plans.
+    pub fn planned_steps(&self) -> u64 {
+        self.lanes[0].steps
     }
 
-    fn end(&mut self, exit: ExitStatus) -> StepOutcome {
-        self.exit = Some(exit);
-        StepOutcome::Done
-    }
-
-    /// Fly one control period (module docs); [`StepOutcome::Done`] once the
-    /// flight is over (and on every later call).
-    pub fn step(&mut self) -> StepOutcome {
-        if self.exit.is_some() {
-            return StepOutcome::Done;
-        }
-        if self.k >= self.steps {
-            return self.end(ExitStatus::Completed);
-        }
-        let (k, dt, h) = (self.k, self.dt, self.h);
-        let t = k as f64 * dt;
-        let state = self.state;
-        let (measured, command) = if self.wants_body {
-            let reading = match self.measured_ahead.take() {
-                Some(euler) => Measurement { euler, body: self.body_ahead.take() },
-                None => self.measure(),
-            };
-            (reading.euler, self.controller.update_measured(&reading, &self.reference, dt))
-        } else {
-            // The Euler state alone: no body attitude is built or copied.
-            let measured = match self.measured_ahead.take() {
-                Some(m) => m,
-                None => self.sensors.as_mut().map_or(state, |s| s.measure(&state)),
-            };
-            (measured, self.controller.update(&measured, &self.reference, dt))
-        };
-        let measured = &measured;
-        self.env.next_period();
-        let plant_now = self.env.params_with(&self.tv_now);
-        let delivered: Delivered = self.actuators.deliver(&command, &plant_now);
-        let demand = delivered.demand.unwrap_or_else(|| rotor_speeds(&self.demand_params, &command, f64::INFINITY));
-        if self.legacy_rotor_metrics {
-            self.peak_demand = demand.iter().fold(self.peak_demand, |m, &w| if w.is_finite() { m.max(w) } else { m });
-            self.saturated_periods += u64::from(delivered.saturated);
-        }
-        self.controller.actuator_feedback(delivered.saturated);
-        if let Err(divergence) = self.truth.begin_period(&self.tv_now, &self.base_plant) {
-            return self.end(ExitStatus::Diverged { divergence, time: t });
-        }
-
-        let applied = delivered.applied;
-        let u = [applied.thrust, applied.torque[0], applied.torque[1], applied.torque[2]];
-        if !(u.iter().all(|v| v.is_finite())) {
-            return self.end(ExitStatus::Diverged { divergence: Divergence::NonFinite, time: t });
-        }
-        {
-            let telemetry = self.controller.telemetry();
-            let x = state.to_array();
-            let tick = Tick {
-                k,
-                t,
-                state: x,
-                measured,
-                reference: &self.reference,
-                telemetry,
-                errors: tracking_errors(&x, &self.reference, telemetry),
-                command: &command,
-                applied: u,
-                omega: delivered.omega,
-                omega_bar: residual_speed(&delivered.omega),
-                demand,
-                saturated: delivered.saturated,
-                nominal_mass: self.scenario.plant.mass,
-                mass: plant_now.mass,
-                inertia: plant_now.inertia,
-                disturbance: self.tv_now.disturbance,
-            };
-            self.metrics.tick(&tick);
-            self.recorder.tick(&tick);
-            self.stats.tick(&tick);
-            for o in &mut self.observers {
-                o.tick(&tick);
-            }
-        }
-
-        let omega_bar = residual_speed(&delivered.target);
-        let substeps = self.scenario.simulation.substeps;
-        for j in 0..substeps {
-            let t0 = t + j as f64 * h;
-            let wind = self.wind.as_mut().map(|w| w.step(t0));
-            let tv_next = self.env.time_varying_on_grid(k * u64::from(substeps) + u64::from(j) + 1, t0 + h);
-            let z_prev = *self.truth.vertical().0;
-            self.truth.substep(&Substep {
-                t0,
-                h,
-                a: self.tv_now,
-                b: tv_next,
-                env: &self.env,
-                drive: self.actuators.drive(&delivered, omega_bar),
-                wind,
-            });
-            if let Some(g) = &self.ground {
-                let (z, vz) = self.truth.vertical();
-                if let Some((fraction, impact_speed)) = g.contact(z_prev, z, vz) {
-                    self.k = k + 1;
-                    return self.end(ExitStatus::Crashed { time: t0 + fraction * h, impact_speed });
-                }
-            }
-            self.actuators.advance(&delivered.target);
-            self.tv_now = tv_next;
-        }
-        self.k = k + 1;
-        if self.options.step_done(self.k) {
-            return self.end(ExitStatus::Interrupted { time: self.k as f64 * dt });
-        }
-
-        let t_next = (k + 1) as f64 * dt;
-        self.reference = self.reference_grid.at(k + 1, t_next);
-        self.state = self.truth.quad_state();
-        if self.wants_body {
-            self.body = self.truth.body_attitude();
-        }
-        self.boundary(t_next);
-        if let Some(divergence) = check_divergence(self.scenario, &self.state.to_array(), &self.reference) {
-            return self.end(ExitStatus::Diverged { divergence, time: t_next });
-        }
-        if self.k >= self.steps {
-            return self.end(ExitStatus::Completed);
-        }
-        StepOutcome::Flying
+    /// How the flight ended (`None` while it is flying).
+    pub fn exit(&self) -> Option<&ExitStatus> {
+        self.lanes[0].exit.as_ref()
     }
 
     /// Step to the end and return the outcome.
@@ -404,24 +337,364 @@ impl<'s, C: Controller + ?Sized> Flight<'s, C> {
 
     /// The outcome so far (a flight stopped early reports `Completed` over
     /// the steps flown).
-    pub fn finish(self) -> RunOutput {
-        let exit = self.exit.unwrap_or(ExitStatus::Completed);
-        self.options.flight_done(self.steps, self.k);
-        let mut metrics = self.metrics.finish();
-        if self.legacy_rotor_metrics {
-            metrics.peak_rotor_speed_demand = Some(self.peak_demand);
-            metrics.saturation_fraction =
-                Some(if self.k > 0 { self.saturated_periods as f64 / self.k as f64 } else { 0.0 });
+    pub fn finish(mut self) -> RunOutput {
+        let name = self.controller.name();
+        let lane = self.lanes.pop().expect("one lane");
+        lane.output(name, &self.options)
+    }
+}
+
+impl<'s, C: Controller<R> + ?Sized, R: Real> Flight<'s, C, R> {
+    /// `R::LANES` flights of `controller` side by side, lane `i` flying
+    /// `scenarios[i]` from `t = 0` (validated scenarios of one base: the
+    /// same vehicle model, control rate and substeps; [`Flight::new`] for
+    /// one flight). Recording and observers are for one flight only.
+    ///
+    /// # Panics
+    /// If `scenarios` does not hold `R::LANES` scenarios.
+    pub fn new_lanes(scenarios: &[&'s Scenario], controller: &'s mut C, options: RunOptions<'s>) -> Self {
+        assert_eq!(scenarios.len(), R::LANES, "one scenario per lane");
+        let wants_body = controller.uses_body_attitude();
+        let first = scenarios[0];
+        let mut truth = truth_lanes::<R>(first);
+        let mut reference = Reference::<R>::default();
+        let mut lanes = Vec::with_capacity(R::LANES);
+        for (i, &scenario) in scenarios.iter().enumerate() {
+            let steps = super::planned_steps(scenario);
+            let recorder = Recorder::new(scenario, options.record && R::LANES == 1, steps, &*controller);
+            let (mut lane, r) = Lane::new(scenario, &options, recorder);
+            if let Err(divergence) = truth.start_lane(i, scenario) {
+                lane.exit = Some(ExitStatus::Diverged { divergence, time: 0.0 });
+            }
+            reference.put_lane(i, r);
+            lanes.push(lane);
         }
-        RunOutput {
-            controller: self.controller.name().to_string(),
-            scenario: self.scenario.name.clone(),
-            envelope: self.envelope.verdict((!exit.is_completed()).then(|| exit.to_string())),
-            exit,
-            metrics,
-            recording: self.recorder.recording,
-            steps: self.k,
-            stats: self.stats,
+        let state = truth.quad_state();
+        let body = if wants_body { truth.body_attitude() } else { None };
+        let mut flight = Self {
+            controller,
+            options,
+            truth,
+            state,
+            body,
+            wants_body,
+            reference,
+            lanes,
+            observers: Vec::new(),
+            measured_ahead: None,
+            body_ahead: None,
+        };
+        for i in 0..R::LANES {
+            flight.lane_boundary(i, 0.0);
+        }
+        flight
+    }
+
+    /// Start a new flight of `scenario` in lane `lane` (its flight ended, or
+    /// it idles): the lane's truth, controller states, environment, sensors,
+    /// actuators and observers start afresh at `t = 0`. `scenario` must be of
+    /// the same base as the others ([`Flight::new_lanes`]).
+    pub fn start_lane(&mut self, lane: usize, scenario: &'s Scenario) {
+        let steps = super::planned_steps(scenario);
+        let recorder = Recorder::new(scenario, false, steps, &*self.controller);
+        let (mut fresh, r) = Lane::new(scenario, &self.options, recorder);
+        if let Err(divergence) = self.truth.start_lane(lane, scenario) {
+            fresh.exit = Some(ExitStatus::Diverged { divergence, time: 0.0 });
+        }
+        self.controller.reset_lane(lane);
+        self.reference.put_lane(lane, r);
+        self.lanes[lane] = fresh;
+        self.refresh_lane(lane);
+        self.lane_boundary(lane, 0.0);
+    }
+
+    /// The outcome of lane `lane`'s flight so far, its lane left as it is
+    /// (to be restarted with [`Flight::start_lane`] or left idle).
+    pub fn lane_output(&mut self, lane: usize) -> RunOutput {
+        let scenario = self.lanes[lane].scenario;
+        let recorder = Recorder::new(scenario, false, 0, &*self.controller);
+        let (mut idle, _) = Lane::new(scenario, &self.options, recorder);
+        idle.exit = Some(ExitStatus::Completed);
+        idle.k = idle.steps;
+        let done = core::mem::replace(&mut self.lanes[lane], idle);
+        done.output(self.controller.name(), &self.options)
+    }
+
+    /// Stop lane `lane` without an outcome: an idle lane of a batch with
+    /// fewer flights than lanes (it reports no progress and no result).
+    pub fn stop_lane(&mut self, lane: usize) {
+        self.lanes[lane].exit = Some(ExitStatus::Completed);
+    }
+
+    /// True while lane `lane`'s flight goes on.
+    pub fn lane_flying(&self, lane: usize) -> bool {
+        self.lanes[lane].flying()
+    }
+
+    /// Number of lanes, `R::LANES`.
+    pub fn lane_count(&self) -> usize {
+        self.lanes.len()
+    }
+
+    /// The controller being flown (e.g. to hand an external agent's
+    /// command to it between two steps).
+    pub fn controller_mut(&mut self) -> &mut C {
+        self.controller
+    }
+
+    /// Read lane `lane`'s truth into the boundary state (after its truth changed).
+    fn refresh_lane(&mut self, lane: usize) {
+        let s = self.truth.quad_state();
+        self.state.put_lane(lane, s.get_lane(lane));
+        if self.wants_body {
+            if let Some(b) = self.truth.body_attitude() {
+                let mut body = self.body.unwrap_or_default();
+                body.put_lane(lane, b.get_lane(lane));
+                self.body = Some(body);
+            }
+        }
+    }
+
+    fn lane_boundary(&mut self, i: usize, t: f64) {
+        let s = self.state.get_lane(i);
+        let r = self.reference.get_lane(i);
+        self.lanes[i].boundary(t, &s, &r);
+        if R::LANES == 1 {
+            for o in &mut self.observers {
+                o.boundary(t, &s, &r);
+            }
+        }
+    }
+
+    /// Fly one control period of every flying lane (module docs);
+    /// [`StepOutcome::Done`] once every lane's flight is over (and on every
+    /// later call).
+    pub fn step(&mut self) -> StepOutcome {
+        let n = R::LANES;
+        // Lanes at their planned end complete before anything is computed.
+        for lane in &mut self.lanes {
+            if lane.flying() && lane.k >= lane.steps {
+                lane.exit = Some(ExitStatus::Completed);
+            }
+        }
+        if !self.lanes.iter().any(Lane::flying) {
+            return StepOutcome::Done;
+        }
+
+        // 1–2. Sensors (lane by lane), controller (on the lanes).
+        let mut measured = Measurement::<R>::default();
+        let command = if self.wants_body {
+            for i in 0..n {
+                let reading = match (i, self.measured_ahead.take()) {
+                    (0, Some(euler)) => Measurement { euler, body: self.body_ahead.take() },
+                    _ => {
+                        let truth = Measurement {
+                            euler: self.state.get_lane(i),
+                            body: self.body.as_ref().map(|b| b.get_lane(i)),
+                        };
+                        if self.lanes[i].flying() {
+                            self.lanes[i].measure(&truth)
+                        } else {
+                            truth
+                        }
+                    }
+                };
+                measured.put_lane(i, reading);
+            }
+            self.controller.update_measured(&measured, &self.reference, self.lanes[0].dt)
+        } else {
+            for i in 0..n {
+                let reading = match (i, self.measured_ahead.take()) {
+                    (0, Some(m)) => m,
+                    _ => {
+                        let state = self.state.get_lane(i);
+                        let lane = &mut self.lanes[i];
+                        match lane.sensors.as_mut() {
+                            Some(s) if lane.exit.is_none() => s.measure(&state),
+                            _ => state,
+                        }
+                    }
+                };
+                measured.euler.put_lane(i, reading);
+            }
+            self.controller.update(&measured.euler, &self.reference, self.lanes[0].dt)
+        };
+
+        // 3–4. Environment and actuator stage, lane by lane.
+        let mut saturated = R::Mask::splat(false);
+        for (i, lane) in self.lanes.iter_mut().enumerate() {
+            if !lane.flying() {
+                continue;
+            }
+            let command_i: Command = command.get_lane(i);
+            lane.env.next_period();
+            let plant_now = lane.env.params_with(&lane.tv_now);
+            let delivered = lane.actuators.deliver(&command_i, &plant_now);
+            let demand =
+                delivered.demand.unwrap_or_else(|| rotor_speeds(&lane.demand_params, &command_i, f64::INFINITY));
+            if lane.legacy_rotor_metrics {
+                lane.peak_demand =
+                    demand.iter().fold(lane.peak_demand, |m, &w| if w.is_finite() { m.max(w) } else { m });
+                lane.saturated_periods += u64::from(delivered.saturated);
+            }
+            saturated.put_lane(i, delivered.saturated);
+            lane.delivered = delivered;
+            lane.demand = demand;
+            lane.plant_now = plant_now;
+        }
+        self.controller.actuator_feedback(saturated);
+
+        // The truth's plant of the period; a finite applied command; the observers.
+        let telemetry = self.controller.telemetry();
+        for i in 0..n {
+            let lane = &mut self.lanes[i];
+            if !lane.flying() {
+                continue;
+            }
+            let t = lane.k as f64 * lane.dt;
+            if let Err(divergence) = self.truth.begin_period(i, &lane.tv_now, &lane.base_plant) {
+                lane.exit = Some(ExitStatus::Diverged { divergence, time: t });
+                continue;
+            }
+            let delivered = &lane.delivered;
+            let applied = delivered.applied;
+            let u = [applied.thrust, applied.torque[0], applied.torque[1], applied.torque[2]];
+            if !(u.iter().all(|v| v.is_finite())) {
+                lane.exit = Some(ExitStatus::Diverged { divergence: Divergence::NonFinite, time: t });
+                continue;
+            }
+            let state = self.state.get_lane(i);
+            let x = state.to_array();
+            let reference = self.reference.get_lane(i);
+            // One flight: the telemetry itself; lanes: lane i's copy.
+            let telemetry_copy;
+            let telemetry_i: &Telemetry = match (telemetry as &dyn core::any::Any).downcast_ref::<Telemetry>() {
+                Some(one) => one,
+                None => {
+                    telemetry_copy = telemetry.get_lane(i);
+                    &telemetry_copy
+                }
+            };
+            let measured_i = measured.euler.get_lane(i);
+            let command_i: Command = command.get_lane(i);
+            let tick = Tick {
+                k: lane.k,
+                t,
+                state: x,
+                measured: &measured_i,
+                reference: &reference,
+                telemetry: telemetry_i,
+                errors: tracking_errors(&x, &reference, telemetry_i),
+                command: &command_i,
+                applied: u,
+                omega: delivered.omega,
+                omega_bar: residual_speed(&delivered.omega),
+                demand: lane.demand,
+                saturated: delivered.saturated,
+                nominal_mass: lane.scenario.plant.mass,
+                mass: lane.plant_now.mass,
+                inertia: lane.plant_now.inertia,
+                disturbance: lane.tv_now.disturbance,
+            };
+            lane.metrics.tick(&tick);
+            lane.recorder.tick(&tick);
+            lane.stats.tick(&tick);
+            if n == 1 {
+                for o in &mut self.observers {
+                    o.tick(&tick);
+                }
+            }
+            lane.omega_bar = residual_speed(&delivered.target);
+        }
+
+        // 6. The truth over the period: every lane's substep at once.
+        let substeps = self.lanes[0].substeps;
+        for j in 0..substeps {
+            for lane in &mut self.lanes {
+                let t0 = lane.k as f64 * lane.dt + j as f64 * lane.h;
+                if lane.flying() {
+                    lane.wind_now = lane.wind.as_mut().map(|w| w.step(t0));
+                    lane.tv_next =
+                        lane.env.time_varying_on_grid(lane.k * u64::from(substeps) + u64::from(j) + 1, t0 + lane.h);
+                }
+            }
+            for i in 0..n {
+                self.lanes[i].z_prev = self.truth.vertical(i).0;
+            }
+            {
+                let lanes = &self.lanes;
+                self.truth.substep(&|i| {
+                    let lane = &lanes[i];
+                    Substep {
+                        t0: lane.k as f64 * lane.dt + j as f64 * lane.h,
+                        h: lane.h,
+                        a: lane.tv_now,
+                        b: lane.tv_next,
+                        env: &lane.env,
+                        drive: lane.actuators.drive(&lane.delivered, lane.omega_bar),
+                        wind: lane.wind_now,
+                    }
+                });
+            }
+            for (i, lane) in self.lanes.iter_mut().enumerate() {
+                if !lane.flying() {
+                    continue;
+                }
+                if let Some(g) = &lane.ground {
+                    let (mut z, mut vz) = self.truth.vertical(i);
+                    let contact = g.contact(lane.z_prev, &mut z, &mut vz);
+                    self.truth.set_vertical(i, z, vz);
+                    if let Some((fraction, impact_speed)) = contact {
+                        let t0 = lane.k as f64 * lane.dt + j as f64 * lane.h;
+                        lane.k += 1;
+                        lane.exit = Some(ExitStatus::Crashed { time: t0 + fraction * lane.h, impact_speed });
+                        continue;
+                    }
+                }
+                lane.actuators.advance(&lane.delivered.target);
+                lane.tv_now = lane.tv_next;
+            }
+        }
+
+        // 7. The next reference and boundary; divergence checks.
+        for (i, lane) in self.lanes.iter_mut().enumerate() {
+            lane.at_boundary = false;
+            if !lane.flying() {
+                continue;
+            }
+            let k = lane.k;
+            lane.k = k + 1;
+            if self.options.step_done(lane.k) {
+                lane.exit = Some(ExitStatus::Interrupted { time: lane.k as f64 * lane.dt });
+                continue;
+            }
+            let t_next = (k + 1) as f64 * lane.dt;
+            self.reference.put_lane(i, lane.reference_grid.at(k + 1, t_next));
+            lane.at_boundary = true;
+        }
+        self.state = self.truth.quad_state();
+        if self.wants_body {
+            self.body = self.truth.body_attitude();
+        }
+        for i in 0..n {
+            if !self.lanes[i].at_boundary {
+                continue;
+            }
+            let t_next = self.lanes[i].k as f64 * self.lanes[i].dt;
+            self.lane_boundary(i, t_next);
+            let state = self.state.get_lane(i);
+            let reference = self.reference.get_lane(i);
+            let lane = &mut self.lanes[i];
+            if let Some(divergence) = check_divergence(lane.scenario, &state.to_array(), &reference) {
+                lane.exit = Some(ExitStatus::Diverged { divergence, time: t_next });
+            } else if lane.k >= lane.steps {
+                lane.exit = Some(ExitStatus::Completed);
+            }
+        }
+        if self.lanes.iter().any(Lane::flying) {
+            StepOutcome::Flying
+        } else {
+            StepOutcome::Done
         }
     }
 }

@@ -201,7 +201,12 @@ impl Recorder {
     /// a row every `control_rate / record_rate` ticks when `record` is on and
     /// `record_rate > 0`, none otherwise (room for all of them is reserved
     /// up front).
-    pub(super) fn new<C: Controller + ?Sized>(scenario: &Scenario, record: bool, steps: u64, controller: &C) -> Self {
+    pub(super) fn new<R: ftsmc_core::lanes::Real, C: Controller<R> + ?Sized>(
+        scenario: &Scenario,
+        record: bool,
+        steps: u64,
+        controller: &C,
+    ) -> Self {
         let sim = &scenario.simulation;
         let every = if record && sim.record_rate > 0.0 {
             ((sim.control_rate / sim.record_rate).round() as u64).max(1)

@@ -18,6 +18,7 @@
 //! `v − w`, the rigid body's parasitic and rotor drag.
 
 use ftsmc_core::allocation::{forces_from_squared_speeds, residual_speed};
+use ftsmc_core::lanes::{Lanewise, Real};
 use ftsmc_core::measured::BodyAttitude;
 use ftsmc_core::model::{Command, QuadState, QuadrotorParams};
 
@@ -49,7 +50,7 @@ pub(crate) struct Substep<'a> {
 }
 
 /// A truth model the loop can fly.
-pub(crate) trait TruthModel {
+pub(crate) trait OneTruth {
     /// The state in the Euler form every controller takes.
     fn quad_state(&self) -> QuadState;
     /// The attitude as quaternion and body rates, when the model has them
@@ -69,12 +70,14 @@ pub(crate) trait TruthModel {
     fn substep(&mut self, s: &Substep<'_>);
     /// Height `z` (m) and vertical velocity `ż` (m/s), for ground contact.
     fn vertical(&mut self) -> (&mut f64, &mut f64);
+    /// Height `z` (m) and vertical velocity `ż` (m/s), read.
+    fn height(&self) -> (f64, f64);
 }
 
 /// Paper Eq. 1 in Euler form.
 pub(crate) struct PaperTruth(pub [f64; 12]);
 
-impl TruthModel for PaperTruth {
+impl OneTruth for PaperTruth {
     #[inline]
     fn quad_state(&self) -> QuadState {
         QuadState::from_array(&self.0)
@@ -126,6 +129,11 @@ impl TruthModel for PaperTruth {
         let (head, tail) = self.0.split_at_mut(8);
         (&mut head[2], &mut tail[0])
     }
+
+    #[inline]
+    fn height(&self) -> (f64, f64) {
+        (self.0[2], self.0[8])
+    }
 }
 
 /// The Newton–Euler rigid body ([`RigidBody`]).
@@ -150,7 +158,7 @@ impl RigidTruth {
     }
 }
 
-impl TruthModel for RigidTruth {
+impl OneTruth for RigidTruth {
     #[inline]
     fn quad_state(&self) -> QuadState {
         to_quad_state(&self.x)
@@ -212,12 +220,17 @@ impl TruthModel for RigidTruth {
         let (head, tail) = self.x.split_at_mut(5);
         (&mut head[2], &mut tail[0])
     }
+
+    #[inline]
+    fn height(&self) -> (f64, f64) {
+        (self.x[2], self.x[5])
+    }
 }
 
 /// What a flight's truth model brings to the loop ([`truth_of`]).
 pub(crate) struct TruthSetup {
     /// The model at the scenario's initial state.
-    pub truth: Box<dyn TruthModel + Send>,
+    pub truth: Box<dyn OneTruth + Send>,
     /// Its allocation `u = A ω²`.
     pub allocation: [[f64; 4]; 4],
     /// Paper-form parameters of its unsaturated rotor-speed demand.
@@ -235,7 +248,7 @@ pub(crate) fn truth_of(scenario: &Scenario) -> TruthSetup {
     let p = scenario.true_plant();
     let paper_hover = (p.mass * p.gravity / (4.0 * p.lift_coefficient)).sqrt();
     let paper = || Box::new(PaperTruth(scenario.initial_state.state().to_array()));
-    let (truth, hover, invalid): (Box<dyn TruthModel + Send>, f64, Option<Divergence>) = match scenario.vehicle.model {
+    let (truth, hover, invalid): (Box<dyn OneTruth + Send>, f64, Option<Divergence>) = match scenario.vehicle.model {
         VehicleModel::Paper => (paper(), paper_hover, None),
         VehicleModel::RigidBody => match RigidTruth::new(scenario) {
             Ok(truth) => {
@@ -246,4 +259,75 @@ pub(crate) fn truth_of(scenario: &Scenario) -> TruthSetup {
         },
     };
     TruthSetup { truth, allocation, demand, hover, invalid }
+}
+
+/// A truth model the loop flies on lanes ([`ftsmc_core::lanes`]): lane `i`
+/// is one flight's truth.
+pub(crate) trait TruthModel<R: Real = f64> {
+    /// The Euler states of the lanes.
+    fn quad_state(&self) -> QuadState<R>;
+    /// The lanes' quaternions and body rates, if the model has them.
+    fn body_attitude(&self) -> Option<BodyAttitude<R>>;
+    /// The start of a control period of lane `lane` with its plant variation.
+    fn begin_period(&mut self, lane: usize, tv: &TimeVarying, base: &QuadrotorParams) -> Result<(), Divergence>;
+    /// One RK4 substep of every lane; `s(i)` is lane `i`'s substep.
+    fn substep<'a>(&mut self, s: &dyn Fn(usize) -> Substep<'a>);
+    /// Height `z` (m) and vertical velocity `ż` (m/s) of lane `lane`.
+    fn vertical(&self, lane: usize) -> (f64, f64);
+    /// Set lane `lane`'s height and vertical velocity (ground contact).
+    fn set_vertical(&mut self, lane: usize, z: f64, vz: f64);
+    /// A new flight of `scenario` in lane `lane` at its initial state.
+    fn start_lane(&mut self, lane: usize, scenario: &Scenario) -> Result<(), Divergence>;
+}
+
+/// Lanes of one-flight truth models, each flown on its own.
+struct PerLane<R> {
+    lanes: Vec<Box<dyn OneTruth + Send>>,
+    _r: core::marker::PhantomData<R>,
+}
+
+impl<R: Real> TruthModel<R> for PerLane<R> {
+    fn quad_state(&self) -> QuadState<R> {
+        let mut q = QuadState::<R>::default();
+        for (i, t) in self.lanes.iter().enumerate() {
+            q.put_lane(i, t.quad_state());
+        }
+        q
+    }
+    fn body_attitude(&self) -> Option<BodyAttitude<R>> {
+        let mut b = BodyAttitude::<R>::default();
+        for (i, t) in self.lanes.iter().enumerate() {
+            b.put_lane(i, t.body_attitude()?);
+        }
+        Some(b)
+    }
+    fn begin_period(&mut self, lane: usize, tv: &TimeVarying, base: &QuadrotorParams) -> Result<(), Divergence> {
+        self.lanes[lane].begin_period(tv, base)
+    }
+    fn substep<'a>(&mut self, s: &dyn Fn(usize) -> Substep<'a>) {
+        for (i, t) in self.lanes.iter_mut().enumerate() {
+            t.substep(&s(i));
+        }
+    }
+    fn vertical(&self, lane: usize) -> (f64, f64) {
+        self.lanes[lane].height()
+    }
+    fn set_vertical(&mut self, lane: usize, z: f64, vz: f64) {
+        let (zz, vv) = self.lanes[lane].vertical();
+        *zz = z;
+        *vv = vz;
+    }
+    fn start_lane(&mut self, lane: usize, scenario: &Scenario) -> Result<(), Divergence> {
+        let setup = truth_of(scenario);
+        self.lanes[lane] = setup.truth;
+        setup.invalid.map_or(Ok(()), Err)
+    }
+}
+
+/// The truth model of `scenario` on lanes, every lane at its initial state.
+pub(crate) fn truth_lanes<R: Real>(scenario: &Scenario) -> Box<dyn TruthModel<R> + Send> {
+    Box::new(PerLane::<R> {
+        lanes: (0..R::LANES).map(|_| truth_of(scenario).truth).collect(),
+        _r: core::marker::PhantomData,
+    })
 }
