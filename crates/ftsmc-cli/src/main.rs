@@ -118,6 +118,9 @@ enum Command {
         /// Worker threads (default: all cores). Results do not depend on it.
         #[arg(long)]
         threads: Option<usize>,
+        /// Flights each thread flies side by side in vector lanes: 1, 2, 4 or 8. Results do not depend on it.
+        #[arg(long, default_value_t = ftsmc_sim::batch::montecarlo::DEFAULT_LANES)]
+        lanes: usize,
         /// Controller(s) to fly (repeat or comma-separate); default: the scenario's `controllers` list.
         #[arg(long, short = 'c', value_delimiter = ',')]
         controllers: Vec<String>,
@@ -291,7 +294,7 @@ fn run(cli: Cli) -> Result<()> {
             };
             fixed_time::run(&scenario, &controllers, &settings, &out)
         }
-        Command::Montecarlo { scenario, runs, seed, threads, controllers, out, no_figures, limit, shard } => {
+        Command::Montecarlo { scenario, runs, seed, threads, lanes, controllers, out, no_figures, limit, shard } => {
             let mut scenario = load_scenario_with_limits(&scenario, &limit)?;
             let names = if controllers.is_empty() { scenario.controllers.clone() } else { controllers };
             check_names(&names)?;
@@ -307,7 +310,12 @@ fn run(cli: Cli) -> Result<()> {
             // the controllers flown, so re-running it gives the same batch.
             scenario.seed = seed.unwrap_or(scenario.seed);
             scenario.controllers = names;
-            montecarlo::run(&scenario, runs, shard, threads, &out, !no_figures)
+            anyhow::ensure!(
+                ftsmc_sim::batch::montecarlo::LANE_COUNTS.contains(&lanes),
+                "--lanes {lanes}: expected one of {:?}",
+                ftsmc_sim::batch::montecarlo::LANE_COUNTS
+            );
+            montecarlo::run(&scenario, runs, shard, threads, lanes, &out, !no_figures)
         }
         Command::Tune { scenario: arg, controller, budget, seed, threads, out, no_figures, limit } => {
             let scenario = load_scenario_with_limits(&arg, &limit)?;

@@ -5,7 +5,7 @@ use std::path::Path;
 use std::time::Instant;
 
 use anyhow::{Context, Result};
-use ftsmc_sim::batch::montecarlo::{run_batch_range, summarize, ControllerSummary, McRun, MonteCarloSpec};
+use ftsmc_sim::batch::montecarlo::{run_batch_lanes, summarize, ControllerSummary, McRun, MonteCarloSpec};
 use ftsmc_sim::batch::runs_table::runs_table;
 use ftsmc_sim::batch::shard::Shard;
 use ftsmc_sim::registry::label;
@@ -85,6 +85,7 @@ pub fn run(
     runs: u64,
     shard: Option<Shard>,
     threads: Option<usize>,
+    lanes: usize,
     out: &Path,
     figures: bool,
 ) -> Result<()> {
@@ -108,7 +109,7 @@ pub fn run(
     let started = Instant::now();
     let cpu_started = crate::cpu::process_cpu_seconds();
     let rows = pool
-        .install(|| run_batch_range(scenario, &spec, controllers, indices.clone(), seed, &|n| bar.inc(n), None))
+        .install(|| run_batch_lanes(scenario, &spec, controllers, indices.clone(), seed, &|n| bar.inc(n), None, lanes))
         .map_err(|known| anyhow::anyhow!("unknown controller (known: {known})"))?;
     bar.finish_and_clear();
     let elapsed = started.elapsed().as_secs_f64();

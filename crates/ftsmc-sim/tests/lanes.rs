@@ -1,0 +1,87 @@
+//! Flights in lanes: a Monte Carlo batch gives the same rows, bit for bit,
+//! whatever number of flights it flies side by side, whatever lane a run
+//! lands in, and whatever the thread count — for every built-in controller
+//! on both truth models, and when lanes start new runs as flights end early.
+
+use ftsmc_sim::batch::montecarlo::{run_batch_lanes, MonteCarloSpec, LANE_COUNTS};
+use ftsmc_sim::registry::CONTROLLERS;
+use ftsmc_sim::scenario::{Scenario, PAPER_SCENARIO_1, PAPER_SCENARIO_2, REALISTIC_SCENARIO_2};
+
+fn builtin(name: &str, duration: f64) -> Scenario {
+    let text = match name {
+        "paper-scenario-1" => PAPER_SCENARIO_1,
+        "paper-scenario-2" => PAPER_SCENARIO_2,
+        _ => REALISTIC_SCENARIO_2,
+    };
+    let mut s = Scenario::from_toml_str(text, &format!("{name}.toml")).expect("built-in scenario");
+    s.duration = duration;
+    s
+}
+
+/// The rows of a batch as text: `{:?}` of an `f64` is its shortest
+/// round-trip form, so equal text is equal bits.
+fn rows(
+    s: &Scenario,
+    spec: &MonteCarloSpec,
+    controllers: &[String],
+    runs: u64,
+    lanes: usize,
+    threads: usize,
+) -> Vec<String> {
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+    let rows = pool
+        .install(|| run_batch_lanes(s, spec, controllers, 0..runs, s.seed, &|_| {}, None, lanes))
+        .expect("batch flies");
+    rows.iter()
+        .map(|r| {
+            format!(
+                "{} {} {} {:?} {:?} {} {:?}",
+                if r.exit.is_completed() { "completed" } else { "ended-early" },
+                r.index,
+                r.controller,
+                r.sampled,
+                r.metrics.flat(),
+                r.exit,
+                (r.stats.peak_tilt, r.stats.rotor_speed_max, r.stats.saturated_periods)
+            )
+        })
+        .collect()
+}
+
+#[test]
+fn every_controller_gives_the_same_rows_on_any_number_of_lanes() {
+    let controllers: Vec<String> = CONTROLLERS.iter().map(|(n, _)| n.to_string()).collect();
+    for name in ["paper-scenario-2", "realistic-scenario-2"] {
+        let s = builtin(name, 2.0);
+        let spec = s.montecarlo.clone().unwrap_or_default();
+        let alone = rows(&s, &spec, &controllers, 5, 1, 1);
+        assert_eq!(alone.len(), 5 * controllers.len());
+        for lanes in LANE_COUNTS.into_iter().filter(|&l| l > 1) {
+            assert_eq!(rows(&s, &spec, &controllers, 5, lanes, 2), alone, "{name}, {lanes} lanes");
+        }
+    }
+}
+
+#[test]
+fn lanes_start_new_runs_as_flights_end_early() {
+    // FTAFTSMC with the paper's gains on the realistic rotors diverges, each
+    // run at its own time, while PID completes: lanes empty at different
+    // times and start the next runs.
+    let s = builtin("realistic-scenario-2", 26.0);
+    let spec = s.montecarlo.clone().unwrap_or_default();
+    let controllers = vec!["ftaftsmc".to_string(), "pid".to_string()];
+    let alone = rows(&s, &spec, &controllers, 7, 1, 1);
+    let ended_early = alone.iter().filter(|r| r.starts_with("ended-early")).count();
+    assert!(ended_early > 1 && ended_early < alone.len(), "{ended_early} of {} ended early", alone.len());
+    for lanes in [2, 4, 8] {
+        assert_eq!(rows(&s, &spec, &controllers, 7, lanes, 1), alone, "{lanes} lanes");
+    }
+}
+
+#[test]
+fn an_unknown_lane_count_is_refused() {
+    let s = builtin("paper-scenario-1", 1.0);
+    let err = run_batch_lanes(&s, &MonteCarloSpec::default(), &["pid".into()], 0..1, 1, &|_| {}, None, 3)
+        .expect_err("3 lanes");
+    assert!(err.contains("lanes = 3") && err.contains("[1, 2, 4, 8]"), "{err}");
+}
