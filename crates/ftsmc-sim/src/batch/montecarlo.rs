@@ -162,8 +162,13 @@ pub fn run_batch_lanes(
 }
 
 /// Fly controller `name` through each of `scenarios` (in order), `lanes`
-/// at a time.
-fn fly(name: &str, scenarios: &[&Scenario], lanes: usize, options: RunOptions<'_>) -> Vec<RunOutput> {
+/// at a time (one of [`LANE_COUNTS`]; scenarios that may not share lanes,
+/// [`crate::registry::lane_compatible`], fly one by one), on this thread.
+/// Each output has exactly the bits of the flight flown alone.
+///
+/// # Panics
+/// If `name` is not a declared controller ([`crate::registry::check_name`]).
+pub fn fly(name: &str, scenarios: &[&Scenario], lanes: usize, options: RunOptions<'_>) -> Vec<RunOutput> {
     let one = |s: &&Scenario| crate::registry::run(name, s, options).expect("controller names checked above");
     let together = scenarios.iter().all(|s| crate::registry::lane_compatible(scenarios[0], s));
     match lanes {

@@ -24,7 +24,7 @@ pub mod space;
 use rayon::prelude::*;
 use serde::Serialize;
 
-use crate::batch::montecarlo::{run_seed, MonteCarloSpec};
+use crate::batch::montecarlo::{run_seed, MonteCarloSpec, DEFAULT_LANES};
 use crate::run::RunOptions;
 use crate::scenario::tune_section::TuneSection;
 use crate::scenario::Scenario;
@@ -129,8 +129,9 @@ impl TuneResult {
 }
 
 /// Fly `controller` on every scenario of `scenarios` with the Monte Carlo
-/// draws `indices` of `spec` (seeded by `master`), all flights in parallel;
-/// the flights of scenario k in index order at position k.
+/// draws `indices` of `spec` (seeded by `master`), all flights in parallel,
+/// [`DEFAULT_LANES`] side by side ([`crate::batch::montecarlo::fly`]); the
+/// flights of scenario k in index order at position k.
 fn fly(
     scenarios: &[Scenario],
     spec: &MonteCarloSpec,
@@ -139,16 +140,24 @@ fn fly(
     controller: &str,
     progress: &(dyn Fn(u64) + Sync),
 ) -> Result<Vec<Vec<Flight>>, String> {
-    let pairs: Vec<(usize, u64)> = (0..scenarios.len()).flat_map(|k| indices.iter().map(move |&i| (k, i))).collect();
-    let flights: Vec<Flight> = pairs
+    crate::registry::check_name(controller)?;
+    // Work items: a scenario and a run of its indices, a few lanes' worth each.
+    let per_task = DEFAULT_LANES * 2;
+    let tasks: Vec<(usize, &[u64])> =
+        (0..scenarios.len()).flat_map(|k| indices.chunks(per_task.max(1)).map(move |c| (k, c))).collect();
+    let options = RunOptions { record: false, ..Default::default() };
+    let flown: Vec<Vec<Flight>> = tasks
         .par_iter()
-        .map(|&(k, index)| {
-            let (s, _, _) = spec.sample(&scenarios[k], master, index);
-            let out = crate::registry::run(controller, &s, RunOptions { record: false, ..Default::default() })?;
-            progress(1);
-            Ok(Flight::of(&out))
+        .map(|&(k, chunk)| {
+            let sampled: Vec<Scenario> =
+                chunk.iter().map(|&index| spec.sample(&scenarios[k], master, index).0).collect();
+            let refs: Vec<&Scenario> = sampled.iter().collect();
+            let outs = crate::batch::montecarlo::fly(controller, &refs, DEFAULT_LANES, options);
+            progress(outs.len() as u64);
+            outs.iter().map(Flight::of).collect()
         })
-        .collect::<Result<_, String>>()?;
+        .collect();
+    let flights: Vec<Flight> = flown.into_iter().flatten().collect();
     Ok(flights.chunks(indices.len().max(1)).map(|c| c.to_vec()).collect())
 }
 
