@@ -62,11 +62,14 @@
 //!            ftaftsmc.rs        `ftaftsmc`, `ftaftsmc-no-mass` (`[ftaftsmc]`)
 //!            ranftsmc.rs        `ranftsmc` (`[ranftsmc]`)
 //!            tsm_sta.rs         `tsm-sta` (`[tsm-sta]`)
+//!            per_lane.rs        any one-flight controller on lanes (one controller per lane)
+//!            on_isa.rs          a controller's updates on the instruction set picked at run time
 //! floor 1  axes.rs              AxisSet and other per-axis containers
 //!          signal/              time signals with analytic derivatives
 //!            waypoints.rs       quintic waypoint splines
 //!          limits.rs            cost limits and their arithmetic
 //!          text.rs              values in error messages, exact-length TOML arrays
+//!          isa.rs               the instruction set of the lane kernels, picked at run time
 //! ```
 #![warn(missing_docs)]
 
@@ -78,6 +81,7 @@ pub mod controllers;
 pub mod envelope;
 pub mod environment;
 pub mod gym;
+pub mod isa;
 pub mod limits;
 pub mod metrics;
 pub mod registry;

@@ -17,6 +17,7 @@ const FLOORS: &[(&str, u32)] = &[
     ("text", 1),
     ("axes", 1),
     ("limits", 1),
+    ("isa", 1),
     ("signal", 1),
     ("vehicle", 2),
     ("actuators", 2),

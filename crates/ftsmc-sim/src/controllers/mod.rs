@@ -80,6 +80,7 @@ use crate::axes::AxisSet;
 use crate::text::show;
 
 pub mod ftaftsmc;
+pub mod on_isa;
 pub mod per_lane;
 pub mod pid;
 pub mod ranftsmc;
