@@ -211,6 +211,52 @@ mod tests {
         }
     }
 
+    /// Every function on `Lanes<4>` gives, lane by lane, the bits of the
+    /// `f64` function on that lane's arguments (angles over several turns,
+    /// at gimbal lock, `cos θ` of either sign near 0, NaN).
+    #[test]
+    fn lanes_give_the_bits_of_one_flight() {
+        use crate::lanes::{Lanes, Lanewise};
+        let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<std::vec::Vec<_>>();
+        let samples = [0.3, -2.9, 7.5, core::f64::consts::FRAC_PI_2, -1e-7, 0.0, f64::NAN, 1e-300];
+        for k in 0..samples.len() {
+            let pick = |j: usize| Lanes::<4>::from_fn(|i| samples[(k + 3 * i + j) % samples.len()]);
+            let e = [pick(0), pick(1), pick(2)];
+            let w = [pick(3), pick(4) * 5.0, pick(5)];
+            let q = quaternion_from_euler(&e);
+            for i in 0..4 {
+                let (ei, wi, qi) = (e.get_lane(i), w.get_lane(i), q.get_lane(i));
+                assert_eq!(bits(&qi), bits(&quaternion_from_euler(&ei)));
+                assert_eq!(
+                    bits(rotation_from_euler(&e).get_lane(i).as_flattened()),
+                    bits(rotation_from_euler(&ei).as_flattened())
+                );
+                assert_eq!(
+                    bits(rotation_from_quaternion(&q).get_lane(i).as_flattened()),
+                    bits(rotation_from_quaternion(&qi).as_flattened())
+                );
+                let r = rotation_from_euler(&e);
+                assert_eq!(bits(&euler_from_rotation(&r).get_lane(i)), bits(&euler_from_rotation(&r.get_lane(i))));
+                assert_eq!(
+                    bits(&roll_pitch_from_rotation(&r).get_lane(i)),
+                    bits(&roll_pitch_from_rotation(&r.get_lane(i)))
+                );
+                assert_eq!(bits(&euler_from_quaternion(&q).get_lane(i)), bits(&euler_from_quaternion(&qi)));
+                assert_eq!(
+                    bits(&body_rates_from_euler_rates(&e, &w).get_lane(i)),
+                    bits(&body_rates_from_euler_rates(&ei, &wi))
+                );
+                assert_eq!(
+                    bits(&euler_rates_from_body_rates(&e, &w).get_lane(i)),
+                    bits(&euler_rates_from_body_rates(&ei, &wi))
+                );
+                assert_eq!(bits(&full_angle(half_angle(e[1])).get_lane(i)), bits(&full_angle(half_angle(ei[1]))));
+                let c = e[1] * 1e-6;
+                assert_eq!(gimbal_clamped_cos(c).get_lane(i).to_bits(), gimbal_clamped_cos(c.get_lane(i)).to_bits());
+            }
+        }
+    }
+
     #[test]
     fn euler_rates_stay_finite_at_gimbal_lock() {
         let w = euler_rates_from_body_rates(&[0.2, core::f64::consts::FRAC_PI_2, 0.0], &[0.1, 0.2, 0.3]);

@@ -894,6 +894,126 @@ mod tests {
         PidController::new(QuadrotorParams::default(), PidGains::default()).unwrap()
     }
 
+    use crate::lanes::{LaneMask, Lanes, Lanewise};
+    use crate::setpoint::lane_tests::{dt_at, flight_inputs, telemetry_bits, Lcg, TELEMETRY_VALUES};
+
+    /// Number of per-lane state values [`state_bits`] returns.
+    const STATE_VALUES: usize = 7 * 3 + 2;
+
+    /// The bits of every per-lane state of a one-flight controller (the
+    /// heading cache, whose value is always `sin_cos` of its key, aside).
+    fn state_bits(c: &PidController) -> ([u64; STATE_VALUES], [u64; TELEMETRY_VALUES]) {
+        let mut out = [0u64; STATE_VALUES];
+        let vectors = [
+            c.velocity_integral,
+            c.rate_integral,
+            c.previous_velocity,
+            c.previous_rates,
+            c.velocity_derivative,
+            c.rate_derivative,
+            c.last_torque,
+        ];
+        for (slot, v) in out.iter_mut().zip(vectors.iter().flatten()) {
+            *slot = v.to_bits();
+        }
+        out[21] = u64::from(c.initialised);
+        out[22] = u64::from(c.actuator_saturated);
+        (out, telemetry_bits(&c.telemetry))
+    }
+
+    /// Lane `i` of a lanes controller as a one-flight controller.
+    fn lane_of<const N: usize>(c: &PidController<Lanes<N>>, i: usize) -> PidController {
+        PidController {
+            model: c.model,
+            gains: c.gains,
+            velocity_integral: c.velocity_integral.get_lane(i),
+            rate_integral: c.rate_integral.get_lane(i),
+            previous_velocity: c.previous_velocity.get_lane(i),
+            previous_rates: c.previous_rates.get_lane(i),
+            velocity_derivative: c.velocity_derivative.get_lane(i),
+            rate_derivative: c.rate_derivative.get_lane(i),
+            initialised: c.initialised.get_lane(i),
+            last_torque: c.last_torque.get_lane(i),
+            actuator_saturated: c.actuator_saturated.get_lane(i),
+            telemetry: c.telemetry.get_lane(i),
+            alphas: c.alphas,
+            alpha_dt: c.alpha_dt,
+            tilt_limit: c.tilt_limit,
+            yaw_sin_cos: HeadingSinCos::new(),
+        }
+    }
+
+    /// `N` flights on `Lanes<N>` against `N` one-flight controllers fed the
+    /// same inputs ([`flight_inputs`]: lanes at the reference, beyond the
+    /// velocity, tilt and thrust limits, on the thrust floor with the
+    /// vertical anti-windup holding, upside down with the thrust axis
+    /// reversed; non-finite inputs in single lanes and in all; actuator
+    /// saturation per lane; lanes reset mid-run): every command, telemetry
+    /// value and state, lane by lane and bit for bit, at every step.
+    fn lanes_fly_as_scalars<const N: usize>(gains: PidGains, with_body: bool) {
+        let model = QuadrotorParams::default();
+        let mut lanes = PidController::<Lanes<N>>::splat(model, gains).unwrap();
+        let mut scalars: [PidController; N] = core::array::from_fn(|_| PidController::new(model, gains).unwrap());
+        let mut rng = Lcg(0x5eed_0000 + 2 * N as u64 + u64::from(with_body));
+        let (mut floored, mut limited, mut reversed) = (0, 0, 0);
+        for step in 0..400 {
+            for lane in [0, N - 1] {
+                if (step == 150 && lane == 0) || (step == 151 && lane == N - 1) {
+                    scalars[lane].reset();
+                    lanes.reset_lane(lane);
+                }
+            }
+            let dt = dt_at(step);
+            let mut m = Measurement::<Lanes<N>>::default();
+            let mut r = Reference::<Lanes<N>>::default();
+            let mut saturated = LaneMask::<N>::default();
+            let mut want = [Command::default(); N];
+            for (i, c) in scalars.iter_mut().enumerate() {
+                let (mi, ri, si) = flight_inputs(&mut rng, i, step, with_body);
+                m.put_lane(i, mi);
+                r.put_lane(i, ri);
+                saturated.put_lane(i, si);
+                c.actuator_feedback(si);
+                want[i] = if step % 2 == 0 { c.update(&mi.euler, &ri, dt) } else { c.update_measured(&mi, &ri, dt) };
+            }
+            lanes.actuator_feedback(saturated);
+            let got = if step % 2 == 0 { lanes.update(&m.euler, &r, dt) } else { lanes.update_measured(&m, &r, dt) };
+            for (i, c) in scalars.iter().enumerate() {
+                let g = got.get_lane(i);
+                assert_eq!(g.thrust.to_bits(), want[i].thrust.to_bits(), "thrust, lane {i}, step {step}");
+                for a in 0..3 {
+                    assert_eq!(g.torque[a].to_bits(), want[i].torque[a].to_bits(), "torque {a}, lane {i}, step {step}");
+                }
+                assert_eq!(state_bits(&lane_of(&lanes, i)), state_bits(c), "states, lane {i}, step {step}");
+                let t = c.telemetry();
+                floored += usize::from(want[i].thrust.is_finite() && t.nominal_thrust < gains.thrust_min);
+                limited += usize::from(want[i].thrust.is_finite() && t.thrust_limited && i % 5 == 1);
+                // Lane 3 on even steps: upside down, demanded thrust axis exactly vertical.
+                reversed += usize::from(
+                    i % 5 == 3 && step % 2 == 0 && want[i].thrust.is_finite() && t.commanded_acceleration[0] == 0.0,
+                );
+            }
+        }
+        // The branches the inputs were built for were taken.
+        assert!(floored > 100 && limited > 100 && reversed > 100, "{floored} {limited} {reversed}");
+        let r = rotation_from_euler(&[core::f64::consts::PI, 0.0, 0.0]);
+        let tilt = quat_between(&[r[0][2], r[1][2], r[2][2]], &[0.0, 0.0, 1.0]);
+        assert!(tilt[1].abs() > 1.0 - 1e-5 || tilt[2].abs() > 1.0 - 1e-5, "{tilt:?}");
+    }
+
+    #[test]
+    fn four_lanes_fly_as_four_scalar_controllers() {
+        lanes_fly_as_scalars::<4>(PidGains::default(), false);
+        lanes_fly_as_scalars::<4>(PidGains::default(), true);
+        lanes_fly_as_scalars::<4>(PidGains { anti_windup: false, ..PidGains::default() }, true);
+    }
+
+    #[test]
+    fn eight_lanes_fly_as_eight_scalar_controllers() {
+        lanes_fly_as_scalars::<8>(PidGains::default(), false);
+        lanes_fly_as_scalars::<8>(PidGains::default(), true);
+    }
+
     #[test]
     fn hover_at_the_reference_gives_weight_zero_torque_and_no_integration() {
         let p = QuadrotorParams::default();

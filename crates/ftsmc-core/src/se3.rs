@@ -428,6 +428,68 @@ mod tests {
         Se3Controller::new(QuadrotorParams::default(), Se3Gains::default()).unwrap()
     }
 
+    use crate::lanes::{Lanes, Lanewise};
+    use crate::setpoint::lane_tests::{dt_at, flight_inputs, telemetry_bits, Lcg};
+
+    /// `N` flights on `Lanes<N>` against `N` one-flight controllers fed the
+    /// same inputs ([`flight_inputs`]: lanes at the reference, beyond the
+    /// tilt limit and the thrust cap, on the thrust floor, upside down;
+    /// non-finite inputs in single lanes and in all; lanes reset mid-run):
+    /// every command and telemetry value (the law's only state), lane by
+    /// lane and bit for bit, at every step.
+    fn lanes_fly_as_scalars<const N: usize>(with_body: bool) {
+        let model = QuadrotorParams::default();
+        let gains = Se3Gains::default();
+        let mut lanes = Se3Controller::<Lanes<N>>::splat(model, gains).unwrap();
+        let mut scalars: [Se3Controller; N] = core::array::from_fn(|_| Se3Controller::new(model, gains).unwrap());
+        let mut rng = Lcg(0x5e3_0000 + 2 * N as u64 + u64::from(with_body));
+        let (mut floored, mut capped, mut tilted) = (0, 0, 0);
+        for step in 0..400 {
+            if step == 150 {
+                scalars[0].reset();
+                lanes.reset_lane(0);
+            }
+            let dt = dt_at(step);
+            let mut m = Measurement::<Lanes<N>>::default();
+            let mut r = Reference::<Lanes<N>>::default();
+            let mut want = [Command::default(); N];
+            for (i, c) in scalars.iter_mut().enumerate() {
+                let (mi, ri, _) = flight_inputs(&mut rng, i, step, with_body);
+                m.put_lane(i, mi);
+                r.put_lane(i, ri);
+                want[i] = if step % 2 == 0 { c.update(&mi.euler, &ri, dt) } else { c.update_measured(&mi, &ri, dt) };
+            }
+            let got = if step % 2 == 0 { lanes.update(&m.euler, &r, dt) } else { lanes.update_measured(&m, &r, dt) };
+            for (i, c) in scalars.iter().enumerate() {
+                let g = got.get_lane(i);
+                assert_eq!(g.thrust.to_bits(), want[i].thrust.to_bits(), "thrust, lane {i}, step {step}");
+                for a in 0..3 {
+                    assert_eq!(g.torque[a].to_bits(), want[i].torque[a].to_bits(), "torque {a}, lane {i}, step {step}");
+                }
+                let t = c.telemetry();
+                assert_eq!(telemetry_bits(&lanes.telemetry().get_lane(i)), telemetry_bits(t), "lane {i}, step {step}");
+                let finite = want[i].thrust.is_finite();
+                floored += usize::from(finite && want[i].thrust == gains.min_thrust);
+                capped += usize::from(finite && want[i].thrust == gains.max_thrust);
+                tilted += usize::from(finite && t.thrust_limited && want[i].thrust != gains.max_thrust);
+            }
+        }
+        // The branches the inputs were built for were taken.
+        assert!(floored > 50 && capped > 50 && tilted > 50, "{floored} {capped} {tilted}");
+    }
+
+    #[test]
+    fn four_lanes_fly_as_four_scalar_controllers() {
+        lanes_fly_as_scalars::<4>(false);
+        lanes_fly_as_scalars::<4>(true);
+    }
+
+    #[test]
+    fn eight_lanes_fly_as_eight_scalar_controllers() {
+        lanes_fly_as_scalars::<8>(false);
+        lanes_fly_as_scalars::<8>(true);
+    }
+
     #[test]
     fn hover_at_the_reference_gives_weight_and_zero_torque() {
         let p = QuadrotorParams::default();
