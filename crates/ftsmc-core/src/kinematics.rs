@@ -5,16 +5,20 @@
 //! laws, the simulator's truth model and Python take these from (PID and
 //! SE(3) use them to leave the Euler interface); built on [`crate::math`]'s
 //! `libm` trigonometry, so bit-identical on every platform.
+//!
+//! Every function is generic over the number type ([`crate::lanes`]): `f64`
+//! for one flight, lanes for several side by side, the same bits per lane.
 
-use crate::math::{asin, atan2, sin_cos, Mat3, Vec3};
+use crate::lanes::Real;
+use crate::math::{Mat3, Vec3};
 
 /// Body-to-world rotation `R = R_z(ψ) R_y(θ) R_x(φ)` of Z-Y-X Euler angles
 /// `[φ, θ, ψ]` (rad); its third column `R e₃` is the thrust direction of
 /// paper Eq. 1 (`cφ sθ cψ + sφ sψ`, `cφ sθ sψ − sφ cψ`, `cφ cθ`).
-pub fn rotation_from_euler(euler: &Vec3) -> Mat3 {
-    let (sf, cf) = sin_cos(euler[0]);
-    let (st, ct) = sin_cos(euler[1]);
-    let (ss, cs) = sin_cos(euler[2]);
+pub fn rotation_from_euler<R: Real>(euler: &Vec3<R>) -> Mat3<R> {
+    let (sf, cf) = euler[0].sin_cos();
+    let (st, ct) = euler[1].sin_cos();
+    let (ss, cs) = euler[2].sin_cos();
     [
         [cs * ct, cs * st * sf - ss * cf, cs * st * cf + ss * sf],
         [ss * ct, ss * st * sf + cs * cf, ss * st * cf - cs * sf],
@@ -25,28 +29,28 @@ pub fn rotation_from_euler(euler: &Vec3) -> Mat3 {
 /// Z-Y-X Euler angles `[φ, θ, ψ]` (rad) of a rotation matrix: φ, ψ in
 /// `[−π, π]`, θ in `[−π/2, π/2]` (inverse of [`rotation_from_euler`] away
 /// from θ = ±π/2).
-pub fn euler_from_rotation(r: &Mat3) -> Vec3 {
+pub fn euler_from_rotation<R: Real>(r: &Mat3<R>) -> Vec3<R> {
     // `saturate`, not `f64::clamp`: no panic path, NaN passes through.
-    let s = crate::law::saturate(-r[2][0], 1.0);
-    [atan2(r[2][1], r[2][2]), asin(s), atan2(r[1][0], r[0][0])]
+    let s = crate::law::saturate(-r[2][0], R::splat(1.0));
+    [r[2][1].atan2(r[2][2]), s.asin(), r[1][0].atan2(r[0][0])]
 }
 
 /// Roll and pitch `[φ, θ]` (rad) of a rotation matrix: the first two
 /// components of [`euler_from_rotation`], same bits, without the yaw's
 /// `atan2` (for the controllers that report only the demanded tilt).
 #[inline]
-pub fn roll_pitch_from_rotation(r: &Mat3) -> [f64; 2] {
-    let s = crate::law::saturate(-r[2][0], 1.0);
-    [atan2(r[2][1], r[2][2]), asin(s)]
+pub fn roll_pitch_from_rotation<R: Real>(r: &Mat3<R>) -> [R; 2] {
+    let s = crate::law::saturate(-r[2][0], R::splat(1.0));
+    [r[2][1].atan2(r[2][2]), s.asin()]
 }
 
 /// Body rates `Ω = W(φ, θ) η̇` (rad/s) from Z-Y-X Euler rates `η̇` at
 /// `euler`: `p = φ̇ − ψ̇ sθ`, `q = θ̇ cφ + ψ̇ cθ sφ`, `r = −θ̇ sφ + ψ̇ cθ cφ`.
 /// Exact, defined everywhere.
 #[inline]
-pub fn body_rates_from_euler_rates(euler: &Vec3, rates: &Vec3) -> Vec3 {
-    let (sf, cf) = sin_cos(euler[0]);
-    let (st, ct) = sin_cos(euler[1]);
+pub fn body_rates_from_euler_rates<R: Real>(euler: &Vec3<R>, rates: &Vec3<R>) -> Vec3<R> {
+    let (sf, cf) = euler[0].sin_cos();
+    let (st, ct) = euler[1].sin_cos();
     let [df, dt, ds] = *rates;
     [df - ds * st, dt * cf + ds * ct * sf, -dt * sf + ds * ct * cf]
 }
@@ -55,15 +59,16 @@ pub fn body_rates_from_euler_rates(euler: &Vec3, rates: &Vec3) -> Vec3 {
 /// `q = q_z(ψ) ⊗ q_y(θ) ⊗ q_x(φ)`, so that
 /// [`rotation_from_quaternion`]`(q)` = [`rotation_from_euler`]`(euler)`.
 #[inline]
-pub fn quaternion_from_euler(euler: &Vec3) -> [f64; 4] {
+pub fn quaternion_from_euler<R: Real>(euler: &Vec3<R>) -> [R; 4] {
     quaternion_from_half_angles(half_angle(euler[0]), half_angle(euler[1]), half_angle(euler[2]))
 }
 
 /// `[sin(a/2), cos(a/2)]` of an angle `a` (rad), the inputs of
 /// [`quaternion_from_half_angles`] and [`full_angle`].
 #[inline]
-pub fn half_angle(a: f64) -> [f64; 2] {
-    let (s, c) = sin_cos(0.5 * a);
+pub fn half_angle<R: Real>(a: R) -> [R; 2] {
+    // `a · 0.5`: the product `0.5 a` with its operands swapped (same bits).
+    let (s, c) = (a * 0.5).sin_cos();
     [s, c]
 }
 
@@ -71,7 +76,7 @@ pub fn half_angle(a: f64) -> [f64; 2] {
 /// `[sin(φ/2), cos(φ/2)]`, `[sin(θ/2), cos(θ/2)]`, `[sin(ψ/2), cos(ψ/2)]`
 /// ([`half_angle`]).
 #[inline]
-pub fn quaternion_from_half_angles([sr, cr]: [f64; 2], [sp, cp]: [f64; 2], [sy, cy]: [f64; 2]) -> [f64; 4] {
+pub fn quaternion_from_half_angles<R: Real>([sr, cr]: [R; 2], [sp, cp]: [R; 2], [sy, cy]: [R; 2]) -> [R; 4] {
     [cr * cp * cy + sr * sp * sy, sr * cp * cy - cr * sp * sy, cr * sp * cy + sr * cp * sy, cr * cp * sy - sr * sp * cy]
 }
 
@@ -81,45 +86,43 @@ pub fn quaternion_from_half_angles([sr, cr]: [f64; 2], [sp, cp]: [f64; 2], [sy, 
 /// that needs both its quaternion and its Euler rates takes the half
 /// angles once).
 #[inline]
-pub fn full_angle([s, c]: [f64; 2]) -> [f64; 2] {
-    [2.0 * s * c, (c - s) * (c + s)]
+pub fn full_angle<R: Real>([s, c]: [R; 2]) -> [R; 2] {
+    [s * 2.0 * c, (c - s) * (c + s)]
 }
 
 /// `cos θ` clamped away from 0 to `±`[`GIMBAL_LOCK_COS`] (the sign of
-/// `cos θ`; positive at 0), as [`euler_rates_from_body_rates`] divides by it.
+/// `cos θ`; positive at 0 and for NaN), as [`euler_rates_from_body_rates`]
+/// divides by it.
 #[inline]
-pub fn gimbal_clamped_cos(c: f64) -> f64 {
-    if c.abs() >= GIMBAL_LOCK_COS {
-        c
-    } else if c < 0.0 {
-        -GIMBAL_LOCK_COS
-    } else {
-        GIMBAL_LOCK_COS
-    }
+pub fn gimbal_clamped_cos<R: Real>(c: R) -> R {
+    let limit = R::splat(GIMBAL_LOCK_COS);
+    R::select(c.abs().ge(limit), c, R::select(c.lt(R::splat(0.0)), -limit, limit))
 }
 
 /// Body-to-world rotation matrix of a unit quaternion `[w, x, y, z]`
 /// (`v_w = R v_b`; no trigonometry).
 #[inline]
-pub fn rotation_from_quaternion(q: &[f64; 4]) -> Mat3 {
+pub fn rotation_from_quaternion<R: Real>(q: &[R; 4]) -> Mat3<R> {
     let [w, x, y, z] = *q;
+    let one = R::splat(1.0);
     [
-        [1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y - w * z), 2.0 * (x * z + w * y)],
-        [2.0 * (x * y + w * z), 1.0 - 2.0 * (x * x + z * z), 2.0 * (y * z - w * x)],
-        [2.0 * (x * z - w * y), 2.0 * (y * z + w * x), 1.0 - 2.0 * (x * x + y * y)],
+        [one - (y * y + z * z) * 2.0, (x * y - w * z) * 2.0, (x * z + w * y) * 2.0],
+        [(x * y + w * z) * 2.0, one - (x * x + z * z) * 2.0, (y * z - w * x) * 2.0],
+        [(x * z - w * y) * 2.0, (y * z + w * x) * 2.0, one - (x * x + y * y) * 2.0],
     ]
 }
 
 /// Z-Y-X Euler angles `[φ, θ, ψ]` (rad) of a unit quaternion: φ, ψ in
 /// `[−π, π]`, θ in `[−π/2, π/2]`; `q` and `−q` give the same angles. At
 /// θ = ±π/2 only φ ∓ ψ is defined.
-pub fn euler_from_quaternion(q: &[f64; 4]) -> Vec3 {
+pub fn euler_from_quaternion<R: Real>(q: &[R; 4]) -> Vec3<R> {
     let [w, x, y, z] = *q;
-    let s = crate::law::saturate(2.0 * (w * y - x * z), 1.0);
+    let one = R::splat(1.0);
+    let s = crate::law::saturate((w * y - x * z) * 2.0, one);
     [
-        atan2(2.0 * (w * x + y * z), 1.0 - 2.0 * (x * x + y * y)),
-        asin(s),
-        atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z)),
+        ((w * x + y * z) * 2.0).atan2(one - (x * x + y * y) * 2.0),
+        s.asin(),
+        ((w * z + x * y) * 2.0).atan2(one - (y * y + z * z) * 2.0),
     ]
 }
 
@@ -133,9 +136,9 @@ pub const GIMBAL_LOCK_COS: f64 = 1e-6;
 /// `ψ̇ = (q sφ + r cφ)/cθ`, with `cos θ` clamped to `±`[`GIMBAL_LOCK_COS`]
 /// (the sign of cos θ; positive at 0) near the singularity.
 #[inline]
-pub fn euler_rates_from_body_rates(euler: &Vec3, body_rates: &Vec3) -> Vec3 {
-    let (sf, cf) = sin_cos(euler[0]);
-    let (st, c) = sin_cos(euler[1]);
+pub fn euler_rates_from_body_rates<R: Real>(euler: &Vec3<R>, body_rates: &Vec3<R>) -> Vec3<R> {
+    let (sf, cf) = euler[0].sin_cos();
+    let (st, c) = euler[1].sin_cos();
     let c = gimbal_clamped_cos(c);
     euler_rates_from_body_rates_with([sf, cf], [st, c], body_rates)
 }
@@ -145,7 +148,7 @@ pub fn euler_rates_from_body_rates(euler: &Vec3, body_rates: &Vec3) -> Vec3 {
 /// reads them off its quaternion); `cθ` must be away from 0 (the caller's
 /// clamp or check).
 #[inline]
-pub fn euler_rates_from_body_rates_with([sf, cf]: [f64; 2], [st, c]: [f64; 2], body_rates: &Vec3) -> Vec3 {
+pub fn euler_rates_from_body_rates_with<R: Real>([sf, cf]: [R; 2], [st, c]: [R; 2], body_rates: &Vec3<R>) -> Vec3<R> {
     let [p, q, r] = *body_rates;
     let a = q * sf + r * cf;
     [p + a * st / c, q * cf - r * sf, a / c]
@@ -154,7 +157,7 @@ pub fn euler_rates_from_body_rates_with([sf, cf]: [f64; 2], [st, c]: [f64; 2], b
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::math::{cross, mat_t_mat, mat_t_vec, mat_vec, norm};
+    use crate::math::{cross, mat_t_mat, mat_t_vec, mat_vec, norm, sin_cos};
 
     use proptest::prelude::*;
 
@@ -204,6 +207,52 @@ mod tests {
             let back = euler_rates_from_body_rates(&e, &body);
             for i in 0..3 {
                 prop_assert!((back[i] - rates[i]).abs() < 1e-9 * (1.0 + rates[i].abs()) / crate::math::cos(theta));
+            }
+        }
+    }
+
+    /// Every function on `Lanes<4>` gives, lane by lane, the bits of the
+    /// `f64` function on that lane's arguments (angles over several turns,
+    /// at gimbal lock, `cos θ` of either sign near 0, NaN).
+    #[test]
+    fn lanes_give_the_bits_of_one_flight() {
+        use crate::lanes::{Lanes, Lanewise};
+        let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<std::vec::Vec<_>>();
+        let samples = [0.3, -2.9, 7.5, core::f64::consts::FRAC_PI_2, -1e-7, 0.0, f64::NAN, 1e-300];
+        for k in 0..samples.len() {
+            let pick = |j: usize| Lanes::<4>::from_fn(|i| samples[(k + 3 * i + j) % samples.len()]);
+            let e = [pick(0), pick(1), pick(2)];
+            let w = [pick(3), pick(4) * 5.0, pick(5)];
+            let q = quaternion_from_euler(&e);
+            for i in 0..4 {
+                let (ei, wi, qi) = (e.get_lane(i), w.get_lane(i), q.get_lane(i));
+                assert_eq!(bits(&qi), bits(&quaternion_from_euler(&ei)));
+                assert_eq!(
+                    bits(rotation_from_euler(&e).get_lane(i).as_flattened()),
+                    bits(rotation_from_euler(&ei).as_flattened())
+                );
+                assert_eq!(
+                    bits(rotation_from_quaternion(&q).get_lane(i).as_flattened()),
+                    bits(rotation_from_quaternion(&qi).as_flattened())
+                );
+                let r = rotation_from_euler(&e);
+                assert_eq!(bits(&euler_from_rotation(&r).get_lane(i)), bits(&euler_from_rotation(&r.get_lane(i))));
+                assert_eq!(
+                    bits(&roll_pitch_from_rotation(&r).get_lane(i)),
+                    bits(&roll_pitch_from_rotation(&r.get_lane(i)))
+                );
+                assert_eq!(bits(&euler_from_quaternion(&q).get_lane(i)), bits(&euler_from_quaternion(&qi)));
+                assert_eq!(
+                    bits(&body_rates_from_euler_rates(&e, &w).get_lane(i)),
+                    bits(&body_rates_from_euler_rates(&ei, &wi))
+                );
+                assert_eq!(
+                    bits(&euler_rates_from_body_rates(&e, &w).get_lane(i)),
+                    bits(&euler_rates_from_body_rates(&ei, &wi))
+                );
+                assert_eq!(bits(&full_angle(half_angle(e[1])).get_lane(i)), bits(&full_angle(half_angle(ei[1]))));
+                let c = e[1] * 1e-6;
+                assert_eq!(gimbal_clamped_cos(c).get_lane(i).to_bits(), gimbal_clamped_cos(c.get_lane(i)).to_bits());
             }
         }
     }

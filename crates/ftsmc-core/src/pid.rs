@@ -100,14 +100,15 @@ use crate::controller::{Controller, Telemetry};
 use crate::kinematics::{
     body_rates_from_euler_rates, roll_pitch_from_rotation, rotation_from_euler, rotation_from_quaternion,
 };
+use crate::lanes::{branch, Blend, Lanewise, Mask, Real};
 use crate::law::{
     check_gain, check_gain_or_zero, check_left_open, check_open, saturate, GainError, INPUT_LIMIT, MAX_ESTIMATES,
     STATE_LIMIT,
 };
-use crate::math::{acos, asin, cos, cross, dot, exp, mat_t_vec, norm, sin, sqrt, Mat3, SinCosCache, Vec3};
+use crate::math::{cross, dot, exp, mat_t_vec, norm, Mat3, Vec3};
 use crate::measured::{BodyAttitude, Measurement};
 use crate::model::{Command, QuadState, QuadrotorParams, Reference};
-use crate::setpoint::{reference_finite, TiltLimit};
+use crate::setpoint::{reference_finite, HeadingSinCos, TiltLimit};
 
 /// PX4 `MPC_THR_HOVER` default: hover at half the maximum thrust (T/W = 2).
 pub const PX4_HOVER_THRUST: f64 = 0.5;
@@ -316,9 +317,10 @@ impl PidGains {
 }
 
 /// Unit quaternion `[w, x, y, z]` (Hamilton, body-to-world).
-type Quat = [f64; 4];
+type Quat<R = f64> = [R; 4];
 
-fn quat_mul(a: &Quat, b: &Quat) -> Quat {
+/// Hamilton product `a ⊗ b`.
+fn quat_mul<R: Real>(a: &Quat<R>, b: &Quat<R>) -> Quat<R> {
     [
         a[0] * b[0] - a[1] * b[1] - a[2] * b[2] - a[3] * b[3],
         a[0] * b[1] + a[1] * b[0] + a[2] * b[3] - a[3] * b[2],
@@ -327,96 +329,134 @@ fn quat_mul(a: &Quat, b: &Quat) -> Quat {
     ]
 }
 
-fn quat_conj(q: &Quat) -> Quat {
+/// Conjugate `q*` (the inverse of a unit quaternion).
+fn quat_conj<R: Real>(q: &Quat<R>) -> Quat<R> {
     [q[0], -q[1], -q[2], -q[3]]
 }
 
-fn quat_normalise(q: Quat) -> Quat {
-    let n = sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
-    if n > 0.0 {
-        [q[0] / n, q[1] / n, q[2] / n, q[3] / n]
-    } else {
-        [1.0, 0.0, 0.0, 0.0]
-    }
+/// `q / ‖q‖`; the identity where `‖q‖` is 0 (or NaN).
+fn quat_normalise<R: Real>(q: Quat<R>) -> Quat<R> {
+    let n = (q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]).sqrt();
+    branch(n.gt(R::splat(0.0)), || [q[0] / n, q[1] / n, q[2] / n, q[3] / n], || unit_quat())
+}
+
+/// The identity rotation `[1, 0, 0, 0]`.
+fn unit_quat<R: Real>() -> Quat<R> {
+    let zero = R::splat(0.0);
+    [R::splat(1.0), zero, zero, zero]
 }
 
 /// `q` or `−q`, whichever has `w >= 0` (the shorter rotation).
-fn canonical(q: Quat) -> Quat {
-    if q[0] < 0.0 {
-        [-q[0], -q[1], -q[2], -q[3]]
-    } else {
-        q
-    }
+fn canonical<R: Real>(q: Quat<R>) -> Quat<R> {
+    branch(q[0].lt(R::splat(0.0)), || [-q[0], -q[1], -q[2], -q[3]], || q)
 }
 
 /// Quaternion of a rotation matrix (Shepperd's method: largest pivot).
-fn quat_from_rotation(r: &Mat3) -> Quat {
+fn quat_from_rotation<R: Real>(r: &Mat3<R>) -> Quat<R> {
+    let zero = R::splat(0.0);
+    let one = R::splat(1.0);
     let trace = r[0][0] + r[1][1] + r[2][2];
-    let q = if trace > 0.0 {
-        let s = 2.0 * sqrt(1.0 + trace);
-        [0.25 * s, (r[2][1] - r[1][2]) / s, (r[0][2] - r[2][0]) / s, (r[1][0] - r[0][1]) / s]
-    } else if r[0][0] > r[1][1] && r[0][0] > r[2][2] {
-        let s = 2.0 * sqrt((1.0 + r[0][0] - r[1][1] - r[2][2]).max(0.0));
-        [(r[2][1] - r[1][2]) / s, 0.25 * s, (r[0][1] + r[1][0]) / s, (r[0][2] + r[2][0]) / s]
-    } else if r[1][1] > r[2][2] {
-        let s = 2.0 * sqrt((1.0 + r[1][1] - r[0][0] - r[2][2]).max(0.0));
-        [(r[0][2] - r[2][0]) / s, (r[0][1] + r[1][0]) / s, 0.25 * s, (r[1][2] + r[2][1]) / s]
-    } else {
-        let s = 2.0 * sqrt((1.0 + r[2][2] - r[0][0] - r[1][1]).max(0.0));
-        [(r[1][0] - r[0][1]) / s, (r[0][2] + r[2][0]) / s, (r[1][2] + r[2][1]) / s, 0.25 * s]
-    };
+    // `x · 2`, `s · 0.25`, `trace + 1`: the products `2 x`, `0.25 s` and the
+    // sum `1 + trace` with their operands swapped (same bits).
+    let q = branch(
+        trace.gt(zero),
+        || {
+            let s = (trace + 1.0).sqrt() * 2.0;
+            [s * 0.25, (r[2][1] - r[1][2]) / s, (r[0][2] - r[2][0]) / s, (r[1][0] - r[0][1]) / s]
+        },
+        || {
+            branch(
+                r[0][0].gt(r[1][1]) & r[0][0].gt(r[2][2]),
+                || {
+                    let s = (one + r[0][0] - r[1][1] - r[2][2]).max(zero).sqrt() * 2.0;
+                    [(r[2][1] - r[1][2]) / s, s * 0.25, (r[0][1] + r[1][0]) / s, (r[0][2] + r[2][0]) / s]
+                },
+                || {
+                    branch(
+                        r[1][1].gt(r[2][2]),
+                        || {
+                            let s = (one + r[1][1] - r[0][0] - r[2][2]).max(zero).sqrt() * 2.0;
+                            [(r[0][2] - r[2][0]) / s, (r[0][1] + r[1][0]) / s, s * 0.25, (r[1][2] + r[2][1]) / s]
+                        },
+                        || {
+                            let s = (one + r[2][2] - r[0][0] - r[1][1]).max(zero).sqrt() * 2.0;
+                            [(r[1][0] - r[0][1]) / s, (r[0][2] + r[2][0]) / s, (r[1][2] + r[2][1]) / s, s * 0.25]
+                        },
+                    )
+                },
+            )
+        },
+    );
     quat_normalise(q)
 }
 
 /// Shortest-arc rotation taking the unit vector `u` onto the unit vector
 /// `v`; for opposite vectors, a half turn about an axis perpendicular to `u`.
-fn quat_between(u: &Vec3, v: &Vec3) -> Quat {
+fn quat_between<R: Real>(u: &Vec3<R>, v: &Vec3<R>) -> Quat<R> {
+    let zero = R::splat(0.0);
+    let one = R::splat(1.0);
     let c = cross(u, v);
     let d = dot(u, v);
-    if norm(&c) < 1e-9 && d < 0.0 {
-        // Half turn about the axis perpendicular to u with the smallest components.
-        let axis = if u[0].abs() < 0.9 { cross(u, &[1.0, 0.0, 0.0]) } else { cross(u, &[0.0, 1.0, 0.0]) };
-        let n = norm(&axis);
-        return [0.0, axis[0] / n, axis[1] / n, axis[2] / n];
-    }
-    quat_normalise([1.0 + d, c[0], c[1], c[2]])
+    branch(
+        norm(&c).lt(R::splat(1e-9)) & d.lt(zero),
+        || {
+            // Half turn about the axis perpendicular to u with the smallest components.
+            let axis =
+                branch(u[0].abs().lt(R::splat(0.9)), || cross(u, &[one, zero, zero]), || cross(u, &[zero, one, zero]));
+            let n = norm(&axis);
+            [zero, axis[0] / n, axis[1] / n, axis[2] / n]
+        },
+        // `d + 1`: the sum `1 + d` with its operands swapped (same bits).
+        || quat_normalise([d + 1.0, c[0], c[1], c[2]]),
+    )
 }
 
-/// PX4 `ControlMath::constrainXY`: `v0 + v1` limited to norm `max`, keeping
-/// `v0` first (the position part before the feed-forward).
-fn constrain_xy(v0: [f64; 2], v1: [f64; 2], max: f64) -> [f64; 2] {
+/// PX4 `ControlMath::constrainXY`: `v0 + v1` limited to norm `max` (m/s),
+/// keeping `v0` first (the position part before the feed-forward).
+fn constrain_xy<R: Real>(v0: [R; 2], v1: [R; 2], max: f64) -> [R; 2] {
     let sum = [v0[0] + v1[0], v0[1] + v1[1]];
-    let n_sum = sqrt(sum[0] * sum[0] + sum[1] * sum[1]);
-    if n_sum <= max {
-        return sum;
-    }
-    let n0 = sqrt(v0[0] * v0[0] + v0[1] * v0[1]);
-    if n0 >= max {
-        return [v0[0] / n0 * max, v0[1] / n0 * max];
-    }
-    // |v0 + s v1| = max, s in [0, 1): a s² + b s + c = 0.
-    let a = v1[0] * v1[0] + v1[1] * v1[1];
-    let b = 2.0 * (v0[0] * v1[0] + v0[1] * v1[1]);
-    let c = n0 * n0 - max * max;
-    let s = (-b + sqrt((b * b - 4.0 * a * c).max(0.0))) / (2.0 * a);
-    [v0[0] + s * v1[0], v0[1] + s * v1[1]]
+    let n_sum = (sum[0] * sum[0] + sum[1] * sum[1]).sqrt();
+    branch(
+        n_sum.le(R::splat(max)),
+        || sum,
+        || {
+            let n0 = (v0[0] * v0[0] + v0[1] * v0[1]).sqrt();
+            branch(
+                n0.ge(R::splat(max)),
+                || [v0[0] / n0 * max, v0[1] / n0 * max],
+                || {
+                    // |v0 + s v1| = max, s in [0, 1): a s² + b s + c = 0.
+                    let a = v1[0] * v1[0] + v1[1] * v1[1];
+                    // `x · 2`, `a · 4`, `a · 2`: `2 x`, `4 a`, `2 a` with their operands swapped.
+                    let b = (v0[0] * v1[0] + v0[1] * v1[1]) * 2.0;
+                    let c = n0 * n0 - max * max;
+                    let s = (-b + (b * b - a * 4.0 * c).max(R::splat(0.0)).sqrt()) / (a * 2.0);
+                    [v0[0] + s * v1[0], v0[1] + s * v1[1]]
+                },
+            )
+        },
+    )
 }
 
-/// PX4's cascade ([module docs](self)).
+/// PX4's cascade ([module docs](self)), of one flight (`R = f64`) or of
+/// lanes of flights ([`crate::lanes`]) with the same gains. The gains, the
+/// nominal model and the filter weights are shared; integrators, filter
+/// states, previous values, the `initialised` flag, the last torque and
+/// the actuator-saturation report are per lane.
 #[derive(Clone, Debug)]
-pub struct PidController {
+pub struct PidController<R: Real = f64> {
     model: QuadrotorParams,
     gains: PidGains,
-    velocity_integral: Vec3,
-    rate_integral: Vec3,
-    previous_velocity: Vec3,
-    previous_rates: Vec3,
-    velocity_derivative: Vec3,
-    rate_derivative: Vec3,
-    initialised: bool,
-    last_torque: Vec3,
-    actuator_saturated: bool,
-    telemetry: Telemetry,
+    velocity_integral: Vec3<R>,
+    rate_integral: Vec3<R>,
+    previous_velocity: Vec3<R>,
+    previous_rates: Vec3<R>,
+    velocity_derivative: Vec3<R>,
+    rate_derivative: Vec3<R>,
+    initialised: R::Mask,
+    last_torque: Vec3<R>,
+    actuator_saturated: R::Mask,
+    telemetry: Telemetry<R>,
     /// The derivative filters' `α = 1 − e^{−2π f_c dt}` (velocity, rates)
     /// for the control period whose bits are `alpha_dt` (constant over a flight).
     alphas: [f64; 2],
@@ -424,7 +464,7 @@ pub struct PidController {
     /// `cos`, `sin` of [`PidGains::max_tilt`], taken once.
     tilt_limit: TiltLimit,
     /// `sin`, `cos` of the last reference heading ψ_d.
-    yaw_sin_cos: SinCosCache,
+    yaw_sin_cos: HeadingSinCos<R>,
 }
 
 /// Names of the [`Telemetry::estimates`] slots: slot 0 of x, y, z is the
@@ -433,27 +473,38 @@ pub const PID_ESTIMATE_NAMES: [&str; MAX_ESTIMATES] = ["integral", "", ""];
 
 impl PidController {
     /// Build after checking the nominal model ([`QuadrotorParams::check`])
-    /// and the gains ([`PidGains::check`]).
+    /// and the gains ([`PidGains::check`]): one flight
+    /// ([`PidController::splat`] for `f64`).
     pub fn new(model: QuadrotorParams, gains: PidGains) -> Result<Self, GainError> {
+        Self::splat(model, gains)
+    }
+}
+
+impl<R: Real> PidController<R> {
+    /// Build for the number type `R` (every lane the same gains and nominal
+    /// model, every lane's states initial) after checking the nominal model
+    /// ([`QuadrotorParams::check`]) and the gains ([`PidGains::check`]).
+    pub fn splat(model: QuadrotorParams, gains: PidGains) -> Result<Self, GainError> {
         model.check()?;
         gains.check()?;
+        let zero = [R::splat(0.0); 3];
         Ok(Self {
             model,
             gains,
-            velocity_integral: [0.0; 3],
-            rate_integral: [0.0; 3],
-            previous_velocity: [0.0; 3],
-            previous_rates: [0.0; 3],
-            velocity_derivative: [0.0; 3],
-            rate_derivative: [0.0; 3],
-            initialised: false,
-            last_torque: [0.0; 3],
-            actuator_saturated: false,
+            velocity_integral: zero,
+            rate_integral: zero,
+            previous_velocity: zero,
+            previous_rates: zero,
+            velocity_derivative: zero,
+            rate_derivative: zero,
+            initialised: R::Mask::splat(false),
+            last_torque: zero,
+            actuator_saturated: R::Mask::splat(false),
             telemetry: Telemetry::default(),
             alphas: [0.0; 2],
             alpha_dt: f64::NAN.to_bits(),
             tilt_limit: TiltLimit::new(gains.max_tilt),
-            yaw_sin_cos: SinCosCache::new(),
+            yaw_sin_cos: HeadingSinCos::new(),
         })
     }
 
@@ -463,12 +514,12 @@ impl PidController {
     }
 
     /// Velocity integrator `I_v`, m/s².
-    pub fn velocity_integral(&self) -> Vec3 {
+    pub fn velocity_integral(&self) -> Vec3<R> {
         self.velocity_integral
     }
 
     /// Rate integrator `I_ω`, N·m.
-    pub fn rate_integral(&self) -> Vec3 {
+    pub fn rate_integral(&self) -> Vec3<R> {
         self.rate_integral
     }
 
@@ -485,68 +536,116 @@ impl PidController {
 
     /// First-order low-pass (weight `alpha`, [`Self::derivative_alphas`]) of
     /// a finite difference over `dt`; `previous` is updated to `value`.
-    fn filtered_derivative(value: &Vec3, previous: &mut Vec3, filtered: &mut Vec3, alpha: f64, dt: f64) {
+    fn filtered_derivative(value: &Vec3<R>, previous: &mut Vec3<R>, filtered: &mut Vec3<R>, alpha: f64, dt: f64) {
         if dt > 0.0 {
+            let limit = R::splat(INPUT_LIMIT);
             for i in 0..3 {
-                let raw = saturate((value[i] - previous[i]) / dt, INPUT_LIMIT);
-                filtered[i] = saturate(filtered[i] + alpha * (raw - filtered[i]), INPUT_LIMIT);
+                let raw = saturate((value[i] - previous[i]) / dt, limit);
+                // `(raw − y) · α`: the product `α (raw − y)` with its operands swapped.
+                filtered[i] = saturate(filtered[i] + (raw - filtered[i]) * alpha, limit);
             }
         }
         *previous = *value;
     }
 
     /// Body-rate setpoint of the quaternion P law (step 7), rad/s.
-    fn rate_setpoint(&self, r: &Mat3, q: &Quat, r_d: &Mat3, yaw_rate: f64) -> Vec3 {
+    fn rate_setpoint(&self, r: &Mat3<R>, q: &Quat<R>, r_d: &Mat3<R>, yaw_rate: R) -> Vec3<R> {
         let k = &self.gains;
+        let zero = R::splat(0.0);
         let q_d = quat_from_rotation(r_d);
         let e_z = [r[0][2], r[1][2], r[2][2]];
         let e_z_d = [r_d[0][2], r_d[1][2], r_d[2][2]];
         let tilt = quat_between(&e_z, &e_z_d);
-        let q_red = if tilt[1].abs() > 1.0 - 1e-5 || tilt[2].abs() > 1.0 - 1e-5 {
+        let reversed = R::splat(1.0 - 1e-5);
+        let q_red = branch(
+            tilt[1].abs().gt(reversed) | tilt[2].abs().gt(reversed),
             // Thrust axis exactly reversed: full attitude control (PX4's corner case).
-            q_d
-        } else {
-            quat_mul(&tilt, q)
-        };
+            || q_d,
+            || quat_mul(&tilt, q),
+        );
         let mut dyaw = canonical(quat_mul(&quat_conj(&q_red), &q_d));
-        dyaw[0] = saturate(dyaw[0], 1.0);
-        dyaw[3] = saturate(dyaw[3], 1.0);
+        dyaw[0] = saturate(dyaw[0], R::splat(1.0));
+        dyaw[3] = saturate(dyaw[3], R::splat(1.0));
         let w = k.yaw_weight;
-        let weighted = [cos(w * acos(dyaw[0])), 0.0, 0.0, sin(w * asin(dyaw[3]))];
+        // `acos(·) · w`: the product `w acos(·)` with its operands swapped.
+        let weighted = [(dyaw[0].acos() * w).cos(), zero, zero, (dyaw[3].asin() * w).sin()];
         let q_target = quat_mul(&q_red, &weighted);
         let q_e = canonical(quat_mul(&quat_conj(q), &q_target));
         // A subnormal yaw_weight would make K_ψ / w infinite (and 0 · ∞ = NaN).
         let gain = [k.attitude_p[0], k.attitude_p[1], saturate(k.attitude_p[2] / w, INPUT_LIMIT)];
-        let feed_forward = mat_t_vec(r, &[0.0, 0.0, yaw_rate]);
-        let mut rate = [0.0; 3];
+        let feed_forward = mat_t_vec(r, &[zero, zero, yaw_rate]);
+        let mut rate = [zero; 3];
         for i in 0..3 {
-            rate[i] = saturate(2.0 * q_e[i + 1] * gain[i] + feed_forward[i], k.max_rate[i]);
+            // `q · 2`: the product `2 q` with its operands swapped.
+            rate[i] = saturate(q_e[i + 1] * 2.0 * gain[i] + feed_forward[i], R::splat(k.max_rate[i]));
         }
         rate
     }
 
-    /// The body of [`Controller::update`] / [`Controller::update_measured`]:
-    /// the rotation `R`, its quaternion and the body rates come from
-    /// `attitude` when given, else from the Euler state (`R = R_z R_y R_x`,
-    /// Shepperd's quaternion, `Ω = W η̇`).
+    /// [`Controller::update`] / [`Controller::update_measured`]: a
+    /// non-finite `dt` gives a NaN command everywhere; a lane whose state,
+    /// attitude or reference is not finite gets a NaN command and keeps
+    /// every internal state (and its telemetry) as it was, as a one-flight
+    /// controller returns early; the other lanes fly [`Self::law`].
     fn update_with(
         &mut self,
-        state: &QuadState,
-        attitude: Option<&BodyAttitude>,
-        reference: &Reference,
+        state: &QuadState<R>,
+        attitude: Option<&BodyAttitude<R>>,
+        reference: &Reference<R>,
         dt: f64,
-    ) -> Command {
-        if !(dt.is_finite()
-            && state.is_finite()
-            && attitude.is_none_or(BodyAttitude::is_finite)
-            && reference_finite(reference))
-        {
-            return Command { thrust: f64::NAN, torque: [f64::NAN; 3] };
+    ) -> Command<R> {
+        let nan = Command { thrust: R::splat(f64::NAN), torque: [R::splat(f64::NAN); 3] };
+        if !dt.is_finite() {
+            return nan;
         }
+        let mut ok = state.is_finite();
+        if let Some(b) = attitude {
+            ok = ok & b.is_finite();
+        }
+        ok = ok & reference_finite(reference);
+        if !ok.any() {
+            return nan;
+        }
+        if ok.all() {
+            return self.law(state, attitude, reference, dt);
+        }
+        let saved = self.clone();
+        let command = self.law(state, attitude, reference, dt);
+        self.keep_lanes(!ok, &saved);
+        Command::blend(ok, command, nan)
+    }
+
+    /// Restore the per-lane states of `saved` in the lanes of `keep`.
+    fn keep_lanes(&mut self, keep: R::Mask, saved: &Self) {
+        self.velocity_integral = Blend::blend(keep, saved.velocity_integral, self.velocity_integral);
+        self.rate_integral = Blend::blend(keep, saved.rate_integral, self.rate_integral);
+        self.previous_velocity = Blend::blend(keep, saved.previous_velocity, self.previous_velocity);
+        self.previous_rates = Blend::blend(keep, saved.previous_rates, self.previous_rates);
+        self.velocity_derivative = Blend::blend(keep, saved.velocity_derivative, self.velocity_derivative);
+        self.rate_derivative = Blend::blend(keep, saved.rate_derivative, self.rate_derivative);
+        self.initialised = Blend::blend(keep, saved.initialised, self.initialised);
+        self.last_torque = Blend::blend(keep, saved.last_torque, self.last_torque);
+        self.actuator_saturated = Blend::blend(keep, saved.actuator_saturated, self.actuator_saturated);
+        self.telemetry = Blend::blend(keep, saved.telemetry, self.telemetry);
+    }
+
+    /// The cascade of the [module docs](self) on finite inputs: the
+    /// rotation `R`, its quaternion and the body rates come from `attitude`
+    /// when given, else from the Euler state (`R = R_z R_y R_x`, Shepperd's
+    /// quaternion, `Ω = W η̇`).
+    fn law(
+        &mut self,
+        state: &QuadState<R>,
+        attitude: Option<&BodyAttitude<R>>,
+        reference: &Reference<R>,
+        dt: f64,
+    ) -> Command<R> {
         let k = self.gains;
         let g = self.model.gravity;
+        let zero = R::splat(0.0);
+        let limit = R::splat(INPUT_LIMIT);
         let dt = dt.max(0.0);
-        let velocity = state.velocity.map(|v| saturate(v, INPUT_LIMIT));
+        let velocity = state.velocity.map(|v| saturate(v, limit));
         let (r, q, omega) = match attitude {
             Some(b) => (rotation_from_quaternion(&b.quaternion), b.quaternion, b.body_rates),
             None => {
@@ -554,175 +653,178 @@ impl PidController {
                 (r, quat_from_rotation(&r), body_rates_from_euler_rates(&state.attitude, &state.angular_rate))
             }
         };
-        let omega = omega.map(|w| saturate(w, INPUT_LIMIT));
-        if !self.initialised {
-            self.previous_velocity = velocity;
-            self.previous_rates = omega;
-            self.initialised = true;
+        let omega = omega.map(|w| saturate(w, limit));
+        if !self.initialised.all() {
+            let started = self.initialised;
+            self.previous_velocity = Blend::blend(started, self.previous_velocity, velocity);
+            self.previous_rates = Blend::blend(started, self.previous_rates, omega);
+            self.initialised = R::Mask::splat(true);
         }
         let alphas = self.derivative_alphas(dt);
         Self::filtered_derivative(&velocity, &mut self.previous_velocity, &mut self.velocity_derivative, alphas[0], dt);
         Self::filtered_derivative(&omega, &mut self.previous_rates, &mut self.rate_derivative, alphas[1], dt);
 
         // 1. Position P → velocity setpoint.
-        let mut from_position = [0.0; 3];
+        let mut from_position = [zero; 3];
         for (i, v) in from_position.iter_mut().enumerate() {
-            *v = k.position_p[i] * saturate(reference.position[i] - state.position[i], INPUT_LIMIT);
+            // `e · K_p`: the product `K_p e` with its operands swapped.
+            *v = saturate(reference.position[i] - state.position[i], limit) * k.position_p[i];
         }
-        let ff = reference.velocity.map(|v| saturate(v, INPUT_LIMIT));
+        let ff = reference.velocity.map(|v| saturate(v, limit));
         let xy = constrain_xy([from_position[0], from_position[1]], [ff[0], ff[1]], k.max_velocity_xy);
         let vz = from_position[2] + ff[2];
-        let vz = if vz > k.max_velocity_up {
-            k.max_velocity_up
-        } else if vz < -k.max_velocity_down {
-            -k.max_velocity_down
-        } else {
-            vz
-        };
+        let up = R::splat(k.max_velocity_up);
+        let down = R::splat(-k.max_velocity_down);
+        let vz = R::select(vz.gt(up), up, R::select(vz.lt(down), down, vz));
         let velocity_setpoint = [xy[0], xy[1], vz];
 
         // 2. Velocity PID → acceleration setpoint.
-        let mut error = [0.0; 3];
-        let mut accel = [0.0; 3];
+        let mut error = [zero; 3];
+        let mut accel = [zero; 3];
         for i in 0..3 {
             error[i] = velocity_setpoint[i] - velocity[i];
             accel[i] = saturate(
-                saturate(reference.acceleration[i], INPUT_LIMIT)
-                    + k.velocity_p[i] * error[i]
-                    + self.velocity_integral[i]
-                    - k.velocity_d[i] * self.velocity_derivative[i],
-                INPUT_LIMIT,
+                saturate(reference.acceleration[i], limit) + error[i] * k.velocity_p[i] + self.velocity_integral[i]
+                    - self.velocity_derivative[i] * k.velocity_d[i],
+                limit,
             );
         }
 
         // 3. Acceleration → thrust vector (N).
         let unlimited = {
-            let v = [accel[0], accel[1], g];
+            let v = [accel[0], accel[1], R::splat(g)];
             let n = norm(&v);
             [v[0] / n, v[1] / n, v[2] / n]
         };
         let direction = self.tilt_limit.apply(unlimited);
-        let nominal_thrust = k.hover_thrust * (accel[2] + g) / g / direction[2];
-        let floored = nominal_thrust < k.thrust_min;
-        let collective = if floored { k.thrust_min } else { nominal_thrust };
+        // `(a + g) · H`: the product `H (a + g)` with its operands swapped.
+        let nominal_thrust = (accel[2] + g) * k.hover_thrust / g / direction[2];
+        let thrust_min = R::splat(k.thrust_min);
+        let thrust_max = R::splat(k.thrust_max);
+        let floored = nominal_thrust.lt(thrust_min);
+        let collective = R::select(floored, thrust_min, nominal_thrust);
         let mut thrust = direction.map(|d| d * collective);
 
         // 5a. Vertical anti-windup: stop integrating into a saturated thrust.
-        if k.anti_windup
-            && ((thrust[2] <= k.thrust_min && error[2] <= 0.0) || (thrust[2] >= k.thrust_max && error[2] >= 0.0))
-        {
-            error[2] = 0.0;
+        if k.anti_windup {
+            let held = (thrust[2].le(thrust_min) & error[2].le(zero)) | (thrust[2].ge(thrust_max) & error[2].ge(zero));
+            error[2] = R::select(held, zero, error[2]);
         }
 
         // 4. Vertical priority with a horizontal margin.
-        let horizontal = sqrt(thrust[0] * thrust[0] + thrust[1] * thrust[1]);
-        let max_sq = k.thrust_max * k.thrust_max;
-        let allocated = horizontal.min(k.thrust_xy_margin);
-        let z_max = sqrt((max_sq - allocated * allocated).max(0.0));
-        let z_capped = thrust[2] > z_max;
-        if z_capped {
-            thrust[2] = z_max;
-        }
-        let xy_max = sqrt((max_sq - thrust[2] * thrust[2]).max(0.0));
-        let xy_capped = horizontal > xy_max;
-        if xy_capped {
-            thrust[0] *= xy_max / horizontal;
-            thrust[1] *= xy_max / horizontal;
-        }
+        let horizontal = (thrust[0] * thrust[0] + thrust[1] * thrust[1]).sqrt();
+        let max_sq = R::splat(k.thrust_max * k.thrust_max);
+        let allocated = horizontal.min(R::splat(k.thrust_xy_margin));
+        let z_max = (max_sq - allocated * allocated).max(zero).sqrt();
+        let z_capped = thrust[2].gt(z_max);
+        thrust[2] = R::select(z_capped, z_max, thrust[2]);
+        let xy_max = (max_sq - thrust[2] * thrust[2]).max(zero).sqrt();
+        let xy_capped = horizontal.gt(xy_max);
+        [thrust[0], thrust[1]] = branch(
+            xy_capped,
+            || [thrust[0] * (xy_max / horizontal), thrust[1] * (xy_max / horizontal)],
+            || [thrust[0], thrust[1]],
+        );
 
         // 5b. Horizontal tracking anti-windup.
         let produced = [thrust[0] * g / k.hover_thrust, thrust[1] * g / k.hover_thrust];
         let demanded = [accel[0], accel[1]];
-        let limited = if demanded[0] * demanded[0] + demanded[1] * demanded[1]
-            > produced[0] * produced[0] + produced[1] * produced[1]
-        {
-            produced
-        } else {
-            demanded
-        };
+        let limited = Blend::blend(
+            (demanded[0] * demanded[0] + demanded[1] * demanded[1])
+                .gt(produced[0] * produced[0] + produced[1] * produced[1]),
+            produced,
+            demanded,
+        );
         // Bounded: a subnormal velocity_p gives 2 / K_p = ∞ and ∞ · 0 = NaN.
         let arw = if k.anti_windup { saturate(2.0 / k.velocity_p[0], STATE_LIMIT) } else { 0.0 };
         for i in 0..2 {
-            error[i] -= arw * (demanded[i] - limited[i]);
+            // `(d − l) · arw`: the product `arw (d − l)` with its operands swapped.
+            error[i] -= (demanded[i] - limited[i]) * arw;
         }
+        let state_limit = R::splat(STATE_LIMIT);
         for i in 0..3 {
+            // `e · K_i`: the product `K_i e` with its operands swapped.
             self.velocity_integral[i] =
-                saturate(self.velocity_integral[i] + k.velocity_i[i] * error[i] * dt, STATE_LIMIT);
+                saturate(self.velocity_integral[i] + error[i] * k.velocity_i[i] * dt, state_limit);
         }
-        self.velocity_integral[2] = saturate(self.velocity_integral[2], g);
+        self.velocity_integral[2] = saturate(self.velocity_integral[2], R::splat(g));
 
         // 6. Thrust vector → desired attitude and collective thrust.
+        let one = R::splat(1.0);
         let magnitude = norm(&thrust);
-        let b3 = if magnitude > 0.0 { thrust.map(|t| t / magnitude) } else { [0.0, 0.0, 1.0] };
+        let b3 = branch(magnitude.gt(zero), || thrust.map(|t| t / magnitude), || [zero, zero, one]);
         let (s, c) = self.yaw_sin_cos.get(reference.yaw);
-        let b1 = cross(&[-s, c, 0.0], &b3);
+        let b1 = cross(&[-s, c, zero], &b3);
         let n1 = norm(&b1);
-        let b1 = if n1 > 1e-9 { b1.map(|v| v / n1) } else { [1.0, 0.0, 0.0] };
+        let b1 = branch(n1.gt(R::splat(1e-9)), || b1.map(|v| v / n1), || [one, zero, zero]);
         let b2 = cross(&b3, &b1);
         let r_d = [[b1[0], b2[0], b3[0]], [b1[1], b2[1], b3[1]], [b1[2], b2[2], b3[2]]];
 
         // 7. Attitude P → body-rate setpoint.
-        let rate_setpoint = self.rate_setpoint(&r, &q, &r_d, saturate(reference.yaw_rate, INPUT_LIMIT));
+        let rate_setpoint = self.rate_setpoint(&r, &q, &r_d, saturate(reference.yaw_rate, limit));
 
         // 8. Rate PID → torques.
-        let mut torque = [0.0; 3];
+        let mut torque = [zero; 3];
         let max_error = 400.0 * core::f64::consts::PI / 180.0;
+        let saturated = self.actuator_saturated;
         for i in 0..3 {
             let mut e = rate_setpoint[i] - omega[i];
-            torque[i] = k.rate_p[i] * e + self.rate_integral[i] - k.rate_d[i] * self.rate_derivative[i]
-                + k.rate_ff[i] * rate_setpoint[i];
-            if self.actuator_saturated {
-                if self.last_torque[i] > 0.0 {
-                    e = e.min(0.0);
-                } else if self.last_torque[i] < 0.0 {
-                    e = e.max(0.0);
-                }
+            // Each product `K x` as `x · K` (operands swapped, same bits).
+            torque[i] = e * k.rate_p[i] + self.rate_integral[i] - self.rate_derivative[i] * k.rate_d[i]
+                + rate_setpoint[i] * k.rate_ff[i];
+            if saturated.any() {
+                let last = self.last_torque[i];
+                let one_sided = R::select(last.gt(zero), e.min(zero), R::select(last.lt(zero), e.max(zero), e));
+                e = R::select(saturated, one_sided, e);
             }
             let f = e / max_error;
-            let factor = (1.0 - f * f).max(0.0);
+            let factor = (one - f * f).max(zero);
             self.rate_integral[i] =
-                saturate(self.rate_integral[i] + factor * k.rate_i[i] * e * dt, k.rate_integral_limit[i]);
+                saturate(self.rate_integral[i] + factor * k.rate_i[i] * e * dt, R::splat(k.rate_integral_limit[i]));
         }
         self.last_torque = torque;
 
         // Only the demanded roll and pitch are reported (the heading is ψ_d).
         let desired = roll_pitch_from_rotation(&r_d);
-        let mut estimates = [[0.0; MAX_ESTIMATES]; 6];
+        let mut estimates = [[zero; MAX_ESTIMATES]; 6];
         for i in 0..3 {
             estimates[i][0] = self.velocity_integral[i];
             estimates[3 + i][0] = self.rate_integral[i];
         }
+        let redirected =
+            !(direction[0].eq(unlimited[0]) & direction[1].eq(unlimited[1]) & direction[2].eq(unlimited[2]));
         self.telemetry = Telemetry {
             attitude_reference: [desired[0], desired[1], reference.yaw],
-            attitude_reference_rate: [0.0, 0.0, reference.yaw_rate],
-            attitude_reference_acceleration: [0.0, 0.0, reference.yaw_acceleration],
+            attitude_reference_rate: [zero, zero, reference.yaw_rate],
+            attitude_reference_acceleration: [zero, zero, reference.yaw_acceleration],
             attitude_demand: [desired[0], desired[1]],
             estimates,
             commanded_acceleration: accel,
             nominal_thrust,
-            thrust_limited: floored || z_capped || xy_capped || direction != unlimited,
+            thrust_limited: floored | z_capped | xy_capped | redirected,
             sliding_mode: None,
         };
         Command { thrust: magnitude, torque }
     }
 }
 
-impl Controller for PidController {
+impl<R: Real> Controller<R> for PidController<R> {
     fn name(&self) -> &'static str {
         "pid"
     }
 
     /// One period of the cascade of the [module docs](self). A non-finite
     /// state, reference or `dt` gives a NaN command and leaves every
-    /// internal state unchanged. Errors and rates are clamped to
-    /// `±INPUT_LIMIT` and the integrators to `±STATE_LIMIT` (no-ops in flight).
-    fn update(&mut self, state: &QuadState, reference: &Reference, dt: f64) -> Command {
+    /// internal state unchanged (per lane: the other lanes fly on). Errors
+    /// and rates are clamped to `±INPUT_LIMIT` and the integrators to
+    /// `±STATE_LIMIT` (no-ops in flight).
+    fn update(&mut self, state: &QuadState<R>, reference: &Reference<R>, dt: f64) -> Command<R> {
         self.update_with(state, None, reference, dt)
     }
 
     /// As [`Controller::update`]; with [`Measurement::body`] the rotation is
     /// that of its quaternion and `Ω` its body rates (no Euler conversion).
-    fn update_measured(&mut self, measured: &Measurement, reference: &Reference, dt: f64) -> Command {
+    fn update_measured(&mut self, measured: &Measurement<R>, reference: &Reference<R>, dt: f64) -> Command<R> {
         self.update_with(&measured.euler, measured.body.as_ref(), reference, dt)
     }
 
@@ -730,7 +832,7 @@ impl Controller for PidController {
         true
     }
 
-    fn telemetry(&self) -> &Telemetry {
+    fn telemetry(&self) -> &Telemetry<R> {
         &self.telemetry
     }
 
@@ -739,18 +841,19 @@ impl Controller for PidController {
     }
 
     fn reset(&mut self) {
+        let zero = [R::splat(0.0); 3];
         *self = Self {
             model: self.model,
             gains: self.gains,
-            velocity_integral: [0.0; 3],
-            rate_integral: [0.0; 3],
-            previous_velocity: [0.0; 3],
-            previous_rates: [0.0; 3],
-            velocity_derivative: [0.0; 3],
-            rate_derivative: [0.0; 3],
-            initialised: false,
-            last_torque: [0.0; 3],
-            actuator_saturated: false,
+            velocity_integral: zero,
+            rate_integral: zero,
+            previous_velocity: zero,
+            previous_rates: zero,
+            velocity_derivative: zero,
+            rate_derivative: zero,
+            initialised: R::Mask::splat(false),
+            last_torque: zero,
+            actuator_saturated: R::Mask::splat(false),
             telemetry: Telemetry::default(),
             alphas: self.alphas,
             alpha_dt: self.alpha_dt,
@@ -759,7 +862,26 @@ impl Controller for PidController {
         };
     }
 
-    fn actuator_feedback(&mut self, saturated: bool) {
+    /// Lane `lane`'s integrators, filters, previous values, flags and
+    /// telemetry back to their initial values (the other lanes untouched).
+    fn reset_lane(&mut self, lane: usize) {
+        for v in [
+            &mut self.velocity_integral,
+            &mut self.rate_integral,
+            &mut self.previous_velocity,
+            &mut self.previous_rates,
+            &mut self.velocity_derivative,
+            &mut self.rate_derivative,
+            &mut self.last_torque,
+        ] {
+            v.put_lane(lane, [0.0; 3]);
+        }
+        self.initialised.put_lane(lane, false);
+        self.actuator_saturated.put_lane(lane, false);
+        self.telemetry.put_lane(lane, Telemetry::default());
+    }
+
+    fn actuator_feedback(&mut self, saturated: R::Mask) {
         self.actuator_saturated = saturated;
     }
 }
@@ -770,6 +892,126 @@ mod tests {
 
     fn controller() -> PidController {
         PidController::new(QuadrotorParams::default(), PidGains::default()).unwrap()
+    }
+
+    use crate::lanes::{LaneMask, Lanes, Lanewise};
+    use crate::setpoint::lane_tests::{dt_at, flight_inputs, telemetry_bits, Lcg, TELEMETRY_VALUES};
+
+    /// Number of per-lane state values [`state_bits`] returns.
+    const STATE_VALUES: usize = 7 * 3 + 2;
+
+    /// The bits of every per-lane state of a one-flight controller (the
+    /// heading cache, whose value is always `sin_cos` of its key, aside).
+    fn state_bits(c: &PidController) -> ([u64; STATE_VALUES], [u64; TELEMETRY_VALUES]) {
+        let mut out = [0u64; STATE_VALUES];
+        let vectors = [
+            c.velocity_integral,
+            c.rate_integral,
+            c.previous_velocity,
+            c.previous_rates,
+            c.velocity_derivative,
+            c.rate_derivative,
+            c.last_torque,
+        ];
+        for (slot, v) in out.iter_mut().zip(vectors.iter().flatten()) {
+            *slot = v.to_bits();
+        }
+        out[21] = u64::from(c.initialised);
+        out[22] = u64::from(c.actuator_saturated);
+        (out, telemetry_bits(&c.telemetry))
+    }
+
+    /// Lane `i` of a lanes controller as a one-flight controller.
+    fn lane_of<const N: usize>(c: &PidController<Lanes<N>>, i: usize) -> PidController {
+        PidController {
+            model: c.model,
+            gains: c.gains,
+            velocity_integral: c.velocity_integral.get_lane(i),
+            rate_integral: c.rate_integral.get_lane(i),
+            previous_velocity: c.previous_velocity.get_lane(i),
+            previous_rates: c.previous_rates.get_lane(i),
+            velocity_derivative: c.velocity_derivative.get_lane(i),
+            rate_derivative: c.rate_derivative.get_lane(i),
+            initialised: c.initialised.get_lane(i),
+            last_torque: c.last_torque.get_lane(i),
+            actuator_saturated: c.actuator_saturated.get_lane(i),
+            telemetry: c.telemetry.get_lane(i),
+            alphas: c.alphas,
+            alpha_dt: c.alpha_dt,
+            tilt_limit: c.tilt_limit,
+            yaw_sin_cos: HeadingSinCos::new(),
+        }
+    }
+
+    /// `N` flights on `Lanes<N>` against `N` one-flight controllers fed the
+    /// same inputs ([`flight_inputs`]: lanes at the reference, beyond the
+    /// velocity, tilt and thrust limits, on the thrust floor with the
+    /// vertical anti-windup holding, upside down with the thrust axis
+    /// reversed; non-finite inputs in single lanes and in all; actuator
+    /// saturation per lane; lanes reset mid-run): every command, telemetry
+    /// value and state, lane by lane and bit for bit, at every step.
+    fn lanes_fly_as_scalars<const N: usize>(gains: PidGains, with_body: bool) {
+        let model = QuadrotorParams::default();
+        let mut lanes = PidController::<Lanes<N>>::splat(model, gains).unwrap();
+        let mut scalars: [PidController; N] = core::array::from_fn(|_| PidController::new(model, gains).unwrap());
+        let mut rng = Lcg(0x5eed_0000 + 2 * N as u64 + u64::from(with_body));
+        let (mut floored, mut limited, mut reversed) = (0, 0, 0);
+        for step in 0..400 {
+            for lane in [0, N - 1] {
+                if (step == 150 && lane == 0) || (step == 151 && lane == N - 1) {
+                    scalars[lane].reset();
+                    lanes.reset_lane(lane);
+                }
+            }
+            let dt = dt_at(step);
+            let mut m = Measurement::<Lanes<N>>::default();
+            let mut r = Reference::<Lanes<N>>::default();
+            let mut saturated = LaneMask::<N>::default();
+            let mut want = [Command::default(); N];
+            for (i, c) in scalars.iter_mut().enumerate() {
+                let (mi, ri, si) = flight_inputs(&mut rng, i, step, with_body);
+                m.put_lane(i, mi);
+                r.put_lane(i, ri);
+                saturated.put_lane(i, si);
+                c.actuator_feedback(si);
+                want[i] = if step % 2 == 0 { c.update(&mi.euler, &ri, dt) } else { c.update_measured(&mi, &ri, dt) };
+            }
+            lanes.actuator_feedback(saturated);
+            let got = if step % 2 == 0 { lanes.update(&m.euler, &r, dt) } else { lanes.update_measured(&m, &r, dt) };
+            for (i, c) in scalars.iter().enumerate() {
+                let g = got.get_lane(i);
+                assert_eq!(g.thrust.to_bits(), want[i].thrust.to_bits(), "thrust, lane {i}, step {step}");
+                for a in 0..3 {
+                    assert_eq!(g.torque[a].to_bits(), want[i].torque[a].to_bits(), "torque {a}, lane {i}, step {step}");
+                }
+                assert_eq!(state_bits(&lane_of(&lanes, i)), state_bits(c), "states, lane {i}, step {step}");
+                let t = c.telemetry();
+                floored += usize::from(want[i].thrust.is_finite() && t.nominal_thrust < gains.thrust_min);
+                limited += usize::from(want[i].thrust.is_finite() && t.thrust_limited && i % 5 == 1);
+                // Lane 3 on even steps: upside down, demanded thrust axis exactly vertical.
+                reversed += usize::from(
+                    i % 5 == 3 && step % 2 == 0 && want[i].thrust.is_finite() && t.commanded_acceleration[0] == 0.0,
+                );
+            }
+        }
+        // The branches the inputs were built for were taken.
+        assert!(floored > 100 && limited > 100 && reversed > 100, "{floored} {limited} {reversed}");
+        let r = rotation_from_euler(&[core::f64::consts::PI, 0.0, 0.0]);
+        let tilt = quat_between(&[r[0][2], r[1][2], r[2][2]], &[0.0, 0.0, 1.0]);
+        assert!(tilt[1].abs() > 1.0 - 1e-5 || tilt[2].abs() > 1.0 - 1e-5, "{tilt:?}");
+    }
+
+    #[test]
+    fn four_lanes_fly_as_four_scalar_controllers() {
+        lanes_fly_as_scalars::<4>(PidGains::default(), false);
+        lanes_fly_as_scalars::<4>(PidGains::default(), true);
+        lanes_fly_as_scalars::<4>(PidGains { anti_windup: false, ..PidGains::default() }, true);
+    }
+
+    #[test]
+    fn eight_lanes_fly_as_eight_scalar_controllers() {
+        lanes_fly_as_scalars::<8>(PidGains::default(), false);
+        lanes_fly_as_scalars::<8>(PidGains::default(), true);
     }
 
     #[test]

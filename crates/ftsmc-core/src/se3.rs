@@ -54,11 +54,12 @@ use crate::controller::{Controller, Telemetry};
 use crate::kinematics::{
     body_rates_from_euler_rates, euler_from_rotation, rotation_from_euler, rotation_from_quaternion,
 };
+use crate::lanes::{branch, Blend, Lanewise, Mask, Real};
 use crate::law::{check_closed, check_gain, check_left_open, saturate, GainError, INPUT_LIMIT, MAX_ESTIMATES};
-use crate::math::{cross, dot, mat_t_mat, mat_t_vec, mat_vec, norm, Mat3, SinCosCache, Vec3};
+use crate::math::{cross, dot, mat_t_mat, mat_t_vec, mat_vec, norm, Mat3, Vec3};
 use crate::measured::{BodyAttitude, Measurement};
 use crate::model::{Command, QuadState, QuadrotorParams, Reference};
-use crate::setpoint::{reference_finite, TiltLimit};
+use crate::setpoint::{reference_finite, HeadingSinCos, TiltLimit};
 
 /// Gains of [`Se3Controller`]. `Default` is [`Se3Gains::for_vehicle`] of the
 /// paper's quadrotor ([`QuadrotorParams::default`]).
@@ -191,37 +192,51 @@ impl Se3Gains {
 }
 
 /// `½ (R_dᵀR − RᵀR_d)^∨`, Lee et al. 2010 Eq. 10: zero at `R = R_d`, its
-/// norm is `sin` of the rotation angle between them.
-pub fn attitude_error(r: &Mat3, r_d: &Mat3) -> Vec3 {
+/// norm is `sin` of the rotation angle between them (per lane for lanes).
+pub fn attitude_error<R: Real>(r: &Mat3<R>, r_d: &Mat3<R>) -> Vec3<R> {
     let m = mat_t_mat(r_d, r);
-    // (M − Mᵀ)^∨ with M = R_dᵀR (so Mᵀ = RᵀR_d).
-    [0.5 * (m[2][1] - m[1][2]), 0.5 * (m[0][2] - m[2][0]), 0.5 * (m[1][0] - m[0][1])]
+    // (M − Mᵀ)^∨ with M = R_dᵀR (so Mᵀ = RᵀR_d); `x · 0.5` is `0.5 x` with
+    // its operands swapped (same bits).
+    [(m[2][1] - m[1][2]) * 0.5, (m[0][2] - m[2][0]) * 0.5, (m[1][0] - m[0][1]) * 0.5]
 }
 
-/// Lee et al.'s geometric controller ([module docs](self)).
+/// Lee et al.'s geometric controller ([module docs](self)), of one flight
+/// (`R = f64`) or of lanes of flights ([`crate::lanes`]) with the same
+/// gains and nominal model. The law has no internal state: only the
+/// telemetry and the heading's sine and cosine are per lane.
 #[derive(Clone, Debug)]
-pub struct Se3Controller {
+pub struct Se3Controller<R: Real = f64> {
     model: QuadrotorParams,
     gains: Se3Gains,
-    telemetry: Telemetry,
+    telemetry: Telemetry<R>,
     /// `cos`, `sin` of [`Se3Gains::max_tilt`], taken once.
     tilt_limit: TiltLimit,
     /// `sin`, `cos` of the last reference heading ψ_d.
-    yaw_sin_cos: SinCosCache,
+    yaw_sin_cos: HeadingSinCos<R>,
 }
 
 impl Se3Controller {
     /// Build after checking the nominal model ([`QuadrotorParams::check`])
-    /// and the gains ([`Se3Gains::check`]).
+    /// and the gains ([`Se3Gains::check`]): one flight
+    /// ([`Se3Controller::splat`] for `f64`).
     pub fn new(model: QuadrotorParams, gains: Se3Gains) -> Result<Self, GainError> {
+        Self::splat(model, gains)
+    }
+}
+
+impl<R: Real> Se3Controller<R> {
+    /// Build for the number type `R` (every lane the same gains and nominal
+    /// model) after checking the nominal model ([`QuadrotorParams::check`])
+    /// and the gains ([`Se3Gains::check`]).
+    pub fn splat(model: QuadrotorParams, gains: Se3Gains) -> Result<Self, GainError> {
         model.check()?;
         gains.check()?;
         Ok(Self {
             model,
             gains,
-            telemetry: Self::initial_telemetry(),
+            telemetry: Telemetry::default(),
             tilt_limit: TiltLimit::new(gains.max_tilt),
-            yaw_sin_cos: SinCosCache::new(),
+            yaw_sin_cos: HeadingSinCos::new(),
         })
     }
 
@@ -230,51 +245,76 @@ impl Se3Controller {
         &self.gains
     }
 
-    fn initial_telemetry() -> Telemetry {
-        Telemetry::default()
-    }
-
     /// Desired rotation from the desired force direction and heading ψ_d;
-    /// the second value is true when the tilt limit changed `b₃d`.
-    fn desired_rotation(&mut self, force: &Vec3, yaw: f64) -> (Mat3, bool) {
+    /// the second value is true (per lane) when the tilt limit changed `b₃d`.
+    fn desired_rotation(&mut self, force: &Vec3<R>, yaw: R) -> (Mat3<R>, R::Mask) {
+        let zero = R::splat(0.0);
         let f = norm(force);
-        let b3 = if f > 1e-9 { [force[0] / f, force[1] / f, force[2] / f] } else { [0.0, 0.0, 1.0] };
+        let b3 =
+            branch(f.gt(R::splat(1e-9)), || [force[0] / f, force[1] / f, force[2] / f], || [zero, zero, R::splat(1.0)]);
         let limited = self.tilt_limit.apply(b3);
-        let tilt_limited = limited != b3;
+        let tilt_limited = !(limited[0].eq(b3[0]) & limited[1].eq(b3[1]) & limited[2].eq(b3[2]));
         let b3 = limited;
         let (s, c) = self.yaw_sin_cos.get(yaw);
-        let b1c = [c, s, 0.0];
+        let b1c = [c, s, zero];
         let b2 = cross(&b3, &b1c);
         let n2 = norm(&b2);
         // b₃d along b₁c (only with max_tilt = π/2): the heading is undefined;
         // take b₂d horizontal, perpendicular to b₁c.
-        let b2 = if n2 > 1e-9 { [b2[0] / n2, b2[1] / n2, b2[2] / n2] } else { [-s, c, 0.0] };
+        let b2 = branch(n2.gt(R::splat(1e-9)), || [b2[0] / n2, b2[1] / n2, b2[2] / n2], || [-s, c, zero]);
         let b1 = cross(&b2, &b3);
         let r_d = [[b1[0], b2[0], b3[0]], [b1[1], b2[1], b3[1]], [b1[2], b2[2], b3[2]]];
         (r_d, tilt_limited)
     }
 
-    /// The law of [`Controller::update`] / [`Controller::update_measured`]:
-    /// `R` and `Ω` from `attitude` when given, else from the Euler state
-    /// (`R = R_z R_y R_x`, `Ω = W η̇`).
+    /// [`Controller::update`] / [`Controller::update_measured`]: a
+    /// non-finite `dt` gives a NaN command everywhere; a lane whose state,
+    /// attitude or reference is not finite gets a NaN command and keeps its
+    /// telemetry, as a one-flight controller returns early; the other lanes
+    /// fly [`Self::law`].
     fn update_with(
         &mut self,
-        state: &QuadState,
-        attitude: Option<&BodyAttitude>,
-        reference: &Reference,
+        state: &QuadState<R>,
+        attitude: Option<&BodyAttitude<R>>,
+        reference: &Reference<R>,
         dt: f64,
-    ) -> Command {
-        if !(dt.is_finite()
-            && state.is_finite()
-            && attitude.is_none_or(BodyAttitude::is_finite)
-            && reference_finite(reference))
-        {
-            return Command { thrust: f64::NAN, torque: [f64::NAN; 3] };
+    ) -> Command<R> {
+        let nan = Command { thrust: R::splat(f64::NAN), torque: [R::splat(f64::NAN); 3] };
+        if !dt.is_finite() {
+            return nan;
         }
+        let mut ok = state.is_finite();
+        if let Some(b) = attitude {
+            ok = ok & b.is_finite();
+        }
+        ok = ok & reference_finite(reference);
+        if !ok.any() {
+            return nan;
+        }
+        if ok.all() {
+            return self.law(state, attitude, reference);
+        }
+        let saved = self.telemetry;
+        let command = self.law(state, attitude, reference);
+        self.telemetry = Blend::blend(ok, self.telemetry, saved);
+        Command::blend(ok, command, nan)
+    }
+
+    /// The law of the [module docs](self) on finite inputs: `R` and `Ω`
+    /// from `attitude` when given, else from the Euler state
+    /// (`R = R_z R_y R_x`, `Ω = W η̇`).
+    fn law(
+        &mut self,
+        state: &QuadState<R>,
+        attitude: Option<&BodyAttitude<R>>,
+        reference: &Reference<R>,
+    ) -> Command<R> {
         let m = self.model.mass;
         let g = self.model.gravity;
         let j = self.model.inertia;
         let k = self.gains;
+        let zero = R::splat(0.0);
+        let limit = R::splat(INPUT_LIMIT);
 
         let (r, omega) = match attitude {
             Some(b) => (rotation_from_quaternion(&b.quaternion), b.body_rates),
@@ -283,79 +323,81 @@ impl Se3Controller {
                 body_rates_from_euler_rates(&state.attitude, &state.angular_rate),
             ),
         };
-        let omega = omega.map(|w| saturate(w, INPUT_LIMIT));
+        let omega = omega.map(|w| saturate(w, limit));
 
         // Translational loop: desired force.
-        let mut force = [0.0; 3];
+        let mut force = [zero; 3];
         for i in 0..3 {
-            let e_x = saturate(state.position[i] - reference.position[i], INPUT_LIMIT);
-            let e_v = saturate(state.velocity[i] - reference.velocity[i], INPUT_LIMIT);
-            let a_d = saturate(reference.acceleration[i], INPUT_LIMIT);
-            force[i] = -k.position[i] * e_x - k.velocity[i] * e_v + m * a_d;
+            let e_x = saturate(state.position[i] - reference.position[i], limit);
+            let e_v = saturate(state.velocity[i] - reference.velocity[i], limit);
+            let a_d = saturate(reference.acceleration[i], limit);
+            // `−k_x e_x − k_v e_v + m a_d`, each product with its operands
+            // swapped (same bits; `−k` is exact).
+            force[i] = e_x * -k.position[i] - e_v * k.velocity[i] + a_d * m;
         }
-        force[2] += m * g;
+        force[2] = force[2] + m * g;
         let (r_d, tilt_limited) = self.desired_rotation(&force, reference.yaw);
 
         // Attitude loop.
         let e_r = attitude_error(&r, &r_d);
         let rt_rd = mat_t_mat(&r, &r_d);
-        let yaw_rate = saturate(reference.yaw_rate, INPUT_LIMIT);
-        let yaw_accel = saturate(reference.yaw_acceleration, INPUT_LIMIT);
-        let omega_d = mat_t_vec(&r_d, &[0.0, 0.0, yaw_rate]);
-        let omega_d_dot = mat_t_vec(&r_d, &[0.0, 0.0, yaw_accel]);
+        let yaw_rate = saturate(reference.yaw_rate, limit);
+        let yaw_accel = saturate(reference.yaw_acceleration, limit);
+        let omega_d = mat_t_vec(&r_d, &[zero, zero, yaw_rate]);
+        let omega_d_dot = mat_t_vec(&r_d, &[zero, zero, yaw_accel]);
         let omega_d_body = mat_vec(&rt_rd, &omega_d);
         let omega_d_dot_body = mat_vec(&rt_rd, &omega_d_dot);
-        let j_omega = [j[0] * omega[0], j[1] * omega[1], j[2] * omega[2]];
+        let j_omega = [omega[0] * j[0], omega[1] * j[1], omega[2] * j[2]];
         let gyro = cross(&omega, &j_omega);
         let hat = cross(&omega, &omega_d_body);
-        let mut torque = [0.0; 3];
+        let mut torque = [zero; 3];
         for i in 0..3 {
             let e_w = omega[i] - omega_d_body[i];
             torque[i] =
-                -k.attitude[i] * e_r[i] - k.angular_rate[i] * e_w + gyro[i] - j[i] * (hat[i] - omega_d_dot_body[i]);
+                e_r[i] * -k.attitude[i] - e_w * k.angular_rate[i] + gyro[i] - (hat[i] - omega_d_dot_body[i]) * j[i];
         }
         let lee_thrust = dot(&force, &[r[0][2], r[1][2], r[2][2]]);
-        let thrust = if lee_thrust < k.min_thrust {
-            k.min_thrust
-        } else if lee_thrust > k.max_thrust {
-            k.max_thrust
-        } else {
-            lee_thrust
-        };
+        let min_thrust = R::splat(k.min_thrust);
+        let max_thrust = R::splat(k.max_thrust);
+        let thrust = R::select(
+            lee_thrust.lt(min_thrust),
+            min_thrust,
+            R::select(lee_thrust.gt(max_thrust), max_thrust, lee_thrust),
+        );
 
         let desired = euler_from_rotation(&r_d);
         self.telemetry = Telemetry {
             attitude_reference: desired,
-            attitude_reference_rate: [0.0, 0.0, yaw_rate],
-            attitude_reference_acceleration: [0.0, 0.0, yaw_accel],
+            attitude_reference_rate: [zero, zero, yaw_rate],
+            attitude_reference_acceleration: [zero, zero, yaw_accel],
             attitude_demand: [desired[0], desired[1]],
-            estimates: [[0.0; MAX_ESTIMATES]; 6],
+            estimates: [[zero; MAX_ESTIMATES]; 6],
             commanded_acceleration: [force[0] / m, force[1] / m, force[2] / m - g],
             nominal_thrust: lee_thrust,
-            thrust_limited: thrust != lee_thrust || tilt_limited,
+            thrust_limited: !thrust.eq(lee_thrust) | tilt_limited,
             sliding_mode: None,
         };
         Command { thrust, torque }
     }
 }
 
-impl Controller for Se3Controller {
+impl<R: Real> Controller<R> for Se3Controller<R> {
     fn name(&self) -> &'static str {
         "se3"
     }
 
     /// One period of the law of the [module docs](self). A non-finite state,
     /// reference or `dt` gives a NaN command and leaves the telemetry as it
-    /// was (the law has no internal state). Errors, rates and the reference
-    /// acceleration are clamped to `±INPUT_LIMIT` (no-op in flight) so the
-    /// command is finite for every finite input.
-    fn update(&mut self, state: &QuadState, reference: &Reference, dt: f64) -> Command {
+    /// was (per lane; the law has no internal state). Errors, rates and the
+    /// reference acceleration are clamped to `±INPUT_LIMIT` (no-op in
+    /// flight) so the command is finite for every finite input.
+    fn update(&mut self, state: &QuadState<R>, reference: &Reference<R>, dt: f64) -> Command<R> {
         self.update_with(state, None, reference, dt)
     }
 
     /// As [`Controller::update`]; with [`Measurement::body`] `R` is the
     /// rotation of its quaternion and `Ω` its body rates (no Euler conversion).
-    fn update_measured(&mut self, measured: &Measurement, reference: &Reference, dt: f64) -> Command {
+    fn update_measured(&mut self, measured: &Measurement<R>, reference: &Reference<R>, dt: f64) -> Command<R> {
         self.update_with(&measured.euler, measured.body.as_ref(), reference, dt)
     }
 
@@ -363,12 +405,18 @@ impl Controller for Se3Controller {
         true
     }
 
-    fn telemetry(&self) -> &Telemetry {
+    fn telemetry(&self) -> &Telemetry<R> {
         &self.telemetry
     }
 
     fn reset(&mut self) {
-        self.telemetry = Self::initial_telemetry();
+        self.telemetry = Telemetry::default();
+    }
+
+    /// Lane `lane`'s telemetry back to its initial value (the law has no
+    /// other state).
+    fn reset_lane(&mut self, lane: usize) {
+        self.telemetry.put_lane(lane, Telemetry::default());
     }
 }
 
@@ -378,6 +426,68 @@ mod tests {
 
     fn controller() -> Se3Controller {
         Se3Controller::new(QuadrotorParams::default(), Se3Gains::default()).unwrap()
+    }
+
+    use crate::lanes::{Lanes, Lanewise};
+    use crate::setpoint::lane_tests::{dt_at, flight_inputs, telemetry_bits, Lcg};
+
+    /// `N` flights on `Lanes<N>` against `N` one-flight controllers fed the
+    /// same inputs ([`flight_inputs`]: lanes at the reference, beyond the
+    /// tilt limit and the thrust cap, on the thrust floor, upside down;
+    /// non-finite inputs in single lanes and in all; lanes reset mid-run):
+    /// every command and telemetry value (the law's only state), lane by
+    /// lane and bit for bit, at every step.
+    fn lanes_fly_as_scalars<const N: usize>(with_body: bool) {
+        let model = QuadrotorParams::default();
+        let gains = Se3Gains::default();
+        let mut lanes = Se3Controller::<Lanes<N>>::splat(model, gains).unwrap();
+        let mut scalars: [Se3Controller; N] = core::array::from_fn(|_| Se3Controller::new(model, gains).unwrap());
+        let mut rng = Lcg(0x5e3_0000 + 2 * N as u64 + u64::from(with_body));
+        let (mut floored, mut capped, mut tilted) = (0, 0, 0);
+        for step in 0..400 {
+            if step == 150 {
+                scalars[0].reset();
+                lanes.reset_lane(0);
+            }
+            let dt = dt_at(step);
+            let mut m = Measurement::<Lanes<N>>::default();
+            let mut r = Reference::<Lanes<N>>::default();
+            let mut want = [Command::default(); N];
+            for (i, c) in scalars.iter_mut().enumerate() {
+                let (mi, ri, _) = flight_inputs(&mut rng, i, step, with_body);
+                m.put_lane(i, mi);
+                r.put_lane(i, ri);
+                want[i] = if step % 2 == 0 { c.update(&mi.euler, &ri, dt) } else { c.update_measured(&mi, &ri, dt) };
+            }
+            let got = if step % 2 == 0 { lanes.update(&m.euler, &r, dt) } else { lanes.update_measured(&m, &r, dt) };
+            for (i, c) in scalars.iter().enumerate() {
+                let g = got.get_lane(i);
+                assert_eq!(g.thrust.to_bits(), want[i].thrust.to_bits(), "thrust, lane {i}, step {step}");
+                for a in 0..3 {
+                    assert_eq!(g.torque[a].to_bits(), want[i].torque[a].to_bits(), "torque {a}, lane {i}, step {step}");
+                }
+                let t = c.telemetry();
+                assert_eq!(telemetry_bits(&lanes.telemetry().get_lane(i)), telemetry_bits(t), "lane {i}, step {step}");
+                let finite = want[i].thrust.is_finite();
+                floored += usize::from(finite && want[i].thrust == gains.min_thrust);
+                capped += usize::from(finite && want[i].thrust == gains.max_thrust);
+                tilted += usize::from(finite && t.thrust_limited && want[i].thrust != gains.max_thrust);
+            }
+        }
+        // The branches the inputs were built for were taken.
+        assert!(floored > 50 && capped > 50 && tilted > 50, "{floored} {capped} {tilted}");
+    }
+
+    #[test]
+    fn four_lanes_fly_as_four_scalar_controllers() {
+        lanes_fly_as_scalars::<4>(false);
+        lanes_fly_as_scalars::<4>(true);
+    }
+
+    #[test]
+    fn eight_lanes_fly_as_eight_scalar_controllers() {
+        lanes_fly_as_scalars::<8>(false);
+        lanes_fly_as_scalars::<8>(true);
     }
 
     #[test]
