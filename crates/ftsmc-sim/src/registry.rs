@@ -39,13 +39,8 @@ pub fn build(name: &str, scenario: &Scenario) -> Result<BoxedController, String>
 pub fn build_lanes<const N: usize>(
     name: &str,
     scenario: &Scenario,
-) -> Result<Box<dyn ftsmc_core::cascade::Controller<ftsmc_core::lanes::Lanes<N>> + Send>, String> {
-    let mut flights = Vec::with_capacity(N);
-    for _ in 0..N {
-        flights.push(build(name, scenario)?);
-    }
-    let flights: [BoxedController; N] = flights.try_into().map_err(|_| "lane count".to_string())?;
-    Ok(Box::new(crate::controllers::per_lane::PerLane::new(flights)))
+) -> Result<crate::controllers::LaneController<N>, String> {
+    crate::controllers::build_lanes::<N>(name, &scenario.gains, &scenario.build_context())
 }
 
 /// True when flights of `a` and `b` may share one batch of lanes: the same

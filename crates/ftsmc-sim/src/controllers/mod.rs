@@ -92,6 +92,9 @@ pub mod tune_param;
 /// A boxed controller ready to fly.
 pub type BoxedController = Box<dyn Controller + Send>;
 
+/// A controller flying `N` lanes, as [`build_lanes`] returns it.
+pub type LaneController<const N: usize> = Box<dyn Controller<ftsmc_core::lanes::Lanes<N>> + Send>;
+
 /// The three controllers compared in the paper, in table order; also the
 /// default `controllers` list of a scenario.
 pub const PAPER_CONTROLLERS: [&str; 3] = ["ranftsmc", "tsm-sta", "ftaftsmc"];
@@ -233,6 +236,17 @@ pub trait Declaration {
     type Section: GainSection;
     /// Build the controller from its gain section and the context.
     fn build(gains: &Self::Section, ctx: &BuildContext) -> Result<BoxedController, String>;
+    /// The same controller on `N` lanes ([`ftsmc_core::lanes`]), when it has
+    /// a lane implementation: `None` (the default) flies `N` one-flight
+    /// controllers side by side instead ([`per_lane::PerLane`]), the same
+    /// bits without the vector speed-up.
+    fn build_lanes<const N: usize>(
+        gains: &Self::Section,
+        ctx: &BuildContext,
+    ) -> Option<Result<LaneController<N>, String>> {
+        let _ = (gains, ctx);
+        None
+    }
     /// Hand the per-axis sliding law of channel `axis` (0..6 = x, y, z, φ,
     /// θ, ψ) to `visitor`; `None` (the default) for a controller without
     /// per-axis sliding laws (full-state controllers).
@@ -425,6 +439,29 @@ macro_rules! declare_controllers {
             $($(
                 if name == <$controller as Declaration>::NAME {
                     return <$controller as Declaration>::build(&gains.$field, ctx);
+                }
+            )+)+
+            Err(known_names())
+        }
+
+        /// Build the declared controller `name` on `N` lanes: its lane
+        /// implementation, or `N` one-flight controllers side by side
+        /// ([`per_lane::PerLane`]). Unknown `name`: the declared names.
+        pub fn build_lanes<const N: usize>(name: &str, gains: &GainSections, ctx: &BuildContext) -> Result<LaneController<N>, String> {
+            $($(
+                if name == <$controller as Declaration>::NAME {
+                    if let Some(built) = <$controller as Declaration>::build_lanes::<N>(&gains.$field, ctx) {
+                        return built;
+                    }
+                    let mut flights = Vec::with_capacity(N);
+                    for _ in 0..N {
+                        flights.push(<$controller as Declaration>::build(&gains.$field, ctx)?);
+                    }
+                    let flights: [BoxedController; N] = match flights.try_into() {
+                        Ok(f) => f,
+                        Err(_) => unreachable!("N controllers built"),
+                    };
+                    return Ok(Box::new(per_lane::PerLane::new(flights)));
                 }
             )+)+
             Err(known_names())

@@ -60,6 +60,18 @@ impl Declaration for Pid {
     fn build(gains: &Self::Section, ctx: &BuildContext) -> Result<BoxedController, String> {
         Ok(Box::new(PidController::new(ctx.plant, *gains).map_err(|e| e.to_string())?))
     }
+
+    fn build_lanes<const N: usize>(
+        gains: &Self::Section,
+        ctx: &BuildContext,
+    ) -> Option<Result<super::LaneController<N>, String>> {
+        let built = PidController::<ftsmc_core::lanes::Lanes<N>>::splat(ctx.plant, *gains);
+        Some(
+            built
+                .map(|c| Box::new(super::on_isa::OnIsa::detected(c)) as super::LaneController<N>)
+                .map_err(|e| e.to_string()),
+        )
+    }
 }
 
 /// What `ftsmc tune` searches for `pid`: factors on PX4's gains, per loop

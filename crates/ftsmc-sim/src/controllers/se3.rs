@@ -44,6 +44,18 @@ impl Declaration for Se3 {
     fn build(gains: &Self::Section, ctx: &BuildContext) -> Result<BoxedController, String> {
         Ok(Box::new(Se3Controller::new(ctx.plant, *gains).map_err(|e| e.to_string())?))
     }
+
+    fn build_lanes<const N: usize>(
+        gains: &Self::Section,
+        ctx: &BuildContext,
+    ) -> Option<Result<super::LaneController<N>, String>> {
+        let built = Se3Controller::<ftsmc_core::lanes::Lanes<N>>::splat(ctx.plant, *gains);
+        Some(
+            built
+                .map(|c| Box::new(super::on_isa::OnIsa::detected(c)) as super::LaneController<N>)
+                .map_err(|e| e.to_string()),
+        )
+    }
 }
 
 /// What `ftsmc tune` searches for `se3`: factors on k_x, k_v (horizontal and
