@@ -58,6 +58,19 @@
 //!   itself does not. With no report, or reports of `false`, the cascade is
 //!   bit-identical to the option off. [`SlidingTelemetry::adaptation_frozen`]
 //!   reports when the states were held.
+//!
+//! # Lanes
+//!
+//! `Cascade<L, R>` is generic over the number type ([`crate::lanes`]):
+//! `Cascade<FtaftsmcAxis>` is one flight (`R = f64`), and
+//! `Cascade<FtaftsmcAxis<Lanes<N>>, Lanes<N>>` (built with
+//! [`Cascade::with_laws`]) flies `N` flights with one configuration, each
+//! lane with the bits of the one-flight cascade. Everything above holds per
+//! lane: the attitude demand, the thrust and tilt limits, α̂ and its freeze
+//! (the saturation report is a per-lane mask), the command filter (a lane
+//! restarted with [`Controller::reset_lane`] starts its filter again), and
+//! the refusal of a non-finite state or reference (NaN command in that
+//! lane, every state of that lane kept).
 
 use crate::allocation::{residual_speed, rotor_speeds};
 use crate::lanes::{branch, Blend, Lanewise, Mask, Real};

@@ -4,6 +4,12 @@
 //! Eq. 53–55) channels; the mass adaptation of §3.2 lives in the cascade.
 //!
 //! Notation: `sig^a(v) = |v|^a sign(v)`; `e = q − q_d`, `ė = q̇ − q̇_d`.
+//!
+//! The surface, the reaching law and [`FtaftsmcAxis`] are generic over the
+//! number type ([`crate::lanes`]): `f64` for one flight (the default), a
+//! lane type for several flights sharing the gains, each lane with the bits
+//! of the one-flight law (the freeze flag is a per-lane mask, the
+//! non-finite-input guard acts per lane).
 
 use crate::lanes::{branch, Blend, Lanewise, Mask, Real};
 use crate::law::{
