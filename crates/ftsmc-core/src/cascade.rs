@@ -58,13 +58,27 @@
 //!   itself does not. With no report, or reports of `false`, the cascade is
 //!   bit-identical to the option off. [`SlidingTelemetry::adaptation_frozen`]
 //!   reports when the states were held.
+//!
+//! # Lanes
+//!
+//! `Cascade<L, R>` is generic over the number type ([`crate::lanes`]):
+//! `Cascade<FtaftsmcAxis>` is one flight (`R = f64`), and
+//! `Cascade<FtaftsmcAxis<Lanes<N>>, Lanes<N>>` (built with
+//! [`Cascade::with_laws`]) flies `N` flights with one configuration, each
+//! lane with the bits of the one-flight cascade. Everything above holds per
+//! lane: the attitude demand, the thrust and tilt limits, α̂ and its freeze
+//! (the saturation report is a per-lane mask), the command filter (a lane
+//! restarted with [`Controller::reset_lane`] starts its filter again), and
+//! the refusal of a non-finite state or reference (NaN command in that
+//! lane, every state of that lane kept).
 
 use crate::allocation::{residual_speed, rotor_speeds};
+use crate::lanes::{branch, Blend, Lanewise, Mask, Real};
 use crate::law::{
     check_closed, check_gain, check_left_open, check_open, saturate, AxisLaw, GainError, INPUT_LIMIT, MAX_ESTIMATES,
     STATE_LIMIT,
 };
-use crate::math::{asin, cos, sin_cos, sqrt, SinCosCache};
+use crate::math::{finite_probe, sin_cos};
 use crate::model::{Command, QuadState, QuadrotorParams, Reference};
 
 // The controller interface lives in its own module; re-exported here so
@@ -298,45 +312,79 @@ pub struct CascadeConfig {
     pub mass_adaptation: MassAdaptation,
 }
 
+/// One command-filter channel: value, rate and whether it has started
+/// (per lane: a lane restarted by [`Controller::reset_lane`] starts again).
 #[derive(Clone, Copy, Debug, Default)]
-struct FilterState {
-    value: f64,
-    rate: f64,
-    initialised: bool,
+struct FilterState<R: Real = f64> {
+    value: R,
+    rate: R,
+    initialised: R::Mask,
+}
+crate::lanewise_struct!(FilterState { value, rate, initialised });
+
+/// `(sin ψ_d, cos ψ_d)` of the last reference heading of each lane, computed
+/// again only for the lanes whose heading bits changed: [`sin_cos`] of each
+/// lane's argument, bit for bit (one [`crate::math::SinCosCache`] per lane).
+#[derive(Clone, Copy, Debug)]
+struct YawSinCos<R: Real = f64> {
+    arg: R,
+    sin: R,
+    cos: R,
+}
+
+impl<R: Real> YawSinCos<R> {
+    fn new() -> Self {
+        let (s, c) = sin_cos(0.0);
+        Self { arg: R::splat(0.0), sin: R::splat(s), cos: R::splat(c) }
+    }
+
+    #[inline]
+    fn get(&mut self, x: R) -> (R, R) {
+        for i in 0..R::LANES {
+            let xi = x.get_lane(i);
+            if xi.to_bits() != self.arg.get_lane(i).to_bits() {
+                let (s, c) = sin_cos(xi);
+                self.sin.put_lane(i, s);
+                self.cos.put_lane(i, c);
+                self.arg.put_lane(i, xi);
+            }
+        }
+        (self.sin, self.cos)
+    }
 }
 
 /// Smallest `cφ cθ` used when dividing by it (tilt ≈ 87°); beyond this the
 /// simulation declares divergence anyway.
 const MIN_TILT_COSINE: f64 = 0.05;
 
-/// The cascade of six axis laws of type `L`.
+/// The cascade of six axis laws of type `L`, of one flight (`R = f64`, the
+/// default) or of several side by side (`R` a lane type with `L` the laws
+/// on lanes, e.g. `Cascade<FtaftsmcAxis<Lanes<4>>, Lanes<4>>`): the
+/// configuration is shared, lane `i`'s command, telemetry and states have
+/// the bits of the one-flight cascade fed lane `i`'s states and references.
 #[derive(Clone, Debug)]
-pub struct Cascade<L: AxisLaw> {
+pub struct Cascade<L, R: Real = f64> {
     /// Configuration.
     pub config: CascadeConfig,
     /// Laws for `[x, y, z, φ, θ, ψ]`.
     pub laws: [L; 6],
-    filter: [FilterState; 2],
-    alpha_hat: f64,
-    last_command: Command,
-    telemetry: Telemetry,
+    filter: [FilterState<R>; 2],
+    alpha_hat: R,
+    last_command: Command<R>,
+    telemetry: Telemetry<R>,
     /// `sin(max_tilt)`, the clamp of the asin arguments of Eq. 52.
     tilt_limit: f64,
     /// Last [`Controller::actuator_feedback`] report.
-    actuator_saturated: bool,
+    actuator_saturated: R::Mask,
+    /// The freeze flag last given to the laws
+    /// ([`AxisLaw::set_adaptation_frozen`]), kept in the lanes whose
+    /// update is refused (non-finite input) as the scalar cascade keeps it.
+    laws_frozen: R::Mask,
     /// `sin`, `cos` of the last reference heading ψ_d (Eq. 52).
-    yaw_sin_cos: SinCosCache,
+    yaw_sin_cos: YawSinCos<R>,
 }
 
 impl<L: AxisLaw> Cascade<L> {
-    /// The telemetry before the first update: zeros, and α̂ at `alpha_hat`.
-    fn initial_telemetry(alpha_hat: f64) -> Telemetry {
-        Telemetry {
-            sliding_mode: Some(SlidingTelemetry { alpha_hat, ..SlidingTelemetry::default() }),
-            ..Telemetry::default()
-        }
-    }
-
     /// Build from a configuration and the six channel laws `[x, y, z, φ, θ, ψ]`,
     /// after validating everything: the nominal model
     /// ([`QuadrotorParams::check`]), the settings ([`CascadeSettings::check`],
@@ -348,14 +396,10 @@ impl<L: AxisLaw> Cascade<L> {
     /// finite command for every finite state, reference and
     /// `0 <= dt <= DT_MAX`, and a NaN command, with every internal state
     /// left unchanged, when any of them is not finite.
+    ///
+    /// One flight; [`Cascade::with_laws`] builds the cascade on lanes.
     pub fn new(config: CascadeConfig, laws: [L; 6]) -> Result<Self, GainError> {
-        config.model.check()?;
-        config.settings.check()?;
-        config.mass_adaptation.check()?;
-        for law in &laws {
-            law.check_gains()?;
-        }
-        Ok(Self::new_unchecked(config, laws))
+        Self::with_laws(config, laws)
     }
 
     /// [`Cascade::new`] without validation. Never panics, whatever the
@@ -363,39 +407,7 @@ impl<L: AxisLaw> Cascade<L> {
     /// NaN or meaningless commands instead); the finiteness guarantee of
     /// [`Cascade::new`] holds only for configurations it would accept.
     pub fn new_unchecked(config: CascadeConfig, laws: [L; 6]) -> Self {
-        let hover = Command { thrust: config.model.mass * config.model.gravity, torque: [0.0; 3] };
-        Self {
-            config,
-            laws,
-            filter: [FilterState::default(); 2],
-            alpha_hat: config.mass_adaptation.alpha_hat0,
-            last_command: hover,
-            telemetry: Self::initial_telemetry(config.mass_adaptation.alpha_hat0),
-            tilt_limit: crate::math::sin(config.settings.max_tilt),
-            actuator_saturated: false,
-            yaw_sin_cos: SinCosCache::new(),
-        }
-    }
-
-    /// Current mass-ratio estimate α̂.
-    pub fn alpha_hat(&self) -> f64 {
-        self.alpha_hat
-    }
-
-    /// Last [`Controller::actuator_feedback`] report (false until the first).
-    pub fn actuator_saturated(&self) -> bool {
-        self.actuator_saturated
-    }
-
-    /// `thrust` bounded to `[lo, hi]` (no `f64::clamp`: never panics);
-    /// unchanged without bounds.
-    #[inline]
-    fn bound_thrust(thrust: f64, limits: Option<[f64; 2]>) -> f64 {
-        match limits {
-            Some([lo, _]) if thrust < lo => lo,
-            Some([_, hi]) if thrust > hi => hi,
-            _ => thrust,
-        }
+        Self::with_laws_unchecked(config, laws)
     }
 
     /// Desired roll and pitch from the virtual controls (Eq. 52 corrected:
@@ -407,51 +419,141 @@ impl<L: AxisLaw> Cascade<L> {
     /// [`Cascade::desired_roll_pitch`] with the clamp `limit = sin(max_tilt)` precomputed.
     #[inline]
     pub fn desired_roll_pitch_limited(ux: f64, uy: f64, yaw_d: f64, limit: f64) -> [f64; 2] {
-        Self::desired_roll_pitch_at(ux, uy, sin_cos(yaw_d), limit)
+        desired_roll_pitch_at(ux, uy, sin_cos(yaw_d), limit)
+    }
+}
+
+/// `thrust` bounded to `[lo, hi]` (no `f64::clamp`: never panics; the lower
+/// bound tested first); unchanged without bounds.
+#[inline]
+fn bound_thrust<R: Real>(thrust: R, limits: Option<[f64; 2]>) -> R {
+    match limits {
+        Some([lo, hi]) => {
+            let (lo, hi) = (R::splat(lo), R::splat(hi));
+            R::select(thrust.lt(lo), lo, R::select(thrust.gt(hi), hi, thrust))
+        }
+        None => thrust,
+    }
+}
+
+/// [`Cascade::desired_roll_pitch_limited`] with `(sin ψ_d, cos ψ_d)` given,
+/// per lane for lanes.
+#[inline]
+fn desired_roll_pitch_at<R: Real>(ux: R, uy: R, (s_psi, c_psi): (R, R), limit: f64) -> [R; 2] {
+    let limit = R::splat(limit);
+    // `saturate`, not `f64::clamp`: it does not panic on a NaN limit.
+    let sin_roll = saturate(ux * s_psi - uy * c_psi, limit);
+    let roll = sin_roll.asin();
+    // cos φ_d = √((1 − sin φ_d)(1 + sin φ_d)), equal to cos(asin(·)) to
+    // rounding (|sin φ_d| <= sin(max_tilt) < 1), without the cosine.
+    let cos_roll = ((R::splat(1.0) - sin_roll) * (sin_roll + 1.0)).sqrt();
+    let pitch = saturate((ux * c_psi + uy * s_psi) / cos_roll, limit).asin();
+    [roll, pitch]
+}
+
+/// Every component of the reference is finite (per lane).
+#[inline]
+fn reference_finite<R: Real>(r: &Reference<R>) -> R::Mask {
+    (finite_probe(&r.position)
+        + finite_probe(&r.velocity)
+        + finite_probe(&r.acceleration)
+        + finite_probe(&[r.yaw, r.yaw_rate, r.yaw_acceleration]))
+    .eq(R::splat(0.0))
+}
+
+impl<R: Real, L: AxisLaw<R>> Cascade<L, R> {
+    /// The telemetry before the first update: zeros, and α̂ at `alpha_hat`.
+    fn initial_telemetry(alpha_hat: f64) -> Telemetry<R> {
+        Telemetry {
+            sliding_mode: Some(SlidingTelemetry { alpha_hat: R::splat(alpha_hat), ..SlidingTelemetry::default() }),
+            ..Telemetry::default()
+        }
     }
 
-    /// [`Cascade::desired_roll_pitch_limited`] with `(sin ψ_d, cos ψ_d)` given.
-    #[inline]
-    fn desired_roll_pitch_at(ux: f64, uy: f64, (s_psi, c_psi): (f64, f64), limit: f64) -> [f64; 2] {
-        // `saturate`, not `f64::clamp`: it does not panic on a NaN limit.
-        let sin_roll = saturate(ux * s_psi - uy * c_psi, limit);
-        let roll = asin(sin_roll);
-        // cos φ_d = √((1 − sin φ_d)(1 + sin φ_d)), equal to cos(asin(·)) to
-        // rounding (|sin φ_d| <= sin(max_tilt) < 1), without the cosine.
-        let cos_roll = sqrt((1.0 - sin_roll) * (1.0 + sin_roll));
-        let pitch = asin(saturate((ux * c_psi + uy * s_psi) / cos_roll, limit));
-        [roll, pitch]
+    /// The hover command `m g`, zero torques (the command before the first
+    /// update, for the gyroscopic cancellation).
+    fn hover(model: &QuadrotorParams) -> Command<R> {
+        Command { thrust: R::splat(model.mass * model.gravity), torque: [R::splat(0.0); 3] }
     }
 
-    fn attitude_reference(&mut self, demand: [f64; 2], state: &QuadState, dt: f64) -> ([f64; 2], [f64; 2], [f64; 2]) {
+    /// [`Cascade::new`] for any number type: the same validation, every
+    /// lane at the initial states.
+    pub fn with_laws(config: CascadeConfig, laws: [L; 6]) -> Result<Self, GainError> {
+        config.model.check()?;
+        config.settings.check()?;
+        config.mass_adaptation.check()?;
+        for law in &laws {
+            law.check_gains()?;
+        }
+        Ok(Self::with_laws_unchecked(config, laws))
+    }
+
+    /// [`Cascade::new_unchecked`] for any number type.
+    pub fn with_laws_unchecked(config: CascadeConfig, laws: [L; 6]) -> Self {
+        Self {
+            config,
+            laws,
+            filter: [FilterState::default(); 2],
+            alpha_hat: R::splat(config.mass_adaptation.alpha_hat0),
+            last_command: Self::hover(&config.model),
+            telemetry: Self::initial_telemetry(config.mass_adaptation.alpha_hat0),
+            tilt_limit: crate::math::sin(config.settings.max_tilt),
+            actuator_saturated: R::Mask::splat(false),
+            laws_frozen: R::Mask::splat(false),
+            yaw_sin_cos: YawSinCos::new(),
+        }
+    }
+
+    /// Current mass-ratio estimate α̂ (per lane).
+    pub fn alpha_hat(&self) -> R {
+        self.alpha_hat
+    }
+
+    /// Last [`Controller::actuator_feedback`] report (false until the first).
+    pub fn actuator_saturated(&self) -> R::Mask {
+        self.actuator_saturated
+    }
+
+    /// The command filter's output `(r, ṙ, r̈)` for the Eq. 52 demand, and
+    /// its states advanced by `dt` (per lane: a lane not yet initialised
+    /// starts from its own demand or attitude).
+    fn attitude_reference(&mut self, demand: [R; 2], state: &QuadState<R>, dt: f64) -> ([R; 2], [R; 2], [R; 2]) {
+        let zero = R::splat(0.0);
         match self.config.settings.attitude_derivatives {
-            AttitudeDerivatives::Zero => (demand, [0.0; 2], [0.0; 2]),
+            AttitudeDerivatives::Zero => (demand, [zero; 2], [zero; 2]),
             AttitudeDerivatives::CommandFilter => {
                 let wn = self.config.settings.command_filter.natural_frequency;
                 let zeta = self.config.settings.command_filter.damping;
-                let mut value = [0.0; 2];
-                let mut rate = [0.0; 2];
-                let mut accel = [0.0; 2];
+                let init = self.config.settings.filter_init;
+                let limit = R::splat(STATE_LIMIT);
+                let mut value = [zero; 2];
+                let mut rate = [zero; 2];
+                let mut accel = [zero; 2];
                 for i in 0..2 {
-                    let f = &mut self.filter[i];
-                    if !f.initialised {
-                        *f = match self.config.settings.filter_init {
-                            FilterInit::FirstDemand => FilterState { value: demand[i], rate: 0.0, initialised: true },
+                    let current = self.filter[i];
+                    let f = branch(
+                        current.initialised,
+                        || current,
+                        || match init {
+                            FilterInit::FirstDemand => {
+                                FilterState { value: demand[i], rate: zero, initialised: R::Mask::splat(true) }
+                            }
                             FilterInit::VehicleAttitude => FilterState {
-                                value: saturate(state.attitude[i], STATE_LIMIT),
-                                rate: saturate(state.angular_rate[i], STATE_LIMIT),
-                                initialised: true,
+                                value: saturate(state.attitude[i], limit),
+                                rate: saturate(state.angular_rate[i], limit),
+                                initialised: R::Mask::splat(true),
                             },
-                        };
-                    }
-                    let a = wn * wn * (demand[i] - f.value) - 2.0 * zeta * wn * f.rate;
+                        },
+                    );
+                    let a = (demand[i] - f.value) * (wn * wn) - f.rate * (2.0 * zeta * wn);
                     value[i] = f.value;
                     rate[i] = f.rate;
                     accel[i] = a;
                     // Semi-implicit Euler on the control clock, states
                     // saturated so that an unstable ω_n·dt stays finite.
-                    f.rate = saturate(f.rate + dt * a, STATE_LIMIT);
-                    f.value = saturate(f.value + dt * f.rate, STATE_LIMIT);
+                    let next_rate = saturate(f.rate + a * dt, limit);
+                    let next_value = saturate(f.value + next_rate * dt, limit);
+                    self.filter[i] = FilterState { value: next_value, rate: next_rate, initialised: f.initialised };
                 }
                 (value, rate, accel)
             }
@@ -459,7 +561,7 @@ impl<L: AxisLaw> Cascade<L> {
     }
 }
 
-impl<L: AxisLaw> Controller for Cascade<L> {
+impl<R: Real, L: AxisLaw<R>> Controller<R> for Cascade<L, R> {
     fn name(&self) -> &'static str {
         L::NAME
     }
@@ -468,9 +570,19 @@ impl<L: AxisLaw> Controller for Cascade<L> {
     /// on meaningful inputs: commanded accelerations and the angular rates
     /// used in the cancellation terms clamped to `±INPUT_LIMIT`; `S_z` in
     /// Eq. 44, α̂ and the command-filter states saturated to `±STATE_LIMIT`.
-    fn update(&mut self, state: &QuadState, reference: &Reference, dt: f64) -> Command {
-        if !(dt.is_finite() && state.is_finite() && crate::setpoint::reference_finite(reference)) {
-            return Command { thrust: f64::NAN, torque: [f64::NAN; 3] };
+    ///
+    /// Lanes: a lane whose state or reference is not finite gets a NaN
+    /// command and keeps every state (its laws are fed NaN errors, which
+    /// leaves them untouched by the [`AxisLaw::update`] contract); the
+    /// other lanes fly on.
+    fn update(&mut self, state: &QuadState<R>, reference: &Reference<R>, dt: f64) -> Command<R> {
+        let nan = Command { thrust: R::splat(f64::NAN), torque: [R::splat(f64::NAN); 3] };
+        if !dt.is_finite() {
+            return nan;
+        }
+        let inputs_ok = state.is_finite() & reference_finite(reference);
+        if !inputs_ok.any() {
+            return nan;
         }
         // Finite inputs whose differences overflow (x = 1e308, x_d = -1e308)
         // are non-finite intermediates: the same NaN, before any state moves
@@ -486,93 +598,102 @@ impl<L: AxisLaw> Controller for Cascade<L> {
             yaw[0],
             yaw[1],
         ];
-        if crate::math::finite_probe(&differences) != 0.0 {
-            return Command { thrust: f64::NAN, torque: [f64::NAN; 3] };
+        let ok = inputs_ok & finite_probe(&differences).eq(R::splat(0.0));
+        if !ok.any() {
+            return nan;
         }
+        // Lanes whose input is refused: NaN errors to the laws (they keep
+        // their states), every cascade state restored below. For one flight
+        // `ok` is true here and this is the identity.
+        let refuse = |x: R| R::select(ok, x, R::splat(f64::NAN));
         let model = self.config.model;
         let m = model.mass;
         let g = model.gravity;
         let settings = self.config.settings;
+        let limit = R::splat(INPUT_LIMIT);
+        let old_filter = self.filter;
 
         // Saturation remedy: hold every adaptive state after a saturation
         // report. Set on all six laws every update (a store), so a law
         // replaced through the public `laws` field is still governed.
-        let frozen = settings.freeze_adaptation_on_saturation && self.actuator_saturated;
+        let frozen =
+            if settings.freeze_adaptation_on_saturation { self.actuator_saturated } else { R::Mask::splat(false) };
+        let laws_frozen = R::Mask::blend(ok, frozen, self.laws_frozen);
+        self.laws_frozen = laws_frozen;
         for law in &mut self.laws {
-            law.set_adaptation_frozen(frozen);
+            law.set_adaptation_frozen(laws_frozen);
         }
 
         // Outer loop: commanded accelerations (Eq. 18–20).
-        let mut accel = [0.0; 3];
+        let mut accel = [R::splat(0.0); 3];
         for i in 0..3 {
-            let e = state.position[i] - reference.position[i];
+            let e = refuse(state.position[i] - reference.position[i]);
             let e_dot = state.velocity[i] - reference.velocity[i];
-            accel[i] = saturate(reference.acceleration[i] + self.laws[i].update(e, e_dot, dt), INPUT_LIMIT);
+            accel[i] = saturate(reference.acceleration[i] + self.laws[i].update(e, e_dot, dt), limit);
         }
         let [phi, theta, _] = state.attitude;
-        let tilt_cos = (cos(phi) * cos(theta)).max(MIN_TILT_COSINE);
-        let nominal_thrust = m * (accel[2] + g) / tilt_cos;
+        let tilt_cos = (phi.cos() * theta.cos()).max(R::splat(MIN_TILT_COSINE));
+        let nominal_thrust = (accel[2] + g) * m / tilt_cos;
 
         // Mass adaptation (§3.2, Eq. 44): U1 = α̂ u1.
         let ma = self.config.mass_adaptation;
         let unbounded_thrust = if ma.enabled { self.alpha_hat * nominal_thrust } else { nominal_thrust };
         // Saturation remedy: U1 bounded to what the rotors can give, before
         // Remark 2 uses it, so the attitude demand matches the real thrust.
-        let thrust = Self::bound_thrust(unbounded_thrust, settings.thrust_limits);
-        let horizontal_mass = if ma.enabled && ma.compensate_horizontal { self.alpha_hat * m } else { m };
-        if ma.enabled && !frozen {
-            let s_z = saturate(self.laws[2].sliding_variable(), STATE_LIMIT);
-            let rate = -ma.beta1 * (s_z * nominal_thrust * tilt_cos / m + ma.beta2 * self.alpha_hat);
-            self.alpha_hat += dt * rate;
+        let thrust = bound_thrust(unbounded_thrust, settings.thrust_limits);
+        let horizontal_mass = if ma.enabled && ma.compensate_horizontal { self.alpha_hat * m } else { R::splat(m) };
+        if ma.enabled {
+            let s_z = saturate(self.laws[2].sliding_variable(), R::splat(STATE_LIMIT));
+            let rate = (s_z * nominal_thrust * tilt_cos / m + self.alpha_hat * ma.beta2) * -ma.beta1;
+            let mut alpha_hat = self.alpha_hat + rate * dt;
             if let Some([lo, hi]) = ma.alpha_hat_bounds {
                 // Not `f64::clamp`, which panics on NaN or inverted bounds.
-                if self.alpha_hat < lo {
-                    self.alpha_hat = lo;
-                } else if self.alpha_hat > hi {
-                    self.alpha_hat = hi;
-                }
+                let (lo, hi) = (R::splat(lo), R::splat(hi));
+                alpha_hat = R::select(alpha_hat.lt(lo), lo, R::select(alpha_hat.gt(hi), hi, alpha_hat));
             }
-            self.alpha_hat = saturate(self.alpha_hat, STATE_LIMIT);
+            let alpha_hat = saturate(alpha_hat, R::splat(STATE_LIMIT));
+            self.alpha_hat = R::select(ok & !frozen, alpha_hat, self.alpha_hat);
         }
 
         // Remark 2: u_x = m a_x / U1, u_y = m a_y / U1; guard U1 → 0.
-        let thrust_for_inversion = thrust.max(1e-3 * m * g);
+        let thrust_for_inversion = thrust.max(R::splat(1e-3 * m * g));
         let ux = horizontal_mass * accel[0] / thrust_for_inversion;
         let uy = horizontal_mass * accel[1] / thrust_for_inversion;
-        let demand = Self::desired_roll_pitch_at(ux, uy, self.yaw_sin_cos.get(reference.yaw), self.tilt_limit);
+        let demand = desired_roll_pitch_at(ux, uy, self.yaw_sin_cos.get(reference.yaw), self.tilt_limit);
         let (att_ref, att_rate, att_accel) = self.attitude_reference(demand, state, dt);
+        self.filter = <[FilterState<R>; 2]>::blend(ok, self.filter, old_filter);
         let reference_attitude = [att_ref[0], att_ref[1], reference.yaw];
         let reference_rate = [att_rate[0], att_rate[1], reference.yaw_rate];
         let reference_accel = [att_accel[0], att_accel[1], reference.yaw_acceleration];
 
         // Inner loop: angular accelerations then torques (Eq. 56–58).
-        let mut angular_accel = [0.0; 3];
+        let mut angular_accel = [R::splat(0.0); 3];
         for i in 0..3 {
-            let e = state.attitude[i] - reference_attitude[i];
+            let e = refuse(state.attitude[i] - reference_attitude[i]);
             let e_dot = state.angular_rate[i] - reference_rate[i];
-            angular_accel[i] = saturate(reference_accel[i] + self.laws[3 + i].update(e, e_dot, dt), INPUT_LIMIT);
+            angular_accel[i] = saturate(reference_accel[i] + self.laws[3 + i].update(e, e_dot, dt), limit);
         }
-        let [p, q, r] = state.angular_rate.map(|w| saturate(w, INPUT_LIMIT));
+        let [p, q, r] = state.angular_rate.map(|w| saturate(w, limit));
         let [i1, i2, i3] = model.inertia;
         let [k1, k2, k3] = model.drag_rotational;
         let omega_bar = residual_speed(&rotor_speeds(&model, &self.last_command, f64::INFINITY));
         let jr = model.rotor_inertia;
-        // Plant (SPEC §1): I φ̈ = coupling − J_r Ω̄ θ̇ − K φ̇|φ̇| + u, so u = I v − (…).
+        // Plant (paper Eq. 1): I φ̈ = coupling − J_r Ω̄ θ̇ − K φ̇|φ̇| + u, so u = I v − (…).
         let torque = [
-            i1 * angular_accel[0] - ((i2 - i3) * q * r - jr * omega_bar * q - k1 * p * p.abs()),
-            i2 * angular_accel[1] - ((i3 - i1) * p * r + jr * omega_bar * p - k2 * q * q.abs()),
-            i3 * angular_accel[2] - ((i1 - i2) * p * q - k3 * r * r.abs()),
+            angular_accel[0] * i1 - (q * (i2 - i3) * r - omega_bar * jr * q - p * k1 * p.abs()),
+            angular_accel[1] * i2 - (p * (i3 - i1) * r + omega_bar * jr * p - q * k2 * q.abs()),
+            angular_accel[2] * i3 - (p * (i1 - i2) * q - r * k3 * r.abs()),
         ];
         let command = Command { thrust, torque };
-        self.last_command = command;
+        self.last_command = Command::blend(ok, command, self.last_command);
 
-        let mut sliding = [0.0; 6];
-        let mut estimates = [[0.0; MAX_ESTIMATES]; 6];
+        let mut sliding = [R::splat(0.0); 6];
+        let mut estimates = [[R::splat(0.0); MAX_ESTIMATES]; 6];
         for i in 0..6 {
             sliding[i] = self.laws[i].sliding_variable();
             estimates[i] = self.laws[i].estimates();
         }
-        self.telemetry = Telemetry {
+        let telemetry = Telemetry {
             attitude_reference: reference_attitude,
             attitude_reference_rate: reference_rate,
             attitude_reference_acceleration: reference_accel,
@@ -580,13 +701,14 @@ impl<L: AxisLaw> Controller for Cascade<L> {
             estimates,
             commanded_acceleration: accel,
             nominal_thrust,
-            thrust_limited: thrust != unbounded_thrust,
+            thrust_limited: !thrust.eq(unbounded_thrust),
             sliding_mode: Some(SlidingTelemetry { sliding, alpha_hat: self.alpha_hat, adaptation_frozen: frozen }),
         };
-        command
+        self.telemetry = Telemetry::blend(ok, telemetry, self.telemetry);
+        Command::blend(ok, command, nan)
     }
 
-    fn telemetry(&self) -> &Telemetry {
+    fn telemetry(&self) -> &Telemetry<R> {
         &self.telemetry
     }
 
@@ -602,15 +724,34 @@ impl<L: AxisLaw> Controller for Cascade<L> {
         for law in &mut self.laws {
             law.reset();
         }
-        let hover = Command { thrust: self.config.model.mass * self.config.model.gravity, torque: [0.0; 3] };
         self.filter = [FilterState::default(); 2];
-        self.alpha_hat = self.config.mass_adaptation.alpha_hat0;
-        self.last_command = hover;
-        self.actuator_saturated = false;
-        self.telemetry = Self::initial_telemetry(self.alpha_hat);
+        self.alpha_hat = R::splat(self.config.mass_adaptation.alpha_hat0);
+        self.last_command = Self::hover(&self.config.model);
+        self.actuator_saturated = R::Mask::splat(false);
+        self.laws_frozen = R::Mask::splat(false);
+        self.telemetry = Self::initial_telemetry(self.config.mass_adaptation.alpha_hat0);
     }
 
-    fn actuator_feedback(&mut self, saturated: bool) {
+    /// Lane `lane` back to the initial states (laws through
+    /// [`AxisLaw::reset_lane`], filter, α̂, last command, saturation report,
+    /// telemetry), the other lanes untouched.
+    fn reset_lane(&mut self, lane: usize) {
+        for law in &mut self.laws {
+            law.reset_lane(lane);
+        }
+        for f in &mut self.filter {
+            f.put_lane(lane, FilterState::default());
+        }
+        let alpha_hat0 = self.config.mass_adaptation.alpha_hat0;
+        self.alpha_hat.put_lane(lane, alpha_hat0);
+        let model = self.config.model;
+        self.last_command.put_lane(lane, Command { thrust: model.mass * model.gravity, torque: [0.0; 3] });
+        self.actuator_saturated.put_lane(lane, false);
+        self.laws_frozen.put_lane(lane, false);
+        self.telemetry.put_lane(lane, Cascade::<L, R>::initial_telemetry(alpha_hat0).get_lane(0));
+    }
+
+    fn actuator_feedback(&mut self, saturated: R::Mask) {
         self.actuator_saturated = saturated;
     }
 }
@@ -619,6 +760,7 @@ impl<L: AxisLaw> Controller for Cascade<L> {
 mod tests {
     use super::*;
     use crate::ftaftsmc::{FtaftsmcAxis, FtaftsmcGains};
+    use crate::lanes::{LaneMask, Lanes};
 
     fn paper_ftaftsmc(settings: CascadeSettings) -> Cascade<FtaftsmcAxis> {
         let xy = FtaftsmcAxis::new(FtaftsmcGains::PAPER_XY);
@@ -972,5 +1114,241 @@ mod tests {
             let a = TsmStaAxis::new(TsmStaGains::DEFAULT_ATTITUDE);
             Cascade::new(paper_config(settings, MassAdaptation::OFF), [p, p, p, a, a, a]).unwrap()
         });
+    }
+
+    /// Knuth's MMIX LCG for the lane tests: uniform in `[-1, 1)`.
+    struct Lcg(u64);
+
+    impl Lcg {
+        fn next(&mut self) -> f64 {
+            self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (self.0 >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+        }
+    }
+
+    /// Every number of a one-flight telemetry, as bits (masks as 0/1).
+    fn telemetry_bits(t: &Telemetry) -> Vec<u64> {
+        let mut v = Vec::new();
+        v.extend(t.attitude_reference.map(f64::to_bits));
+        v.extend(t.attitude_reference_rate.map(f64::to_bits));
+        v.extend(t.attitude_reference_acceleration.map(f64::to_bits));
+        v.extend(t.attitude_demand.map(f64::to_bits));
+        for e in t.estimates {
+            v.extend(e.map(f64::to_bits));
+        }
+        v.extend(t.commanded_acceleration.map(f64::to_bits));
+        v.push(t.nominal_thrust.to_bits());
+        v.push(u64::from(t.thrust_limited));
+        let sm = t.sliding_mode.expect("the cascade reports its sliding part");
+        v.extend(sm.sliding.map(f64::to_bits));
+        v.push(sm.alpha_hat.to_bits());
+        v.push(u64::from(sm.adaptation_frozen));
+        v
+    }
+
+    /// The states of a one-flight cascade the telemetry does not show, as
+    /// bits: α̂, the filter, the last command, the saturation report, the
+    /// laws' freeze flag and every law state.
+    fn state_bits(c: &Cascade<FtaftsmcAxis>) -> Vec<u64> {
+        let mut v = vec![c.alpha_hat.to_bits(), u64::from(c.actuator_saturated), u64::from(c.laws_frozen)];
+        for f in c.filter {
+            v.extend([f.value.to_bits(), f.rate.to_bits(), u64::from(f.initialised)]);
+        }
+        v.extend(command_bits(&c.last_command));
+        for l in &c.laws {
+            let t = l.last;
+            v.extend(
+                [l.delta_hat, t.y, t.y_dot, t.s_delta, t.s_delta_dot, t.s, t.varpi, l.last_reaching].map(f64::to_bits),
+            );
+            v.push(u64::from(l.adaptation_frozen()));
+        }
+        v
+    }
+
+    /// Lane `i` of a cascade on lanes, as a one-flight cascade's states.
+    fn lane_state_bits<const N: usize>(c: &Cascade<FtaftsmcAxis<Lanes<N>>, Lanes<N>>, i: usize) -> Vec<u64> {
+        let laws: [FtaftsmcAxis; 6] = core::array::from_fn(|k| c.laws[k].get_lane(i));
+        let one = Cascade {
+            config: c.config,
+            laws,
+            filter: c.filter.map(|f| f.get_lane(i)),
+            alpha_hat: c.alpha_hat.get_lane(i),
+            last_command: c.last_command.get_lane(i),
+            telemetry: c.telemetry.get_lane(i),
+            tilt_limit: c.tilt_limit,
+            actuator_saturated: c.actuator_saturated.get_lane(i),
+            laws_frozen: c.laws_frozen.get_lane(i),
+            yaw_sin_cos: YawSinCos::new(),
+        };
+        state_bits(&one)
+    }
+
+    /// What the lane test saw, to check that every case happened.
+    #[derive(Debug, Default)]
+    struct Seen {
+        refused: usize,
+        frozen: usize,
+        thrust_limited: usize,
+        tilt_limited: usize,
+        resets: usize,
+    }
+
+    /// The cascade of FTAFTSMC laws on `Lanes<N>` against `N` one-flight
+    /// cascades fed each lane's measurements and references, 300 periods:
+    /// per lane and bit for bit, commands, telemetry and every state. The
+    /// lanes fly different wobbles towards different references (some far
+    /// enough to hit the tilt and thrust limits), report actuator
+    /// saturation at different times, one gets a NaN measurement and one an
+    /// infinite reference at some period, and one is restarted with
+    /// `reset_lane` mid-run (its scalar twin with `reset`).
+    fn cascade_lanes_match_scalar<const N: usize>(
+        settings: CascadeSettings,
+        mass_adaptation: MassAdaptation,
+        seed: u64,
+    ) -> Seen {
+        let config = paper_config(settings, mass_adaptation);
+        let g = [
+            FtaftsmcGains::PAPER_XY,
+            FtaftsmcGains::PAPER_XY,
+            FtaftsmcGains::PAPER_Z,
+            FtaftsmcGains::PAPER_ROLL_PITCH,
+            FtaftsmcGains::PAPER_ROLL_PITCH,
+            FtaftsmcGains::PAPER_YAW,
+        ];
+        let mut lanes =
+            Cascade::<FtaftsmcAxis<Lanes<N>>, Lanes<N>>::with_laws(config, g.map(FtaftsmcAxis::with_gains)).unwrap();
+        let mut scalar: [Cascade<FtaftsmcAxis>; N] =
+            core::array::from_fn(|_| Cascade::new(config, g.map(FtaftsmcAxis::new)).unwrap());
+        let mut rng = Lcg(seed);
+        let mut seen = Seen::default();
+        let tilt_sin = crate::math::sin(settings.max_tilt);
+        for k in 0..300 {
+            let mut states = [QuadState::default(); N];
+            let mut references = [Reference::default(); N];
+            for i in 0..N {
+                let (mut state, _) = wobble(k + 37 * i);
+                for v in [&mut state.position, &mut state.velocity, &mut state.attitude, &mut state.angular_rate] {
+                    for x in v.iter_mut() {
+                        *x += 0.05 * rng.next();
+                    }
+                }
+                let far = 1.0 + 4.0 * (i % 3) as f64;
+                references[i] = Reference {
+                    position: [far * rng.next(), far * rng.next(), 1.0 + far * rng.next()],
+                    velocity: [0.1 * rng.next(), 0.0, 0.2 * rng.next()],
+                    acceleration: [0.0, 0.1 * rng.next(), 0.0],
+                    // Lane 0 keeps its heading (the sin/cos cache hits), the others move it.
+                    yaw: if i == 0 { 0.3 } else { 0.5 * rng.next() },
+                    yaw_rate: 0.01 * i as f64,
+                    yaw_acceleration: 0.0,
+                };
+                if i % 4 == 1 && k % 11 == 0 {
+                    // Exactly at the reference: zero errors.
+                    state.position = references[i].position;
+                    state.velocity = references[i].velocity;
+                }
+                states[i] = state;
+            }
+            if k == 90 {
+                states[1].velocity[2] = f64::NAN;
+            }
+            if k == 91 {
+                references[2 % N].yaw = f64::INFINITY;
+            }
+            if k == 92 {
+                // Finite, but the difference overflows.
+                states[3 % N].position[0] = 1e308;
+                references[3 % N].position[0] = -1e308;
+            }
+            if k == 150 {
+                lanes.reset_lane(1);
+                scalar[1].reset();
+                seen.resets += 1;
+            }
+            // Lane i reports saturation during its own window of periods.
+            let saturated: [bool; N] = core::array::from_fn(|i| (k + 13 * i) % 60 >= 40);
+            let mut report = LaneMask::<N>::splat(false);
+            for i in 0..N {
+                report.put_lane(i, saturated[i]);
+            }
+            lanes.actuator_feedback(report);
+            let state = QuadState::<Lanes<N>>::default();
+            let mut state = state;
+            let mut reference = Reference::<Lanes<N>>::default();
+            for i in 0..N {
+                state.put_lane(i, states[i]);
+                reference.put_lane(i, references[i]);
+            }
+            let dt = if k == 200 { 0.0 } else { 1e-3 };
+            let cmd = lanes.update(&state, &reference, dt);
+            for i in 0..N {
+                scalar[i].actuator_feedback(saturated[i]);
+                let want = scalar[i].update(&states[i], &references[i], dt);
+                assert_eq!(command_bits(&cmd.get_lane(i)), command_bits(&want), "N={N} step {k} lane {i}");
+                let t = scalar[i].telemetry();
+                assert_eq!(
+                    telemetry_bits(&lanes.telemetry().get_lane(i)),
+                    telemetry_bits(t),
+                    "N={N} step {k} lane {i}"
+                );
+                assert_eq!(lane_state_bits(&lanes, i), state_bits(&scalar[i]), "N={N} step {k} lane {i}");
+                assert_eq!(lanes.alpha_hat().get_lane(i).to_bits(), scalar[i].alpha_hat().to_bits());
+                seen.refused += usize::from(want.thrust.is_nan());
+                let sm = t.sliding_mode.unwrap();
+                seen.frozen += usize::from(sm.adaptation_frozen && !want.thrust.is_nan());
+                seen.thrust_limited += usize::from(t.thrust_limited && !want.thrust.is_nan());
+                seen.tilt_limited += usize::from(
+                    !want.thrust.is_nan()
+                        && t.attitude_demand.iter().any(|d| crate::math::sin(*d).abs() >= tilt_sin * (1.0 - 1e-12)),
+                );
+            }
+        }
+        seen
+    }
+
+    /// The cascade on lanes flies each lane with the bits of the one-flight
+    /// cascade, with the paper's settings and with each saturation remedy
+    /// and option of the settings on.
+    #[test]
+    fn lanes_give_each_flight_the_bits_of_the_scalar_cascade() {
+        let paper = CascadeSettings::default();
+        let freeze = CascadeSettings { freeze_adaptation_on_saturation: true, ..paper };
+        let thrust = CascadeSettings { thrust_limits: Some([5.0, 9.0]), ..paper };
+        let tilt = CascadeSettings { max_tilt: 0.15, ..paper };
+        let vehicle_init = CascadeSettings { filter_init: FilterInit::VehicleAttitude, ..paper };
+        let zero = CascadeSettings { attitude_derivatives: AttitudeDerivatives::Zero, ..paper };
+        let slow_filter =
+            CascadeSettings { command_filter: CommandFilterParams { natural_frequency: 8.0, damping: 0.7 }, ..paper };
+        let all = CascadeSettings {
+            freeze_adaptation_on_saturation: true,
+            thrust_limits: Some([5.0, 9.0]),
+            max_tilt: 0.2,
+            filter_init: FilterInit::VehicleAttitude,
+            ..paper
+        };
+        let bounded =
+            MassAdaptation { alpha_hat_bounds: Some([0.9, 1.1]), compensate_horizontal: true, ..MassAdaptation::PAPER };
+        let cases = [
+            (paper, MassAdaptation::PAPER),
+            (freeze, MassAdaptation::PAPER),
+            (thrust, MassAdaptation::PAPER),
+            (tilt, MassAdaptation::PAPER),
+            (vehicle_init, MassAdaptation::PAPER),
+            (zero, MassAdaptation::PAPER),
+            (slow_filter, MassAdaptation::PAPER),
+            (paper, MassAdaptation::OFF),
+            (paper, bounded),
+            (all, bounded),
+        ];
+        for (j, (settings, ma)) in cases.into_iter().enumerate() {
+            let four = cascade_lanes_match_scalar::<4>(settings, ma, 5 + j as u64);
+            let eight = cascade_lanes_match_scalar::<8>(settings, ma, 71 + j as u64);
+            for seen in [&four, &eight] {
+                assert!(seen.refused >= 3 && seen.resets == 1, "{seen:?}");
+                assert_eq!(seen.frozen > 0, settings.freeze_adaptation_on_saturation, "{seen:?}");
+                assert_eq!(seen.thrust_limited > 0, settings.thrust_limits.is_some(), "{seen:?}");
+                assert!(seen.tilt_limited > 0, "the tilt limit never acted: {seen:?}");
+            }
+        }
     }
 }

@@ -4,12 +4,19 @@
 //! Eq. 53–55) channels; the mass adaptation of §3.2 lives in the cascade.
 //!
 //! Notation: `sig^a(v) = |v|^a sign(v)`; `e = q − q_d`, `ė = q̇ − q̇_d`.
+//!
+//! The surface, the reaching law and [`FtaftsmcAxis`] are generic over the
+//! number type ([`crate::lanes`]): `f64` for one flight (the default), a
+//! lane type for several flights sharing the gains, each lane with the bits
+//! of the one-flight law (the freeze flag is a per-lane mask, the
+//! non-finite-input guard acts per lane).
 
+use crate::lanes::{branch, Blend, Lanewise, Mask, Real};
 use crate::law::{
-    check_closed, check_gain, check_initial_state, check_left_open, check_open, inputs_finite, saturate, AxisLaw,
-    ContinuousRhs, GainError, INPUT_LIMIT, MAX_ESTIMATES, STATE_LIMIT,
+    check_closed, check_gain, check_initial_state, check_left_open, check_open, saturate, AxisLaw, ContinuousRhs,
+    GainError, INPUT_LIMIT, MAX_ESTIMATES, STATE_LIMIT,
 };
-use crate::math::{exp, pow_abs, pow_abs_minus_one, saturate_power, sig, sign, Power};
+use crate::math::{pow_abs, pow_abs_minus_one, saturate_power, sign, sign_of, Power};
 
 /// Gains of one FTAFTSMC channel (paper Tables 4 and 5).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -213,28 +220,31 @@ impl FtaftsmcGains {
 }
 
 /// Every intermediate quantity of the surface at one instant, for tests,
-/// telemetry and the fixed-time analysis.
+/// telemetry and the fixed-time analysis, of one flight (`R = f64`) or of
+/// lanes ([`crate::lanes`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct SurfaceTerms {
+pub struct SurfaceTerms<R: Real = f64> {
     /// `Y(e)` (Eq. 6, with the `(1 − ℵ1)` of Eq. 11).
-    pub y: f64,
+    pub y: R,
     /// `Ẏ(e)` (Eq. 11), 1/s.
-    pub y_dot: f64,
+    pub y_dot: R,
     /// `S_Δ(e)` (Eq. 7).
-    pub s_delta: f64,
+    pub s_delta: R,
     /// `Ṡ_Δ` (Eq. 12).
-    pub s_delta_dot: f64,
+    pub s_delta_dot: R,
     /// Sliding variable `S` (Eq. 5), channel units per second.
-    pub s: f64,
+    pub s: R,
     /// `ϖ` (Eq. 13): the part of the equivalent control that cancels `d/dt`
     /// of the surface's error terms, channel units per s².
-    pub varpi: f64,
+    pub varpi: R,
 }
+crate::lanewise_struct!(SurfaceTerms { y, y_dot, s_delta, s_delta_dot, s, varpi });
 
 /// What the gains fix for a whole flight, computed once per channel: `κ1`,
 /// `κ2` (Eq. 9), `2ξ²` (Eq. 15, 17) and the evaluation path of each
 /// exponent ([`Power`]). Every function below that takes it gives the same
 /// bits as its public counterpart, which builds it from the gains per call.
+/// Shared by every lane (the gains are).
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct Constants {
     /// `[κ1, κ2]` of Eq. 9.
@@ -270,32 +280,56 @@ impl Constants {
     }
 }
 
+// Lane code note: the formulas below are the scalar ones with the operands
+// of single products and sums written in the order `R op f64` that `Real`
+// offers (IEEE `+` and `*` are commutative, so the bits are unchanged);
+// no sum or product is re-associated. Value-dependent `if`s are
+// `branch` (expensive sides) so each lane takes its own side.
+
+/// `sign(x)` per lane ([`sign_of`]); for one flight the branch-free
+/// integer form of [`crate::math::sign`] (the same bits: −1, 0 or +1), which
+/// the scalar law has always used and which costs fewer instructions than
+/// two selects.
+#[inline(always)]
+fn sgn<R: Real>(x: R) -> R {
+    if R::LANES == 1 {
+        R::splat(sign(x.get_lane(0)))
+    } else {
+        sign_of(x)
+    }
+}
+
+/// `sig²(x) = |x|² sign(x)`, the bits of [`crate::math::sig`]`(x, 2.0)`.
+#[inline(always)]
+fn sig2<R: Real>(x: R) -> R {
+    Power::Two.abs(x) * sgn(x)
+}
+
 /// `Y(e) = 1 / (ℵ1 + (1 − ℵ1) exp(−ℵ2 |e|^ℵ3))` and its time derivative
-/// (Eq. 6 with the erratum, Eq. 11).
+/// (Eq. 6 with the erratum, Eq. 11), per lane for lanes.
 #[inline]
-pub fn gain_shaping(g: &FtaftsmcGains, e: f64, e_dot: f64) -> (f64, f64) {
+pub fn gain_shaping<R: Real>(g: &FtaftsmcGains, e: R, e_dot: R) -> (R, R) {
     gain_shaping_c(g, &Constants::new(g, [0.0; 2]), e, e_dot)
 }
 
-#[inline]
-fn gain_shaping_c(g: &FtaftsmcGains, c: &Constants, e: f64, e_dot: f64) -> (f64, f64) {
+#[inline(always)]
+fn gain_shaping_c<R: Real>(g: &FtaftsmcGains, c: &Constants, e: R, e_dot: R) -> (R, R) {
     if g.aleph1 == 1.0 {
-        return (1.0, 0.0);
+        return (R::splat(1.0), R::splat(0.0));
     }
-    let decay = exp(-g.aleph2 * c.aleph3.abs(e));
-    let den = g.aleph1 + (1.0 - g.aleph1) * decay;
-    let y = 1.0 / den;
+    let decay = (c.aleph3.abs(e) * -g.aleph2).exp();
+    let den = decay * (1.0 - g.aleph1) + g.aleph1;
+    let y = R::splat(1.0) / den;
     // When |e|^ℵ3 overflows, decay is 0 and |e|^(ℵ3−1) may be ∞: the limit
     // of their product is 0 (the exponential wins), not 0·∞ = NaN.
     // |e|^(ℵ3−1) as `pow_abs_minus_one` (0 at e = 0 for ℵ3 > 1, 1 for ℵ3 = 1).
-    let pow = if decay == 0.0 {
-        0.0
-    } else if e == 0.0 {
-        pow_abs_minus_one(e, g.aleph3)
-    } else {
-        c.aleph3_minus_one.abs(e)
-    };
-    let y_dot = (1.0 - g.aleph1) * decay * g.aleph2 * g.aleph3 * pow * e_dot * sign(e) / (den * den);
+    let zero = R::splat(0.0);
+    let pow = branch(
+        decay.eq(zero),
+        || zero,
+        || branch(e.eq(zero), || pow_abs_minus_one(e, g.aleph3), || c.aleph3_minus_one.abs(e)),
+    );
+    let y_dot = decay * (1.0 - g.aleph1) * g.aleph2 * g.aleph3 * pow * e_dot * sgn(e) / (den * den);
     (y, y_dot)
 }
 
@@ -308,50 +342,52 @@ pub fn kappa(g: &FtaftsmcGains) -> [f64; 2] {
 /// `S_Δ(e)` and `Ṡ_Δ` (Eq. 7, 9, 12): `sig^p(e)` outside `|e| ≤ ε`, the
 /// quadratic `κ1 e + κ2 sig²(e)` inside, matching value and slope at `|e| = ε`.
 #[inline]
-pub fn nonsingular_term(g: &FtaftsmcGains, e: f64, e_dot: f64) -> (f64, f64) {
+pub fn nonsingular_term<R: Real>(g: &FtaftsmcGains, e: R, e_dot: R) -> (R, R) {
     nonsingular_term_with(g, kappa(g), e, e_dot)
 }
 
 /// [`nonsingular_term`] with precomputed `[κ1, κ2]`.
 #[inline]
-pub fn nonsingular_term_with(g: &FtaftsmcGains, kappa: [f64; 2], e: f64, e_dot: f64) -> (f64, f64) {
+pub fn nonsingular_term_with<R: Real>(g: &FtaftsmcGains, kappa: [f64; 2], e: R, e_dot: R) -> (R, R) {
     nonsingular_term_c(g, &Constants::new(g, kappa), e, e_dot)
 }
 
-#[inline]
-fn nonsingular_term_c(g: &FtaftsmcGains, c: &Constants, e: f64, e_dot: f64) -> (f64, f64) {
+#[inline(always)]
+fn nonsingular_term_c<R: Real>(g: &FtaftsmcGains, c: &Constants, e: R, e_dot: R) -> (R, R) {
     let [kappa1, kappa2] = c.kappa;
     let ae = e.abs();
-    if ae > g.epsilon {
-        let pow_p = c.p.abs(e);
-        (pow_p * sign(e), g.p * e_dot * pow_p / ae)
-    } else {
-        (kappa1 * e + kappa2 * sig(e, 2.0), kappa1 * e_dot + 2.0 * kappa2 * ae * e_dot)
-    }
+    branch(
+        ae.gt(R::splat(g.epsilon)),
+        || {
+            let pow_p = c.p.abs(e);
+            (pow_p * sgn(e), e_dot * g.p * pow_p / ae)
+        },
+        || (e * kappa1 + sig2(e) * kappa2, e_dot * kappa1 + ae * (2.0 * kappa2) * e_dot),
+    )
 }
 
 /// Evaluate the fixed-time sliding surface (Eq. 5) and `ϖ` (Eq. 13).
 #[inline]
-pub fn sliding_surface(g: &FtaftsmcGains, e: f64, e_dot: f64) -> SurfaceTerms {
+pub fn sliding_surface<R: Real>(g: &FtaftsmcGains, e: R, e_dot: R) -> SurfaceTerms<R> {
     sliding_surface_with(g, kappa(g), e, e_dot)
 }
 
 /// [`sliding_surface`] with precomputed `[κ1, κ2]` (see [`kappa`]).
 #[inline]
-pub fn sliding_surface_with(g: &FtaftsmcGains, kappa: [f64; 2], e: f64, e_dot: f64) -> SurfaceTerms {
+pub fn sliding_surface_with<R: Real>(g: &FtaftsmcGains, kappa: [f64; 2], e: R, e_dot: R) -> SurfaceTerms<R> {
     sliding_surface_c(g, &Constants::new(g, kappa), e, e_dot)
 }
 
-#[inline]
-fn sliding_surface_c(g: &FtaftsmcGains, c: &Constants, e: f64, e_dot: f64) -> SurfaceTerms {
+#[inline(always)]
+fn sliding_surface_c<R: Real>(g: &FtaftsmcGains, c: &Constants, e: R, e_dot: R) -> SurfaceTerms<R> {
     let (y, y_dot) = gain_shaping_c(g, c, e, e_dot);
     let (s_delta, s_delta_dot) = nonsingular_term_c(g, c, e, e_dot);
     let pow_q = c.q.abs(e);
     // λ sig^q(e) + γ S_Δ + η e
-    let shape = g.lambda * pow_q * sign(e) + g.gamma * s_delta + g.eta * e;
+    let shape = pow_q * g.lambda * sgn(e) + s_delta * g.gamma + e * g.eta;
     // d/dt of the same bracket: λ q |e|^(q−1) ė + γ Ṡ_Δ + η ė
-    let pow_q_minus_one = if e == 0.0 { pow_abs_minus_one(e, g.q) } else { pow_q / e.abs() };
-    let shape_dot = g.lambda * g.q * pow_q_minus_one * e_dot + g.gamma * s_delta_dot + g.eta * e_dot;
+    let pow_q_minus_one = branch(e.eq(R::splat(0.0)), || pow_abs_minus_one(e, g.q), || pow_q / e.abs());
+    let shape_dot = pow_q_minus_one * (g.lambda * g.q) * e_dot + s_delta_dot * g.gamma + e_dot * g.eta;
     SurfaceTerms { y, y_dot, s_delta, s_delta_dot, s: e_dot + y * shape, varpi: -y_dot * shape - y * shape_dot }
 }
 
@@ -359,57 +395,60 @@ fn sliding_surface_c(g: &FtaftsmcGains, c: &Constants, e: f64, e_dot: f64) -> Su
 /// channel units per s². `|S|^q2` is saturated at
 /// [`crate::law::POWER_LIMIT`] so that it never overflows.
 #[inline]
-pub fn reaching_law(g: &FtaftsmcGains, s: f64, delta_hat: f64) -> f64 {
+pub fn reaching_law<R: Real>(g: &FtaftsmcGains, s: R, delta_hat: R) -> R {
     reaching_law_c(g, &Constants::new(g, [0.0; 2]), s, delta_hat)
 }
 
-#[inline]
-fn reaching_law_c(g: &FtaftsmcGains, c: &Constants, s: f64, delta_hat: f64) -> f64 {
+#[inline(always)]
+fn reaching_law_c<R: Real>(g: &FtaftsmcGains, c: &Constants, s: R, delta_hat: R) -> R {
     // |S|^q2 and |S|^p2 share ln|S| when both are general powers.
     let (pow_q2, pow_p2) = Power::abs_pair(c.q2, c.p2, s);
-    let sign_s = sign(s);
-    -(g.lambda2 * saturate_power(pow_q2) * sign_s
-        + g.gamma2 * (pow_p2 * sign_s)
-        + g.eta2 * s
+    let sign_s = sgn(s);
+    -(saturate_power(pow_q2) * g.lambda2 * sign_s
+        + (pow_p2 * sign_s) * g.gamma2
+        + s * g.eta2
         + delta_hat / c.two_xi_sq * s)
 }
 
 /// `dδ̂/dt = α1 (S²/(2ξ²) − α2 δ̂)` (Eq. 17).
 #[inline]
-pub fn delta_hat_rate(g: &FtaftsmcGains, s: f64, delta_hat: f64) -> f64 {
+pub fn delta_hat_rate<R: Real>(g: &FtaftsmcGains, s: R, delta_hat: R) -> R {
     delta_hat_rate_c(g, &Constants::new(g, [0.0; 2]), s, delta_hat)
 }
 
-#[inline]
-fn delta_hat_rate_c(g: &FtaftsmcGains, c: &Constants, s: f64, delta_hat: f64) -> f64 {
-    g.alpha1 * (s * s / c.two_xi_sq - g.alpha2 * delta_hat)
+#[inline(always)]
+fn delta_hat_rate_c<R: Real>(g: &FtaftsmcGains, c: &Constants, s: R, delta_hat: R) -> R {
+    (s * s / c.two_xi_sq - delta_hat * g.alpha2) * g.alpha1
 }
 
-/// One FTAFTSMC channel: gains, the estimate δ̂ and the last surface terms.
+/// One FTAFTSMC channel: gains, the estimate δ̂ and the last surface terms,
+/// of one flight (`R = f64`, the default) or of several flights side by
+/// side sharing the gains (`R` a lane type, [`crate::lanes`]): lane `i`
+/// has the bits of a one-flight channel fed lane `i`'s inputs.
 #[derive(Clone, Copy, Debug)]
-pub struct FtaftsmcAxis {
-    /// Gains (Tables 4–5).
+pub struct FtaftsmcAxis<R: Real = f64> {
+    /// Gains (Tables 4–5), shared by every lane.
     pub gains: FtaftsmcGains,
     /// Current estimate δ̂ of δ = Λ² (Eq. 17).
-    pub delta_hat: f64,
+    pub delta_hat: R,
     /// Surface terms of the last update.
-    pub last: SurfaceTerms,
+    pub last: SurfaceTerms<R>,
     /// `ϖ2` of the last update (Eq. 15).
-    pub last_reaching: f64,
+    pub last_reaching: R,
     /// `κ1`, `κ2` of Eq. 9, `2ξ²` and the exponents' paths, computed once
     /// from the gains.
     constants: Constants,
-    /// δ̂ held (Eq. 17 not integrated) while true; see
+    /// δ̂ held (Eq. 17 not integrated) in the lanes where true; see
     /// [`AxisLaw::set_adaptation_frozen`].
-    frozen: bool,
+    frozen: R::Mask,
 }
+crate::lanewise_struct!(FtaftsmcAxis { delta_hat, last, last_reaching, frozen } shared { gains, constants });
 
 impl FtaftsmcAxis {
     /// A channel with δ̂ = `gains.delta_hat0`, after validating the gains
     /// ([`FtaftsmcGains::check`]).
     pub fn try_new(gains: FtaftsmcGains) -> Result<Self, GainError> {
-        gains.check()?;
-        Ok(Self::new(gains))
+        Self::try_with_gains(gains)
     }
 
     /// A channel with δ̂ = `gains.delta_hat0`, **without** validating the
@@ -420,23 +459,39 @@ impl FtaftsmcAxis {
     /// give non-finite commands. [`crate::cascade::Cascade::new`] checks
     /// the gains of the laws it is given.
     pub fn new(gains: FtaftsmcGains) -> Self {
+        Self::with_gains(gains)
+    }
+}
+
+impl<R: Real> FtaftsmcAxis<R> {
+    /// [`FtaftsmcAxis::try_new`] for any number type: every lane starts
+    /// at δ̂ = `gains.delta_hat0`, released.
+    pub fn try_with_gains(gains: FtaftsmcGains) -> Result<Self, GainError> {
+        gains.check()?;
+        Ok(Self::with_gains(gains))
+    }
+
+    /// [`FtaftsmcAxis::new`] (no validation) for any number type: every
+    /// lane starts at δ̂ = `gains.delta_hat0`, released.
+    pub fn with_gains(gains: FtaftsmcGains) -> Self {
         Self {
             gains,
-            delta_hat: gains.delta_hat0,
+            delta_hat: R::splat(gains.delta_hat0),
             last: SurfaceTerms::default(),
-            last_reaching: 0.0,
+            last_reaching: R::splat(0.0),
             constants: Constants::new(&gains, kappa(&gains)),
-            frozen: false,
+            frozen: R::Mask::splat(false),
         }
     }
 
-    /// Whether δ̂ is currently held ([`AxisLaw::set_adaptation_frozen`]).
-    pub fn adaptation_frozen(&self) -> bool {
+    /// Whether δ̂ is currently held ([`AxisLaw::set_adaptation_frozen`]),
+    /// per lane.
+    pub fn adaptation_frozen(&self) -> R::Mask {
         self.frozen
     }
 }
 
-impl AxisLaw for FtaftsmcAxis {
+impl<R: Real> AxisLaw<R> for FtaftsmcAxis<R> {
     const NAME: &'static str = "ftaftsmc";
     const ESTIMATE_NAMES: [&'static str; MAX_ESTIMATES] = ["delta_hat", "", ""];
 
@@ -450,37 +505,60 @@ impl AxisLaw for FtaftsmcAxis {
     ///
     /// While frozen ([`AxisLaw::set_adaptation_frozen`]) the output uses the
     /// held δ̂ and Eq. 17 is not integrated.
+    ///
+    /// Lanes: the guards act per lane — a lane with a non-finite `e` or `ė`
+    /// gets NaN and keeps all its states, the others advance (a non-finite
+    /// `dt`, shared, gives NaN in every lane).
     #[inline]
-    fn update(&mut self, e: f64, e_dot: f64, dt: f64) -> f64 {
-        if !inputs_finite(e, e_dot, dt) {
-            return f64::NAN;
+    fn update(&mut self, e: R, e_dot: R, dt: f64) -> R {
+        let ok = e.is_finite() & e_dot.is_finite();
+        if !(dt.is_finite() && ok.any()) {
+            return R::splat(f64::NAN);
         }
-        let (e, e_dot) = (saturate(e, INPUT_LIMIT), saturate(e_dot, INPUT_LIMIT));
+        // Lanes: the bad lanes compute on 0 (their results are dropped
+        // below), so they take no path a finite input would not. A no-op
+        // for one flight (`ok` is true here), removed at compile time.
+        let (e, e_dot) = if R::LANES > 1 {
+            (R::select(ok, e, R::splat(0.0)), R::select(ok, e_dot, R::splat(0.0)))
+        } else {
+            (e, e_dot)
+        };
+        let limit = R::splat(INPUT_LIMIT);
+        let (e, e_dot) = (saturate(e, limit), saturate(e_dot, limit));
         let terms = sliding_surface_c(&self.gains, &self.constants, e, e_dot);
         let reaching = reaching_law_c(&self.gains, &self.constants, terms.s, self.delta_hat);
-        if !self.frozen {
-            let delta_hat =
-                self.delta_hat + dt * delta_hat_rate_c(&self.gains, &self.constants, terms.s, self.delta_hat);
-            self.delta_hat = delta_hat.clamp(0.0, STATE_LIMIT);
-        }
-        self.last = terms;
-        self.last_reaching = reaching;
-        terms.varpi + reaching
+        // δ̂ + dt dδ̂/dt projected onto [0, STATE_LIMIT] (`f64::clamp`'s
+        // order: the lower bound first), kept where frozen or the input bad.
+        let advanced = self.delta_hat + delta_hat_rate_c(&self.gains, &self.constants, terms.s, self.delta_hat) * dt;
+        let zero = R::splat(0.0);
+        let limit = R::splat(STATE_LIMIT);
+        let advanced = R::select(advanced.lt(zero), zero, advanced);
+        let advanced = R::select(advanced.gt(limit), limit, advanced);
+        self.delta_hat = R::select(ok & !self.frozen, advanced, self.delta_hat);
+        self.last = SurfaceTerms::blend(ok, terms, self.last);
+        self.last_reaching = R::select(ok, reaching, self.last_reaching);
+        R::select(ok, terms.varpi + reaching, R::splat(f64::NAN))
     }
 
-    fn sliding_variable(&self) -> f64 {
+    fn sliding_variable(&self) -> R {
         self.last.s
     }
 
-    fn estimates(&self) -> [f64; 3] {
-        [self.delta_hat, 0.0, 0.0]
+    fn estimates(&self) -> [R; 3] {
+        [self.delta_hat, R::splat(0.0), R::splat(0.0)]
     }
 
     fn reset(&mut self) {
-        *self = Self::new(self.gains);
+        *self = Self::with_gains(self.gains);
     }
 
-    fn set_adaptation_frozen(&mut self, frozen: bool) {
+    /// Lane `lane` back to δ̂ = `gains.delta_hat0`, released, zero surface
+    /// terms; the other lanes untouched.
+    fn reset_lane(&mut self, lane: usize) {
+        self.put_lane(lane, FtaftsmcAxis::new(self.gains));
+    }
+
+    fn set_adaptation_frozen(&mut self, frozen: R::Mask) {
         self.frozen = frozen;
     }
 
@@ -491,6 +569,9 @@ impl AxisLaw for FtaftsmcAxis {
     /// `v = ϖ + ϖ2(S, δ̂)`, `dδ̂/dt` of Eq. 17 (the `[0, STATE_LIMIT]`
     /// projection of [`AxisLaw::update`] is not applied: Eq. 17 keeps δ̂ ≥ 0
     /// from δ̂ ≥ 0 by itself); `dδ̂/dt = 0` while frozen.
+    ///
+    /// One flight (the analysis flies one): the gains are shared, and for
+    /// lanes the freeze flag is lane 0's.
     fn continuous_rhs(&self, e: f64, e_dot: f64, estimates: [f64; 3]) -> Option<ContinuousRhs> {
         let (e, e_dot) = (saturate(e, INPUT_LIMIT), saturate(e_dot, INPUT_LIMIT));
         let c = &self.constants;
@@ -500,7 +581,7 @@ impl AxisLaw for FtaftsmcAxis {
             v: terms.varpi + reaching_law_c(&self.gains, c, terms.s, delta_hat),
             s: terms.s,
             estimates_rate: [
-                if self.frozen { 0.0 } else { delta_hat_rate_c(&self.gains, c, terms.s, delta_hat) },
+                if self.frozen.get_lane(0) { 0.0 } else { delta_hat_rate_c(&self.gains, c, terms.s, delta_hat) },
                 0.0,
                 0.0,
             ],
@@ -511,6 +592,7 @@ impl AxisLaw for FtaftsmcAxis {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::math::{exp, sig};
     use approx::assert_relative_eq;
 
     fn gains_xy() -> FtaftsmcGains {
@@ -704,6 +786,155 @@ mod tests {
             let axis = warmed(FtaftsmcAxis::new(FtaftsmcGains { delta_hat0: 0.3, ..g }));
             assert!(!axis.adaptation_frozen());
             check_freeze(axis);
+        }
+    }
+
+    /// A small deterministic generator for the lane tests (Knuth's MMIX LCG).
+    struct Lcg(u64);
+
+    impl Lcg {
+        /// Uniform in `[-1, 1)`.
+        fn next(&mut self) -> f64 {
+            self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (self.0 >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+        }
+    }
+
+    /// The mask whose lane `i` is `f(i)`.
+    fn mask<const N: usize>(f: impl Fn(usize) -> bool) -> crate::lanes::LaneMask<N> {
+        let mut m = crate::lanes::LaneMask::<N>::splat(false);
+        for i in 0..N {
+            m.put_lane(i, f(i));
+        }
+        m
+    }
+
+    /// Every state of a one-flight channel, as bits.
+    fn axis_bits(a: &FtaftsmcAxis) -> [u64; 10] {
+        let t = a.last;
+        [
+            a.delta_hat.to_bits(),
+            t.y.to_bits(),
+            t.y_dot.to_bits(),
+            t.s_delta.to_bits(),
+            t.s_delta_dot.to_bits(),
+            t.s.to_bits(),
+            t.varpi.to_bits(),
+            a.last_reaching.to_bits(),
+            u64::from(a.frozen),
+            a.gains.delta_hat0.to_bits(),
+        ]
+    }
+
+    /// The channel on `Lanes<N>` against `N` one-flight channels fed each
+    /// lane's inputs: per lane and bit for bit, outputs, `S`, estimates and
+    /// every state, over 400 steps whose inputs make the lanes take
+    /// different sides of every branch (|e| inside and outside ε, e = 0
+    /// exactly, e and ė near zero, huge errors clamped at INPUT_LIMIT), with
+    /// a NaN and an ∞ input in one lane, per-lane freezing switched on and
+    /// off, a `dt = 0` step and a lane reset mid-run. Returns how many
+    /// lane-steps were refused, frozen, inside ε and clamped, so the caller
+    /// can check that each case happened.
+    fn law_lanes_match_scalar<const N: usize>(gains: FtaftsmcGains, seed: u64) -> [usize; 4] {
+        use crate::lanes::Lanes;
+        let mut lanes = FtaftsmcAxis::<Lanes<N>>::with_gains(gains);
+        let mut scalar = [FtaftsmcAxis::new(gains); N];
+        let mut rng = Lcg(seed);
+        let mut seen = [0usize; 4];
+        for k in 0..400 {
+            let dt = if k == 57 { 0.0 } else { 1e-3 * (1.0 + 9.0 * (k % 3) as f64) };
+            let mut e = [0.0; N];
+            let mut e_dot = [0.0; N];
+            for i in 0..N {
+                let (a, b) = (rng.next(), rng.next());
+                (e[i], e_dot[i]) = match (i + k / 50) % 5 {
+                    0 => (1e-4 * a, 1e-3 * b),
+                    1 => (0.06 * a, 0.5 * b),
+                    2 => (3.0 * a, 4.0 * b),
+                    3 if k % 7 == 0 => (0.0, b),
+                    3 => (1e13 * a, -1e13 * b),
+                    _ => (0.5 * a + 0.2, 2.0 * b),
+                };
+            }
+            if k == 120 {
+                e[1 % N] = f64::NAN;
+            }
+            if k == 121 {
+                e_dot[2 % N] = f64::INFINITY;
+            }
+            if k == 200 {
+                lanes.reset_lane(3 % N);
+                scalar[3 % N].reset();
+            }
+            let frozen: [bool; N] = core::array::from_fn(|i| (k / 30 + i) % 4 == 1);
+            lanes.set_adaptation_frozen(mask(|i| frozen[i]));
+            let out = lanes.update(Lanes(e), Lanes(e_dot), dt);
+            for i in 0..N {
+                scalar[i].set_adaptation_frozen(frozen[i]);
+                let want = scalar[i].update(e[i], e_dot[i], dt);
+                assert_eq!(out.0[i].to_bits(), want.to_bits(), "N={N} step {k} lane {i}: {} vs {want}", out.0[i]);
+                assert_eq!(lanes.sliding_variable().0[i].to_bits(), scalar[i].sliding_variable().to_bits());
+                assert_eq!(
+                    lanes.estimates().map(|x| x.0[i].to_bits()),
+                    scalar[i].estimates().map(f64::to_bits),
+                    "N={N} step {k} lane {i}"
+                );
+                assert_eq!(axis_bits(&lanes.get_lane(i)), axis_bits(&scalar[i]), "N={N} step {k} lane {i}");
+                seen[0] += usize::from(want.is_nan());
+                seen[1] += usize::from(frozen[i]);
+                seen[2] += usize::from(e[i].abs() <= gains.epsilon);
+                seen[3] += usize::from(e[i].abs() > INPUT_LIMIT);
+            }
+        }
+        seen
+    }
+
+    #[test]
+    fn lanes_give_each_flight_the_bits_of_the_scalar_law() {
+        let general = FtaftsmcGains { q: 1.3, aleph3: 2.5, q2: 1.7, delta_hat0: 0.4, ..FtaftsmcGains::PAPER_Z };
+        // dt α1 α2 > 1: Euler drives δ̂ below 0 and the projection acts.
+        let leaky = FtaftsmcGains { alpha1: 50.0, alpha2: 100.0, delta_hat0: 2.0, ..FtaftsmcGains::PAPER_XY };
+        for (j, g) in [
+            FtaftsmcGains::PAPER_XY,
+            FtaftsmcGains::PAPER_Z,
+            FtaftsmcGains::PAPER_ROLL_PITCH,
+            FtaftsmcGains::PAPER_YAW,
+            general,
+            leaky,
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            for seen in [law_lanes_match_scalar::<4>(g, 11 + j as u64), law_lanes_match_scalar::<8>(g, 97 + j as u64)] {
+                assert!(seen.iter().all(|&n| n > 0), "a case never happened: {seen:?}");
+            }
+        }
+        // The leaky gains do hit the lower bound of the projection.
+        let mut axis = FtaftsmcAxis::new(FtaftsmcGains {
+            alpha1: 50.0,
+            alpha2: 100.0,
+            delta_hat0: 2.0,
+            ..FtaftsmcGains::PAPER_XY
+        });
+        axis.update(0.01, 0.0, 1e-3);
+        assert_eq!(axis.delta_hat.to_bits(), 0.0f64.to_bits());
+    }
+
+    /// `continuous_rhs` of a channel on lanes is the one-flight channel's
+    /// with lane 0's freeze flag.
+    #[test]
+    fn continuous_rhs_on_lanes_uses_lane_zero() {
+        use crate::lanes::Lanes;
+        let g = FtaftsmcGains::PAPER_Z;
+        let mut lanes = FtaftsmcAxis::<Lanes<4>>::with_gains(g);
+        for frozen in [false, true] {
+            lanes.set_adaptation_frozen(mask::<4>(|i| (i == 0) == frozen));
+            let mut one = FtaftsmcAxis::new(g);
+            one.set_adaptation_frozen(frozen);
+            let (a, b) =
+                (lanes.continuous_rhs(0.3, -0.2, [0.5, 0.0, 0.0]), one.continuous_rhs(0.3, -0.2, [0.5, 0.0, 0.0]));
+            assert_eq!(a, b);
+            assert_eq!(a.unwrap().estimates_rate[0] == 0.0, frozen);
         }
     }
 }
