@@ -1,6 +1,7 @@
 //! FTAFTSMC, the paper's controller (§3, Eq. 9–17 and 44), and its variant
 //! with the mass adaptation switched off; both read `[ftaftsmc]`.
 
+use ftsmc_core::lanes::Lanes;
 use ftsmc_core::cascade::{Cascade, MassAdaptation};
 use ftsmc_core::ftaftsmc::{FtaftsmcAxis, FtaftsmcGains};
 use serde::{Deserialize, Serialize};
@@ -75,6 +76,17 @@ fn cascade(
     Ok(Box::new(Cascade::new(ctx.cascade_config(mass_adaptation), laws).map_err(|e| e.to_string())?))
 }
 
+/// [`cascade`] on `N` lanes, its updates on the detected instruction set.
+fn cascade_lanes<const N: usize>(
+    config: &FtaftsmcConfig,
+    mass_adaptation: MassAdaptation,
+    ctx: &BuildContext,
+) -> Option<Result<super::LaneController<N>, String>> {
+    let laws = config.gains().to_array().map(FtaftsmcAxis::<Lanes<N>>::with_gains);
+    let built = Cascade::<_, Lanes<N>>::with_laws(ctx.cascade_config(mass_adaptation), laws);
+    Some(built.map(|c| Box::new(super::on_isa::OnIsa::detected(c)) as super::LaneController<N>).map_err(|e| e.to_string()))
+}
+
 /// `ftaftsmc`: the paper's controller.
 pub struct Ftaftsmc;
 
@@ -87,6 +99,13 @@ impl Declaration for Ftaftsmc {
 
     fn build(config: &FtaftsmcConfig, ctx: &BuildContext) -> Result<BoxedController, String> {
         cascade(config, config.mass_adaptation, ctx)
+    }
+
+    fn build_lanes<const N: usize>(
+        config: &FtaftsmcConfig,
+        ctx: &BuildContext,
+    ) -> Option<Result<super::LaneController<N>, String>> {
+        cascade_lanes(config, config.mass_adaptation, ctx)
     }
 
     fn visit_axis_law<V: AxisLawVisitor>(config: &FtaftsmcConfig, axis: usize, visitor: V) -> Option<V::Output> {
@@ -111,6 +130,13 @@ impl Declaration for FtaftsmcNoMass {
 
     fn build(config: &FtaftsmcConfig, ctx: &BuildContext) -> Result<BoxedController, String> {
         cascade(config, MassAdaptation { enabled: false, ..config.mass_adaptation }, ctx)
+    }
+
+    fn build_lanes<const N: usize>(
+        config: &FtaftsmcConfig,
+        ctx: &BuildContext,
+    ) -> Option<Result<super::LaneController<N>, String>> {
+        cascade_lanes(config, MassAdaptation { enabled: false, ..config.mass_adaptation }, ctx)
     }
 
     fn visit_axis_law<V: AxisLawVisitor>(config: &FtaftsmcConfig, axis: usize, visitor: V) -> Option<V::Output> {
