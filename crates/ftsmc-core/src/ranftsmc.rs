@@ -13,11 +13,12 @@
 //! by the cascade). Since `α, β > 1`, the powers `|e|^(α−1)` and `|ė|^(β−1)`
 //! vanish at zero and every term stays finite.
 
+use crate::lanes::{branch, Blend, Lanewise, Mask, Real};
 use crate::law::{
     check_closed, check_gain, check_gain_or_zero, check_initial_state, check_left_open, check_non_negative, check_open,
-    inputs_finite, saturate, AxisLaw, ContinuousRhs, GainError, INPUT_LIMIT, MAX_ESTIMATES, STATE_LIMIT,
+    saturate, AxisLaw, ContinuousRhs, GainError, INPUT_LIMIT, MAX_ESTIMATES, STATE_LIMIT,
 };
-use crate::math::{pow_abs, pow_abs_minus_one, sig, sign, tanh};
+use crate::math::{pow_abs, pow_abs_minus_one, sig, sign_of, tanh};
 
 /// Gains of one RANFTSMC channel (the published gain table of ref. \[19\]).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -127,44 +128,54 @@ impl RanftsmcGains {
     }
 }
 
-/// Nonsingular fast terminal surface `σ = e + b1 sig^α(e) + b2 sig^β(ė)`.
+/// Nonsingular fast terminal surface `σ = e + b1 sig^α(e) + b2 sig^β(ė)`
+/// (error units: m or rad), for one flight or per lane.
 #[inline]
-pub fn sliding_surface(g: &RanftsmcGains, e: f64, e_dot: f64) -> f64 {
-    e + g.b1 * sig(e, g.alpha) + g.b2 * sig(e_dot, g.beta)
+pub fn sliding_surface<R: Real>(g: &RanftsmcGains, e: R, e_dot: R) -> R {
+    e + sig(e, g.alpha) * g.b1 + sig(e_dot, g.beta) * g.b2
 }
 
-/// Equivalent part `−(1/(β b2)) |ė|^(2−β) (1 + α b1 |e|^(α−1)) sign(ė)`, channel units/s².
+/// Equivalent part `−(1/(β b2)) |ė|^(2−β) (1 + α b1 |e|^(α−1)) sign(ė)`,
+/// channel units/s², for one flight or per lane.
 #[inline]
-pub fn equivalent_law(g: &RanftsmcGains, e: f64, e_dot: f64) -> f64 {
-    -(1.0 / (g.beta * g.b2))
-        * pow_abs(e_dot, 2.0 - g.beta)
-        * (1.0 + g.alpha * g.b1 * pow_abs_minus_one(e, g.alpha))
-        * sign(e_dot)
+pub fn equivalent_law<R: Real>(g: &RanftsmcGains, e: R, e_dot: R) -> R {
+    pow_abs(e_dot, 2.0 - g.beta)
+        * (-(1.0 / (g.beta * g.b2)))
+        * (pow_abs_minus_one(e, g.alpha) * (g.alpha * g.b1) + 1.0)
+        * sign_of(e_dot)
 }
 
-/// `sign(σ)`, or `tanh(σ/φ)` with a boundary layer φ > 0.
+/// `sign(σ)`, or `tanh(σ/φ)` with a boundary layer φ > 0 (dimensionless),
+/// for one flight or per lane.
 #[inline]
-pub fn switching_sign(g: &RanftsmcGains, sigma: f64) -> f64 {
+pub fn switching_sign<R: Real>(g: &RanftsmcGains, sigma: R) -> R {
     if g.sign_smoothing > 0.0 {
-        tanh(sigma / g.sign_smoothing)
+        (sigma / g.sign_smoothing).map(tanh)
     } else {
-        sign(sigma)
+        sign_of(sigma)
     }
 }
 
 /// One RANFTSMC channel: gains and the adaptive gains `[â0, â1, â2]`.
+///
+/// `R` is the number type ([`crate::lanes`]): `f64` (the default) for one
+/// flight, [`crate::lanes::Lanes`] for several flights side by side that
+/// share the gains; lane `i` has exactly the bits of an `f64` channel fed
+/// lane `i`'s inputs (its own `â`, σ and freeze flag).
 #[derive(Clone, Copy, Debug)]
-pub struct RanftsmcAxis {
-    /// Gains.
+pub struct RanftsmcAxis<R: Real = f64> {
+    /// Gains (shared by every lane).
     pub gains: RanftsmcGains,
-    /// `[â0, â1, â2]`.
-    pub a_hat: [f64; 3],
-    /// σ of the last update.
-    pub sigma: f64,
-    /// `â` held (not integrated) while true; see
+    /// `[â0, â1, â2]` (â0 channel units/s², â1 1/s², â2 1/s), per lane.
+    pub a_hat: [R; 3],
+    /// σ of the last update (channel units: m or rad), per lane.
+    pub sigma: R,
+    /// `â` held (not integrated) in the lanes where true; see
     /// [`AxisLaw::set_adaptation_frozen`].
-    frozen: bool,
+    frozen: R::Mask,
 }
+
+crate::lanewise_struct!(RanftsmcAxis { a_hat, sigma, frozen } shared { gains });
 
 /// Below this `|ė|` the update computes `|ė|^(2−β)` with its own power
 /// instead of `|ė|² / |ė|^β`: for `|ė| ≤ 6.8e-195` (β = 5/3) both `|ė|²`
@@ -173,7 +184,7 @@ pub struct RanftsmcAxis {
 /// rounding there.
 const SHARED_POWER_MIN: f64 = 1e-100;
 
-impl RanftsmcAxis {
+impl RanftsmcAxis<f64> {
     /// A channel with `â = [a0_hat0, a1_hat0, a2_hat0]`, after validating the
     /// gains ([`RanftsmcGains::check`]).
     pub fn try_new(gains: RanftsmcGains) -> Result<Self, GainError> {
@@ -186,16 +197,54 @@ impl RanftsmcAxis {
     /// run [`RanftsmcGains::check`] or use [`RanftsmcAxis::try_new`].
     /// Out-of-range gains never panic but may give non-finite commands.
     pub fn new(gains: RanftsmcGains) -> Self {
-        Self { gains, a_hat: [gains.a0_hat0, gains.a1_hat0, gains.a2_hat0], sigma: 0.0, frozen: false }
+        Self::splat(gains)
     }
 
-    /// Whether `â` is currently held ([`AxisLaw::set_adaptation_frozen`]).
-    pub fn adaptation_frozen(&self) -> bool {
+    /// [`AxisLaw::continuous_rhs`] of one flight: `v` and σ exactly as
+    /// [`AxisLaw::update`] computes them with `â = estimates`;
+    /// `dâ/dt = [μ0 |σ| |ė|^(β−1), μ1 |σ| |e| |ė|^(β−1), μ2 |σ| |ė|^β]`
+    /// (zero while frozen).
+    fn continuous_rhs_one(&self, e: f64, e_dot: f64, estimates: [f64; 3]) -> ContinuousRhs {
+        let mut at = Self { a_hat: estimates, ..*self };
+        let v = at.update(e, e_dot, 0.0);
+        if self.frozen {
+            return ContinuousRhs { v, s: at.sigma, estimates_rate: [0.0; 3] };
+        }
+        let (e, e_dot) = (saturate(e, INPUT_LIMIT), saturate(e_dot, INPUT_LIMIT));
+        let g = &self.gains;
+        let abs_sigma = at.sigma.abs();
+        let ed_beta_minus_one = pow_abs_minus_one(e_dot, g.beta);
+        ContinuousRhs {
+            v,
+            s: at.sigma,
+            estimates_rate: [
+                g.mu0 * abs_sigma * ed_beta_minus_one,
+                g.mu1 * abs_sigma * e.abs() * ed_beta_minus_one,
+                g.mu2 * abs_sigma * e_dot.abs() * ed_beta_minus_one,
+            ],
+        }
+    }
+}
+
+impl<R: Real> RanftsmcAxis<R> {
+    /// Every lane a fresh channel ([`RanftsmcAxis::new`]: `â` at its
+    /// initial values, σ = 0, released), **without** validating the gains.
+    pub fn splat(gains: RanftsmcGains) -> Self {
+        Self {
+            gains,
+            a_hat: [R::splat(gains.a0_hat0), R::splat(gains.a1_hat0), R::splat(gains.a2_hat0)],
+            sigma: R::splat(0.0),
+            frozen: R::Mask::splat(false),
+        }
+    }
+
+    /// Whether `â` is currently held, per lane ([`AxisLaw::set_adaptation_frozen`]).
+    pub fn adaptation_frozen(&self) -> R::Mask {
         self.frozen
     }
 }
 
-impl AxisLaw for RanftsmcAxis {
+impl<R: Real> AxisLaw<R> for RanftsmcAxis<R> {
     const NAME: &'static str = "ranftsmc";
     const ESTIMATE_NAMES: [&'static str; MAX_ESTIMATES] = ["a_hat0", "a_hat1", "a_hat2"];
 
@@ -212,55 +261,75 @@ impl AxisLaw for RanftsmcAxis {
     ///
     /// While frozen ([`AxisLaw::set_adaptation_frozen`]) the output uses the
     /// held `â` and the three adaptation laws are not integrated.
+    ///
+    /// On lanes every guard acts per lane: a lane with a non-finite `e` or
+    /// `ė` gets NaN and keeps its states while the other lanes update (a
+    /// non-finite `dt`, shared, is every lane's); the direct `|ė|^(2−β)` is
+    /// computed only when some lane needs it ([`crate::lanes::branch`]).
     #[inline]
-    fn update(&mut self, e: f64, e_dot: f64, dt: f64) -> f64 {
-        if !inputs_finite(e, e_dot, dt) {
-            return f64::NAN;
+    fn update(&mut self, e: R, e_dot: R, dt: f64) -> R {
+        let ok = e.is_finite() & e_dot.is_finite();
+        if !(dt.is_finite() && ok.any()) {
+            return R::splat(f64::NAN);
         }
-        let (e, e_dot) = (saturate(e, INPUT_LIMIT), saturate(e_dot, INPUT_LIMIT));
+        // From here on, lanes with a bad input compute garbage that the
+        // selects below throw away (for one flight `ok` is true here).
+        let input_limit = R::splat(INPUT_LIMIT);
+        let (e, e_dot) = (saturate(e, input_limit), saturate(e_dot, input_limit));
         let g = &self.gains;
         let (ae, aed) = (e.abs(), e_dot.abs());
         let e_alpha_minus_one = pow_abs_minus_one(e, g.alpha);
         let ed_beta_minus_one = pow_abs_minus_one(e_dot, g.beta);
         let ed_beta = aed * ed_beta_minus_one;
+        let sign_ed = sign_of(e_dot);
         // σ = e + b1 sig^α(e) + b2 sig^β(ė)
-        let sigma = e + g.b1 * e * e_alpha_minus_one + g.b2 * ed_beta * sign(e_dot);
+        let sigma = e + e * g.b1 * e_alpha_minus_one + ed_beta * g.b2 * sign_ed;
         // |ė|^(2−β) = |ė|² / |ė|^β (0 at ė = 0 since β < 2); for tiny |ė|
         // the quotient would be 0/0, so take the power directly.
-        let ed_two_minus_beta = if aed >= SHARED_POWER_MIN {
-            aed * aed / ed_beta
-        } else if aed > 0.0 {
-            pow_abs(e_dot, 2.0 - g.beta)
-        } else {
-            0.0
-        };
+        let zero = R::splat(0.0);
+        let ed_two_minus_beta = branch(
+            aed.ge(R::splat(SHARED_POWER_MIN)),
+            || aed * aed / ed_beta,
+            || branch(aed.gt(zero), || pow_abs(e_dot, 2.0 - g.beta), || zero),
+        );
         let v_eq =
-            -(1.0 / (g.beta * g.b2)) * ed_two_minus_beta * (1.0 + g.alpha * g.b1 * e_alpha_minus_one) * sign(e_dot);
+            ed_two_minus_beta * (-(1.0 / (g.beta * g.b2))) * (e_alpha_minus_one * (g.alpha * g.b1) + 1.0) * sign_ed;
         let [a0, a1, a2] = self.a_hat;
-        let v = v_eq - g.c * sigma - (a0 + a1 * ae + a2 * aed + g.h) * switching_sign(g, sigma);
-        if !self.frozen {
+        let v = v_eq - sigma * g.c - (a0 + a1 * ae + a2 * aed + g.h) * switching_sign(g, sigma);
+        let adapt = ok & !self.frozen;
+        if adapt.any() {
             let abs_sigma = sigma.abs();
-            self.a_hat[0] = saturate(self.a_hat[0] + dt * g.mu0 * abs_sigma * ed_beta_minus_one, STATE_LIMIT);
-            self.a_hat[1] = saturate(self.a_hat[1] + dt * g.mu1 * abs_sigma * ae * ed_beta_minus_one, STATE_LIMIT);
-            self.a_hat[2] = saturate(self.a_hat[2] + dt * g.mu2 * abs_sigma * ed_beta, STATE_LIMIT);
+            let state_limit = R::splat(STATE_LIMIT);
+            let adapted = [
+                saturate(a0 + abs_sigma * (dt * g.mu0) * ed_beta_minus_one, state_limit),
+                saturate(a1 + abs_sigma * (dt * g.mu1) * ae * ed_beta_minus_one, state_limit),
+                saturate(a2 + abs_sigma * (dt * g.mu2) * ed_beta, state_limit),
+            ];
+            self.a_hat = Blend::blend(adapt, adapted, self.a_hat);
         }
-        self.sigma = sigma;
-        v
+        self.sigma = R::select(ok, sigma, self.sigma);
+        R::select(ok, v, R::splat(f64::NAN))
     }
 
-    fn sliding_variable(&self) -> f64 {
+    fn sliding_variable(&self) -> R {
         self.sigma
     }
 
-    fn estimates(&self) -> [f64; 3] {
+    fn estimates(&self) -> [R; 3] {
         self.a_hat
     }
 
     fn reset(&mut self) {
-        *self = Self::new(self.gains);
+        *self = Self::splat(self.gains);
     }
 
-    fn set_adaptation_frozen(&mut self, frozen: bool) {
+    /// Lane `lane` becomes a fresh channel ([`RanftsmcAxis::new`]); the
+    /// other lanes are untouched.
+    fn reset_lane(&mut self, lane: usize) {
+        self.put_lane(lane, RanftsmcAxis::new(self.gains));
+    }
+
+    fn set_adaptation_frozen(&mut self, frozen: R::Mask) {
         self.frozen = frozen;
     }
 
@@ -270,26 +339,10 @@ impl AxisLaw for RanftsmcAxis {
 
     /// `v` and σ exactly as [`AxisLaw::update`] computes them with
     /// `â = estimates`; `dâ/dt = [μ0 |σ| |ė|^(β−1), μ1 |σ| |e| |ė|^(β−1), μ2 |σ| |ė|^β]`
-    /// (zero while frozen).
+    /// (zero while frozen). One flight: on lanes, lane 0's law (its gains
+    /// and freeze flag; `â` comes from `estimates`).
     fn continuous_rhs(&self, e: f64, e_dot: f64, estimates: [f64; 3]) -> Option<ContinuousRhs> {
-        let mut at = Self { a_hat: estimates, ..*self };
-        let v = at.update(e, e_dot, 0.0);
-        if self.frozen {
-            return Some(ContinuousRhs { v, s: at.sigma, estimates_rate: [0.0; 3] });
-        }
-        let (e, e_dot) = (saturate(e, INPUT_LIMIT), saturate(e_dot, INPUT_LIMIT));
-        let g = &self.gains;
-        let abs_sigma = at.sigma.abs();
-        let ed_beta_minus_one = pow_abs_minus_one(e_dot, g.beta);
-        Some(ContinuousRhs {
-            v,
-            s: at.sigma,
-            estimates_rate: [
-                g.mu0 * abs_sigma * ed_beta_minus_one,
-                g.mu1 * abs_sigma * e.abs() * ed_beta_minus_one,
-                g.mu2 * abs_sigma * e_dot.abs() * ed_beta_minus_one,
-            ],
-        })
+        Some(self.get_lane(0).continuous_rhs_one(e, e_dot, estimates))
     }
 }
 

@@ -15,11 +15,12 @@
 //! the super-twisting algorithm acting on `s` through a positive gain, and no
 //! negative power of ė anywhere (the surface is nonsingular).
 
+use crate::lanes::{Lanewise, Mask, Real};
 use crate::law::{
-    check_closed, check_gain, check_non_negative, inputs_finite, saturate, AxisLaw, ContinuousRhs, GainError,
-    INPUT_LIMIT, MAX_ESTIMATES, STATE_LIMIT,
+    check_closed, check_gain, check_non_negative, saturate, AxisLaw, ContinuousRhs, GainError, INPUT_LIMIT,
+    MAX_ESTIMATES, STATE_LIMIT,
 };
-use crate::math::{pow_abs, sig, sign, sqrt, tanh};
+use crate::math::{pow_abs, sig, sign_of, tanh};
 
 /// Largest `p` and `q` accepted (99): an update computes `|ė|^(p/q)` and
 /// `|ė|^(2−p/q)` by `p` and `2q − p` multiplications, so the bound keeps one
@@ -136,38 +137,43 @@ impl TsmStaGains {
     }
 }
 
-/// Nonsingular terminal surface `s = e + (1/λ) sig^(p/q)(ė)`.
+/// Nonsingular terminal surface `s = e + (1/λ) sig^(p/q)(ė)` (error units:
+/// m or rad), for one flight or per lane.
 #[inline]
-pub fn sliding_surface(g: &TsmStaGains, e: f64, e_dot: f64) -> f64 {
+pub fn sliding_surface<R: Real>(g: &TsmStaGains, e: R, e_dot: R) -> R {
     e + sig(e_dot, g.p / g.q) / g.lambda
 }
 
-/// `sign(s)`, or `tanh(s/φ)` with a boundary layer φ > 0.
+/// `sign(s)`, or `tanh(s/φ)` with a boundary layer φ > 0 (dimensionless),
+/// for one flight or per lane.
 #[inline]
-pub fn switching_sign(g: &TsmStaGains, s: f64) -> f64 {
+pub fn switching_sign<R: Real>(g: &TsmStaGains, s: R) -> R {
     if g.sign_smoothing > 0.0 {
-        tanh(s / g.sign_smoothing)
+        (s / g.sign_smoothing).map(tanh)
     } else {
-        sign(s)
+        sign_of(s)
     }
 }
 
-/// `x^(1/q)` for `x ≥ 0` (cube root when `q = 3`).
+/// `x^(1/q)` for `x ≥ 0` (cube root when `q = 3`), per lane. `q` is a gain,
+/// the same in every lane, so the path is chosen once for all lanes.
 #[inline]
-fn qth_root(x: f64, q: f64) -> f64 {
+fn qth_root<R: Real>(x: R, q: f64) -> R {
     if q == 3.0 {
-        crate::math::cbrt(x)
+        x.map(crate::math::cbrt)
     } else if q == 1.0 {
         x
     } else {
-        crate::math::powf(x, 1.0 / q)
+        let inverse = 1.0 / q;
+        x.map(|v| crate::math::powf(v, inverse))
     }
 }
 
-/// `x^n` for a small non-negative integer `n` by repeated multiplication.
+/// `x^n` for a small non-negative integer `n` by repeated multiplication
+/// (`n` is a gain: the same number of multiplications in every lane).
 #[inline]
-fn powi(x: f64, n: u32) -> f64 {
-    let mut out = 1.0;
+fn powi<R: Real>(x: R, n: u32) -> R {
+    let mut out = R::splat(1.0);
     for _ in 0..n {
         out *= x;
     }
@@ -175,24 +181,31 @@ fn powi(x: f64, n: u32) -> f64 {
 }
 
 /// One TSM-STA channel: gains, the super-twisting integral state ν, last s.
+///
+/// `R` is the number type ([`crate::lanes`]): `f64` (the default) for one
+/// flight, [`crate::lanes::Lanes`] for several flights side by side that
+/// share the gains; lane `i` has exactly the bits of an `f64` channel fed
+/// lane `i`'s inputs (its own ν, s and freeze flag).
 #[derive(Clone, Copy, Debug)]
-pub struct TsmStaAxis {
-    /// Gains.
+pub struct TsmStaAxis<R: Real = f64> {
+    /// Gains (shared by every lane).
     pub gains: TsmStaGains,
-    /// Integral state ν of the super-twisting law, channel units/s².
-    pub nu: f64,
-    /// s of the last update.
-    pub s: f64,
+    /// Integral state ν of the super-twisting law, channel units/s², per lane.
+    pub nu: R,
+    /// s of the last update (channel units: m or rad), per lane.
+    pub s: R,
     /// `(p, 2q − p)` as integers when the gains are valid; `None` (general
     /// real powers) otherwise, so that an unchecked `p = 2999999999` is
-    /// neither truncated nor looped over.
+    /// neither truncated nor looped over. Shared by every lane.
     exponents: Option<(u32, u32)>,
-    /// ν held (not integrated) while true; see
+    /// ν held (not integrated) in the lanes where true; see
     /// [`AxisLaw::set_adaptation_frozen`].
-    frozen: bool,
+    frozen: R::Mask,
 }
 
-impl TsmStaAxis {
+crate::lanewise_struct!(TsmStaAxis { nu, s, frozen } shared { gains, exponents });
+
+impl TsmStaAxis<f64> {
     /// A channel with ν = 0, after validating the gains ([`TsmStaGains::check`]).
     pub fn try_new(gains: TsmStaGains) -> Result<Self, GainError> {
         gains.check()?;
@@ -206,16 +219,40 @@ impl TsmStaAxis {
     /// checked range use real powers instead of repeated multiplication),
     /// but may give non-finite commands.
     pub fn new(gains: TsmStaGains) -> Self {
-        Self { gains, nu: 0.0, s: 0.0, exponents: gains.integer_exponents(), frozen: false }
+        Self::splat(gains)
     }
 
-    /// Whether ν is currently held ([`AxisLaw::set_adaptation_frozen`]).
-    pub fn adaptation_frozen(&self) -> bool {
+    /// [`AxisLaw::continuous_rhs`] of one flight: `v` and s exactly as
+    /// [`AxisLaw::update`] computes them with `ν = estimates[0]`;
+    /// `dν/dt = −k2 sign(s)` (or `tanh(s/φ)`; zero while frozen).
+    fn continuous_rhs_one(&self, e: f64, e_dot: f64, estimates: [f64; 3]) -> ContinuousRhs {
+        let mut at = Self { nu: estimates[0], ..*self };
+        let v = at.update(e, e_dot, 0.0);
+        let rate = if self.frozen { 0.0 } else { -self.gains.k2 * switching_sign(&self.gains, at.s) };
+        ContinuousRhs { v, s: at.s, estimates_rate: [rate, 0.0, 0.0] }
+    }
+}
+
+impl<R: Real> TsmStaAxis<R> {
+    /// Every lane a fresh channel ([`TsmStaAxis::new`]: ν = 0, s = 0,
+    /// released), **without** validating the gains.
+    pub fn splat(gains: TsmStaGains) -> Self {
+        Self {
+            gains,
+            nu: R::splat(0.0),
+            s: R::splat(0.0),
+            exponents: gains.integer_exponents(),
+            frozen: R::Mask::splat(false),
+        }
+    }
+
+    /// Whether ν is currently held, per lane ([`AxisLaw::set_adaptation_frozen`]).
+    pub fn adaptation_frozen(&self) -> R::Mask {
         self.frozen
     }
 }
 
-impl AxisLaw for TsmStaAxis {
+impl<R: Real> AxisLaw<R> for TsmStaAxis<R> {
     const NAME: &'static str = "tsm-sta";
     const ESTIMATE_NAMES: [&'static str; MAX_ESTIMATES] = ["nu", "", ""];
 
@@ -230,12 +267,22 @@ impl AxisLaw for TsmStaAxis {
     /// the super-twisting integral; holding it while the actuators saturate
     /// is the classic conditional-integration anti-windup, so it is frozen
     /// by the same option as the adaptive gains of the other laws.
+    ///
+    /// On lanes every guard acts per lane: a lane with a non-finite `e` or
+    /// `ė` gets NaN and keeps its states while the other lanes update (a
+    /// non-finite `dt`, shared, is every lane's). The exponents are gains,
+    /// so every lane takes the same power path and the same number of
+    /// multiplications.
     #[inline]
-    fn update(&mut self, e: f64, e_dot: f64, dt: f64) -> f64 {
-        if !inputs_finite(e, e_dot, dt) {
-            return f64::NAN;
+    fn update(&mut self, e: R, e_dot: R, dt: f64) -> R {
+        let ok = e.is_finite() & e_dot.is_finite();
+        if !(dt.is_finite() && ok.any()) {
+            return R::splat(f64::NAN);
         }
-        let (e, e_dot) = (saturate(e, INPUT_LIMIT), saturate(e_dot, INPUT_LIMIT));
+        // From here on, lanes with a bad input compute garbage that the
+        // selects below throw away (for one flight `ok` is true here).
+        let input_limit = R::splat(INPUT_LIMIT);
+        let (e, e_dot) = (saturate(e, input_limit), saturate(e_dot, input_limit));
         let g = &self.gains;
         let ratio = g.p / g.q;
         let (ed_ratio, ed_two_minus_ratio) = match self.exponents {
@@ -247,29 +294,38 @@ impl AxisLaw for TsmStaAxis {
             }
             None => (pow_abs(e_dot, ratio), pow_abs(e_dot, 2.0 - ratio)),
         };
-        let s = e + ed_ratio * sign(e_dot) / g.lambda;
+        let sign_ed = sign_of(e_dot);
+        let s = e + ed_ratio * sign_ed / g.lambda;
         let sw = switching_sign(g, s);
-        let v = -g.lambda / ratio * ed_two_minus_ratio * sign(e_dot) - g.k1 * sqrt(s.abs()) * sw + self.nu;
-        if !self.frozen {
-            self.nu = saturate(self.nu - dt * g.k2 * sw, STATE_LIMIT);
+        let v = ed_two_minus_ratio * (-g.lambda / ratio) * sign_ed - s.abs().sqrt() * g.k1 * sw + self.nu;
+        let integrate = ok & !self.frozen;
+        if integrate.any() {
+            let integrated = saturate(self.nu - sw * (dt * g.k2), R::splat(STATE_LIMIT));
+            self.nu = R::select(integrate, integrated, self.nu);
         }
-        self.s = s;
-        v
+        self.s = R::select(ok, s, self.s);
+        R::select(ok, v, R::splat(f64::NAN))
     }
 
-    fn sliding_variable(&self) -> f64 {
+    fn sliding_variable(&self) -> R {
         self.s
     }
 
-    fn estimates(&self) -> [f64; 3] {
-        [self.nu, 0.0, 0.0]
+    fn estimates(&self) -> [R; 3] {
+        [self.nu, R::splat(0.0), R::splat(0.0)]
     }
 
     fn reset(&mut self) {
-        *self = Self::new(self.gains);
+        *self = Self::splat(self.gains);
     }
 
-    fn set_adaptation_frozen(&mut self, frozen: bool) {
+    /// Lane `lane` becomes a fresh channel ([`TsmStaAxis::new`]); the other
+    /// lanes are untouched.
+    fn reset_lane(&mut self, lane: usize) {
+        self.put_lane(lane, TsmStaAxis::new(self.gains));
+    }
+
+    fn set_adaptation_frozen(&mut self, frozen: R::Mask) {
         self.frozen = frozen;
     }
 
@@ -279,19 +335,17 @@ impl AxisLaw for TsmStaAxis {
 
     /// `v` and s exactly as [`AxisLaw::update`] computes them with
     /// `ν = estimates[0]`; `dν/dt = −k2 sign(s)` (or `tanh(s/φ)`; zero while
-    /// frozen).
+    /// frozen). One flight: on lanes, lane 0's law (its gains and freeze
+    /// flag; ν comes from `estimates`).
     fn continuous_rhs(&self, e: f64, e_dot: f64, estimates: [f64; 3]) -> Option<ContinuousRhs> {
-        let mut at = Self { nu: estimates[0], ..*self };
-        let v = at.update(e, e_dot, 0.0);
-        let rate = if self.frozen { 0.0 } else { -self.gains.k2 * switching_sign(&self.gains, at.s) };
-        Some(ContinuousRhs { v, s: at.s, estimates_rate: [rate, 0.0, 0.0] })
+        Some(self.get_lane(0).continuous_rhs_one(e, e_dot, estimates))
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::math::pow_abs;
+    use crate::math::{pow_abs, sign};
     use approx::assert_relative_eq;
 
     #[test]
