@@ -1,9 +1,9 @@
 //! FTAFTSMC, the paper's controller (§3, Eq. 9–17 and 44), and its variant
 //! with the mass adaptation switched off; both read `[ftaftsmc]`.
 
-use ftsmc_core::lanes::Lanes;
 use ftsmc_core::cascade::{Cascade, MassAdaptation};
 use ftsmc_core::ftaftsmc::{FtaftsmcAxis, FtaftsmcGains};
+use ftsmc_core::lanes::Lanes;
 use serde::{Deserialize, Serialize};
 
 use super::{check_axes, AxisLawVisitor, BoxedController, BuildContext, Declaration, GainSection, InvalidGain};
@@ -84,7 +84,11 @@ fn cascade_lanes<const N: usize>(
 ) -> Option<Result<super::LaneController<N>, String>> {
     let laws = config.gains().to_array().map(FtaftsmcAxis::<Lanes<N>>::with_gains);
     let built = Cascade::<_, Lanes<N>>::with_laws(ctx.cascade_config(mass_adaptation), laws);
-    Some(built.map(|c| Box::new(super::on_isa::OnIsa::detected(c)) as super::LaneController<N>).map_err(|e| e.to_string()))
+    Some(
+        built
+            .map(|c| Box::new(super::on_isa::OnIsa::detected(c)) as super::LaneController<N>)
+            .map_err(|e| e.to_string()),
+    )
 }
 
 /// `ftaftsmc`: the paper's controller.

@@ -37,6 +37,19 @@ impl Declaration for TsmSta {
         Ok(Box::new(Cascade::new(ctx.cascade_config(MassAdaptation::OFF), laws).map_err(|e| e.to_string())?))
     }
 
+    fn build_lanes<const N: usize>(
+        gains: &Self::Section,
+        ctx: &BuildContext,
+    ) -> Option<Result<super::LaneController<N>, String>> {
+        let laws = gains.to_array().map(TsmStaAxis::<ftsmc_core::lanes::Lanes<N>>::splat);
+        let built = Cascade::<_, ftsmc_core::lanes::Lanes<N>>::with_laws(ctx.cascade_config(MassAdaptation::OFF), laws);
+        Some(
+            built
+                .map(|c| Box::new(super::on_isa::OnIsa::detected(c)) as super::LaneController<N>)
+                .map_err(|e| e.to_string()),
+        )
+    }
+
     fn visit_axis_law<V: AxisLawVisitor>(gains: &Self::Section, axis: usize, visitor: V) -> Option<V::Output> {
         Some(visitor.visit(TsmStaAxis::new(gains.to_array()[axis])))
     }
