@@ -117,6 +117,11 @@ fn montecarlo_csv_is_byte_identical_across_thread_counts() {
         if cfg!(unix) {
             assert!(said.contains(" M steps flown per CPU-second"), "{said}");
         }
+        // Which lanes and instruction set flew it.
+        assert!(
+            said.contains("; 4 lanes per thread, baseline)") || said.contains("; 4 lanes per thread, avx2+fma)"),
+            "{said}"
+        );
     }
     // `--out` is the parent: the batch goes to `<out>/<scenario name>/`.
     let one = std::fs::read(dir.join("mc1/paper-scenario-2/runs.csv")).unwrap();

@@ -10,6 +10,12 @@
 //! is and with glibc's AVX2/FMA builds switched off, and compares the files
 //! byte for byte. (Where the C library is not glibc the variable is ignored
 //! and the two runs are the same by construction; CI runs on glibc.)
+//!
+//! The flights in lanes run their control laws on the widest instruction
+//! set the CPU has (AVX2 + FMA on most x86-64 machines, `ftsmc_sim::isa`);
+//! `FTSMC_ISA=baseline` forces the baseline (SSE2) build of the same code.
+//! The batches below are flown on 4 lanes both ways, and on one lane, and
+//! must give the same bytes.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -21,15 +27,19 @@ fn temp_dir(name: &str) -> PathBuf {
     d
 }
 
-/// Fly `file` as a Monte Carlo batch into `dir/<out>`; `baseline` asks
-/// glibc for its baseline (no AVX, no FMA) maths.
-fn fly(dir: &Path, file: &str, out: &str, baseline: bool) -> Vec<u8> {
+/// Fly `file` as a Monte Carlo batch on `lanes` lanes into `dir/<out>`;
+/// `baseline` asks glibc for its baseline (no AVX, no FMA) maths and ftsmc
+/// for its baseline lane kernels.
+fn fly(dir: &Path, file: &str, out: &str, baseline: bool, lanes: &str) -> Vec<u8> {
     let mut cmd = Command::new(env!("CARGO_BIN_EXE_ftsmc"));
-    cmd.args(["montecarlo", file, "--runs", "3", "--threads", "2", "--no-figures", "--out", out]).current_dir(dir);
+    cmd.args(["montecarlo", file, "--runs", "5", "--threads", "2", "--lanes", lanes, "--no-figures", "--out", out])
+        .current_dir(dir);
     if baseline {
         cmd.env("GLIBC_TUNABLES", "glibc.cpu.hwcaps=-AVX2,-FMA,-AVX,-FMA4");
+        cmd.env("FTSMC_ISA", "baseline");
     } else {
         cmd.env_remove("GLIBC_TUNABLES");
+        cmd.env_remove("FTSMC_ISA");
     }
     let run = cmd.output().expect("binary runs");
     assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
@@ -55,10 +65,12 @@ fn monte_carlo_is_byte_identical_with_and_without_avx2_and_fma() {
         }
         assert!(short.contains("duration = 10.0"), "{file} has no top-level `name`");
         std::fs::write(dir.join(file), short).unwrap();
-        let native = fly(&dir, file, "native", false);
-        let baseline = fly(&dir, file, "baseline", true);
+        let native = fly(&dir, file, "native", false, "4");
+        let baseline = fly(&dir, file, "baseline", true, "4");
+        let one_lane = fly(&dir, file, "one-lane", false, "1");
         assert!(String::from_utf8_lossy(&native).lines().count() > 3, "{file}: no rows");
-        assert!(native == baseline, "{file}: runs.csv differs between the CPU's maths and glibc's baseline maths");
+        assert!(native == baseline, "{file}: runs.csv differs between the CPU's maths and the baseline maths");
+        assert!(native == one_lane, "{file}: runs.csv differs between 4 lanes and one");
     }
     std::fs::remove_dir_all(&dir).ok();
 }
