@@ -310,7 +310,7 @@ impl<'s, C: Controller + ?Sized> Flight<'s, C> {
             self.saturated_periods += u64::from(delivered.saturated);
         }
         self.controller.actuator_feedback(delivered.saturated);
-        if let Err(divergence) = self.truth.begin_period(&self.tv_now, &self.base_plant) {
+        if let Err(divergence) = self.truth.begin_period(0, &self.tv_now, &self.base_plant) {
             return self.end(ExitStatus::Diverged { divergence, time: t });
         }
 
@@ -355,8 +355,8 @@ impl<'s, C: Controller + ?Sized> Flight<'s, C> {
             let t0 = t + j as f64 * h;
             let wind = self.wind.as_mut().map(|w| w.step(t0));
             let tv_next = self.env.time_varying_on_grid(k * u64::from(substeps) + u64::from(j) + 1, t0 + h);
-            let z_prev = *self.truth.vertical().0;
-            self.truth.substep(&Substep {
+            let z_prev = self.truth.vertical(0).0;
+            self.truth.substep(core::slice::from_ref(&Substep {
                 t0,
                 h,
                 a: self.tv_now,
@@ -364,10 +364,12 @@ impl<'s, C: Controller + ?Sized> Flight<'s, C> {
                 env: &self.env,
                 drive: self.actuators.drive(&delivered, omega_bar),
                 wind,
-            });
+            }));
             if let Some(g) = &self.ground {
-                let (z, vz) = self.truth.vertical();
-                if let Some((fraction, impact_speed)) = g.contact(z_prev, z, vz) {
+                let (mut z, mut vz) = self.truth.vertical(0);
+                let contact = g.contact(z_prev, &mut z, &mut vz);
+                self.truth.set_vertical(0, z, vz);
+                if let Some((fraction, impact_speed)) = contact {
                     self.k = k + 1;
                     return self.end(ExitStatus::Crashed { time: t0 + fraction * h, impact_speed });
                 }

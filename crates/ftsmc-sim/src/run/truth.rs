@@ -18,12 +18,14 @@
 //! `v − w`, the rigid body's parasitic and rotor drag.
 
 use ftsmc_core::allocation::{forces_from_squared_speeds, residual_speed};
+use ftsmc_core::lanes::{Lanewise, Real};
 use ftsmc_core::measured::BodyAttitude;
 use ftsmc_core::model::{Command, QuadState, QuadrotorParams};
 
-use crate::environment::{Environment, TimeVarying};
+use crate::environment::Environment;
+use crate::environment::TimeVarying;
 use crate::scenario::Scenario;
-use crate::vehicle::paper::{derivative, derivative_in_wind, rk4_step_staged};
+use crate::vehicle::paper::{derivative_in_wind_of, derivative_of, rk4_step_staged, Eq1Params};
 use crate::vehicle::rigid_body::{normalize_quaternion, RigidBodyState};
 use crate::vehicle::{from_quad_state, to_quad_state, RigidBody, RigidBodyInput, RigidBodyParams, VehicleModel};
 
@@ -48,156 +50,269 @@ pub(crate) struct Substep<'a> {
     pub wind: Option<[f64; 3]>,
 }
 
-/// A truth model the loop can fly.
-pub(crate) trait TruthModel {
+/// Why a flight cannot start in a lane ([`TruthModel::start_lane`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[allow(dead_code)] // the batched run loop is built on it next
+pub(crate) enum LaneStart {
+    /// The scenario's rigid body is out of range (what [`truth_of`] reports
+    /// as `invalid`: the flight stops at t = 0).
+    Invalid(Divergence),
+    /// The scenario flies the other truth model (`[vehicle] model`): lanes
+    /// of one model only.
+    OtherModel,
+}
+
+/// A truth model the loop can fly: one flight (`R = f64`) or `R::LANES`
+/// flights side by side ([`ftsmc_core::lanes`]), each lane computing
+/// exactly what the one-flight model of its flight computes.
+pub(crate) trait TruthModel<R: Real = f64> {
     /// The state in the Euler form every controller takes.
-    fn quad_state(&self) -> QuadState;
+    fn quad_state(&self) -> QuadState<R>;
     /// The attitude as quaternion and body rates, when the model has them
     /// (handed to full-state controllers beside the Euler state). The
     /// default: none (the model's state is the Euler state).
-    fn body_attitude(&self) -> Option<BodyAttitude> {
+    fn body_attitude(&self) -> Option<BodyAttitude<R>> {
         None
     }
-    /// The start of a control period with the plant variation `tv` (the
-    /// rigid body's payload and inertia scaling); `base` is the true plant.
-    /// An error stops the run: the model cannot represent this variation.
-    fn begin_period(&mut self, tv: &TimeVarying, base: &QuadrotorParams) -> Result<(), Divergence> {
-        let _ = (tv, base);
+    /// The start of a control period of lane `lane`'s flight with the plant
+    /// variation `tv` (the rigid body's payload and inertia scaling); `base`
+    /// is that flight's true plant. An error stops that flight: the model
+    /// cannot represent this variation (the lane is left as it was).
+    fn begin_period(&mut self, lane: usize, tv: &TimeVarying, base: &QuadrotorParams) -> Result<(), Divergence> {
+        let _ = (lane, tv, base);
         Ok(())
     }
-    /// Integrate one substep.
-    fn substep(&mut self, s: &Substep<'_>);
-    /// Height `z` (m) and vertical velocity `ż` (m/s), for ground contact.
-    fn vertical(&mut self) -> (&mut f64, &mut f64);
+    /// Integrate one substep: `s[i]` is lane `i`'s (`s.len() >= R::LANES`).
+    fn substep(&mut self, s: &[Substep<'_>]);
+    /// Height `z` (m) and vertical velocity `ż` (m/s) of lane `lane`, for
+    /// ground contact.
+    fn vertical(&self, lane: usize) -> (f64, f64);
+    /// Overwrite lane `lane`'s `z` (m) and `ż` (m/s) (ground contact).
+    fn set_vertical(&mut self, lane: usize, z: f64, vz: f64);
+    /// Start a new flight of `scenario` in lane `lane`: its vehicle and its
+    /// initial state, the other lanes untouched. On error the lane is
+    /// unchanged.
+    #[allow(dead_code)] // the batched run loop is built on it next
+    fn start_lane(&mut self, lane: usize, scenario: &Scenario) -> Result<(), LaneStart>;
 }
 
-/// Paper Eq. 1 in Euler form.
-pub(crate) struct PaperTruth(pub [f64; 12]);
+/// Paper Eq. 1 in Euler form: `[x, y, z, φ, θ, ψ, ẋ, ẏ, ż, φ̇, θ̇, ψ̇]` per lane.
+pub(crate) struct PaperTruth<R: Real = f64>(pub [R; 12]);
 
-impl TruthModel for PaperTruth {
+/// The inputs of Eq. 1 at one RK4 stage time: the plant of the period's
+/// variation, the rotors' wrench and residual speed, the disturbance and
+/// the wind (zero in still air).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+struct PaperStage<R: Real = f64> {
+    plant: Eq1Params<R>,
+    command: Command<R>,
+    omega_bar: R,
+    disturbance: [R; 6],
+    wind: [R; 3],
+}
+
+ftsmc_core::lanewise_struct!(PaperStage { plant, command, omega_bar, disturbance, wind });
+
+/// The one-flight Eq. 1 inputs of substep `s` at the stage time `tau` (s):
+/// the plant of the variation interpolated to `tau`, and the held wrench or
+/// the one the lagged rotors deliver at `tau`.
+#[inline]
+fn paper_stage(s: &Substep<'_>, tau: f64) -> PaperStage {
+    let tv = TimeVarying::lerp(&s.a, &s.b, (tau - s.t0) / s.h);
+    let p = s.env.params_with(&tv);
+    let wind = s.wind.unwrap_or([0.0; 3]);
+    match s.drive {
+        Drive::Held { applied, omega_bar, .. } => {
+            PaperStage { plant: Eq1Params::of(&p), command: *applied, omega_bar, disturbance: tv.disturbance, wind }
+        }
+        drive @ Drive::Lagged { .. } => {
+            let w = drive.speeds_after(tau - s.t0);
+            let delivered: Command = forces_from_squared_speeds(&p, &w.map(|o| o * o));
+            PaperStage {
+                plant: Eq1Params::of(&p),
+                command: delivered,
+                omega_bar: residual_speed(&w),
+                disturbance: tv.disturbance,
+                wind,
+            }
+        }
+    }
+}
+
+impl<R: Real> PaperTruth<R> {
+    /// Every lane at `scenario`'s initial state.
+    pub(crate) fn new(scenario: &Scenario) -> Self {
+        Self(scenario.initial_state.state().to_array().map(R::splat))
+    }
+}
+
+impl<R: Real> TruthModel<R> for PaperTruth<R> {
     #[inline]
-    fn quad_state(&self) -> QuadState {
-        QuadState::from_array(&self.0)
+    fn quad_state(&self) -> QuadState<R> {
+        let a = &self.0;
+        QuadState {
+            position: [a[0], a[1], a[2]],
+            attitude: [a[3], a[4], a[5]],
+            velocity: [a[6], a[7], a[8]],
+            angular_rate: [a[9], a[10], a[11]],
+        }
     }
 
     #[inline]
-    fn substep(&mut self, s: &Substep<'_>) {
-        let (t0, h, a, b, env, wind) = (s.t0, s.h, &s.a, &s.b, s.env, s.wind);
-        // The plant of each RK4 stage time, made once (the second and third
-        // stages share theirs).
-        self.0 = match s.drive {
-            Drive::Held { applied, omega_bar, .. } => {
-                let inputs = |tau: f64| {
-                    let tv = TimeVarying::lerp(a, b, (tau - t0) / h);
-                    (env.params_with(&tv), tv.disturbance)
-                };
-                match wind {
-                    None => {
-                        rk4_step_staged(inputs, |(p, d), x| derivative(x, applied, omega_bar, p, d), t0, &self.0, h)
-                    }
-                    Some(wind) => rk4_step_staged(
-                        inputs,
-                        |(p, d), x| derivative_in_wind(x, applied, omega_bar, p, d, &wind),
-                        t0,
-                        &self.0,
-                        h,
-                    ),
-                }
+    fn substep(&mut self, s: &[Substep<'_>]) {
+        let s = &s[..R::LANES];
+        let t0 = R::from_fn(|i| s[i].t0);
+        let h = R::from_fn(|i| s[i].h);
+        // The plant of each RK4 stage time, made once per lane with the
+        // one-flight code (the second and third stages share theirs).
+        let inputs = |tau: R| {
+            let mut stage = PaperStage::<R>::default();
+            for (i, s) in s.iter().enumerate() {
+                stage.put_lane(i, paper_stage(s, tau.get_lane(i)));
             }
-            drive @ Drive::Lagged { .. } => {
-                let wind = wind.unwrap_or([0.0; 3]);
-                let inputs = |tau: f64| {
-                    let tv = TimeVarying::lerp(a, b, (tau - t0) / h);
-                    let p = env.params_with(&tv);
-                    let w = drive.speeds_after(tau - t0);
-                    let delivered: Command = forces_from_squared_speeds(&p, &w.map(|o| o * o));
-                    (p, delivered, residual_speed(&w), tv.disturbance)
-                };
-                let f = |(p, delivered, omega_bar, d): &(QuadrotorParams, Command, f64, [f64; 6]), x: &[f64; 12]| {
-                    derivative_in_wind(x, delivered, *omega_bar, p, d, &wind)
-                };
-                rk4_step_staged(inputs, f, t0, &self.0, h)
-            }
+            stage
+        };
+        // Eq. 1 in still air unless some lane has wind or lagged rotors
+        // (which always took the wind form); the wind form with a zero wind
+        // is Eq. 1 bit for bit (`v − 0 = v`), so a still-air lane flies the
+        // same either way.
+        let in_wind = s.iter().any(|s| s.wind.is_some() || matches!(s.drive, Drive::Lagged { .. }));
+        self.0 = if in_wind {
+            let f = |st: &PaperStage<R>, x: &[R; 12]| {
+                derivative_in_wind_of(x, &st.command, st.omega_bar, &st.plant, &st.disturbance, &st.wind)
+            };
+            rk4_step_staged(inputs, f, t0, &self.0, h)
+        } else {
+            let f = |st: &PaperStage<R>, x: &[R; 12]| {
+                derivative_of(x, &st.command, st.omega_bar, &st.plant, &st.disturbance)
+            };
+            rk4_step_staged(inputs, f, t0, &self.0, h)
         };
     }
 
     #[inline]
-    fn vertical(&mut self) -> (&mut f64, &mut f64) {
-        let (head, tail) = self.0.split_at_mut(8);
-        (&mut head[2], &mut tail[0])
+    fn vertical(&self, lane: usize) -> (f64, f64) {
+        (self.0[2].get_lane(lane), self.0[8].get_lane(lane))
+    }
+
+    #[inline]
+    fn set_vertical(&mut self, lane: usize, z: f64, vz: f64) {
+        self.0[2].put_lane(lane, z);
+        self.0[8].put_lane(lane, vz);
+    }
+
+    fn start_lane(&mut self, lane: usize, scenario: &Scenario) -> Result<(), LaneStart> {
+        if scenario.vehicle.model != VehicleModel::Paper {
+            return Err(LaneStart::OtherModel);
+        }
+        self.0.put_lane(lane, scenario.initial_state.state().to_array());
+        Ok(())
     }
 }
 
-/// The Newton–Euler rigid body ([`RigidBody`]).
-pub(crate) struct RigidTruth {
-    body: RigidBody,
+/// One flight's rigid-body bookkeeping beside its lane of the body.
+#[derive(Clone, Copy, Debug)]
+struct RigidLane {
+    /// The scenario's vehicle.
     base: RigidBodyParams,
-    /// The added mass (kg) and inertia scale the body flies: its mass is
-    /// `base.mass + key.0`, its inertia `key.1 · base.inertia`.
+    /// The added mass (kg) and inertia scale the lane's body flies: its mass
+    /// is `base.mass + key.0`, its inertia `key.1 · base.inertia`.
     key: (f64, f64),
-    x: RigidBodyState,
 }
 
-impl RigidTruth {
-    /// The rigid body of `scenario` at its initial state (`Err`: its
-    /// parameters are out of range; `Scenario::validate` refuses them, a
-    /// caller may skip validation).
+/// The rigid body of `scenario` at its initial state, one flight.
+fn rigid_flight(scenario: &Scenario) -> Result<(RigidBody, RigidLane, RigidBodyState), Divergence> {
+    let base = scenario.rigid_body_params();
+    let body =
+        RigidBody::new(base).map_err(|_| Divergence::RigidBodyOutOfRange { mass: base.mass, inertia_scale: 1.0 })?;
+    Ok((body, RigidLane { base, key: (0.0, 1.0) }, from_quad_state(&scenario.initial_state.state())))
+}
+
+/// The Newton–Euler rigid body ([`RigidBody`]), one vehicle per lane.
+pub(crate) struct RigidTruth<R: Real = f64> {
+    body: RigidBody<R>,
+    /// One per lane.
+    lanes: Vec<RigidLane>,
+    x: RigidBodyState<R>,
+}
+
+impl<R: Real> RigidTruth<R> {
+    /// The rigid body of `scenario` at its initial state in every lane
+    /// (`Err`: its parameters are out of range; `Scenario::validate` refuses
+    /// them, a caller may skip validation).
     pub(crate) fn new(scenario: &Scenario) -> Result<Self, Divergence> {
-        let base = scenario.rigid_body_params();
-        let body = RigidBody::new(base)
-            .map_err(|_| Divergence::RigidBodyOutOfRange { mass: base.mass, inertia_scale: 1.0 })?;
-        Ok(Self { body, base, key: (0.0, 1.0), x: from_quad_state(&scenario.initial_state.state()) })
+        let (body, lane, x) = rigid_flight(scenario)?;
+        Ok(Self { body: RigidBody::splat(&body), lanes: vec![lane; R::LANES], x: x.map(R::splat) })
     }
 }
 
-impl TruthModel for RigidTruth {
+impl<R: Real> TruthModel<R> for RigidTruth<R> {
     #[inline]
-    fn quad_state(&self) -> QuadState {
-        to_quad_state(&self.x)
+    fn quad_state(&self) -> QuadState<R> {
+        // The Euler conversion is the one-flight one, lane by lane.
+        let mut q = QuadState::<R>::default();
+        for i in 0..R::LANES {
+            q.put_lane(i, to_quad_state(&self.x.get_lane(i)));
+        }
+        q
     }
 
     #[inline]
-    fn body_attitude(&self) -> Option<BodyAttitude> {
+    fn body_attitude(&self) -> Option<BodyAttitude<R>> {
         let x = &self.x;
         Some(BodyAttitude { quaternion: [x[6], x[7], x[8], x[9]], body_rates: [x[10], x[11], x[12]] })
     }
 
-    fn begin_period(&mut self, tv: &TimeVarying, base_plant: &QuadrotorParams) -> Result<(), Divergence> {
+    fn begin_period(&mut self, lane: usize, tv: &TimeVarying, base_plant: &QuadrotorParams) -> Result<(), Divergence> {
         let added = tv.mass - base_plant.mass;
         let scale = tv.inertia[0] / base_plant.inertia[0];
-        if (added, scale) != self.key {
-            let mass = self.base.mass + added;
+        let l = &mut self.lanes[lane];
+        if (added, scale) != l.key {
+            let mass = l.base.mass + added;
             // The body's inertia is `scale · base` already when the scale
             // has not changed (a payload alone): then only the mass moves.
-            let updated = if scale == self.key.1 {
-                self.body.set_mass(mass)
+            let updated = if scale == l.key.1 {
+                self.body.set_mass_in_lane(lane, mass)
             } else {
-                self.body.set_mass_and_scaled_inertia(mass, &self.base.inertia, scale)
+                self.body.set_mass_and_scaled_inertia_in_lane(lane, mass, &l.base.inertia, scale)
             };
             if updated.is_err() {
                 // Never fly a mass or inertia other than the recorded one.
                 return Err(Divergence::RigidBodyOutOfRange { mass, inertia_scale: scale });
             }
-            self.key = (added, scale);
+            l.key = (added, scale);
         }
         Ok(())
     }
 
     #[inline]
-    fn substep(&mut self, s: &Substep<'_>) {
-        let (t0, h, a, b, drive) = (s.t0, s.h, &s.a, &s.b, &s.drive);
-        let wind = s.wind.unwrap_or([0.0; 3]);
+    fn substep(&mut self, s: &[Substep<'_>]) {
+        let s = &s[..R::LANES];
+        let t0 = R::from_fn(|i| s[i].t0);
+        let h = R::from_fn(|i| s[i].h);
+        let mut wind = [R::default(); 3];
+        for (i, s) in s.iter().enumerate() {
+            wind.put_lane(i, s.wind.unwrap_or([0.0; 3]));
+        }
         let body = &self.body;
-        let mass = body.params().mass;
+        let mass = body.mass();
         // The inputs at each RK4 stage time, made once (the second and third
-        // stages share theirs).
-        let inputs = |tau: f64| {
-            // The disturbance of `TimeVarying::lerp` (its mass and inertia
-            // are not used here: the body's are those of the period).
-            let w = (tau - t0) / h;
-            let d: [f64; 6] = core::array::from_fn(|i| a.disturbance[i] + w * (b.disturbance[i] - a.disturbance[i]));
+        // stages share theirs): each lane's rotor speeds and disturbance by
+        // the one-flight code, then the body's terms on the lanes.
+        let inputs = |tau: R| {
+            let mut rotor_speeds = [R::default(); 4];
+            let mut d = [R::default(); 6];
+            for (i, s) in s.iter().enumerate() {
+                let tau = tau.get_lane(i);
+                // The disturbance of `TimeVarying::lerp` (its mass and
+                // inertia are not used here: the body's are those of the period).
+                let w = (tau - s.t0) / s.h;
+                let (a, b) = (&s.a.disturbance, &s.b.disturbance);
+                d.put_lane(i, core::array::from_fn(|k| a[k] + w * (b[k] - a[k])));
+                rotor_speeds.put_lane(i, s.drive.speeds_after(tau - s.t0));
+            }
             body.prepare(&RigidBodyInput {
-                rotor_speeds: drive.speeds_after(tau - t0),
+                rotor_speeds,
                 wind,
                 force: [mass * d[0], mass * d[1], mass * d[2]],
                 torque: body.inertia_times([d[3], d[4], d[5]]),
@@ -208,9 +323,25 @@ impl TruthModel for RigidTruth {
     }
 
     #[inline]
-    fn vertical(&mut self) -> (&mut f64, &mut f64) {
-        let (head, tail) = self.x.split_at_mut(5);
-        (&mut head[2], &mut tail[0])
+    fn vertical(&self, lane: usize) -> (f64, f64) {
+        (self.x[2].get_lane(lane), self.x[5].get_lane(lane))
+    }
+
+    #[inline]
+    fn set_vertical(&mut self, lane: usize, z: f64, vz: f64) {
+        self.x[2].put_lane(lane, z);
+        self.x[5].put_lane(lane, vz);
+    }
+
+    fn start_lane(&mut self, lane: usize, scenario: &Scenario) -> Result<(), LaneStart> {
+        if scenario.vehicle.model != VehicleModel::RigidBody {
+            return Err(LaneStart::OtherModel);
+        }
+        let (body, one, x) = rigid_flight(scenario).map_err(LaneStart::Invalid)?;
+        self.body.put_lane(lane, body);
+        self.lanes[lane] = one;
+        self.x.put_lane(lane, x);
+        Ok(())
     }
 }
 
@@ -234,16 +365,28 @@ pub(crate) fn truth_of(scenario: &Scenario) -> TruthSetup {
     let (allocation, demand) = scenario.truth_allocation();
     let p = scenario.true_plant();
     let paper_hover = (p.mass * p.gravity / (4.0 * p.lift_coefficient)).sqrt();
-    let paper = || Box::new(PaperTruth(scenario.initial_state.state().to_array()));
+    let paper = || Box::new(PaperTruth::<f64>::new(scenario));
     let (truth, hover, invalid): (Box<dyn TruthModel + Send>, f64, Option<Divergence>) = match scenario.vehicle.model {
         VehicleModel::Paper => (paper(), paper_hover, None),
         VehicleModel::RigidBody => match RigidTruth::new(scenario) {
             Ok(truth) => {
-                let hover = truth.base.hover_rotor_speed();
+                let hover = truth.lanes[0].base.hover_rotor_speed();
                 (Box::new(truth), hover, None)
             }
             Err(why) => (paper(), paper_hover, Some(why)),
         },
     };
     TruthSetup { truth, allocation, demand, hover, invalid }
+}
+
+/// The truth model of `scenario` in every lane of `R` at its initial state
+/// (`[vehicle] model`; `Err`: its rigid body is out of range, which
+/// [`truth_of`] reports as `invalid`). New flights enter lanes with
+/// [`TruthModel::start_lane`].
+#[allow(dead_code)] // the batched run loop is built on it next
+pub(crate) fn truth_lanes<R: Real>(scenario: &Scenario) -> Result<Box<dyn TruthModel<R> + Send>, Divergence> {
+    Ok(match scenario.vehicle.model {
+        VehicleModel::Paper => Box::new(PaperTruth::<R>::new(scenario)),
+        VehicleModel::RigidBody => Box::new(RigidTruth::<R>::new(scenario)?),
+    })
 }
