@@ -390,3 +390,285 @@ pub(crate) fn truth_lanes<R: Real>(scenario: &Scenario) -> Result<Box<dyn TruthM
         VehicleModel::RigidBody => Box::new(RigidTruth::<R>::new(scenario)?),
     })
 }
+
+#[cfg(test)]
+mod lane_tests {
+    //! Lane equivalence: a truth model on `Lanes<4>` and `Lanes<8>`, each
+    //! lane flying its own scenario (vehicle, drive, wind, disturbances,
+    //! commands), equals bit for bit the one-flight models fed the same
+    //! inputs, substep by substep.
+
+    use super::*;
+    use crate::actuators::MixerKind;
+    use crate::environment::wind::Wind;
+    use crate::run::actuation::{ActuatorStage, Delivered};
+    use crate::scenario::ladder::{REALISTIC_CALM_2, REALISTIC_MODERATE_2};
+    use crate::scenario::{PAPER_SCENARIO_1, PAPER_SCENARIO_2};
+    use crate::vehicle::{Configuration, Inertia};
+    use ftsmc_core::lanes::Lanes;
+
+    fn parse(text: &str, name: &str) -> Scenario {
+        Scenario::from_toml_str(&format!("{text}\n"), name).unwrap()
+    }
+
+    /// Scenarios of one model, differing in everything a lane may differ in.
+    fn scenarios(rigid: bool) -> Vec<Scenario> {
+        let moderate = parse(REALISTIC_MODERATE_2, "realistic-moderate-2.toml");
+        let calm = parse(REALISTIC_CALM_2, "realistic-calm-2.toml");
+        let paper = parse(PAPER_SCENARIO_2, "paper-scenario-2.toml");
+        let mut out = Vec::new();
+        if rigid {
+            // Lagged rotors in wind; lagged in still air, heavier; held
+            // (clamp mixer) with products of inertia in the "×" layout; the
+            // paper vehicle (no aerodynamics) on default rotors.
+            out.push(moderate.clone());
+            let mut heavy = calm.clone();
+            heavy.vehicle.mass = Some(0.9);
+            heavy.seed = 11;
+            out.push(heavy);
+            let mut held = calm.clone();
+            held.actuators = held.actuators.map(|a| crate::actuators::ActuatorParams {
+                mixer: MixerKind::Clamp,
+                time_constant_up: 0.0,
+                time_constant_down: 0.0,
+                ..a
+            });
+            held.vehicle.inertia =
+                Some(Inertia::Matrix([[0.007, 2e-4, -1e-4], [2e-4, 0.0072, 5e-5], [-1e-4, 5e-5, 0.012]]));
+            held.vehicle.configuration = Some(Configuration::Cross);
+            held.wind = moderate.wind.clone();
+            out.push(held);
+            let mut bare = paper.clone();
+            bare.vehicle.model = VehicleModel::RigidBody;
+            out.push(bare);
+        } else {
+            // Ideal (held) in still air; held in wind; lagged rotors; paper 1.
+            out.push(paper.clone());
+            let mut windy = paper.clone();
+            windy.wind = moderate.wind.clone();
+            windy.seed = 5;
+            out.push(windy);
+            let mut lagged = paper.clone();
+            lagged.actuators = calm.actuators;
+            out.push(lagged);
+            out.push(parse(PAPER_SCENARIO_1, "paper-scenario-1.toml"));
+        }
+        out
+    }
+
+    /// A small deterministic generator, uniform in [−1, 1).
+    struct Lcg(u64);
+    impl Lcg {
+        fn next(&mut self) -> f64 {
+            self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (self.0 >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+        }
+    }
+
+    /// One flight's surroundings, as `Flight` sets them up, and its
+    /// one-flight truth model (apart: the substeps borrow the former while
+    /// the latter integrates).
+    struct Lane<'s> {
+        scenario: &'s Scenario,
+        env: Environment<'s>,
+        actuators: ActuatorStage,
+        wind: Option<Wind>,
+        tv_now: TimeVarying,
+        base_plant: QuadrotorParams,
+        h: f64,
+        k: u64,
+    }
+
+    impl<'s> Lane<'s> {
+        fn new(scenario: &'s Scenario) -> (Self, Box<dyn TruthModel + Send>) {
+            let h = scenario.control_period() / scenario.simulation.substeps as f64;
+            let setup = truth_of(scenario);
+            assert!(setup.invalid.is_none());
+            let actuators = ActuatorStage::of(scenario, setup.allocation, setup.hover, h);
+            let mut env_params = scenario.environment();
+            if scenario.vehicle.model == VehicleModel::RigidBody {
+                env_params.drag_noise = None;
+            }
+            let mut env = Environment::new(env_params).on_grid(h);
+            let wind = scenario.wind.clone().and_then(|w| Wind::new(w, h, scenario.seed).ok());
+            let tv_now = env.time_varying_on_grid(0, 0.0);
+            let lane = Self { scenario, env, actuators, wind, tv_now, base_plant: scenario.true_plant(), h, k: 0 };
+            (lane, setup.truth)
+        }
+
+        fn t0(&self, j: u32) -> f64 {
+            self.k as f64 * self.scenario.control_period() + j as f64 * self.h
+        }
+    }
+
+    fn assert_lane<R: Real>(lanes: &dyn TruthModel<R>, i: usize, scalar: &dyn TruthModel, at: &str) {
+        let bits = |q: QuadState| [q.position, q.attitude, q.velocity, q.angular_rate].map(|v| v.map(f64::to_bits));
+        assert_eq!(bits(lanes.quad_state().get_lane(i)), bits(scalar.quad_state()), "lane {i} {at}");
+        let body =
+            |b: Option<BodyAttitude>| b.map(|b| (b.quaternion.map(f64::to_bits), b.body_rates.map(f64::to_bits)));
+        assert_eq!(body(lanes.body_attitude().map(|b| b.get_lane(i))), body(scalar.body_attitude()), "lane {i} {at}");
+        let v = |(z, vz): (f64, f64)| (z.to_bits(), vz.to_bits());
+        assert_eq!(v(lanes.vertical(i)), v(scalar.vertical(0)), "lane {i} {at}");
+    }
+
+    /// Fly `periods` control periods of `R::LANES` flights of one model in
+    /// lanes and one by one, comparing every lane after every substep.
+    /// Lanes cycle through [`scenarios`]; every lane's commands are random,
+    /// with saturating ones now and then; the lanes below ground are
+    /// clamped (`set_vertical`); lane 2 starts a new flight a third of the
+    /// way (`start_lane`); lane 3 gets a NaN command and disturbance late; even lanes see
+    /// their mass and inertia change (`begin_period`), once out of range.
+    /// Returns the number of substeps flown and how many lanes went
+    /// non-finite.
+    fn fly<R: Real>(rigid: bool, periods: u64) -> (u64, usize) {
+        let pool = scenarios(rigid);
+        let n = R::LANES;
+        let (mut lanes, mut scalars): (Vec<Lane<'_>>, Vec<Box<dyn TruthModel + Send>>) =
+            (0..n).map(|i| Lane::new(&pool[i % pool.len()])).unzip();
+        let mut model = truth_lanes::<R>(&pool[0]).unwrap();
+        for (i, lane) in lanes.iter().enumerate() {
+            model.start_lane(i, lane.scenario).unwrap();
+            assert_lane(&*model, i, &*scalars[i], "start");
+        }
+        // A flight of the other model is refused, the lane unchanged.
+        let other = scenarios(!rigid);
+        assert_eq!(model.start_lane(0, &other[0]), Err(LaneStart::OtherModel));
+        assert_lane(&*model, 0, &*scalars[0], "refused");
+        let mut rng = Lcg(42);
+        let mut refused = 0;
+        let mut substeps = 0;
+        for period in 0..periods {
+            if period == periods / 3 {
+                let (lane, scalar) = Lane::new(&pool[3 % pool.len()]);
+                let r = 2 % n;
+                lanes[r] = lane;
+                scalars[r] = scalar;
+                model.start_lane(r, lanes[r].scenario).unwrap();
+                assert_lane(&*model, r, &*scalars[r], "restart");
+            }
+            let mut delivered: Vec<Delivered> = Vec::with_capacity(n);
+            for (i, lane) in lanes.iter_mut().enumerate() {
+                let (m, g) = (lane.base_plant.mass, lane.base_plant.gravity);
+                let mut command = Command {
+                    thrust: m * g * (1.0 + 0.4 * rng.next()),
+                    torque: [0.02 * rng.next(), 0.02 * rng.next(), 0.005 * rng.next()],
+                };
+                if (period + i as u64) % 29 == 0 {
+                    // Far past the rotors: saturations.
+                    command.thrust *= 4.0;
+                    command.torque[0] = 2.0;
+                }
+                if i == 3 % n && period == periods * 4 / 5 {
+                    // A NaN command (which a mixer may clamp) and a NaN
+                    // disturbance (which no stage does).
+                    command.thrust = f64::NAN;
+                    lane.tv_now.disturbance[0] = f64::NAN;
+                }
+                lane.env.next_period();
+                let plant_now = lane.env.params_with(&lane.tv_now);
+                delivered.push(lane.actuators.deliver(&command, &plant_now));
+                let mut tv = lane.tv_now;
+                if i % 2 == 0 && period % 3 == 0 {
+                    tv.mass += 0.1 * rng.next();
+                    if period % 9 == 0 {
+                        tv.inertia = tv.inertia.map(|v| v * (1.0 + 0.3 * rng.next()));
+                    }
+                }
+                if i % 2 == 0 && period == periods / 2 {
+                    tv.mass = -5.0;
+                }
+                let a = scalars[i].begin_period(0, &tv, &lane.base_plant);
+                let b = model.begin_period(i, &tv, &lane.base_plant);
+                assert_eq!(a, b, "lane {i} period {period}");
+                refused += usize::from(a.is_err());
+                assert_lane(&*model, i, &*scalars[i], "begin_period");
+            }
+            let steps = lanes[0].scenario.simulation.substeps;
+            assert!(lanes.iter().all(|l| l.scenario.simulation.substeps == steps));
+            for j in 0..steps {
+                let mut winds = Vec::with_capacity(n);
+                let mut next = Vec::with_capacity(n);
+                for lane in lanes.iter_mut() {
+                    let t0 = lane.t0(j);
+                    winds.push(lane.wind.as_mut().map(|w| w.step(t0)));
+                    next.push(lane.env.time_varying_on_grid(lane.k * u64::from(steps) + u64::from(j) + 1, t0 + lane.h));
+                }
+                let subs: Vec<Substep<'_>> = lanes
+                    .iter()
+                    .enumerate()
+                    .map(|(i, lane)| Substep {
+                        t0: lane.t0(j),
+                        h: lane.h,
+                        a: lane.tv_now,
+                        b: next[i],
+                        env: &lane.env,
+                        drive: lane.actuators.drive(&delivered[i], residual_speed(&delivered[i].target)),
+                        wind: winds[i],
+                    })
+                    .collect();
+                model.substep(&subs);
+                for (scalar, sub) in scalars.iter_mut().zip(&subs) {
+                    scalar.substep(core::slice::from_ref(sub));
+                }
+                drop(subs);
+                for (i, scalar) in scalars.iter_mut().enumerate() {
+                    let (z, vz) = scalar.vertical(0);
+                    if z < 0.0 {
+                        // A ground at z = 0.
+                        let vz = if vz < 0.0 { 0.0 } else { vz };
+                        scalar.set_vertical(0, 0.0, vz);
+                        model.set_vertical(i, 0.0, vz);
+                    }
+                    assert_lane(&*model, i, &**scalar, &format!("period {period} substep {j}"));
+                }
+                for (lane, tv) in lanes.iter_mut().zip(next) {
+                    lane.tv_now = tv;
+                }
+                substeps += 1;
+            }
+            for (lane, d) in lanes.iter_mut().zip(&delivered) {
+                lane.actuators.advance(&d.target);
+                lane.k += 1;
+            }
+        }
+        let nonfinite = scalars.iter().filter(|s| !s.quad_state().to_array().iter().all(|v| v.is_finite())).count();
+        assert_eq!(refused > 0, rigid, "begin_period refuses the rigid body's out-of-range mass only");
+        (substeps, nonfinite)
+    }
+
+    #[test]
+    fn rigid_body_in_4_lanes_is_4_flights_bit_for_bit() {
+        let (substeps, nonfinite) = fly::<Lanes<4>>(true, 400);
+        assert!(substeps >= 400, "{substeps}");
+        assert!(nonfinite >= 1, "the NaN lane");
+    }
+
+    #[test]
+    fn rigid_body_in_8_lanes_is_8_flights_bit_for_bit() {
+        let (substeps, _) = fly::<Lanes<8>>(true, 400);
+        assert!(substeps >= 400, "{substeps}");
+    }
+
+    #[test]
+    fn paper_model_in_4_lanes_is_4_flights_bit_for_bit() {
+        let (substeps, nonfinite) = fly::<Lanes<4>>(false, 400);
+        assert!(substeps >= 400, "{substeps}");
+        assert!(nonfinite >= 1, "the NaN lane");
+    }
+
+    #[test]
+    fn paper_model_in_8_lanes_is_8_flights_bit_for_bit() {
+        let (substeps, _) = fly::<Lanes<8>>(false, 400);
+        assert!(substeps >= 400, "{substeps}");
+    }
+
+    /// One lane is one flight: the lanes model on `f64` is the model
+    /// `truth_of` gives (the same trait object type behind both).
+    #[test]
+    fn one_lane_is_the_one_flight_model() {
+        let (substeps, _) = fly::<f64>(true, 400);
+        assert!(substeps >= 150);
+        let (substeps, _) = fly::<f64>(false, 400);
+        assert!(substeps >= 150);
+    }
+}
