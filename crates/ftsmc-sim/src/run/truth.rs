@@ -16,6 +16,17 @@
 //!
 //! With `[wind]` both models see air-relative drag: Eq. 1's `K_f1` drag on
 //! `v − w`, the rigid body's parasitic and rotor drag.
+//!
+//! # Lanes
+//!
+//! [`TruthModel`] is generic over the number type: `TruthModel<f64>` is one
+//! flight ([`truth_of`]), `TruthModel<Lanes<N>>` is `N` flights of one
+//! model side by side ([`truth_lanes`]), each lane its own scenario's
+//! vehicle, started with [`TruthModel::start_lane`]. A substep takes one
+//! [`Substep`] per lane: each lane's RK4 stage inputs (disturbance
+//! interpolation, rotor speeds, the period's plant) are made by the
+//! one-flight code, then one RK4 step runs on the lanes, so lane `i` has
+//! exactly the bits of the one-flight model fed lane `i`'s substeps.
 
 use ftsmc_core::allocation::{forces_from_squared_speeds, residual_speed};
 use ftsmc_core::lanes::{Lanewise, Real};

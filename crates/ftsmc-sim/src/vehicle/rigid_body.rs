@@ -33,6 +33,19 @@
 //! velocity (m/s), quaternion, body rates (rad/s); see [`index`]. The array
 //! goes through the generic [`crate::vehicle::paper::rk4_step`].
 //!
+//! # Lanes
+//!
+//! [`RigidBody`], its inputs, the derivative and [`normalize_quaternion`]
+//! are generic over the number type ([`ftsmc_core::lanes::Real`], `f64` by
+//! default): on `Lanes<N>` they fly `N` vehicles side by side, every
+//! parameter (mass, inertia and its inverse, arm length and layout, spin
+//! directions, rotor and aerodynamic coefficients) one lane per vehicle.
+//! Where the one-flight body skips a term it does not have (diagonal
+//! inertia, rotor aerodynamics, translational lift, parasitic drag), lanes
+//! skip it per lane, so lane `i` computes the one-flight body's operations
+//! in the same order: the same bits. The Euler conversions below stay
+//! one-flight (`f64`).
+//!
 //! # Equations (body wrench in the body frame)
 //!
 //! ```text
