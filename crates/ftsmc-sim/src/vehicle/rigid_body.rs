@@ -1126,4 +1126,119 @@ mod tests {
             }
         }
     }
+
+    /// Four different vehicles in `Lanes<4>` (and the same four, twice, in
+    /// `Lanes<8>`): every lane reads back its parameters, and 300 staged RK4
+    /// steps with per-lane states, rotor speeds, winds and external wrenches
+    /// (one lane's rotor speed NaN midway, masses and inertias changed in
+    /// some lanes) give each lane the one-flight body's bits.
+    #[test]
+    fn vehicles_in_lanes_are_the_one_flight_vehicles_bit_for_bit() {
+        use crate::vehicle::paper::rk4_step_staged;
+        use ftsmc_core::lanes::Lanes;
+        fn check<R: Real>() {
+            let full = RigidBodyParams {
+                inertia: [[3.8e-3, 1e-4, -2e-4], [1e-4, 3.9e-3, 5e-5], [-2e-4, 5e-5, 7.6e-3]],
+                ..RigidBodyParams::hummingbird()
+            };
+            let params =
+                [RigidBodyParams::default(), RigidBodyParams::hummingbird(), RigidBodyParams::crazyflie(), full];
+            let mut ones: Vec<RigidBody> = (0..R::LANES).map(|i| RigidBody::new(params[i % 4]).unwrap()).collect();
+            let mut lanes = RigidBody::<R>::splat(&ones[1]);
+            for (i, one) in ones.iter().enumerate() {
+                lanes.put_lane(i, *one);
+                assert_eq!(lanes.lane_params(i), params[i % 4]);
+            }
+            let mut rng = ChaCha8Rng::seed_from_u64(9);
+            let mut xs: Vec<RigidBodyState> = (0..R::LANES)
+                .map(|i| {
+                    let mut x: RigidBodyState = core::array::from_fn(|_| rng.random_range(-1.0..1.0));
+                    x[6] += 2.0 + i as f64;
+                    normalize_quaternion(&mut x);
+                    x
+                })
+                .collect();
+            let mut x = [R::splat(0.0); STATE_LEN];
+            for (i, xi) in xs.iter().enumerate() {
+                x.put_lane(i, *xi);
+            }
+            let h = 1e-3;
+            for k in 0..300 {
+                let inputs: Vec<RigidBodyInput> = ones
+                    .iter()
+                    .map(|one| {
+                        let hover = one.params().hover_rotor_speed();
+                        let mut u = || -> f64 { rng.random_range(-1.0..1.0) };
+                        RigidBodyInput {
+                            rotor_speeds: core::array::from_fn(|_| hover * (1.0 + 0.1 * u())),
+                            wind: [3.0 * u(), 3.0 * u(), u()],
+                            force: [0.01 * u(), 0.01 * u(), 0.01 * u()],
+                            torque: [1e-5 * u(), 1e-5 * u(), 1e-5 * u()],
+                        }
+                    })
+                    .map(|mut input| {
+                        if k == 150 {
+                            input.rotor_speeds[2] = f64::NAN;
+                        }
+                        input
+                    })
+                    .collect();
+                // Only lane 1 gets the NaN (the others keep flying).
+                let inputs: Vec<RigidBodyInput> = inputs
+                    .into_iter()
+                    .enumerate()
+                    .map(|(i, mut input)| {
+                        if input.rotor_speeds[2].is_nan() && i != 1 {
+                            input.rotor_speeds[2] = 0.0;
+                        }
+                        input
+                    })
+                    .collect();
+                if k % 50 == 25 {
+                    for (i, one) in ones.iter_mut().enumerate().filter(|(i, _)| i % 2 == 0) {
+                        let p = one.params();
+                        let (mass, scale) = (p.mass * 1.1, 1.0 + 0.01 * k as f64);
+                        let a = one.set_mass_and_scaled_inertia(mass, &params[i % 4].inertia, scale);
+                        let b = lanes.set_mass_and_scaled_inertia_in_lane(i, mass, &params[i % 4].inertia, scale);
+                        assert_eq!(a, b);
+                        assert_eq!(one.set_mass(mass * 0.95), lanes.set_mass_in_lane(i, mass * 0.95));
+                    }
+                }
+                let mut lane_input = RigidBodyInput::<R>::default();
+                for (i, input) in inputs.iter().enumerate() {
+                    lane_input.put_lane(i, *input);
+                }
+                for (i, xi) in xs.iter_mut().enumerate() {
+                    let one = &ones[i];
+                    *xi = rk4_step_staged(
+                        |_| one.prepare(&inputs[i]),
+                        |input, s| one.derivative_prepared(s, input),
+                        k as f64 * h,
+                        xi,
+                        h,
+                    );
+                    normalize_quaternion(xi);
+                }
+                x = rk4_step_staged(
+                    |_| lanes.prepare(&lane_input),
+                    |input, s| lanes.derivative_prepared(s, input),
+                    R::splat(k as f64 * h),
+                    &x,
+                    R::splat(h),
+                );
+                normalize_quaternion(&mut x);
+                // Bits, any NaN as one: Rust leaves a NaN's sign and payload
+                // unspecified (RFC 3514), and the compiler orders the
+                // operands of a vector and a scalar operation as it likes.
+                let bits = |v: f64| if v.is_nan() { f64::NAN.to_bits() } else { v.to_bits() };
+                for (i, xi) in xs.iter().enumerate() {
+                    assert_eq!(x.get_lane(i).map(bits), xi.map(bits), "lane {i} step {k}");
+                    assert_eq!(lanes.get_lane(i), ones[i], "lane {i} step {k}");
+                }
+            }
+            assert!(xs[1].iter().any(|v| v.is_nan()) && xs[0].iter().all(|v| v.is_finite()));
+        }
+        check::<Lanes<4>>();
+        check::<Lanes<8>>();
+    }
 }
