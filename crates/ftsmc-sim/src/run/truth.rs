@@ -127,7 +127,7 @@ ftsmc_core::lanewise_struct!(PaperStage { plant, command, omega_bar, disturbance
 /// The one-flight Eq. 1 inputs of substep `s` at the stage time `tau` (s):
 /// the plant of the variation interpolated to `tau`, and the held wrench or
 /// the one the lagged rotors deliver at `tau`.
-#[inline]
+#[inline(always)]
 fn paper_stage(s: &Substep<'_>, tau: f64) -> PaperStage {
     let tv = TimeVarying::lerp(&s.a, &s.b, (tau - s.t0) / s.h);
     let p = s.env.params_with(&tv);
@@ -148,6 +148,16 @@ fn paper_stage(s: &Substep<'_>, tau: f64) -> PaperStage {
             }
         }
     }
+}
+
+/// [`paper_stage`] of every lane at its stage time (lane `i` of `tau`).
+#[inline(always)]
+fn paper_stages<R: Real>(s: &[Substep<'_>], tau: R) -> PaperStage<R> {
+    let mut stage = PaperStage::<R>::default();
+    for (i, s) in s.iter().enumerate() {
+        stage.put_lane(i, paper_stage(s, tau.get_lane(i)));
+    }
+    stage
 }
 
 impl<R: Real> PaperTruth<R> {
@@ -176,29 +186,50 @@ impl<R: Real> TruthModel<R> for PaperTruth<R> {
         let h = R::from_fn(|i| s[i].h);
         // The plant of each RK4 stage time, made once per lane with the
         // one-flight code (the second and third stages share theirs).
-        let inputs = |tau: R| {
-            let mut stage = PaperStage::<R>::default();
+        if s.iter().all(|s| matches!(s.drive, Drive::Held { .. })) {
+            // Held rotors: the wrench, Ω̄ and the wind are the substep's;
+            // only the plant and the disturbance move with the stage time.
+            let mut command = Command::<R>::default();
+            let mut omega_bar = R::default();
+            let mut wind = [R::default(); 3];
+            let mut windy = false;
             for (i, s) in s.iter().enumerate() {
-                stage.put_lane(i, paper_stage(s, tau.get_lane(i)));
+                if let Drive::Held { applied, omega_bar: w, .. } = s.drive {
+                    command.put_lane(i, *applied);
+                    omega_bar.put_lane(i, w);
+                }
+                wind.put_lane(i, s.wind.unwrap_or([0.0; 3]));
+                windy |= s.wind.is_some();
             }
-            stage
-        };
-        // Eq. 1 in still air unless some lane has wind or lagged rotors
-        // (which always took the wind form); the wind form with a zero wind
-        // is Eq. 1 bit for bit (`v − 0 = v`), so a still-air lane flies the
-        // same either way.
-        let in_wind = s.iter().any(|s| s.wind.is_some() || matches!(s.drive, Drive::Lagged { .. }));
-        self.0 = if in_wind {
+            let inputs = |tau: R| {
+                let mut stage = <(Eq1Params<R>, [R; 6])>::default();
+                for (i, s) in s.iter().enumerate() {
+                    let tv = TimeVarying::lerp(&s.a, &s.b, (tau.get_lane(i) - s.t0) / s.h);
+                    stage.put_lane(i, (Eq1Params::of(&s.env.params_with(&tv)), tv.disturbance));
+                }
+                stage
+            };
+            // Eq. 1 in still air unless some lane has wind; the wind form
+            // with a zero wind is Eq. 1 bit for bit (`v − 0 = v`), so a
+            // still-air lane flies the same either way.
+            self.0 = if windy {
+                let f = |(p, d): &(Eq1Params<R>, [R; 6]), x: &[R; 12]| {
+                    derivative_in_wind_of(x, &command, omega_bar, p, d, &wind)
+                };
+                rk4_step_staged(inputs, f, t0, &self.0, h)
+            } else {
+                let f = |(p, d): &(Eq1Params<R>, [R; 6]), x: &[R; 12]| derivative_of(x, &command, omega_bar, p, d);
+                rk4_step_staged(inputs, f, t0, &self.0, h)
+            };
+        } else {
+            // Some lane's rotors lag (the one-flight model takes the wind
+            // form for them, with a zero wind in still air): every stage
+            // input per lane and stage.
             let f = |st: &PaperStage<R>, x: &[R; 12]| {
                 derivative_in_wind_of(x, &st.command, st.omega_bar, &st.plant, &st.disturbance, &st.wind)
             };
-            rk4_step_staged(inputs, f, t0, &self.0, h)
-        } else {
-            let f = |st: &PaperStage<R>, x: &[R; 12]| {
-                derivative_of(x, &st.command, st.omega_bar, &st.plant, &st.disturbance)
-            };
-            rk4_step_staged(inputs, f, t0, &self.0, h)
-        };
+            self.0 = rk4_step_staged(|tau: R| paper_stages(s, tau), f, t0, &self.0, h);
+        }
     }
 
     #[inline]
@@ -542,7 +573,11 @@ mod lane_tests {
     /// Returns the number of substeps flown and how many lanes went
     /// non-finite.
     fn fly<R: Real>(rigid: bool, periods: u64) -> (u64, usize) {
-        let pool = scenarios(rigid);
+        fly_pool::<R>(scenarios(rigid), rigid, periods)
+    }
+
+    /// [`fly`] with the lanes cycling through `pool`.
+    fn fly_pool<R: Real>(pool: Vec<Scenario>, rigid: bool, periods: u64) -> (u64, usize) {
         let n = R::LANES;
         let (mut lanes, mut scalars): (Vec<Lane<'_>>, Vec<Box<dyn TruthModel + Send>>) =
             (0..n).map(|i| Lane::new(&pool[i % pool.len()])).unzip();
@@ -681,6 +716,18 @@ mod lane_tests {
     fn paper_model_in_8_lanes_is_8_flights_bit_for_bit() {
         let (substeps, _) = fly::<Lanes<8>>(false, 400);
         assert!(substeps >= 400, "{substeps}");
+    }
+
+    /// Eq. 1 with held rotors in every lane (the wrench of the substep, with
+    /// and without wind): the lanes' other path.
+    #[test]
+    fn paper_model_with_held_rotors_in_lanes_is_flights_bit_for_bit() {
+        let held = || scenarios(false).into_iter().filter(|s| s.actuators.is_none()).collect::<Vec<_>>();
+        assert_eq!(held().len(), 3);
+        let (substeps, nonfinite) = fly_pool::<Lanes<4>>(held(), false, 400);
+        assert!(substeps >= 400 && nonfinite >= 1, "{substeps} {nonfinite}");
+        let (substeps, _) = fly_pool::<Lanes<8>>(held(), false, 400);
+        assert!(substeps >= 400);
     }
 
     /// One lane is one flight: the lanes model on `f64` is the model
