@@ -52,7 +52,7 @@ use super::actuation::{ActuatorStage, Delivered};
 use super::exit::check_divergence;
 use super::observer::{FlightStats, Observer, Tick};
 use super::recording::Recorder;
-use super::truth::{truth_lanes, truth_of, Substep, TruthModel, TruthSetup};
+use super::truth::{truth_lanes, truth_of, LaneStart, Substep, TruthModel, TruthSetup};
 use super::{tracking_errors, Divergence, ExitStatus, RunOptions, RunOutput};
 
 /// The scenario's reference signals `x, y, z, ψ` on the control grid
@@ -209,6 +209,20 @@ impl<'s> Lane<'s> {
         self.exit.is_none()
     }
 
+    /// Substep `j` of the current period as the truth model takes it.
+    #[inline]
+    fn substep(&self, j: u32) -> Substep<'_> {
+        Substep {
+            t0: self.k as f64 * self.dt + j as f64 * self.h,
+            h: self.h,
+            a: self.tv_now,
+            b: self.tv_next,
+            env: &self.env,
+            drive: self.actuators.drive(&self.delivered, self.omega_bar),
+            wind: self.wind_now,
+        }
+    }
+
     /// The sensor stage's reading of `truth` (the truth itself with perfect sensors).
     #[inline]
     fn measure(&mut self, truth: &Measurement) -> Measurement {
@@ -249,6 +263,24 @@ impl<'s> Lane<'s> {
     }
 }
 
+/// An emptied vector of substeps with another lifetime, its allocation
+/// kept (the in-place collect of an empty vector of a type of the same
+/// layout reuses the buffer).
+fn recycle<'a, 'b>(mut v: Vec<Substep<'a>>) -> Vec<Substep<'b>> {
+    v.clear();
+    v.into_iter().map(|_| unreachable!("emptied")).collect()
+}
+
+/// Why a flight of `scenario` cannot start in a lane.
+fn refusal(scenario: &Scenario, why: LaneStart) -> Divergence {
+    match why {
+        LaneStart::Invalid(divergence) => divergence,
+        // A batch keeps one truth model per lane set (`registry::lane_compatible`);
+        // this is the one-flight path's stand-in for an out-of-range body.
+        LaneStart::OtherModel => truth_of(scenario).invalid.unwrap_or(Divergence::NonFinite),
+    }
+}
+
 /// One flight of a controller through a scenario (or, with lanes, `N`
 /// flights side by side), advanced one control period at a time.
 pub struct Flight<'s, C: Controller<R> + ?Sized, R: Real = f64> {
@@ -269,6 +301,9 @@ pub struct Flight<'s, C: Controller<R> + ?Sized, R: Real = f64> {
     measured_ahead: Option<QuadState>,
     /// Its body attitude (full-state controllers only).
     body_ahead: Option<BodyAttitude>,
+    /// The allocation the lanes' substeps are gathered in (kept between
+    /// substeps; empty in between).
+    substeps: Vec<Substep<'static>>,
 }
 
 impl<'s, C: Controller + ?Sized> Flight<'s, C, f64> {
@@ -356,20 +391,32 @@ impl<'s, C: Controller<R> + ?Sized, R: Real> Flight<'s, C, R> {
         assert_eq!(scenarios.len(), R::LANES, "one scenario per lane");
         let wants_body = controller.uses_body_attitude();
         let first = scenarios[0];
-        let mut truth = truth_lanes::<R>(first);
+        let mut truth = truth_lanes::<R>(first).unwrap_or_else(|_| {
+            // The first flight's rigid body is out of range: the paper plant
+            // at the same initial state stands in (that flight stops at t = 0).
+            let mut stand_in = first.clone();
+            stand_in.vehicle.model = crate::vehicle::VehicleModel::Paper;
+            truth_lanes::<R>(&stand_in).expect("the paper plant flies any validated scenario")
+        });
         let mut reference = Reference::<R>::default();
         let mut lanes = Vec::with_capacity(R::LANES);
+        let mut refused = Vec::new();
         for (i, &scenario) in scenarios.iter().enumerate() {
             let steps = super::planned_steps(scenario);
             let recorder = Recorder::new(scenario, options.record && R::LANES == 1, steps, &*controller);
             let (mut lane, r) = Lane::new(scenario, &options, recorder);
-            if let Err(divergence) = truth.start_lane(i, scenario) {
-                lane.exit = Some(ExitStatus::Diverged { divergence, time: 0.0 });
+            if let Err(why) = truth.start_lane(i, scenario) {
+                lane.exit = Some(ExitStatus::Diverged { divergence: refusal(scenario, why), time: 0.0 });
+                refused.push(i);
             }
             reference.put_lane(i, r);
             lanes.push(lane);
         }
-        let state = truth.quad_state();
+        let mut state = truth.quad_state();
+        for &i in &refused {
+            // A flight that cannot start is seen at its initial state.
+            state.put_lane(i, scenarios[i].initial_state.state());
+        }
         let body = if wants_body { truth.body_attitude() } else { None };
         let mut flight = Self {
             controller,
@@ -383,6 +430,7 @@ impl<'s, C: Controller<R> + ?Sized, R: Real> Flight<'s, C, R> {
             observers: Vec::new(),
             measured_ahead: None,
             body_ahead: None,
+            substeps: Vec::new(),
         };
         for i in 0..R::LANES {
             flight.lane_boundary(i, 0.0);
@@ -398,13 +446,18 @@ impl<'s, C: Controller<R> + ?Sized, R: Real> Flight<'s, C, R> {
         let steps = super::planned_steps(scenario);
         let recorder = Recorder::new(scenario, false, steps, &*self.controller);
         let (mut fresh, r) = Lane::new(scenario, &self.options, recorder);
-        if let Err(divergence) = self.truth.start_lane(lane, scenario) {
-            fresh.exit = Some(ExitStatus::Diverged { divergence, time: 0.0 });
+        let started = self.truth.start_lane(lane, scenario);
+        if let Err(why) = started {
+            fresh.exit = Some(ExitStatus::Diverged { divergence: refusal(scenario, why), time: 0.0 });
         }
         self.controller.reset_lane(lane);
         self.reference.put_lane(lane, r);
         self.lanes[lane] = fresh;
         self.refresh_lane(lane);
+        if started.is_err() {
+            // A flight that cannot start is seen at its initial state.
+            self.state.put_lane(lane, scenario.initial_state.state());
+        }
         self.lane_boundary(lane, 0.0);
     }
 
@@ -623,18 +676,15 @@ impl<'s, C: Controller<R> + ?Sized, R: Real> Flight<'s, C, R> {
             }
             {
                 let lanes = &self.lanes;
-                self.truth.substep(&|i| {
-                    let lane = &lanes[i];
-                    Substep {
-                        t0: lane.k as f64 * lane.dt + j as f64 * lane.h,
-                        h: lane.h,
-                        a: lane.tv_now,
-                        b: lane.tv_next,
-                        env: &lane.env,
-                        drive: lane.actuators.drive(&lane.delivered, lane.omega_bar),
-                        wind: lane.wind_now,
-                    }
-                });
+                if n == 1 {
+                    self.truth.substep(core::slice::from_ref(&lanes[0].substep(j)));
+                } else {
+                    // The same allocation every substep (recycled: empty in between).
+                    let mut gathered: Vec<Substep<'_>> = recycle(core::mem::take(&mut self.substeps));
+                    gathered.extend(lanes.iter().map(|lane| lane.substep(j)));
+                    self.truth.substep(&gathered);
+                    self.substeps = recycle(gathered);
+                }
             }
             for (i, lane) in self.lanes.iter_mut().enumerate() {
                 if !lane.flying() {

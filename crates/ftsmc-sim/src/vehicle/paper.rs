@@ -1,7 +1,7 @@
 //! The quadrotor plant of paper Eq. 1–2 with the errata of docs/paper-errata.md (section 1.A), as a
 //! pure derivative function `ẋ = f(x, U, Ω̄, params, D)`.
 
-use ftsmc_core::math::sin_cos;
+use ftsmc_core::lanes::Real;
 use ftsmc_core::model::{Command, QuadrotorParams};
 
 /// Index of each component in the 12-element state array
@@ -17,6 +17,42 @@ pub mod index {
     pub const P: usize = 9;
 }
 
+/// The parameters of paper Eq. 1 ([`derivative_of`]) for one flight (`f64`)
+/// or for flights in lanes (one lane per flight): the fields of
+/// [`QuadrotorParams`] that Eq. 1 reads, same names and units.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Eq1Params<R: Real = f64> {
+    /// Mass m, kg.
+    pub mass: R,
+    /// Gravitational acceleration g, m/s².
+    pub gravity: R,
+    /// Translational drag `[K_f1x, K_f1y, K_f1z]`, N·s/m.
+    pub drag_translational: [R; 3],
+    /// Inertia `[I1, I2, I3]`, kg·m².
+    pub inertia: [R; 3],
+    /// Rotational drag `[K_f2x, K_f2y, K_f2z]`, N·m·s²/rad².
+    pub drag_rotational: [R; 3],
+    /// Rotor inertia J_r, kg·m².
+    pub rotor_inertia: R,
+}
+
+ftsmc_core::lanewise_struct!(Eq1Params { mass, gravity, drag_translational, inertia, drag_rotational, rotor_inertia });
+
+impl Eq1Params<f64> {
+    /// The Eq. 1 fields of `p`.
+    #[inline]
+    pub fn of(p: &QuadrotorParams) -> Self {
+        Self {
+            mass: p.mass,
+            gravity: p.gravity,
+            drag_translational: p.drag_translational,
+            inertia: p.inertia,
+            drag_rotational: p.drag_rotational,
+            rotor_inertia: p.rotor_inertia,
+        }
+    }
+}
+
 /// Time derivative of the state (paper Eq. 1 corrected, docs/paper-errata.md 1.A):
 ///
 /// ```text
@@ -30,6 +66,7 @@ pub mod index {
 ///
 /// `omega_bar` is the residual rotor speed Ω̄ (rad/s); `disturbance` holds
 /// `[D_x, D_y, D_z, D_φ, D_θ, D_ψ]` as accelerations (m/s², rad/s²).
+/// [`derivative_of`] on `f64` with the Eq. 1 fields of `p`, bit for bit.
 #[inline]
 pub fn derivative(
     x: &[f64; 12],
@@ -38,10 +75,23 @@ pub fn derivative(
     p: &QuadrotorParams,
     disturbance: &[f64; 6],
 ) -> [f64; 12] {
+    derivative_of(x, command, omega_bar, &Eq1Params::of(p), disturbance)
+}
+
+/// [`derivative`] (paper Eq. 1) on one flight or on flights in lanes: lane
+/// `i` is the one-flight derivative of lane `i`'s inputs, bit for bit.
+#[inline]
+pub fn derivative_of<R: Real>(
+    x: &[R; 12],
+    command: &Command<R>,
+    omega_bar: R,
+    p: &Eq1Params<R>,
+    disturbance: &[R; 6],
+) -> [R; 12] {
     let [_, _, _, phi, theta, psi, vx, vy, vz, dphi, dtheta, dpsi] = *x;
-    let (sphi, cphi) = sin_cos(phi);
-    let (stheta, ctheta) = sin_cos(theta);
-    let (spsi, cpsi) = sin_cos(psi);
+    let (sphi, cphi) = phi.sin_cos();
+    let (stheta, ctheta) = theta.sin_cos();
+    let (spsi, cpsi) = psi.sin_cos();
     let m = p.mass;
     let thrust_accel = command.thrust / m;
     let [kx, ky, kz] = p.drag_translational;
@@ -70,6 +120,7 @@ pub fn derivative(
 /// drag terms `−K_f1 ẋ / m` become `−K_f1 (ẋ − w_x) / m`, everything else
 /// (including ṗ = v) is unchanged. With `wind = [0, 0, 0]` it equals
 /// [`derivative`] bit for bit.
+#[inline]
 pub fn derivative_in_wind(
     x: &[f64; 12],
     command: &Command,
@@ -78,11 +129,25 @@ pub fn derivative_in_wind(
     disturbance: &[f64; 6],
     wind: &[f64; 3],
 ) -> [f64; 12] {
+    derivative_in_wind_of(x, command, omega_bar, &Eq1Params::of(p), disturbance, wind)
+}
+
+/// [`derivative_in_wind`] on one flight or on flights in lanes (lane `i`
+/// the one-flight value of lane `i`'s inputs, bit for bit).
+#[inline]
+pub fn derivative_in_wind_of<R: Real>(
+    x: &[R; 12],
+    command: &Command<R>,
+    omega_bar: R,
+    p: &Eq1Params<R>,
+    disturbance: &[R; 6],
+    wind: &[R; 3],
+) -> [R; 12] {
     let mut air = *x;
     for i in 0..3 {
         air[6 + i] -= wind[i];
     }
-    let mut d = derivative(&air, command, omega_bar, p, disturbance);
+    let mut d = derivative_of(&air, command, omega_bar, p, disturbance);
     d[..3].copy_from_slice(&x[6..9]);
     d
 }
@@ -113,29 +178,35 @@ pub fn rk4_step<const N: usize>(f: impl Fn(f64, &[f64; N]) -> [f64; N], t: f64, 
 /// `t + h/2` for the second and third stages, `t + h`), three times instead
 /// of four. The stage times, and so the result, are those of [`rk4_step`]
 /// with `|τ, x| f(&inputs(τ), x)`, bit for bit.
+///
+/// Generic over the number type: on lanes, lane `i` is the one-flight step
+/// of lane `i`'s start time, step, state and inputs, bit for bit (each lane
+/// may have its own `t` and `h`).
 #[inline]
-pub fn rk4_step_staged<const N: usize, S>(
-    inputs: impl Fn(f64) -> S,
-    f: impl Fn(&S, &[f64; N]) -> [f64; N],
-    t: f64,
-    x: &[f64; N],
-    h: f64,
-) -> [f64; N] {
-    let axpy = |a: &[f64; N], k: &[f64; N], s: f64| {
+pub fn rk4_step_staged<R: Real, const N: usize, S>(
+    inputs: impl Fn(R) -> S,
+    f: impl Fn(&S, &[R; N]) -> [R; N],
+    t: R,
+    x: &[R; N],
+    h: R,
+) -> [R; N] {
+    let axpy = |a: &[R; N], k: &[R; N], s: R| {
         let mut out = *a;
         for i in 0..N {
             out[i] += s * k[i];
         }
         out
     };
+    let half = h * 0.5;
     let k1 = f(&inputs(t), x);
-    let mid = inputs(t + 0.5 * h);
-    let k2 = f(&mid, &axpy(x, &k1, 0.5 * h));
-    let k3 = f(&mid, &axpy(x, &k2, 0.5 * h));
+    let mid = inputs(t + half);
+    let k2 = f(&mid, &axpy(x, &k1, half));
+    let k3 = f(&mid, &axpy(x, &k2, half));
     let k4 = f(&inputs(t + h), &axpy(x, &k3, h));
+    let sixth = h / 6.0;
     let mut out = *x;
     for i in 0..N {
-        out[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
+        out[i] += sixth * (k1[i] + k2[i] * 2.0 + k3[i] * 2.0 + k4[i]);
     }
     out
 }

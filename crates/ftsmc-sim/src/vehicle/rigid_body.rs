@@ -33,6 +33,19 @@
 //! velocity (m/s), quaternion, body rates (rad/s); see [`index`]. The array
 //! goes through the generic [`crate::vehicle::paper::rk4_step`].
 //!
+//! # Lanes
+//!
+//! [`RigidBody`], its inputs, the derivative and [`normalize_quaternion`]
+//! are generic over the number type ([`ftsmc_core::lanes::Real`], `f64` by
+//! default): on `Lanes<N>` they fly `N` vehicles side by side, every
+//! parameter (mass, inertia and its inverse, arm length and layout, spin
+//! directions, rotor and aerodynamic coefficients) one lane per vehicle.
+//! Where the one-flight body skips a term it does not have (diagonal
+//! inertia, rotor aerodynamics, translational lift, parasitic drag), lanes
+//! skip it per lane, so lane `i` computes the one-flight body's operations
+//! in the same order: the same bits. The Euler conversions below stay
+//! one-flight (`f64`).
+//!
 //! # Equations (body wrench in the body frame)
 //!
 //! ```text
@@ -68,6 +81,7 @@
 //! `gyroscopic_torque_is_opposite_to_the_paper_plant` pins this down.
 
 use ftsmc_core::kinematics;
+use ftsmc_core::lanes::{branch, Lanewise, Mask, Real};
 use ftsmc_core::law::GainError;
 use ftsmc_core::model::{QuadState, QuadrotorParams};
 use serde::{Deserialize, Serialize};
@@ -81,8 +95,9 @@ use crate::vehicle::paper::rk4_step;
 /// Length of the rigid-body state array.
 pub const STATE_LEN: usize = 13;
 
-/// The rigid-body state `[p, v, q, Ω]` (see [`index`]).
-pub type RigidBodyState = [f64; STATE_LEN];
+/// The rigid-body state `[p, v, q, Ω]` (see [`index`]): of one flight
+/// (`f64`, the default) or of flights in lanes.
+pub type RigidBodyState<R = f64> = [R; STATE_LEN];
 
 /// Index of the first component of each block of [`RigidBodyState`].
 pub mod index {
@@ -371,101 +386,174 @@ impl RigidBodyParams {
     }
 }
 
-/// Inputs held constant over an integration step.
+/// Inputs held constant over an integration step, for one flight (`f64`) or
+/// for flights in lanes (each number one lane per flight).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct RigidBodyInput {
+pub struct RigidBodyInput<R: Real = f64> {
     /// Rotor speeds `ω_i ≥ 0`, rad/s (magnitudes; the direction is [`RigidBodyParams::spin`]).
-    pub rotor_speeds: [f64; 4],
+    pub rotor_speeds: [R; 4],
     /// Wind velocity w in the world frame, m/s.
-    pub wind: [f64; 3],
+    pub wind: [R; 3],
     /// External force in the world frame (disturbance, payload), N.
-    pub force: [f64; 3],
+    pub force: [R; 3],
     /// External torque in the body frame, N·m.
-    pub torque: [f64; 3],
+    pub torque: [R; 3],
 }
+
+ftsmc_core::lanewise_struct!(RigidBodyInput { rotor_speeds, wind, force, torque });
 
 /// [`RigidBodyInput`] with the terms of the body wrench that depend on the
 /// rotor speeds alone worked out ([`RigidBody::prepare`]): once per RK4
 /// stage time instead of once per derivative.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct PreparedInput {
+pub struct PreparedInput<R: Real = f64> {
     /// The inputs.
-    pub input: RigidBodyInput,
+    pub input: RigidBodyInput<R>,
     /// Thrust per rotor `k_f ω_i²`, N.
-    thrust: [f64; 4],
+    thrust: [R; 4],
     /// Reaction torque per rotor `s_i k_m ω_i²`, N·m.
-    reaction: [f64; 4],
+    reaction: [R; 4],
     /// In-plane rotor drag per unit airspeed `ω_i k_d`, N·s/m.
-    drag_xy: [f64; 4],
+    drag_xy: [R; 4],
     /// Axial rotor drag per unit airspeed `ω_i k_z`, N·s/m.
-    drag_z: [f64; 4],
+    drag_z: [R; 4],
     /// Rotor angular momentum `h_r` ([`RigidBody::rotor_momentum`]), kg·m²/s.
-    momentum: [f64; 3],
+    momentum: [R; 3],
 }
 
 /// Force and moment in the body frame.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct Wrench {
+pub struct Wrench<R: Real = f64> {
     /// Force, N (body frame).
-    pub force: [f64; 3],
+    pub force: [R; 3],
     /// Moment about the centre of mass, N·m (body frame).
-    pub torque: [f64; 3],
+    pub torque: [R; 3],
 }
 
 /// The rigid-body model: checked parameters with the inertia inverse and the
-/// rotor geometry precomputed.
+/// rotor geometry precomputed, for one flight (`RigidBody<f64>`, the
+/// default) or for flights in lanes (`RigidBody<Lanes<N>>`: every number,
+/// and every yes/no derived from one, one lane per flight, so each lane may
+/// fly its own vehicle). Lane `i` of a lanes body computes exactly what the
+/// one-flight body of lane `i`'s parameters computes, bit for bit
+/// ([`ftsmc_core::lanes`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct RigidBody {
-    params: RigidBodyParams,
-    inertia_inv: Mat3,
+pub struct RigidBody<R: Real = f64> {
+    /// Mass m, kg.
+    mass: R,
+    /// Gravitational acceleration g, m/s².
+    gravity: R,
+    /// Inertia J, kg·m².
+    inertia: Mat3<R>,
+    /// J⁻¹, 1/(kg·m²).
+    inertia_inv: Mat3<R>,
     /// The inertia (and so its inverse) has zero products of inertia: the
     /// products `J Ω` and `J⁻¹ M` skip the zero entries.
-    diagonal: bool,
-    /// Rotor hub positions, all with `z = 0` ([`RigidBodyParams::rotor_positions`]).
-    rotors: [Vec3; 4],
-    spin: [f64; 4],
+    diagonal: R::Mask,
+    /// Arm length l, m.
+    arm_length: R,
+    /// The "×" layout ([`Configuration::Cross`]); "+" otherwise.
+    cross_layout: R::Mask,
+    /// Rotor hub positions, all with `z = 0` ([`RigidBodyParams::rotor_positions`]), m.
+    rotors: [Vec3<R>; 4],
+    /// Spin signs `s_i` ([`Spin::sign`]).
+    spin: [R; 4],
+    /// k_f, N·s²/rad².
+    thrust_coefficient: R,
+    /// k_m, N·m·s²/rad².
+    moment_coefficient: R,
+    /// J_r, kg·m².
+    rotor_inertia: R,
+    /// c_D, N·s²/m².
+    parasitic_drag: [R; 3],
+    /// k_d, N·s²/(m·rad).
+    rotor_drag_xy: R,
+    /// k_z, N·s²/(m·rad).
+    rotor_drag_z: R,
+    /// k_h, N·s²/m².
+    translational_lift: R,
+    /// Some rotor aerodynamics: `k_d`, `k_z` or `k_h` nonzero.
+    rotor_aero: R::Mask,
+    /// `k_h` nonzero.
+    lift: R::Mask,
+    /// Some `c_D` nonzero.
+    parasitic: R::Mask,
 }
+
+ftsmc_core::lanewise_struct!(RigidBody {
+    mass,
+    gravity,
+    inertia,
+    inertia_inv,
+    diagonal,
+    arm_length,
+    cross_layout,
+    rotors,
+    spin,
+    thrust_coefficient,
+    moment_coefficient,
+    rotor_inertia,
+    parasitic_drag,
+    rotor_drag_xy,
+    rotor_drag_z,
+    translational_lift,
+    rotor_aero,
+    lift,
+    parasitic,
+});
 
 /// No products of inertia: every off-diagonal entry is zero.
 fn is_diagonal(j: &Mat3) -> bool {
     j[0][1] == 0.0 && j[0][2] == 0.0 && j[1][0] == 0.0 && j[1][2] == 0.0 && j[2][0] == 0.0 && j[2][1] == 0.0
 }
 
-/// `m v`, or for a `diagonal` `m` only its diagonal times `v`: the same
-/// values (the skipped products are zeros added to a sum).
+/// `m v`, or where `diagonal` only the diagonal of `m` times `v`: the same
+/// values (the skipped products are zeros added to a sum). Per lane for
+/// lanes ([`branch`]: each product only if some lane needs it).
 #[inline]
-fn mat_vec_or_diagonal(m: &Mat3, diagonal: bool, v: Vec3) -> Vec3 {
-    if diagonal {
-        [m[0][0] * v[0], m[1][1] * v[1], m[2][2] * v[2]]
-    } else {
-        mat_vec(m, v)
-    }
+fn mat_vec_or_diagonal<R: Real>(m: &Mat3<R>, diagonal: R::Mask, v: Vec3<R>) -> Vec3<R> {
+    branch(diagonal, || [m[0][0] * v[0], m[1][1] * v[1], m[2][2] * v[2]], || mat_vec(m, v))
 }
 
 /// `a × r` for a rotor position `r` with `r_z = 0` (the terms with `r_z`
 /// are zeros).
 #[inline]
-fn cross_rotor(a: Vec3, r: Vec3) -> Vec3 {
+fn cross_rotor<R: Real>(a: Vec3<R>, r: Vec3<R>) -> Vec3<R> {
     [-(a[2] * r[1]), a[2] * r[0], a[0] * r[1] - a[1] * r[0]]
 }
 
 /// `r × f` for a rotor position `r` with `r_z = 0`.
 #[inline]
-fn rotor_cross(r: Vec3, f: Vec3) -> Vec3 {
+fn rotor_cross<R: Real>(r: Vec3<R>, f: Vec3<R>) -> Vec3<R> {
     [r[1] * f[2], -(r[0] * f[2]), r[0] * f[1] - r[1] * f[0]]
 }
 
-impl RigidBody {
+impl RigidBody<f64> {
     /// Check the parameters and precompute.
     pub fn new(params: RigidBodyParams) -> Result<Self, GainError> {
         params.check()?;
         let inertia_inv = inverse3(&params.inertia).expect("checked positive definite");
+        let p = &params;
         Ok(Self {
-            params,
+            mass: p.mass,
+            gravity: p.gravity,
+            inertia: p.inertia,
             inertia_inv,
-            diagonal: is_diagonal(&params.inertia),
-            rotors: params.rotor_positions(),
-            spin: params.spin.map(Spin::sign),
+            diagonal: is_diagonal(&p.inertia),
+            arm_length: p.arm_length,
+            cross_layout: p.configuration == Configuration::Cross,
+            rotors: p.rotor_positions(),
+            spin: p.spin.map(Spin::sign),
+            thrust_coefficient: p.thrust_coefficient,
+            moment_coefficient: p.moment_coefficient,
+            rotor_inertia: p.rotor_inertia,
+            parasitic_drag: p.parasitic_drag,
+            rotor_drag_xy: p.rotor_drag_xy,
+            rotor_drag_z: p.rotor_drag_z,
+            translational_lift: p.translational_lift,
+            rotor_aero: p.rotor_drag_xy != 0.0 || p.rotor_drag_z != 0.0 || p.translational_lift != 0.0,
+            lift: p.translational_lift != 0.0,
+            parasitic: p.parasitic_drag != [0.0; 3],
         })
     }
 
@@ -474,9 +562,9 @@ impl RigidBody {
     /// and inertia checks run again; the rotor geometry is kept), for a
     /// payload or an inertia variation changing them during a flight.
     pub fn with_mass_and_inertia(&self, mass: f64, inertia: Mat3) -> Result<Self, GainError> {
-        let params = RigidBodyParams { mass, inertia, ..self.params };
+        let params = RigidBodyParams { mass, inertia, ..self.params() };
         let inertia_inv = params.check_mass_inertia()?;
-        Ok(Self { params, inertia_inv, diagonal: is_diagonal(&inertia), ..*self })
+        Ok(Self { mass, inertia, inertia_inv, diagonal: is_diagonal(&inertia), ..*self })
     }
 
     /// In place, the result of [`RigidBody::with_mass_and_inertia`] of
@@ -489,150 +577,20 @@ impl RigidBody {
     /// when any of those fails, the full check answers (the same error as
     /// [`RigidBody::with_mass_and_inertia`]); on error `self` is unchanged.
     pub fn set_mass_and_scaled_inertia(&mut self, mass: f64, base_inertia: &Mat3, scale: f64) -> Result<(), GainError> {
-        let inertia = base_inertia.map(|r| r.map(|v| v * scale));
-        let fast = scale > 0.0
-            && scale.is_finite()
-            && (1e-6..=1e6).contains(&mass)
-            && inertia.iter().flatten().all(|v| (-1e6..=1e6).contains(v));
-        let inverse = if fast { inverse3_positive(&inertia) } else { None };
-        let inverse = match inverse {
-            Some(inv) => inv,
-            None => RigidBodyParams { mass, inertia, ..self.params }.check_mass_inertia()?,
-        };
-        self.params.mass = mass;
-        self.params.inertia = inertia;
-        self.inertia_inv = inverse;
-        self.diagonal = is_diagonal(&inertia);
-        Ok(())
-    }
-
-    /// `J v` for a body-frame vector `v` (the inertia times an angular
-    /// acceleration, rad/s² → N·m): the same values as the full product,
-    /// the zero products of a diagonal inertia skipped.
-    #[inline]
-    pub fn inertia_times(&self, v: [f64; 3]) -> [f64; 3] {
-        mat_vec_or_diagonal(&self.params.inertia, self.diagonal, v)
+        self.set_mass_and_scaled_inertia_in_lane(0, mass, base_inertia, scale)
     }
 
     /// In place, the result of [`RigidBody::with_mass_and_inertia`] of `mass`
     /// (kg) and this body's inertia: only the mass check runs (the inertia
     /// and its inverse are kept); on error `self` is unchanged.
     pub fn set_mass(&mut self, mass: f64) -> Result<(), GainError> {
-        if !(1e-6..=1e6).contains(&mass) {
-            RigidBodyParams { mass, ..self.params }.check_mass_inertia()?;
-        }
-        self.params.mass = mass;
-        Ok(())
+        self.set_mass_in_lane(0, mass)
     }
 
-    /// The parameters.
-    pub fn params(&self) -> &RigidBodyParams {
-        &self.params
-    }
-
-    /// Rotor and aerodynamic wrench in the body frame at a state (without
-    /// gravity, external inputs or the gyroscopic terms).
-    pub fn body_wrench(&self, x: &RigidBodyState, input: &RigidBodyInput) -> Wrench {
-        self.body_wrench_in(x, &self.prepare(input), &rotation(quaternion(x)))
-    }
-
-    /// The rotor terms of `input` ([`PreparedInput`]) for
-    /// [`RigidBody::derivative_prepared`].
-    #[inline]
-    pub fn prepare(&self, input: &RigidBodyInput) -> PreparedInput {
-        let p = &self.params;
-        let w = input.rotor_speeds;
-        PreparedInput {
-            input: *input,
-            thrust: w.map(|w| p.thrust_coefficient * w * w),
-            reaction: [0, 1, 2, 3].map(|i| self.spin[i] * p.moment_coefficient * w[i] * w[i]),
-            drag_xy: w.map(|w| w * p.rotor_drag_xy),
-            drag_z: w.map(|w| w * p.rotor_drag_z),
-            momentum: self.rotor_momentum(&w),
-        }
-    }
-
-    /// [`RigidBody::body_wrench`] with the body-to-world rotation `r` of `x` given.
-    #[inline]
-    fn body_wrench_in(&self, x: &RigidBodyState, prepared: &PreparedInput, r: &Mat3) -> Wrench {
-        let p = &self.params;
-        let input = &prepared.input;
-        let v = block(x, index::VELOCITY);
-        let omega = block(x, index::BODY_RATES);
-        let v_air = mat_t_vec(r, sub(v, input.wind));
-        let mut force = [0.0; 3];
-        let mut torque = [0.0; 3];
-        // Two loops of the same arithmetic, so neither carries the other's
-        // branch: rotor aerodynamics on (the realistic vehicles) or off.
-        if p.rotor_drag_xy != 0.0 || p.rotor_drag_z != 0.0 || p.translational_lift != 0.0 {
-            for i in 0..4 {
-                let mut f = [0.0, 0.0, prepared.thrust[i]];
-                let vi = add(v_air, cross_rotor(omega, self.rotors[i]));
-                f[0] -= prepared.drag_xy[i] * vi[0];
-                f[1] -= prepared.drag_xy[i] * vi[1];
-                f[2] -= prepared.drag_z[i] * vi[2];
-                // Off (k_h = 0) it would add a zero.
-                if p.translational_lift != 0.0 {
-                    f[2] += p.translational_lift * (vi[0] * vi[0] + vi[1] * vi[1]);
-                }
-                force = add(force, f);
-                torque = add(torque, rotor_cross(self.rotors[i], f));
-                torque[2] -= prepared.reaction[i];
-            }
-        } else {
-            // The thrust alone: `f = [0, 0, T]`, `r × f = [r_y T, −r_x T, 0]`.
-            for i in 0..4 {
-                let (r, t) = (self.rotors[i], prepared.thrust[i]);
-                force[2] += t;
-                torque[0] += r[1] * t;
-                torque[1] += -(r[0] * t);
-                torque[2] -= prepared.reaction[i];
-            }
-        }
-        let cd = p.parasitic_drag;
-        if cd != [0.0; 3] {
-            let speed = norm(v_air);
-            force[0] -= speed * cd[0] * v_air[0];
-            force[1] -= speed * cd[1] * v_air[1];
-            force[2] -= speed * cd[2] * v_air[2];
-        }
-        Wrench { force, torque }
-    }
-
-    /// Rotor angular momentum `h_r = J_r Σ s_i ω_i ẑ` (body frame), kg·m²/s.
-    pub fn rotor_momentum(&self, rotor_speeds: &[f64; 4]) -> [f64; 3] {
-        let s: f64 = (0..4).map(|i| self.spin[i] * rotor_speeds[i]).sum();
-        [0.0, 0.0, self.params.rotor_inertia * s]
-    }
-
-    /// Time derivative of the state (module docs for the equations).
-    pub fn derivative(&self, x: &RigidBodyState, input: &RigidBodyInput) -> RigidBodyState {
-        self.derivative_prepared(x, &self.prepare(input))
-    }
-
-    /// [`RigidBody::derivative`] of the inputs [`RigidBody::prepare`] made,
-    /// bit for bit: the form for several states with the same inputs (the
-    /// second and third RK4 stages).
-    #[inline]
-    pub fn derivative_prepared(&self, x: &RigidBodyState, prepared: &PreparedInput) -> RigidBodyState {
-        let p = &self.params;
-        let input = &prepared.input;
-        let q = quaternion(x);
-        let omega = block(x, index::BODY_RATES);
-        let r = rotation(q);
-        let wrench = self.body_wrench_in(x, prepared, &r);
-        let f_world = add(mat_vec(&r, wrench.force), input.force);
-        let acc = [f_world[0] / p.mass, f_world[1] / p.mass, f_world[2] / p.mass - p.gravity];
-        let j_omega = mat_vec_or_diagonal(&p.inertia, self.diagonal, omega);
-        let m = sub(add(wrench.torque, input.torque), cross(omega, add(j_omega, prepared.momentum)));
-        let omega_dot = mat_vec_or_diagonal(&self.inertia_inv, self.diagonal, m);
-        let q_dot = quat_derivative(q, omega);
-        let mut d = [0.0; STATE_LEN];
-        d[0..3].copy_from_slice(&x[3..6]);
-        d[3..6].copy_from_slice(&acc);
-        d[6..10].copy_from_slice(&q_dot);
-        d[10..13].copy_from_slice(&omega_dot);
-        d
+    /// The parameters (the ones [`RigidBody::new`] was given, with the mass
+    /// and inertia of the latest change).
+    pub fn params(&self) -> RigidBodyParams {
+        self.lane_params(0)
     }
 
     /// One RK4 step of `h` seconds with the inputs held, without renormalising
@@ -657,35 +615,262 @@ impl RigidBody {
     /// `R (J Ω + h_r)`, kg·m²/s.
     pub fn angular_momentum_world(&self, x: &RigidBodyState, rotor_speeds: &[f64; 4]) -> [f64; 3] {
         let omega = block(x, index::BODY_RATES);
-        let body = add(mat_vec(&self.params.inertia, omega), self.rotor_momentum(rotor_speeds));
+        let body = add(mat_vec(&self.inertia, omega), self.rotor_momentum(rotor_speeds));
         mat_vec(&rotation(quaternion(x)), body)
     }
 
     /// Rotational kinetic energy of the body `½ Ωᵀ J Ω`, J.
     pub fn rotational_energy(&self, x: &RigidBodyState) -> f64 {
         let omega = block(x, index::BODY_RATES);
-        0.5 * super::math::dot(omega, mat_vec(&self.params.inertia, omega))
+        0.5 * super::math::dot(omega, mat_vec(&self.inertia, omega))
     }
 }
 
-fn block(x: &RigidBodyState, start: usize) -> Vec3 {
+impl<R: Real> RigidBody<R> {
+    /// Every lane `body` (for `f64`, `body` itself).
+    pub fn splat(body: &RigidBody<f64>) -> Self {
+        let s = |v: f64| R::splat(v);
+        let m = |b: bool| <R::Mask as Mask>::splat(b);
+        Self {
+            mass: s(body.mass),
+            gravity: s(body.gravity),
+            inertia: body.inertia.map(|r| r.map(s)),
+            inertia_inv: body.inertia_inv.map(|r| r.map(s)),
+            diagonal: m(body.diagonal),
+            arm_length: s(body.arm_length),
+            cross_layout: m(body.cross_layout),
+            rotors: body.rotors.map(|r| r.map(s)),
+            spin: body.spin.map(s),
+            thrust_coefficient: s(body.thrust_coefficient),
+            moment_coefficient: s(body.moment_coefficient),
+            rotor_inertia: s(body.rotor_inertia),
+            parasitic_drag: body.parasitic_drag.map(s),
+            rotor_drag_xy: s(body.rotor_drag_xy),
+            rotor_drag_z: s(body.rotor_drag_z),
+            translational_lift: s(body.translational_lift),
+            rotor_aero: m(body.rotor_aero),
+            lift: m(body.lift),
+            parasitic: m(body.parasitic),
+        }
+    }
+
+    /// The parameters of lane `lane`'s vehicle (`lane < R::LANES`).
+    pub fn lane_params(&self, lane: usize) -> RigidBodyParams {
+        let spin = self.spin.get_lane(lane).map(|s| if s > 0.0 { Spin::Ccw } else { Spin::Cw });
+        RigidBodyParams {
+            mass: self.mass.get_lane(lane),
+            gravity: self.gravity.get_lane(lane),
+            inertia: self.inertia.get_lane(lane),
+            arm_length: self.arm_length.get_lane(lane),
+            configuration: if self.cross_layout.get_lane(lane) { Configuration::Cross } else { Configuration::Plus },
+            spin,
+            thrust_coefficient: self.thrust_coefficient.get_lane(lane),
+            moment_coefficient: self.moment_coefficient.get_lane(lane),
+            rotor_inertia: self.rotor_inertia.get_lane(lane),
+            parasitic_drag: self.parasitic_drag.get_lane(lane),
+            rotor_drag_xy: self.rotor_drag_xy.get_lane(lane),
+            rotor_drag_z: self.rotor_drag_z.get_lane(lane),
+            translational_lift: self.translational_lift.get_lane(lane),
+        }
+    }
+
+    /// Mass m of every lane, kg.
+    #[inline]
+    pub fn mass(&self) -> R {
+        self.mass
+    }
+
+    /// [`RigidBody::set_mass_and_scaled_inertia`] on lane `lane` alone
+    /// (`lane < R::LANES`; the other lanes are untouched, and so is this
+    /// one on error).
+    pub fn set_mass_and_scaled_inertia_in_lane(
+        &mut self,
+        lane: usize,
+        mass: f64,
+        base_inertia: &Mat3,
+        scale: f64,
+    ) -> Result<(), GainError> {
+        let inertia = base_inertia.map(|r| r.map(|v| v * scale));
+        let fast = scale > 0.0
+            && scale.is_finite()
+            && (1e-6..=1e6).contains(&mass)
+            && inertia.iter().flatten().all(|v| (-1e6..=1e6).contains(v));
+        let inverse = if fast { inverse3_positive(&inertia) } else { None };
+        let inverse = match inverse {
+            Some(inv) => inv,
+            None => RigidBodyParams { mass, inertia, ..self.lane_params(lane) }.check_mass_inertia()?,
+        };
+        self.mass.put_lane(lane, mass);
+        self.inertia.put_lane(lane, inertia);
+        self.inertia_inv.put_lane(lane, inverse);
+        self.diagonal.put_lane(lane, is_diagonal(&inertia));
+        Ok(())
+    }
+
+    /// [`RigidBody::set_mass`] on lane `lane` alone (`lane < R::LANES`; the
+    /// other lanes are untouched, and so is this one on error).
+    pub fn set_mass_in_lane(&mut self, lane: usize, mass: f64) -> Result<(), GainError> {
+        if !(1e-6..=1e6).contains(&mass) {
+            RigidBodyParams { mass, ..self.lane_params(lane) }.check_mass_inertia()?;
+        }
+        self.mass.put_lane(lane, mass);
+        Ok(())
+    }
+
+    /// `J v` for a body-frame vector `v` (the inertia times an angular
+    /// acceleration, rad/s² → N·m): the same values as the full product,
+    /// the zero products of a diagonal inertia skipped.
+    #[inline]
+    pub fn inertia_times(&self, v: [R; 3]) -> [R; 3] {
+        mat_vec_or_diagonal(&self.inertia, self.diagonal, v)
+    }
+
+    /// Rotor and aerodynamic wrench in the body frame at a state (without
+    /// gravity, external inputs or the gyroscopic terms).
+    pub fn body_wrench(&self, x: &RigidBodyState<R>, input: &RigidBodyInput<R>) -> Wrench<R> {
+        self.body_wrench_in(x, &self.prepare(input), &rotation(quaternion(x)))
+    }
+
+    /// The rotor terms of `input` ([`PreparedInput`]) for
+    /// [`RigidBody::derivative_prepared`].
+    #[inline]
+    pub fn prepare(&self, input: &RigidBodyInput<R>) -> PreparedInput<R> {
+        let w = input.rotor_speeds;
+        PreparedInput {
+            input: *input,
+            thrust: w.map(|w| self.thrust_coefficient * w * w),
+            reaction: [0, 1, 2, 3].map(|i| self.spin[i] * self.moment_coefficient * w[i] * w[i]),
+            drag_xy: w.map(|w| w * self.rotor_drag_xy),
+            drag_z: w.map(|w| w * self.rotor_drag_z),
+            momentum: self.rotor_momentum(&w),
+        }
+    }
+
+    /// [`RigidBody::body_wrench`] with the body-to-world rotation `r` of `x`
+    /// given. The terms a vehicle does not have (rotor aerodynamics,
+    /// translational lift, parasitic drag) are skipped per lane
+    /// ([`branch`]), so each lane adds exactly the terms its one-flight body
+    /// adds.
+    #[inline]
+    pub fn body_wrench_in(&self, x: &RigidBodyState<R>, prepared: &PreparedInput<R>, r: &Mat3<R>) -> Wrench<R> {
+        let input = &prepared.input;
+        let v = block(x, index::VELOCITY);
+        let omega = block(x, index::BODY_RATES);
+        let v_air = mat_t_vec(r, sub(v, input.wind));
+        let zero = R::splat(0.0);
+        // Two loops of the same arithmetic, so neither carries the other's
+        // branch: rotor aerodynamics on (the realistic vehicles) or off.
+        let (mut force, torque) = branch(
+            self.rotor_aero,
+            || {
+                let mut force = [zero; 3];
+                let mut torque = [zero; 3];
+                for i in 0..4 {
+                    let mut f = [zero, zero, prepared.thrust[i]];
+                    let vi = add(v_air, cross_rotor(omega, self.rotors[i]));
+                    f[0] -= prepared.drag_xy[i] * vi[0];
+                    f[1] -= prepared.drag_xy[i] * vi[1];
+                    f[2] -= prepared.drag_z[i] * vi[2];
+                    // Off (k_h = 0) it would add a zero.
+                    f[2] =
+                        branch(self.lift, || f[2] + self.translational_lift * (vi[0] * vi[0] + vi[1] * vi[1]), || f[2]);
+                    force = add(force, f);
+                    torque = add(torque, rotor_cross(self.rotors[i], f));
+                    torque[2] -= prepared.reaction[i];
+                }
+                (force, torque)
+            },
+            || {
+                // The thrust alone: `f = [0, 0, T]`, `r × f = [r_y T, −r_x T, 0]`.
+                let mut force = [zero; 3];
+                let mut torque = [zero; 3];
+                for i in 0..4 {
+                    let (r, t) = (self.rotors[i], prepared.thrust[i]);
+                    force[2] += t;
+                    torque[0] += r[1] * t;
+                    torque[1] += -(r[0] * t);
+                    torque[2] -= prepared.reaction[i];
+                }
+                (force, torque)
+            },
+        );
+        let cd = self.parasitic_drag;
+        force = branch(
+            self.parasitic,
+            || {
+                let speed = norm(v_air);
+                let mut f = force;
+                f[0] -= speed * cd[0] * v_air[0];
+                f[1] -= speed * cd[1] * v_air[1];
+                f[2] -= speed * cd[2] * v_air[2];
+                f
+            },
+            || force,
+        );
+        Wrench { force, torque }
+    }
+
+    /// Rotor angular momentum `h_r = J_r Σ s_i ω_i ẑ` (body frame), kg·m²/s.
+    pub fn rotor_momentum(&self, rotor_speeds: &[R; 4]) -> [R; 3] {
+        // The sum of `Iterator::sum` for f64: from −0 (which leaves any
+        // first term's bits as they are), term by term.
+        let mut s = R::splat(-0.0);
+        for i in 0..4 {
+            s += self.spin[i] * rotor_speeds[i];
+        }
+        let zero = R::splat(0.0);
+        [zero, zero, self.rotor_inertia * s]
+    }
+
+    /// Time derivative of the state (module docs for the equations).
+    pub fn derivative(&self, x: &RigidBodyState<R>, input: &RigidBodyInput<R>) -> RigidBodyState<R> {
+        self.derivative_prepared(x, &self.prepare(input))
+    }
+
+    /// [`RigidBody::derivative`] of the inputs [`RigidBody::prepare`] made,
+    /// bit for bit: the form for several states with the same inputs (the
+    /// second and third RK4 stages).
+    #[inline]
+    pub fn derivative_prepared(&self, x: &RigidBodyState<R>, prepared: &PreparedInput<R>) -> RigidBodyState<R> {
+        let input = &prepared.input;
+        let q = quaternion(x);
+        let omega = block(x, index::BODY_RATES);
+        let r = rotation(q);
+        let wrench = self.body_wrench_in(x, prepared, &r);
+        let f_world = add(mat_vec(&r, wrench.force), input.force);
+        let acc = [f_world[0] / self.mass, f_world[1] / self.mass, f_world[2] / self.mass - self.gravity];
+        let j_omega = mat_vec_or_diagonal(&self.inertia, self.diagonal, omega);
+        let m = sub(add(wrench.torque, input.torque), cross(omega, add(j_omega, prepared.momentum)));
+        let omega_dot = mat_vec_or_diagonal(&self.inertia_inv, self.diagonal, m);
+        let q_dot = quat_derivative(q, omega);
+        let mut d = [R::default(); STATE_LEN];
+        d[0..3].copy_from_slice(&x[3..6]);
+        d[3..6].copy_from_slice(&acc);
+        d[6..10].copy_from_slice(&q_dot);
+        d[10..13].copy_from_slice(&omega_dot);
+        d
+    }
+}
+
+fn block<R: Real>(x: &RigidBodyState<R>, start: usize) -> Vec3<R> {
     [x[start], x[start + 1], x[start + 2]]
 }
 
-fn quaternion(x: &RigidBodyState) -> Quat {
+fn quaternion<R: Real>(x: &RigidBodyState<R>) -> Quat<R> {
     let i = index::QUATERNION;
     [x[i], x[i + 1], x[i + 2], x[i + 3]]
 }
 
 /// Scale the quaternion block of `x` to unit length (left unchanged if its
-/// norm is zero or not finite).
-pub fn normalize_quaternion(x: &mut RigidBodyState) {
+/// norm is zero, subnormal or not finite), lane by lane for lanes.
+#[inline]
+pub fn normalize_quaternion<R: Real>(x: &mut RigidBodyState<R>) {
     let i = index::QUATERNION;
     let n = (x[i] * x[i] + x[i + 1] * x[i + 1] + x[i + 2] * x[i + 2] + x[i + 3] * x[i + 3]).sqrt();
-    if n.is_normal() {
-        for k in i..i + 4 {
-            x[k] /= n;
-        }
+    // `n.is_normal()` for the `n ≥ 0` (or NaN) of a square root.
+    let normal = n.ge(R::splat(f64::MIN_POSITIVE)) & n.is_finite();
+    for k in i..i + 4 {
+        x[k] = R::select(normal, x[k] / n, x[k]);
     }
 }
 
@@ -940,5 +1125,120 @@ mod tests {
                 assert_eq!(got, want, "{params:?}");
             }
         }
+    }
+
+    /// Four different vehicles in `Lanes<4>` (and the same four, twice, in
+    /// `Lanes<8>`): every lane reads back its parameters, and 300 staged RK4
+    /// steps with per-lane states, rotor speeds, winds and external wrenches
+    /// (one lane's rotor speed NaN midway, masses and inertias changed in
+    /// some lanes) give each lane the one-flight body's bits.
+    #[test]
+    fn vehicles_in_lanes_are_the_one_flight_vehicles_bit_for_bit() {
+        use crate::vehicle::paper::rk4_step_staged;
+        use ftsmc_core::lanes::Lanes;
+        fn check<R: Real>() {
+            let full = RigidBodyParams {
+                inertia: [[3.8e-3, 1e-4, -2e-4], [1e-4, 3.9e-3, 5e-5], [-2e-4, 5e-5, 7.6e-3]],
+                ..RigidBodyParams::hummingbird()
+            };
+            let params =
+                [RigidBodyParams::default(), RigidBodyParams::hummingbird(), RigidBodyParams::crazyflie(), full];
+            let mut ones: Vec<RigidBody> = (0..R::LANES).map(|i| RigidBody::new(params[i % 4]).unwrap()).collect();
+            let mut lanes = RigidBody::<R>::splat(&ones[1]);
+            for (i, one) in ones.iter().enumerate() {
+                lanes.put_lane(i, *one);
+                assert_eq!(lanes.lane_params(i), params[i % 4]);
+            }
+            let mut rng = ChaCha8Rng::seed_from_u64(9);
+            let mut xs: Vec<RigidBodyState> = (0..R::LANES)
+                .map(|i| {
+                    let mut x: RigidBodyState = core::array::from_fn(|_| rng.random_range(-1.0..1.0));
+                    x[6] += 2.0 + i as f64;
+                    normalize_quaternion(&mut x);
+                    x
+                })
+                .collect();
+            let mut x = [R::splat(0.0); STATE_LEN];
+            for (i, xi) in xs.iter().enumerate() {
+                x.put_lane(i, *xi);
+            }
+            let h = 1e-3;
+            for k in 0..300 {
+                let inputs: Vec<RigidBodyInput> = ones
+                    .iter()
+                    .map(|one| {
+                        let hover = one.params().hover_rotor_speed();
+                        let mut u = || -> f64 { rng.random_range(-1.0..1.0) };
+                        RigidBodyInput {
+                            rotor_speeds: core::array::from_fn(|_| hover * (1.0 + 0.1 * u())),
+                            wind: [3.0 * u(), 3.0 * u(), u()],
+                            force: [0.01 * u(), 0.01 * u(), 0.01 * u()],
+                            torque: [1e-5 * u(), 1e-5 * u(), 1e-5 * u()],
+                        }
+                    })
+                    .map(|mut input| {
+                        if k == 150 {
+                            input.rotor_speeds[2] = f64::NAN;
+                        }
+                        input
+                    })
+                    .collect();
+                // Only lane 1 gets the NaN (the others keep flying).
+                let inputs: Vec<RigidBodyInput> = inputs
+                    .into_iter()
+                    .enumerate()
+                    .map(|(i, mut input)| {
+                        if input.rotor_speeds[2].is_nan() && i != 1 {
+                            input.rotor_speeds[2] = 0.0;
+                        }
+                        input
+                    })
+                    .collect();
+                if k % 50 == 25 {
+                    for (i, one) in ones.iter_mut().enumerate().filter(|(i, _)| i % 2 == 0) {
+                        let p = one.params();
+                        let (mass, scale) = (p.mass * 1.1, 1.0 + 0.01 * k as f64);
+                        let a = one.set_mass_and_scaled_inertia(mass, &params[i % 4].inertia, scale);
+                        let b = lanes.set_mass_and_scaled_inertia_in_lane(i, mass, &params[i % 4].inertia, scale);
+                        assert_eq!(a, b);
+                        assert_eq!(one.set_mass(mass * 0.95), lanes.set_mass_in_lane(i, mass * 0.95));
+                    }
+                }
+                let mut lane_input = RigidBodyInput::<R>::default();
+                for (i, input) in inputs.iter().enumerate() {
+                    lane_input.put_lane(i, *input);
+                }
+                for (i, xi) in xs.iter_mut().enumerate() {
+                    let one = &ones[i];
+                    *xi = rk4_step_staged(
+                        |_| one.prepare(&inputs[i]),
+                        |input, s| one.derivative_prepared(s, input),
+                        k as f64 * h,
+                        xi,
+                        h,
+                    );
+                    normalize_quaternion(xi);
+                }
+                x = rk4_step_staged(
+                    |_| lanes.prepare(&lane_input),
+                    |input, s| lanes.derivative_prepared(s, input),
+                    R::splat(k as f64 * h),
+                    &x,
+                    R::splat(h),
+                );
+                normalize_quaternion(&mut x);
+                // Bits, any NaN as one: Rust leaves a NaN's sign and payload
+                // unspecified (RFC 3514), and the compiler orders the
+                // operands of a vector and a scalar operation as it likes.
+                let bits = |v: f64| if v.is_nan() { f64::NAN.to_bits() } else { v.to_bits() };
+                for (i, xi) in xs.iter().enumerate() {
+                    assert_eq!(x.get_lane(i).map(bits), xi.map(bits), "lane {i} step {k}");
+                    assert_eq!(lanes.get_lane(i), ones[i], "lane {i} step {k}");
+                }
+            }
+            assert!(xs[1].iter().any(|v| v.is_nan()) && xs[0].iter().all(|v| v.is_finite()));
+        }
+        check::<Lanes<4>>();
+        check::<Lanes<8>>();
     }
 }
