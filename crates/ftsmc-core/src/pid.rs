@@ -320,6 +320,7 @@ impl PidGains {
 type Quat<R = f64> = [R; 4];
 
 /// Hamilton product `a ⊗ b`.
+#[inline(always)]
 fn quat_mul<R: Real>(a: &Quat<R>, b: &Quat<R>) -> Quat<R> {
     [
         a[0] * b[0] - a[1] * b[1] - a[2] * b[2] - a[3] * b[3],
@@ -330,28 +331,33 @@ fn quat_mul<R: Real>(a: &Quat<R>, b: &Quat<R>) -> Quat<R> {
 }
 
 /// Conjugate `q*` (the inverse of a unit quaternion).
+#[inline(always)]
 fn quat_conj<R: Real>(q: &Quat<R>) -> Quat<R> {
     [q[0], -q[1], -q[2], -q[3]]
 }
 
 /// `q / ‖q‖`; the identity where `‖q‖` is 0 (or NaN).
+#[inline(always)]
 fn quat_normalise<R: Real>(q: Quat<R>) -> Quat<R> {
     let n = (q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]).sqrt();
     branch(n.gt(R::splat(0.0)), || [q[0] / n, q[1] / n, q[2] / n, q[3] / n], || unit_quat())
 }
 
 /// The identity rotation `[1, 0, 0, 0]`.
+#[inline(always)]
 fn unit_quat<R: Real>() -> Quat<R> {
     let zero = R::splat(0.0);
     [R::splat(1.0), zero, zero, zero]
 }
 
 /// `q` or `−q`, whichever has `w >= 0` (the shorter rotation).
+#[inline(always)]
 fn canonical<R: Real>(q: Quat<R>) -> Quat<R> {
     branch(q[0].lt(R::splat(0.0)), || [-q[0], -q[1], -q[2], -q[3]], || q)
 }
 
 /// Quaternion of a rotation matrix (Shepperd's method: largest pivot).
+#[inline(always)]
 fn quat_from_rotation<R: Real>(r: &Mat3<R>) -> Quat<R> {
     let zero = R::splat(0.0);
     let one = R::splat(1.0);
@@ -392,6 +398,7 @@ fn quat_from_rotation<R: Real>(r: &Mat3<R>) -> Quat<R> {
 
 /// Shortest-arc rotation taking the unit vector `u` onto the unit vector
 /// `v`; for opposite vectors, a half turn about an axis perpendicular to `u`.
+#[inline(always)]
 fn quat_between<R: Real>(u: &Vec3<R>, v: &Vec3<R>) -> Quat<R> {
     let zero = R::splat(0.0);
     let one = R::splat(1.0);
@@ -413,6 +420,7 @@ fn quat_between<R: Real>(u: &Vec3<R>, v: &Vec3<R>) -> Quat<R> {
 
 /// PX4 `ControlMath::constrainXY`: `v0 + v1` limited to norm `max` (m/s),
 /// keeping `v0` first (the position part before the feed-forward).
+#[inline(always)]
 fn constrain_xy<R: Real>(v0: [R; 2], v1: [R; 2], max: f64) -> [R; 2] {
     let sum = [v0[0] + v1[0], v0[1] + v1[1]];
     let n_sum = (sum[0] * sum[0] + sum[1] * sum[1]).sqrt();
@@ -525,6 +533,7 @@ impl<R: Real> PidController<R> {
 
     /// The low-pass weights `α = 1 − e^{−2π f_c dt}` of the velocity and
     /// rate derivative filters for a period `dt` (s), computed when `dt` changes.
+    #[inline(always)]
     fn derivative_alphas(&mut self, dt: f64) -> [f64; 2] {
         if self.alpha_dt != dt.to_bits() {
             let alpha = |hz: f64| 1.0 - exp(-2.0 * core::f64::consts::PI * hz * dt);
@@ -536,6 +545,7 @@ impl<R: Real> PidController<R> {
 
     /// First-order low-pass (weight `alpha`, [`Self::derivative_alphas`]) of
     /// a finite difference over `dt`; `previous` is updated to `value`.
+    #[inline(always)]
     fn filtered_derivative(value: &Vec3<R>, previous: &mut Vec3<R>, filtered: &mut Vec3<R>, alpha: f64, dt: f64) {
         if dt > 0.0 {
             let limit = R::splat(INPUT_LIMIT);
@@ -549,6 +559,7 @@ impl<R: Real> PidController<R> {
     }
 
     /// Body-rate setpoint of the quaternion P law (step 7), rad/s.
+    #[inline(always)]
     fn rate_setpoint(&self, r: &Mat3<R>, q: &Quat<R>, r_d: &Mat3<R>, yaw_rate: R) -> Vec3<R> {
         let k = &self.gains;
         let zero = R::splat(0.0);
@@ -587,6 +598,7 @@ impl<R: Real> PidController<R> {
     /// attitude or reference is not finite gets a NaN command and keeps
     /// every internal state (and its telemetry) as it was, as a one-flight
     /// controller returns early; the other lanes fly [`Self::law`].
+    #[inline(always)]
     fn update_with(
         &mut self,
         state: &QuadState<R>,
@@ -616,6 +628,7 @@ impl<R: Real> PidController<R> {
     }
 
     /// Restore the per-lane states of `saved` in the lanes of `keep`.
+    #[inline(always)]
     fn keep_lanes(&mut self, keep: R::Mask, saved: &Self) {
         self.velocity_integral = Blend::blend(keep, saved.velocity_integral, self.velocity_integral);
         self.rate_integral = Blend::blend(keep, saved.rate_integral, self.rate_integral);
@@ -633,6 +646,7 @@ impl<R: Real> PidController<R> {
     /// rotation `R`, its quaternion and the body rates come from `attitude`
     /// when given, else from the Euler state (`R = R_z R_y R_x`, Shepperd's
     /// quaternion, `Ω = W η̇`).
+    #[inline(always)]
     fn law(
         &mut self,
         state: &QuadState<R>,
@@ -818,12 +832,14 @@ impl<R: Real> Controller<R> for PidController<R> {
     /// internal state unchanged (per lane: the other lanes fly on). Errors
     /// and rates are clamped to `±INPUT_LIMIT` and the integrators to
     /// `±STATE_LIMIT` (no-ops in flight).
+    #[inline(always)]
     fn update(&mut self, state: &QuadState<R>, reference: &Reference<R>, dt: f64) -> Command<R> {
         self.update_with(state, None, reference, dt)
     }
 
     /// As [`Controller::update`]; with [`Measurement::body`] the rotation is
     /// that of its quaternion and `Ω` its body rates (no Euler conversion).
+    #[inline(always)]
     fn update_measured(&mut self, measured: &Measurement<R>, reference: &Reference<R>, dt: f64) -> Command<R> {
         self.update_with(&measured.euler, measured.body.as_ref(), reference, dt)
     }

@@ -27,7 +27,7 @@ impl TiltLimit {
     /// Rotate the unit vector `b` towards the vertical so that its angle to
     /// `e₃` is at most `max_tilt` (PX4 `ControlMath::limitTilt`, z up); per
     /// lane for lanes.
-    #[inline]
+    #[inline(always)]
     pub(crate) fn apply<R: Real>(&self, b: Vec3<R>) -> Vec3<R> {
         let limit_cos = R::splat(self.cos);
         branch(
@@ -48,7 +48,7 @@ impl TiltLimit {
 }
 
 /// Every component of the reference is finite (per lane).
-#[inline]
+#[inline(always)]
 pub(crate) fn reference_finite<R: Real>(r: &Reference<R>) -> R::Mask {
     (finite_probe(&r.position)
         + finite_probe(&r.velocity)
@@ -75,7 +75,7 @@ impl<R: Real> HeadingSinCos<R> {
     }
 
     /// `(sin ψ, cos ψ)`, the bits of [`Real::sin_cos`]`(ψ)`.
-    #[inline]
+    #[inline(always)]
     pub(crate) fn get(&mut self, heading: R) -> (R, R) {
         if (0..R::LANES).any(|i| heading.get_lane(i).to_bits() != self.heading.get_lane(i).to_bits()) {
             self.value = heading.sin_cos();

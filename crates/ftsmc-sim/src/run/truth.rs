@@ -177,7 +177,7 @@ impl<R: Real> TruthModel<R> for PaperTruth<R> {
         }
     }
 
-    #[inline]
+    #[inline(always)]
     fn substep(&mut self, s: &[Substep<'_>]) {
         let s = &s[..R::LANES];
         let t0 = R::from_fn(|i| s[i].t0);
@@ -325,7 +325,7 @@ impl<R: Real> TruthModel<R> for RigidTruth<R> {
         Ok(())
     }
 
-    #[inline]
+    #[inline(always)]
     fn substep(&mut self, s: &[Substep<'_>]) {
         let s = &s[..R::LANES];
         let t0 = R::from_fn(|i| s[i].t0);
@@ -385,6 +385,54 @@ impl<R: Real> TruthModel<R> for RigidTruth<R> {
     }
 }
 
+/// A truth model whose substeps run on a chosen instruction set
+/// ([`crate::isa`]): the lane kernels compiled for AVX2 + FMA when the CPU
+/// has them, the same bits either way.
+struct OnIsa<T> {
+    inner: T,
+    isa: crate::isa::Isa,
+}
+
+impl<R: Real, T: TruthModel<R>> TruthModel<R> for OnIsa<T> {
+    fn quad_state(&self) -> QuadState<R> {
+        self.inner.quad_state()
+    }
+    fn body_attitude(&self) -> Option<BodyAttitude<R>> {
+        self.inner.body_attitude()
+    }
+    fn begin_period(&mut self, lane: usize, tv: &TimeVarying, base: &QuadrotorParams) -> Result<(), Divergence> {
+        self.inner.begin_period(lane, tv, base)
+    }
+    fn substep(&mut self, s: &[Substep<'_>]) {
+        match self.isa {
+            #[cfg(target_arch = "x86_64")]
+            // SAFETY: `Isa::Avx2Fma` is only detected on a CPU with AVX2 and FMA.
+            crate::isa::Isa::Avx2Fma => unsafe { substep_avx2(&mut self.inner, s) },
+            _ => self.inner.substep(s),
+        }
+    }
+    fn vertical(&self, lane: usize) -> (f64, f64) {
+        self.inner.vertical(lane)
+    }
+    fn set_vertical(&mut self, lane: usize, z: f64, vz: f64) {
+        self.inner.set_vertical(lane, z, vz);
+    }
+    fn start_lane(&mut self, lane: usize, scenario: &Scenario) -> Result<(), LaneStart> {
+        self.inner.start_lane(lane, scenario)
+    }
+}
+
+/// [`TruthModel::substep`] compiled with AVX2 and FMA (the models mark it
+/// and their kernels `#[inline(always)]`, so the whole RK4 is compiled here).
+///
+/// # Safety
+/// The CPU must have AVX2 and FMA.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+unsafe fn substep_avx2<R: Real, T: TruthModel<R>>(truth: &mut T, s: &[Substep<'_>]) {
+    truth.substep(s);
+}
+
 /// What a flight's truth model brings to the loop ([`truth_of`]).
 pub(crate) struct TruthSetup {
     /// Its allocation `u = A ω²`.
@@ -420,9 +468,11 @@ pub(crate) fn truth_of(scenario: &Scenario) -> TruthSetup {
 /// [`truth_of`] reports as `invalid`). New flights enter lanes with
 /// [`TruthModel::start_lane`].
 pub(crate) fn truth_lanes<R: Real>(scenario: &Scenario) -> Result<Box<dyn TruthModel<R> + Send>, Divergence> {
+    // One flight keeps the baseline path; lanes run on the detected instruction set.
+    let isa = if R::LANES > 1 { crate::isa::Isa::detect() } else { crate::isa::Isa::Baseline };
     Ok(match scenario.vehicle.model {
-        VehicleModel::Paper => Box::new(PaperTruth::<R>::new(scenario)),
-        VehicleModel::RigidBody => Box::new(RigidTruth::<R>::new(scenario)?),
+        VehicleModel::Paper => Box::new(OnIsa { inner: PaperTruth::<R>::new(scenario), isa }),
+        VehicleModel::RigidBody => Box::new(OnIsa { inner: RigidTruth::<R>::new(scenario)?, isa }),
     })
 }
 

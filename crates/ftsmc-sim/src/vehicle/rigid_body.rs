@@ -510,20 +510,20 @@ fn is_diagonal(j: &Mat3) -> bool {
 /// `m v`, or where `diagonal` only the diagonal of `m` times `v`: the same
 /// values (the skipped products are zeros added to a sum). Per lane for
 /// lanes ([`branch`]: each product only if some lane needs it).
-#[inline]
+#[inline(always)]
 fn mat_vec_or_diagonal<R: Real>(m: &Mat3<R>, diagonal: R::Mask, v: Vec3<R>) -> Vec3<R> {
     branch(diagonal, || [m[0][0] * v[0], m[1][1] * v[1], m[2][2] * v[2]], || mat_vec(m, v))
 }
 
 /// `a × r` for a rotor position `r` with `r_z = 0` (the terms with `r_z`
 /// are zeros).
-#[inline]
+#[inline(always)]
 fn cross_rotor<R: Real>(a: Vec3<R>, r: Vec3<R>) -> Vec3<R> {
     [-(a[2] * r[1]), a[2] * r[0], a[0] * r[1] - a[1] * r[0]]
 }
 
 /// `r × f` for a rotor position `r` with `r_z = 0`.
-#[inline]
+#[inline(always)]
 fn rotor_cross<R: Real>(r: Vec3<R>, f: Vec3<R>) -> Vec3<R> {
     [r[1] * f[2], -(r[0] * f[2]), r[0] * f[1] - r[1] * f[0]]
 }
@@ -720,7 +720,7 @@ impl<R: Real> RigidBody<R> {
     /// `J v` for a body-frame vector `v` (the inertia times an angular
     /// acceleration, rad/s² → N·m): the same values as the full product,
     /// the zero products of a diagonal inertia skipped.
-    #[inline]
+    #[inline(always)]
     pub fn inertia_times(&self, v: [R; 3]) -> [R; 3] {
         mat_vec_or_diagonal(&self.inertia, self.diagonal, v)
     }
@@ -733,7 +733,7 @@ impl<R: Real> RigidBody<R> {
 
     /// The rotor terms of `input` ([`PreparedInput`]) for
     /// [`RigidBody::derivative_prepared`].
-    #[inline]
+    #[inline(always)]
     pub fn prepare(&self, input: &RigidBodyInput<R>) -> PreparedInput<R> {
         let w = input.rotor_speeds;
         PreparedInput {
@@ -751,7 +751,7 @@ impl<R: Real> RigidBody<R> {
     /// translational lift, parasitic drag) are skipped per lane
     /// ([`branch`]), so each lane adds exactly the terms its one-flight body
     /// adds.
-    #[inline]
+    #[inline(always)]
     pub fn body_wrench_in(&self, x: &RigidBodyState<R>, prepared: &PreparedInput<R>, r: &Mat3<R>) -> Wrench<R> {
         let input = &prepared.input;
         let v = block(x, index::VELOCITY);
@@ -811,6 +811,7 @@ impl<R: Real> RigidBody<R> {
     }
 
     /// Rotor angular momentum `h_r = J_r Σ s_i ω_i ẑ` (body frame), kg·m²/s.
+    #[inline(always)]
     pub fn rotor_momentum(&self, rotor_speeds: &[R; 4]) -> [R; 3] {
         // The sum of `Iterator::sum` for f64: from −0 (which leaves any
         // first term's bits as they are), term by term.
@@ -830,7 +831,7 @@ impl<R: Real> RigidBody<R> {
     /// [`RigidBody::derivative`] of the inputs [`RigidBody::prepare`] made,
     /// bit for bit: the form for several states with the same inputs (the
     /// second and third RK4 stages).
-    #[inline]
+    #[inline(always)]
     pub fn derivative_prepared(&self, x: &RigidBodyState<R>, prepared: &PreparedInput<R>) -> RigidBodyState<R> {
         let input = &prepared.input;
         let q = quaternion(x);
@@ -852,10 +853,12 @@ impl<R: Real> RigidBody<R> {
     }
 }
 
+#[inline(always)]
 fn block<R: Real>(x: &RigidBodyState<R>, start: usize) -> Vec3<R> {
     [x[start], x[start + 1], x[start + 2]]
 }
 
+#[inline(always)]
 fn quaternion<R: Real>(x: &RigidBodyState<R>) -> Quat<R> {
     let i = index::QUATERNION;
     [x[i], x[i + 1], x[i + 2], x[i + 3]]
@@ -863,7 +866,7 @@ fn quaternion<R: Real>(x: &RigidBodyState<R>) -> Quat<R> {
 
 /// Scale the quaternion block of `x` to unit length (left unchanged if its
 /// norm is zero, subnormal or not finite), lane by lane for lanes.
-#[inline]
+#[inline(always)]
 pub fn normalize_quaternion<R: Real>(x: &mut RigidBodyState<R>) {
     let i = index::QUATERNION;
     let n = (x[i] * x[i] + x[i + 1] * x[i + 1] + x[i + 2] * x[i + 2] + x[i + 3] * x[i + 3]).sqrt();
