@@ -145,7 +145,7 @@ pub fn run_batch_lanes(
                         seed,
                         sampled,
                         controller: name.clone(),
-                        exit: out_run.exit.clone(),
+                        exit: out_run.exit,
                         success: out_run.success(),
                         metrics: out_run.metrics,
                         stats: out_run.stats,
