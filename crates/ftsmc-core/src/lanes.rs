@@ -9,7 +9,7 @@
 //! a computation on `Lanes<N>` has exactly the bits of the same computation
 //! on `f64` with lane `i`'s inputs** — whatever `N`, whatever the lane and
 //! whatever vector width the CPU offers. Transcendental functions are the
-//! one maths library's ([`crate::math`]) called lane by lane, never a vector
+//! one maths library's ([`crate::elementary`]) called lane by lane, never a vector
 //! approximation.
 //!
 //! # Branches
@@ -108,7 +108,7 @@ pub trait Real:
     fn splat(v: f64) -> Self;
     /// Lane `i` is `f(i)`.
     fn from_fn(f: impl FnMut(usize) -> f64) -> Self;
-    /// Correctly rounded square root ([`crate::math::sqrt`]).
+    /// Correctly rounded square root ([`crate::elementary::sqrt`]).
     fn sqrt(self) -> Self;
     /// `|x|`.
     fn abs(self) -> Self;
@@ -135,67 +135,67 @@ pub trait Real:
     fn select(m: Self::Mask, a: Self, b: Self) -> Self {
         Self::blend(m, a, b)
     }
-    /// `f` applied to every lane (a scalar function of [`crate::math`]).
+    /// `f` applied to every lane (a scalar function of [`crate::elementary`]).
     fn map(self, f: impl Fn(f64) -> f64) -> Self;
     /// `f` applied to the pairs of lanes of `self` and `other`.
     fn map2(self, other: Self, f: impl Fn(f64, f64) -> f64) -> Self;
 
-    /// `sin x` (rad), [`crate::math::sin`] per lane.
+    /// `sin x` (rad), [`crate::elementary::sin`] per lane.
     #[inline]
     fn sin(self) -> Self {
-        self.map(crate::math::sin)
+        self.map(crate::elementary::sin)
     }
-    /// `cos x` (rad), [`crate::math::cos`] per lane.
+    /// `cos x` (rad), [`crate::elementary::cos`] per lane.
     #[inline]
     fn cos(self) -> Self {
-        self.map(crate::math::cos)
+        self.map(crate::elementary::cos)
     }
-    /// `(sin x, cos x)` (rad), [`crate::math::sin_cos`] per lane.
+    /// `(sin x, cos x)` (rad), [`crate::elementary::sin_cos`] per lane.
     #[inline]
     fn sin_cos(self) -> (Self, Self) {
         let mut s = self;
         let mut c = self;
         for i in 0..Self::LANES {
-            let (si, ci) = crate::math::sin_cos(self.get_lane(i));
+            let (si, ci) = crate::elementary::sin_cos(self.get_lane(i));
             s.put_lane(i, si);
             c.put_lane(i, ci);
         }
         (s, c)
     }
-    /// `eˣ`, [`crate::math::exp`] per lane.
+    /// `eˣ`, [`crate::elementary::exp`] per lane.
     #[inline]
     fn exp(self) -> Self {
-        self.map(crate::math::exp)
+        self.map(crate::elementary::exp)
     }
-    /// `ln x`, [`crate::math::ln`] per lane.
+    /// `ln x`, [`crate::elementary::ln`] per lane.
     #[inline]
     fn ln(self) -> Self {
-        self.map(crate::math::ln)
+        self.map(crate::elementary::ln)
     }
-    /// `asin x` (rad), [`crate::math::asin`] per lane.
+    /// `asin x` (rad), [`crate::elementary::asin`] per lane.
     #[inline]
     fn asin(self) -> Self {
-        self.map(crate::math::asin)
+        self.map(crate::elementary::asin)
     }
-    /// `acos x` (rad), [`crate::math::acos`] per lane.
+    /// `acos x` (rad), [`crate::elementary::acos`] per lane.
     #[inline]
     fn acos(self) -> Self {
-        self.map(crate::math::acos)
+        self.map(crate::elementary::acos)
     }
-    /// `atan x` (rad), [`crate::math::atan`] per lane.
+    /// `atan x` (rad), [`crate::elementary::atan`] per lane.
     #[inline]
     fn atan(self) -> Self {
-        self.map(crate::math::atan)
+        self.map(crate::elementary::atan)
     }
-    /// `atan2(self, x)` (rad), [`crate::math::atan2`] per lane.
+    /// `atan2(self, x)` (rad), [`crate::elementary::atan2`] per lane.
     #[inline]
     fn atan2(self, x: Self) -> Self {
-        self.map2(x, crate::math::atan2)
+        self.map2(x, crate::elementary::atan2)
     }
-    /// `self^y`, [`crate::math::powf`] per lane.
+    /// `self^y`, [`crate::elementary::powf`] per lane.
     #[inline]
     fn powf(self, y: Self) -> Self {
-        self.map2(y, crate::math::powf)
+        self.map2(y, crate::elementary::powf)
     }
 }
 
@@ -290,7 +290,7 @@ impl Real for f64 {
     }
     #[inline(always)]
     fn sqrt(self) -> Self {
-        crate::math::sqrt(self)
+        crate::elementary::sqrt(self)
     }
     #[inline(always)]
     fn abs(self) -> Self {
@@ -342,7 +342,7 @@ impl Real for f64 {
     }
     #[inline(always)]
     fn sin_cos(self) -> (Self, Self) {
-        crate::math::sin_cos(self)
+        crate::elementary::sin_cos(self)
     }
 }
 
@@ -543,7 +543,7 @@ impl<const N: usize> Real for Lanes<N> {
     }
     #[inline(always)]
     fn sqrt(self) -> Self {
-        Self(self.0.map(crate::math::sqrt))
+        Self(self.0.map(crate::elementary::sqrt))
     }
     #[inline(always)]
     fn abs(self) -> Self {
@@ -813,7 +813,7 @@ mod tests {
                 -x
             },
         );
-        assert_eq!(y.0, [1.0, 2.0, crate::math::sqrt(3.0), 4.0]);
+        assert_eq!(y.0, [1.0, 2.0, crate::elementary::sqrt(3.0), 4.0]);
         assert_eq!(calls.get(), (1, 1));
         calls.set((0, 0));
         let _ = branch(

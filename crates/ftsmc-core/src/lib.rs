@@ -24,6 +24,7 @@
 pub mod allocation;
 pub mod cascade;
 pub mod controller;
+pub mod elementary;
 pub mod ftaftsmc;
 pub mod kinematics;
 pub mod lanes;
