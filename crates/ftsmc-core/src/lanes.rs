@@ -601,6 +601,52 @@ impl<const N: usize> Real for Lanes<N> {
     fn map2(self, o: Self, f: impl Fn(f64, f64) -> f64) -> Self {
         Self(core::array::from_fn(|i| f(self.0[i], o.0[i])))
     }
+    /// [`crate::lanes_math::sin`]: [`crate::math::sin`]'s bits per lane.
+    #[inline(always)]
+    fn sin(self) -> Self {
+        Self(crate::lanes_math::sin(self.0))
+    }
+    /// [`crate::lanes_math::cos`]: [`crate::math::cos`]'s bits per lane.
+    #[inline(always)]
+    fn cos(self) -> Self {
+        Self(crate::lanes_math::cos(self.0))
+    }
+    /// [`crate::lanes_math::sin_cos`]: [`crate::math::sin_cos`]'s bits per lane.
+    #[inline(always)]
+    fn sin_cos(self) -> (Self, Self) {
+        let (s, c) = crate::lanes_math::sin_cos(self.0);
+        (Self(s), Self(c))
+    }
+    /// [`crate::lanes_math::exp`]: [`crate::math::exp`]'s bits per lane.
+    #[inline(always)]
+    fn exp(self) -> Self {
+        Self(crate::lanes_math::exp(self.0))
+    }
+    /// [`crate::lanes_math::ln`]: [`crate::math::ln`]'s bits per lane.
+    #[inline(always)]
+    fn ln(self) -> Self {
+        Self(crate::lanes_math::ln(self.0))
+    }
+    /// [`crate::lanes_math::asin`]: [`crate::math::asin`]'s bits per lane.
+    #[inline(always)]
+    fn asin(self) -> Self {
+        Self(crate::lanes_math::asin(self.0))
+    }
+    /// [`crate::lanes_math::acos`]: [`crate::math::acos`]'s bits per lane.
+    #[inline(always)]
+    fn acos(self) -> Self {
+        Self(crate::lanes_math::acos(self.0))
+    }
+    /// [`crate::lanes_math::atan`]: [`crate::math::atan`]'s bits per lane.
+    #[inline(always)]
+    fn atan(self) -> Self {
+        Self(crate::lanes_math::atan(self.0))
+    }
+    /// [`crate::lanes_math::atan2`]: [`crate::math::atan2`]'s bits per lane.
+    #[inline(always)]
+    fn atan2(self, x: Self) -> Self {
+        Self(crate::lanes_math::atan2(self.0, x.0))
+    }
 }
 
 // ---------------------------------------------------------------- composites

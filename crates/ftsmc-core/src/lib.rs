@@ -27,6 +27,7 @@ pub mod controller;
 pub mod ftaftsmc;
 pub mod kinematics;
 pub mod lanes;
+pub mod lanes_math;
 pub mod law;
 pub mod math;
 pub mod measured;
