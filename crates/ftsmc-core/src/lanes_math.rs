@@ -518,50 +518,14 @@ fn k_cos(x: f64, y: f64) -> f64 {
     w + (((1.0 - w) - hz) + (z * r - x * y))
 }
 
-/// One lane of `sin`/`cos`/`sincos` up to the quadrant: `(s, c, q, ix,
-/// rare)` with `s = __sin`, `c = __cos` of the reduced argument (of `x`
-/// itself for `|x| ≤ π/4`, with `iy = 0` for `__sin`), `q = n & 3` the
-/// quadrant (0 when not reduced), `ix` the high word of `|x|`, `rare` for
-/// ±∞, NaN and `|x| ≥ 2²⁰ π/2` (`__rem_pio2_large`).
+/// The Cody-Waite reduction of `__rem_pio2`'s medium case
+/// (`|x| < 2²⁰ π/2`): `(n, y0, y1)`, up to three rounds as the scalar code
+/// takes them (computed all, then selected).
 #[inline(always)]
-fn sin_cos_lane(x: f64) -> (f64, f64, u32, u32, bool) {
-    let sign = (x.to_bits() >> 63) != 0;
-    let ix = high(x) & 0x7fff_ffff;
-    let rare = ix >= 0x4139_21fb;
-    let reduce = ix > 0x3fe9_21fb;
-
-    // __rem_pio2, small multiples of pi/2 (|x| ~<= 9pi/4): n = +-1..4
-    // and x - n pio2_1 - n pio2_1t, unless close to a multiple (medium).
-    let le_5pio4 = ix <= 0x400f_6a7a;
-    let le_9pio4 = ix <= 0x401c_463b;
-    let cancel = if le_5pio4 {
-        (ix & 0xfffff) == 0x921fb
-    } else if ix <= 0x4015_fdbc {
-        ix == 0x4012_d97c
-    } else {
-        ix == 0x4019_21fb
-    };
-    let k_small: i32 = if le_5pio4 {
-        if ix <= 0x4002_d97c {
-            1
-        } else {
-            2
-        }
-    } else if ix <= 0x4015_fdbc {
-        3
-    } else {
-        4
-    };
-    let n_small = if sign { -k_small } else { k_small };
-    let nf_small = n_small as f64;
-    let zs = x - nf_small * PIO2_1;
-    let y0s = zs - nf_small * PIO2_1T;
-    let y1s = (zs - y0s) - nf_small * PIO2_1T;
-
-    // medium: rint(x / (pi/2)) and up to three rounds of Cody-Waite.
+fn medium_lane(x: f64, ix: u32) -> (i32, f64, f64) {
     let tmp = x * INV_PIO2 + TO_INT;
     let f_n = tmp - TO_INT;
-    let n_med = f_n as i32;
+    let n = f_n as i32;
     let r1 = x - f_n * PIO2_1;
     let w1 = f_n * PIO2_1T;
     let y01 = r1 - w1;
@@ -580,28 +544,77 @@ fn sin_cos_lane(x: f64) -> (f64, f64, u32, u32, bool) {
     let y03 = r3 - w3;
     let round2 = ex - ey1 > 16;
     let round3 = round2 && ex - ey2 > 49;
-    let (r, w, y0m) = if round3 {
-        (r3, w3, y03)
-    } else if round2 {
-        (r2, w2, y02)
-    } else {
-        (r1, w1, y01)
-    };
-    let y1m = (r - y0m) - w;
+    let r = sel(round3, r3, sel(round2, r2, r1));
+    let w = sel(round3, w3, sel(round2, w2, w1));
+    let y0 = sel(round3, y03, sel(round2, y02, y01));
+    (n, y0, (r - y0) - w)
+}
 
-    let medium = !le_9pio4 || cancel;
-    let n = if !reduce {
-        0
-    } else if medium {
-        n_med
-    } else {
-        n_small
-    };
-    let y0 = sel(reduce, sel(medium, y0m, y0s), x);
-    let y1 = sel(reduce, sel(medium, y1m, y1s), 0.0);
-    let s = k_sin(y0, y1, reduce);
-    let c = k_cos(y0, y1);
-    (s, c, (n & 3) as u32, ix, rare)
+/// `sin`/`cos`/`sincos` up to the quadrant, on all lanes: `(s, c, q, ix,
+/// rare)` with `s = __sin`, `c = __cos` of the reduced argument (of `x`
+/// itself for `|x| ≤ π/4`, with `iy = 0` for `__sin`), `q = n & 3` the
+/// quadrant (0 when not reduced), `ix` the high word of `|x|`, `rare` for
+/// ±∞, NaN and `|x| ≥ 2²⁰ π/2` (`__rem_pio2_large`). The medium reduction
+/// is computed only when some lane needs it.
+#[allow(clippy::type_complexity)]
+#[inline(always)]
+fn sin_cos_core<const N: usize>(x: &[f64; N]) -> ([f64; N], [f64; N], [u32; N], [u32; N], [u64; N]) {
+    let mut y0 = [0.0; N];
+    let mut y1 = [0.0; N];
+    let mut nn = [0i32; N];
+    let mut ixs = [0u32; N];
+    let mut rare = [0u64; N];
+    let mut med = [0u64; N];
+    let mut reduced = [0u64; N];
+    for i in 0..N {
+        let xi = x[i];
+        let sign = (xi.to_bits() >> 63) != 0;
+        let ix = high(xi) & 0x7fff_ffff;
+        ixs[i] = ix;
+        rare[i] = bits(ix >= 0x4139_21fb);
+        let reduce = ix > 0x3fe9_21fb;
+        reduced[i] = bits(reduce);
+        // __rem_pio2, small multiples of pi/2 (|x| ~<= 9pi/4): n = +-1..4
+        // and x - n pio2_1 - n pio2_1t, unless close to a multiple (medium).
+        let le_5pio4 = ix <= 0x400f_6a7a;
+        let le_9pio4 = ix <= 0x401c_463b;
+        let cancel = if le_5pio4 {
+            (ix & 0xfffff) == 0x921fb
+        } else if ix <= 0x4015_fdbc {
+            ix == 0x4012_d97c
+        } else {
+            ix == 0x4019_21fb
+        };
+        // 1 + [> 3pi/4] + [> 5pi/4] + [> 7pi/4] (each range test 0 or 1).
+        let k_small = 1 + (ix > 0x4002_d97c) as i32 + (!le_5pio4) as i32 + (ix > 0x4015_fdbc) as i32;
+        let n_small = (k_small ^ -(sign as i32)) + sign as i32;
+        let nf_small = n_small as f64;
+        let zs = xi - nf_small * PIO2_1;
+        let y0s = zs - nf_small * PIO2_1T;
+        let y1s = (zs - y0s) - nf_small * PIO2_1T;
+        med[i] = bits(reduce && (!le_9pio4 || cancel));
+        y0[i] = sel(reduce, y0s, xi);
+        y1[i] = sel(reduce, y1s, 0.0);
+        nn[i] = n_small & -(reduce as i32);
+    }
+    if any(&med) {
+        for i in 0..N {
+            let (n, a, b) = medium_lane(x[i], ixs[i]);
+            let m = med[i] != 0;
+            y0[i] = sel(m, a, y0[i]);
+            y1[i] = sel(m, b, y1[i]);
+            nn[i] = (n & -(m as i32)) | (nn[i] & !(-(m as i32)));
+        }
+    }
+    let mut s = [0.0; N];
+    let mut c = [0.0; N];
+    let mut q = [0u32; N];
+    for i in 0..N {
+        s[i] = k_sin(y0[i], y1[i], reduced[i] != 0);
+        c[i] = k_cos(y0[i], y1[i]);
+        q[i] = (nn[i] & 3) as u32;
+    }
+    (s, c, q, ixs, rare)
 }
 
 /// `sin x` (rad) on each lane: [`crate::math::sin`] (`libm::sin`, fdlibm's
@@ -611,16 +624,12 @@ fn sin_cos_lane(x: f64) -> (f64, f64, u32, u32, bool) {
 #[inline]
 pub fn sin<const N: usize>(x: [f64; N]) -> [f64; N] {
     let mut out = [0.0; N];
-    let mut rare = [0u64; N];
+    let (s, c, q, ix, rare) = sin_cos_core(&x);
     for i in 0..N {
-        let (s, c, q, ix, r) = sin_cos_lane(x[i]);
-        rare[i] = bits(r);
-        let v = match q {
-            0 => s,
-            1 => c,
-            2 => -s,
-            _ => -c,
-        };
+        let (s, c, q, ix) = (s[i], c[i], q[i], ix[i]);
+        // q: 0 => s, 1 => c, 2 => -s, 3 => -c (selects, not a jump table).
+        let v = sel(q & 1 != 0, c, s);
+        let v = sel(q & 2 != 0, -v, v);
         // |x| < 2^-26: x itself.
         out[i] = sel(ix < 0x3e50_0000, x[i], v);
     }
@@ -636,16 +645,12 @@ pub fn sin<const N: usize>(x: [f64; N]) -> [f64; N] {
 #[inline]
 pub fn cos<const N: usize>(x: [f64; N]) -> [f64; N] {
     let mut out = [0.0; N];
-    let mut rare = [0u64; N];
+    let (s, c, q, ix, rare) = sin_cos_core(&x);
     for i in 0..N {
-        let (s, c, q, ix, r) = sin_cos_lane(x[i]);
-        rare[i] = bits(r);
-        let v = match q {
-            0 => c,
-            1 => -s,
-            2 => -c,
-            _ => s,
-        };
+        let (s, c, q, ix) = (s[i], c[i], q[i], ix[i]);
+        // q: 0 => c, 1 => -s, 2 => -c, 3 => s (selects, not a jump table).
+        let v = sel(q & 1 != 0, s, c);
+        let v = sel((q + 1) & 2 != 0, -v, v);
         // |x| < 2^-27 sqrt(2): 1.
         out[i] = sel(ix < 0x3e46_a09e, 1.0, v);
     }
@@ -662,16 +667,14 @@ pub fn cos<const N: usize>(x: [f64; N]) -> [f64; N] {
 pub fn sin_cos<const N: usize>(x: [f64; N]) -> ([f64; N], [f64; N]) {
     let mut so = [0.0; N];
     let mut co = [0.0; N];
-    let mut rare = [0u64; N];
+    let (s, c, q, ix, rare) = sin_cos_core(&x);
     for i in 0..N {
-        let (s, c, q, ix, r) = sin_cos_lane(x[i]);
-        rare[i] = bits(r);
-        let (vs, vc) = match q {
-            0 => (s, c),
-            1 => (c, -s),
-            2 => (-s, -c),
-            _ => (-c, s),
-        };
+        let (s, c, q, ix) = (s[i], c[i], q[i], ix[i]);
+        // q: 0 => (s, c), 1 => (c, -s), 2 => (-s, -c), 3 => (-c, s).
+        let vs = sel(q & 1 != 0, c, s);
+        let vs = sel(q & 2 != 0, -vs, vs);
+        let vc = sel(q & 1 != 0, s, c);
+        let vc = sel((q + 1) & 2 != 0, -vc, vc);
         // |x| < 2^-27 sqrt(2): (x, 1).
         let tiny = ix < 0x3e46_a09e;
         so[i] = sel(tiny, x[i], vs);

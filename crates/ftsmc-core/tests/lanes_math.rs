@@ -15,7 +15,7 @@ use ftsmc_core::lanes::{Lanes, Real};
 use ftsmc_core::lanes_math as lm;
 
 /// Random samples per family (debug / release).
-const SAMPLES: usize = if cfg!(debug_assertions) { 20_000 } else { 1_000_000 };
+const SAMPLES: usize = if cfg!(debug_assertions) { 100_000 } else { 2_000_000 };
 
 /// splitmix64: a small deterministic generator.
 struct Rng(u64);
