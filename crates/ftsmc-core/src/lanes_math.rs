@@ -33,6 +33,11 @@
 //! patterns, the ranges the controllers use, and every branch boundary of
 //! the scalar code with its neighbours.
 
+// The constants are written exactly as in the `libm` sources (fdlibm's
+// decimal literals, their bits in the comments), so that a reader can
+// compare them line by line; the tests check every kernel's bits.
+#![allow(clippy::excessive_precision, clippy::approx_constant)]
+
 use crate::math;
 
 // ------------------------------------------------------------------ helpers
