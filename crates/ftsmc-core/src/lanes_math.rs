@@ -92,8 +92,9 @@ const P5: f64 = 4.13813679705723846039e-08; /* 0x3E663769, 0x72BEA4D0 */
 /// `eˣ` on each lane: [`crate::math::exp`] (`libm::exp`, fdlibm's
 /// `e_exp.c`: `x = k ln2 + r`, `|r| ≤ ln2/2`, a degree-5 rational
 /// approximation of `eʳ`, scaled by `2ᵏ`), bit for bit. Vectorised for
-/// `|x| < 708.39…` (where `2ᵏ` is a normal number); NaN, ±∞, overflow and
-/// underflow lanes go through the scalar function.
+/// `|x| < 708.39…` (where `2ᵏ` is a normal number) and `x < −745.13…`
+/// (`+0`, down to `−∞`); NaN, `+∞`, overflow and the subnormal results go
+/// through the scalar function.
 #[inline]
 pub fn exp<const N: usize>(x: [f64; N]) -> [f64; N] {
     let mut out = [0.0; N];
@@ -103,8 +104,10 @@ pub fn exp<const N: usize>(x: [f64; N]) -> [f64; N] {
         let hfull = high(xi);
         let sign = hfull >> 31;
         let hx = hfull & 0x7fff_ffff;
-        // |x| >= 708.39...: NaN, overflow, underflow (scalar).
-        rare[i] = bits(hx >= 0x4086_232b);
+        // |x| >= 708.39...: NaN, overflow, underflow (scalar), except
+        // x < -745.13... (down to -inf), where libm returns +0.
+        let zero = xi < -745.133_219_101_941_108_42;
+        rare[i] = bits(hx >= 0x4086_232b && !zero);
         // Argument reduction (|x| > 0.5 ln2).
         let reduce = hx > 0x3fd6_2e42;
         let half = sel(sign != 0, -HALF_EXP, HALF_EXP);
@@ -133,7 +136,8 @@ pub fn exp<const N: usize>(x: [f64; N]) -> [f64; N] {
         let scale = f64::from_bits((0x3ff_i32.wrapping_add(k) as u64) << 52);
         let scaled = sel(k == 0, y, y * scale);
         // |x| <= 2^-28: 1 + x.
-        out[i] = sel(hx > 0x3e30_0000, scaled, 1. + xi);
+        let v = sel(hx > 0x3e30_0000, scaled, 1. + xi);
+        out[i] = sel(zero, 0.0, v);
     }
     if any(&rare) {
         patch(&mut out, &rare, &x, math::exp);
@@ -156,8 +160,8 @@ const LG7: f64 = 1.479819860511658591e-01; /* 3FC2F112 DF3E5244 */
 /// `ln x` on each lane: [`crate::math::ln`] (`libm::log`, fdlibm's
 /// `e_log.c`: `x = 2ᵏ(1 + f)`, `√2/2 < 1 + f < √2`, `ln(1 + f)` by a
 /// degree-14 polynomial in `s = f/(2 + f)`), bit for bit. Vectorised for
-/// positive normal finite `x`; zero, negative, subnormal, ∞ and NaN lanes
-/// go through the scalar function.
+/// positive normal finite `x` and `±0` (`−∞`); negative, subnormal, `+∞`
+/// and NaN lanes go through the scalar function.
 #[inline]
 pub fn ln<const N: usize>(x: [f64; N]) -> [f64; N] {
     let mut out = [0.0; N];
@@ -165,8 +169,10 @@ pub fn ln<const N: usize>(x: [f64; N]) -> [f64; N] {
     for i in 0..N {
         let ui = x[i].to_bits();
         let hx = (ui >> 32) as u32;
-        // Zero, subnormal, negative (sign bit), +inf, NaN: scalar.
-        rare[i] = bits(hx < 0x0010_0000 || (hx >> 31) != 0 || hx >= 0x7ff0_0000);
+        // Subnormal, negative (sign bit), +inf, NaN: scalar. ±0: libm's
+        // -1/(x*x) is -inf.
+        let zero = (ui << 1) == 0;
+        rare[i] = bits((hx < 0x0010_0000 || (hx >> 31) != 0 || hx >= 0x7ff0_0000) && !zero);
         // Reduce x into [sqrt(2)/2, sqrt(2)].
         let hx = hx.wrapping_add(0x3ff0_0000 - 0x3fe6_a09e);
         let k = ((hx >> 20) as i32) - 0x3ff;
@@ -183,7 +189,8 @@ pub fn ln<const N: usize>(x: [f64; N]) -> [f64; N] {
         let dk = k as f64;
         let v = s * (hfsq + r) + dk * LN2_LO - hfsq + f + dk * LN2_HI;
         // x == 1: exactly 0.
-        out[i] = sel(ui == 0x3ff0_0000_0000_0000, 0.0, v);
+        let v = sel(ui == 0x3ff0_0000_0000_0000, 0.0, v);
+        out[i] = sel(zero, f64::NEG_INFINITY, v);
     }
     if any(&rare) {
         patch(&mut out, &rare, &x, math::ln);
