@@ -601,6 +601,102 @@ impl<const N: usize> Real for Lanes<N> {
     fn map2(self, o: Self, f: impl Fn(f64, f64) -> f64) -> Self {
         Self(core::array::from_fn(|i| f(self.0[i], o.0[i])))
     }
+    // The kernels of `lanes_math` give the bits of the scalar functions
+    // on every lane, so which one runs is a matter of speed only. Measured
+    // (benches/lanes_math.rs): `ln`'s kernel is faster than per-lane libm
+    // at every width; the others only at 8 lanes and more (with AVX2);
+    // below that the scalar calls are faster, so they stay.
+    /// [`crate::lanes_math::sin`] (8 lanes and more) or
+    /// [`crate::math::sin`] per lane: the same bits.
+    #[inline(always)]
+    fn sin(self) -> Self {
+        if N >= 8 {
+            Self(crate::lanes_math::sin(self.0))
+        } else {
+            self.map(crate::math::sin)
+        }
+    }
+    /// [`crate::lanes_math::cos`] (8 lanes and more) or
+    /// [`crate::math::cos`] per lane: the same bits.
+    #[inline(always)]
+    fn cos(self) -> Self {
+        if N >= 8 {
+            Self(crate::lanes_math::cos(self.0))
+        } else {
+            self.map(crate::math::cos)
+        }
+    }
+    /// [`crate::lanes_math::sin_cos`] (8 lanes and more) or
+    /// [`crate::math::sin_cos`] per lane: the same bits.
+    #[inline(always)]
+    fn sin_cos(self) -> (Self, Self) {
+        if N >= 8 {
+            let (s, c) = crate::lanes_math::sin_cos(self.0);
+            (Self(s), Self(c))
+        } else {
+            let mut s = self;
+            let mut c = self;
+            for i in 0..N {
+                (s.0[i], c.0[i]) = crate::math::sin_cos(self.0[i]);
+            }
+            (s, c)
+        }
+    }
+    /// [`crate::lanes_math::exp`] (8 lanes and more) or
+    /// [`crate::math::exp`] per lane: the same bits.
+    #[inline(always)]
+    fn exp(self) -> Self {
+        if N >= 8 {
+            Self(crate::lanes_math::exp(self.0))
+        } else {
+            self.map(crate::math::exp)
+        }
+    }
+    /// [`crate::lanes_math::ln`]: [`crate::math::ln`]'s bits per lane.
+    #[inline(always)]
+    fn ln(self) -> Self {
+        Self(crate::lanes_math::ln(self.0))
+    }
+    /// [`crate::lanes_math::asin`] (8 lanes and more) or
+    /// [`crate::math::asin`] per lane: the same bits.
+    #[inline(always)]
+    fn asin(self) -> Self {
+        if N >= 8 {
+            Self(crate::lanes_math::asin(self.0))
+        } else {
+            self.map(crate::math::asin)
+        }
+    }
+    /// [`crate::lanes_math::acos`] (8 lanes and more) or
+    /// [`crate::math::acos`] per lane: the same bits.
+    #[inline(always)]
+    fn acos(self) -> Self {
+        if N >= 8 {
+            Self(crate::lanes_math::acos(self.0))
+        } else {
+            self.map(crate::math::acos)
+        }
+    }
+    /// [`crate::lanes_math::atan`] (8 lanes and more) or
+    /// [`crate::math::atan`] per lane: the same bits.
+    #[inline(always)]
+    fn atan(self) -> Self {
+        if N >= 8 {
+            Self(crate::lanes_math::atan(self.0))
+        } else {
+            self.map(crate::math::atan)
+        }
+    }
+    /// [`crate::lanes_math::atan2`] (8 lanes and more) or
+    /// [`crate::math::atan2`] per lane: the same bits.
+    #[inline(always)]
+    fn atan2(self, x: Self) -> Self {
+        if N >= 8 {
+            Self(crate::lanes_math::atan2(self.0, x.0))
+        } else {
+            self.map2(x, crate::math::atan2)
+        }
+    }
 }
 
 // ---------------------------------------------------------------- composites

@@ -28,6 +28,7 @@ pub mod elementary;
 pub mod ftaftsmc;
 pub mod kinematics;
 pub mod lanes;
+pub mod lanes_math;
 pub mod law;
 pub mod math;
 pub mod measured;
