@@ -9,8 +9,10 @@
 //! a computation on `Lanes<N>` has exactly the bits of the same computation
 //! on `f64` with lane `i`'s inputs** — whatever `N`, whatever the lane and
 //! whatever vector width the CPU offers. Transcendental functions are the
-//! one maths library's ([`crate::elementary`]) called lane by lane, never a vector
-//! approximation.
+//! one maths library's ([`crate::elementary`]), never a vector
+//! approximation: called lane by lane, or, where that is faster, the lane
+//! ports of the same algorithms ([`crate::lanes_math`]), which perform
+//! `libm`'s operations in `libm`'s order on every lane and so give its bits.
 //!
 //! # Branches
 //!
@@ -607,27 +609,27 @@ impl<const N: usize> Real for Lanes<N> {
     // at every width; the others only at 8 lanes and more (with AVX2);
     // below that the scalar calls are faster, so they stay.
     /// [`crate::lanes_math::sin`] (8 lanes and more) or
-    /// [`crate::math::sin`] per lane: the same bits.
+    /// [`crate::elementary::sin`] per lane: the same bits.
     #[inline(always)]
     fn sin(self) -> Self {
         if N >= 8 {
             Self(crate::lanes_math::sin(self.0))
         } else {
-            self.map(crate::math::sin)
+            self.map(crate::elementary::sin)
         }
     }
     /// [`crate::lanes_math::cos`] (8 lanes and more) or
-    /// [`crate::math::cos`] per lane: the same bits.
+    /// [`crate::elementary::cos`] per lane: the same bits.
     #[inline(always)]
     fn cos(self) -> Self {
         if N >= 8 {
             Self(crate::lanes_math::cos(self.0))
         } else {
-            self.map(crate::math::cos)
+            self.map(crate::elementary::cos)
         }
     }
     /// [`crate::lanes_math::sin_cos`] (8 lanes and more) or
-    /// [`crate::math::sin_cos`] per lane: the same bits.
+    /// [`crate::elementary::sin_cos`] per lane: the same bits.
     #[inline(always)]
     fn sin_cos(self) -> (Self, Self) {
         if N >= 8 {
@@ -637,64 +639,64 @@ impl<const N: usize> Real for Lanes<N> {
             let mut s = self;
             let mut c = self;
             for i in 0..N {
-                (s.0[i], c.0[i]) = crate::math::sin_cos(self.0[i]);
+                (s.0[i], c.0[i]) = crate::elementary::sin_cos(self.0[i]);
             }
             (s, c)
         }
     }
     /// [`crate::lanes_math::exp`] (8 lanes and more) or
-    /// [`crate::math::exp`] per lane: the same bits.
+    /// [`crate::elementary::exp`] per lane: the same bits.
     #[inline(always)]
     fn exp(self) -> Self {
         if N >= 8 {
             Self(crate::lanes_math::exp(self.0))
         } else {
-            self.map(crate::math::exp)
+            self.map(crate::elementary::exp)
         }
     }
-    /// [`crate::lanes_math::ln`]: [`crate::math::ln`]'s bits per lane.
+    /// [`crate::lanes_math::ln`]: [`crate::elementary::ln`]'s bits per lane.
     #[inline(always)]
     fn ln(self) -> Self {
         Self(crate::lanes_math::ln(self.0))
     }
     /// [`crate::lanes_math::asin`] (8 lanes and more) or
-    /// [`crate::math::asin`] per lane: the same bits.
+    /// [`crate::elementary::asin`] per lane: the same bits.
     #[inline(always)]
     fn asin(self) -> Self {
         if N >= 8 {
             Self(crate::lanes_math::asin(self.0))
         } else {
-            self.map(crate::math::asin)
+            self.map(crate::elementary::asin)
         }
     }
     /// [`crate::lanes_math::acos`] (8 lanes and more) or
-    /// [`crate::math::acos`] per lane: the same bits.
+    /// [`crate::elementary::acos`] per lane: the same bits.
     #[inline(always)]
     fn acos(self) -> Self {
         if N >= 8 {
             Self(crate::lanes_math::acos(self.0))
         } else {
-            self.map(crate::math::acos)
+            self.map(crate::elementary::acos)
         }
     }
     /// [`crate::lanes_math::atan`] (8 lanes and more) or
-    /// [`crate::math::atan`] per lane: the same bits.
+    /// [`crate::elementary::atan`] per lane: the same bits.
     #[inline(always)]
     fn atan(self) -> Self {
         if N >= 8 {
             Self(crate::lanes_math::atan(self.0))
         } else {
-            self.map(crate::math::atan)
+            self.map(crate::elementary::atan)
         }
     }
     /// [`crate::lanes_math::atan2`] (8 lanes and more) or
-    /// [`crate::math::atan2`] per lane: the same bits.
+    /// [`crate::elementary::atan2`] per lane: the same bits.
     #[inline(always)]
     fn atan2(self, x: Self) -> Self {
         if N >= 8 {
             Self(crate::lanes_math::atan2(self.0, x.0))
         } else {
-            self.map2(x, crate::math::atan2)
+            self.map2(x, crate::elementary::atan2)
         }
     }
 }

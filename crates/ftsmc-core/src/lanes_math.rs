@@ -38,7 +38,7 @@
 // compare them line by line; the tests check every kernel's bits.
 #![allow(clippy::excessive_precision, clippy::approx_constant)]
 
-use crate::math;
+use crate::elementary as math;
 
 // ------------------------------------------------------------------ helpers
 
