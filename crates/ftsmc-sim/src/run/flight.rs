@@ -271,6 +271,20 @@ fn recycle<'a, 'b>(mut v: Vec<Substep<'a>>) -> Vec<Substep<'b>> {
     v.into_iter().map(|_| unreachable!("emptied")).collect()
 }
 
+/// Lane `i` of `x` as its one-flight form: `x` itself when it is already
+/// one flight (`R = f64`: no copy), else lane `i` copied into `slot`.
+#[inline(always)]
+fn lane_ref<'a, T>(x: &'a T, i: usize, slot: &'a mut Option<T::Scalar>) -> &'a T::Scalar
+where
+    T: Lanewise + 'static,
+    T::Scalar: 'static,
+{
+    match (x as &dyn core::any::Any).downcast_ref::<T::Scalar>() {
+        Some(one) => one,
+        None => slot.insert(x.get_lane(i)),
+    }
+}
+
 /// Why a flight of `scenario` cannot start in a lane.
 fn refusal(scenario: &Scenario, why: LaneStart) -> Divergence {
     match why {
@@ -509,12 +523,13 @@ impl<'s, C: Controller<R> + ?Sized, R: Real> Flight<'s, C, R> {
     }
 
     fn lane_boundary(&mut self, i: usize, t: f64) {
-        let s = self.state.get_lane(i);
-        let r = self.reference.get_lane(i);
-        self.lanes[i].boundary(t, &s, &r);
+        let (mut s_slot, mut r_slot) = (None, None);
+        let s = lane_ref(&self.state, i, &mut s_slot);
+        let r = lane_ref(&self.reference, i, &mut r_slot);
+        self.lanes[i].boundary(t, s, r);
         if R::LANES == 1 {
             for o in &mut self.observers {
-                o.boundary(t, &s, &r);
+                o.boundary(t, s, r);
             }
         }
     }
@@ -616,29 +631,22 @@ impl<'s, C: Controller<R> + ?Sized, R: Real> Flight<'s, C, R> {
                 lane.exit = Some(ExitStatus::Diverged { divergence: Divergence::NonFinite, time: t });
                 continue;
             }
-            let state = self.state.get_lane(i);
-            let x = state.to_array();
-            let reference = self.reference.get_lane(i);
-            // One flight: the telemetry itself; lanes: lane i's copy.
-            let telemetry_copy;
-            let telemetry_i: &Telemetry = match (telemetry as &dyn core::any::Any).downcast_ref::<Telemetry>() {
-                Some(one) => one,
-                None => {
-                    telemetry_copy = telemetry.get_lane(i);
-                    &telemetry_copy
-                }
-            };
-            let measured_i = measured.euler.get_lane(i);
-            let command_i: Command = command.get_lane(i);
+            // One flight: the values themselves; lanes: lane i's copies.
+            let (mut s_slot, mut r_slot, mut t_slot, mut m_slot, mut c_slot) = (None, None, None, None, None);
+            let x = lane_ref(&self.state, i, &mut s_slot).to_array();
+            let reference = lane_ref(&self.reference, i, &mut r_slot);
+            let telemetry_i: &Telemetry = lane_ref(telemetry, i, &mut t_slot);
+            let measured_i = lane_ref(&measured.euler, i, &mut m_slot);
+            let command_i: &Command = lane_ref(&command, i, &mut c_slot);
             let tick = Tick {
                 k: lane.k,
                 t,
                 state: x,
-                measured: &measured_i,
-                reference: &reference,
+                measured: measured_i,
+                reference,
                 telemetry: telemetry_i,
-                errors: tracking_errors(&x, &reference, telemetry_i),
-                command: &command_i,
+                errors: tracking_errors(&x, reference, telemetry_i),
+                command: command_i,
                 applied: u,
                 omega: delivered.omega,
                 omega_bar: residual_speed(&delivered.omega),
@@ -732,10 +740,11 @@ impl<'s, C: Controller<R> + ?Sized, R: Real> Flight<'s, C, R> {
             }
             let t_next = self.lanes[i].k as f64 * self.lanes[i].dt;
             self.lane_boundary(i, t_next);
-            let state = self.state.get_lane(i);
-            let reference = self.reference.get_lane(i);
+            let (mut s_slot, mut r_slot) = (None, None);
+            let state = lane_ref(&self.state, i, &mut s_slot);
+            let reference = lane_ref(&self.reference, i, &mut r_slot);
             let lane = &mut self.lanes[i];
-            if let Some(divergence) = check_divergence(lane.scenario, &state.to_array(), &reference) {
+            if let Some(divergence) = check_divergence(lane.scenario, &state.to_array(), reference) {
                 lane.exit = Some(ExitStatus::Diverged { divergence, time: t_next });
             } else if lane.k >= lane.steps {
                 lane.exit = Some(ExitStatus::Completed);
