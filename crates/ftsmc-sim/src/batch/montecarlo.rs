@@ -92,9 +92,18 @@ pub const LANE_COUNTS: [usize; 4] = [1, 2, 4, 8];
 /// lanes, one AVX2 register.
 pub const DEFAULT_LANES: usize = 4;
 
-/// Runs a worker takes at a time: enough to keep its lanes full as flights
-/// end at different times, few enough to share a batch out among threads.
+/// Most runs a worker takes at a time: enough to keep its lanes full as
+/// flights end at different times ([`runs_per_task`]).
 const RUNS_PER_TASK: usize = 16;
+
+/// Runs per work item for `runs` runs on `lanes` lanes: at least one lane
+/// set, at most [`RUNS_PER_TASK`], and small enough that every thread of
+/// the pool gets about two items (a short batch still uses every core).
+/// The rows do not depend on it.
+fn runs_per_task(runs: usize, lanes: usize) -> usize {
+    let share = runs.div_ceil(2 * rayon::current_num_threads().max(1));
+    share.clamp(lanes.max(1), RUNS_PER_TASK.max(lanes))
+}
 
 /// [`run_batch_range`] flying `lanes` flights side by side
 /// ([`crate::run::Flight::new_lanes`]; one of [`LANE_COUNTS`], 1 flies each
@@ -121,7 +130,7 @@ pub fn run_batch_lanes(
     let options = RunOptions { record: false, progress: Some(progress), cancel };
     let indices: Vec<u64> = indices.collect();
     let rows: Vec<Vec<McRun>> = indices
-        .par_chunks(RUNS_PER_TASK)
+        .par_chunks(runs_per_task(indices.len(), lanes))
         .map(|chunk| {
             if options.cancelled() {
                 return Vec::new();
