@@ -108,7 +108,7 @@ use crate::law::{
 use crate::math::{cross, dot, exp, mat_t_vec, norm, Mat3, Vec3};
 use crate::measured::{BodyAttitude, Measurement};
 use crate::model::{Command, QuadState, QuadrotorParams, Reference};
-use crate::setpoint::{reference_finite, HeadingSinCos, TiltLimit};
+use crate::setpoint::{finite_lanes, nan_command, HeadingSinCos, TiltLimit};
 
 /// PX4 `MPC_THR_HOVER` default: hover at half the maximum thrust (T/W = 2).
 pub const PX4_HOVER_THRUST: f64 = 0.5;
@@ -606,25 +606,16 @@ impl<R: Real> PidController<R> {
         reference: &Reference<R>,
         dt: f64,
     ) -> Command<R> {
-        let nan = Command { thrust: R::splat(f64::NAN), torque: [R::splat(f64::NAN); 3] };
-        if !dt.is_finite() {
-            return nan;
-        }
-        let mut ok = state.is_finite();
-        if let Some(b) = attitude {
-            ok = ok & b.is_finite();
-        }
-        ok = ok & reference_finite(reference);
-        if !ok.any() {
-            return nan;
-        }
+        let Some(ok) = finite_lanes(dt, state, attitude, reference) else {
+            return nan_command();
+        };
         if ok.all() {
             return self.law(state, attitude, reference, dt);
         }
         let saved = self.clone();
         let command = self.law(state, attitude, reference, dt);
         self.keep_lanes(!ok, &saved);
-        Command::blend(ok, command, nan)
+        Command::blend(ok, command, nan_command())
     }
 
     /// Restore the per-lane states of `saved` in the lanes of `keep`.

@@ -59,7 +59,7 @@ use crate::law::{check_closed, check_gain, check_left_open, saturate, GainError,
 use crate::math::{cross, dot, mat_t_mat, mat_t_vec, mat_vec, norm, Mat3, Vec3};
 use crate::measured::{BodyAttitude, Measurement};
 use crate::model::{Command, QuadState, QuadrotorParams, Reference};
-use crate::setpoint::{reference_finite, HeadingSinCos, TiltLimit};
+use crate::setpoint::{finite_lanes, nan_command, HeadingSinCos, TiltLimit};
 
 /// Gains of [`Se3Controller`]. `Default` is [`Se3Gains::for_vehicle`] of the
 /// paper's quadrotor ([`QuadrotorParams::default`]).
@@ -282,25 +282,16 @@ impl<R: Real> Se3Controller<R> {
         reference: &Reference<R>,
         dt: f64,
     ) -> Command<R> {
-        let nan = Command { thrust: R::splat(f64::NAN), torque: [R::splat(f64::NAN); 3] };
-        if !dt.is_finite() {
-            return nan;
-        }
-        let mut ok = state.is_finite();
-        if let Some(b) = attitude {
-            ok = ok & b.is_finite();
-        }
-        ok = ok & reference_finite(reference);
-        if !ok.any() {
-            return nan;
-        }
+        let Some(ok) = finite_lanes(dt, state, attitude, reference) else {
+            return nan_command();
+        };
         if ok.all() {
             return self.law(state, attitude, reference);
         }
         let saved = self.telemetry;
         let command = self.law(state, attitude, reference);
         self.telemetry = Blend::blend(ok, self.telemetry, saved);
-        Command::blend(ok, command, nan)
+        Command::blend(ok, command, nan_command())
     }
 
     /// The law of the [module docs](self) on finite inputs: `R` and `Ω`

@@ -5,9 +5,10 @@
 //! controller imports the other for them. Generic over the number type
 //! ([`crate::lanes`]): the same bits per lane as on `f64`.
 
-use crate::lanes::{branch, Real};
+use crate::lanes::{branch, Mask, Real};
 use crate::math::{cos, finite_probe, sin, Vec3};
-use crate::model::Reference;
+use crate::measured::BodyAttitude;
+use crate::model::{Command, QuadState, Reference};
 
 /// The tilt limit of a thrust direction with `cos(max_tilt)` and
 /// `sin(max_tilt)` taken once (the limit is a gain, constant over a flight
@@ -55,6 +56,33 @@ pub(crate) fn reference_finite<R: Real>(r: &Reference<R>) -> R::Mask {
         + finite_probe(&r.acceleration)
         + finite_probe(&[r.yaw, r.yaw_rate, r.yaw_acceleration]))
     .eq(R::splat(0.0))
+}
+
+/// Which lanes of a full-state controller's inputs are finite (state,
+/// body attitude when given, reference); `None` when `dt` is not finite or
+/// no lane is (every lane then gets [`nan_command`] and keeps its states).
+#[inline(always)]
+pub(crate) fn finite_lanes<R: Real>(
+    dt: f64,
+    state: &QuadState<R>,
+    attitude: Option<&BodyAttitude<R>>,
+    reference: &Reference<R>,
+) -> Option<R::Mask> {
+    if !dt.is_finite() {
+        return None;
+    }
+    let mut ok = state.is_finite();
+    if let Some(b) = attitude {
+        ok = ok & b.is_finite();
+    }
+    ok = ok & reference_finite(reference);
+    ok.any().then_some(ok)
+}
+
+/// The command of a lane whose inputs are not finite: NaN thrust and torques.
+#[inline(always)]
+pub(crate) fn nan_command<R: Real>() -> Command<R> {
+    Command { thrust: R::splat(f64::NAN), torque: [R::splat(f64::NAN); 3] }
 }
 
 /// `(sin ψ, cos ψ)` of the last heading ψ (rad), per lane: recomputed
