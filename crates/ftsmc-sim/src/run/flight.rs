@@ -142,9 +142,9 @@ struct Lane<'s> {
 }
 
 impl<'s> Lane<'s> {
-    /// The flight of `scenario` at `t = 0`, its allocation set up; the
-    /// reference at `t = 0`; why the truth cannot fly it.
-    fn new(scenario: &'s Scenario, options: &RunOptions<'_>, recorder: Recorder) -> (Self, Reference) {
+    /// The flight of `scenario` at `t = 0` (its actuator stage built from
+    /// the truth model's allocation) and its reference at `t = 0`.
+    fn new(scenario: &'s Scenario, recorder: Recorder) -> (Self, Reference) {
         let sim = &scenario.simulation;
         let dt = scenario.control_period();
         let steps = super::planned_steps(scenario);
@@ -167,7 +167,6 @@ impl<'s> Lane<'s> {
         let tv_now = env.time_varying_on_grid(0, 0.0);
         let mut reference_grid = ReferenceGrid::new(scenario, dt);
         let reference = reference_grid.at(0, 0.0);
-        let _ = options;
         let lane = Self {
             scenario,
             dt,
@@ -418,7 +417,7 @@ impl<'s, C: Controller<R> + ?Sized, R: Real> Flight<'s, C, R> {
         for (i, &scenario) in scenarios.iter().enumerate() {
             let steps = super::planned_steps(scenario);
             let recorder = Recorder::new(scenario, options.record && R::LANES == 1, steps, &*controller);
-            let (mut lane, r) = Lane::new(scenario, &options, recorder);
+            let (mut lane, r) = Lane::new(scenario, recorder);
             if let Err(why) = truth.start_lane(i, scenario) {
                 lane.exit = Some(ExitStatus::Diverged { divergence: refusal(scenario, why), time: 0.0 });
                 refused.push(i);
@@ -459,7 +458,7 @@ impl<'s, C: Controller<R> + ?Sized, R: Real> Flight<'s, C, R> {
     pub fn start_lane(&mut self, lane: usize, scenario: &'s Scenario) {
         let steps = super::planned_steps(scenario);
         let recorder = Recorder::new(scenario, false, steps, &*self.controller);
-        let (mut fresh, r) = Lane::new(scenario, &self.options, recorder);
+        let (mut fresh, r) = Lane::new(scenario, recorder);
         let started = self.truth.start_lane(lane, scenario);
         if let Err(why) = started {
             fresh.exit = Some(ExitStatus::Diverged { divergence: refusal(scenario, why), time: 0.0 });
@@ -480,7 +479,7 @@ impl<'s, C: Controller<R> + ?Sized, R: Real> Flight<'s, C, R> {
     pub fn lane_output(&mut self, lane: usize) -> RunOutput {
         let scenario = self.lanes[lane].scenario;
         let recorder = Recorder::new(scenario, false, 0, &*self.controller);
-        let (mut idle, _) = Lane::new(scenario, &self.options, recorder);
+        let (mut idle, _) = Lane::new(scenario, recorder);
         idle.exit = Some(ExitStatus::Completed);
         idle.k = idle.steps;
         let done = core::mem::replace(&mut self.lanes[lane], idle);
