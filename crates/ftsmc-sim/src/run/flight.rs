@@ -18,7 +18,6 @@
 //!    RK4 substeps ([`super::truth`]), with the wind sampled once per
 //!    substep and the ground checked after each.
 //! 7. The next reference; divergence checks.
-
 //!
 //! # Lanes
 //!
