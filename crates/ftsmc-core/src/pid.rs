@@ -495,8 +495,13 @@ impl<R: Real> PidController<R> {
     pub fn splat(model: QuadrotorParams, gains: PidGains) -> Result<Self, GainError> {
         model.check()?;
         gains.check()?;
+        Ok(Self::initial(model, gains))
+    }
+
+    /// Every lane at its initial states, for checked `model` and `gains`.
+    fn initial(model: QuadrotorParams, gains: PidGains) -> Self {
         let zero = [R::splat(0.0); 3];
-        Ok(Self {
+        Self {
             model,
             gains,
             velocity_integral: zero,
@@ -513,7 +518,7 @@ impl<R: Real> PidController<R> {
             alpha_dt: f64::NAN.to_bits(),
             tilt_limit: TiltLimit::new(gains.max_tilt),
             yaw_sin_cos: HeadingSinCos::new(),
-        })
+        }
     }
 
     /// The gains in use.
@@ -848,24 +853,13 @@ impl<R: Real> Controller<R> for PidController<R> {
     }
 
     fn reset(&mut self) {
-        let zero = [R::splat(0.0); 3];
+        // The filter weights of the last `dt` and the heading cache are
+        // kept: they hold no flight state.
         *self = Self {
-            model: self.model,
-            gains: self.gains,
-            velocity_integral: zero,
-            rate_integral: zero,
-            previous_velocity: zero,
-            previous_rates: zero,
-            velocity_derivative: zero,
-            rate_derivative: zero,
-            initialised: R::Mask::splat(false),
-            last_torque: zero,
-            actuator_saturated: R::Mask::splat(false),
-            telemetry: Telemetry::default(),
             alphas: self.alphas,
             alpha_dt: self.alpha_dt,
-            tilt_limit: self.tilt_limit,
             yaw_sin_cos: self.yaw_sin_cos,
+            ..Self::initial(self.model, self.gains)
         };
     }
 
