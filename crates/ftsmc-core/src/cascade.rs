@@ -533,7 +533,9 @@ impl<R: Real, L: AxisLaw<R>> Cascade<L, R> {
                     let current = self.filter[i];
                     let f = branch(
                         current.initialised,
+                        #[inline(always)]
                         || current,
+                        #[inline(always)]
                         || match init {
                             FilterInit::FirstDemand => {
                                 FilterState { value: demand[i], rate: zero, initialised: R::Mask::splat(true) }

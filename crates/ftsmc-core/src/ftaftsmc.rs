@@ -326,8 +326,18 @@ fn gain_shaping_c<R: Real>(g: &FtaftsmcGains, c: &Constants, e: R, e_dot: R) -> 
     let zero = R::splat(0.0);
     let pow = branch(
         decay.eq(zero),
+        #[inline(always)]
         || zero,
-        || branch(e.eq(zero), || pow_abs_minus_one(e, g.aleph3), || c.aleph3_minus_one.abs(e)),
+        #[inline(always)]
+        || {
+            branch(
+                e.eq(zero),
+                #[inline(always)]
+                || pow_abs_minus_one(e, g.aleph3),
+                #[inline(always)]
+                || c.aleph3_minus_one.abs(e),
+            )
+        },
     );
     let y_dot = decay * (1.0 - g.aleph1) * g.aleph2 * g.aleph3 * pow * e_dot * sgn(e) / (den * den);
     (y, y_dot)
@@ -358,10 +368,12 @@ fn nonsingular_term_c<R: Real>(g: &FtaftsmcGains, c: &Constants, e: R, e_dot: R)
     let ae = e.abs();
     branch(
         ae.gt(R::splat(g.epsilon)),
+        #[inline(always)]
         || {
             let pow_p = c.p.abs(e);
             (pow_p * sgn(e), e_dot * g.p * pow_p / ae)
         },
+        #[inline(always)]
         || (e * kappa1 + sig2(e) * kappa2, e_dot * kappa1 + ae * (2.0 * kappa2) * e_dot),
     )
 }
@@ -386,7 +398,13 @@ fn sliding_surface_c<R: Real>(g: &FtaftsmcGains, c: &Constants, e: R, e_dot: R) 
     // λ sig^q(e) + γ S_Δ + η e
     let shape = pow_q * g.lambda * sgn(e) + s_delta * g.gamma + e * g.eta;
     // d/dt of the same bracket: λ q |e|^(q−1) ė + γ Ṡ_Δ + η ė
-    let pow_q_minus_one = branch(e.eq(R::splat(0.0)), || pow_abs_minus_one(e, g.q), || pow_q / e.abs());
+    let pow_q_minus_one = branch(
+        e.eq(R::splat(0.0)),
+        #[inline(always)]
+        || pow_abs_minus_one(e, g.q),
+        #[inline(always)]
+        || pow_q / e.abs(),
+    );
     let shape_dot = pow_q_minus_one * (g.lambda * g.q) * e_dot + s_delta_dot * g.gamma + e_dot * g.eta;
     SurfaceTerms { y, y_dot, s_delta, s_delta_dot, s: e_dot + y * shape, varpi: -y_dot * shape - y * shape_dot }
 }

@@ -15,6 +15,7 @@ use crate::math::{Mat3, Vec3};
 /// Body-to-world rotation `R = R_z(ψ) R_y(θ) R_x(φ)` of Z-Y-X Euler angles
 /// `[φ, θ, ψ]` (rad); its third column `R e₃` is the thrust direction of
 /// paper Eq. 1 (`cφ sθ cψ + sφ sψ`, `cφ sθ sψ − sφ cψ`, `cφ cθ`).
+#[inline(always)]
 pub fn rotation_from_euler<R: Real>(euler: &Vec3<R>) -> Mat3<R> {
     let (sf, cf) = euler[0].sin_cos();
     let (st, ct) = euler[1].sin_cos();
@@ -29,6 +30,7 @@ pub fn rotation_from_euler<R: Real>(euler: &Vec3<R>) -> Mat3<R> {
 /// Z-Y-X Euler angles `[φ, θ, ψ]` (rad) of a rotation matrix: φ, ψ in
 /// `[−π, π]`, θ in `[−π/2, π/2]` (inverse of [`rotation_from_euler`] away
 /// from θ = ±π/2).
+#[inline(always)]
 pub fn euler_from_rotation<R: Real>(r: &Mat3<R>) -> Vec3<R> {
     // `saturate`, not `f64::clamp`: no panic path, NaN passes through.
     let s = crate::law::saturate(-r[2][0], R::splat(1.0));
@@ -47,7 +49,7 @@ pub fn roll_pitch_from_rotation<R: Real>(r: &Mat3<R>) -> [R; 2] {
 /// Body rates `Ω = W(φ, θ) η̇` (rad/s) from Z-Y-X Euler rates `η̇` at
 /// `euler`: `p = φ̇ − ψ̇ sθ`, `q = θ̇ cφ + ψ̇ cθ sφ`, `r = −θ̇ sφ + ψ̇ cθ cφ`.
 /// Exact, defined everywhere.
-#[inline]
+#[inline(always)]
 pub fn body_rates_from_euler_rates<R: Real>(euler: &Vec3<R>, rates: &Vec3<R>) -> Vec3<R> {
     let (sf, cf) = euler[0].sin_cos();
     let (st, ct) = euler[1].sin_cos();
@@ -101,7 +103,7 @@ pub fn gimbal_clamped_cos<R: Real>(c: R) -> R {
 
 /// Body-to-world rotation matrix of a unit quaternion `[w, x, y, z]`
 /// (`v_w = R v_b`; no trigonometry).
-#[inline]
+#[inline(always)]
 pub fn rotation_from_quaternion<R: Real>(q: &[R; 4]) -> Mat3<R> {
     let [w, x, y, z] = *q;
     let one = R::splat(1.0);

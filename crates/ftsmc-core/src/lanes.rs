@@ -377,6 +377,18 @@ impl<const N: usize> Default for Lanes<N> {
     }
 }
 
+/// `[f(0), …, f(N − 1)]` by a plain loop (always inlined, unlike
+/// `core::array::from_fn`, whose out-of-line instances would leave lane
+/// arithmetic outside the dispatched kernels).
+#[inline(always)]
+fn lanes_of<const N: usize>(mut f: impl FnMut(usize) -> f64) -> [f64; N] {
+    let mut out = [0.0; N];
+    for (i, v) in out.iter_mut().enumerate() {
+        *v = f(i);
+    }
+    out
+}
+
 #[inline(always)]
 fn mask_bits(b: bool) -> u64 {
     (b as u64).wrapping_neg()
@@ -528,7 +540,7 @@ impl<const N: usize> Neg for Lanes<N> {
     type Output = Self;
     #[inline(always)]
     fn neg(self) -> Self {
-        Self(self.0.map(|v| -v))
+        Self(lanes_of(|i| -self.0[i]))
     }
 }
 
@@ -541,15 +553,15 @@ impl<const N: usize> Real for Lanes<N> {
     }
     #[inline(always)]
     fn from_fn(f: impl FnMut(usize) -> f64) -> Self {
-        Self(core::array::from_fn(f))
+        Self(lanes_of(f))
     }
     #[inline(always)]
     fn sqrt(self) -> Self {
-        Self(self.0.map(crate::elementary::sqrt))
+        Self(lanes_of(|i| crate::elementary::sqrt(self.0[i])))
     }
     #[inline(always)]
     fn abs(self) -> Self {
-        Self(self.0.map(f64::abs))
+        Self(lanes_of(|i| self.0[i].abs()))
     }
     #[inline(always)]
     fn min(self, o: Self) -> Self {
@@ -597,11 +609,11 @@ impl<const N: usize> Real for Lanes<N> {
     }
     #[inline(always)]
     fn map(self, f: impl Fn(f64) -> f64) -> Self {
-        Self(self.0.map(f))
+        Self(lanes_of(|i| f(self.0[i])))
     }
     #[inline(always)]
     fn map2(self, o: Self, f: impl Fn(f64, f64) -> f64) -> Self {
-        Self(core::array::from_fn(|i| f(self.0[i], o.0[i])))
+        Self(lanes_of(|i| f(self.0[i], o.0[i])))
     }
     // The kernels of `lanes_math` give the bits of the scalar functions
     // on every lane, so which one runs is a matter of speed only. Measured
@@ -720,7 +732,11 @@ impl<T: Lanewise, const K: usize> Lanewise for [T; K] {
 impl<M: Copy, T: Blend<M> + Copy, const K: usize> Blend<M> for [T; K] {
     #[inline(always)]
     fn blend(m: M, a: Self, b: Self) -> Self {
-        core::array::from_fn(|k| T::blend(m, a[k], b[k]))
+        let mut out = a;
+        for k in 0..K {
+            out[k] = T::blend(m, a[k], b[k]);
+        }
+        out
     }
 }
 
@@ -799,21 +815,21 @@ macro_rules! lanewise_struct {
     ($name:ident { $($field:ident),* $(,)? } $(shared { $($shared:ident),* $(,)? })?) => {
         impl<R: $crate::lanes::Real> $crate::lanes::Lanewise for $name<R> {
             type Scalar = $name<f64>;
-            #[inline]
+            #[inline(always)]
             fn get_lane(&self, i: usize) -> $name<f64> {
                 $name {
                     $($field: $crate::lanes::Lanewise::get_lane(&self.$field, i),)*
                     $($($shared: ::core::clone::Clone::clone(&self.$shared),)*)?
                 }
             }
-            #[inline]
+            #[inline(always)]
             fn put_lane(&mut self, i: usize, v: $name<f64>) {
                 $($crate::lanes::Lanewise::put_lane(&mut self.$field, i, v.$field);)*
                 $($(self.$shared = v.$shared;)*)?
             }
         }
         impl<R: $crate::lanes::Real> $crate::lanes::Blend<R::Mask> for $name<R> {
-            #[inline]
+            #[inline(always)]
             fn blend(m: R::Mask, a: Self, b: Self) -> Self {
                 $name {
                     $($field: $crate::lanes::Blend::blend(m, a.$field, b.$field),)*
@@ -902,10 +918,12 @@ mod tests {
         };
         let y = branch(
             Real::gt(x, Lanes::splat(0.0)),
+            #[inline(always)]
             || {
                 count(true);
                 Real::sqrt(x)
             },
+            #[inline(always)]
             || {
                 count(false);
                 -x
@@ -916,17 +934,25 @@ mod tests {
         calls.set((0, 0));
         let _ = branch(
             Real::gt(x, Lanes::splat(-10.0)),
+            #[inline(always)]
             || {
                 count(true);
                 x
             },
+            #[inline(always)]
             || {
                 count(false);
                 x
             },
         );
         assert_eq!(calls.get(), (1, 0));
-        let s = branch(2.0 > 1.0, || 1.0, || f64::NAN);
+        let s = branch(
+            2.0 > 1.0,
+            #[inline(always)]
+            || 1.0,
+            #[inline(always)]
+            || f64::NAN,
+        );
         assert_eq!(s, 1.0);
     }
 

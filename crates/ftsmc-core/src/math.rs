@@ -170,7 +170,13 @@ pub fn sig<R: Real>(x: R, a: f64) -> R {
 #[inline]
 pub fn pow_abs_minus_one<R: Real>(x: R, a: f64) -> R {
     let at_zero = R::splat(if a == 1.0 { 1.0 } else { 0.0 });
-    crate::lanes::branch(x.eq(R::splat(0.0)), || at_zero, || pow_abs(x, a - 1.0))
+    crate::lanes::branch(
+        x.eq(R::splat(0.0)),
+        #[inline(always)]
+        || at_zero,
+        #[inline(always)]
+        || pow_abs(x, a - 1.0),
+    )
 }
 
 use crate::lanes::Real;
@@ -240,7 +246,7 @@ pub fn dot<R: Real>(a: &Vec3<R>, b: &Vec3<R>) -> R {
 }
 
 /// `a × b`.
-#[inline]
+#[inline(always)]
 pub fn cross<R: Real>(a: &Vec3<R>, b: &Vec3<R>) -> Vec3<R> {
     [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
 }

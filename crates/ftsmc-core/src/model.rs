@@ -124,7 +124,7 @@ crate::lanewise_struct!(QuadState { position, attitude, velocity, angular_rate }
 impl<R: Real> QuadState<R> {
     /// True (per lane) when all twelve components are finite (branch-free,
     /// [`crate::math::finite_probe`]).
-    #[inline]
+    #[inline(always)]
     pub fn is_finite(&self) -> R::Mask {
         use crate::math::finite_probe;
         (finite_probe(&self.position)

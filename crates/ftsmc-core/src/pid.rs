@@ -340,7 +340,13 @@ fn quat_conj<R: Real>(q: &Quat<R>) -> Quat<R> {
 #[inline(always)]
 fn quat_normalise<R: Real>(q: Quat<R>) -> Quat<R> {
     let n = (q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]).sqrt();
-    branch(n.gt(R::splat(0.0)), || [q[0] / n, q[1] / n, q[2] / n, q[3] / n], || unit_quat())
+    branch(
+        n.gt(R::splat(0.0)),
+        #[inline(always)]
+        || [q[0] / n, q[1] / n, q[2] / n, q[3] / n],
+        #[inline(always)]
+        || unit_quat(),
+    )
 }
 
 /// The identity rotation `[1, 0, 0, 0]`.
@@ -353,7 +359,13 @@ fn unit_quat<R: Real>() -> Quat<R> {
 /// `q` or `−q`, whichever has `w >= 0` (the shorter rotation).
 #[inline(always)]
 fn canonical<R: Real>(q: Quat<R>) -> Quat<R> {
-    branch(q[0].lt(R::splat(0.0)), || [-q[0], -q[1], -q[2], -q[3]], || q)
+    branch(
+        q[0].lt(R::splat(0.0)),
+        #[inline(always)]
+        || [-q[0], -q[1], -q[2], -q[3]],
+        #[inline(always)]
+        || q,
+    )
 }
 
 /// Quaternion of a rotation matrix (Shepperd's method: largest pivot).
@@ -366,24 +378,30 @@ fn quat_from_rotation<R: Real>(r: &Mat3<R>) -> Quat<R> {
     // sum `1 + trace` with their operands swapped (same bits).
     let q = branch(
         trace.gt(zero),
+        #[inline(always)]
         || {
             let s = (trace + 1.0).sqrt() * 2.0;
             [s * 0.25, (r[2][1] - r[1][2]) / s, (r[0][2] - r[2][0]) / s, (r[1][0] - r[0][1]) / s]
         },
+        #[inline(always)]
         || {
             branch(
                 r[0][0].gt(r[1][1]) & r[0][0].gt(r[2][2]),
+                #[inline(always)]
                 || {
                     let s = (one + r[0][0] - r[1][1] - r[2][2]).max(zero).sqrt() * 2.0;
                     [(r[2][1] - r[1][2]) / s, s * 0.25, (r[0][1] + r[1][0]) / s, (r[0][2] + r[2][0]) / s]
                 },
+                #[inline(always)]
                 || {
                     branch(
                         r[1][1].gt(r[2][2]),
+                        #[inline(always)]
                         || {
                             let s = (one + r[1][1] - r[0][0] - r[2][2]).max(zero).sqrt() * 2.0;
                             [(r[0][2] - r[2][0]) / s, (r[0][1] + r[1][0]) / s, s * 0.25, (r[1][2] + r[2][1]) / s]
                         },
+                        #[inline(always)]
                         || {
                             let s = (one + r[2][2] - r[0][0] - r[1][1]).max(zero).sqrt() * 2.0;
                             [(r[1][0] - r[0][1]) / s, (r[0][2] + r[2][0]) / s, (r[1][2] + r[2][1]) / s, s * 0.25]
@@ -406,10 +424,16 @@ fn quat_between<R: Real>(u: &Vec3<R>, v: &Vec3<R>) -> Quat<R> {
     let d = dot(u, v);
     branch(
         norm(&c).lt(R::splat(1e-9)) & d.lt(zero),
+        #[inline(always)]
         || {
             // Half turn about the axis perpendicular to u with the smallest components.
-            let axis =
-                branch(u[0].abs().lt(R::splat(0.9)), || cross(u, &[one, zero, zero]), || cross(u, &[zero, one, zero]));
+            let axis = branch(
+                u[0].abs().lt(R::splat(0.9)),
+                #[inline(always)]
+                || cross(u, &[one, zero, zero]),
+                #[inline(always)]
+                || cross(u, &[zero, one, zero]),
+            );
             let n = norm(&axis);
             [zero, axis[0] / n, axis[1] / n, axis[2] / n]
         },
@@ -426,12 +450,16 @@ fn constrain_xy<R: Real>(v0: [R; 2], v1: [R; 2], max: f64) -> [R; 2] {
     let n_sum = (sum[0] * sum[0] + sum[1] * sum[1]).sqrt();
     branch(
         n_sum.le(R::splat(max)),
+        #[inline(always)]
         || sum,
+        #[inline(always)]
         || {
             let n0 = (v0[0] * v0[0] + v0[1] * v0[1]).sqrt();
             branch(
                 n0.ge(R::splat(max)),
+                #[inline(always)]
                 || [v0[0] / n0 * max, v0[1] / n0 * max],
+                #[inline(always)]
                 || {
                     // |v0 + s v1| = max, s in [0, 1): a s² + b s + c = 0.
                     let a = v1[0] * v1[0] + v1[1] * v1[1];
@@ -577,6 +605,7 @@ impl<R: Real> PidController<R> {
             tilt[1].abs().gt(reversed) | tilt[2].abs().gt(reversed),
             // Thrust axis exactly reversed: full attitude control (PX4's corner case).
             || q_d,
+            #[inline(always)]
             || quat_mul(&tilt, q),
         );
         let mut dyaw = canonical(quat_mul(&quat_conj(&q_red), &q_d));
@@ -732,7 +761,9 @@ impl<R: Real> PidController<R> {
         let xy_capped = horizontal.gt(xy_max);
         [thrust[0], thrust[1]] = branch(
             xy_capped,
+            #[inline(always)]
             || [thrust[0] * (xy_max / horizontal), thrust[1] * (xy_max / horizontal)],
+            #[inline(always)]
             || [thrust[0], thrust[1]],
         );
 
@@ -762,11 +793,23 @@ impl<R: Real> PidController<R> {
         // 6. Thrust vector → desired attitude and collective thrust.
         let one = R::splat(1.0);
         let magnitude = norm(&thrust);
-        let b3 = branch(magnitude.gt(zero), || thrust.map(|t| t / magnitude), || [zero, zero, one]);
+        let b3 = branch(
+            magnitude.gt(zero),
+            #[inline(always)]
+            || thrust.map(|t| t / magnitude),
+            #[inline(always)]
+            || [zero, zero, one],
+        );
         let (s, c) = self.yaw_sin_cos.get(reference.yaw);
         let b1 = cross(&[-s, c, zero], &b3);
         let n1 = norm(&b1);
-        let b1 = branch(n1.gt(R::splat(1e-9)), || b1.map(|v| v / n1), || [one, zero, zero]);
+        let b1 = branch(
+            n1.gt(R::splat(1e-9)),
+            #[inline(always)]
+            || b1.map(|v| v / n1),
+            #[inline(always)]
+            || [one, zero, zero],
+        );
         let b2 = cross(&b3, &b1);
         let r_d = [[b1[0], b2[0], b3[0]], [b1[1], b2[1], b3[1]], [b1[2], b2[2], b3[2]]];
 

@@ -289,8 +289,18 @@ impl<R: Real> AxisLaw<R> for RanftsmcAxis<R> {
         let zero = R::splat(0.0);
         let ed_two_minus_beta = branch(
             aed.ge(R::splat(SHARED_POWER_MIN)),
+            #[inline(always)]
             || aed * aed / ed_beta,
-            || branch(aed.gt(zero), || pow_abs(e_dot, 2.0 - g.beta), || zero),
+            #[inline(always)]
+            || {
+                branch(
+                    aed.gt(zero),
+                    #[inline(always)]
+                    || pow_abs(e_dot, 2.0 - g.beta),
+                    #[inline(always)]
+                    || zero,
+                )
+            },
         );
         let v_eq =
             ed_two_minus_beta * (-(1.0 / (g.beta * g.b2))) * (e_alpha_minus_one * (g.alpha * g.b1) + 1.0) * sign_ed;

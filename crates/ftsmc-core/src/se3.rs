@@ -252,8 +252,13 @@ impl<R: Real> Se3Controller<R> {
     fn desired_rotation(&mut self, force: &Vec3<R>, yaw: R) -> (Mat3<R>, R::Mask) {
         let zero = R::splat(0.0);
         let f = norm(force);
-        let b3 =
-            branch(f.gt(R::splat(1e-9)), || [force[0] / f, force[1] / f, force[2] / f], || [zero, zero, R::splat(1.0)]);
+        let b3 = branch(
+            f.gt(R::splat(1e-9)),
+            #[inline(always)]
+            || [force[0] / f, force[1] / f, force[2] / f],
+            #[inline(always)]
+            || [zero, zero, R::splat(1.0)],
+        );
         let limited = self.tilt_limit.apply(b3);
         let tilt_limited = !(limited[0].eq(b3[0]) & limited[1].eq(b3[1]) & limited[2].eq(b3[2]));
         let b3 = limited;
@@ -263,7 +268,13 @@ impl<R: Real> Se3Controller<R> {
         let n2 = norm(&b2);
         // b₃d along b₁c (only with max_tilt = π/2): the heading is undefined;
         // take b₂d horizontal, perpendicular to b₁c.
-        let b2 = branch(n2.gt(R::splat(1e-9)), || [b2[0] / n2, b2[1] / n2, b2[2] / n2], || [-s, c, zero]);
+        let b2 = branch(
+            n2.gt(R::splat(1e-9)),
+            #[inline(always)]
+            || [b2[0] / n2, b2[1] / n2, b2[2] / n2],
+            #[inline(always)]
+            || [-s, c, zero],
+        );
         let b1 = cross(&b2, &b3);
         let r_d = [[b1[0], b2[0], b3[0]], [b1[1], b2[1], b3[1]], [b1[2], b2[2], b3[2]]];
         (r_d, tilt_limited)

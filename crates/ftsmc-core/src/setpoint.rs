@@ -33,12 +33,16 @@ impl TiltLimit {
         let limit_cos = R::splat(self.cos);
         branch(
             b[2].ge(limit_cos),
+            #[inline(always)]
             || b,
+            #[inline(always)]
             || {
                 let horizontal = (b[0] * b[0] + b[1] * b[1]).sqrt();
                 let (hx, hy) = branch(
                     horizontal.gt(R::splat(1e-12)),
+                    #[inline(always)]
                     || (b[0] / horizontal, b[1] / horizontal),
+                    #[inline(always)]
                     || (R::splat(1.0), R::splat(0.0)),
                 );
                 // `hx · s`: the product `s hx` with its operands swapped (same bits).

@@ -158,6 +158,19 @@ fn paper_stages<R: Real>(s: &[Substep<'_>], tau: R) -> PaperStage<R> {
     stage
 }
 
+/// Eq. 1's plant and disturbance of every lane at its stage time (lane `i`
+/// of `tau`) with held rotors: the variation interpolated to the stage
+/// time by the one-flight code.
+#[inline(always)]
+fn held_stage_inputs<R: Real>(s: &[Substep<'_>], tau: R) -> (Eq1Params<R>, [R; 6]) {
+    let mut stage = <(Eq1Params<R>, [R; 6])>::default();
+    for (i, s) in s.iter().enumerate() {
+        let tv = TimeVarying::lerp(&s.a, &s.b, (tau.get_lane(i) - s.t0) / s.h);
+        stage.put_lane(i, (Eq1Params::of(&s.env.params_with(&tv)), tv.disturbance));
+    }
+    stage
+}
+
 impl<R: Real> PaperTruth<R> {
     /// Every lane at `scenario`'s initial state.
     pub(crate) fn new(scenario: &Scenario) -> Self {
@@ -199,34 +212,49 @@ impl<R: Real> TruthModel<R> for PaperTruth<R> {
                 wind.put_lane(i, s.wind.unwrap_or([0.0; 3]));
                 windy |= s.wind.is_some();
             }
-            let inputs = |tau: R| {
-                let mut stage = <(Eq1Params<R>, [R; 6])>::default();
-                for (i, s) in s.iter().enumerate() {
-                    let tv = TimeVarying::lerp(&s.a, &s.b, (tau.get_lane(i) - s.t0) / s.h);
-                    stage.put_lane(i, (Eq1Params::of(&s.env.params_with(&tv)), tv.disturbance));
-                }
-                stage
-            };
             // Eq. 1 in still air unless some lane has wind; the wind form
             // with a zero wind is Eq. 1 bit for bit (`v − 0 = v`), so a
-            // still-air lane flies the same either way.
+            // still-air lane flies the same either way. The closures are
+            // forced inline so that the step compiles inside the
+            // dispatched kernel (`OnIsa`).
             self.0 = if windy {
-                let f = |(p, d): &(Eq1Params<R>, [R; 6]), x: &[R; 12]| {
-                    derivative_in_wind_of(x, &command, omega_bar, p, d, &wind)
-                };
-                rk4_step_staged(inputs, f, t0, &self.0, h)
+                rk4_step_staged(
+                    #[inline(always)]
+                    |tau: R| held_stage_inputs(s, tau),
+                    #[inline(always)]
+                    |(p, d): &(Eq1Params<R>, [R; 6]), x: &[R; 12]| {
+                        derivative_in_wind_of(x, &command, omega_bar, p, d, &wind)
+                    },
+                    t0,
+                    &self.0,
+                    h,
+                )
             } else {
-                let f = |(p, d): &(Eq1Params<R>, [R; 6]), x: &[R; 12]| derivative_of(x, &command, omega_bar, p, d);
-                rk4_step_staged(inputs, f, t0, &self.0, h)
+                rk4_step_staged(
+                    #[inline(always)]
+                    |tau: R| held_stage_inputs(s, tau),
+                    #[inline(always)]
+                    |(p, d): &(Eq1Params<R>, [R; 6]), x: &[R; 12]| derivative_of(x, &command, omega_bar, p, d),
+                    t0,
+                    &self.0,
+                    h,
+                )
             };
         } else {
             // Some lane's rotors lag (the one-flight model takes the wind
             // form for them, with a zero wind in still air): every stage
             // input per lane and stage.
-            let f = |st: &PaperStage<R>, x: &[R; 12]| {
-                derivative_in_wind_of(x, &st.command, st.omega_bar, &st.plant, &st.disturbance, &st.wind)
-            };
-            self.0 = rk4_step_staged(|tau: R| paper_stages(s, tau), f, t0, &self.0, h);
+            self.0 = rk4_step_staged(
+                #[inline(always)]
+                |tau: R| paper_stages(s, tau),
+                #[inline(always)]
+                |st: &PaperStage<R>, x: &[R; 12]| {
+                    derivative_in_wind_of(x, &st.command, st.omega_bar, &st.plant, &st.disturbance, &st.wind)
+                },
+                t0,
+                &self.0,
+                h,
+            );
         }
     }
 
@@ -339,26 +367,36 @@ impl<R: Real> TruthModel<R> for RigidTruth<R> {
         // The inputs at each RK4 stage time, made once (the second and third
         // stages share theirs): each lane's rotor speeds and disturbance by
         // the one-flight code, then the body's terms on the lanes.
-        let inputs = |tau: R| {
-            let mut rotor_speeds = [R::default(); 4];
-            let mut d = [R::default(); 6];
-            for (i, s) in s.iter().enumerate() {
-                let tau = tau.get_lane(i);
-                // The disturbance of `TimeVarying::lerp` (its mass and
-                // inertia are not used here: the body's are those of the period).
-                let w = (tau - s.t0) / s.h;
-                let (a, b) = (&s.a.disturbance, &s.b.disturbance);
-                d.put_lane(i, core::array::from_fn(|k| a[k] + w * (b[k] - a[k])));
-                rotor_speeds.put_lane(i, s.drive.speeds_after(tau - s.t0));
-            }
-            body.prepare(&RigidBodyInput {
-                rotor_speeds,
-                wind,
-                force: [mass * d[0], mass * d[1], mass * d[2]],
-                torque: body.inertia_times([d[3], d[4], d[5]]),
-            })
-        };
-        self.x = rk4_step_staged(inputs, |input, x| body.derivative_prepared(x, input), t0, &self.x, h);
+        // Closures in argument position, forced inline: the whole step then
+        // compiles inside the dispatched kernel (`OnIsa`), none of it left
+        // behind in a baseline-ISA function.
+        self.x = rk4_step_staged(
+            #[inline(always)]
+            |tau: R| {
+                let mut rotor_speeds = [R::default(); 4];
+                let mut d = [R::default(); 6];
+                for (i, s) in s.iter().enumerate() {
+                    let tau = tau.get_lane(i);
+                    // The disturbance of `TimeVarying::lerp` (its mass and
+                    // inertia are not used here: the body's are those of the period).
+                    let w = (tau - s.t0) / s.h;
+                    let (a, b) = (&s.a.disturbance, &s.b.disturbance);
+                    d.put_lane(i, core::array::from_fn(|k| a[k] + w * (b[k] - a[k])));
+                    rotor_speeds.put_lane(i, s.drive.speeds_after(tau - s.t0));
+                }
+                body.prepare(&RigidBodyInput {
+                    rotor_speeds,
+                    wind,
+                    force: [mass * d[0], mass * d[1], mass * d[2]],
+                    torque: body.inertia_times([d[3], d[4], d[5]]),
+                })
+            },
+            #[inline(always)]
+            |input, x| body.derivative_prepared(x, input),
+            t0,
+            &self.x,
+            h,
+        );
         normalize_quaternion(&mut self.x);
     }
 

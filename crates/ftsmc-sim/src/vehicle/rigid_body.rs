@@ -512,7 +512,13 @@ fn is_diagonal(j: &Mat3) -> bool {
 /// lanes ([`branch`]: each product only if some lane needs it).
 #[inline(always)]
 fn mat_vec_or_diagonal<R: Real>(m: &Mat3<R>, diagonal: R::Mask, v: Vec3<R>) -> Vec3<R> {
-    branch(diagonal, || [m[0][0] * v[0], m[1][1] * v[1], m[2][2] * v[2]], || mat_vec(m, v))
+    branch(
+        diagonal,
+        #[inline(always)]
+        || [m[0][0] * v[0], m[1][1] * v[1], m[2][2] * v[2]],
+        #[inline(always)]
+        || mat_vec(m, v),
+    )
 }
 
 /// `a × r` for a rotor position `r` with `r_z = 0` (the terms with `r_z`
@@ -762,6 +768,7 @@ impl<R: Real> RigidBody<R> {
         // branch: rotor aerodynamics on (the realistic vehicles) or off.
         let (mut force, torque) = branch(
             self.rotor_aero,
+            #[inline(always)]
             || {
                 let mut force = [zero; 3];
                 let mut torque = [zero; 3];
@@ -772,14 +779,20 @@ impl<R: Real> RigidBody<R> {
                     f[1] -= prepared.drag_xy[i] * vi[1];
                     f[2] -= prepared.drag_z[i] * vi[2];
                     // Off (k_h = 0) it would add a zero.
-                    f[2] =
-                        branch(self.lift, || f[2] + self.translational_lift * (vi[0] * vi[0] + vi[1] * vi[1]), || f[2]);
+                    f[2] = branch(
+                        self.lift,
+                        #[inline(always)]
+                        || f[2] + self.translational_lift * (vi[0] * vi[0] + vi[1] * vi[1]),
+                        #[inline(always)]
+                        || f[2],
+                    );
                     force = add(force, f);
                     torque = add(torque, rotor_cross(self.rotors[i], f));
                     torque[2] -= prepared.reaction[i];
                 }
                 (force, torque)
             },
+            #[inline(always)]
             || {
                 // The thrust alone: `f = [0, 0, T]`, `r × f = [r_y T, −r_x T, 0]`.
                 let mut force = [zero; 3];
@@ -797,6 +810,7 @@ impl<R: Real> RigidBody<R> {
         let cd = self.parasitic_drag;
         force = branch(
             self.parasitic,
+            #[inline(always)]
             || {
                 let speed = norm(v_air);
                 let mut f = force;
@@ -805,6 +819,7 @@ impl<R: Real> RigidBody<R> {
                 f[2] -= speed * cd[2] * v_air[2];
                 f
             },
+            #[inline(always)]
             || force,
         );
         Wrench { force, torque }
