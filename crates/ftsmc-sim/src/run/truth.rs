@@ -23,10 +23,15 @@
 //! flight ([`truth_of`]), `TruthModel<Lanes<N>>` is `N` flights of one
 //! model side by side ([`truth_lanes`]), each lane its own scenario's
 //! vehicle, started with [`TruthModel::start_lane`]. A substep takes one
-//! [`Substep`] per lane: each lane's RK4 stage inputs (disturbance
-//! interpolation, rotor speeds, the period's plant) are made by the
-//! one-flight code, then one RK4 step runs on the lanes, so lane `i` has
-//! exactly the bits of the one-flight model fed lane `i`'s substeps.
+//! [`Substep`] per lane: what each lane's RK4 stage inputs are made of
+//! (the period's plant, the endpoints of the disturbance and plant
+//! variation, the held or lagged rotors) is gathered into lanes once per
+//! substep, each stage's inputs are then lane operations doing, lane by
+//! lane, the one-flight code's operations in its order (the paper plant
+//! with lagged rotors still makes them with the one-flight code per lane),
+//! and one RK4 step runs on the lanes: lane `i` has exactly the bits of the
+//! one-flight model fed lane `i`'s substeps. The Euler state of the rigid
+//! body ([`TruthModel::quad_state`]) is computed on the lanes too.
 
 use ftsmc_core::allocation::{forces_from_squared_speeds, residual_speed};
 use ftsmc_core::lanes::{branch, Lanewise, Mask, Real};
@@ -159,17 +164,56 @@ fn paper_stages<R: Real>(s: &[Substep<'_>], tau: R) -> PaperStage<R> {
     stage
 }
 
-/// Eq. 1's plant and disturbance of every lane at its stage time (lane `i`
-/// of `tau`) with held rotors: the variation interpolated to the stage
-/// time by the one-flight code.
+/// Eq. 1's plant over one substep of every lane with held rotors: the
+/// period's plant (`Environment::params_with`) and the endpoints of the
+/// variation (mass, inertia, disturbance), gathered into lanes once.
+struct HeldPlant<R: Real> {
+    /// The plant at the substep start (its gravity, drags and rotor
+    /// inertia hold over the substep).
+    base: Eq1Params<R>,
+    /// Mass at the start, kg, and its change over the substep.
+    mass: (R, R),
+    /// Inertia at the start, kg·m², and its change.
+    inertia: ([R; 3], [R; 3]),
+    /// Disturbance at the start, m/s² and rad/s², and its change.
+    disturbance: ([R; 6], [R; 6]),
+}
+
+/// [`HeldPlant`] of every lane's substep.
 #[inline(always)]
-fn held_stage_inputs<R: Real>(s: &[Substep<'_>], tau: R) -> (Eq1Params<R>, [R; 6]) {
-    let mut stage = <(Eq1Params<R>, [R; 6])>::default();
-    for (i, s) in s.iter().enumerate() {
-        let tv = TimeVarying::lerp(&s.a, &s.b, (tau.get_lane(i) - s.t0) / s.h);
-        stage.put_lane(i, (Eq1Params::of(&s.env.params_with(&tv)), tv.disturbance));
+fn held_plant<R: Real>(s: &[Substep<'_>]) -> HeldPlant<R> {
+    let base = <Eq1Params<R>>::from_lanes(s, |s| Eq1Params::of(&s.env.params_with(&s.a)));
+    let (m_a, m_b) = (R::from_lanes(s, |s| s.a.mass), R::from_lanes(s, |s| s.b.mass));
+    let (i_a, i_b) = (<[R; 3]>::from_lanes(s, |s| s.a.inertia), <[R; 3]>::from_lanes(s, |s| s.b.inertia));
+    let (d_a, d_b) = (<[R; 6]>::from_lanes(s, |s| s.a.disturbance), <[R; 6]>::from_lanes(s, |s| s.b.disturbance));
+    let (mut i_gap, mut d_gap) = (i_b, d_b);
+    for k in 0..3 {
+        i_gap[k] = i_b[k] - i_a[k];
     }
-    stage
+    for k in 0..6 {
+        d_gap[k] = d_b[k] - d_a[k];
+    }
+    HeldPlant { base, mass: (m_a, m_b - m_a), inertia: (i_a, i_gap), disturbance: (d_a, d_gap) }
+}
+
+impl<R: Real> HeldPlant<R> {
+    /// The plant and disturbance at the fraction `w` (lane `i`: lane `i`'s
+    /// `(τ − t0)/h`) of the substep: `Environment::params_with` of
+    /// `TimeVarying::lerp` (`a + w (b − a)`), lane `i` with the one-flight
+    /// operations.
+    #[inline(always)]
+    fn at(&self, w: R) -> (Eq1Params<R>, [R; 6]) {
+        let (i_a, i_gap) = self.inertia;
+        let (d_a, d_gap) = self.disturbance;
+        let (mut inertia, mut d) = (i_a, d_a);
+        for k in 0..3 {
+            inertia[k] = i_a[k] + w * i_gap[k];
+        }
+        for k in 0..6 {
+            d[k] = d_a[k] + w * d_gap[k];
+        }
+        (Eq1Params { mass: self.mass.0 + w * self.mass.1, inertia, ..self.base }, d)
+    }
 }
 
 impl<R: Real> PaperTruth<R> {
@@ -218,10 +262,14 @@ impl<R: Real> TruthModel<R> for PaperTruth<R> {
             // still-air lane flies the same either way. The closures are
             // forced inline so that the step compiles inside the
             // dispatched kernel (`OnIsa`).
+            // The plant of the period (all but the mass and inertia, which
+            // the variation moves) and the variation's endpoints, gathered
+            // once; each stage is then `TimeVarying::lerp` on the lanes.
+            let plant = held_plant(s);
             self.0 = if windy {
                 rk4_step_staged(
                     #[inline(always)]
-                    |tau: R| held_stage_inputs(s, tau),
+                    |tau: R| plant.at((tau - t0) / h),
                     #[inline(always)]
                     |(p, d): &(Eq1Params<R>, [R; 6]), x: &[R; 12]| {
                         derivative_in_wind_of(x, &command, omega_bar, p, d, &wind)
@@ -233,7 +281,7 @@ impl<R: Real> TruthModel<R> for PaperTruth<R> {
             } else {
                 rk4_step_staged(
                     #[inline(always)]
-                    |tau: R| held_stage_inputs(s, tau),
+                    |tau: R| plant.at((tau - t0) / h),
                     #[inline(always)]
                     |(p, d): &(Eq1Params<R>, [R; 6]), x: &[R; 12]| derivative_of(x, &command, omega_bar, p, d),
                     t0,
@@ -347,6 +395,10 @@ impl<R: Real> LaneRotors<R> {
     /// [`LaneRotors::default`] made it).
     #[inline(always)]
     fn gather(&mut self, s: &[Substep<'_>]) {
+        if R::LANES == 1 {
+            // One flight: `after` takes the drive's own speeds.
+            return;
+        }
         let r = self;
         for (i, s) in s.iter().enumerate() {
             match s.drive {
@@ -383,6 +435,13 @@ impl<R: Real> LaneRotors<R> {
     /// `target + gap · e` then the noise and `f64::clamp` to the limits.
     #[inline(always)]
     fn after(&self, s: &[Substep<'_>], dt: R) -> [R; 4] {
+        if R::LANES == 1 {
+            // One flight: the scalar code itself (the lane operations of
+            // `f64` would only add selects).
+            let mut w = [R::default(); 4];
+            w.put_lane(0, s[0].drive.speeds_after(dt.get_lane(0)));
+            return w;
+        }
         let (mut e_up, mut e_down) = (R::splat(1.0), R::splat(1.0));
         if self.any_lagged {
             for (i, s) in s.iter().enumerate() {
