@@ -27,9 +27,10 @@
 //! `latency` (a motion-capture or GNSS source); each quantity keeps its own
 //! random stream either way.
 //!
-//! No allocation per call: the latency line is a ring buffer of
-//! `latency + 1` states allocated once in [`Sensors::new`]; `measure` only
-//! writes into it. A run loop calling `measure` every step does not touch the
+//! No allocation per call: each latency line is a ring buffer of
+//! `latency + 1` readings (only the quantities its clock reads) allocated
+//! once in [`Sensors::new`]; `measure` only
+//! writes into them. A run loop calling `measure` every step does not touch the
 //! heap (asserted by `tests/sensors_alloc.rs` with a counting allocator).
 
 use core::convert::Infallible;
@@ -217,7 +218,7 @@ pub fn sensor_noise_rng(seed: u64, stream: u64) -> ChaCha8Rng {
 const BLOCK_WORDS: usize = 64;
 
 /// A noise source's generator read a block ahead: the 32-bit words of its
-/// `ChaCha8Rng` in their order, [`BLOCK_WORDS`] at a time. A `u64` is two
+/// `ChaCha8Rng` in their order, 64 at a time (one ChaCha refill, 256 bytes). A `u64` is two
 /// consecutive words, low word first, and bytes are the words
 /// little-endian, a started word consumed whole: exactly how the
 /// `ChaCha8Rng` itself serves them, so every draw (`u32`, `u64`, bytes, and
@@ -527,8 +528,9 @@ impl Sensors {
     /// [`Sensors::measure`] of a truth that may carry its quaternion and
     /// body rates ([`Measurement::body`]). With them and `rates = "body"`,
     /// the reading carries the measured attitude as a quaternion
-    /// ([`quaternion_from_euler`] of the measured angles) with the measured
-    /// body rates, so a full-state controller needs no Euler conversion;
+    /// ([`quaternion_from_euler`](ftsmc_core::kinematics::quaternion_from_euler)
+    /// of the measured angles) with the measured body rates, so a
+    /// full-state controller needs no Euler conversion;
     /// the gyroscope then reads the truth's own body rates. Otherwise the
     /// reading has no body attitude. The clocks, latency and random draws
     /// are those of [`Sensors::measure`], and so are the readings of

@@ -74,6 +74,9 @@
 //! seed, streams [`WIND_TURBULENCE_STREAMS`] (u, v, w), distinct from the
 //! drag noise (1–6), motor noise (16) and Monte Carlo sampling (100+), so
 //! turning turbulence on or off changes no other source's draws.
+//! Each stream is read through a [`crate::sensors::NoiseStream`] (the
+//! generator's own words, read a block ahead), so the draws are those of
+//! `rand_distr::StandardNormal` on the `ChaCha8Rng` itself.
 
 use ftsmc_core::law::GainError;
 use rand::SeedableRng;
