@@ -85,8 +85,18 @@ impl<'a> Environment<'a> {
         self
     }
 
-    /// Draw the drag multipliers for the next control period.
+    /// Draw the drag multipliers for the next control period (nothing
+    /// without drag noise: the loop calls it every period).
+    #[inline(always)]
     pub fn next_period(&mut self) {
+        if self.drag_rngs.is_some() {
+            self.draw_drag_factors();
+        }
+    }
+
+    /// [`Environment::next_period`]'s draws.
+    #[inline(never)]
+    fn draw_drag_factors(&mut self) {
         if let (Some(rngs), Some(noise)) = (&mut self.drag_rngs, self.params.drag_noise) {
             for (factor, rng) in self.drag_factor.iter_mut().zip(rngs.iter_mut()) {
                 let w: f64 = StandardNormal.sample(rng);
@@ -146,15 +156,18 @@ impl<'a> Environment<'a> {
     }
 
     /// Plant parameters for given time-varying inputs and the current
-    /// period's drag noise.
+    /// period's drag noise (without drag noise every multiplier is 1 and
+    /// the coefficients are the plant's: `x · 1 = x` exactly, not formed).
     #[inline]
     pub fn params_with(&self, tv: &TimeVarying) -> QuadrotorParams {
         let mut p = self.params.plant;
         p.mass = tv.mass;
         p.inertia = tv.inertia;
-        for i in 0..3 {
-            p.drag_translational[i] *= self.drag_factor[i];
-            p.drag_rotational[i] *= self.drag_factor[3 + i];
+        if self.drag_rngs.is_some() {
+            for i in 0..3 {
+                p.drag_translational[i] *= self.drag_factor[i];
+                p.drag_rotational[i] *= self.drag_factor[3 + i];
+            }
         }
         p
     }

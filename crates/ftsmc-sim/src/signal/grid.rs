@@ -158,6 +158,10 @@ enum GridTerm {
 enum Shape {
     /// None: the signal is its leading constants' sum.
     Constant,
+    /// One tabulated sinusoid (the first phasor).
+    Sinusoid,
+    /// One polynomial ([`GridSignal::polynomial`]).
+    Polynomial,
     /// Only tabulated sinusoids, in the order of the phasors.
     Sinusoids,
     /// Anything else: the terms in order.
@@ -188,6 +192,9 @@ pub struct GridSignal {
     phasors: Vec<Phasor>,
     /// The terms after the leading constants ([`Shape::General`] only).
     terms: Vec<GridTerm>,
+    /// The coefficients of the one polynomial of a [`Shape::Polynomial`]
+    /// signal, from degree 0 upward.
+    polynomial: Vec<f64>,
 }
 
 impl GridSignal {
@@ -217,16 +224,17 @@ impl GridSignal {
                 other => GridTerm::Other(other.clone()),
             })
             .collect();
-        let shape = if terms.is_empty() {
-            Shape::Constant
-        } else if terms.iter().all(|term| matches!(term, GridTerm::Sinusoid(_))) {
-            Shape::Sinusoids
-        } else {
-            Shape::General
+        let (shape, polynomial) = match terms.as_slice() {
+            [] => (Shape::Constant, Vec::new()),
+            [GridTerm::Sinusoid(_)] => (Shape::Sinusoid, Vec::new()),
+            [GridTerm::Polynomial(coefficients)] => (Shape::Polynomial, coefficients.clone()),
+            _ if terms.iter().all(|term| matches!(term, GridTerm::Sinusoid(_))) => (Shape::Sinusoids, Vec::new()),
+            _ => (Shape::General, Vec::new()),
         };
         let terms = if shape == Shape::General { terms } else { Vec::new() };
         let window = signal.window.unwrap_or([f64::NEG_INFINITY, f64::INFINITY]);
-        Self { step, window, start, shape, empty: signal.terms.is_empty(), block: u64::MAX, phasors, terms }
+        let empty = signal.terms.is_empty();
+        Self { step, window, start, shape, empty, block: u64::MAX, phasors, terms, polynomial }
     }
 
     /// True when the signal has no terms (identically zero).
@@ -270,6 +278,11 @@ impl GridSignal {
         }
         match self.shape {
             Shape::Constant => self.start,
+            Shape::Sinusoid => {
+                let n = self.offset(m);
+                self.start + self.phasors[0].value(n, t)
+            }
+            Shape::Polynomial => self.start + super::polynomial(&self.polynomial, t).value,
             Shape::Sinusoids => {
                 let n = self.offset(m);
                 let mut out = self.start;
@@ -307,6 +320,11 @@ impl GridSignal {
         let mut out = Sample { value: self.start, ..Sample::default() };
         match self.shape {
             Shape::Constant => {}
+            Shape::Sinusoid => {
+                let n = self.offset(m);
+                out += self.phasors[0].sample(n, t);
+            }
+            Shape::Polynomial => out += super::polynomial(&self.polynomial, t),
             Shape::Sinusoids => {
                 let n = self.offset(m);
                 for p in &self.phasors {
@@ -565,7 +583,12 @@ mod tests {
     /// implementation's bits, whatever order the points are taken in.
     #[test]
     fn samples_have_the_bits_of_the_previous_implementation() {
+        let mut seen = Vec::new();
         for signal in shapes() {
+            let shape = GridSignal::new(&signal, 1e-3).shape;
+            if !seen.contains(&shape) {
+                seen.push(shape);
+            }
             for substeps in [1u64, 4] {
                 let (dt, h) = (1e-3, 1e-3 / substeps as f64);
                 let mut grid = GridSignal::new(&signal, h);
@@ -583,6 +606,7 @@ mod tests {
                 assert_eq!(grid.is_zero(), signal.terms.is_empty());
             }
         }
+        assert_eq!(seen.len(), 5, "every shape was compared: {seen:?}");
     }
 
     fn sinusoids() -> Signal {
