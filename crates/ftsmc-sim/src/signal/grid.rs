@@ -178,9 +178,8 @@ enum Shape {
 #[derive(Clone, Debug)]
 pub struct GridSignal {
     step: f64,
-    /// The window `[start, end]`, s; `[−∞, +∞]` when the signal has none
-    /// (the same comparisons then never switch it off).
-    window: [f64; 2],
+    /// The window `[start, end]`, s, if any.
+    window: Option<[f64; 2]>,
     /// `0.0 + c_1 + … + c_j`: the sum of the leading constant terms.
     start: f64,
     shape: Shape,
@@ -232,7 +231,7 @@ impl GridSignal {
             _ => (Shape::General, Vec::new()),
         };
         let terms = if shape == Shape::General { terms } else { Vec::new() };
-        let window = signal.window.unwrap_or([f64::NEG_INFINITY, f64::INFINITY]);
+        let window = signal.window;
         let empty = signal.terms.is_empty();
         Self { step, window, start, shape, empty, block: u64::MAX, phasors, terms, polynomial }
     }
@@ -262,11 +261,18 @@ impl GridSignal {
         self.block = block;
     }
 
+    /// The signal's window `[start, end]`, s, if any.
+    pub fn window(&self) -> Option<[f64; 2]> {
+        self.window
+    }
+
     /// True when `t` (s) is outside the window (as [`Signal::value`] tests it).
     #[inline(always)]
     fn outside(&self, t: f64) -> bool {
-        let [start, end] = self.window;
-        t < start || t > end
+        match self.window {
+            Some([start, end]) => t < start || t > end,
+            None => false,
+        }
     }
 
     /// The value at grid point `m`, whose time the caller computed as `t`
@@ -276,6 +282,14 @@ impl GridSignal {
         if self.outside(t) {
             return 0.0;
         }
+        self.value_inside(m, t)
+    }
+
+    /// [`GridSignal::value`] at a time `t` the caller found inside the
+    /// window ([`GridSignal::window`]; any `t` without one): the sum
+    /// without the window's test.
+    #[inline(always)]
+    pub fn value_inside(&mut self, m: u64, t: f64) -> f64 {
         match self.shape {
             Shape::Constant => self.start,
             Shape::Sinusoid => {
