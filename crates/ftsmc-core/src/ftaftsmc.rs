@@ -307,7 +307,7 @@ fn sig2<R: Real>(x: R) -> R {
 
 /// `Y(e) = 1 / (ℵ1 + (1 − ℵ1) exp(−ℵ2 |e|^ℵ3))` and its time derivative
 /// (Eq. 6 with the erratum, Eq. 11), per lane for lanes.
-#[inline]
+#[inline(always)]
 pub fn gain_shaping<R: Real>(g: &FtaftsmcGains, e: R, e_dot: R) -> (R, R) {
     gain_shaping_c(g, &Constants::new(g, [0.0; 2]), e, e_dot)
 }
@@ -344,20 +344,20 @@ fn gain_shaping_c<R: Real>(g: &FtaftsmcGains, c: &Constants, e: R, e_dot: R) -> 
 }
 
 /// `κ1 = (2 − p) ε^(p−1)`, `κ2 = (p − 1) ε^(p−2)` (Eq. 9).
-#[inline]
+#[inline(always)]
 pub fn kappa(g: &FtaftsmcGains) -> [f64; 2] {
     [(2.0 - g.p) * pow_abs(g.epsilon, g.p - 1.0), (g.p - 1.0) * pow_abs(g.epsilon, g.p - 2.0)]
 }
 
 /// `S_Δ(e)` and `Ṡ_Δ` (Eq. 7, 9, 12): `sig^p(e)` outside `|e| ≤ ε`, the
 /// quadratic `κ1 e + κ2 sig²(e)` inside, matching value and slope at `|e| = ε`.
-#[inline]
+#[inline(always)]
 pub fn nonsingular_term<R: Real>(g: &FtaftsmcGains, e: R, e_dot: R) -> (R, R) {
     nonsingular_term_with(g, kappa(g), e, e_dot)
 }
 
 /// [`nonsingular_term`] with precomputed `[κ1, κ2]`.
-#[inline]
+#[inline(always)]
 pub fn nonsingular_term_with<R: Real>(g: &FtaftsmcGains, kappa: [f64; 2], e: R, e_dot: R) -> (R, R) {
     nonsingular_term_c(g, &Constants::new(g, kappa), e, e_dot)
 }
@@ -379,13 +379,13 @@ fn nonsingular_term_c<R: Real>(g: &FtaftsmcGains, c: &Constants, e: R, e_dot: R)
 }
 
 /// Evaluate the fixed-time sliding surface (Eq. 5) and `ϖ` (Eq. 13).
-#[inline]
+#[inline(always)]
 pub fn sliding_surface<R: Real>(g: &FtaftsmcGains, e: R, e_dot: R) -> SurfaceTerms<R> {
     sliding_surface_with(g, kappa(g), e, e_dot)
 }
 
 /// [`sliding_surface`] with precomputed `[κ1, κ2]` (see [`kappa`]).
-#[inline]
+#[inline(always)]
 pub fn sliding_surface_with<R: Real>(g: &FtaftsmcGains, kappa: [f64; 2], e: R, e_dot: R) -> SurfaceTerms<R> {
     sliding_surface_c(g, &Constants::new(g, kappa), e, e_dot)
 }
@@ -412,7 +412,7 @@ fn sliding_surface_c<R: Real>(g: &FtaftsmcGains, c: &Constants, e: R, e_dot: R) 
 /// `ϖ2` (Eq. 15): `−[λ2 sig^q2(S) + γ2 sig^p2(S) + η2 S + δ̂/(2ξ²) S]`,
 /// channel units per s². `|S|^q2` is saturated at
 /// [`crate::law::POWER_LIMIT`] so that it never overflows.
-#[inline]
+#[inline(always)]
 pub fn reaching_law<R: Real>(g: &FtaftsmcGains, s: R, delta_hat: R) -> R {
     reaching_law_c(g, &Constants::new(g, [0.0; 2]), s, delta_hat)
 }
@@ -429,7 +429,7 @@ fn reaching_law_c<R: Real>(g: &FtaftsmcGains, c: &Constants, s: R, delta_hat: R)
 }
 
 /// `dδ̂/dt = α1 (S²/(2ξ²) − α2 δ̂)` (Eq. 17).
-#[inline]
+#[inline(always)]
 pub fn delta_hat_rate<R: Real>(g: &FtaftsmcGains, s: R, delta_hat: R) -> R {
     delta_hat_rate_c(g, &Constants::new(g, [0.0; 2]), s, delta_hat)
 }
@@ -527,7 +527,7 @@ impl<R: Real> AxisLaw<R> for FtaftsmcAxis<R> {
     /// Lanes: the guards act per lane — a lane with a non-finite `e` or `ė`
     /// gets NaN and keeps all its states, the others advance (a non-finite
     /// `dt`, shared, gives NaN in every lane).
-    #[inline]
+    #[inline(always)]
     fn update(&mut self, e: R, e_dot: R, dt: f64) -> R {
         let ok = e.is_finite() & e_dot.is_finite();
         if !(dt.is_finite() && ok.any()) {

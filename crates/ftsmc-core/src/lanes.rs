@@ -133,7 +133,7 @@ pub trait Real:
     /// NaN.
     fn is_nan(self) -> Self::Mask;
     /// `a` where `m`, else `b`.
-    #[inline]
+    #[inline(always)]
     fn select(m: Self::Mask, a: Self, b: Self) -> Self {
         Self::blend(m, a, b)
     }
@@ -143,17 +143,17 @@ pub trait Real:
     fn map2(self, other: Self, f: impl Fn(f64, f64) -> f64) -> Self;
 
     /// `sin x` (rad), [`crate::elementary::sin`] per lane.
-    #[inline]
+    #[inline(always)]
     fn sin(self) -> Self {
         self.map(crate::elementary::sin)
     }
     /// `cos x` (rad), [`crate::elementary::cos`] per lane.
-    #[inline]
+    #[inline(always)]
     fn cos(self) -> Self {
         self.map(crate::elementary::cos)
     }
     /// `(sin x, cos x)` (rad), [`crate::elementary::sin_cos`] per lane.
-    #[inline]
+    #[inline(always)]
     fn sin_cos(self) -> (Self, Self) {
         let mut s = self;
         let mut c = self;
@@ -165,37 +165,37 @@ pub trait Real:
         (s, c)
     }
     /// `eˣ`, [`crate::elementary::exp`] per lane.
-    #[inline]
+    #[inline(always)]
     fn exp(self) -> Self {
         self.map(crate::elementary::exp)
     }
     /// `ln x`, [`crate::elementary::ln`] per lane.
-    #[inline]
+    #[inline(always)]
     fn ln(self) -> Self {
         self.map(crate::elementary::ln)
     }
     /// `asin x` (rad), [`crate::elementary::asin`] per lane.
-    #[inline]
+    #[inline(always)]
     fn asin(self) -> Self {
         self.map(crate::elementary::asin)
     }
     /// `acos x` (rad), [`crate::elementary::acos`] per lane.
-    #[inline]
+    #[inline(always)]
     fn acos(self) -> Self {
         self.map(crate::elementary::acos)
     }
     /// `atan x` (rad), [`crate::elementary::atan`] per lane.
-    #[inline]
+    #[inline(always)]
     fn atan(self) -> Self {
         self.map(crate::elementary::atan)
     }
     /// `atan2(self, x)` (rad), [`crate::elementary::atan2`] per lane.
-    #[inline]
+    #[inline(always)]
     fn atan2(self, x: Self) -> Self {
         self.map2(x, crate::elementary::atan2)
     }
     /// `self^y`, [`crate::elementary::powf`] per lane.
-    #[inline]
+    #[inline(always)]
     fn powf(self, y: Self) -> Self {
         self.map2(y, crate::elementary::powf)
     }
@@ -773,11 +773,11 @@ impl<A: Lanewise, B: Lanewise> Lanewise for (A, B) {
 /// `None`.
 impl<T: Lanewise + Default> Lanewise for Option<T> {
     type Scalar = Option<T::Scalar>;
-    #[inline]
+    #[inline(always)]
     fn get_lane(&self, i: usize) -> Self::Scalar {
         self.as_ref().map(|x| x.get_lane(i))
     }
-    #[inline]
+    #[inline(always)]
     fn put_lane(&mut self, i: usize, v: Self::Scalar) {
         match v {
             Some(v) => self.get_or_insert_with(T::default).put_lane(i, v),
@@ -789,7 +789,7 @@ impl<T: Lanewise + Default> Lanewise for Option<T> {
 impl<M: Copy, T: Blend<M>> Blend<M> for Option<T> {
     /// Both present: blended; otherwise `a` (the presence is the same in
     /// every lane).
-    #[inline]
+    #[inline(always)]
     fn blend(m: M, a: Self, b: Self) -> Self {
         match (a, b) {
             (Some(a), Some(b)) => Some(T::blend(m, a, b)),

@@ -95,7 +95,7 @@ const P5: f64 = 4.13813679705723846039e-08; /* 0x3E663769, 0x72BEA4D0 */
 /// `|x| < 708.39…` (where `2ᵏ` is a normal number) and `x < −745.13…`
 /// (`+0`, down to `−∞`); NaN, `+∞`, overflow and the subnormal results go
 /// through the scalar function.
-#[inline]
+#[inline(always)]
 pub fn exp<const N: usize>(x: [f64; N]) -> [f64; N] {
     let mut out = [0.0; N];
     let mut rare = [0u64; N];
@@ -162,7 +162,7 @@ const LG7: f64 = 1.479819860511658591e-01; /* 3FC2F112 DF3E5244 */
 /// degree-14 polynomial in `s = f/(2 + f)`), bit for bit. Vectorised for
 /// positive normal finite `x` and `±0` (`−∞`); negative, subnormal, `+∞`
 /// and NaN lanes go through the scalar function.
-#[inline]
+#[inline(always)]
 pub fn ln<const N: usize>(x: [f64; N]) -> [f64; N] {
     let mut out = [0.0; N];
     let mut rare = [0u64; N];
@@ -295,7 +295,7 @@ fn atan_lane(x: f64) -> (f64, bool) {
 /// and an odd degree-23 polynomial), bit for bit. Vectorised for
 /// `|x| < 2⁶⁶`; larger, infinite and NaN lanes go through the scalar
 /// function.
-#[inline]
+#[inline(always)]
 pub fn atan<const N: usize>(x: [f64; N]) -> [f64; N] {
     let mut out = [0.0; N];
     let mut rare = [0u64; N];
@@ -321,7 +321,7 @@ const PI_LO: f64 = 1.2246467991473531772E-16; /* 0x3CA1A626, 0x33145C07 */
 /// finite arguments with `x ≠ 1`, including `y = 0`, `x = 0` and
 /// `|y/x| > 2⁶⁴`; NaN, infinite and `x = 1` lanes go through the scalar
 /// function.
-#[inline]
+#[inline(always)]
 pub fn atan2<const N: usize>(y: [f64; N], x: [f64; N]) -> [f64; N] {
     let mut out = [0.0; N];
     let mut rare = [0u64; N];
@@ -405,7 +405,7 @@ const X1P_120: f64 = f64::from_bits(0x3870_0000_0000_0000);
 /// fdlibm's `e_asin.c`: `x + x R(x²)` for `|x| < ½`, else through
 /// `√((1 − |x|)/2)`), bit for bit. Vectorised for `|x| ≤ 1`; `|x| > 1`
 /// and NaN lanes go through the scalar function.
-#[inline]
+#[inline(always)]
 pub fn asin<const N: usize>(x: [f64; N]) -> [f64; N] {
     let mut out = [0.0; N];
     let mut rare = [0u64; N];
@@ -446,7 +446,7 @@ pub fn asin<const N: usize>(x: [f64; N]) -> [f64; N] {
 /// fdlibm's `e_acos.c`: `π/2 − (x + x R(x²))` for `|x| < ½`, else through
 /// `√((1 ∓ x)/2)`), bit for bit. Vectorised for `|x| ≤ 1`; `|x| > 1` and
 /// NaN lanes go through the scalar function.
-#[inline]
+#[inline(always)]
 pub fn acos<const N: usize>(x: [f64; N]) -> [f64; N] {
     let mut out = [0.0; N];
     let mut rare = [0u64; N];
@@ -633,7 +633,7 @@ fn sin_cos_core<const N: usize>(x: &[f64; N]) -> ([f64; N], [f64; N], [u32; N], 
 /// `s_sin.c`: `__rem_pio2` reduction to `[−π/4, π/4]` and the `__sin` /
 /// `__cos` polynomials), bit for bit. Vectorised for `|x| < 2²⁰ π/2`;
 /// larger, infinite and NaN lanes go through the scalar function.
-#[inline]
+#[inline(always)]
 pub fn sin<const N: usize>(x: [f64; N]) -> [f64; N] {
     let mut out = [0.0; N];
     let (s, c, q, ix, rare) = sin_cos_core(&x);
@@ -654,7 +654,7 @@ pub fn sin<const N: usize>(x: [f64; N]) -> [f64; N] {
 /// `cos x` (rad) on each lane: [`crate::math::cos`] (`libm::cos`, fdlibm's
 /// `s_cos.c`), bit for bit. Vectorised for `|x| < 2²⁰ π/2`; larger,
 /// infinite and NaN lanes go through the scalar function.
-#[inline]
+#[inline(always)]
 pub fn cos<const N: usize>(x: [f64; N]) -> [f64; N] {
     let mut out = [0.0; N];
     let (s, c, q, ix, rare) = sin_cos_core(&x);
@@ -675,7 +675,7 @@ pub fn cos<const N: usize>(x: [f64; N]) -> [f64; N] {
 /// `(sin x, cos x)` (rad) on each lane: [`crate::math::sin_cos`]
 /// (`libm::sincos`), bit for bit. Vectorised for `|x| < 2²⁰ π/2`; larger,
 /// infinite and NaN lanes go through the scalar function.
-#[inline]
+#[inline(always)]
 pub fn sin_cos<const N: usize>(x: [f64; N]) -> ([f64; N], [f64; N]) {
     let mut so = [0.0; N];
     let mut co = [0.0; N];

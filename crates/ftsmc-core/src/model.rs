@@ -137,7 +137,7 @@ impl<R: Real> QuadState<R> {
 
 impl QuadState {
     /// Flatten to `[x, y, z, φ, θ, ψ, ẋ, ẏ, ż, φ̇, θ̇, ψ̇]`.
-    #[inline]
+    #[inline(always)]
     pub fn to_array(&self) -> [f64; 12] {
         let mut a = [0.0; 12];
         a[0..3].copy_from_slice(&self.position);
@@ -148,7 +148,7 @@ impl QuadState {
     }
 
     /// Inverse of [`QuadState::to_array`].
-    #[inline]
+    #[inline(always)]
     pub fn from_array(a: &[f64; 12]) -> Self {
         Self {
             position: [a[0], a[1], a[2]],
