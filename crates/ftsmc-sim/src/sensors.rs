@@ -27,18 +27,20 @@
 //! `latency` (a motion-capture or GNSS source); each quantity keeps its own
 //! random stream either way.
 //!
-//! No allocation per call: the latency line is a ring buffer of
-//! `latency + 1` states allocated once in [`Sensors::new`]; `measure` only
-//! writes into it. A run loop calling `measure` every step does not touch the
+//! No allocation per call: each latency line is a ring buffer of
+//! `latency + 1` readings (only the quantities its clock reads) allocated
+//! once in [`Sensors::new`]; `measure` only
+//! writes into them. A run loop calling `measure` every step does not touch the
 //! heap (asserted by `tests/sensors_alloc.rs` with a counting allocator).
 
+use core::convert::Infallible;
 use ftsmc_core::kinematics::{
     euler_rates_from_body_rates_with, full_angle, gimbal_clamped_cos, half_angle, quaternion_from_half_angles,
 };
 use ftsmc_core::law::GainError;
 use ftsmc_core::measured::{BodyAttitude, Measurement};
 use ftsmc_core::model::QuadState;
-use rand::SeedableRng;
+use rand::{Rng, SeedableRng, TryRng};
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};
 use serde::{Deserialize, Serialize};
@@ -211,11 +213,118 @@ pub fn sensor_noise_rng(seed: u64, stream: u64) -> ChaCha8Rng {
     rng
 }
 
+/// Words of a [`NoiseStream`]'s block: one ChaCha block refill (4 × 16
+/// 32-bit words), 256 bytes.
+const BLOCK_WORDS: usize = 64;
+
+/// A noise source's generator read a block ahead: the 32-bit words of its
+/// `ChaCha8Rng` in their order, 64 at a time (one ChaCha refill, 256 bytes). A `u64` is two
+/// consecutive words, low word first, and bytes are the words
+/// little-endian, a started word consumed whole: exactly how the
+/// `ChaCha8Rng` itself serves them, so every draw (`u32`, `u64`, bytes, and
+/// any distribution sampled from them, e.g. [`NoiseStream::normal`]) has
+/// the bits it has on the generator itself. The words are the generator's
+/// own sequence whatever the mix of calls; only the generator's position is
+/// ahead of the draws (by up to one block), which nothing else reads: the
+/// stream owns it. Reading the block is cheaper per draw than the
+/// generator's own buffer (no index kept inside the buffer, one load per
+/// `u64`).
+#[derive(Clone, Debug)]
+pub struct NoiseStream {
+    rng: ChaCha8Rng,
+    /// The words read ahead, little-endian bytes.
+    block: [u8; 4 * BLOCK_WORDS],
+    /// The next unread word of `block` (`BLOCK_WORDS`: all read).
+    next: usize,
+}
+
+impl NoiseStream {
+    /// The stream of `rng`'s words from its current position on.
+    pub fn new(rng: ChaCha8Rng) -> Self {
+        Self { rng, block: [0; 4 * BLOCK_WORDS], next: BLOCK_WORDS }
+    }
+
+    /// Read the generator's next [`BLOCK_WORDS`] words.
+    #[inline(never)]
+    fn refill(&mut self) {
+        self.rng.fill_bytes(&mut self.block);
+        self.next = 0;
+    }
+
+    /// The next word.
+    #[inline(always)]
+    fn word(&mut self) -> u32 {
+        if self.next >= BLOCK_WORDS {
+            self.refill();
+        }
+        let i = 4 * self.next;
+        self.next += 1;
+        u32::from_le_bytes([self.block[i], self.block[i + 1], self.block[i + 2], self.block[i + 3]])
+    }
+
+    /// The next two words as a `u64`, the first one low.
+    #[inline(always)]
+    fn word_pair(&mut self) -> u64 {
+        if self.next + 1 < BLOCK_WORDS {
+            let i = 4 * self.next;
+            self.next += 2;
+            let mut bytes = [0u8; 8];
+            bytes.copy_from_slice(&self.block[i..i + 8]);
+            u64::from_le_bytes(bytes)
+        } else {
+            self.word_pair_across()
+        }
+    }
+
+    /// [`NoiseStream::word_pair`] at the end of the block (once per block,
+    /// out of line so that the common case inlines small).
+    #[inline(never)]
+    fn word_pair_across(&mut self) -> u64 {
+        let lo = self.word();
+        let hi = self.word();
+        (u64::from(hi) << 32) | u64::from(lo)
+    }
+
+    /// One standard normal draw `z ~ N(0, 1)`: `rand_distr::StandardNormal`
+    /// (ziggurat) on this stream.
+    #[inline(always)]
+    pub fn normal(&mut self) -> f64 {
+        StandardNormal.sample(self)
+    }
+}
+
+impl TryRng for NoiseStream {
+    type Error = Infallible;
+
+    #[inline(always)]
+    fn try_next_u32(&mut self) -> Result<u32, Infallible> {
+        Ok(self.word())
+    }
+
+    #[inline(always)]
+    fn try_next_u64(&mut self) -> Result<u64, Infallible> {
+        Ok(self.word_pair())
+    }
+
+    fn try_fill_bytes(&mut self, dst: &mut [u8]) -> Result<(), Infallible> {
+        let mut chunks = dst.chunks_exact_mut(4);
+        for chunk in chunks.by_ref() {
+            chunk.copy_from_slice(&self.word().to_le_bytes());
+        }
+        let rest = chunks.into_remainder();
+        if !rest.is_empty() {
+            let n = rest.len();
+            rest.copy_from_slice(&self.word().to_le_bytes()[..n]);
+        }
+        Ok(())
+    }
+}
+
 /// One noise source: its error model and its own generator.
 #[derive(Clone, Debug)]
 struct Source {
     error: QuantityError,
-    rng: ChaCha8Rng,
+    rng: NoiseStream,
     /// [`QuantityError::has_noise`], decided once.
     noisy: bool,
     /// Any axis has a bias.
@@ -225,18 +334,19 @@ struct Source {
 impl Source {
     fn new(error: QuantityError, seed: u64, stream: u64) -> Self {
         let biased = error.bias.iter().any(|b| *b != 0.0);
-        Self { error, rng: sensor_noise_rng(seed, stream), noisy: error.has_noise(), biased }
+        Self { error, rng: NoiseStream::new(sensor_noise_rng(seed, stream)), noisy: error.has_noise(), biased }
     }
 
     /// `truth + bias + std · z` per axis. Three draws per reading whenever
     /// any axis is noisy (so an axis's draws do not depend on the others'
     /// std); none otherwise. Zero terms are skipped, not added, so a
     /// perfect quantity is returned bit-exactly (`-0.0 + 0.0` would not be).
+    #[inline(always)]
     fn corrupt(&mut self, truth: [f64; 3]) -> [f64; 3] {
         let mut out = truth;
         if self.noisy {
             for k in 0..3 {
-                let z: f64 = StandardNormal.sample(&mut self.rng);
+                let z = self.rng.normal();
                 if self.error.std[k] != 0.0 {
                     out[k] += self.error.std[k] * z;
                 }
@@ -253,10 +363,30 @@ impl Source {
     }
 }
 
+/// Position and velocity as read, `[position (m), velocity (m/s)]`.
+type Translation = [[f64; 3]; 2];
+
+/// Attitude and rates as read: Z-Y-X angles (rad), Euler rates (rad/s)
+/// and, when the rates are measured as body rates of a truth that has
+/// them, the body attitude (see [`Sensors::measure_full`]).
+#[derive(Clone, Copy, Debug, Default)]
+struct Rotation {
+    attitude: [f64; 3],
+    angular_rate: [f64; 3],
+    body: Option<BodyAttitude>,
+}
+
+/// A whole reading, for a sensor whose quantities share one clock.
+#[derive(Clone, Copy, Debug, Default)]
+struct Reading {
+    translation: Translation,
+    rotation: Rotation,
+}
+
 /// The sample clock, held sample and latency line of one group of
-/// quantities (the whole state is carried; the caller picks its fields).
+/// quantities; `T` is what the group reads (only that is held and delayed).
 #[derive(Clone, Debug)]
-struct Line {
+struct Line<T> {
     /// Samples per control period, clamped to at most 1.
     samples_per_period: f64,
     /// `samples_per_period == 1`: a sample is due every period.
@@ -264,20 +394,14 @@ struct Line {
     /// Index of the last sample taken (`⌊period · samples_per_period⌋`).
     last_sample: u64,
     /// The reading held between samples.
-    held: QuadState,
+    held: T,
     /// Ring of the last `latency + 1` readings.
-    ring: Vec<QuadState>,
-    /// The held reading's attitude as a quaternion with its measured body
-    /// rates (rad/s), `None` when the rates were not measured as such (see
-    /// [`Sensors::measure_full`]).
-    held_body: Option<BodyAttitude>,
-    /// Their ring, beside `ring`.
-    body_ring: Vec<Option<BodyAttitude>>,
+    ring: Vec<T>,
     /// Slot the next reading goes into.
     head: usize,
 }
 
-impl Line {
+impl<T: Copy + Default> Line<T> {
     fn new(clock: SensorClock, control_rate_hz: f64) -> Self {
         let samples_per_period = match clock.sample_rate {
             Some(rate) if control_rate_hz > 0.0 => (rate / control_rate_hz).min(1.0),
@@ -287,10 +411,8 @@ impl Line {
             samples_per_period,
             every_period: samples_per_period == 1.0,
             last_sample: 0,
-            held: QuadState::default(),
-            ring: vec![QuadState::default(); clock.latency as usize + 1],
-            held_body: None,
-            body_ring: vec![None; clock.latency as usize + 1],
+            held: T::default(),
+            ring: vec![T::default(); clock.latency as usize + 1],
             head: 0,
         }
     }
@@ -298,6 +420,7 @@ impl Line {
     /// Whether a sample is due in control period `period`: when the sample
     /// index ⌊k · f_s / f_c⌋ moves on (the 1e-9 guards exact ratios, 100 Hz
     /// at 1 kHz: every 10th period, against rounding down).
+    #[inline]
     fn due(&mut self, period: u64) -> bool {
         if self.every_period {
             // ⌊k · 1 + 1e-9⌋ = k moves on every period.
@@ -315,22 +438,35 @@ impl Line {
 
     /// Push this period's held reading and return the one of `latency`
     /// periods ago (the first reading until then).
-    fn delayed(&mut self, period: u64) -> QuadState {
+    #[inline]
+    fn delayed(&mut self, period: u64) -> T {
         if period == 0 {
             self.ring.fill(self.held);
-            self.body_ring.fill(self.held_body);
         }
         let n = self.ring.len();
         self.ring[self.head] = self.held;
-        self.body_ring[self.head] = self.held_body;
         self.head = if self.head + 1 == n { 0 } else { self.head + 1 };
         self.ring[self.head]
     }
+}
 
-    /// The body rates of the reading [`Line::delayed`] returned last.
-    fn delayed_body(&self) -> Option<BodyAttitude> {
-        self.body_ring[self.head]
-    }
+/// The four noise sources and the frame the rates are measured in.
+#[derive(Clone, Debug)]
+struct Sources {
+    position: Source,
+    velocity: Source,
+    attitude: Source,
+    angular_rate: Source,
+    rates: RateFrame,
+}
+
+/// The latency lines: one clock for every quantity, or (with
+/// [`SensorParams::imu`]) one for position and velocity and the IMU's for
+/// attitude and rates.
+#[derive(Clone, Debug)]
+enum Lines {
+    Shared(Line<Reading>),
+    Split { translation: Line<Translation>, rotation: Line<Rotation> },
 }
 
 /// A running sensor: four noise sources, the sample clocks, the held
@@ -341,16 +477,10 @@ impl Line {
 #[derive(Clone, Debug)]
 pub struct Sensors {
     params: SensorParams,
-    position: Source,
-    velocity: Source,
-    attitude: Source,
-    angular_rate: Source,
+    sources: Sources,
     /// Control periods seen so far.
     period: u64,
-    /// Position and velocity (and attitude/rates without an IMU clock).
-    main: Line,
-    /// Attitude and rates on their own clock, if any.
-    imu: Option<Line>,
+    lines: Lines,
 }
 
 impl Sensors {
@@ -358,18 +488,27 @@ impl Sensors {
     /// are keyed by `seed` (streams [`POSITION_NOISE_STREAM`]…
     /// [`ANGULAR_RATE_NOISE_STREAM`]). `params` should have passed
     /// [`SensorParams::check`]. Allocates the latency lines (`latency + 1`
-    /// states each) here, once.
+    /// readings each) here, once.
     pub fn new(params: SensorParams, control_rate_hz: f64, seed: u64) -> Self {
         let main = SensorClock { sample_rate: params.sample_rate, latency: params.latency };
+        let lines = match params.imu {
+            None => Lines::Shared(Line::new(main, control_rate_hz)),
+            Some(imu) => Lines::Split {
+                translation: Line::new(main, control_rate_hz),
+                rotation: Line::new(imu, control_rate_hz),
+            },
+        };
         Self {
             params,
-            position: Source::new(params.position, seed, POSITION_NOISE_STREAM),
-            velocity: Source::new(params.velocity, seed, VELOCITY_NOISE_STREAM),
-            attitude: Source::new(params.attitude, seed, ATTITUDE_NOISE_STREAM),
-            angular_rate: Source::new(params.angular_rate, seed, ANGULAR_RATE_NOISE_STREAM),
+            sources: Sources {
+                position: Source::new(params.position, seed, POSITION_NOISE_STREAM),
+                velocity: Source::new(params.velocity, seed, VELOCITY_NOISE_STREAM),
+                attitude: Source::new(params.attitude, seed, ATTITUDE_NOISE_STREAM),
+                angular_rate: Source::new(params.angular_rate, seed, ANGULAR_RATE_NOISE_STREAM),
+                rates: params.rates,
+            },
             period: 0,
-            main: Line::new(main, control_rate_hz),
-            imu: params.imu.map(|c| Line::new(c, control_rate_hz)),
+            lines,
         }
     }
 
@@ -389,8 +528,9 @@ impl Sensors {
     /// [`Sensors::measure`] of a truth that may carry its quaternion and
     /// body rates ([`Measurement::body`]). With them and `rates = "body"`,
     /// the reading carries the measured attitude as a quaternion
-    /// ([`quaternion_from_euler`] of the measured angles) with the measured
-    /// body rates, so a full-state controller needs no Euler conversion;
+    /// ([`quaternion_from_euler`](ftsmc_core::kinematics::quaternion_from_euler)
+    /// of the measured angles) with the measured body rates, so a
+    /// full-state controller needs no Euler conversion;
     /// the gyroscope then reads the truth's own body rates. Otherwise the
     /// reading has no body attitude. The clocks, latency and random draws
     /// are those of [`Sensors::measure`], and so are the readings of
@@ -400,61 +540,62 @@ impl Sensors {
     pub fn measure_full(&mut self, truth: &Measurement) -> Measurement {
         let k = self.period;
         self.period += 1;
-        match &mut self.imu {
-            None => {
-                if self.main.due(k) {
-                    let (held, body) = self.read(truth);
-                    self.main.held = held;
-                    self.main.held_body = body;
+        let sources = &mut self.sources;
+        let (translation, rotation) = match &mut self.lines {
+            Lines::Shared(line) => {
+                if line.due(k) {
+                    let translation = sources.read_translation(&truth.euler);
+                    line.held = Reading { translation, rotation: sources.read_rotation(truth) };
                 }
-                let euler = self.main.delayed(k);
-                Measurement { euler, body: self.main.delayed_body() }
+                let reading = line.delayed(k);
+                (reading.translation, reading.rotation)
             }
-            Some(_) => {
-                if self.main.due(k) {
-                    let position = self.position.corrupt(truth.euler.position);
-                    let velocity = self.velocity.corrupt(truth.euler.velocity);
-                    self.main.held = QuadState { position, velocity, ..self.main.held };
+            Lines::Split { translation, rotation } => {
+                if translation.due(k) {
+                    translation.held = sources.read_translation(&truth.euler);
                 }
-                let imu_due = self.imu.as_mut().is_some_and(|l| l.due(k));
-                if imu_due {
-                    let (attitude, angular_rate, body) = self.read_rotation(truth);
-                    if let Some(l) = &mut self.imu {
-                        l.held = QuadState { attitude, angular_rate, ..l.held };
-                        l.held_body = body;
-                    }
+                if rotation.due(k) {
+                    rotation.held = sources.read_rotation(truth);
                 }
-                let translation = self.main.delayed(k);
-                let (rotation, body) = match self.imu.as_mut() {
-                    Some(l) => (l.delayed(k), l.delayed_body()),
-                    None => (translation, self.main.delayed_body()),
-                };
-                let euler = QuadState {
-                    position: translation.position,
-                    velocity: translation.velocity,
-                    attitude: rotation.attitude,
-                    angular_rate: rotation.angular_rate,
-                };
-                Measurement { euler, body }
+                (translation.delayed(k), rotation.delayed(k))
             }
+        };
+        let [position, velocity] = translation;
+        Measurement {
+            euler: QuadState { position, attitude: rotation.attitude, velocity, angular_rate: rotation.angular_rate },
+            body: rotation.body,
         }
+    }
+}
+
+impl Sources {
+    /// One reading of position and velocity with their errors (position's
+    /// draws first).
+    #[inline]
+    fn read_translation(&mut self, truth: &QuadState) -> Translation {
+        let position = self.position.corrupt(truth.position);
+        let velocity = self.velocity.corrupt(truth.velocity);
+        [position, velocity]
     }
 
     /// One reading of attitude and angular rate with their errors: Euler
     /// angles, Euler rates, and, when the rates are measured in the body
     /// frame of a truth that has them, the body attitude (the quaternion of
     /// the measured angles with the measured body rates).
-    fn read_rotation(&mut self, truth: &Measurement) -> ([f64; 3], [f64; 3], Option<BodyAttitude>) {
+    #[inline]
+    fn read_rotation(&mut self, truth: &Measurement) -> Rotation {
         let euler = &truth.euler;
         let attitude = self.attitude.corrupt(euler.attitude);
-        match (self.params.rates, truth.body) {
-            (RateFrame::Euler, _) => (attitude, self.angular_rate.corrupt(euler.angular_rate), None),
+        match (self.rates, truth.body) {
+            (RateFrame::Euler, _) => {
+                Rotation { attitude, angular_rate: self.angular_rate.corrupt(euler.angular_rate), body: None }
+            }
             (RateFrame::Body, None) => {
                 // A truth without body rates (the paper's plant): the body
                 // rates of its Euler state.
                 let body_rates =
                     self.angular_rate.corrupt(euler_rates_to_body_rates(&euler.attitude, &euler.angular_rate));
-                (attitude, euler_rates_clamped(&attitude, &body_rates), None)
+                Rotation { attitude, angular_rate: euler_rates_clamped(&attitude, &body_rates), body: None }
             }
             (RateFrame::Body, Some(truth_body)) => {
                 // The gyroscope reads the truth's body rates. The half
@@ -466,18 +607,49 @@ impl Sensors {
                 let halves = attitude.map(half_angle);
                 let quaternion = quaternion_from_half_angles(halves[0], halves[1], halves[2]);
                 let [st, ct] = full_angle(halves[1]);
-                let rates =
+                let angular_rate =
                     euler_rates_from_body_rates_with(full_angle(halves[0]), [st, gimbal_clamped_cos(ct)], &body_rates);
-                (attitude, rates, Some(BodyAttitude { quaternion, body_rates }))
+                Rotation { attitude, angular_rate, body: Some(BodyAttitude { quaternion, body_rates }) }
             }
         }
     }
+}
 
-    /// One reading of the truth with every error applied.
-    fn read(&mut self, truth: &Measurement) -> (QuadState, Option<BodyAttitude>) {
-        let position = self.position.corrupt(truth.euler.position);
-        let velocity = self.velocity.corrupt(truth.euler.velocity);
-        let (attitude, angular_rate, body) = self.read_rotation(truth);
-        (QuadState { position, attitude, velocity, angular_rate }, body)
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The stream serves the generator's own words, whatever the mix of
+    /// `u32`, `u64` and byte reads and wherever they fall against the
+    /// block boundaries, and so the generator's own normal draws.
+    #[test]
+    fn noise_stream_serves_the_generators_own_sequence() {
+        let mut reference = sensor_noise_rng(7, ANGULAR_RATE_NOISE_STREAM);
+        let mut stream = NoiseStream::new(sensor_noise_rng(7, ANGULAR_RATE_NOISE_STREAM));
+        // A pattern that straddles block boundaries at odd and even words.
+        for round in 0..400u32 {
+            match round % 7 {
+                0 | 3 => assert_eq!(stream.next_u32(), reference.next_u32(), "u32 at round {round}"),
+                1 | 4 | 6 => assert_eq!(stream.next_u64(), reference.next_u64(), "u64 at round {round}"),
+                2 => {
+                    let n = 1 + (round as usize * 5) % 23;
+                    let (mut a, mut b) = ([0u8; 23], [0u8; 23]);
+                    stream.fill_bytes(&mut a[..n]);
+                    reference.fill_bytes(&mut b[..n]);
+                    assert_eq!(a[..n], b[..n], "{n} bytes at round {round}");
+                }
+                _ => {
+                    let z: f64 = StandardNormal.sample(&mut reference);
+                    assert_eq!(stream.normal().to_bits(), z.to_bits(), "normal at round {round}");
+                }
+            }
+        }
+        // Normal draws alone, as the sensors and the wind take them.
+        let mut reference = sensor_noise_rng(11, POSITION_NOISE_STREAM);
+        let mut stream = NoiseStream::new(sensor_noise_rng(11, POSITION_NOISE_STREAM));
+        for i in 0..5000 {
+            let z: f64 = StandardNormal.sample(&mut reference);
+            assert_eq!(stream.normal().to_bits(), z.to_bits(), "draw {i}");
+        }
     }
 }

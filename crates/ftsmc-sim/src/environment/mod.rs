@@ -54,6 +54,9 @@ pub struct Environment<'a> {
 struct Grid {
     disturbance: [GridSignal; 6],
     inertia_variation: Option<GridSignal>,
+    /// The window all seven signals have (`Some(None)`: none has one;
+    /// `None`: their windows differ), tested once per sample.
+    shared_window: Option<Option<[f64; 2]>>,
 }
 
 impl<'a> Environment<'a> {
@@ -78,15 +81,28 @@ impl<'a> Environment<'a> {
     pub fn on_grid(mut self, step: f64) -> Self {
         let d = self.params.disturbance;
         let g = |s: &Signal| GridSignal::new(s, step);
-        self.grid = Some(Grid {
-            disturbance: [g(&d.x), g(&d.y), g(&d.z), g(&d.phi), g(&d.theta), g(&d.psi)],
-            inertia_variation: self.params.inertia_variation.map(g),
-        });
+        let disturbance = [g(&d.x), g(&d.y), g(&d.z), g(&d.phi), g(&d.theta), g(&d.psi)];
+        let inertia_variation = self.params.inertia_variation.map(g);
+        let mut windows = disturbance.iter().chain(&inertia_variation).map(GridSignal::window);
+        let first = windows.next().flatten();
+        let same = |w: Option<[f64; 2]>| w.map(|w| w.map(f64::to_bits)) == first.map(|w| w.map(f64::to_bits));
+        let shared_window = windows.all(same).then_some(first);
+        self.grid = Some(Grid { disturbance, inertia_variation, shared_window });
         self
     }
 
-    /// Draw the drag multipliers for the next control period.
+    /// Draw the drag multipliers for the next control period (nothing
+    /// without drag noise: the loop calls it every period).
+    #[inline(always)]
     pub fn next_period(&mut self) {
+        if self.drag_rngs.is_some() {
+            self.draw_drag_factors();
+        }
+    }
+
+    /// [`Environment::next_period`]'s draws.
+    #[inline(never)]
+    fn draw_drag_factors(&mut self) {
         if let (Some(rngs), Some(noise)) = (&mut self.drag_rngs, self.params.drag_noise) {
             for (factor, rng) in self.drag_factor.iter_mut().zip(rngs.iter_mut()) {
                 let w: f64 = StandardNormal.sample(rng);
@@ -138,23 +154,48 @@ impl<'a> Environment<'a> {
         let Some(grid) = self.grid.as_mut() else {
             return self.time_varying(t);
         };
-        let variation = grid.inertia_variation.as_mut().map(|var| var.value(m, t));
-        let [x, y, z, phi, theta, psi] = &mut grid.disturbance;
-        let disturbance =
-            [x.value(m, t), y.value(m, t), z.value(m, t), phi.value(m, t), theta.value(m, t), psi.value(m, t)];
+        let (variation, disturbance) = match grid.shared_window {
+            // One window for all: outside, every value is 0 (as each signal's own test gives).
+            Some(Some([start, end])) if t < start || t > end => {
+                (grid.inertia_variation.as_ref().map(|_| 0.0), [0.0; 6])
+            }
+            Some(_) => {
+                let variation = grid.inertia_variation.as_mut().map(|var| var.value_inside(m, t));
+                let [x, y, z, phi, theta, psi] = &mut grid.disturbance;
+                let disturbance = [
+                    x.value_inside(m, t),
+                    y.value_inside(m, t),
+                    z.value_inside(m, t),
+                    phi.value_inside(m, t),
+                    theta.value_inside(m, t),
+                    psi.value_inside(m, t),
+                ];
+                (variation, disturbance)
+            }
+            None => {
+                let variation = grid.inertia_variation.as_mut().map(|var| var.value(m, t));
+                let [x, y, z, phi, theta, psi] = &mut grid.disturbance;
+                let disturbance =
+                    [x.value(m, t), y.value(m, t), z.value(m, t), phi.value(m, t), theta.value(m, t), psi.value(m, t)];
+                (variation, disturbance)
+            }
+        };
         self.time_varying_from(t, variation, disturbance)
     }
 
     /// Plant parameters for given time-varying inputs and the current
-    /// period's drag noise.
+    /// period's drag noise (without drag noise every multiplier is 1 and
+    /// the coefficients are the plant's: `x · 1 = x` exactly, not formed).
     #[inline]
     pub fn params_with(&self, tv: &TimeVarying) -> QuadrotorParams {
         let mut p = self.params.plant;
         p.mass = tv.mass;
         p.inertia = tv.inertia;
-        for i in 0..3 {
-            p.drag_translational[i] *= self.drag_factor[i];
-            p.drag_rotational[i] *= self.drag_factor[3 + i];
+        if self.drag_rngs.is_some() {
+            for i in 0..3 {
+                p.drag_translational[i] *= self.drag_factor[i];
+                p.drag_rotational[i] *= self.drag_factor[3 + i];
+            }
         }
         p
     }
@@ -192,6 +233,65 @@ impl TimeVarying {
             mass: l(a.mass, b.mass),
             inertia: core::array::from_fn(|i| l(a.inertia[i], b.inertia[i])),
             disturbance: core::array::from_fn(|i| l(a.disturbance[i], b.disturbance[i])),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::signal::Term;
+
+    fn sine(amplitude: f64, omega: f64, window: Option<[f64; 2]>) -> Signal {
+        Signal { terms: vec![Term::Sine { amplitude, omega: Some(omega), frequency: None, phase: 0.3 }], window }
+    }
+
+    /// With one window for all seven signals (tested once) or with
+    /// different ones (each its own), the grid's time-varying inputs have
+    /// the bits of every signal's own [`GridSignal::value`].
+    #[test]
+    fn a_shared_window_gives_the_bits_of_every_signals_own_window() {
+        let payload = Payload { mass: 0.37, start: 1.0, decay_start: Some(2.0), tau: Some(3.0) };
+        for windows in
+            [[Some([1.0, 2.0]); 7], [None; 7], [Some([1.0, 2.0]), None, None, None, None, None, Some([0.5, 1.5])]]
+        {
+            let [wx, wy, wz, wphi, wtheta, wpsi, wvar] = windows;
+            let disturbance = DisturbanceSignals {
+                x: sine(0.5, 0.4, wx),
+                y: Signal {
+                    terms: vec![Term::Constant { value: 0.1 }, Term::Polynomial { coefficients: vec![0.0, 0.2] }],
+                    window: wy,
+                },
+                z: sine(0.7, 0.3, wz),
+                phi: sine(0.5, 0.4, wphi),
+                theta: sine(-0.5, 0.5, wtheta),
+                psi: sine(0.5, 0.7, wpsi),
+            };
+            let variation = sine(0.15, 3.1, wvar);
+            let params = EnvironmentParams {
+                plant: QuadrotorParams::default(),
+                payload: Some(&payload),
+                inertia_variation: Some(&variation),
+                drag_noise: None,
+                disturbance: &disturbance,
+                seed: 7,
+            };
+            let step = 2.5e-4;
+            let mut env = Environment::new(params).on_grid(step);
+            let d = &disturbance;
+            let mut own = [&d.x, &d.y, &d.z, &d.phi, &d.theta, &d.psi, &variation].map(|s| GridSignal::new(s, step));
+            for m in 0..12_000u64 {
+                let t = m as f64 * step;
+                let tv = env.time_varying_on_grid(m, t);
+                let values: [f64; 7] = core::array::from_fn(|i| own[i].value(m, t));
+                let expected = env.time_varying_from(t, Some(values[6]), values[..6].try_into().unwrap());
+                let bits = |tv: &TimeVarying| {
+                    let mut b = vec![tv.mass.to_bits()];
+                    b.extend(tv.inertia.iter().chain(&tv.disturbance).map(|v| v.to_bits()));
+                    b
+                };
+                assert_eq!(bits(&tv), bits(&expected), "windows {windows:?}, t = {t}");
+            }
         }
     }
 }

@@ -74,12 +74,16 @@
 //! seed, streams [`WIND_TURBULENCE_STREAMS`] (u, v, w), distinct from the
 //! drag noise (1–6), motor noise (16) and Monte Carlo sampling (100+), so
 //! turning turbulence on or off changes no other source's draws.
+//! Each stream is read through a [`crate::sensors::NoiseStream`] (the
+//! generator's own words, read a block ahead), so the draws are those of
+//! `rand_distr::StandardNormal` on the `ChaCha8Rng` itself.
 
 use ftsmc_core::law::GainError;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
-use rand_distr::{Distribution, StandardNormal};
 use serde::{Deserialize, Serialize};
+
+use crate::sensors::NoiseStream;
 
 /// One knot in m/s (exact: 1852 m / 3600 s ≈ 0.514444).
 pub const KNOT: f64 = 1852.0 / 3600.0;
@@ -477,22 +481,31 @@ fn j_integrals(x: f64) -> [f64; 3] {
     }
 }
 
-/// Exact discretisation of one axis's shaping filter at one airspeed.
+/// Exact discretisation of the first-order (`u`) shaping filter at one
+/// airspeed: `x ← φ x + g n`.
 #[derive(Clone, Copy, Debug)]
-enum AxisFilter {
-    /// `x ← φ x + g n`.
-    First { phi: f64, gain: f64 },
-    /// `z ← Φ z + L (n₁, n₂)`, `L` lower triangular.
-    Second { phi: [[f64; 2]; 2], chol: [[f64; 2]; 2] },
+struct FirstOrder {
+    phi: f64,
+    gain: f64,
 }
 
-impl AxisFilter {
-    fn first(sigma: f64, a: f64, dt: f64) -> Self {
+impl FirstOrder {
+    fn new(sigma: f64, a: f64, dt: f64) -> Self {
         let y = a * dt;
-        AxisFilter::First { phi: ftsmc_core::math::exp(-y), gain: sigma * (-ftsmc_core::math::exp_m1(-2.0 * y)).sqrt() }
+        Self { phi: ftsmc_core::math::exp(-y), gain: sigma * (-ftsmc_core::math::exp_m1(-2.0 * y)).sqrt() }
     }
+}
 
-    fn second(sigma: f64, a: f64, dt: f64) -> Self {
+/// Exact discretisation of a second-order (`v`, `w`) shaping filter at one
+/// airspeed: `z ← Φ z + L (n₁, n₂)`, `L` lower triangular.
+#[derive(Clone, Copy, Debug)]
+struct SecondOrder {
+    phi: [[f64; 2]; 2],
+    chol: [[f64; 2]; 2],
+}
+
+impl SecondOrder {
+    fn new(sigma: f64, a: f64, dt: f64) -> Self {
         let y = a * dt;
         let e = ftsmc_core::math::exp(-y);
         let phi = [[e * (1.0 + y), e * y], [-e * y, e * (1.0 - y)]];
@@ -504,7 +517,16 @@ impl AxisFilter {
         let l11 = q11.max(0.0).sqrt();
         let l21 = if l11 > 0.0 { q12 / l11 } else { 0.0 };
         let l22 = (q22 - l21 * l21).max(0.0).sqrt();
-        AxisFilter::Second { phi, chol: [[l11, 0.0], [l21, l22]] }
+        Self { phi, chol: [[l11, 0.0], [l21, l22]] }
+    }
+
+    /// One step of state `z` with the draws `n₁`, `n₂` (in this order).
+    #[inline(always)]
+    fn step(&self, z: &mut [f64; 2], n1: f64, n2: f64) {
+        let [phi, chol] = [self.phi, self.chol];
+        let [z1, z2] = *z;
+        z[0] = phi[0][0] * z1 + phi[0][1] * z2 + chol[0][0] * n1;
+        z[1] = phi[1][0] * z1 + phi[1][1] * z2 + chol[1][0] * n1 + chol[1][1] * n2;
     }
 }
 
@@ -517,10 +539,13 @@ pub struct Dryden {
     scales: DrydenScales,
     dt: f64,
     airspeed: f64,
-    filters: [AxisFilter; 3],
+    /// The `u` filter.
+    u_filter: FirstOrder,
+    /// The `v` and `w` filters.
+    vw_filters: [SecondOrder; 2],
     /// u: `state[0][0]`; v, w: `(z₁, z₂)`.
     state: [[f64; 2]; 3],
-    rngs: [ChaCha8Rng; 3],
+    rngs: [NoiseStream; 3],
 }
 
 impl Dryden {
@@ -529,28 +554,30 @@ impl Dryden {
     /// start in their stationary distribution (first draws of each stream).
     /// `params` and `dt` are assumed checked ([`WindParams::check`], `dt > 0`).
     pub fn new(params: TurbulenceParams, dt: f64, airspeed: f64, seed: u64) -> Self {
-        let mut rngs: [ChaCha8Rng; 3] = core::array::from_fn(|k| {
+        let mut rngs: [NoiseStream; 3] = core::array::from_fn(|k| {
             let mut rng = ChaCha8Rng::seed_from_u64(seed);
             rng.set_stream(WIND_TURBULENCE_STREAMS[k]);
-            rng
+            NoiseStream::new(rng)
         });
         let scales = params.scales();
         let mut state = [[0.0; 2]; 3];
         for (k, (s, rng)) in state.iter_mut().zip(rngs.iter_mut()).enumerate() {
             let sigma = scales.sigma[k];
             if k == 0 {
-                s[0] = sigma * normal(rng);
+                s[0] = sigma * rng.normal();
             } else {
-                s[0] = 0.5 * sigma * normal(rng);
-                s[1] = 0.5 * sigma * normal(rng);
+                s[0] = 0.5 * sigma * rng.normal();
+                s[1] = 0.5 * sigma * rng.normal();
             }
         }
+        let idle = SecondOrder { phi: [[0.0; 2]; 2], chol: [[0.0; 2]; 2] };
         let mut d = Self {
             params,
             scales,
             dt,
             airspeed: f64::NAN,
-            filters: [AxisFilter::First { phi: 0.0, gain: 0.0 }; 3],
+            u_filter: FirstOrder { phi: 0.0, gain: 0.0 },
+            vw_filters: [idle; 2],
             state,
             rngs,
         };
@@ -569,10 +596,10 @@ impl Dryden {
         }
         self.airspeed = v;
         let s = &self.scales;
-        self.filters = [
-            AxisFilter::first(s.sigma[0], v / s.length[0], self.dt),
-            AxisFilter::second(s.sigma[1], v / s.length[1], self.dt),
-            AxisFilter::second(s.sigma[2], v / s.length[2], self.dt),
+        self.u_filter = FirstOrder::new(s.sigma[0], v / s.length[0], self.dt);
+        self.vw_filters = [
+            SecondOrder::new(s.sigma[1], v / s.length[1], self.dt),
+            SecondOrder::new(s.sigma[2], v / s.length[2], self.dt),
         ];
     }
 
@@ -594,28 +621,21 @@ impl Dryden {
     }
 
     /// Return the current turbulence `[u, v, w]` (m/s, wind axes), then
-    /// advance the filters by one step `dt`.
+    /// advance the filters by one step `dt` (draws: one on `u`'s stream,
+    /// then two on `v`'s, then two on `w`'s).
+    #[inline]
     pub fn step(&mut self) -> [f64; 3] {
         let now = self.current();
-        for ((f, s), rng) in self.filters.iter().zip(self.state.iter_mut()).zip(self.rngs.iter_mut()) {
-            match *f {
-                AxisFilter::First { phi, gain } => s[0] = phi * s[0] + gain * normal(rng),
-                AxisFilter::Second { phi, chol } => {
-                    let n1 = normal(rng);
-                    let n2 = normal(rng);
-                    let z = *s;
-                    s[0] = phi[0][0] * z[0] + phi[0][1] * z[1] + chol[0][0] * n1;
-                    s[1] = phi[1][0] * z[0] + phi[1][1] * z[1] + chol[1][0] * n1 + chol[1][1] * n2;
-                }
-            }
-        }
+        let [u_rng, v_rng, w_rng] = &mut self.rngs;
+        let [u, v, w] = &mut self.state;
+        let FirstOrder { phi, gain } = self.u_filter;
+        u[0] = phi * u[0] + gain * u_rng.normal();
+        let (n1, n2) = (v_rng.normal(), v_rng.normal());
+        self.vw_filters[0].step(v, n1, n2);
+        let (n1, n2) = (w_rng.normal(), w_rng.normal());
+        self.vw_filters[1].step(w, n1, n2);
         now
     }
-}
-
-#[inline]
-fn normal(rng: &mut ChaCha8Rng) -> f64 {
-    StandardNormal.sample(rng)
 }
 
 /// The wind of a flight: mean + gusts + turbulence, world frame.
@@ -672,6 +692,7 @@ impl Wind {
     /// World wind velocity (m/s) at `t` (s): mean + gusts at `t` + the
     /// current turbulence sample, which then advances by one step `dt`.
     /// Call once per step, at `t = t₀ + k dt`; deterministic per seed.
+    #[inline]
     pub fn step(&mut self, t: f64) -> [f64; 3] {
         let mut v = self.params.deterministic(t);
         if let Some(d) = &mut self.turbulence {

@@ -1,5 +1,5 @@
 //! The actuator stage of a flight: what the rotors make of the controller's
-//! command, chosen once per flight from the scenario ([`ActuatorStage::of`]).
+//! command, chosen once per flight from the scenario (`ActuatorStage::of`).
 //!
 //! | stage | when | applied command | rotor speeds |
 //! |---|---|---|---|

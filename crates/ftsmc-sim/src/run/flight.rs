@@ -15,7 +15,7 @@
 //! 5. **Observers** ([`super::observer`]) see the whole tick: metrics,
 //!    recording, flight statistics (and the envelope at the period boundaries).
 //! 6. **Truth model** integrated over the period by `simulation.substeps`
-//!    RK4 substeps ([`super::truth`]), with the wind sampled once per
+//!    RK4 substeps (`run/truth.rs`), with the wind sampled once per
 //!    substep and the ground checked after each.
 //! 7. The next reference; divergence checks.
 //!

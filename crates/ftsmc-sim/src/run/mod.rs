@@ -1,6 +1,6 @@
 //! The run loop, one for every flight: a controller on its own clock
 //! (zero-order hold at the control period) behind a sensor stage, an
-//! actuator stage ([`actuation`]), a truth model ([`truth`]: paper Eq. 1 or
+//! actuator stage ([`actuation`]), a truth model (`run/truth.rs`: paper Eq. 1 or
 //! the rigid body) integrated by RK4 substeps between control ticks
 //! (restarting at each tick, where the input jumps), the environment
 //! (plant variations, wind, ground), and per-tick observers ([`observer`]:

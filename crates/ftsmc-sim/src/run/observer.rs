@@ -27,7 +27,9 @@ pub struct Tick<'a> {
     pub reference: &'a Reference,
     /// The controller's telemetry after this tick's update.
     pub telemetry: &'a Telemetry,
-    /// Tracking errors `[e_x, e_y, e_z, e_φ, e_θ, e_ψ]` of the truth ([`super::tracking_errors`]).
+    /// Tracking errors `[e_x, e_y, e_z, e_φ, e_θ, e_ψ]` of the truth: the
+    /// truth minus the reference, φ and θ against the controller's attitude
+    /// reference (`telemetry`), ψ against the reference yaw.
     pub errors: [f64; 6],
     /// Commanded thrust (N) and torques (N·m).
     pub command: &'a Command,
