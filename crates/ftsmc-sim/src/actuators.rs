@@ -365,16 +365,16 @@ impl Motors {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct HeldCommand {
     /// Commands clamped to `[ω_min, ω_max]`, rad/s.
-    target: [f64; 4],
+    pub(crate) target: [f64; 4],
     /// `ω − ω_cmd` at the start of the step, rad/s.
-    gap: [f64; 4],
+    pub(crate) gap: [f64; 4],
     /// Index of the decay factor per rotor (0: spin-up τ, 1: spin-down τ),
     /// `None` where that τ is 0 (the command is reached at once).
-    factor: [Option<usize>; 4],
+    pub(crate) factor: [Option<usize>; 4],
     /// The noise, per rotor: `σ z` (absolute) or `1 + σ z` (relative).
-    noise: Option<(NoiseScale, [f64; 4])>,
+    pub(crate) noise: Option<(NoiseScale, [f64; 4])>,
     /// `[ω_min, ω_max]`, rad/s.
-    limits: [f64; 2],
+    pub(crate) limits: [f64; 2],
 }
 
 impl HeldCommand {

@@ -23,16 +23,22 @@
 //! flight ([`truth_of`]), `TruthModel<Lanes<N>>` is `N` flights of one
 //! model side by side ([`truth_lanes`]), each lane its own scenario's
 //! vehicle, started with [`TruthModel::start_lane`]. A substep takes one
-//! [`Substep`] per lane: each lane's RK4 stage inputs (disturbance
-//! interpolation, rotor speeds, the period's plant) are made by the
-//! one-flight code, then one RK4 step runs on the lanes, so lane `i` has
-//! exactly the bits of the one-flight model fed lane `i`'s substeps.
+//! [`Substep`] per lane: what each lane's RK4 stage inputs are made of
+//! (the period's plant, the endpoints of the disturbance and plant
+//! variation, the held or lagged rotors) is gathered into lanes once per
+//! substep, each stage's inputs are then lane operations doing, lane by
+//! lane, the one-flight code's operations in its order (the paper plant
+//! with lagged rotors still makes them with the one-flight code per lane),
+//! and one RK4 step runs on the lanes: lane `i` has exactly the bits of the
+//! one-flight model fed lane `i`'s substeps. The Euler state of the rigid
+//! body ([`TruthModel::quad_state`]) is computed on the lanes too.
 
 use ftsmc_core::allocation::{forces_from_squared_speeds, residual_speed};
-use ftsmc_core::lanes::{Lanewise, Real};
+use ftsmc_core::lanes::{branch, Lanewise, Mask, Real};
 use ftsmc_core::measured::BodyAttitude;
 use ftsmc_core::model::{Command, QuadState, QuadrotorParams};
 
+use crate::actuators::NoiseScale;
 use crate::environment::Environment;
 use crate::environment::TimeVarying;
 use crate::scenario::Scenario;
@@ -158,17 +164,56 @@ fn paper_stages<R: Real>(s: &[Substep<'_>], tau: R) -> PaperStage<R> {
     stage
 }
 
-/// Eq. 1's plant and disturbance of every lane at its stage time (lane `i`
-/// of `tau`) with held rotors: the variation interpolated to the stage
-/// time by the one-flight code.
+/// Eq. 1's plant over one substep of every lane with held rotors: the
+/// period's plant (`Environment::params_with`) and the endpoints of the
+/// variation (mass, inertia, disturbance), gathered into lanes once.
+struct HeldPlant<R: Real> {
+    /// The plant at the substep start (its gravity, drags and rotor
+    /// inertia hold over the substep).
+    base: Eq1Params<R>,
+    /// Mass at the start, kg, and its change over the substep.
+    mass: (R, R),
+    /// Inertia at the start, kg·m², and its change.
+    inertia: ([R; 3], [R; 3]),
+    /// Disturbance at the start, m/s² and rad/s², and its change.
+    disturbance: ([R; 6], [R; 6]),
+}
+
+/// [`HeldPlant`] of every lane's substep.
 #[inline(always)]
-fn held_stage_inputs<R: Real>(s: &[Substep<'_>], tau: R) -> (Eq1Params<R>, [R; 6]) {
-    let mut stage = <(Eq1Params<R>, [R; 6])>::default();
-    for (i, s) in s.iter().enumerate() {
-        let tv = TimeVarying::lerp(&s.a, &s.b, (tau.get_lane(i) - s.t0) / s.h);
-        stage.put_lane(i, (Eq1Params::of(&s.env.params_with(&tv)), tv.disturbance));
+fn held_plant<R: Real>(s: &[Substep<'_>]) -> HeldPlant<R> {
+    let base = <Eq1Params<R>>::from_lanes(s, |s| Eq1Params::of(&s.env.params_with(&s.a)));
+    let (m_a, m_b) = (R::from_lanes(s, |s| s.a.mass), R::from_lanes(s, |s| s.b.mass));
+    let (i_a, i_b) = (<[R; 3]>::from_lanes(s, |s| s.a.inertia), <[R; 3]>::from_lanes(s, |s| s.b.inertia));
+    let (d_a, d_b) = (<[R; 6]>::from_lanes(s, |s| s.a.disturbance), <[R; 6]>::from_lanes(s, |s| s.b.disturbance));
+    let (mut i_gap, mut d_gap) = (i_b, d_b);
+    for k in 0..3 {
+        i_gap[k] = i_b[k] - i_a[k];
     }
-    stage
+    for k in 0..6 {
+        d_gap[k] = d_b[k] - d_a[k];
+    }
+    HeldPlant { base, mass: (m_a, m_b - m_a), inertia: (i_a, i_gap), disturbance: (d_a, d_gap) }
+}
+
+impl<R: Real> HeldPlant<R> {
+    /// The plant and disturbance at the fraction `w` (lane `i`: lane `i`'s
+    /// `(τ − t0)/h`) of the substep: `Environment::params_with` of
+    /// `TimeVarying::lerp` (`a + w (b − a)`), lane `i` with the one-flight
+    /// operations.
+    #[inline(always)]
+    fn at(&self, w: R) -> (Eq1Params<R>, [R; 6]) {
+        let (i_a, i_gap) = self.inertia;
+        let (d_a, d_gap) = self.disturbance;
+        let (mut inertia, mut d) = (i_a, d_a);
+        for k in 0..3 {
+            inertia[k] = i_a[k] + w * i_gap[k];
+        }
+        for k in 0..6 {
+            d[k] = d_a[k] + w * d_gap[k];
+        }
+        (Eq1Params { mass: self.mass.0 + w * self.mass.1, inertia, ..self.base }, d)
+    }
 }
 
 impl<R: Real> PaperTruth<R> {
@@ -179,7 +224,7 @@ impl<R: Real> PaperTruth<R> {
 }
 
 impl<R: Real> TruthModel<R> for PaperTruth<R> {
-    #[inline]
+    #[inline(always)]
     fn quad_state(&self) -> QuadState<R> {
         let a = &self.0;
         QuadState {
@@ -217,10 +262,14 @@ impl<R: Real> TruthModel<R> for PaperTruth<R> {
             // still-air lane flies the same either way. The closures are
             // forced inline so that the step compiles inside the
             // dispatched kernel (`OnIsa`).
+            // The plant of the period (all but the mass and inertia, which
+            // the variation moves) and the variation's endpoints, gathered
+            // once; each stage is then `TimeVarying::lerp` on the lanes.
+            let plant = held_plant(s);
             self.0 = if windy {
                 rk4_step_staged(
                     #[inline(always)]
-                    |tau: R| held_stage_inputs(s, tau),
+                    |tau: R| plant.at((tau - t0) / h),
                     #[inline(always)]
                     |(p, d): &(Eq1Params<R>, [R; 6]), x: &[R; 12]| {
                         derivative_in_wind_of(x, &command, omega_bar, p, d, &wind)
@@ -232,7 +281,7 @@ impl<R: Real> TruthModel<R> for PaperTruth<R> {
             } else {
                 rk4_step_staged(
                     #[inline(always)]
-                    |tau: R| held_stage_inputs(s, tau),
+                    |tau: R| plant.at((tau - t0) / h),
                     #[inline(always)]
                     |(p, d): &(Eq1Params<R>, [R; 6]), x: &[R; 12]| derivative_of(x, &command, omega_bar, p, d),
                     t0,
@@ -278,6 +327,173 @@ impl<R: Real> TruthModel<R> for PaperTruth<R> {
     }
 }
 
+/// A value of every lane's substep gathered into lanes (lane `i` of
+/// `f(&s[i])`).
+trait FromLanes: Lanewise + Default {
+    #[inline(always)]
+    fn from_lanes(s: &[Substep<'_>], f: impl Fn(&Substep<'_>) -> Self::Scalar) -> Self {
+        let mut v = Self::default();
+        for (i, s) in s.iter().enumerate() {
+            v.put_lane(i, f(s));
+        }
+        v
+    }
+}
+
+impl<T: Lanewise + Default> FromLanes for T {}
+
+/// Every lane's rotors over one substep ([`Drive`]) gathered into lanes
+/// once, so that the speeds at an RK4 stage time ([`LaneRotors::after`])
+/// are a few lane operations: lane `i` is `Drive::speeds_after` of lane
+/// `i`'s drive, bit for bit. A held drive is a lagged one reached at once
+/// (`target` its speeds, no lag, no noise).
+struct LaneRotors<R: Real> {
+    /// Commanded speeds clamped to the limits (held: the speeds), rad/s.
+    target: [R; 4],
+    /// `ω − ω_cmd` at the substep start, rad/s.
+    gap: [R; 4],
+    /// The rotor lags (its time constant is nonzero).
+    lagged: [R::Mask; 4],
+    /// The rotor lags with the spin-up time constant (else spin-down).
+    up: [R::Mask; 4],
+    /// Absolute noise: `ω + σ z`, clamped.
+    absolute: R::Mask,
+    /// Relative noise: `ω (1 + σ z)`, clamped.
+    relative: R::Mask,
+    /// `σ z` (absolute) or `1 + σ z` (relative) per rotor.
+    noise: [R; 4],
+    /// `ω_min`, rad/s.
+    lo: R,
+    /// `ω_max`, rad/s.
+    hi: R,
+    /// Some lane's rotors lag (the decay factors are looked up).
+    any_lagged: bool,
+}
+
+impl<R: Real> Default for LaneRotors<R> {
+    /// No lane gathered yet: every lane held at zero speed.
+    #[inline(always)]
+    fn default() -> Self {
+        let no = <R::Mask as Mask>::splat(false);
+        Self {
+            target: [R::default(); 4],
+            gap: [R::default(); 4],
+            lagged: [no; 4],
+            up: [no; 4],
+            absolute: no,
+            relative: no,
+            noise: [R::default(); 4],
+            lo: R::default(),
+            hi: R::default(),
+            any_lagged: false,
+        }
+    }
+}
+
+impl<R: Real> LaneRotors<R> {
+    /// The rotors of every lane's substep (`self` as
+    /// [`LaneRotors::default`] made it).
+    #[inline(always)]
+    fn gather(&mut self, s: &[Substep<'_>]) {
+        if R::LANES == 1 {
+            // One flight: `after` takes the drive's own speeds.
+            return;
+        }
+        let r = self;
+        for (i, s) in s.iter().enumerate() {
+            match s.drive {
+                Drive::Held { speeds, .. } => r.target.put_lane(i, *speeds),
+                Drive::Lagged { held, .. } => {
+                    r.any_lagged = true;
+                    r.target.put_lane(i, held.target);
+                    r.gap.put_lane(i, held.gap);
+                    for k in 0..4 {
+                        r.lagged[k].put_lane(i, held.factor[k].is_some());
+                        r.up[k].put_lane(i, held.factor[k] == Some(0));
+                    }
+                    match held.noise {
+                        None => {}
+                        Some((NoiseScale::Absolute, add)) => {
+                            r.absolute.put_lane(i, true);
+                            r.noise.put_lane(i, add);
+                        }
+                        Some((NoiseScale::Relative, mul)) => {
+                            r.relative.put_lane(i, true);
+                            r.noise.put_lane(i, mul);
+                        }
+                    }
+                    r.lo.put_lane(i, held.limits[0]);
+                    r.hi.put_lane(i, held.limits[1]);
+                }
+            }
+        }
+    }
+
+    /// Rotor speeds `dt` (lane `i`: lane `i`'s stage time minus its
+    /// substep start, s) into the substep, rad/s: `HeldCommand::speeds` of
+    /// the decay factors `DecayCache::get` looks up for each lagged lane,
+    /// `target + gap · e` then the noise and `f64::clamp` to the limits.
+    #[inline(always)]
+    fn after(&self, s: &[Substep<'_>], dt: R) -> [R; 4] {
+        if R::LANES == 1 {
+            // One flight: the scalar code itself (the lane operations of
+            // `f64` would only add selects).
+            let mut w = [R::default(); 4];
+            w.put_lane(0, s[0].drive.speeds_after(dt.get_lane(0)));
+            return w;
+        }
+        let (mut e_up, mut e_down) = (R::splat(1.0), R::splat(1.0));
+        if self.any_lagged {
+            for (i, s) in s.iter().enumerate() {
+                if let Drive::Lagged { motors, decay, .. } = s.drive {
+                    let [u, d] = decay.get(motors, dt.get_lane(i));
+                    e_up.put_lane(i, u);
+                    e_down.put_lane(i, d);
+                }
+            }
+        }
+        let mut w = self.target;
+        for k in 0..4 {
+            let e = R::select(self.up[k], e_up, e_down);
+            w[k] = R::select(self.lagged[k], self.target[k] + self.gap[k] * e, self.target[k]);
+        }
+        let w = branch(
+            self.absolute,
+            #[inline(always)]
+            || {
+                let mut v = w;
+                for k in 0..4 {
+                    v[k] = clamp(w[k] + self.noise[k], self.lo, self.hi);
+                }
+                v
+            },
+            #[inline(always)]
+            || w,
+        );
+        branch(
+            self.relative,
+            #[inline(always)]
+            || {
+                let mut v = w;
+                for k in 0..4 {
+                    v[k] = clamp(w[k] * self.noise[k], self.lo, self.hi);
+                }
+                v
+            },
+            #[inline(always)]
+            || w,
+        )
+    }
+}
+
+/// `f64::clamp` lane by lane: below `lo` is `lo`, then above `hi` is `hi`
+/// (NaN stays NaN).
+#[inline(always)]
+fn clamp<R: Real>(v: R, lo: R, hi: R) -> R {
+    let v = R::select(v.lt(lo), lo, v);
+    R::select(v.gt(hi), hi, v)
+}
+
 /// One flight's rigid-body bookkeeping beside its lane of the body.
 #[derive(Clone, Copy, Debug)]
 struct RigidLane {
@@ -315,14 +531,12 @@ impl<R: Real> RigidTruth<R> {
 }
 
 impl<R: Real> TruthModel<R> for RigidTruth<R> {
-    #[inline]
+    /// The one-flight Euler conversion written for any [`Real`]: on the
+    /// lanes at once (forced inline, so that it compiles inside the
+    /// dispatched kernel, `OnIsa`).
+    #[inline(always)]
     fn quad_state(&self) -> QuadState<R> {
-        // The Euler conversion is the one-flight one, lane by lane.
-        let mut q = QuadState::<R>::default();
-        for i in 0..R::LANES {
-            q.put_lane(i, to_quad_state(&self.x.get_lane(i)));
-        }
-        q
+        to_quad_state(&self.x)
     }
 
     #[inline]
@@ -365,27 +579,34 @@ impl<R: Real> TruthModel<R> for RigidTruth<R> {
         let body = &self.body;
         let mass = body.mass();
         // The inputs at each RK4 stage time, made once (the second and third
-        // stages share theirs): each lane's rotor speeds and disturbance by
-        // the one-flight code, then the body's terms on the lanes.
+        // stages share theirs) on the lanes from each lane's substep gathered
+        // once: the disturbance of `TimeVarying::lerp` (its mass and inertia
+        // are not used here: the body's are those of the period) and the
+        // rotor speeds of `Drive::speeds_after`, each lane with the
+        // one-flight operations in their order.
+        let (d_a, d_b) = (<[R; 6]>::from_lanes(s, |s| s.a.disturbance), <[R; 6]>::from_lanes(s, |s| s.b.disturbance));
+        let mut d_gap = d_b;
+        for k in 0..6 {
+            d_gap[k] = d_b[k] - d_a[k];
+        }
+        let mut rotors = LaneRotors::<R>::default();
+        rotors.gather(s);
         // Closures in argument position, forced inline: the whole step then
         // compiles inside the dispatched kernel (`OnIsa`), none of it left
         // behind in a baseline-ISA function.
         self.x = rk4_step_staged(
             #[inline(always)]
             |tau: R| {
-                let mut rotor_speeds = [R::default(); 4];
-                let mut d = [R::default(); 6];
-                for (i, s) in s.iter().enumerate() {
-                    let tau = tau.get_lane(i);
-                    // The disturbance of `TimeVarying::lerp` (its mass and
-                    // inertia are not used here: the body's are those of the period).
-                    let w = (tau - s.t0) / s.h;
-                    let (a, b) = (&s.a.disturbance, &s.b.disturbance);
-                    d.put_lane(i, core::array::from_fn(|k| a[k] + w * (b[k] - a[k])));
-                    rotor_speeds.put_lane(i, s.drive.speeds_after(tau - s.t0));
+                // (`core::array::from_fn` and `map` are avoided in the
+                // kernels: their out-of-line instances compile for the
+                // baseline instruction set.)
+                let w = (tau - t0) / h;
+                let mut d = d_a;
+                for k in 0..6 {
+                    d[k] = d_a[k] + w * d_gap[k];
                 }
                 body.prepare(&RigidBodyInput {
-                    rotor_speeds,
+                    rotor_speeds: rotors.after(s, tau - t0),
                     wind,
                     force: [mass * d[0], mass * d[1], mass * d[2]],
                     torque: body.inertia_times([d[3], d[4], d[5]]),
@@ -433,7 +654,12 @@ struct OnIsa<T> {
 
 impl<R: Real, T: TruthModel<R>> TruthModel<R> for OnIsa<T> {
     fn quad_state(&self) -> QuadState<R> {
-        self.inner.quad_state()
+        match self.isa {
+            #[cfg(target_arch = "x86_64")]
+            // SAFETY: `Isa::Avx2Fma` is only detected on a CPU with AVX2 and FMA.
+            crate::isa::Isa::Avx2Fma => unsafe { quad_state_avx2(&self.inner) },
+            _ => self.inner.quad_state(),
+        }
     }
     fn body_attitude(&self) -> Option<BodyAttitude<R>> {
         self.inner.body_attitude()
@@ -469,6 +695,18 @@ impl<R: Real, T: TruthModel<R>> TruthModel<R> for OnIsa<T> {
 #[target_feature(enable = "avx2,fma")]
 unsafe fn substep_avx2<R: Real, T: TruthModel<R>>(truth: &mut T, s: &[Substep<'_>]) {
     truth.substep(s);
+}
+
+/// [`TruthModel::quad_state`] compiled with AVX2 and FMA (the Euler
+/// conversion of the lanes; `atan2` and `asin` stay calls to the one maths
+/// library, per lane).
+///
+/// # Safety
+/// The CPU must have AVX2 and FMA.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+unsafe fn quad_state_avx2<R: Real, T: TruthModel<R>>(truth: &T) -> QuadState<R> {
+    truth.quad_state()
 }
 
 /// What a flight's truth model brings to the loop ([`truth_of`]).
@@ -544,8 +782,18 @@ mod lane_tests {
             // Lagged rotors in wind; lagged in still air, heavier; held
             // (clamp mixer) with products of inertia in the "×" layout; the
             // paper vehicle (no aerodynamics) on default rotors.
-            out.push(moderate.clone());
-            let mut heavy = calm.clone();
+            // The first two with motor noise, relative and absolute (no
+            // built-in scenario has any).
+            let noisy = |s: &Scenario, std: f64, scale: NoiseScale| {
+                let mut s = s.clone();
+                s.actuators = s.actuators.map(|a| crate::actuators::ActuatorParams {
+                    noise: Some(crate::actuators::MotorNoise { std, scale }),
+                    ..a
+                });
+                s
+            };
+            out.push(noisy(&moderate, 0.05, NoiseScale::Relative));
+            let mut heavy = noisy(&calm, 40.0, NoiseScale::Absolute);
             heavy.vehicle.mass = Some(0.9);
             heavy.seed = 11;
             out.push(heavy);

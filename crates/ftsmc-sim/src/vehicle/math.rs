@@ -100,7 +100,7 @@ pub(crate) fn rotation<R: Real>(q: Quat<R>) -> Mat3<R> {
 }
 
 /// `q̇ = ½ q ⊗ (0, Ω)` for body rates Ω.
-#[inline]
+#[inline(always)]
 pub(crate) fn quat_derivative<R: Real>(q: Quat<R>, omega: Vec3<R>) -> Quat<R> {
     let [w, x, y, z] = q;
     let [p, r1, r2] = omega;

@@ -43,8 +43,8 @@
 //! Where the one-flight body skips a term it does not have (diagonal
 //! inertia, rotor aerodynamics, translational lift, parasitic drag), lanes
 //! skip it per lane, so lane `i` computes the one-flight body's operations
-//! in the same order: the same bits. The Euler conversions below stay
-//! one-flight (`f64`).
+//! in the same order: the same bits. So is [`to_quad_state`]; the other
+//! Euler conversions below are one-flight (`f64`).
 //!
 //! # Equations (body wrench in the body frame)
 //!
@@ -742,14 +742,16 @@ impl<R: Real> RigidBody<R> {
     #[inline(always)]
     pub fn prepare(&self, input: &RigidBodyInput<R>) -> PreparedInput<R> {
         let w = input.rotor_speeds;
-        PreparedInput {
-            input: *input,
-            thrust: w.map(|w| self.thrust_coefficient * w * w),
-            reaction: [0, 1, 2, 3].map(|i| self.spin[i] * self.moment_coefficient * w[i] * w[i]),
-            drag_xy: w.map(|w| w * self.rotor_drag_xy),
-            drag_z: w.map(|w| w * self.rotor_drag_z),
-            momentum: self.rotor_momentum(&w),
+        // Loops rather than `map`: its out-of-line instances would compile
+        // for the baseline instruction set, outside a dispatched kernel.
+        let (mut thrust, mut reaction, mut drag_xy, mut drag_z) = (w, w, w, w);
+        for i in 0..4 {
+            thrust[i] = self.thrust_coefficient * w[i] * w[i];
+            reaction[i] = self.spin[i] * self.moment_coefficient * w[i] * w[i];
+            drag_xy[i] = w[i] * self.rotor_drag_xy;
+            drag_z[i] = w[i] * self.rotor_drag_z;
         }
+        PreparedInput { input: *input, thrust, reaction, drag_xy, drag_z, momentum: self.rotor_momentum(&w) }
     }
 
     /// [`RigidBody::body_wrench`] with the body-to-world rotation `r` of `x`
@@ -966,38 +968,48 @@ pub fn euler_rates_clamped(euler: &[f64; 3], body_rates: &[f64; 3]) -> [f64; 3] 
     kinematics::euler_rates_from_body_rates(euler, body_rates)
 }
 
-/// [`euler_rates_clamped`] at the Z-Y-X angles `euler` of the unit
-/// quaternion `q` ([`kinematics::euler_from_quaternion`]), with the sines and
-/// cosines of φ and θ read off `q` instead of evaluated: with
-/// `a = 2(wx + yz) = cθ sφ`, `b = 1 − 2(x² + y²) = cθ cφ` (the arguments of
-/// φ's `atan2`) and `s = 2(wy − xz) = sθ` (θ's `asin`), `cθ = √(a² + b²)`,
-/// `sφ = a/cθ`, `cφ = b/cθ`: the same values to rounding, without two
-/// `sin_cos`. Within `cθ < 1e-3` of gimbal lock, where `a` and `b` lose
-/// their relative precision, the core's formula on the angles answers.
-fn euler_rates_of_quaternion(q: &Quat, euler: &Vec3, body_rates: &Vec3) -> Vec3 {
+/// The Z-Y-X angles of the unit quaternion `q` and the sines and cosines
+/// their Euler rates take, in one pass (every lane for lanes).
+///
+/// The angles are the core's [`kinematics::euler_from_quaternion`], the same
+/// operations in the same order: `φ = atan2(a, b)`, `θ = asin(s)`,
+/// `ψ = atan2(2(wz + xy), 1 − 2(y² + z²))` with `a = 2(wx + yz) = cθ sφ`,
+/// `b = 1 − 2(x² + y²) = cθ cφ` and `s = sat(2(wy − xz), ±1) = sθ`.
+///
+/// The Euler rates ([`euler_rates_clamped`]) take the sines and cosines of φ
+/// and θ read off `q` instead of evaluated: `cθ = √(a² + b²)`,
+/// `sφ = a/cθ`, `cφ = b/cθ`, `sθ = s` (the same values to rounding, without
+/// two `sin_cos`). Within `cθ < 1e-3` of gimbal lock, where `a` and `b` lose
+/// their relative precision, the core's formula on the angles answers
+/// (per lane for lanes, [`branch`]).
+#[inline(always)]
+fn euler_of_quaternion<R: Real>(q: &Quat<R>, body_rates: &Vec3<R>) -> (Vec3<R>, Vec3<R>) {
     let [w, x, y, z] = *q;
-    let a = 2.0 * (w * x + y * z);
-    let b = 1.0 - 2.0 * (x * x + y * y);
+    let one = R::splat(1.0);
+    let a = (w * x + y * z) * 2.0;
+    let b = one - (x * x + y * y) * 2.0;
+    let s = ftsmc_core::law::saturate((w * y - x * z) * 2.0, one);
+    let attitude = [a.atan2(b), s.asin(), ((w * z + x * y) * 2.0).atan2(one - (y * y + z * z) * 2.0)];
     let ct = (a * a + b * b).sqrt();
-    if ct >= 1e-3 {
-        let st = ftsmc_core::law::saturate(2.0 * (w * y - x * z), 1.0);
-        kinematics::euler_rates_from_body_rates_with([a / ct, b / ct], [st, ct], body_rates)
-    } else {
+    let rates = branch(
+        ct.ge(R::splat(1e-3)),
+        #[inline(always)]
+        || kinematics::euler_rates_from_body_rates_with([a / ct, b / ct], [s, ct], body_rates),
         // Near gimbal lock, or a non-finite quaternion.
-        kinematics::euler_rates_from_body_rates(euler, body_rates)
-    }
+        #[inline(always)]
+        || kinematics::euler_rates_from_body_rates(&attitude, body_rates),
+    );
+    (attitude, rates)
 }
 
 /// The Euler state the paper's controllers were designed for: position,
 /// velocity, Z-Y-X angles ([`quaternion_to_euler`]) and Euler rates
 /// ([`body_rates_to_euler_rates`]). Errors with [`GimbalLock`] at θ = ±π/2.
 pub fn try_to_quad_state(x: &RigidBodyState) -> Result<QuadState, GimbalLock> {
-    let q = quaternion(x);
-    let attitude = kinematics::euler_from_quaternion(&q);
+    let (attitude, angular_rate) = euler_of_quaternion(&quaternion(x), &block(x, index::BODY_RATES));
     if ftsmc_core::math::cos(attitude[1]).abs() < GIMBAL_LOCK_COS {
         return Err(GimbalLock { theta: attitude[1] });
     }
-    let angular_rate = euler_rates_of_quaternion(&q, &attitude, &block(x, index::BODY_RATES));
     Ok(QuadState { position: block(x, index::POSITION), attitude, velocity: block(x, index::VELOCITY), angular_rate })
 }
 
@@ -1006,15 +1018,15 @@ pub fn try_to_quad_state(x: &RigidBodyState) -> Result<QuadState, GimbalLock> {
 /// cos θ; positive at exactly 0), so the Euler rates stay finite (large, up to ~1e6 × ‖Ω‖)
 /// rather than infinite. A controller flying there has already lost its
 /// Euler-angle model; use [`try_to_quad_state`] to detect it.
-pub fn to_quad_state(x: &RigidBodyState) -> QuadState {
-    let q = quaternion(x);
-    let attitude = kinematics::euler_from_quaternion(&q);
-    QuadState {
-        position: block(x, index::POSITION),
-        attitude,
-        velocity: block(x, index::VELOCITY),
-        angular_rate: euler_rates_of_quaternion(&q, &attitude, &block(x, index::BODY_RATES)),
-    }
+///
+/// Generic over the number type: on lanes ([`ftsmc_core::lanes`]) lane `i`
+/// is the one-flight conversion of lane `i`'s state, bit for bit (the
+/// arithmetic lane by lane, `atan2` and `asin` from the one maths library
+/// per lane).
+#[inline(always)]
+pub fn to_quad_state<R: Real>(x: &RigidBodyState<R>) -> QuadState<R> {
+    let (attitude, angular_rate) = euler_of_quaternion(&quaternion(x), &block(x, index::BODY_RATES));
+    QuadState { position: block(x, index::POSITION), attitude, velocity: block(x, index::VELOCITY), angular_rate }
 }
 
 /// Rigid-body state of an Euler state (quaternion from the angles, body
@@ -1099,7 +1111,8 @@ mod tests {
             let angles = kinematics::euler_from_quaternion(&q);
             let rates = [2.0 * u(), 2.0 * u(), 2.0 * u()];
             let want = euler_rates_clamped(&angles, &rates);
-            let got = euler_rates_of_quaternion(&q, &angles, &rates);
+            let (got_angles, got) = euler_of_quaternion(&q, &rates);
+            assert_eq!(got_angles.map(f64::to_bits), angles.map(f64::to_bits));
             let ct = ftsmc_core::math::cos(angles[1]).abs();
             for i in 0..3 {
                 // Relative to the angle path's precision ‖Ω‖/cθ³ (‖Ω‖ ≤ 2√3).
@@ -1109,6 +1122,51 @@ mod tests {
             }
         }
         assert!(worst > 0.0, "the two forms are not the same bits everywhere");
+    }
+
+    /// The Euler state of rigid-body states in lanes is, lane by lane, the
+    /// one-flight [`to_quad_state`] bit for bit, with lanes near and at
+    /// gimbal lock (where the angle formula answers) and non-finite lanes
+    /// beside ordinary ones.
+    #[test]
+    fn euler_state_in_lanes_is_the_one_flight_state_bit_for_bit() {
+        use ftsmc_core::lanes::Lanes;
+        fn check<R: Real>(rng: &mut ChaCha8Rng) {
+            let bits = |q: QuadState| q.to_array().map(|v| if v.is_nan() { f64::NAN.to_bits() } else { v.to_bits() });
+            let mut near_lock = 0;
+            for k in 0..3000 {
+                let xs: Vec<RigidBodyState> = (0..R::LANES)
+                    .map(|i| {
+                        let mut u = || -> f64 { rng.random_range(-1.0..1.0) };
+                        let theta = match (k + i) % 4 {
+                            0 => (core::f64::consts::FRAC_PI_2 - 10f64.powi(-((k / 4) as i32 % 12))) * u().signum(),
+                            _ => 1.5 * u(),
+                        };
+                        let q = kinematics::quaternion_from_euler(&[3.1 * u(), theta, 3.1 * u()]);
+                        let mut x: RigidBodyState = core::array::from_fn(|_| 5.0 * u());
+                        x[6..10].copy_from_slice(&q);
+                        if (k + 3 * i) % 97 == 0 {
+                            x[7 + i % 3] = f64::NAN;
+                        }
+                        x
+                    })
+                    .collect();
+                let mut lanes = [R::splat(0.0); STATE_LEN];
+                for (i, x) in xs.iter().enumerate() {
+                    lanes.put_lane(i, *x);
+                }
+                let q = to_quad_state(&lanes);
+                for (i, x) in xs.iter().enumerate() {
+                    let one = to_quad_state(x);
+                    near_lock += usize::from(ftsmc_core::math::cos(one.attitude[1]).abs() < 1e-3);
+                    assert_eq!(bits(q.get_lane(i)), bits(one), "lane {i} of {x:?}");
+                }
+            }
+            assert!(near_lock > 100, "{near_lock}");
+        }
+        let mut rng = ChaCha8Rng::seed_from_u64(21);
+        check::<Lanes<4>>(&mut rng);
+        check::<Lanes<8>>(&mut rng);
     }
 
     /// The derivative skips the zero terms of the rotor positions (`r_z = 0`),
