@@ -338,7 +338,7 @@ impl<R: Real> YawSinCos<R> {
         Self { arg: R::splat(0.0), sin: R::splat(s), cos: R::splat(c) }
     }
 
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn get(&mut self, x: R) -> (R, R) {
         for i in 0..R::LANES {
             let xi = x.get_lane(i);
@@ -417,7 +417,7 @@ impl<L: AxisLaw> Cascade<L> {
     }
 
     /// [`Cascade::desired_roll_pitch`] with the clamp `limit = sin(max_tilt)` precomputed.
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     pub fn desired_roll_pitch_limited(ux: f64, uy: f64, yaw_d: f64, limit: f64) -> [f64; 2] {
         desired_roll_pitch_at(ux, uy, sin_cos(yaw_d), limit)
     }
@@ -425,7 +425,7 @@ impl<L: AxisLaw> Cascade<L> {
 
 /// `thrust` bounded to `[lo, hi]` (no `f64::clamp`: never panics; the lower
 /// bound tested first); unchanged without bounds.
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 fn bound_thrust<R: Real>(thrust: R, limits: Option<[f64; 2]>) -> R {
     match limits {
         Some([lo, hi]) => {
@@ -438,7 +438,7 @@ fn bound_thrust<R: Real>(thrust: R, limits: Option<[f64; 2]>) -> R {
 
 /// [`Cascade::desired_roll_pitch_limited`] with `(sin ψ_d, cos ψ_d)` given,
 /// per lane for lanes.
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 fn desired_roll_pitch_at<R: Real>(ux: R, uy: R, (s_psi, c_psi): (R, R), limit: f64) -> [R; 2] {
     let limit = R::splat(limit);
     // `saturate`, not `f64::clamp`: it does not panic on a NaN limit.
@@ -452,7 +452,7 @@ fn desired_roll_pitch_at<R: Real>(ux: R, uy: R, (s_psi, c_psi): (R, R), limit: f
 }
 
 /// Every component of the reference is finite (per lane).
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 fn reference_finite<R: Real>(r: &Reference<R>) -> R::Mask {
     (finite_probe(&r.position)
         + finite_probe(&r.velocity)
@@ -533,9 +533,9 @@ impl<R: Real, L: AxisLaw<R>> Cascade<L, R> {
                     let current = self.filter[i];
                     let f = branch(
                         current.initialised,
-                        #[inline(always)]
+                        #[cfg_attr(not(debug_assertions), inline(always))]
                         || current,
-                        #[inline(always)]
+                        #[cfg_attr(not(debug_assertions), inline(always))]
                         || match init {
                             FilterInit::FirstDemand => {
                                 FilterState { value: demand[i], rate: zero, initialised: R::Mask::splat(true) }
@@ -577,7 +577,7 @@ impl<R: Real, L: AxisLaw<R>> Controller<R> for Cascade<L, R> {
     /// command and keeps every state (its laws are fed NaN errors, which
     /// leaves them untouched by the [`AxisLaw::update`] contract); the
     /// other lanes fly on.
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn update(&mut self, state: &QuadState<R>, reference: &Reference<R>, dt: f64) -> Command<R> {
         let nan = Command { thrust: R::splat(f64::NAN), torque: [R::splat(f64::NAN); 3] };
         if !dt.is_finite() {

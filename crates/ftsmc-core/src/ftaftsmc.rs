@@ -290,7 +290,7 @@ impl Constants {
 /// integer form of [`crate::math::sign`] (the same bits: −1, 0 or +1), which
 /// the scalar law has always used and which costs fewer instructions than
 /// two selects.
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 fn sgn<R: Real>(x: R) -> R {
     if R::LANES == 1 {
         R::splat(sign(x.get_lane(0)))
@@ -300,19 +300,19 @@ fn sgn<R: Real>(x: R) -> R {
 }
 
 /// `sig²(x) = |x|² sign(x)`, the bits of [`crate::math::sig`]`(x, 2.0)`.
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 fn sig2<R: Real>(x: R) -> R {
     Power::Two.abs(x) * sgn(x)
 }
 
 /// `Y(e) = 1 / (ℵ1 + (1 − ℵ1) exp(−ℵ2 |e|^ℵ3))` and its time derivative
 /// (Eq. 6 with the erratum, Eq. 11), per lane for lanes.
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 pub fn gain_shaping<R: Real>(g: &FtaftsmcGains, e: R, e_dot: R) -> (R, R) {
     gain_shaping_c(g, &Constants::new(g, [0.0; 2]), e, e_dot)
 }
 
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 fn gain_shaping_c<R: Real>(g: &FtaftsmcGains, c: &Constants, e: R, e_dot: R) -> (R, R) {
     if g.aleph1 == 1.0 {
         return (R::splat(1.0), R::splat(0.0));
@@ -326,15 +326,15 @@ fn gain_shaping_c<R: Real>(g: &FtaftsmcGains, c: &Constants, e: R, e_dot: R) -> 
     let zero = R::splat(0.0);
     let pow = branch(
         decay.eq(zero),
-        #[inline(always)]
+        #[cfg_attr(not(debug_assertions), inline(always))]
         || zero,
-        #[inline(always)]
+        #[cfg_attr(not(debug_assertions), inline(always))]
         || {
             branch(
                 e.eq(zero),
-                #[inline(always)]
+                #[cfg_attr(not(debug_assertions), inline(always))]
                 || pow_abs_minus_one(e, g.aleph3),
-                #[inline(always)]
+                #[cfg_attr(not(debug_assertions), inline(always))]
                 || c.aleph3_minus_one.abs(e),
             )
         },
@@ -344,53 +344,53 @@ fn gain_shaping_c<R: Real>(g: &FtaftsmcGains, c: &Constants, e: R, e_dot: R) -> 
 }
 
 /// `κ1 = (2 − p) ε^(p−1)`, `κ2 = (p − 1) ε^(p−2)` (Eq. 9).
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 pub fn kappa(g: &FtaftsmcGains) -> [f64; 2] {
     [(2.0 - g.p) * pow_abs(g.epsilon, g.p - 1.0), (g.p - 1.0) * pow_abs(g.epsilon, g.p - 2.0)]
 }
 
 /// `S_Δ(e)` and `Ṡ_Δ` (Eq. 7, 9, 12): `sig^p(e)` outside `|e| ≤ ε`, the
 /// quadratic `κ1 e + κ2 sig²(e)` inside, matching value and slope at `|e| = ε`.
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 pub fn nonsingular_term<R: Real>(g: &FtaftsmcGains, e: R, e_dot: R) -> (R, R) {
     nonsingular_term_with(g, kappa(g), e, e_dot)
 }
 
 /// [`nonsingular_term`] with precomputed `[κ1, κ2]`.
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 pub fn nonsingular_term_with<R: Real>(g: &FtaftsmcGains, kappa: [f64; 2], e: R, e_dot: R) -> (R, R) {
     nonsingular_term_c(g, &Constants::new(g, kappa), e, e_dot)
 }
 
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 fn nonsingular_term_c<R: Real>(g: &FtaftsmcGains, c: &Constants, e: R, e_dot: R) -> (R, R) {
     let [kappa1, kappa2] = c.kappa;
     let ae = e.abs();
     branch(
         ae.gt(R::splat(g.epsilon)),
-        #[inline(always)]
+        #[cfg_attr(not(debug_assertions), inline(always))]
         || {
             let pow_p = c.p.abs(e);
             (pow_p * sgn(e), e_dot * g.p * pow_p / ae)
         },
-        #[inline(always)]
+        #[cfg_attr(not(debug_assertions), inline(always))]
         || (e * kappa1 + sig2(e) * kappa2, e_dot * kappa1 + ae * (2.0 * kappa2) * e_dot),
     )
 }
 
 /// Evaluate the fixed-time sliding surface (Eq. 5) and `ϖ` (Eq. 13).
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 pub fn sliding_surface<R: Real>(g: &FtaftsmcGains, e: R, e_dot: R) -> SurfaceTerms<R> {
     sliding_surface_with(g, kappa(g), e, e_dot)
 }
 
 /// [`sliding_surface`] with precomputed `[κ1, κ2]` (see [`kappa`]).
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 pub fn sliding_surface_with<R: Real>(g: &FtaftsmcGains, kappa: [f64; 2], e: R, e_dot: R) -> SurfaceTerms<R> {
     sliding_surface_c(g, &Constants::new(g, kappa), e, e_dot)
 }
 
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 fn sliding_surface_c<R: Real>(g: &FtaftsmcGains, c: &Constants, e: R, e_dot: R) -> SurfaceTerms<R> {
     let (y, y_dot) = gain_shaping_c(g, c, e, e_dot);
     let (s_delta, s_delta_dot) = nonsingular_term_c(g, c, e, e_dot);
@@ -400,9 +400,9 @@ fn sliding_surface_c<R: Real>(g: &FtaftsmcGains, c: &Constants, e: R, e_dot: R) 
     // d/dt of the same bracket: λ q |e|^(q−1) ė + γ Ṡ_Δ + η ė
     let pow_q_minus_one = branch(
         e.eq(R::splat(0.0)),
-        #[inline(always)]
+        #[cfg_attr(not(debug_assertions), inline(always))]
         || pow_abs_minus_one(e, g.q),
-        #[inline(always)]
+        #[cfg_attr(not(debug_assertions), inline(always))]
         || pow_q / e.abs(),
     );
     let shape_dot = pow_q_minus_one * (g.lambda * g.q) * e_dot + s_delta_dot * g.gamma + e_dot * g.eta;
@@ -412,12 +412,12 @@ fn sliding_surface_c<R: Real>(g: &FtaftsmcGains, c: &Constants, e: R, e_dot: R) 
 /// `ϖ2` (Eq. 15): `−[λ2 sig^q2(S) + γ2 sig^p2(S) + η2 S + δ̂/(2ξ²) S]`,
 /// channel units per s². `|S|^q2` is saturated at
 /// [`crate::law::POWER_LIMIT`] so that it never overflows.
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 pub fn reaching_law<R: Real>(g: &FtaftsmcGains, s: R, delta_hat: R) -> R {
     reaching_law_c(g, &Constants::new(g, [0.0; 2]), s, delta_hat)
 }
 
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 fn reaching_law_c<R: Real>(g: &FtaftsmcGains, c: &Constants, s: R, delta_hat: R) -> R {
     // |S|^q2 and |S|^p2 share ln|S| when both are general powers.
     let (pow_q2, pow_p2) = Power::abs_pair(c.q2, c.p2, s);
@@ -429,12 +429,12 @@ fn reaching_law_c<R: Real>(g: &FtaftsmcGains, c: &Constants, s: R, delta_hat: R)
 }
 
 /// `dδ̂/dt = α1 (S²/(2ξ²) − α2 δ̂)` (Eq. 17).
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 pub fn delta_hat_rate<R: Real>(g: &FtaftsmcGains, s: R, delta_hat: R) -> R {
     delta_hat_rate_c(g, &Constants::new(g, [0.0; 2]), s, delta_hat)
 }
 
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 fn delta_hat_rate_c<R: Real>(g: &FtaftsmcGains, c: &Constants, s: R, delta_hat: R) -> R {
     (s * s / c.two_xi_sq - delta_hat * g.alpha2) * g.alpha1
 }
@@ -527,7 +527,7 @@ impl<R: Real> AxisLaw<R> for FtaftsmcAxis<R> {
     /// Lanes: the guards act per lane — a lane with a non-finite `e` or `ė`
     /// gets NaN and keeps all its states, the others advance (a non-finite
     /// `dt`, shared, gives NaN in every lane).
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn update(&mut self, e: R, e_dot: R, dt: f64) -> R {
         let ok = e.is_finite() & e_dot.is_finite();
         if !(dt.is_finite() && ok.any()) {

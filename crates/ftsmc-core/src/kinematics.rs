@@ -15,7 +15,7 @@ use crate::math::{Mat3, Vec3};
 /// Body-to-world rotation `R = R_z(ψ) R_y(θ) R_x(φ)` of Z-Y-X Euler angles
 /// `[φ, θ, ψ]` (rad); its third column `R e₃` is the thrust direction of
 /// paper Eq. 1 (`cφ sθ cψ + sφ sψ`, `cφ sθ sψ − sφ cψ`, `cφ cθ`).
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 pub fn rotation_from_euler<R: Real>(euler: &Vec3<R>) -> Mat3<R> {
     let (sf, cf) = euler[0].sin_cos();
     let (st, ct) = euler[1].sin_cos();
@@ -30,7 +30,7 @@ pub fn rotation_from_euler<R: Real>(euler: &Vec3<R>) -> Mat3<R> {
 /// Z-Y-X Euler angles `[φ, θ, ψ]` (rad) of a rotation matrix: φ, ψ in
 /// `[−π, π]`, θ in `[−π/2, π/2]` (inverse of [`rotation_from_euler`] away
 /// from θ = ±π/2).
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 pub fn euler_from_rotation<R: Real>(r: &Mat3<R>) -> Vec3<R> {
     // `saturate`, not `f64::clamp`: no panic path, NaN passes through.
     let s = crate::law::saturate(-r[2][0], R::splat(1.0));
@@ -40,7 +40,7 @@ pub fn euler_from_rotation<R: Real>(r: &Mat3<R>) -> Vec3<R> {
 /// Roll and pitch `[φ, θ]` (rad) of a rotation matrix: the first two
 /// components of [`euler_from_rotation`], same bits, without the yaw's
 /// `atan2` (for the controllers that report only the demanded tilt).
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 pub fn roll_pitch_from_rotation<R: Real>(r: &Mat3<R>) -> [R; 2] {
     let s = crate::law::saturate(-r[2][0], R::splat(1.0));
     [r[2][1].atan2(r[2][2]), s.asin()]
@@ -49,7 +49,7 @@ pub fn roll_pitch_from_rotation<R: Real>(r: &Mat3<R>) -> [R; 2] {
 /// Body rates `Ω = W(φ, θ) η̇` (rad/s) from Z-Y-X Euler rates `η̇` at
 /// `euler`: `p = φ̇ − ψ̇ sθ`, `q = θ̇ cφ + ψ̇ cθ sφ`, `r = −θ̇ sφ + ψ̇ cθ cφ`.
 /// Exact, defined everywhere.
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 pub fn body_rates_from_euler_rates<R: Real>(euler: &Vec3<R>, rates: &Vec3<R>) -> Vec3<R> {
     let (sf, cf) = euler[0].sin_cos();
     let (st, ct) = euler[1].sin_cos();
@@ -60,14 +60,14 @@ pub fn body_rates_from_euler_rates<R: Real>(euler: &Vec3<R>, rates: &Vec3<R>) ->
 /// Unit quaternion `[w, x, y, z]` of Z-Y-X Euler angles `[φ, θ, ψ]` (rad):
 /// `q = q_z(ψ) ⊗ q_y(θ) ⊗ q_x(φ)`, so that
 /// [`rotation_from_quaternion`]`(q)` = [`rotation_from_euler`]`(euler)`.
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 pub fn quaternion_from_euler<R: Real>(euler: &Vec3<R>) -> [R; 4] {
     quaternion_from_half_angles(half_angle(euler[0]), half_angle(euler[1]), half_angle(euler[2]))
 }
 
 /// `[sin(a/2), cos(a/2)]` of an angle `a` (rad), the inputs of
 /// [`quaternion_from_half_angles`] and [`full_angle`].
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 pub fn half_angle<R: Real>(a: R) -> [R; 2] {
     // `a · 0.5`: the product `0.5 a` with its operands swapped (same bits).
     let (s, c) = (a * 0.5).sin_cos();
@@ -77,7 +77,7 @@ pub fn half_angle<R: Real>(a: R) -> [R; 2] {
 /// [`quaternion_from_euler`] from the sines and cosines of the half angles
 /// `[sin(φ/2), cos(φ/2)]`, `[sin(θ/2), cos(θ/2)]`, `[sin(ψ/2), cos(ψ/2)]`
 /// ([`half_angle`]).
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 pub fn quaternion_from_half_angles<R: Real>([sr, cr]: [R; 2], [sp, cp]: [R; 2], [sy, cy]: [R; 2]) -> [R; 4] {
     [cr * cp * cy + sr * sp * sy, sr * cp * cy - cr * sp * sy, cr * sp * cy + sr * cp * sy, cr * cp * sy - sr * sp * cy]
 }
@@ -87,7 +87,7 @@ pub fn quaternion_from_half_angles<R: Real>([sr, cr]: [R; 2], [sp, cp]: [R; 2], 
 /// few units in the last place, without a second evaluation (a reading
 /// that needs both its quaternion and its Euler rates takes the half
 /// angles once).
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 pub fn full_angle<R: Real>([s, c]: [R; 2]) -> [R; 2] {
     [s * 2.0 * c, (c - s) * (c + s)]
 }
@@ -95,7 +95,7 @@ pub fn full_angle<R: Real>([s, c]: [R; 2]) -> [R; 2] {
 /// `cos θ` clamped away from 0 to `±`[`GIMBAL_LOCK_COS`] (the sign of
 /// `cos θ`; positive at 0 and for NaN), as [`euler_rates_from_body_rates`]
 /// divides by it.
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 pub fn gimbal_clamped_cos<R: Real>(c: R) -> R {
     let limit = R::splat(GIMBAL_LOCK_COS);
     R::select(c.abs().ge(limit), c, R::select(c.lt(R::splat(0.0)), -limit, limit))
@@ -103,7 +103,7 @@ pub fn gimbal_clamped_cos<R: Real>(c: R) -> R {
 
 /// Body-to-world rotation matrix of a unit quaternion `[w, x, y, z]`
 /// (`v_w = R v_b`; no trigonometry).
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 pub fn rotation_from_quaternion<R: Real>(q: &[R; 4]) -> Mat3<R> {
     let [w, x, y, z] = *q;
     let one = R::splat(1.0);
@@ -137,7 +137,7 @@ pub const GIMBAL_LOCK_COS: f64 = 1e-6;
 /// `euler`: `φ̇ = p + (q sφ + r cφ) tθ`, `θ̇ = q cφ − r sφ`,
 /// `ψ̇ = (q sφ + r cφ)/cθ`, with `cos θ` clamped to `±`[`GIMBAL_LOCK_COS`]
 /// (the sign of cos θ; positive at 0) near the singularity.
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 pub fn euler_rates_from_body_rates<R: Real>(euler: &Vec3<R>, body_rates: &Vec3<R>) -> Vec3<R> {
     let (sf, cf) = euler[0].sin_cos();
     let (st, c) = euler[1].sin_cos();
@@ -149,7 +149,7 @@ pub fn euler_rates_from_body_rates<R: Real>(euler: &Vec3<R>, body_rates: &Vec3<R
 /// `[sφ, cφ]` and `[sθ, cθ]`, however they were obtained (the truth model
 /// reads them off its quaternion); `cθ` must be away from 0 (the caller's
 /// clamp or check).
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 pub fn euler_rates_from_body_rates_with<R: Real>([sf, cf]: [R; 2], [st, c]: [R; 2], body_rates: &Vec3<R>) -> Vec3<R> {
     let [p, q, r] = *body_rates;
     let a = q * sf + r * cf;

@@ -133,7 +133,7 @@ pub trait Real:
     /// NaN.
     fn is_nan(self) -> Self::Mask;
     /// `a` where `m`, else `b`.
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn select(m: Self::Mask, a: Self, b: Self) -> Self {
         Self::blend(m, a, b)
     }
@@ -143,17 +143,17 @@ pub trait Real:
     fn map2(self, other: Self, f: impl Fn(f64, f64) -> f64) -> Self;
 
     /// `sin x` (rad), [`crate::elementary::sin`] per lane.
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn sin(self) -> Self {
         self.map(crate::elementary::sin)
     }
     /// `cos x` (rad), [`crate::elementary::cos`] per lane.
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn cos(self) -> Self {
         self.map(crate::elementary::cos)
     }
     /// `(sin x, cos x)` (rad), [`crate::elementary::sin_cos`] per lane.
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn sin_cos(self) -> (Self, Self) {
         let mut s = self;
         let mut c = self;
@@ -165,37 +165,37 @@ pub trait Real:
         (s, c)
     }
     /// `eˣ`, [`crate::elementary::exp`] per lane.
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn exp(self) -> Self {
         self.map(crate::elementary::exp)
     }
     /// `ln x`, [`crate::elementary::ln`] per lane.
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn ln(self) -> Self {
         self.map(crate::elementary::ln)
     }
     /// `asin x` (rad), [`crate::elementary::asin`] per lane.
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn asin(self) -> Self {
         self.map(crate::elementary::asin)
     }
     /// `acos x` (rad), [`crate::elementary::acos`] per lane.
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn acos(self) -> Self {
         self.map(crate::elementary::acos)
     }
     /// `atan x` (rad), [`crate::elementary::atan`] per lane.
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn atan(self) -> Self {
         self.map(crate::elementary::atan)
     }
     /// `atan2(self, x)` (rad), [`crate::elementary::atan2`] per lane.
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn atan2(self, x: Self) -> Self {
         self.map2(x, crate::elementary::atan2)
     }
     /// `self^y`, [`crate::elementary::powf`] per lane.
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn powf(self, y: Self) -> Self {
         self.map2(y, crate::elementary::powf)
     }
@@ -205,7 +205,7 @@ pub trait Real:
 /// for one flight the plain `if`; for lanes both sides when the lanes
 /// disagree, blended per lane. The closures must not have side effects
 /// (module docs).
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 pub fn branch<M: Mask, T: Blend<M>>(m: M, a: impl FnOnce() -> T, b: impl FnOnce() -> T) -> T {
     if m.all() {
         a()
@@ -220,11 +220,11 @@ pub fn branch<M: Mask, T: Blend<M>>(m: M, a: impl FnOnce() -> T, b: impl FnOnce(
 
 impl Lanewise for f64 {
     type Scalar = f64;
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn get_lane(&self, _i: usize) -> f64 {
         *self
     }
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn put_lane(&mut self, _i: usize, v: f64) {
         *self = v;
     }
@@ -232,18 +232,18 @@ impl Lanewise for f64 {
 
 impl Lanewise for bool {
     type Scalar = bool;
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn get_lane(&self, _i: usize) -> bool {
         *self
     }
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn put_lane(&mut self, _i: usize, v: bool) {
         *self = v;
     }
 }
 
 impl Blend<bool> for f64 {
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn blend(m: bool, a: f64, b: f64) -> f64 {
         if m {
             a
@@ -254,7 +254,7 @@ impl Blend<bool> for f64 {
 }
 
 impl Blend<bool> for bool {
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn blend(m: bool, a: bool, b: bool) -> bool {
         if m {
             a
@@ -265,15 +265,15 @@ impl Blend<bool> for bool {
 }
 
 impl Mask for bool {
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn splat(b: bool) -> Self {
         b
     }
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn all(self) -> bool {
         self
     }
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn any(self) -> bool {
         self
     }
@@ -282,67 +282,67 @@ impl Mask for bool {
 impl Real for f64 {
     type Mask = bool;
     const LANES: usize = 1;
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn splat(v: f64) -> Self {
         v
     }
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn from_fn(mut f: impl FnMut(usize) -> f64) -> Self {
         f(0)
     }
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn sqrt(self) -> Self {
         crate::elementary::sqrt(self)
     }
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn abs(self) -> Self {
         f64::abs(self)
     }
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn min(self, other: Self) -> Self {
         f64::min(self, other)
     }
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn max(self, other: Self) -> Self {
         f64::max(self, other)
     }
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn lt(self, other: Self) -> bool {
         self < other
     }
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn le(self, other: Self) -> bool {
         self <= other
     }
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn gt(self, other: Self) -> bool {
         self > other
     }
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn ge(self, other: Self) -> bool {
         self >= other
     }
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn eq(self, other: Self) -> bool {
         self == other
     }
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn is_finite(self) -> bool {
         f64::is_finite(self)
     }
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn is_nan(self) -> bool {
         f64::is_nan(self)
     }
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn map(self, f: impl Fn(f64) -> f64) -> Self {
         f(self)
     }
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn map2(self, other: Self, f: impl Fn(f64, f64) -> f64) -> Self {
         f(self, other)
     }
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn sin_cos(self) -> (Self, Self) {
         crate::elementary::sin_cos(self)
     }
@@ -364,14 +364,14 @@ pub struct LaneMask<const N: usize>(pub [u64; N]);
 
 impl<const N: usize> Default for LaneMask<N> {
     /// False in every lane.
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn default() -> Self {
         Self([0; N])
     }
 }
 
 impl<const N: usize> Default for Lanes<N> {
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn default() -> Self {
         Self([0.0; N])
     }
@@ -380,7 +380,7 @@ impl<const N: usize> Default for Lanes<N> {
 /// `[f(0), …, f(N − 1)]` by a plain loop (always inlined, unlike
 /// `core::array::from_fn`, whose out-of-line instances would leave lane
 /// arithmetic outside the dispatched kernels).
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 fn lanes_of<const N: usize>(mut f: impl FnMut(usize) -> f64) -> [f64; N] {
     let mut out = [0.0; N];
     for (i, v) in out.iter_mut().enumerate() {
@@ -389,13 +389,13 @@ fn lanes_of<const N: usize>(mut f: impl FnMut(usize) -> f64) -> [f64; N] {
     out
 }
 
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 fn mask_bits(b: bool) -> u64 {
     (b as u64).wrapping_neg()
 }
 
 impl<const N: usize> LaneMask<N> {
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn from_fn(mut f: impl FnMut(usize) -> bool) -> Self {
         let mut m = [0u64; N];
         for (i, v) in m.iter_mut().enumerate() {
@@ -407,11 +407,11 @@ impl<const N: usize> LaneMask<N> {
 
 impl<const N: usize> Lanewise for Lanes<N> {
     type Scalar = f64;
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn get_lane(&self, i: usize) -> f64 {
         self.0[i]
     }
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn put_lane(&mut self, i: usize, v: f64) {
         self.0[i] = v;
     }
@@ -419,11 +419,11 @@ impl<const N: usize> Lanewise for Lanes<N> {
 
 impl<const N: usize> Lanewise for LaneMask<N> {
     type Scalar = bool;
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn get_lane(&self, i: usize) -> bool {
         self.0[i] != 0
     }
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn put_lane(&mut self, i: usize, v: bool) {
         self.0[i] = mask_bits(v);
     }
@@ -431,7 +431,7 @@ impl<const N: usize> Lanewise for LaneMask<N> {
 
 impl<const N: usize> BitAnd for LaneMask<N> {
     type Output = Self;
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn bitand(self, o: Self) -> Self {
         let mut m = self.0;
         for i in 0..N {
@@ -443,7 +443,7 @@ impl<const N: usize> BitAnd for LaneMask<N> {
 
 impl<const N: usize> BitOr for LaneMask<N> {
     type Output = Self;
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn bitor(self, o: Self) -> Self {
         let mut m = self.0;
         for i in 0..N {
@@ -455,14 +455,14 @@ impl<const N: usize> BitOr for LaneMask<N> {
 
 impl<const N: usize> Not for LaneMask<N> {
     type Output = Self;
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn not(self) -> Self {
         Self(self.0.map(|v| !v))
     }
 }
 
 impl<const N: usize> Blend<LaneMask<N>> for LaneMask<N> {
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn blend(m: LaneMask<N>, a: Self, b: Self) -> Self {
         let mut out = [0u64; N];
         for i in 0..N {
@@ -473,22 +473,22 @@ impl<const N: usize> Blend<LaneMask<N>> for LaneMask<N> {
 }
 
 impl<const N: usize> Mask for LaneMask<N> {
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn splat(b: bool) -> Self {
         Self([mask_bits(b); N])
     }
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn all(self) -> bool {
         self.0.iter().fold(u64::MAX, |acc, &v| acc & v) != 0
     }
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn any(self) -> bool {
         self.0.iter().fold(0, |acc, &v| acc | v) != 0
     }
 }
 
 impl<const N: usize> Blend<LaneMask<N>> for Lanes<N> {
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn blend(m: LaneMask<N>, a: Self, b: Self) -> Self {
         let mut out = [0.0; N];
         for i in 0..N {
@@ -502,7 +502,7 @@ macro_rules! lane_binary {
     ($tr:ident, $f:ident, $atr:ident, $af:ident, $op:tt) => {
         impl<const N: usize> $tr for Lanes<N> {
             type Output = Self;
-            #[inline(always)]
+            #[cfg_attr(not(debug_assertions), inline(always))]
             fn $f(self, o: Self) -> Self {
                 let mut out = self.0;
                 for i in 0..N {
@@ -513,7 +513,7 @@ macro_rules! lane_binary {
         }
         impl<const N: usize> $tr<f64> for Lanes<N> {
             type Output = Self;
-            #[inline(always)]
+            #[cfg_attr(not(debug_assertions), inline(always))]
             fn $f(self, o: f64) -> Self {
                 let mut out = self.0;
                 for i in 0..N {
@@ -523,7 +523,7 @@ macro_rules! lane_binary {
             }
         }
         impl<const N: usize> $atr for Lanes<N> {
-            #[inline(always)]
+            #[cfg_attr(not(debug_assertions), inline(always))]
             fn $af(&mut self, o: Self) {
                 *self = *self $op o;
             }
@@ -538,7 +538,7 @@ lane_binary!(Div, div, DivAssign, div_assign, /);
 
 impl<const N: usize> Neg for Lanes<N> {
     type Output = Self;
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn neg(self) -> Self {
         Self(lanes_of(|i| -self.0[i]))
     }
@@ -547,23 +547,23 @@ impl<const N: usize> Neg for Lanes<N> {
 impl<const N: usize> Real for Lanes<N> {
     type Mask = LaneMask<N>;
     const LANES: usize = N;
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn splat(v: f64) -> Self {
         Self([v; N])
     }
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn from_fn(f: impl FnMut(usize) -> f64) -> Self {
         Self(lanes_of(f))
     }
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn sqrt(self) -> Self {
         Self(lanes_of(|i| crate::elementary::sqrt(self.0[i])))
     }
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn abs(self) -> Self {
         Self(lanes_of(|i| self.0[i].abs()))
     }
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn min(self, o: Self) -> Self {
         let mut out = self.0;
         for i in 0..N {
@@ -571,7 +571,7 @@ impl<const N: usize> Real for Lanes<N> {
         }
         Self(out)
     }
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn max(self, o: Self) -> Self {
         let mut out = self.0;
         for i in 0..N {
@@ -579,39 +579,39 @@ impl<const N: usize> Real for Lanes<N> {
         }
         Self(out)
     }
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn lt(self, o: Self) -> LaneMask<N> {
         LaneMask::from_fn(|i| self.0[i] < o.0[i])
     }
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn le(self, o: Self) -> LaneMask<N> {
         LaneMask::from_fn(|i| self.0[i] <= o.0[i])
     }
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn gt(self, o: Self) -> LaneMask<N> {
         LaneMask::from_fn(|i| self.0[i] > o.0[i])
     }
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn ge(self, o: Self) -> LaneMask<N> {
         LaneMask::from_fn(|i| self.0[i] >= o.0[i])
     }
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn eq(self, o: Self) -> LaneMask<N> {
         LaneMask::from_fn(|i| self.0[i] == o.0[i])
     }
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn is_finite(self) -> LaneMask<N> {
         LaneMask::from_fn(|i| self.0[i].is_finite())
     }
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn is_nan(self) -> LaneMask<N> {
         LaneMask::from_fn(|i| self.0[i].is_nan())
     }
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn map(self, f: impl Fn(f64) -> f64) -> Self {
         Self(lanes_of(|i| f(self.0[i])))
     }
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn map2(self, o: Self, f: impl Fn(f64, f64) -> f64) -> Self {
         Self(lanes_of(|i| f(self.0[i], o.0[i])))
     }
@@ -622,7 +622,7 @@ impl<const N: usize> Real for Lanes<N> {
     // below that the scalar calls are faster, so they stay.
     /// [`crate::lanes_math::sin`] (8 lanes and more) or
     /// [`crate::elementary::sin`] per lane: the same bits.
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn sin(self) -> Self {
         if N >= 8 {
             Self(crate::lanes_math::sin(self.0))
@@ -632,7 +632,7 @@ impl<const N: usize> Real for Lanes<N> {
     }
     /// [`crate::lanes_math::cos`] (8 lanes and more) or
     /// [`crate::elementary::cos`] per lane: the same bits.
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn cos(self) -> Self {
         if N >= 8 {
             Self(crate::lanes_math::cos(self.0))
@@ -642,7 +642,7 @@ impl<const N: usize> Real for Lanes<N> {
     }
     /// [`crate::lanes_math::sin_cos`] (8 lanes and more) or
     /// [`crate::elementary::sin_cos`] per lane: the same bits.
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn sin_cos(self) -> (Self, Self) {
         if N >= 8 {
             let (s, c) = crate::lanes_math::sin_cos(self.0);
@@ -658,7 +658,7 @@ impl<const N: usize> Real for Lanes<N> {
     }
     /// [`crate::lanes_math::exp`] (8 lanes and more) or
     /// [`crate::elementary::exp`] per lane: the same bits.
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn exp(self) -> Self {
         if N >= 8 {
             Self(crate::lanes_math::exp(self.0))
@@ -667,13 +667,13 @@ impl<const N: usize> Real for Lanes<N> {
         }
     }
     /// [`crate::lanes_math::ln`]: [`crate::elementary::ln`]'s bits per lane.
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn ln(self) -> Self {
         Self(crate::lanes_math::ln(self.0))
     }
     /// [`crate::lanes_math::asin`] (8 lanes and more) or
     /// [`crate::elementary::asin`] per lane: the same bits.
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn asin(self) -> Self {
         if N >= 8 {
             Self(crate::lanes_math::asin(self.0))
@@ -683,7 +683,7 @@ impl<const N: usize> Real for Lanes<N> {
     }
     /// [`crate::lanes_math::acos`] (8 lanes and more) or
     /// [`crate::elementary::acos`] per lane: the same bits.
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn acos(self) -> Self {
         if N >= 8 {
             Self(crate::lanes_math::acos(self.0))
@@ -693,7 +693,7 @@ impl<const N: usize> Real for Lanes<N> {
     }
     /// [`crate::lanes_math::atan`] (8 lanes and more) or
     /// [`crate::elementary::atan`] per lane: the same bits.
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn atan(self) -> Self {
         if N >= 8 {
             Self(crate::lanes_math::atan(self.0))
@@ -703,7 +703,7 @@ impl<const N: usize> Real for Lanes<N> {
     }
     /// [`crate::lanes_math::atan2`] (8 lanes and more) or
     /// [`crate::elementary::atan2`] per lane: the same bits.
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn atan2(self, x: Self) -> Self {
         if N >= 8 {
             Self(crate::lanes_math::atan2(self.0, x.0))
@@ -717,11 +717,11 @@ impl<const N: usize> Real for Lanes<N> {
 
 impl<T: Lanewise, const K: usize> Lanewise for [T; K] {
     type Scalar = [T::Scalar; K];
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn get_lane(&self, i: usize) -> Self::Scalar {
         core::array::from_fn(|k| self[k].get_lane(i))
     }
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn put_lane(&mut self, i: usize, v: Self::Scalar) {
         for (slot, x) in self.iter_mut().zip(v) {
             slot.put_lane(i, x);
@@ -730,7 +730,7 @@ impl<T: Lanewise, const K: usize> Lanewise for [T; K] {
 }
 
 impl<M: Copy, T: Blend<M> + Copy, const K: usize> Blend<M> for [T; K] {
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn blend(m: M, a: Self, b: Self) -> Self {
         let mut out = a;
         for k in 0..K {
@@ -741,14 +741,14 @@ impl<M: Copy, T: Blend<M> + Copy, const K: usize> Blend<M> for [T; K] {
 }
 
 impl<M: Copy, A: Blend<M>, B: Blend<M>> Blend<M> for (A, B) {
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn blend(m: M, a: Self, b: Self) -> Self {
         (A::blend(m, a.0, b.0), B::blend(m, a.1, b.1))
     }
 }
 
 impl<M: Copy, A: Blend<M>, B: Blend<M>, C: Blend<M>> Blend<M> for (A, B, C) {
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn blend(m: M, a: Self, b: Self) -> Self {
         (A::blend(m, a.0, b.0), B::blend(m, a.1, b.1), C::blend(m, a.2, b.2))
     }
@@ -756,11 +756,11 @@ impl<M: Copy, A: Blend<M>, B: Blend<M>, C: Blend<M>> Blend<M> for (A, B, C) {
 
 impl<A: Lanewise, B: Lanewise> Lanewise for (A, B) {
     type Scalar = (A::Scalar, B::Scalar);
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn get_lane(&self, i: usize) -> Self::Scalar {
         (self.0.get_lane(i), self.1.get_lane(i))
     }
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn put_lane(&mut self, i: usize, v: Self::Scalar) {
         self.0.put_lane(i, v.0);
         self.1.put_lane(i, v.1);
@@ -773,11 +773,11 @@ impl<A: Lanewise, B: Lanewise> Lanewise for (A, B) {
 /// `None`.
 impl<T: Lanewise + Default> Lanewise for Option<T> {
     type Scalar = Option<T::Scalar>;
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn get_lane(&self, i: usize) -> Self::Scalar {
         self.as_ref().map(|x| x.get_lane(i))
     }
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn put_lane(&mut self, i: usize, v: Self::Scalar) {
         match v {
             Some(v) => self.get_or_insert_with(T::default).put_lane(i, v),
@@ -789,7 +789,7 @@ impl<T: Lanewise + Default> Lanewise for Option<T> {
 impl<M: Copy, T: Blend<M>> Blend<M> for Option<T> {
     /// Both present: blended; otherwise `a` (the presence is the same in
     /// every lane).
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn blend(m: M, a: Self, b: Self) -> Self {
         match (a, b) {
             (Some(a), Some(b)) => Some(T::blend(m, a, b)),
@@ -815,21 +815,21 @@ macro_rules! lanewise_struct {
     ($name:ident { $($field:ident),* $(,)? } $(shared { $($shared:ident),* $(,)? })?) => {
         impl<R: $crate::lanes::Real> $crate::lanes::Lanewise for $name<R> {
             type Scalar = $name<f64>;
-            #[inline(always)]
+            #[cfg_attr(not(debug_assertions), inline(always))]
             fn get_lane(&self, i: usize) -> $name<f64> {
                 $name {
                     $($field: $crate::lanes::Lanewise::get_lane(&self.$field, i),)*
                     $($($shared: ::core::clone::Clone::clone(&self.$shared),)*)?
                 }
             }
-            #[inline(always)]
+            #[cfg_attr(not(debug_assertions), inline(always))]
             fn put_lane(&mut self, i: usize, v: $name<f64>) {
                 $($crate::lanes::Lanewise::put_lane(&mut self.$field, i, v.$field);)*
                 $($(self.$shared = v.$shared;)*)?
             }
         }
         impl<R: $crate::lanes::Real> $crate::lanes::Blend<R::Mask> for $name<R> {
-            #[inline(always)]
+            #[cfg_attr(not(debug_assertions), inline(always))]
             fn blend(m: R::Mask, a: Self, b: Self) -> Self {
                 $name {
                     $($field: $crate::lanes::Blend::blend(m, a.$field, b.$field),)*
@@ -918,12 +918,12 @@ mod tests {
         };
         let y = branch(
             Real::gt(x, Lanes::splat(0.0)),
-            #[inline(always)]
+            #[cfg_attr(not(debug_assertions), inline(always))]
             || {
                 count(true);
                 Real::sqrt(x)
             },
-            #[inline(always)]
+            #[cfg_attr(not(debug_assertions), inline(always))]
             || {
                 count(false);
                 -x
@@ -934,12 +934,12 @@ mod tests {
         calls.set((0, 0));
         let _ = branch(
             Real::gt(x, Lanes::splat(-10.0)),
-            #[inline(always)]
+            #[cfg_attr(not(debug_assertions), inline(always))]
             || {
                 count(true);
                 x
             },
-            #[inline(always)]
+            #[cfg_attr(not(debug_assertions), inline(always))]
             || {
                 count(false);
                 x
@@ -948,9 +948,9 @@ mod tests {
         assert_eq!(calls.get(), (1, 0));
         let s = branch(
             2.0 > 1.0,
-            #[inline(always)]
+            #[cfg_attr(not(debug_assertions), inline(always))]
             || 1.0,
-            #[inline(always)]
+            #[cfg_attr(not(debug_assertions), inline(always))]
             || f64::NAN,
         );
         assert_eq!(s, 1.0);

@@ -43,25 +43,25 @@ use crate::elementary as math;
 // ------------------------------------------------------------------ helpers
 
 /// All bits set where `b`, clear elsewhere.
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 fn bits(b: bool) -> u64 {
     (b as u64).wrapping_neg()
 }
 
 /// Some lane flagged.
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 fn any<const N: usize>(m: &[u64; N]) -> bool {
     m.iter().fold(0, |acc, &v| acc | v) != 0
 }
 
 /// `a` where `m`, else `b` (a select, not a branch, once vectorised).
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 fn sel(m: bool, a: f64, b: f64) -> f64 {
     f64::from_bits((a.to_bits() & bits(m)) | (b.to_bits() & !bits(m)))
 }
 
 /// High 32 bits of `x`'s representation (fdlibm's `GET_HIGH_WORD`).
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 fn high(x: f64) -> u32 {
     (x.to_bits() >> 32) as u32
 }
@@ -95,7 +95,7 @@ const P5: f64 = 4.13813679705723846039e-08; /* 0x3E663769, 0x72BEA4D0 */
 /// `|x| < 708.39…` (where `2ᵏ` is a normal number) and `x < −745.13…`
 /// (`+0`, down to `−∞`); NaN, `+∞`, overflow and the subnormal results go
 /// through the scalar function.
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 pub fn exp<const N: usize>(x: [f64; N]) -> [f64; N] {
     let mut out = [0.0; N];
     let mut rare = [0u64; N];
@@ -162,7 +162,7 @@ const LG7: f64 = 1.479819860511658591e-01; /* 3FC2F112 DF3E5244 */
 /// degree-14 polynomial in `s = f/(2 + f)`), bit for bit. Vectorised for
 /// positive normal finite `x` and `±0` (`−∞`); negative, subnormal, `+∞`
 /// and NaN lanes go through the scalar function.
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 pub fn ln<const N: usize>(x: [f64; N]) -> [f64; N] {
     let mut out = [0.0; N];
     let mut rare = [0u64; N];
@@ -228,7 +228,7 @@ const AT: [f64; 11] = [
 
 /// One lane of `atan` (`s_atan.c`) without its `|x| ≥ 2⁶⁶`/NaN branch:
 /// `(value, rare)`, `rare` where that branch applies.
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 fn atan_lane(x: f64) -> (f64, bool) {
     let hfull = high(x);
     let sign = hfull >> 31;
@@ -295,7 +295,7 @@ fn atan_lane(x: f64) -> (f64, bool) {
 /// and an odd degree-23 polynomial), bit for bit. Vectorised for
 /// `|x| < 2⁶⁶`; larger, infinite and NaN lanes go through the scalar
 /// function.
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 pub fn atan<const N: usize>(x: [f64; N]) -> [f64; N] {
     let mut out = [0.0; N];
     let mut rare = [0u64; N];
@@ -321,7 +321,7 @@ const PI_LO: f64 = 1.2246467991473531772E-16; /* 0x3CA1A626, 0x33145C07 */
 /// finite arguments with `x ≠ 1`, including `y = 0`, `x = 0` and
 /// `|y/x| > 2⁶⁴`; NaN, infinite and `x = 1` lanes go through the scalar
 /// function.
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 pub fn atan2<const N: usize>(y: [f64; N], x: [f64; N]) -> [f64; N] {
     let mut out = [0.0; N];
     let mut rare = [0u64; N];
@@ -391,7 +391,7 @@ const QS3: f64 = -6.88283971605453293030e-01; /* 0xBFE6066C, 0x1B8D0159 */
 const QS4: f64 = 7.70381505559019352791e-02; /* 0x3FB3B8C5, 0xB12E9282 */
 
 /// The rational approximation shared by `asin` and `acos` (`R(z)`).
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 fn comp_r(z: f64) -> f64 {
     let p = z * (PS0 + z * (PS1 + z * (PS2 + z * (PS3 + z * (PS4 + z * PS5)))));
     let q = 1.0 + z * (QS1 + z * (QS2 + z * (QS3 + z * QS4)));
@@ -405,7 +405,7 @@ const X1P_120: f64 = f64::from_bits(0x3870_0000_0000_0000);
 /// fdlibm's `e_asin.c`: `x + x R(x²)` for `|x| < ½`, else through
 /// `√((1 − |x|)/2)`), bit for bit. Vectorised for `|x| ≤ 1`; `|x| > 1`
 /// and NaN lanes go through the scalar function.
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 pub fn asin<const N: usize>(x: [f64; N]) -> [f64; N] {
     let mut out = [0.0; N];
     let mut rare = [0u64; N];
@@ -446,7 +446,7 @@ pub fn asin<const N: usize>(x: [f64; N]) -> [f64; N] {
 /// fdlibm's `e_acos.c`: `π/2 − (x + x R(x²))` for `|x| < ½`, else through
 /// `√((1 ∓ x)/2)`), bit for bit. Vectorised for `|x| ≤ 1`; `|x| > 1` and
 /// NaN lanes go through the scalar function.
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 pub fn acos<const N: usize>(x: [f64; N]) -> [f64; N] {
     let mut out = [0.0; N];
     let mut rare = [0u64; N];
@@ -510,7 +510,7 @@ const PIO2_3: f64 = 2.02226624871116645580e-21; /* 0x3BA3198A, 0x2E000000 */
 const PIO2_3T: f64 = 8.47842766036889956997e-32; /* 0x397B839A, 0x252049C1 */
 
 /// `__sin(x, y, iy)` (`k_sin.c`) with the `iy` branch as a select.
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 fn k_sin(x: f64, y: f64, iy: bool) -> f64 {
     let z = x * x;
     let w = z * z;
@@ -520,7 +520,7 @@ fn k_sin(x: f64, y: f64, iy: bool) -> f64 {
 }
 
 /// `__cos(x, y)` (`k_cos.c`).
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 fn k_cos(x: f64, y: f64) -> f64 {
     let z = x * x;
     let w = z * z;
@@ -533,7 +533,7 @@ fn k_cos(x: f64, y: f64) -> f64 {
 /// The Cody-Waite reduction of `__rem_pio2`'s medium case
 /// (`|x| < 2²⁰ π/2`): `(n, y0, y1)`, up to three rounds as the scalar code
 /// takes them (computed all, then selected).
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 fn medium_lane(x: f64, ix: u32) -> (i32, f64, f64) {
     let tmp = x * INV_PIO2 + TO_INT;
     let f_n = tmp - TO_INT;
@@ -569,7 +569,7 @@ fn medium_lane(x: f64, ix: u32) -> (i32, f64, f64) {
 /// ±∞, NaN and `|x| ≥ 2²⁰ π/2` (`__rem_pio2_large`). The medium reduction
 /// is computed only when some lane needs it.
 #[allow(clippy::type_complexity)]
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 fn sin_cos_core<const N: usize>(x: &[f64; N]) -> ([f64; N], [f64; N], [u32; N], [u32; N], [u64; N]) {
     let mut y0 = [0.0; N];
     let mut y1 = [0.0; N];
@@ -633,7 +633,7 @@ fn sin_cos_core<const N: usize>(x: &[f64; N]) -> ([f64; N], [f64; N], [u32; N], 
 /// `s_sin.c`: `__rem_pio2` reduction to `[−π/4, π/4]` and the `__sin` /
 /// `__cos` polynomials), bit for bit. Vectorised for `|x| < 2²⁰ π/2`;
 /// larger, infinite and NaN lanes go through the scalar function.
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 pub fn sin<const N: usize>(x: [f64; N]) -> [f64; N] {
     let mut out = [0.0; N];
     let (s, c, q, ix, rare) = sin_cos_core(&x);
@@ -654,7 +654,7 @@ pub fn sin<const N: usize>(x: [f64; N]) -> [f64; N] {
 /// `cos x` (rad) on each lane: [`crate::math::cos`] (`libm::cos`, fdlibm's
 /// `s_cos.c`), bit for bit. Vectorised for `|x| < 2²⁰ π/2`; larger,
 /// infinite and NaN lanes go through the scalar function.
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 pub fn cos<const N: usize>(x: [f64; N]) -> [f64; N] {
     let mut out = [0.0; N];
     let (s, c, q, ix, rare) = sin_cos_core(&x);
@@ -675,7 +675,7 @@ pub fn cos<const N: usize>(x: [f64; N]) -> [f64; N] {
 /// `(sin x, cos x)` (rad) on each lane: [`crate::math::sin_cos`]
 /// (`libm::sincos`), bit for bit. Vectorised for `|x| < 2²⁰ π/2`; larger,
 /// infinite and NaN lanes go through the scalar function.
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 pub fn sin_cos<const N: usize>(x: [f64; N]) -> ([f64; N], [f64; N]) {
     let mut so = [0.0; N];
     let mut co = [0.0; N];

@@ -137,7 +137,7 @@ pub const POWER_LIMIT: f64 = 1e100;
 /// `-limit > t ? -limit : t`, which compile to one `minsd` and one `maxsd`
 /// (NaN in `x` passes through both) instead of two compare-and-branch
 /// pairs: the laws call it dozens of times per period.
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 pub fn saturate<R: crate::lanes::Real>(x: R, limit: R) -> R {
     let upper = R::select(limit.lt(x), limit, x);
     R::select((-limit).gt(upper), -limit, upper)
@@ -147,7 +147,7 @@ pub fn saturate<R: crate::lanes::Real>(x: R, limit: R) -> R {
 /// leaves its states untouched when this is false, so one bad measurement
 /// is reported as divergence by the caller and does not poison the
 /// adaptive states.
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 pub fn inputs_finite(e: f64, e_dot: f64, dt: f64) -> bool {
     e.is_finite() && e_dot.is_finite() && dt.is_finite()
 }

@@ -35,7 +35,7 @@
 ///
 /// A law that raises to the same exponent every period chooses the path
 /// once with [`Power::new`]; this function is `Power::new(a).abs(x)`.
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 pub fn pow_abs<R: Real>(x: R, a: f64) -> R {
     Power::new(a).abs(x)
 }
@@ -66,7 +66,7 @@ pub enum Power {
 
 impl Power {
     /// The path of [`pow_abs`] for the exponent `a` (dimensionless).
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     pub fn new(a: f64) -> Self {
         if a == 1.0 {
             Self::One
@@ -88,7 +88,7 @@ impl Power {
     }
 
     /// `|x|^a` (same bits as [`pow_abs`]), per lane for lanes.
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     pub fn abs<R: Real>(self, x: R) -> R {
         let ax = x.abs();
         match self {
@@ -107,7 +107,7 @@ impl Power {
     }
 
     /// `min(|x|^a, POWER_LIMIT)` (same bits as [`pow_abs_sat`]).
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     pub fn abs_sat<R: Real>(self, x: R) -> R {
         saturate_power(self.abs(x))
     }
@@ -115,7 +115,7 @@ impl Power {
     /// `(|x|^a, |x|^b)` for two exponents of the same base: for two
     /// [`Power::General`] exponents `ln|x|` is taken once (the same bits
     /// as two [`Power::abs`] calls, one logarithm fewer).
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     pub fn abs_pair<R: Real>(a: Self, b: Self, x: R) -> (R, R) {
         match (a, b) {
             (Self::General(ea), Self::General(eb)) => {
@@ -129,7 +129,7 @@ impl Power {
 
 /// `min(v, POWER_LIMIT)`: `v` saturated at [`crate::law::POWER_LIMIT`]
 /// (1e100), the bound of [`pow_abs_sat`].
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 pub fn saturate_power<R: Real>(v: R) -> R {
     let limit = R::splat(crate::law::POWER_LIMIT);
     R::select(v.gt(limit), limit, v)
@@ -138,7 +138,7 @@ pub fn saturate_power<R: Real>(v: R) -> R {
 /// `min(|x|^a, POWER_LIMIT)`: [`pow_abs`] saturated at
 /// [`crate::law::POWER_LIMIT`] (1e100), so that it never overflows to
 /// infinity; identical to [`pow_abs`] below the limit.
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 pub fn pow_abs_sat<R: Real>(x: R, a: f64) -> R {
     saturate_power(pow_abs(x, a))
 }
@@ -146,35 +146,35 @@ pub fn pow_abs_sat<R: Real>(x: R, a: f64) -> R {
 /// `sign(x)`: −1, 0 or +1 (0 at exactly ±0 and for NaN, unlike
 /// `f64::signum`). Computed as `(x > 0) − (x < 0)` in integers and
 /// converted (exact), which compiles without branches.
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 pub fn sign(x: f64) -> f64 {
     f64::from(i32::from(x > 0.0) - i32::from(x < 0.0))
 }
 
 /// [`sign`] of one flight or of lanes: −1, 0 or +1 per lane (0 at ±0 and
 /// NaN), the same bits as [`sign`] in every lane.
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 pub fn sign_of<R: Real>(x: R) -> R {
     let zero = R::splat(0.0);
     R::select(x.gt(zero), R::splat(1.0), R::select(x.lt(zero), R::splat(-1.0), zero))
 }
 
 /// `sig^a(x) = |x|^a sign(x)` (paper notation after Eq. 5).
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 pub fn sig<R: Real>(x: R, a: f64) -> R {
     pow_abs(x, a) * sign_of(x)
 }
 
 /// `|x|^(a−1)` used in derivatives of `sig^a`; returns 0 at `x = 0` when the
 /// power would be singular (`a < 1`) so that callers stay finite.
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 pub fn pow_abs_minus_one<R: Real>(x: R, a: f64) -> R {
     let at_zero = R::splat(if a == 1.0 { 1.0 } else { 0.0 });
     crate::lanes::branch(
         x.eq(R::splat(0.0)),
-        #[inline(always)]
+        #[cfg_attr(not(debug_assertions), inline(always))]
         || at_zero,
-        #[inline(always)]
+        #[cfg_attr(not(debug_assertions), inline(always))]
         || pow_abs(x, a - 1.0),
     )
 }
@@ -209,7 +209,7 @@ impl SinCosCache {
     }
 
     /// `(sin x, cos x)` (rad), the same bits as [`sin_cos`]`(x)`.
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     pub fn get(&mut self, x: f64) -> (f64, f64) {
         if x.to_bits() != self.bits {
             self.value = sin_cos(x);
@@ -224,7 +224,7 @@ impl SinCosCache {
 /// `finite_probe(a) + finite_probe(b) == 0.0` checks many values with
 /// neither a branch per value nor a copy; the compiler may not fold
 /// `v − v` to 0 (IEEE 754).
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 #[allow(clippy::eq_op)] // v − v is the point: NaN for a non-finite v.
 pub fn finite_probe<R: Real>(values: &[R]) -> R {
     let mut sum = R::splat(0.0);
@@ -240,37 +240,37 @@ pub type Vec3<R = f64> = [R; 3];
 pub type Mat3<R = f64> = [[R; 3]; 3];
 
 /// `a · b`.
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 pub fn dot<R: Real>(a: &Vec3<R>, b: &Vec3<R>) -> R {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
 /// `a × b`.
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 pub fn cross<R: Real>(a: &Vec3<R>, b: &Vec3<R>) -> Vec3<R> {
     [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
 }
 
 /// Euclidean norm `‖a‖`.
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 pub fn norm<R: Real>(a: &Vec3<R>) -> R {
     dot(a, a).sqrt()
 }
 
 /// `m a`.
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 pub fn mat_vec<R: Real>(m: &Mat3<R>, a: &Vec3<R>) -> Vec3<R> {
     [dot(&m[0], a), dot(&m[1], a), dot(&m[2], a)]
 }
 
 /// `mᵀ a`.
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 pub fn mat_t_vec<R: Real>(m: &Mat3<R>, a: &Vec3<R>) -> Vec3<R> {
     core::array::from_fn(|i| m[0][i] * a[0] + m[1][i] * a[1] + m[2][i] * a[2])
 }
 
 /// `aᵀ b` of two 3×3 matrices.
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 pub fn mat_t_mat<R: Real>(a: &Mat3<R>, b: &Mat3<R>) -> Mat3<R> {
     core::array::from_fn(|i| core::array::from_fn(|j| a[0][i] * b[0][j] + a[1][i] * b[1][j] + a[2][i] * b[2][j]))
 }

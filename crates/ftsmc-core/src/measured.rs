@@ -29,7 +29,7 @@ crate::lanewise_struct!(BodyAttitude { quaternion, body_rates });
 
 impl<R: Real> BodyAttitude<R> {
     /// True (per lane) when every component is finite.
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     pub fn is_finite(&self) -> R::Mask {
         (crate::math::finite_probe(&self.quaternion) + crate::math::finite_probe(&self.body_rates)).eq(R::splat(0.0))
     }

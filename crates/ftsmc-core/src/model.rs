@@ -124,7 +124,7 @@ crate::lanewise_struct!(QuadState { position, attitude, velocity, angular_rate }
 impl<R: Real> QuadState<R> {
     /// True (per lane) when all twelve components are finite (branch-free,
     /// [`crate::math::finite_probe`]).
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     pub fn is_finite(&self) -> R::Mask {
         use crate::math::finite_probe;
         (finite_probe(&self.position)
@@ -137,7 +137,7 @@ impl<R: Real> QuadState<R> {
 
 impl QuadState {
     /// Flatten to `[x, y, z, φ, θ, ψ, ẋ, ẏ, ż, φ̇, θ̇, ψ̇]`.
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     pub fn to_array(&self) -> [f64; 12] {
         let mut a = [0.0; 12];
         a[0..3].copy_from_slice(&self.position);
@@ -148,7 +148,7 @@ impl QuadState {
     }
 
     /// Inverse of [`QuadState::to_array`].
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     pub fn from_array(a: &[f64; 12]) -> Self {
         Self {
             position: [a[0], a[1], a[2]],

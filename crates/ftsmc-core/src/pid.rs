@@ -320,7 +320,7 @@ impl PidGains {
 type Quat<R = f64> = [R; 4];
 
 /// Hamilton product `a ⊗ b`.
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 fn quat_mul<R: Real>(a: &Quat<R>, b: &Quat<R>) -> Quat<R> {
     [
         a[0] * b[0] - a[1] * b[1] - a[2] * b[2] - a[3] * b[3],
@@ -331,45 +331,45 @@ fn quat_mul<R: Real>(a: &Quat<R>, b: &Quat<R>) -> Quat<R> {
 }
 
 /// Conjugate `q*` (the inverse of a unit quaternion).
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 fn quat_conj<R: Real>(q: &Quat<R>) -> Quat<R> {
     [q[0], -q[1], -q[2], -q[3]]
 }
 
 /// `q / ‖q‖`; the identity where `‖q‖` is 0 (or NaN).
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 fn quat_normalise<R: Real>(q: Quat<R>) -> Quat<R> {
     let n = (q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]).sqrt();
     branch(
         n.gt(R::splat(0.0)),
-        #[inline(always)]
+        #[cfg_attr(not(debug_assertions), inline(always))]
         || [q[0] / n, q[1] / n, q[2] / n, q[3] / n],
-        #[inline(always)]
+        #[cfg_attr(not(debug_assertions), inline(always))]
         || unit_quat(),
     )
 }
 
 /// The identity rotation `[1, 0, 0, 0]`.
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 fn unit_quat<R: Real>() -> Quat<R> {
     let zero = R::splat(0.0);
     [R::splat(1.0), zero, zero, zero]
 }
 
 /// `q` or `−q`, whichever has `w >= 0` (the shorter rotation).
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 fn canonical<R: Real>(q: Quat<R>) -> Quat<R> {
     branch(
         q[0].lt(R::splat(0.0)),
-        #[inline(always)]
+        #[cfg_attr(not(debug_assertions), inline(always))]
         || [-q[0], -q[1], -q[2], -q[3]],
-        #[inline(always)]
+        #[cfg_attr(not(debug_assertions), inline(always))]
         || q,
     )
 }
 
 /// Quaternion of a rotation matrix (Shepperd's method: largest pivot).
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 fn quat_from_rotation<R: Real>(r: &Mat3<R>) -> Quat<R> {
     let zero = R::splat(0.0);
     let one = R::splat(1.0);
@@ -378,30 +378,30 @@ fn quat_from_rotation<R: Real>(r: &Mat3<R>) -> Quat<R> {
     // sum `1 + trace` with their operands swapped (same bits).
     let q = branch(
         trace.gt(zero),
-        #[inline(always)]
+        #[cfg_attr(not(debug_assertions), inline(always))]
         || {
             let s = (trace + 1.0).sqrt() * 2.0;
             [s * 0.25, (r[2][1] - r[1][2]) / s, (r[0][2] - r[2][0]) / s, (r[1][0] - r[0][1]) / s]
         },
-        #[inline(always)]
+        #[cfg_attr(not(debug_assertions), inline(always))]
         || {
             branch(
                 r[0][0].gt(r[1][1]) & r[0][0].gt(r[2][2]),
-                #[inline(always)]
+                #[cfg_attr(not(debug_assertions), inline(always))]
                 || {
                     let s = (one + r[0][0] - r[1][1] - r[2][2]).max(zero).sqrt() * 2.0;
                     [(r[2][1] - r[1][2]) / s, s * 0.25, (r[0][1] + r[1][0]) / s, (r[0][2] + r[2][0]) / s]
                 },
-                #[inline(always)]
+                #[cfg_attr(not(debug_assertions), inline(always))]
                 || {
                     branch(
                         r[1][1].gt(r[2][2]),
-                        #[inline(always)]
+                        #[cfg_attr(not(debug_assertions), inline(always))]
                         || {
                             let s = (one + r[1][1] - r[0][0] - r[2][2]).max(zero).sqrt() * 2.0;
                             [(r[0][2] - r[2][0]) / s, (r[0][1] + r[1][0]) / s, s * 0.25, (r[1][2] + r[2][1]) / s]
                         },
-                        #[inline(always)]
+                        #[cfg_attr(not(debug_assertions), inline(always))]
                         || {
                             let s = (one + r[2][2] - r[0][0] - r[1][1]).max(zero).sqrt() * 2.0;
                             [(r[1][0] - r[0][1]) / s, (r[0][2] + r[2][0]) / s, (r[1][2] + r[2][1]) / s, s * 0.25]
@@ -416,7 +416,7 @@ fn quat_from_rotation<R: Real>(r: &Mat3<R>) -> Quat<R> {
 
 /// Shortest-arc rotation taking the unit vector `u` onto the unit vector
 /// `v`; for opposite vectors, a half turn about an axis perpendicular to `u`.
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 fn quat_between<R: Real>(u: &Vec3<R>, v: &Vec3<R>) -> Quat<R> {
     let zero = R::splat(0.0);
     let one = R::splat(1.0);
@@ -424,14 +424,14 @@ fn quat_between<R: Real>(u: &Vec3<R>, v: &Vec3<R>) -> Quat<R> {
     let d = dot(u, v);
     branch(
         norm(&c).lt(R::splat(1e-9)) & d.lt(zero),
-        #[inline(always)]
+        #[cfg_attr(not(debug_assertions), inline(always))]
         || {
             // Half turn about the axis perpendicular to u with the smallest components.
             let axis = branch(
                 u[0].abs().lt(R::splat(0.9)),
-                #[inline(always)]
+                #[cfg_attr(not(debug_assertions), inline(always))]
                 || cross(u, &[one, zero, zero]),
-                #[inline(always)]
+                #[cfg_attr(not(debug_assertions), inline(always))]
                 || cross(u, &[zero, one, zero]),
             );
             let n = norm(&axis);
@@ -444,22 +444,22 @@ fn quat_between<R: Real>(u: &Vec3<R>, v: &Vec3<R>) -> Quat<R> {
 
 /// PX4 `ControlMath::constrainXY`: `v0 + v1` limited to norm `max` (m/s),
 /// keeping `v0` first (the position part before the feed-forward).
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 fn constrain_xy<R: Real>(v0: [R; 2], v1: [R; 2], max: f64) -> [R; 2] {
     let sum = [v0[0] + v1[0], v0[1] + v1[1]];
     let n_sum = (sum[0] * sum[0] + sum[1] * sum[1]).sqrt();
     branch(
         n_sum.le(R::splat(max)),
-        #[inline(always)]
+        #[cfg_attr(not(debug_assertions), inline(always))]
         || sum,
-        #[inline(always)]
+        #[cfg_attr(not(debug_assertions), inline(always))]
         || {
             let n0 = (v0[0] * v0[0] + v0[1] * v0[1]).sqrt();
             branch(
                 n0.ge(R::splat(max)),
-                #[inline(always)]
+                #[cfg_attr(not(debug_assertions), inline(always))]
                 || [v0[0] / n0 * max, v0[1] / n0 * max],
-                #[inline(always)]
+                #[cfg_attr(not(debug_assertions), inline(always))]
                 || {
                     // |v0 + s v1| = max, s in [0, 1): a s² + b s + c = 0.
                     let a = v1[0] * v1[0] + v1[1] * v1[1];
@@ -566,7 +566,7 @@ impl<R: Real> PidController<R> {
 
     /// The low-pass weights `α = 1 − e^{−2π f_c dt}` of the velocity and
     /// rate derivative filters for a period `dt` (s), computed when `dt` changes.
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn derivative_alphas(&mut self, dt: f64) -> [f64; 2] {
         if self.alpha_dt != dt.to_bits() {
             let alpha = |hz: f64| 1.0 - exp(-2.0 * core::f64::consts::PI * hz * dt);
@@ -578,7 +578,7 @@ impl<R: Real> PidController<R> {
 
     /// First-order low-pass (weight `alpha`, [`Self::derivative_alphas`]) of
     /// a finite difference over `dt`; `previous` is updated to `value`.
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn filtered_derivative(value: &Vec3<R>, previous: &mut Vec3<R>, filtered: &mut Vec3<R>, alpha: f64, dt: f64) {
         if dt > 0.0 {
             let limit = R::splat(INPUT_LIMIT);
@@ -592,7 +592,7 @@ impl<R: Real> PidController<R> {
     }
 
     /// Body-rate setpoint of the quaternion P law (step 7), rad/s.
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn rate_setpoint(&self, r: &Mat3<R>, q: &Quat<R>, r_d: &Mat3<R>, yaw_rate: R) -> Vec3<R> {
         let k = &self.gains;
         let zero = R::splat(0.0);
@@ -605,7 +605,7 @@ impl<R: Real> PidController<R> {
             tilt[1].abs().gt(reversed) | tilt[2].abs().gt(reversed),
             // Thrust axis exactly reversed: full attitude control (PX4's corner case).
             || q_d,
-            #[inline(always)]
+            #[cfg_attr(not(debug_assertions), inline(always))]
             || quat_mul(&tilt, q),
         );
         let mut dyaw = canonical(quat_mul(&quat_conj(&q_red), &q_d));
@@ -632,7 +632,7 @@ impl<R: Real> PidController<R> {
     /// attitude or reference is not finite gets a NaN command and keeps
     /// every internal state (and its telemetry) as it was, as a one-flight
     /// controller returns early; the other lanes fly [`Self::law`].
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn update_with(
         &mut self,
         state: &QuadState<R>,
@@ -653,7 +653,7 @@ impl<R: Real> PidController<R> {
     }
 
     /// Restore the per-lane states of `saved` in the lanes of `keep`.
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn keep_lanes(&mut self, keep: R::Mask, saved: &Self) {
         self.velocity_integral = Blend::blend(keep, saved.velocity_integral, self.velocity_integral);
         self.rate_integral = Blend::blend(keep, saved.rate_integral, self.rate_integral);
@@ -671,7 +671,7 @@ impl<R: Real> PidController<R> {
     /// rotation `R`, its quaternion and the body rates come from `attitude`
     /// when given, else from the Euler state (`R = R_z R_y R_x`, Shepperd's
     /// quaternion, `Ω = W η̇`).
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn law(
         &mut self,
         state: &QuadState<R>,
@@ -761,9 +761,9 @@ impl<R: Real> PidController<R> {
         let xy_capped = horizontal.gt(xy_max);
         [thrust[0], thrust[1]] = branch(
             xy_capped,
-            #[inline(always)]
+            #[cfg_attr(not(debug_assertions), inline(always))]
             || [thrust[0] * (xy_max / horizontal), thrust[1] * (xy_max / horizontal)],
-            #[inline(always)]
+            #[cfg_attr(not(debug_assertions), inline(always))]
             || [thrust[0], thrust[1]],
         );
 
@@ -795,9 +795,9 @@ impl<R: Real> PidController<R> {
         let magnitude = norm(&thrust);
         let b3 = branch(
             magnitude.gt(zero),
-            #[inline(always)]
+            #[cfg_attr(not(debug_assertions), inline(always))]
             || thrust.map(|t| t / magnitude),
-            #[inline(always)]
+            #[cfg_attr(not(debug_assertions), inline(always))]
             || [zero, zero, one],
         );
         let (s, c) = self.yaw_sin_cos.get(reference.yaw);
@@ -805,9 +805,9 @@ impl<R: Real> PidController<R> {
         let n1 = norm(&b1);
         let b1 = branch(
             n1.gt(R::splat(1e-9)),
-            #[inline(always)]
+            #[cfg_attr(not(debug_assertions), inline(always))]
             || b1.map(|v| v / n1),
-            #[inline(always)]
+            #[cfg_attr(not(debug_assertions), inline(always))]
             || [one, zero, zero],
         );
         let b2 = cross(&b3, &b1);
@@ -871,14 +871,14 @@ impl<R: Real> Controller<R> for PidController<R> {
     /// internal state unchanged (per lane: the other lanes fly on). Errors
     /// and rates are clamped to `±INPUT_LIMIT` and the integrators to
     /// `±STATE_LIMIT` (no-ops in flight).
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn update(&mut self, state: &QuadState<R>, reference: &Reference<R>, dt: f64) -> Command<R> {
         self.update_with(state, None, reference, dt)
     }
 
     /// As [`Controller::update`]; with [`Measurement::body`] the rotation is
     /// that of its quaternion and `Ω` its body rates (no Euler conversion).
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn update_measured(&mut self, measured: &Measurement<R>, reference: &Reference<R>, dt: f64) -> Command<R> {
         self.update_with(&measured.euler, measured.body.as_ref(), reference, dt)
     }

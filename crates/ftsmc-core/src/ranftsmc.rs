@@ -130,14 +130,14 @@ impl RanftsmcGains {
 
 /// Nonsingular fast terminal surface `σ = e + b1 sig^α(e) + b2 sig^β(ė)`
 /// (error units: m or rad), for one flight or per lane.
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 pub fn sliding_surface<R: Real>(g: &RanftsmcGains, e: R, e_dot: R) -> R {
     e + sig(e, g.alpha) * g.b1 + sig(e_dot, g.beta) * g.b2
 }
 
 /// Equivalent part `−(1/(β b2)) |ė|^(2−β) (1 + α b1 |e|^(α−1)) sign(ė)`,
 /// channel units/s², for one flight or per lane.
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 pub fn equivalent_law<R: Real>(g: &RanftsmcGains, e: R, e_dot: R) -> R {
     pow_abs(e_dot, 2.0 - g.beta)
         * (-(1.0 / (g.beta * g.b2)))
@@ -147,7 +147,7 @@ pub fn equivalent_law<R: Real>(g: &RanftsmcGains, e: R, e_dot: R) -> R {
 
 /// `sign(σ)`, or `tanh(σ/φ)` with a boundary layer φ > 0 (dimensionless),
 /// for one flight or per lane.
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 pub fn switching_sign<R: Real>(g: &RanftsmcGains, sigma: R) -> R {
     if g.sign_smoothing > 0.0 {
         (sigma / g.sign_smoothing).map(tanh)
@@ -266,7 +266,7 @@ impl<R: Real> AxisLaw<R> for RanftsmcAxis<R> {
     /// `ė` gets NaN and keeps its states while the other lanes update (a
     /// non-finite `dt`, shared, is every lane's); the direct `|ė|^(2−β)` is
     /// computed only when some lane needs it ([`crate::lanes::branch`]).
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn update(&mut self, e: R, e_dot: R, dt: f64) -> R {
         let ok = e.is_finite() & e_dot.is_finite();
         if !(dt.is_finite() && ok.any()) {
@@ -289,15 +289,15 @@ impl<R: Real> AxisLaw<R> for RanftsmcAxis<R> {
         let zero = R::splat(0.0);
         let ed_two_minus_beta = branch(
             aed.ge(R::splat(SHARED_POWER_MIN)),
-            #[inline(always)]
+            #[cfg_attr(not(debug_assertions), inline(always))]
             || aed * aed / ed_beta,
-            #[inline(always)]
+            #[cfg_attr(not(debug_assertions), inline(always))]
             || {
                 branch(
                     aed.gt(zero),
-                    #[inline(always)]
+                    #[cfg_attr(not(debug_assertions), inline(always))]
                     || pow_abs(e_dot, 2.0 - g.beta),
-                    #[inline(always)]
+                    #[cfg_attr(not(debug_assertions), inline(always))]
                     || zero,
                 )
             },

@@ -193,7 +193,7 @@ impl Se3Gains {
 
 /// `½ (R_dᵀR − RᵀR_d)^∨`, Lee et al. 2010 Eq. 10: zero at `R = R_d`, its
 /// norm is `sin` of the rotation angle between them (per lane for lanes).
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 pub fn attitude_error<R: Real>(r: &Mat3<R>, r_d: &Mat3<R>) -> Vec3<R> {
     let m = mat_t_mat(r_d, r);
     // (M − Mᵀ)^∨ with M = R_dᵀR (so Mᵀ = RᵀR_d); `x · 0.5` is `0.5 x` with
@@ -248,15 +248,15 @@ impl<R: Real> Se3Controller<R> {
 
     /// Desired rotation from the desired force direction and heading ψ_d;
     /// the second value is true (per lane) when the tilt limit changed `b₃d`.
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn desired_rotation(&mut self, force: &Vec3<R>, yaw: R) -> (Mat3<R>, R::Mask) {
         let zero = R::splat(0.0);
         let f = norm(force);
         let b3 = branch(
             f.gt(R::splat(1e-9)),
-            #[inline(always)]
+            #[cfg_attr(not(debug_assertions), inline(always))]
             || [force[0] / f, force[1] / f, force[2] / f],
-            #[inline(always)]
+            #[cfg_attr(not(debug_assertions), inline(always))]
             || [zero, zero, R::splat(1.0)],
         );
         let limited = self.tilt_limit.apply(b3);
@@ -270,9 +270,9 @@ impl<R: Real> Se3Controller<R> {
         // take b₂d horizontal, perpendicular to b₁c.
         let b2 = branch(
             n2.gt(R::splat(1e-9)),
-            #[inline(always)]
+            #[cfg_attr(not(debug_assertions), inline(always))]
             || [b2[0] / n2, b2[1] / n2, b2[2] / n2],
-            #[inline(always)]
+            #[cfg_attr(not(debug_assertions), inline(always))]
             || [-s, c, zero],
         );
         let b1 = cross(&b2, &b3);
@@ -285,7 +285,7 @@ impl<R: Real> Se3Controller<R> {
     /// attitude or reference is not finite gets a NaN command and keeps its
     /// telemetry, as a one-flight controller returns early; the other lanes
     /// fly [`Self::law`].
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn update_with(
         &mut self,
         state: &QuadState<R>,
@@ -308,7 +308,7 @@ impl<R: Real> Se3Controller<R> {
     /// The law of the [module docs](self) on finite inputs: `R` and `Ω`
     /// from `attitude` when given, else from the Euler state
     /// (`R = R_z R_y R_x`, `Ω = W η̇`).
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn law(
         &mut self,
         state: &QuadState<R>,
@@ -397,14 +397,14 @@ impl<R: Real> Controller<R> for Se3Controller<R> {
     /// was (per lane; the law has no internal state). Errors, rates and the
     /// reference acceleration are clamped to `±INPUT_LIMIT` (no-op in
     /// flight) so the command is finite for every finite input.
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn update(&mut self, state: &QuadState<R>, reference: &Reference<R>, dt: f64) -> Command<R> {
         self.update_with(state, None, reference, dt)
     }
 
     /// As [`Controller::update`]; with [`Measurement::body`] `R` is the
     /// rotation of its quaternion and `Ω` its body rates (no Euler conversion).
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn update_measured(&mut self, measured: &Measurement<R>, reference: &Reference<R>, dt: f64) -> Command<R> {
         self.update_with(&measured.euler, measured.body.as_ref(), reference, dt)
     }

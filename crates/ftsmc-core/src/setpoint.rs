@@ -28,21 +28,21 @@ impl TiltLimit {
     /// Rotate the unit vector `b` towards the vertical so that its angle to
     /// `e₃` is at most `max_tilt` (PX4 `ControlMath::limitTilt`, z up); per
     /// lane for lanes.
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     pub(crate) fn apply<R: Real>(&self, b: Vec3<R>) -> Vec3<R> {
         let limit_cos = R::splat(self.cos);
         branch(
             b[2].ge(limit_cos),
-            #[inline(always)]
+            #[cfg_attr(not(debug_assertions), inline(always))]
             || b,
-            #[inline(always)]
+            #[cfg_attr(not(debug_assertions), inline(always))]
             || {
                 let horizontal = (b[0] * b[0] + b[1] * b[1]).sqrt();
                 let (hx, hy) = branch(
                     horizontal.gt(R::splat(1e-12)),
-                    #[inline(always)]
+                    #[cfg_attr(not(debug_assertions), inline(always))]
                     || (b[0] / horizontal, b[1] / horizontal),
-                    #[inline(always)]
+                    #[cfg_attr(not(debug_assertions), inline(always))]
                     || (R::splat(1.0), R::splat(0.0)),
                 );
                 // `hx · s`: the product `s hx` with its operands swapped (same bits).
@@ -53,7 +53,7 @@ impl TiltLimit {
 }
 
 /// Every component of the reference is finite (per lane).
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 pub(crate) fn reference_finite<R: Real>(r: &Reference<R>) -> R::Mask {
     (finite_probe(&r.position)
         + finite_probe(&r.velocity)
@@ -65,7 +65,7 @@ pub(crate) fn reference_finite<R: Real>(r: &Reference<R>) -> R::Mask {
 /// Which lanes of a full-state controller's inputs are finite (state,
 /// body attitude when given, reference); `None` when `dt` is not finite or
 /// no lane is (every lane then gets [`nan_command`] and keeps its states).
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 pub(crate) fn finite_lanes<R: Real>(
     dt: f64,
     state: &QuadState<R>,
@@ -84,7 +84,7 @@ pub(crate) fn finite_lanes<R: Real>(
 }
 
 /// The command of a lane whose inputs are not finite: NaN thrust and torques.
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 pub(crate) fn nan_command<R: Real>() -> Command<R> {
     Command { thrust: R::splat(f64::NAN), torque: [R::splat(f64::NAN); 3] }
 }
@@ -107,7 +107,7 @@ impl<R: Real> HeadingSinCos<R> {
     }
 
     /// `(sin ψ, cos ψ)`, the bits of [`Real::sin_cos`]`(ψ)`.
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     pub(crate) fn get(&mut self, heading: R) -> (R, R) {
         if (0..R::LANES).any(|i| heading.get_lane(i).to_bits() != self.heading.get_lane(i).to_bits()) {
             self.value = heading.sin_cos();

@@ -139,14 +139,14 @@ impl TsmStaGains {
 
 /// Nonsingular terminal surface `s = e + (1/λ) sig^(p/q)(ė)` (error units:
 /// m or rad), for one flight or per lane.
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 pub fn sliding_surface<R: Real>(g: &TsmStaGains, e: R, e_dot: R) -> R {
     e + sig(e_dot, g.p / g.q) / g.lambda
 }
 
 /// `sign(s)`, or `tanh(s/φ)` with a boundary layer φ > 0 (dimensionless),
 /// for one flight or per lane.
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 pub fn switching_sign<R: Real>(g: &TsmStaGains, s: R) -> R {
     if g.sign_smoothing > 0.0 {
         (s / g.sign_smoothing).map(tanh)
@@ -157,7 +157,7 @@ pub fn switching_sign<R: Real>(g: &TsmStaGains, s: R) -> R {
 
 /// `x^(1/q)` for `x ≥ 0` (cube root when `q = 3`), per lane. `q` is a gain,
 /// the same in every lane, so the path is chosen once for all lanes.
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 fn qth_root<R: Real>(x: R, q: f64) -> R {
     if q == 3.0 {
         x.map(crate::math::cbrt)
@@ -171,7 +171,7 @@ fn qth_root<R: Real>(x: R, q: f64) -> R {
 
 /// `x^n` for a small non-negative integer `n` by repeated multiplication
 /// (`n` is a gain: the same number of multiplications in every lane).
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 fn powi<R: Real>(x: R, n: u32) -> R {
     let mut out = R::splat(1.0);
     for _ in 0..n {
@@ -273,7 +273,7 @@ impl<R: Real> AxisLaw<R> for TsmStaAxis<R> {
     /// non-finite `dt`, shared, is every lane's). The exponents are gains,
     /// so every lane takes the same power path and the same number of
     /// multiplications.
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn update(&mut self, e: R, e_dot: R, dt: f64) -> R {
         let ok = e.is_finite() & e_dot.is_finite();
         if !(dt.is_finite() && ok.any()) {

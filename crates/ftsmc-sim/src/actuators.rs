@@ -381,7 +381,7 @@ impl HeldCommand {
     /// Rotor speeds after the `dt` of `decay` ([`Motors::decay`]), rad/s:
     /// `motors.with_noise(&motors.speeds_decayed(command, decay), z)` of the
     /// [`Motors::held`] call that made this, bit for bit.
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     pub fn speeds(&self, decay: &[f64; 2]) -> [f64; 4] {
         let [lo, hi] = self.limits;
         let mut w = self.target;

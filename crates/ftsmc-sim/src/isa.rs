@@ -76,7 +76,7 @@ pub unsafe fn avx2_fma<T>(f: impl FnOnce() -> T) -> T {
 }
 
 /// `f` on the instruction set `isa` (the same result, bit for bit, on either).
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 pub fn run_on<T>(isa: Isa, f: impl FnOnce() -> T) -> T {
     match isa {
         #[cfg(target_arch = "x86_64")]

@@ -252,7 +252,7 @@ impl NoiseStream {
     }
 
     /// The next word.
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn word(&mut self) -> u32 {
         if self.next >= BLOCK_WORDS {
             self.refill();
@@ -263,7 +263,7 @@ impl NoiseStream {
     }
 
     /// The next two words as a `u64`, the first one low.
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn word_pair(&mut self) -> u64 {
         if self.next + 1 < BLOCK_WORDS {
             let i = 4 * self.next;
@@ -287,7 +287,7 @@ impl NoiseStream {
 
     /// One standard normal draw `z ~ N(0, 1)`: `rand_distr::StandardNormal`
     /// (ziggurat) on this stream.
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     pub fn normal(&mut self) -> f64 {
         StandardNormal.sample(self)
     }
@@ -296,12 +296,12 @@ impl NoiseStream {
 impl TryRng for NoiseStream {
     type Error = Infallible;
 
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn try_next_u32(&mut self) -> Result<u32, Infallible> {
         Ok(self.word())
     }
 
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn try_next_u64(&mut self) -> Result<u64, Infallible> {
         Ok(self.word_pair())
     }
@@ -341,7 +341,7 @@ impl Source {
     /// any axis is noisy (so an axis's draws do not depend on the others'
     /// std); none otherwise. Zero terms are skipped, not added, so a
     /// perfect quantity is returned bit-exactly (`-0.0 + 0.0` would not be).
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn corrupt(&mut self, truth: [f64; 3]) -> [f64; 3] {
         let mut out = truth;
         if self.noisy {

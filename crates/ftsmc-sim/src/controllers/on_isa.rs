@@ -77,7 +77,7 @@ impl<R: Real, C: Controller<R>> Controller<R> for OnIsa<C> {
 }
 
 /// [`Controller::update`] compiled with AVX2 and FMA: the lane kernels mark
-/// their update `#[inline(always)]`, so its whole body is compiled here.
+/// their update `#[cfg_attr(not(debug_assertions), inline(always))]`, so its whole body is compiled here.
 ///
 /// # Safety
 /// The CPU must have AVX2 and FMA.

@@ -93,7 +93,7 @@ impl<'a> Environment<'a> {
 
     /// Draw the drag multipliers for the next control period (nothing
     /// without drag noise: the loop calls it every period).
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     pub fn next_period(&mut self) {
         if self.drag_rngs.is_some() {
             self.draw_drag_factors();
@@ -118,7 +118,7 @@ impl<'a> Environment<'a> {
 
     /// The smooth time-varying plant inputs at `t` (s): true mass, inertia
     /// and disturbances (drag noise is per control period and kept apart).
-    #[inline(always)] // the loop calls it every substep; LLVM's heuristics left it out of line
+    #[cfg_attr(not(debug_assertions), inline(always))] // the loop calls it every substep; LLVM's heuristics left it out of line
     pub fn time_varying(&self, t: f64) -> TimeVarying {
         let variation = self.params.inertia_variation.as_ref().map(|var| var.value(t));
         self.time_varying_from(t, variation, self.params.disturbance.at(t))
@@ -128,7 +128,7 @@ impl<'a> Environment<'a> {
     /// variation (relative, when there is one) and of the disturbances: the
     /// true mass (with the payload at `t`) and the inertia scaled by
     /// `1 + variation`.
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn time_varying_from(&self, t: f64, variation: Option<f64>, disturbance: [f64; 6]) -> TimeVarying {
         let base = self.params.plant;
         let mut mass = base.mass;
@@ -149,7 +149,7 @@ impl<'a> Environment<'a> {
     /// [`Environment::on_grid`], whose time the caller computed as `t` (s):
     /// the payload, the windows and the non-sinusoid terms at `t`, the
     /// sinusoids rotated to `m`. Without a grid, `time_varying(t)`.
-    #[inline(always)] // the loop calls it every substep
+    #[cfg_attr(not(debug_assertions), inline(always))] // the loop calls it every substep
     pub fn time_varying_on_grid(&mut self, m: u64, t: f64) -> TimeVarying {
         let Some(grid) = self.grid.as_mut() else {
             return self.time_varying(t);

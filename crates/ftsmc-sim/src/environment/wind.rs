@@ -521,7 +521,7 @@ impl SecondOrder {
     }
 
     /// One step of state `z` with the draws `n₁`, `n₂` (in this order).
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn step(&self, z: &mut [f64; 2], n1: f64, n2: f64) {
         let [phi, chol] = [self.phi, self.chol];
         let [z1, z2] = *z;

@@ -83,7 +83,7 @@ impl Drive<'_> {
     /// the substep's start), rad/s: the lagged speeds
     /// ([`Motors::speeds_decayed`]) with the period's noise
     /// ([`Motors::with_noise`]).
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     pub(crate) fn speeds_after(&self, dt: f64) -> [f64; 4] {
         match self {
             Drive::Held { speeds, .. } => **speeds,
@@ -233,7 +233,7 @@ impl DecayCache {
     }
 
     /// The factors over `dt` seconds.
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     pub(crate) fn get(&self, motors: &Motors, dt: f64) -> [f64; 2] {
         if dt == 0.0 {
             return [1.0; 2];

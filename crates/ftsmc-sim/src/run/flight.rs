@@ -271,7 +271,7 @@ fn recycle<'a, 'b>(mut v: Vec<Substep<'a>>) -> Vec<Substep<'b>> {
 
 /// Lane `i` of `x` as its one-flight form: `x` itself when it is already
 /// one flight (`R = f64`: no copy), else lane `i` copied into `slot`.
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 fn lane_ref<'a, T>(x: &'a T, i: usize, slot: &'a mut Option<T::Scalar>) -> &'a T::Scalar
 where
     T: Lanewise + 'static,

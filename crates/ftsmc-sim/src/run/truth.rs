@@ -131,7 +131,7 @@ ftsmc_core::lanewise_struct!(PaperStage { plant, command, omega_bar, disturbance
 /// The one-flight Eq. 1 inputs of substep `s` at the stage time `tau` (s):
 /// the plant of the variation interpolated to `tau`, and the held wrench or
 /// the one the lagged rotors deliver at `tau`.
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 fn paper_stage(s: &Substep<'_>, tau: f64) -> PaperStage {
     let tv = TimeVarying::lerp(&s.a, &s.b, (tau - s.t0) / s.h);
     let p = s.env.params_with(&tv);
@@ -155,7 +155,7 @@ fn paper_stage(s: &Substep<'_>, tau: f64) -> PaperStage {
 }
 
 /// [`paper_stage`] of every lane at its stage time (lane `i` of `tau`).
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 fn paper_stages<R: Real>(s: &[Substep<'_>], tau: R) -> PaperStage<R> {
     let mut stage = PaperStage::<R>::default();
     for (i, s) in s.iter().enumerate() {
@@ -180,7 +180,7 @@ struct HeldPlant<R: Real> {
 }
 
 /// [`HeldPlant`] of every lane's substep.
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 fn held_plant<R: Real>(s: &[Substep<'_>]) -> HeldPlant<R> {
     let base = <Eq1Params<R>>::from_lanes(s, |s| Eq1Params::of(&s.env.params_with(&s.a)));
     let (m_a, m_b) = (R::from_lanes(s, |s| s.a.mass), R::from_lanes(s, |s| s.b.mass));
@@ -201,7 +201,7 @@ impl<R: Real> HeldPlant<R> {
     /// `(τ − t0)/h`) of the substep: `Environment::params_with` of
     /// `TimeVarying::lerp` (`a + w (b − a)`), lane `i` with the one-flight
     /// operations.
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn at(&self, w: R) -> (Eq1Params<R>, [R; 6]) {
         let (i_a, i_gap) = self.inertia;
         let (d_a, d_gap) = self.disturbance;
@@ -224,7 +224,7 @@ impl<R: Real> PaperTruth<R> {
 }
 
 impl<R: Real> TruthModel<R> for PaperTruth<R> {
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn quad_state(&self) -> QuadState<R> {
         let a = &self.0;
         QuadState {
@@ -235,7 +235,7 @@ impl<R: Real> TruthModel<R> for PaperTruth<R> {
         }
     }
 
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn substep(&mut self, s: &[Substep<'_>]) {
         let s = &s[..R::LANES];
         let t0 = R::from_fn(|i| s[i].t0);
@@ -268,9 +268,9 @@ impl<R: Real> TruthModel<R> for PaperTruth<R> {
             let plant = held_plant(s);
             self.0 = if windy {
                 rk4_step_staged(
-                    #[inline(always)]
+                    #[cfg_attr(not(debug_assertions), inline(always))]
                     |tau: R| plant.at((tau - t0) / h),
-                    #[inline(always)]
+                    #[cfg_attr(not(debug_assertions), inline(always))]
                     |(p, d): &(Eq1Params<R>, [R; 6]), x: &[R; 12]| {
                         derivative_in_wind_of(x, &command, omega_bar, p, d, &wind)
                     },
@@ -280,9 +280,9 @@ impl<R: Real> TruthModel<R> for PaperTruth<R> {
                 )
             } else {
                 rk4_step_staged(
-                    #[inline(always)]
+                    #[cfg_attr(not(debug_assertions), inline(always))]
                     |tau: R| plant.at((tau - t0) / h),
-                    #[inline(always)]
+                    #[cfg_attr(not(debug_assertions), inline(always))]
                     |(p, d): &(Eq1Params<R>, [R; 6]), x: &[R; 12]| derivative_of(x, &command, omega_bar, p, d),
                     t0,
                     &self.0,
@@ -294,9 +294,9 @@ impl<R: Real> TruthModel<R> for PaperTruth<R> {
             // form for them, with a zero wind in still air): every stage
             // input per lane and stage.
             self.0 = rk4_step_staged(
-                #[inline(always)]
+                #[cfg_attr(not(debug_assertions), inline(always))]
                 |tau: R| paper_stages(s, tau),
-                #[inline(always)]
+                #[cfg_attr(not(debug_assertions), inline(always))]
                 |st: &PaperStage<R>, x: &[R; 12]| {
                     derivative_in_wind_of(x, &st.command, st.omega_bar, &st.plant, &st.disturbance, &st.wind)
                 },
@@ -330,7 +330,7 @@ impl<R: Real> TruthModel<R> for PaperTruth<R> {
 /// A value of every lane's substep gathered into lanes (lane `i` of
 /// `f(&s[i])`).
 trait FromLanes: Lanewise + Default {
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn from_lanes(s: &[Substep<'_>], f: impl Fn(&Substep<'_>) -> Self::Scalar) -> Self {
         let mut v = Self::default();
         for (i, s) in s.iter().enumerate() {
@@ -372,7 +372,7 @@ struct LaneRotors<R: Real> {
 
 impl<R: Real> Default for LaneRotors<R> {
     /// No lane gathered yet: every lane held at zero speed.
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn default() -> Self {
         let no = <R::Mask as Mask>::splat(false);
         Self {
@@ -393,7 +393,7 @@ impl<R: Real> Default for LaneRotors<R> {
 impl<R: Real> LaneRotors<R> {
     /// The rotors of every lane's substep (`self` as
     /// [`LaneRotors::default`] made it).
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn gather(&mut self, s: &[Substep<'_>]) {
         if R::LANES == 1 {
             // One flight: `after` takes the drive's own speeds.
@@ -433,7 +433,7 @@ impl<R: Real> LaneRotors<R> {
     /// substep start, s) into the substep, rad/s: `HeldCommand::speeds` of
     /// the decay factors `DecayCache::get` looks up for each lagged lane,
     /// `target + gap · e` then the noise and `f64::clamp` to the limits.
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn after(&self, s: &[Substep<'_>], dt: R) -> [R; 4] {
         if R::LANES == 1 {
             // One flight: the scalar code itself (the lane operations of
@@ -459,7 +459,7 @@ impl<R: Real> LaneRotors<R> {
         }
         let w = branch(
             self.absolute,
-            #[inline(always)]
+            #[cfg_attr(not(debug_assertions), inline(always))]
             || {
                 let mut v = w;
                 for k in 0..4 {
@@ -467,12 +467,12 @@ impl<R: Real> LaneRotors<R> {
                 }
                 v
             },
-            #[inline(always)]
+            #[cfg_attr(not(debug_assertions), inline(always))]
             || w,
         );
         branch(
             self.relative,
-            #[inline(always)]
+            #[cfg_attr(not(debug_assertions), inline(always))]
             || {
                 let mut v = w;
                 for k in 0..4 {
@@ -480,7 +480,7 @@ impl<R: Real> LaneRotors<R> {
                 }
                 v
             },
-            #[inline(always)]
+            #[cfg_attr(not(debug_assertions), inline(always))]
             || w,
         )
     }
@@ -488,7 +488,7 @@ impl<R: Real> LaneRotors<R> {
 
 /// `f64::clamp` lane by lane: below `lo` is `lo`, then above `hi` is `hi`
 /// (NaN stays NaN).
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 fn clamp<R: Real>(v: R, lo: R, hi: R) -> R {
     let v = R::select(v.lt(lo), lo, v);
     R::select(v.gt(hi), hi, v)
@@ -534,7 +534,7 @@ impl<R: Real> TruthModel<R> for RigidTruth<R> {
     /// The one-flight Euler conversion written for any [`Real`]: on the
     /// lanes at once (forced inline, so that it compiles inside the
     /// dispatched kernel, `OnIsa`).
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn quad_state(&self) -> QuadState<R> {
         to_quad_state(&self.x)
     }
@@ -567,7 +567,7 @@ impl<R: Real> TruthModel<R> for RigidTruth<R> {
         Ok(())
     }
 
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn substep(&mut self, s: &[Substep<'_>]) {
         let s = &s[..R::LANES];
         let t0 = R::from_fn(|i| s[i].t0);
@@ -595,7 +595,7 @@ impl<R: Real> TruthModel<R> for RigidTruth<R> {
         // compiles inside the dispatched kernel (`OnIsa`), none of it left
         // behind in a baseline-ISA function.
         self.x = rk4_step_staged(
-            #[inline(always)]
+            #[cfg_attr(not(debug_assertions), inline(always))]
             |tau: R| {
                 // (`core::array::from_fn` and `map` are avoided in the
                 // kernels: their out-of-line instances compile for the
@@ -612,7 +612,7 @@ impl<R: Real> TruthModel<R> for RigidTruth<R> {
                     torque: body.inertia_times([d[3], d[4], d[5]]),
                 })
             },
-            #[inline(always)]
+            #[cfg_attr(not(debug_assertions), inline(always))]
             |input, x| body.derivative_prepared(x, input),
             t0,
             &self.x,
@@ -687,7 +687,7 @@ impl<R: Real, T: TruthModel<R>> TruthModel<R> for OnIsa<T> {
 }
 
 /// [`TruthModel::substep`] compiled with AVX2 and FMA (the models mark it
-/// and their kernels `#[inline(always)]`, so the whole RK4 is compiled here).
+/// and their kernels `#[cfg_attr(not(debug_assertions), inline(always))]`, so the whole RK4 is compiled here).
 ///
 /// # Safety
 /// The CPU must have AVX2 and FMA.

@@ -91,7 +91,7 @@ impl Phasor {
     /// The residual `r = θ − θ_a − τ_n` of the term's argument `θ = ω t + φ`
     /// (formed as [`Term::sample`] forms it) at offset `n` of the anchor's
     /// block, and the table's `(sin τ_n, cos τ_n)`.
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn residual(&self, n: usize, t: f64) -> (f64, f64, f64) {
         let (tau, s_n, c_n) = self.table[n];
         let theta = self.omega * t + self.phase;
@@ -102,7 +102,7 @@ impl Phasor {
     /// `(sin θ, cos θ)` at offset `n` of the anchor's block, time `t ≈ m·δ`:
     /// the anchor rotated by the table's `τ_n`, then by the residual `r` to
     /// first order (`r²/2` is below 1e-25).
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn sin_cos_at(&self, n: usize, t: f64) -> (f64, f64) {
         let (_, s_a, c_a) = self.anchor;
         let (r, s_n, c_n) = self.residual(n, t);
@@ -118,7 +118,7 @@ impl Phasor {
     /// `Y = (−sin θ_a) cos τ_n + (−cos θ_a) sin τ_n` is `−sin(θ_a + τ_n)`
     /// but for the sign of an exact zero, which `X + Y·r` absorbs (`X`, the
     /// cosine, is then ±1 to rounding).
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn value(&self, n: usize, t: f64) -> f64 {
         let [u, v, w, z] = self.rotation;
         let (r, s_n, c_n) = self.residual(n, t);
@@ -128,7 +128,7 @@ impl Phasor {
 
     /// The term's value and derivatives at offset `n` of the anchor's block,
     /// time `t` (the formulas of [`Term::sample`]).
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn sample(&self, n: usize, t: f64) -> Sample {
         let (s, c) = self.sin_cos_at(n, t);
         let (a, w) = (self.amplitude, self.omega);
@@ -243,7 +243,7 @@ impl GridSignal {
 
     /// The offset of grid point `m` in its block, the phasors' anchors
     /// moved to that block first (once every `BLOCK` samples).
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn offset(&mut self, m: u64) -> usize {
         let block = m / BLOCK;
         if block != self.block {
@@ -267,7 +267,7 @@ impl GridSignal {
     }
 
     /// True when `t` (s) is outside the window (as [`Signal::value`] tests it).
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn outside(&self, t: f64) -> bool {
         match self.window {
             Some([start, end]) => t < start || t > end,
@@ -277,7 +277,7 @@ impl GridSignal {
 
     /// The value at grid point `m`, whose time the caller computed as `t`
     /// (s, `≈ m·step`; the window and the non-sinusoid terms use it).
-    #[inline(always)] // the loop calls it for every signal at every substep
+    #[cfg_attr(not(debug_assertions), inline(always))] // the loop calls it for every signal at every substep
     pub fn value(&mut self, m: u64, t: f64) -> f64 {
         if self.outside(t) {
             return 0.0;
@@ -288,7 +288,7 @@ impl GridSignal {
     /// [`GridSignal::value`] at a time `t` the caller found inside the
     /// window ([`GridSignal::window`]; any `t` without one): the sum
     /// without the window's test.
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     pub fn value_inside(&mut self, m: u64, t: f64) -> f64 {
         match self.shape {
             Shape::Constant => self.start,
@@ -326,7 +326,7 @@ impl GridSignal {
     }
 
     /// Value and derivatives at grid point `m` of time `t` (as [`GridSignal::value`]).
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     pub fn sample(&mut self, m: u64, t: f64) -> Sample {
         if self.outside(t) {
             return Sample::default();
@@ -420,7 +420,7 @@ mod tests {
             /// anchor rotated by the table's `τ_n`, then by the residual
             /// `r = θ − θ_a − τ_n` (a few units in the last place of `θ`) to first
             /// order (`r²/2` is below 1e-25).
-            #[inline(always)]
+            #[cfg_attr(not(debug_assertions), inline(always))]
             fn sin_cos_at(&mut self, m: u64, t: f64, step: f64) -> (f64, f64) {
                 let block = m / BLOCK;
                 if block != self.block {
@@ -505,7 +505,7 @@ mod tests {
 
             /// The value at grid point `m`, whose time the caller computed as `t`
             /// (s, `≈ m·step`; the window and the non-sinusoid terms use it).
-            #[inline(always)] // the loop calls it for every signal at every substep
+            #[cfg_attr(not(debug_assertions), inline(always))] // the loop calls it for every signal at every substep
             pub fn value(&mut self, m: u64, t: f64) -> f64 {
                 if let Some([start, end]) = self.window {
                     if t < start || t > end {
@@ -526,7 +526,7 @@ mod tests {
             }
 
             /// Value and derivatives at grid point `m` of time `t` (as [`GridSignal::value`]).
-            #[inline(always)]
+            #[cfg_attr(not(debug_assertions), inline(always))]
             pub fn sample(&mut self, m: u64, t: f64) -> Sample {
                 if let Some([start, end]) = self.window {
                     if t < start || t > end {

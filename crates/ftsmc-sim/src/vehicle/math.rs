@@ -13,38 +13,38 @@ pub(crate) type Vec3<R = f64> = [R; 3];
 pub(crate) type Mat3<R = f64> = [[R; 3]; 3];
 pub(crate) type Quat<R = f64> = [R; 4];
 
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 pub(crate) fn add<R: Real>(a: Vec3<R>, b: Vec3<R>) -> Vec3<R> {
     [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
 }
 
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 pub(crate) fn sub<R: Real>(a: Vec3<R>, b: Vec3<R>) -> Vec3<R> {
     [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
 }
 
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 pub(crate) fn dot<R: Real>(a: Vec3<R>, b: Vec3<R>) -> R {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 pub(crate) fn cross<R: Real>(a: Vec3<R>, b: Vec3<R>) -> Vec3<R> {
     [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
 }
 
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 pub(crate) fn norm<R: Real>(a: Vec3<R>) -> R {
     dot(a, a).sqrt()
 }
 
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 pub(crate) fn mat_vec<R: Real>(m: &Mat3<R>, v: Vec3<R>) -> Vec3<R> {
     [dot(m[0], v), dot(m[1], v), dot(m[2], v)]
 }
 
 /// `mᵀ v`.
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 pub(crate) fn mat_t_vec<R: Real>(m: &Mat3<R>, v: Vec3<R>) -> Vec3<R> {
     [
         m[0][0] * v[0] + m[1][0] * v[1] + m[2][0] * v[2],
@@ -88,7 +88,7 @@ fn adjugate_over(m: &Mat3, det: f64) -> Mat3 {
 /// formula of the core's [`ftsmc_core::kinematics::rotation_from_quaternion`]
 /// with the same operations in the same order (so the same bits for `f64`;
 /// the test `rotation_is_the_cores_bit_for_bit` pins it), on any [`Real`].
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 pub(crate) fn rotation<R: Real>(q: Quat<R>) -> Mat3<R> {
     let [w, x, y, z] = q;
     let one = R::splat(1.0);
@@ -100,7 +100,7 @@ pub(crate) fn rotation<R: Real>(q: Quat<R>) -> Mat3<R> {
 }
 
 /// `q̇ = ½ q ⊗ (0, Ω)` for body rates Ω.
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 pub(crate) fn quat_derivative<R: Real>(q: Quat<R>, omega: Vec3<R>) -> Quat<R> {
     let [w, x, y, z] = q;
     let [p, r1, r2] = omega;

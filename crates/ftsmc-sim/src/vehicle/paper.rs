@@ -80,7 +80,7 @@ pub fn derivative(
 
 /// [`derivative`] (paper Eq. 1) on one flight or on flights in lanes: lane
 /// `i` is the one-flight derivative of lane `i`'s inputs, bit for bit.
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 pub fn derivative_of<R: Real>(
     x: &[R; 12],
     command: &Command<R>,
@@ -134,7 +134,7 @@ pub fn derivative_in_wind(
 
 /// [`derivative_in_wind`] on one flight or on flights in lanes (lane `i`
 /// the one-flight value of lane `i`'s inputs, bit for bit).
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 pub fn derivative_in_wind_of<R: Real>(
     x: &[R; 12],
     command: &Command<R>,
@@ -182,7 +182,7 @@ pub fn rk4_step<const N: usize>(f: impl Fn(f64, &[f64; N]) -> [f64; N], t: f64, 
 /// Generic over the number type: on lanes, lane `i` is the one-flight step
 /// of lane `i`'s start time, step, state and inputs, bit for bit (each lane
 /// may have its own `t` and `h`).
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 pub fn rk4_step_staged<R: Real, const N: usize, S>(
     inputs: impl Fn(R) -> S,
     f: impl Fn(&S, &[R; N]) -> [R; N],

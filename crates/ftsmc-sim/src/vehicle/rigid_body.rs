@@ -510,26 +510,26 @@ fn is_diagonal(j: &Mat3) -> bool {
 /// `m v`, or where `diagonal` only the diagonal of `m` times `v`: the same
 /// values (the skipped products are zeros added to a sum). Per lane for
 /// lanes ([`branch`]: each product only if some lane needs it).
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 fn mat_vec_or_diagonal<R: Real>(m: &Mat3<R>, diagonal: R::Mask, v: Vec3<R>) -> Vec3<R> {
     branch(
         diagonal,
-        #[inline(always)]
+        #[cfg_attr(not(debug_assertions), inline(always))]
         || [m[0][0] * v[0], m[1][1] * v[1], m[2][2] * v[2]],
-        #[inline(always)]
+        #[cfg_attr(not(debug_assertions), inline(always))]
         || mat_vec(m, v),
     )
 }
 
 /// `a × r` for a rotor position `r` with `r_z = 0` (the terms with `r_z`
 /// are zeros).
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 fn cross_rotor<R: Real>(a: Vec3<R>, r: Vec3<R>) -> Vec3<R> {
     [-(a[2] * r[1]), a[2] * r[0], a[0] * r[1] - a[1] * r[0]]
 }
 
 /// `r × f` for a rotor position `r` with `r_z = 0`.
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 fn rotor_cross<R: Real>(r: Vec3<R>, f: Vec3<R>) -> Vec3<R> {
     [r[1] * f[2], -(r[0] * f[2]), r[0] * f[1] - r[1] * f[0]]
 }
@@ -726,7 +726,7 @@ impl<R: Real> RigidBody<R> {
     /// `J v` for a body-frame vector `v` (the inertia times an angular
     /// acceleration, rad/s² → N·m): the same values as the full product,
     /// the zero products of a diagonal inertia skipped.
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     pub fn inertia_times(&self, v: [R; 3]) -> [R; 3] {
         mat_vec_or_diagonal(&self.inertia, self.diagonal, v)
     }
@@ -739,7 +739,7 @@ impl<R: Real> RigidBody<R> {
 
     /// The rotor terms of `input` ([`PreparedInput`]) for
     /// [`RigidBody::derivative_prepared`].
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     pub fn prepare(&self, input: &RigidBodyInput<R>) -> PreparedInput<R> {
         let w = input.rotor_speeds;
         // Loops rather than `map`: its out-of-line instances would compile
@@ -759,7 +759,7 @@ impl<R: Real> RigidBody<R> {
     /// translational lift, parasitic drag) are skipped per lane
     /// ([`branch`]), so each lane adds exactly the terms its one-flight body
     /// adds.
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     pub fn body_wrench_in(&self, x: &RigidBodyState<R>, prepared: &PreparedInput<R>, r: &Mat3<R>) -> Wrench<R> {
         let input = &prepared.input;
         let v = block(x, index::VELOCITY);
@@ -770,7 +770,7 @@ impl<R: Real> RigidBody<R> {
         // branch: rotor aerodynamics on (the realistic vehicles) or off.
         let (mut force, torque) = branch(
             self.rotor_aero,
-            #[inline(always)]
+            #[cfg_attr(not(debug_assertions), inline(always))]
             || {
                 let mut force = [zero; 3];
                 let mut torque = [zero; 3];
@@ -783,9 +783,9 @@ impl<R: Real> RigidBody<R> {
                     // Off (k_h = 0) it would add a zero.
                     f[2] = branch(
                         self.lift,
-                        #[inline(always)]
+                        #[cfg_attr(not(debug_assertions), inline(always))]
                         || f[2] + self.translational_lift * (vi[0] * vi[0] + vi[1] * vi[1]),
-                        #[inline(always)]
+                        #[cfg_attr(not(debug_assertions), inline(always))]
                         || f[2],
                     );
                     force = add(force, f);
@@ -794,7 +794,7 @@ impl<R: Real> RigidBody<R> {
                 }
                 (force, torque)
             },
-            #[inline(always)]
+            #[cfg_attr(not(debug_assertions), inline(always))]
             || {
                 // The thrust alone: `f = [0, 0, T]`, `r × f = [r_y T, −r_x T, 0]`.
                 let mut force = [zero; 3];
@@ -812,7 +812,7 @@ impl<R: Real> RigidBody<R> {
         let cd = self.parasitic_drag;
         force = branch(
             self.parasitic,
-            #[inline(always)]
+            #[cfg_attr(not(debug_assertions), inline(always))]
             || {
                 let speed = norm(v_air);
                 let mut f = force;
@@ -821,14 +821,14 @@ impl<R: Real> RigidBody<R> {
                 f[2] -= speed * cd[2] * v_air[2];
                 f
             },
-            #[inline(always)]
+            #[cfg_attr(not(debug_assertions), inline(always))]
             || force,
         );
         Wrench { force, torque }
     }
 
     /// Rotor angular momentum `h_r = J_r Σ s_i ω_i ẑ` (body frame), kg·m²/s.
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     pub fn rotor_momentum(&self, rotor_speeds: &[R; 4]) -> [R; 3] {
         // The sum of `Iterator::sum` for f64: from −0 (which leaves any
         // first term's bits as they are), term by term.
@@ -848,7 +848,7 @@ impl<R: Real> RigidBody<R> {
     /// [`RigidBody::derivative`] of the inputs [`RigidBody::prepare`] made,
     /// bit for bit: the form for several states with the same inputs (the
     /// second and third RK4 stages).
-    #[inline(always)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     pub fn derivative_prepared(&self, x: &RigidBodyState<R>, prepared: &PreparedInput<R>) -> RigidBodyState<R> {
         let input = &prepared.input;
         let q = quaternion(x);
@@ -870,12 +870,12 @@ impl<R: Real> RigidBody<R> {
     }
 }
 
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 fn block<R: Real>(x: &RigidBodyState<R>, start: usize) -> Vec3<R> {
     [x[start], x[start + 1], x[start + 2]]
 }
 
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 fn quaternion<R: Real>(x: &RigidBodyState<R>) -> Quat<R> {
     let i = index::QUATERNION;
     [x[i], x[i + 1], x[i + 2], x[i + 3]]
@@ -883,7 +883,7 @@ fn quaternion<R: Real>(x: &RigidBodyState<R>) -> Quat<R> {
 
 /// Scale the quaternion block of `x` to unit length (left unchanged if its
 /// norm is zero, subnormal or not finite), lane by lane for lanes.
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 pub fn normalize_quaternion<R: Real>(x: &mut RigidBodyState<R>) {
     let i = index::QUATERNION;
     let n = (x[i] * x[i] + x[i + 1] * x[i + 1] + x[i + 2] * x[i + 2] + x[i + 3] * x[i + 3]).sqrt();
@@ -982,7 +982,7 @@ pub fn euler_rates_clamped(euler: &[f64; 3], body_rates: &[f64; 3]) -> [f64; 3] 
 /// two `sin_cos`). Within `cθ < 1e-3` of gimbal lock, where `a` and `b` lose
 /// their relative precision, the core's formula on the angles answers
 /// (per lane for lanes, [`branch`]).
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 fn euler_of_quaternion<R: Real>(q: &Quat<R>, body_rates: &Vec3<R>) -> (Vec3<R>, Vec3<R>) {
     let [w, x, y, z] = *q;
     let one = R::splat(1.0);
@@ -993,10 +993,10 @@ fn euler_of_quaternion<R: Real>(q: &Quat<R>, body_rates: &Vec3<R>) -> (Vec3<R>, 
     let ct = (a * a + b * b).sqrt();
     let rates = branch(
         ct.ge(R::splat(1e-3)),
-        #[inline(always)]
+        #[cfg_attr(not(debug_assertions), inline(always))]
         || kinematics::euler_rates_from_body_rates_with([a / ct, b / ct], [s, ct], body_rates),
         // Near gimbal lock, or a non-finite quaternion.
-        #[inline(always)]
+        #[cfg_attr(not(debug_assertions), inline(always))]
         || kinematics::euler_rates_from_body_rates(&attitude, body_rates),
     );
     (attitude, rates)
@@ -1023,7 +1023,7 @@ pub fn try_to_quad_state(x: &RigidBodyState) -> Result<QuadState, GimbalLock> {
 /// is the one-flight conversion of lane `i`'s state, bit for bit (the
 /// arithmetic lane by lane, `atan2` and `asin` from the one maths library
 /// per lane).
-#[inline(always)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 pub fn to_quad_state<R: Real>(x: &RigidBodyState<R>) -> QuadState<R> {
     let (attitude, angular_rate) = euler_of_quaternion(&quaternion(x), &block(x, index::BODY_RATES));
     QuadState { position: block(x, index::POSITION), attitude, velocity: block(x, index::VELOCITY), angular_rate }
