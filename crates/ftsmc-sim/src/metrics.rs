@@ -148,7 +148,11 @@ pub struct MetricsAccumulator {
     max_after: [f64; 6],
     /// A sample at or after `steady_after` was observed.
     reached_after: bool,
-    last_outside: [Option<f64>; 6],
+    /// The last sample time with `|e| >` the band, s (meaningful where
+    /// [`MetricsAccumulator::outside`] is set).
+    last_outside: [f64; 6],
+    /// Some sample had `|e|` above the band.
+    outside: [bool; 6],
     energy: [f64; 4],
     variation: [f64; 4],
     last_u: [f64; 4],
@@ -172,7 +176,8 @@ impl MetricsAccumulator {
             itae: [0.0; 6],
             max_after: [0.0; 6],
             reached_after: false,
-            last_outside: [None; 6],
+            last_outside: [0.0; 6],
+            outside: [false; 6],
             energy: [0.0; 4],
             variation: [0.0; 4],
             last_u: [0.0; 4],
@@ -188,32 +193,34 @@ impl MetricsAccumulator {
 
     /// Add the sample at time `t` (s): channel errors and the command
     /// `[U1, u2, u3, u4]` held over the following period.
-    #[inline]
+    ///
+    /// Each sum takes the sample in time order (`Σ ← Σ + e²`, …); the
+    /// maximum, the last time outside the band and the window's sum are
+    /// selections, branch-free per channel.
+    #[cfg_attr(not(debug_assertions), inline(always))]
     pub fn observe(&mut self, t: f64, errors: &[f64; 6], u: &[f64; 4]) {
         if !self.started {
-            for i in 0..6 {
-                self.band[i] = (self.band_fraction * errors[i].abs()).max(self.band_floor);
-            }
-            self.last_u = *u;
-            self.started = true;
+            self.start(errors, u);
         }
         let after = t >= self.steady_after;
         self.reached_after |= after;
-        let in_window = matches!(self.window, Some([start, end]) if t >= start && t <= end);
         for i in 0..6 {
             let e = errors[i];
             let a = e.abs();
             self.ise[i] += e * e;
             self.iae[i] += a;
             self.itae[i] += t * a;
-            if in_window {
-                self.ise_window[i] += e * e;
-            }
-            if after && a > self.max_after[i] {
-                self.max_after[i] = a;
-            }
-            if a > self.band[i] {
-                self.last_outside[i] = Some(t);
+            let m = self.max_after[i];
+            self.max_after[i] = if after & (a > m) { a } else { m };
+            let outside = a > self.band[i];
+            self.last_outside[i] = if outside { t } else { self.last_outside[i] };
+            self.outside[i] |= outside;
+        }
+        if let Some([start, end]) = self.window {
+            if t >= start && t <= end {
+                for i in 0..6 {
+                    self.ise_window[i] += errors[i] * errors[i];
+                }
             }
         }
         for j in 0..4 {
@@ -224,15 +231,27 @@ impl MetricsAccumulator {
         self.time = t + self.dt;
     }
 
+    /// The settling bands `max(band_fraction · |e(0)|, band_floor)` from
+    /// the first sample, which also starts the command's variation.
+    #[cold]
+    fn start(&mut self, errors: &[f64; 6], u: &[f64; 4]) {
+        for i in 0..6 {
+            self.band[i] = (self.band_fraction * errors[i].abs()).max(self.band_floor);
+        }
+        self.last_u = *u;
+        self.started = true;
+    }
+
     /// Final metrics over the observed time.
     pub fn finish(&self) -> Metrics {
         let duration = self.time;
         let axes = |a: [f64; 6]| AxisSet { x: a[0], y: a[1], z: a[2], phi: a[3], theta: a[4], psi: a[5] };
-        let settled: [Option<f64>; 6] = core::array::from_fn(|i| match self.last_outside[i] {
-            None => Some(0.0),
-            Some(t) if t + self.dt < duration - 0.5 * self.dt => Some(t + self.dt),
-            Some(_) => None,
-        });
+        let settled: [Option<f64>; 6] =
+            core::array::from_fn(|i| match self.outside[i].then_some(self.last_outside[i]) {
+                None => Some(0.0),
+                Some(t) if t + self.dt < duration - 0.5 * self.dt => Some(t + self.dt),
+                Some(_) => None,
+            });
         let dt = self.dt;
         let ise = self.ise.map(|v| v * dt);
         let rms = ise.map(|v| if duration > 0.0 { (v / duration).sqrt() } else { 0.0 });

@@ -122,6 +122,9 @@ struct Lane<'s> {
     wind_now: Option<[f64; 3]>,
     z_prev: f64,
     reference_grid: ReferenceGrid,
+    /// The reference at the lane's current period boundary (the lane's copy
+    /// of [`Flight`]'s reference, read by the observers and the checks).
+    reference: Reference,
     metrics: MetricsAccumulator,
     recorder: Recorder,
     envelope: Tracker,
@@ -185,6 +188,7 @@ impl<'s> Lane<'s> {
             wind_now: None,
             z_prev: 0.0,
             reference_grid,
+            reference,
             metrics,
             recorder,
             envelope: Tracker::new(scenario.envelope),
@@ -228,13 +232,6 @@ impl<'s> Lane<'s> {
             Some(s) => s.measure_full(truth),
             None => *truth,
         }
-    }
-
-    /// The envelope and the statistics see the truth at a period boundary.
-    #[inline]
-    fn boundary(&mut self, t: f64, state: &QuadState, reference: &Reference) {
-        self.envelope.boundary(t, state, reference);
-        self.stats.boundary(t, state, reference);
     }
 
     /// The outcome of this lane's flight (a flight stopped early reports
@@ -445,7 +442,7 @@ impl<'s, C: Controller<R> + ?Sized, R: Real> Flight<'s, C, R> {
             substeps: Vec::new(),
         };
         for i in 0..R::LANES {
-            flight.lane_boundary(i, 0.0);
+            flight.lane_boundary(i, 0.0, false);
         }
         flight
     }
@@ -470,7 +467,7 @@ impl<'s, C: Controller<R> + ?Sized, R: Real> Flight<'s, C, R> {
             // A flight that cannot start is seen at its initial state.
             self.state.put_lane(lane, scenario.initial_state.state());
         }
-        self.lane_boundary(lane, 0.0);
+        self.lane_boundary(lane, 0.0, false);
     }
 
     /// The outcome of lane `lane`'s flight so far, its lane left as it is
@@ -520,14 +517,26 @@ impl<'s, C: Controller<R> + ?Sized, R: Real> Flight<'s, C, R> {
         }
     }
 
-    fn lane_boundary(&mut self, i: usize, t: f64) {
-        let (mut s_slot, mut r_slot) = (None, None);
+    /// Lane `i`'s envelope, statistics (and, one flight, the observers) see
+    /// the truth at the period boundary `t` (s); with `check`, the
+    /// divergence checks and the planned end follow on the same state.
+    fn lane_boundary(&mut self, i: usize, t: f64, check: bool) {
+        let mut s_slot = None;
         let s = lane_ref(&self.state, i, &mut s_slot);
-        let r = lane_ref(&self.reference, i, &mut r_slot);
-        self.lanes[i].boundary(t, s, r);
+        let lane = &mut self.lanes[i];
+        let r = &lane.reference;
+        lane.envelope.boundary(t, s, r);
+        lane.stats.boundary(t, s, r);
         if R::LANES == 1 {
             for o in &mut self.observers {
                 o.boundary(t, s, r);
+            }
+        }
+        if check {
+            if let Some(divergence) = check_divergence(lane.scenario, s, r) {
+                lane.exit = Some(ExitStatus::Diverged { divergence, time: t });
+            } else if lane.k >= lane.steps {
+                lane.exit = Some(ExitStatus::Completed);
             }
         }
     }
@@ -629,39 +638,57 @@ impl<'s, C: Controller<R> + ?Sized, R: Real> Flight<'s, C, R> {
                 lane.exit = Some(ExitStatus::Diverged { divergence: Divergence::NonFinite, time: t });
                 continue;
             }
-            // One flight: the values themselves; lanes: lane i's copies.
-            let (mut s_slot, mut r_slot, mut t_slot, mut m_slot, mut c_slot) = (None, None, None, None, None);
-            let x = lane_ref(&self.state, i, &mut s_slot).to_array();
-            let reference = lane_ref(&self.reference, i, &mut r_slot);
-            let telemetry_i: &Telemetry = lane_ref(telemetry, i, &mut t_slot);
-            let measured_i = lane_ref(&measured.euler, i, &mut m_slot);
-            let command_i: &Command = lane_ref(&command, i, &mut c_slot);
-            let tick = Tick {
-                k: lane.k,
-                t,
-                state: x,
-                measured: measured_i,
-                reference,
-                telemetry: telemetry_i,
-                errors: tracking_errors(&x, reference, telemetry_i),
-                command: command_i,
-                applied: u,
-                omega: delivered.omega,
-                omega_bar: residual_speed(&delivered.omega),
-                demand: lane.demand,
-                saturated: delivered.saturated,
-                nominal_mass: lane.scenario.plant.mass,
-                mass: lane.plant_now.mass,
-                inertia: lane.plant_now.inertia,
-                disturbance: lane.tv_now.disturbance,
-            };
-            lane.metrics.tick(&tick);
-            lane.recorder.tick(&tick);
-            lane.stats.tick(&tick);
+            let reference = &lane.reference;
             if n == 1 {
+                // One flight: the whole tick (the values themselves, no
+                // copies) for the recorder and every observer.
+                let (mut s_slot, mut t_slot, mut m_slot, mut c_slot) = (None, None, None, None);
+                let x = lane_ref(&self.state, i, &mut s_slot).to_array();
+                let telemetry_i: &Telemetry = lane_ref(telemetry, i, &mut t_slot);
+                let measured_i = lane_ref(&measured.euler, i, &mut m_slot);
+                let command_i: &Command = lane_ref(&command, i, &mut c_slot);
+                let tick = Tick {
+                    k: lane.k,
+                    t,
+                    state: x,
+                    measured: measured_i,
+                    reference,
+                    telemetry: telemetry_i,
+                    errors: tracking_errors(&x, reference, telemetry_i),
+                    command: command_i,
+                    applied: u,
+                    omega: delivered.omega,
+                    omega_bar: residual_speed(&delivered.omega),
+                    demand: lane.demand,
+                    saturated: delivered.saturated,
+                    nominal_mass: lane.scenario.plant.mass,
+                    mass: lane.plant_now.mass,
+                    inertia: lane.plant_now.inertia,
+                    disturbance: lane.tv_now.disturbance,
+                };
+                lane.metrics.tick(&tick);
+                lane.recorder.tick(&tick);
+                lane.stats.tick(&tick);
                 for o in &mut self.observers {
                     o.tick(&tick);
                 }
+            } else {
+                // Lanes: no recording and no observers (`Flight::new_lanes`);
+                // the metrics and the statistics read the tracking errors
+                // (`tracking_errors`, the same operations on lane i's numbers),
+                // the applied command and the rotor speeds alone.
+                let (position, attitude) = (&self.state.position, &self.state.attitude);
+                let attitude_reference = &telemetry.attitude_reference;
+                let errors = [
+                    position[0].get_lane(i) - reference.position[0],
+                    position[1].get_lane(i) - reference.position[1],
+                    position[2].get_lane(i) - reference.position[2],
+                    attitude[0].get_lane(i) - attitude_reference[0].get_lane(i),
+                    attitude[1].get_lane(i) - attitude_reference[1].get_lane(i),
+                    attitude[2].get_lane(i) - reference.yaw,
+                ];
+                lane.metrics.observe(t, &errors, &u);
+                lane.stats.observe_period(delivered.saturated, &lane.demand, &delivered.omega);
             }
             lane.omega_bar = residual_speed(&delivered.target);
         }
@@ -678,7 +705,10 @@ impl<'s, C: Controller<R> + ?Sized, R: Real> Flight<'s, C, R> {
                 }
             }
             for i in 0..n {
-                self.lanes[i].z_prev = self.truth.vertical(i).0;
+                // Only the ground contact reads it.
+                if self.lanes[i].ground.is_some() {
+                    self.lanes[i].z_prev = self.truth.vertical(i).0;
+                }
             }
             {
                 let lanes = &self.lanes;
@@ -725,7 +755,8 @@ impl<'s, C: Controller<R> + ?Sized, R: Real> Flight<'s, C, R> {
                 continue;
             }
             let t_next = (k + 1) as f64 * lane.dt;
-            self.reference.put_lane(i, lane.reference_grid.at(k + 1, t_next));
+            lane.reference = lane.reference_grid.at(k + 1, t_next);
+            self.reference.put_lane(i, lane.reference);
             lane.at_boundary = true;
         }
         self.state = self.truth.quad_state();
@@ -733,19 +764,9 @@ impl<'s, C: Controller<R> + ?Sized, R: Real> Flight<'s, C, R> {
             self.body = self.truth.body_attitude();
         }
         for i in 0..n {
-            if !self.lanes[i].at_boundary {
-                continue;
-            }
-            let t_next = self.lanes[i].k as f64 * self.lanes[i].dt;
-            self.lane_boundary(i, t_next);
-            let (mut s_slot, mut r_slot) = (None, None);
-            let state = lane_ref(&self.state, i, &mut s_slot);
-            let reference = lane_ref(&self.reference, i, &mut r_slot);
-            let lane = &mut self.lanes[i];
-            if let Some(divergence) = check_divergence(lane.scenario, &state.to_array(), reference) {
-                lane.exit = Some(ExitStatus::Diverged { divergence, time: t_next });
-            } else if lane.k >= lane.steps {
-                lane.exit = Some(ExitStatus::Completed);
+            if self.lanes[i].at_boundary {
+                let t_next = self.lanes[i].k as f64 * self.lanes[i].dt;
+                self.lane_boundary(i, t_next, true);
             }
         }
         if self.lanes.iter().any(Lane::flying) {
