@@ -72,6 +72,7 @@ impl ReferenceGrid {
     }
 
     /// The reference at control step `k`, whose time the loop computed as `t` (s).
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn at(&mut self, k: u64, t: f64) -> Reference {
         super::reference_of([self.x.sample(k, t), self.y.sample(k, t), self.z.sample(k, t), self.psi.sample(k, t)])
     }
@@ -603,8 +604,10 @@ impl<'s, C: Controller<R> + ?Sized, R: Real> Flight<'s, C, R> {
             }
             let command_i: Command = command.get_lane(i);
             lane.env.next_period();
-            let plant_now = lane.env.params_with(&lane.tv_now);
-            let delivered = lane.actuators.deliver(&command_i, &plant_now);
+            // Computed in place (no copies of the plant and the delivery).
+            lane.plant_now = lane.env.params_with(&lane.tv_now);
+            lane.delivered = lane.actuators.deliver(&command_i, &lane.plant_now);
+            let delivered = &lane.delivered;
             let demand =
                 delivered.demand.unwrap_or_else(|| rotor_speeds(&lane.demand_params, &command_i, f64::INFINITY));
             if lane.legacy_rotor_metrics {
@@ -613,9 +616,7 @@ impl<'s, C: Controller<R> + ?Sized, R: Real> Flight<'s, C, R> {
                 lane.saturated_periods += u64::from(delivered.saturated);
             }
             saturated.put_lane(i, delivered.saturated);
-            lane.delivered = delivered;
             lane.demand = demand;
-            lane.plant_now = plant_now;
         }
         self.controller.actuator_feedback(saturated);
 
