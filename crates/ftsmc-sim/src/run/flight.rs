@@ -131,8 +131,10 @@ struct Lane<'s> {
     envelope: Tracker,
     stats: FlightStats,
     legacy_rotor_metrics: bool,
-    peak_demand: f64,
-    saturated_periods: u64,
+    /// The last delivered period was not observed (the flight ended at its
+    /// tick): the two rotor metrics of [`crate::metrics::Metrics`] count it,
+    /// the statistics do not.
+    unobserved_period: bool,
     /// This period's delivery (the truth reads its drive during the substeps),
     /// its unlimited rotor-speed demand and the true plant of the period.
     delivered: Delivered,
@@ -195,8 +197,7 @@ impl<'s> Lane<'s> {
             envelope: Tracker::new(scenario.envelope),
             stats: FlightStats::default(),
             legacy_rotor_metrics: reports_rotor_metrics(scenario),
-            peak_demand: 0.0,
-            saturated_periods: 0,
+            unobserved_period: false,
             delivered: Delivered::none(),
             demand: [0.0; 4],
             plant_now: scenario.true_plant(),
@@ -242,9 +243,17 @@ impl<'s> Lane<'s> {
         options.flight_done(self.steps, self.k);
         let mut metrics = self.metrics.finish();
         if self.legacy_rotor_metrics {
-            metrics.peak_rotor_speed_demand = Some(self.peak_demand);
-            metrics.saturation_fraction =
-                Some(if self.k > 0 { self.saturated_periods as f64 / self.k as f64 } else { 0.0 });
+            // Every delivered period: the observed ones (the statistics'
+            // running maximum and count, the same operations in the same
+            // order), then the one the flight ended at, if unobserved.
+            let (mut peak_demand, mut saturated_periods) =
+                (self.stats.peak_rotor_speed_demand, self.stats.saturated_periods);
+            if self.unobserved_period {
+                peak_demand = self.demand.iter().fold(peak_demand, |m, &w| if w.is_finite() { m.max(w) } else { m });
+                saturated_periods += u64::from(self.delivered.saturated);
+            }
+            metrics.peak_rotor_speed_demand = Some(peak_demand);
+            metrics.saturation_fraction = Some(if self.k > 0 { saturated_periods as f64 / self.k as f64 } else { 0.0 });
         }
         RunOutput {
             controller: controller.to_string(),
@@ -610,11 +619,6 @@ impl<'s, C: Controller<R> + ?Sized, R: Real> Flight<'s, C, R> {
             let delivered = &lane.delivered;
             let demand =
                 delivered.demand.unwrap_or_else(|| rotor_speeds(&lane.demand_params, &command_i, f64::INFINITY));
-            if lane.legacy_rotor_metrics {
-                lane.peak_demand =
-                    demand.iter().fold(lane.peak_demand, |m, &w| if w.is_finite() { m.max(w) } else { m });
-                lane.saturated_periods += u64::from(delivered.saturated);
-            }
             saturated.put_lane(i, delivered.saturated);
             lane.demand = demand;
         }
@@ -630,6 +634,7 @@ impl<'s, C: Controller<R> + ?Sized, R: Real> Flight<'s, C, R> {
             let t = lane.k as f64 * lane.dt;
             if let Err(divergence) = self.truth.begin_period(i, &lane.tv_now, &lane.base_plant) {
                 lane.exit = Some(ExitStatus::Diverged { divergence, time: t });
+                lane.unobserved_period = true;
                 continue;
             }
             let delivered = &lane.delivered;
@@ -637,6 +642,7 @@ impl<'s, C: Controller<R> + ?Sized, R: Real> Flight<'s, C, R> {
             let u = [applied.thrust, applied.torque[0], applied.torque[1], applied.torque[2]];
             if !(u.iter().all(|v| v.is_finite())) {
                 lane.exit = Some(ExitStatus::Diverged { divergence: Divergence::NonFinite, time: t });
+                lane.unobserved_period = true;
                 continue;
             }
             let reference = &lane.reference;
