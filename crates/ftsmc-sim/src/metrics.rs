@@ -148,7 +148,11 @@ pub struct MetricsAccumulator {
     max_after: [f64; 6],
     /// A sample at or after `steady_after` was observed.
     reached_after: bool,
-    last_outside: [Option<f64>; 6],
+    /// The last sample time with `|e| >` the band, s (meaningful where
+    /// [`MetricsAccumulator::outside`] is set).
+    last_outside: [f64; 6],
+    /// Some sample had `|e|` above the band.
+    outside: [bool; 6],
     energy: [f64; 4],
     variation: [f64; 4],
     last_u: [f64; 4],
@@ -172,7 +176,8 @@ impl MetricsAccumulator {
             itae: [0.0; 6],
             max_after: [0.0; 6],
             reached_after: false,
-            last_outside: [None; 6],
+            last_outside: [0.0; 6],
+            outside: [false; 6],
             energy: [0.0; 4],
             variation: [0.0; 4],
             last_u: [0.0; 4],
@@ -188,51 +193,77 @@ impl MetricsAccumulator {
 
     /// Add the sample at time `t` (s): channel errors and the command
     /// `[U1, u2, u3, u4]` held over the following period.
-    #[inline]
+    ///
+    /// Each sum takes the sample in time order (`Σ ← Σ + e²`, …); the
+    /// maximum and the last time outside the band are selections,
+    /// branch-free per channel.
+    #[cfg_attr(not(debug_assertions), inline(always))]
     pub fn observe(&mut self, t: f64, errors: &[f64; 6], u: &[f64; 4]) {
         if !self.started {
-            for i in 0..6 {
-                self.band[i] = (self.band_fraction * errors[i].abs()).max(self.band_floor);
-            }
-            self.last_u = *u;
-            self.started = true;
+            self.start(errors, u);
         }
         let after = t >= self.steady_after;
         self.reached_after |= after;
-        let in_window = matches!(self.window, Some([start, end]) if t >= start && t <= end);
+        // One statement per loop, channel by channel: the loops compile to
+        // vector instructions (each channel's operations unchanged).
+        let a: [f64; 6] = core::array::from_fn(|i| errors[i].abs());
         for i in 0..6 {
-            let e = errors[i];
-            let a = e.abs();
-            self.ise[i] += e * e;
-            self.iae[i] += a;
-            self.itae[i] += t * a;
-            if in_window {
-                self.ise_window[i] += e * e;
+            self.ise[i] += errors[i] * errors[i];
+        }
+        for i in 0..6 {
+            self.iae[i] += a[i];
+        }
+        for i in 0..6 {
+            self.itae[i] += t * a[i];
+        }
+        if after {
+            for i in 0..6 {
+                self.max_after[i] = if a[i] > self.max_after[i] { a[i] } else { self.max_after[i] };
             }
-            if after && a > self.max_after[i] {
-                self.max_after[i] = a;
-            }
-            if a > self.band[i] {
-                self.last_outside[i] = Some(t);
+        }
+        for i in 0..6 {
+            let outside = a[i] > self.band[i];
+            self.last_outside[i] = if outside { t } else { self.last_outside[i] };
+            self.outside[i] |= outside;
+        }
+        if let Some([start, end]) = self.window {
+            if t >= start && t <= end {
+                for i in 0..6 {
+                    self.ise_window[i] += errors[i] * errors[i];
+                }
             }
         }
         for j in 0..4 {
             self.energy[j] += u[j] * u[j];
+        }
+        for j in 0..4 {
             self.variation[j] += (u[j] - self.last_u[j]).abs();
         }
         self.last_u = *u;
         self.time = t + self.dt;
     }
 
+    /// The settling bands `max(band_fraction · |e(0)|, band_floor)` from
+    /// the first sample, which also starts the command's variation.
+    #[cold]
+    fn start(&mut self, errors: &[f64; 6], u: &[f64; 4]) {
+        for i in 0..6 {
+            self.band[i] = (self.band_fraction * errors[i].abs()).max(self.band_floor);
+        }
+        self.last_u = *u;
+        self.started = true;
+    }
+
     /// Final metrics over the observed time.
     pub fn finish(&self) -> Metrics {
         let duration = self.time;
         let axes = |a: [f64; 6]| AxisSet { x: a[0], y: a[1], z: a[2], phi: a[3], theta: a[4], psi: a[5] };
-        let settled: [Option<f64>; 6] = core::array::from_fn(|i| match self.last_outside[i] {
-            None => Some(0.0),
-            Some(t) if t + self.dt < duration - 0.5 * self.dt => Some(t + self.dt),
-            Some(_) => None,
-        });
+        let settled: [Option<f64>; 6] =
+            core::array::from_fn(|i| match self.outside[i].then_some(self.last_outside[i]) {
+                None => Some(0.0),
+                Some(t) if t + self.dt < duration - 0.5 * self.dt => Some(t + self.dt),
+                Some(_) => None,
+            });
         let dt = self.dt;
         let ise = self.ise.map(|v| v * dt);
         let rms = ise.map(|v| if duration > 0.0 { (v / duration).sqrt() } else { 0.0 });
@@ -293,6 +324,103 @@ mod tests {
         // Pitch torque alternates 0/1 every sample: variation 1 per sample.
         assert_relative_eq!(m.chattering.pitch_torque, (n - 1) as f64 / 20.0, epsilon = 1e-9);
         assert_eq!(m.chattering.thrust, 0.0);
+    }
+
+    /// The accumulator as it was before its loops were split for vector
+    /// instructions (one loop with branches, the last time outside the band
+    /// an `Option`): the bits every metric must keep.
+    fn previous(dt: f64, steady_after: f64, window: [f64; 2], samples: &[(f64, [f64; 6], [f64; 4])]) -> Metrics {
+        let (band_fraction, band_floor) = (0.02, 1e-3);
+        let (mut band, mut ise, mut iae, mut itae, mut max_after, mut ise_window) =
+            ([0.0f64; 6], [0.0f64; 6], [0.0f64; 6], [0.0f64; 6], [0.0f64; 6], [0.0f64; 6]);
+        let mut last_outside = [None::<f64>; 6];
+        let (mut energy, mut variation, mut last_u) = ([0.0f64; 4], [0.0f64; 4], [0.0f64; 4]);
+        let (mut started, mut reached_after, mut time) = (false, false, 0.0);
+        for (t, errors, u) in samples {
+            let t = *t;
+            if !started {
+                for i in 0..6 {
+                    band[i] = (band_fraction * errors[i].abs()).max(band_floor);
+                }
+                last_u = *u;
+                started = true;
+            }
+            let after = t >= steady_after;
+            reached_after |= after;
+            let in_window = t >= window[0] && t <= window[1];
+            for i in 0..6 {
+                let e = errors[i];
+                let a = e.abs();
+                ise[i] += e * e;
+                iae[i] += a;
+                itae[i] += t * a;
+                if in_window {
+                    ise_window[i] += e * e;
+                }
+                if after && a > max_after[i] {
+                    max_after[i] = a;
+                }
+                if a > band[i] {
+                    last_outside[i] = Some(t);
+                }
+            }
+            for j in 0..4 {
+                energy[j] += u[j] * u[j];
+                variation[j] += (u[j] - last_u[j]).abs();
+            }
+            last_u = *u;
+            time = t + dt;
+        }
+        let mut acc = MetricsAccumulator::new(dt, band_fraction, band_floor, steady_after).with_window(Some(window));
+        // The state the sums above reached, finished by the current code.
+        acc.started = started;
+        acc.band = band;
+        acc.ise = ise;
+        acc.iae = iae;
+        acc.itae = itae;
+        acc.ise_window = ise_window;
+        acc.max_after = max_after;
+        acc.reached_after = reached_after;
+        acc.outside = last_outside.map(|v| v.is_some());
+        acc.last_outside = last_outside.map(|v| v.unwrap_or(0.0));
+        acc.energy = energy;
+        acc.variation = variation;
+        acc.last_u = last_u;
+        acc.time = time;
+        acc.finish()
+    }
+
+    #[test]
+    fn split_loops_keep_the_bits_of_the_branching_loop() {
+        // Errors that cross the band, ties, signed zeros, a NaN and
+        // infinities: every selection and sum must take the same path.
+        let dt = 0.01;
+        let specials = [0.0, -0.0, 1e-3, -1e-3, 0.25, -0.25, f64::NAN, f64::INFINITY, -f64::INFINITY, 3.0];
+        let mut samples = Vec::new();
+        let mut x = 0.123_456_789_f64;
+        for k in 0..400u32 {
+            let t = f64::from(k) * dt;
+            let errors: [f64; 6] = core::array::from_fn(|i| {
+                x = (x * 3.9 * (1.0 - x)).clamp(1e-9, 1.0 - 1e-9);
+                if (k as usize + i) % 37 == 0 {
+                    specials[(k as usize / 37 + i) % specials.len()]
+                } else {
+                    (x - 0.5) * ftsmc_core::math::exp(-t)
+                }
+            });
+            let u: [f64; 4] =
+                core::array::from_fn(|j| if (k as usize + j) % 53 == 0 { -0.0 } else { x * (j as f64 + 1.0) });
+            samples.push((t, errors, u));
+        }
+        let (steady_after, window) = (1.5, [0.5, 2.5]);
+        let mut acc = MetricsAccumulator::new(dt, 0.02, 1e-3, steady_after).with_window(Some(window));
+        for (t, errors, u) in &samples {
+            acc.observe(*t, errors, u);
+        }
+        let (now, before) = (acc.finish(), previous(dt, steady_after, window, &samples));
+        let bits = |m: &Metrics| m.flat().into_iter().map(|(n, v)| (n, v.to_bits())).collect::<Vec<_>>();
+        assert_eq!(bits(&now), bits(&before));
+        assert!(now.ise.x.is_nan(), "a NaN error reaches the ISE");
     }
 
     #[test]

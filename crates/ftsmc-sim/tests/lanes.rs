@@ -85,3 +85,29 @@ fn an_unknown_lane_count_is_refused() {
         .expect_err("3 lanes");
     assert!(err.contains("lanes = 3") && err.contains("[1, 2, 4, 8]"), "{err}");
 }
+
+#[test]
+fn flights_stopped_at_a_tick_the_observers_do_not_see_give_the_same_rows_on_any_number_of_lanes() {
+    // From 0.5 s the inertia variation takes the rigid body out of its
+    // range: each flight stops at a tick the statistics do not observe,
+    // which the rotor metrics (peak demand, saturation fraction) still count.
+    let text = format!(
+        "{REALISTIC_SCENARIO_2}\n[inertia_variation]\nwindow = [0.5, 1.0]\nterms = [{{ type = \"constant\", value = -2.0 }}]\n"
+    );
+    let mut s = Scenario::from_toml_str(&text, "stopped.toml").expect("scenario");
+    s.duration = 2.0;
+    let spec = s.montecarlo.clone().unwrap_or_default();
+    let controllers = vec!["pid".to_string()];
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
+    let batch =
+        pool.install(|| run_batch_lanes(&s, &spec, &controllers, 0..5, s.seed, &|_| {}, None, 4)).expect("batch flies");
+    for r in &batch {
+        assert!(r.exit.to_string().contains("rigid body out of its valid range"), "{}", r.exit);
+        let peak = r.metrics.peak_rotor_speed_demand.expect("realistic flights report it");
+        assert!(peak >= r.stats.peak_rotor_speed_demand && peak > 0.0, "{peak} {:?}", r.stats);
+    }
+    let alone = rows(&s, &spec, &controllers, 5, 1, 1);
+    for lanes in LANE_COUNTS.into_iter().filter(|&l| l > 1) {
+        assert_eq!(rows(&s, &spec, &controllers, 5, lanes, 1), alone, "{lanes} lanes");
+    }
+}

@@ -72,6 +72,7 @@ impl ReferenceGrid {
     }
 
     /// The reference at control step `k`, whose time the loop computed as `t` (s).
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn at(&mut self, k: u64, t: f64) -> Reference {
         super::reference_of([self.x.sample(k, t), self.y.sample(k, t), self.z.sample(k, t), self.psi.sample(k, t)])
     }
@@ -122,13 +123,18 @@ struct Lane<'s> {
     wind_now: Option<[f64; 3]>,
     z_prev: f64,
     reference_grid: ReferenceGrid,
+    /// The reference at the lane's current period boundary (the lane's copy
+    /// of [`Flight`]'s reference, read by the observers and the checks).
+    reference: Reference,
     metrics: MetricsAccumulator,
     recorder: Recorder,
     envelope: Tracker,
     stats: FlightStats,
     legacy_rotor_metrics: bool,
-    peak_demand: f64,
-    saturated_periods: u64,
+    /// The last delivered period was not observed (the flight ended at its
+    /// tick): the two rotor metrics of [`crate::metrics::Metrics`] count it,
+    /// the statistics do not.
+    unobserved_period: bool,
     /// This period's delivery (the truth reads its drive during the substeps),
     /// its unlimited rotor-speed demand and the true plant of the period.
     delivered: Delivered,
@@ -185,13 +191,13 @@ impl<'s> Lane<'s> {
             wind_now: None,
             z_prev: 0.0,
             reference_grid,
+            reference,
             metrics,
             recorder,
             envelope: Tracker::new(scenario.envelope),
             stats: FlightStats::default(),
             legacy_rotor_metrics: reports_rotor_metrics(scenario),
-            peak_demand: 0.0,
-            saturated_periods: 0,
+            unobserved_period: false,
             delivered: Delivered::none(),
             demand: [0.0; 4],
             plant_now: scenario.true_plant(),
@@ -230,13 +236,6 @@ impl<'s> Lane<'s> {
         }
     }
 
-    /// The envelope and the statistics see the truth at a period boundary.
-    #[inline]
-    fn boundary(&mut self, t: f64, state: &QuadState, reference: &Reference) {
-        self.envelope.boundary(t, state, reference);
-        self.stats.boundary(t, state, reference);
-    }
-
     /// The outcome of this lane's flight (a flight stopped early reports
     /// `Completed` over the steps flown).
     fn output(self, controller: &str, options: &RunOptions<'_>) -> RunOutput {
@@ -244,9 +243,17 @@ impl<'s> Lane<'s> {
         options.flight_done(self.steps, self.k);
         let mut metrics = self.metrics.finish();
         if self.legacy_rotor_metrics {
-            metrics.peak_rotor_speed_demand = Some(self.peak_demand);
-            metrics.saturation_fraction =
-                Some(if self.k > 0 { self.saturated_periods as f64 / self.k as f64 } else { 0.0 });
+            // Every delivered period: the observed ones (the statistics'
+            // running maximum and count, the same operations in the same
+            // order), then the one the flight ended at, if unobserved.
+            let (mut peak_demand, mut saturated_periods) =
+                (self.stats.peak_rotor_speed_demand, self.stats.saturated_periods);
+            if self.unobserved_period {
+                peak_demand = self.demand.iter().fold(peak_demand, |m, &w| if w.is_finite() { m.max(w) } else { m });
+                saturated_periods += u64::from(self.delivered.saturated);
+            }
+            metrics.peak_rotor_speed_demand = Some(peak_demand);
+            metrics.saturation_fraction = Some(if self.k > 0 { saturated_periods as f64 / self.k as f64 } else { 0.0 });
         }
         RunOutput {
             controller: controller.to_string(),
@@ -445,7 +452,7 @@ impl<'s, C: Controller<R> + ?Sized, R: Real> Flight<'s, C, R> {
             substeps: Vec::new(),
         };
         for i in 0..R::LANES {
-            flight.lane_boundary(i, 0.0);
+            flight.lane_boundary(i, 0.0, false);
         }
         flight
     }
@@ -470,7 +477,7 @@ impl<'s, C: Controller<R> + ?Sized, R: Real> Flight<'s, C, R> {
             // A flight that cannot start is seen at its initial state.
             self.state.put_lane(lane, scenario.initial_state.state());
         }
-        self.lane_boundary(lane, 0.0);
+        self.lane_boundary(lane, 0.0, false);
     }
 
     /// The outcome of lane `lane`'s flight so far, its lane left as it is
@@ -520,14 +527,26 @@ impl<'s, C: Controller<R> + ?Sized, R: Real> Flight<'s, C, R> {
         }
     }
 
-    fn lane_boundary(&mut self, i: usize, t: f64) {
-        let (mut s_slot, mut r_slot) = (None, None);
+    /// Lane `i`'s envelope, statistics (and, one flight, the observers) see
+    /// the truth at the period boundary `t` (s); with `check`, the
+    /// divergence checks and the planned end follow on the same state.
+    fn lane_boundary(&mut self, i: usize, t: f64, check: bool) {
+        let mut s_slot = None;
         let s = lane_ref(&self.state, i, &mut s_slot);
-        let r = lane_ref(&self.reference, i, &mut r_slot);
-        self.lanes[i].boundary(t, s, r);
+        let lane = &mut self.lanes[i];
+        let r = &lane.reference;
+        lane.envelope.boundary(t, s, r);
+        lane.stats.boundary(t, s, r);
         if R::LANES == 1 {
             for o in &mut self.observers {
                 o.boundary(t, s, r);
+            }
+        }
+        if check {
+            if let Some(divergence) = check_divergence(lane.scenario, s, r) {
+                lane.exit = Some(ExitStatus::Diverged { divergence, time: t });
+            } else if lane.k >= lane.steps {
+                lane.exit = Some(ExitStatus::Completed);
             }
         }
     }
@@ -594,19 +613,14 @@ impl<'s, C: Controller<R> + ?Sized, R: Real> Flight<'s, C, R> {
             }
             let command_i: Command = command.get_lane(i);
             lane.env.next_period();
-            let plant_now = lane.env.params_with(&lane.tv_now);
-            let delivered = lane.actuators.deliver(&command_i, &plant_now);
+            // Computed in place (no copies of the plant and the delivery).
+            lane.plant_now = lane.env.params_with(&lane.tv_now);
+            lane.delivered = lane.actuators.deliver(&command_i, &lane.plant_now);
+            let delivered = &lane.delivered;
             let demand =
                 delivered.demand.unwrap_or_else(|| rotor_speeds(&lane.demand_params, &command_i, f64::INFINITY));
-            if lane.legacy_rotor_metrics {
-                lane.peak_demand =
-                    demand.iter().fold(lane.peak_demand, |m, &w| if w.is_finite() { m.max(w) } else { m });
-                lane.saturated_periods += u64::from(delivered.saturated);
-            }
             saturated.put_lane(i, delivered.saturated);
-            lane.delivered = delivered;
             lane.demand = demand;
-            lane.plant_now = plant_now;
         }
         self.controller.actuator_feedback(saturated);
 
@@ -620,6 +634,7 @@ impl<'s, C: Controller<R> + ?Sized, R: Real> Flight<'s, C, R> {
             let t = lane.k as f64 * lane.dt;
             if let Err(divergence) = self.truth.begin_period(i, &lane.tv_now, &lane.base_plant) {
                 lane.exit = Some(ExitStatus::Diverged { divergence, time: t });
+                lane.unobserved_period = true;
                 continue;
             }
             let delivered = &lane.delivered;
@@ -627,41 +642,60 @@ impl<'s, C: Controller<R> + ?Sized, R: Real> Flight<'s, C, R> {
             let u = [applied.thrust, applied.torque[0], applied.torque[1], applied.torque[2]];
             if !(u.iter().all(|v| v.is_finite())) {
                 lane.exit = Some(ExitStatus::Diverged { divergence: Divergence::NonFinite, time: t });
+                lane.unobserved_period = true;
                 continue;
             }
-            // One flight: the values themselves; lanes: lane i's copies.
-            let (mut s_slot, mut r_slot, mut t_slot, mut m_slot, mut c_slot) = (None, None, None, None, None);
-            let x = lane_ref(&self.state, i, &mut s_slot).to_array();
-            let reference = lane_ref(&self.reference, i, &mut r_slot);
-            let telemetry_i: &Telemetry = lane_ref(telemetry, i, &mut t_slot);
-            let measured_i = lane_ref(&measured.euler, i, &mut m_slot);
-            let command_i: &Command = lane_ref(&command, i, &mut c_slot);
-            let tick = Tick {
-                k: lane.k,
-                t,
-                state: x,
-                measured: measured_i,
-                reference,
-                telemetry: telemetry_i,
-                errors: tracking_errors(&x, reference, telemetry_i),
-                command: command_i,
-                applied: u,
-                omega: delivered.omega,
-                omega_bar: residual_speed(&delivered.omega),
-                demand: lane.demand,
-                saturated: delivered.saturated,
-                nominal_mass: lane.scenario.plant.mass,
-                mass: lane.plant_now.mass,
-                inertia: lane.plant_now.inertia,
-                disturbance: lane.tv_now.disturbance,
-            };
-            lane.metrics.tick(&tick);
-            lane.recorder.tick(&tick);
-            lane.stats.tick(&tick);
+            let reference = &lane.reference;
             if n == 1 {
+                // One flight: the whole tick (the values themselves, no
+                // copies) for the recorder and every observer.
+                let (mut s_slot, mut t_slot, mut m_slot, mut c_slot) = (None, None, None, None);
+                let x = lane_ref(&self.state, i, &mut s_slot).to_array();
+                let telemetry_i: &Telemetry = lane_ref(telemetry, i, &mut t_slot);
+                let measured_i = lane_ref(&measured.euler, i, &mut m_slot);
+                let command_i: &Command = lane_ref(&command, i, &mut c_slot);
+                let tick = Tick {
+                    k: lane.k,
+                    t,
+                    state: x,
+                    measured: measured_i,
+                    reference,
+                    telemetry: telemetry_i,
+                    errors: tracking_errors(&x, reference, telemetry_i),
+                    command: command_i,
+                    applied: u,
+                    omega: delivered.omega,
+                    omega_bar: residual_speed(&delivered.omega),
+                    demand: lane.demand,
+                    saturated: delivered.saturated,
+                    nominal_mass: lane.scenario.plant.mass,
+                    mass: lane.plant_now.mass,
+                    inertia: lane.plant_now.inertia,
+                    disturbance: lane.tv_now.disturbance,
+                };
+                lane.metrics.tick(&tick);
+                lane.recorder.tick(&tick);
+                lane.stats.tick(&tick);
                 for o in &mut self.observers {
                     o.tick(&tick);
                 }
+            } else {
+                // Lanes: no recording and no observers (`Flight::new_lanes`);
+                // the metrics and the statistics read the tracking errors
+                // (`tracking_errors`, the same operations on lane i's numbers),
+                // the applied command and the rotor speeds alone.
+                let (position, attitude) = (&self.state.position, &self.state.attitude);
+                let attitude_reference = &telemetry.attitude_reference;
+                let errors = [
+                    position[0].get_lane(i) - reference.position[0],
+                    position[1].get_lane(i) - reference.position[1],
+                    position[2].get_lane(i) - reference.position[2],
+                    attitude[0].get_lane(i) - attitude_reference[0].get_lane(i),
+                    attitude[1].get_lane(i) - attitude_reference[1].get_lane(i),
+                    attitude[2].get_lane(i) - reference.yaw,
+                ];
+                lane.metrics.observe(t, &errors, &u);
+                lane.stats.observe_period(delivered.saturated, &lane.demand, &delivered.omega);
             }
             lane.omega_bar = residual_speed(&delivered.target);
         }
@@ -678,7 +712,10 @@ impl<'s, C: Controller<R> + ?Sized, R: Real> Flight<'s, C, R> {
                 }
             }
             for i in 0..n {
-                self.lanes[i].z_prev = self.truth.vertical(i).0;
+                // Only the ground contact reads it.
+                if self.lanes[i].ground.is_some() {
+                    self.lanes[i].z_prev = self.truth.vertical(i).0;
+                }
             }
             {
                 let lanes = &self.lanes;
@@ -725,7 +762,8 @@ impl<'s, C: Controller<R> + ?Sized, R: Real> Flight<'s, C, R> {
                 continue;
             }
             let t_next = (k + 1) as f64 * lane.dt;
-            self.reference.put_lane(i, lane.reference_grid.at(k + 1, t_next));
+            lane.reference = lane.reference_grid.at(k + 1, t_next);
+            self.reference.put_lane(i, lane.reference);
             lane.at_boundary = true;
         }
         self.state = self.truth.quad_state();
@@ -733,19 +771,9 @@ impl<'s, C: Controller<R> + ?Sized, R: Real> Flight<'s, C, R> {
             self.body = self.truth.body_attitude();
         }
         for i in 0..n {
-            if !self.lanes[i].at_boundary {
-                continue;
-            }
-            let t_next = self.lanes[i].k as f64 * self.lanes[i].dt;
-            self.lane_boundary(i, t_next);
-            let (mut s_slot, mut r_slot) = (None, None);
-            let state = lane_ref(&self.state, i, &mut s_slot);
-            let reference = lane_ref(&self.reference, i, &mut r_slot);
-            let lane = &mut self.lanes[i];
-            if let Some(divergence) = check_divergence(lane.scenario, &state.to_array(), reference) {
-                lane.exit = Some(ExitStatus::Diverged { divergence, time: t_next });
-            } else if lane.k >= lane.steps {
-                lane.exit = Some(ExitStatus::Completed);
+            if self.lanes[i].at_boundary {
+                let t_next = self.lanes[i].k as f64 * self.lanes[i].dt;
+                self.lane_boundary(i, t_next, true);
             }
         }
         if self.lanes.iter().any(Lane::flying) {

@@ -110,21 +110,32 @@ impl FlightStats {
     }
 }
 
-impl Observer for FlightStats {
-    #[inline]
-    fn tick(&mut self, tick: &Tick<'_>) {
+impl FlightStats {
+    /// One observed control period ([`Observer::tick`] reads these fields
+    /// of its [`Tick`]): the actuator stage saturated, the unlimited
+    /// rotor-speed demand (rad/s; non-finite values skipped) and the rotor
+    /// speeds flown (rad/s). The running mean is `Σω / (4 · periods)`.
+    #[cfg_attr(not(debug_assertions), inline(always))]
+    pub fn observe_period(&mut self, saturated: bool, demand: &[f64; 4], omega: &[f64; 4]) {
         self.periods += 1;
-        self.saturated_periods += u64::from(tick.saturated);
-        for &w in &tick.demand {
+        self.saturated_periods += u64::from(saturated);
+        for &w in demand {
             if w.is_finite() {
                 self.peak_rotor_speed_demand = self.peak_rotor_speed_demand.max(w);
             }
         }
-        for &w in &tick.omega {
+        for &w in omega {
             self.rotor_speed_max = self.rotor_speed_max.max(w);
             self.sum_speed += w;
         }
         self.rotor_speed_mean = self.sum_speed / (4 * self.periods) as f64;
+    }
+}
+
+impl Observer for FlightStats {
+    #[inline]
+    fn tick(&mut self, tick: &Tick<'_>) {
+        self.observe_period(tick.saturated, &tick.demand, &tick.omega);
     }
     #[inline]
     fn boundary(&mut self, _: f64, truth: &QuadState, _: &Reference) {
