@@ -313,20 +313,23 @@ impl Motors {
         let mut held = HeldCommand {
             target: [0.0; 4],
             gap: [0.0; 4],
-            factor: [None; 4],
+            lagged: [false; 4],
+            up: [false; 4],
             noise: p.noise.map(|n| match n.scale {
                 NoiseScale::Absolute => (n.scale, z.map(|zi| n.std * zi)),
                 NoiseScale::Relative => (n.scale, z.map(|zi| 1.0 + n.std * zi)),
             }),
             limits: [p.min_rotor_speed, p.max_rotor_speed],
         };
+        let lag = [p.time_constant_up != 0.0, p.time_constant_down != 0.0];
         for i in 0..4 {
             let target = p.clamp_speed(command[i]);
             let now = self.speeds[i];
-            let (tau, k) = if target > now { (p.time_constant_up, 0) } else { (p.time_constant_down, 1) };
+            let up = target > now;
             held.target[i] = target;
             held.gap[i] = now - target;
-            held.factor[i] = (tau != 0.0).then_some(k);
+            held.up[i] = up;
+            held.lagged[i] = if up { lag[0] } else { lag[1] };
         }
         held
     }
@@ -368,9 +371,12 @@ pub struct HeldCommand {
     pub(crate) target: [f64; 4],
     /// `ω − ω_cmd` at the start of the step, rad/s.
     pub(crate) gap: [f64; 4],
-    /// Index of the decay factor per rotor (0: spin-up τ, 1: spin-down τ),
-    /// `None` where that τ is 0 (the command is reached at once).
-    pub(crate) factor: [Option<usize>; 4],
+    /// The rotor lags: the time constant of its direction is nonzero (else
+    /// the command is reached at once).
+    pub(crate) lagged: [bool; 4],
+    /// The rotor spins up (`ω_cmd > ω`: τ_up and the first decay factor;
+    /// else τ_down and the second).
+    pub(crate) up: [bool; 4],
     /// The noise, per rotor: `σ z` (absolute) or `1 + σ z` (relative).
     pub(crate) noise: Option<(NoiseScale, [f64; 4])>,
     /// `[ω_min, ω_max]`, rad/s.
@@ -386,8 +392,8 @@ impl HeldCommand {
         let [lo, hi] = self.limits;
         let mut w = self.target;
         for i in 0..4 {
-            if let Some(k) = self.factor[i] {
-                w[i] += self.gap[i] * decay[k];
+            if self.lagged[i] {
+                w[i] += self.gap[i] * if self.up[i] { decay[0] } else { decay[1] };
             }
         }
         match &self.noise {
@@ -456,6 +462,11 @@ pub struct MixerOutput {
 pub struct Mixer {
     allocation: [[f64; 4]; 4],
     inverse: [[f64; 4]; 4],
+    /// The columns of `inverse` (`columns[k][i] = inverse[i][k]`): the
+    /// squared speeds `A⁻¹ u` as four columns scaled and added, each
+    /// rotor's sum in the order of its row (the compiler works on several
+    /// rotors at once).
+    columns: [[f64; 4]; 4],
     w_min: f64,
     w_max: f64,
     thrust_range: [f64; 2],
@@ -542,7 +553,8 @@ impl Mixer {
                 expected: "a speed range wide enough for some torque-free thrust",
             });
         }
-        Ok(Self { allocation, inverse, w_min, w_max, thrust_range, kind: actuators.mixer })
+        let columns = core::array::from_fn(|k| core::array::from_fn(|i| inverse[i][k]));
+        Ok(Self { allocation, inverse, columns, w_min, w_max, thrust_range, kind: actuators.mixer })
     }
 
     /// The mixer of paper Eq. 2 ([`paper_allocation_matrix`]).
@@ -561,8 +573,17 @@ impl Mixer {
         Command { thrust: row(0), torque: [row(1), row(2), row(3)] }
     }
 
+    /// `A⁻¹ u`, rotor `i`'s entry `Σ_k inverse[i][k] u[k]` summed in the
+    /// order of `k` (the float sum starts at `−0.0`, which `−0.0 + x = x`
+    /// for every `x` drops).
+    #[inline]
     fn squared(&self, u: &[f64; 4]) -> [f64; 4] {
-        core::array::from_fn(|i| (0..4).map(|k| self.inverse[i][k] * u[k]).sum())
+        let c = &self.columns;
+        let mut w = [0.0; 4];
+        for i in 0..4 {
+            w[i] = c[0][i] * u[0] + c[1][i] * u[1] + c[2][i] * u[2] + c[3][i] * u[3];
+        }
+        w
     }
 
     /// Largest `s ∈ [0, 1]` with `base + s·dir` inside `[w_min, w_max]`
@@ -641,7 +662,9 @@ impl Mixer {
         let u = [commanded.thrust, commanded.torque[0], commanded.torque[1], commanded.torque[2]];
         let w = self.squared(&u);
         let speeds = |w: &[f64; 4]| w.map(|wi| wi.clamp(self.w_min, self.w_max).sqrt());
-        if all_finite && w.iter().all(|&wi| wi >= self.w_min && wi <= self.w_max) {
+        // Every rotor tested (no early exit): the same answer, without branches.
+        let in_range = w.iter().fold(true, |ok, &wi| ok & (wi >= self.w_min) & (wi <= self.w_max));
+        if all_finite && in_range {
             return MixerOutput { commanded, applied: commanded, rotor_speeds: speeds(&w), saturated: false };
         }
         let column = |k: usize, scale: f64| -> [f64; 4] { core::array::from_fn(|i| self.inverse[i][k] * scale) };
@@ -663,5 +686,40 @@ impl Mixer {
         let applied = Command { thrust, torque: [s_rp * u[1], s_rp * u[2], s_y * u[3]] };
         let saturated = !all_finite || applied != commanded;
         MixerOutput { commanded, applied, rotor_speeds: speeds(&w), saturated }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::{RngExt, SeedableRng};
+
+    /// The squared speeds from the columns are the row sums
+    /// `Σ_k inverse[i][k] u[k]` bit for bit, signed zeros and non-finite
+    /// commands included, for the paper's and a "×" rigid body's allocation.
+    #[test]
+    fn squared_speeds_from_columns_are_the_row_sums_bit_for_bit() {
+        let rigid = crate::vehicle::RigidBodyParams {
+            configuration: crate::vehicle::Configuration::Cross,
+            ..crate::vehicle::RigidBodyParams::hummingbird()
+        };
+        let allocations = [paper_allocation_matrix(&QuadrotorParams::default()), rigid.allocation_matrix()];
+        let mut rng = ChaCha8Rng::seed_from_u64(3);
+        let specials = [0.0, -0.0, 1e-300, -1e300, f64::INFINITY, f64::NAN];
+        for a in allocations {
+            let mixer = Mixer::new(a, &ActuatorParams::hummingbird()).unwrap();
+            for n in 0..20_000 {
+                let mut u: [f64; 4] = core::array::from_fn(|_| rng.random_range(-20.0..20.0));
+                if n % 3 == 0 {
+                    u[n % 4] = specials[n % specials.len()];
+                }
+                if n % 5 == 0 {
+                    u[(n + 1) % 4] = -0.0;
+                }
+                let sums: [f64; 4] = core::array::from_fn(|i| (0..4).map(|k| mixer.inverse[i][k] * u[k]).sum());
+                let bits = |w: [f64; 4]| w.map(|v| if v.is_nan() { u64::MAX } else { v.to_bits() });
+                assert_eq!(bits(mixer.squared(&u)), bits(sums), "{u:?}");
+            }
+        }
     }
 }
