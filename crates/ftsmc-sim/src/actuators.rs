@@ -236,12 +236,28 @@ impl ActuatorParams {
 pub struct Motors {
     params: ActuatorParams,
     speeds: [f64; 4],
+    /// `[τ_up ≠ 0, τ_down ≠ 0]`: which direction lags (worked out once).
+    lag: [bool; 2],
+}
+
+/// `v.clamp(lo, hi)` for limits known to be ordered ([`ActuatorParams::check`]):
+/// `f64::clamp`'s two comparisons in its order (NaN stays NaN), without
+/// its assertion on the limits.
+#[cfg_attr(not(debug_assertions), inline(always))]
+fn clamp_ordered(v: f64, lo: f64, hi: f64) -> f64 {
+    let v = if v < lo { lo } else { v };
+    if v > hi {
+        hi
+    } else {
+        v
+    }
 }
 
 impl Motors {
     /// Motors at `initial` speeds (rad/s, clamped to the limits).
     pub fn new(params: &ActuatorParams, initial: [f64; 4]) -> Self {
-        Self { params: *params, speeds: initial.map(|w| params.clamp_speed(w)) }
+        let lag = [params.time_constant_up != 0.0, params.time_constant_down != 0.0];
+        Self { params: *params, speeds: initial.map(|w| params.clamp_speed(w)), lag }
     }
 
     /// The parameters.
@@ -284,20 +300,23 @@ impl Motors {
     }
 
     /// [`Motors::speeds_after`] with the decay factors of [`Motors::decay`]
-    /// for that `dt` (same formula, no exponential evaluated).
+    /// for that `dt` (same formula, no exponential evaluated; each rotor
+    /// without branches: the lagged value is formed and kept where the
+    /// direction's τ is nonzero).
     #[inline]
     pub fn speeds_decayed(&self, command: &[f64; 4], decay: &[f64; 2]) -> [f64; 4] {
         let p = &self.params;
-        core::array::from_fn(|i| {
-            let target = p.clamp_speed(command[i]);
+        let mut w = [0.0; 4];
+        for i in 0..4 {
+            let target = clamp_ordered(command[i], p.min_rotor_speed, p.max_rotor_speed);
             let now = self.speeds[i];
-            let (tau, e) = if target > now { (p.time_constant_up, decay[0]) } else { (p.time_constant_down, decay[1]) };
-            if tau == 0.0 {
-                target
-            } else {
-                target + (now - target) * e
-            }
-        })
+            let up = target > now;
+            let e = if up { decay[0] } else { decay[1] };
+            let lagged = if up { self.lag[0] } else { self.lag[1] };
+            let moved = target + (now - target) * e;
+            w[i] = if lagged { moved } else { target };
+        }
+        w
     }
 
     /// [`Motors::advance`] by the `dt` of `decay` ([`Motors::decay`]).
@@ -308,6 +327,7 @@ impl Motors {
 
     /// The motors from now on with `command` (rad/s) and the noise draws `z`
     /// ([`Motors::sample_noise`]) held, prepared for [`HeldCommand::speeds`].
+    #[inline]
     pub fn held(&self, command: &[f64; 4], z: &[f64; 4]) -> HeldCommand {
         let p = &self.params;
         let mut held = HeldCommand {
@@ -321,15 +341,14 @@ impl Motors {
             }),
             limits: [p.min_rotor_speed, p.max_rotor_speed],
         };
-        let lag = [p.time_constant_up != 0.0, p.time_constant_down != 0.0];
         for i in 0..4 {
-            let target = p.clamp_speed(command[i]);
+            let target = clamp_ordered(command[i], p.min_rotor_speed, p.max_rotor_speed);
             let now = self.speeds[i];
             let up = target > now;
             held.target[i] = target;
             held.gap[i] = now - target;
             held.up[i] = up;
-            held.lagged[i] = if up { lag[0] } else { lag[1] };
+            held.lagged[i] = if up { self.lag[0] } else { self.lag[1] };
         }
         held
     }
@@ -337,6 +356,7 @@ impl Motors {
     /// Draw one standard-normal sample per rotor (rotors 1..4 in order) for
     /// the next period's noise; all zeros, **without touching `rng`**, when
     /// the noise is off.
+    #[inline]
     pub fn sample_noise(&self, rng: &mut ChaCha8Rng) -> [f64; 4] {
         match self.params.noise {
             Some(_) => core::array::from_fn(|_| StandardNormal.sample(rng)),
@@ -346,6 +366,7 @@ impl Motors {
 
     /// Speeds with the noise `z` (from [`Motors::sample_noise`]) applied and
     /// clamped to the limits, rad/s; `speeds` unchanged when noise is off.
+    #[inline]
     pub fn with_noise(&self, speeds: &[f64; 4], z: &[f64; 4]) -> [f64; 4] {
         match self.params.noise {
             None => *speeds,
@@ -656,9 +677,13 @@ impl Mixer {
         if self.kind == MixerKind::Clamp {
             return self.mix_clamped(command);
         }
+        let raw = [command.thrust, command.torque[0], command.torque[1], command.torque[2]];
+        // `x − x` is +0 for a finite `x` and NaN otherwise: the sum is 0
+        // exactly when every component is finite (then nothing is replaced).
+        let all_finite = (raw[0] - raw[0]) + (raw[1] - raw[1]) + (raw[2] - raw[2]) + (raw[3] - raw[3]) == 0.0;
         let finite = |v: f64| if v.is_finite() { v } else { 0.0 };
-        let commanded = Command { thrust: finite(command.thrust), torque: command.torque.map(finite) };
-        let all_finite = commanded == *command;
+        let commanded =
+            if all_finite { *command } else { Command { thrust: finite(command.thrust), torque: command.torque.map(finite) } };
         let u = [commanded.thrust, commanded.torque[0], commanded.torque[1], commanded.torque[2]];
         let w = self.squared(&u);
         let speeds = |w: &[f64; 4]| w.map(|wi| wi.clamp(self.w_min, self.w_max).sqrt());
