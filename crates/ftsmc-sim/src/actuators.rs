@@ -680,10 +680,14 @@ impl Mixer {
         let raw = [command.thrust, command.torque[0], command.torque[1], command.torque[2]];
         // `x − x` is +0 for a finite `x` and NaN otherwise: the sum is 0
         // exactly when every component is finite (then nothing is replaced).
+        #[allow(clippy::eq_op)] // `x − x` on purpose: the finiteness test above
         let all_finite = (raw[0] - raw[0]) + (raw[1] - raw[1]) + (raw[2] - raw[2]) + (raw[3] - raw[3]) == 0.0;
         let finite = |v: f64| if v.is_finite() { v } else { 0.0 };
-        let commanded =
-            if all_finite { *command } else { Command { thrust: finite(command.thrust), torque: command.torque.map(finite) } };
+        let commanded = if all_finite {
+            *command
+        } else {
+            Command { thrust: finite(command.thrust), torque: command.torque.map(finite) }
+        };
         let u = [commanded.thrust, commanded.torque[0], commanded.torque[1], commanded.torque[2]];
         let w = self.squared(&u);
         let speeds = |w: &[f64; 4]| w.map(|wi| wi.clamp(self.w_min, self.w_max).sqrt());

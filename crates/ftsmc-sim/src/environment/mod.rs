@@ -294,8 +294,7 @@ mod tests {
         ];
         let windows_list =
             [[Some([1.0, 2.0]); 7], [None; 7], [Some([1.0, 2.0]), None, None, None, None, None, Some([0.5, 1.5])]];
-        for (windows, y_terms) in
-            windows_list.iter().flat_map(|w| [(*w, polynomial.clone()), (*w, sinusoids.clone())])
+        for (windows, y_terms) in windows_list.iter().flat_map(|w| [(*w, polynomial.clone()), (*w, sinusoids.clone())])
         {
             let banked = y_terms.len() == 3;
             let [wx, wy, wz, wphi, wtheta, wpsi, wvar] = windows;

@@ -222,15 +222,27 @@ mod tests {
     #[test]
     fn the_bank_gives_each_signals_grid_bits() {
         let signals = [
-            Signal { terms: vec![term(false, 0.5, Some(0.4), None, 0.0), term(false, 0.3, Some(1.3), None, 0.2)], window: None },
+            Signal {
+                terms: vec![term(false, 0.5, Some(0.4), None, 0.0), term(false, 0.3, Some(1.3), None, 0.2)],
+                window: None,
+            },
             Signal { terms: vec![term(true, 0.5, Some(0.7), None, 1.1)], window: Some([1.0, 2.0]) },
             Signal { terms: vec![], window: None },
             Signal {
-                terms: vec![Term::Constant { value: 0.1 }, Term::Constant { value: -0.3 }, term(true, 0.2, None, Some(2.0), 0.0)],
+                terms: vec![
+                    Term::Constant { value: 0.1 },
+                    Term::Constant { value: -0.3 },
+                    term(true, 0.2, None, Some(2.0), 0.0),
+                ],
                 window: None,
             },
             Signal { terms: vec![Term::Constant { value: 0.7 }], window: None },
-            Signal { terms: (0..5).map(|i| term(i % 2 == 0, 0.1 * i as f64 - 0.2, None, Some(0.5 + i as f64), -0.4 * i as f64)).collect(), window: None },
+            Signal {
+                terms: (0..5)
+                    .map(|i| term(i % 2 == 0, 0.1 * i as f64 - 0.2, None, Some(0.5 + i as f64), -0.4 * i as f64))
+                    .collect(),
+                window: None,
+            },
         ];
         let refs: Vec<&Signal> = signals.iter().collect();
         for step in [1e-3, 2.5e-4] {
@@ -253,7 +265,8 @@ mod tests {
         let poly = Signal { terms: vec![Term::Polynomial { coefficients: vec![0.0, 0.2] }], window: None };
         let sine = Signal { terms: vec![term(false, 1.0, Some(1.0), None, 0.0)], window: None };
         assert!(PhasorBank::new(&[&sine, &poly], 1e-3).is_none());
-        let mixed = Signal { terms: vec![term(false, 1.0, Some(1.0), None, 0.0), Term::Constant { value: 1.0 }], window: None };
+        let mixed =
+            Signal { terms: vec![term(false, 1.0, Some(1.0), None, 0.0), Term::Constant { value: 1.0 }], window: None };
         assert!(PhasorBank::new(&[&mixed], 1e-3).is_none());
         assert!(PhasorBank::new(&[&sine], 1e-3).is_some());
     }

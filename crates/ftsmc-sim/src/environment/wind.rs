@@ -519,7 +519,6 @@ impl SecondOrder {
         let l22 = (q22 - l21 * l21).max(0.0).sqrt();
         Self { phi, chol: [[l11, 0.0], [l21, l22]] }
     }
-
 }
 
 /// The `v` and `w` filters ([`SecondOrder`]) side by side, entry by entry

@@ -1277,7 +1277,8 @@ mod tests {
             assert!(has_plain_diagonal(&base));
             let body = RigidBody::new(RigidBodyParams { inertia: base, ..RigidBodyParams::hummingbird() }).ok();
             let Some(body) = body else { continue };
-            let edges = [1.0, 0.0, -0.0, -1.0, 2.0, 1e6, 1e300, f64::INFINITY, f64::NAN, 1e-300, 1e-3, f64::MIN_POSITIVE];
+            let edges =
+                [1.0, 0.0, -0.0, -1.0, 2.0, 1e6, 1e300, f64::INFINITY, f64::NAN, 1e-300, 1e-3, f64::MIN_POSITIVE];
             for k in 0..4000 {
                 let scale = if k < edges.len() { edges[k] } else { rng.random_range(0.5..1.5) };
                 let mass = match k % 7 {
