@@ -236,12 +236,28 @@ impl ActuatorParams {
 pub struct Motors {
     params: ActuatorParams,
     speeds: [f64; 4],
+    /// `[τ_up ≠ 0, τ_down ≠ 0]`: which direction lags (worked out once).
+    lag: [bool; 2],
+}
+
+/// `v.clamp(lo, hi)` for limits known to be ordered ([`ActuatorParams::check`]):
+/// `f64::clamp`'s two comparisons in its order (NaN stays NaN), without
+/// its assertion on the limits.
+#[cfg_attr(not(debug_assertions), inline(always))]
+fn clamp_ordered(v: f64, lo: f64, hi: f64) -> f64 {
+    let v = if v < lo { lo } else { v };
+    if v > hi {
+        hi
+    } else {
+        v
+    }
 }
 
 impl Motors {
     /// Motors at `initial` speeds (rad/s, clamped to the limits).
     pub fn new(params: &ActuatorParams, initial: [f64; 4]) -> Self {
-        Self { params: *params, speeds: initial.map(|w| params.clamp_speed(w)) }
+        let lag = [params.time_constant_up != 0.0, params.time_constant_down != 0.0];
+        Self { params: *params, speeds: initial.map(|w| params.clamp_speed(w)), lag }
     }
 
     /// The parameters.
@@ -284,20 +300,23 @@ impl Motors {
     }
 
     /// [`Motors::speeds_after`] with the decay factors of [`Motors::decay`]
-    /// for that `dt` (same formula, no exponential evaluated).
+    /// for that `dt` (same formula, no exponential evaluated; each rotor
+    /// without branches: the lagged value is formed and kept where the
+    /// direction's τ is nonzero).
     #[inline]
     pub fn speeds_decayed(&self, command: &[f64; 4], decay: &[f64; 2]) -> [f64; 4] {
         let p = &self.params;
-        core::array::from_fn(|i| {
-            let target = p.clamp_speed(command[i]);
+        let mut w = [0.0; 4];
+        for i in 0..4 {
+            let target = clamp_ordered(command[i], p.min_rotor_speed, p.max_rotor_speed);
             let now = self.speeds[i];
-            let (tau, e) = if target > now { (p.time_constant_up, decay[0]) } else { (p.time_constant_down, decay[1]) };
-            if tau == 0.0 {
-                target
-            } else {
-                target + (now - target) * e
-            }
-        })
+            let up = target > now;
+            let e = if up { decay[0] } else { decay[1] };
+            let lagged = if up { self.lag[0] } else { self.lag[1] };
+            let moved = target + (now - target) * e;
+            w[i] = if lagged { moved } else { target };
+        }
+        w
     }
 
     /// [`Motors::advance`] by the `dt` of `decay` ([`Motors::decay`]).
@@ -308,12 +327,14 @@ impl Motors {
 
     /// The motors from now on with `command` (rad/s) and the noise draws `z`
     /// ([`Motors::sample_noise`]) held, prepared for [`HeldCommand::speeds`].
+    #[inline]
     pub fn held(&self, command: &[f64; 4], z: &[f64; 4]) -> HeldCommand {
         let p = &self.params;
         let mut held = HeldCommand {
             target: [0.0; 4],
             gap: [0.0; 4],
-            factor: [None; 4],
+            lagged: [false; 4],
+            up: [false; 4],
             noise: p.noise.map(|n| match n.scale {
                 NoiseScale::Absolute => (n.scale, z.map(|zi| n.std * zi)),
                 NoiseScale::Relative => (n.scale, z.map(|zi| 1.0 + n.std * zi)),
@@ -321,12 +342,13 @@ impl Motors {
             limits: [p.min_rotor_speed, p.max_rotor_speed],
         };
         for i in 0..4 {
-            let target = p.clamp_speed(command[i]);
+            let target = clamp_ordered(command[i], p.min_rotor_speed, p.max_rotor_speed);
             let now = self.speeds[i];
-            let (tau, k) = if target > now { (p.time_constant_up, 0) } else { (p.time_constant_down, 1) };
+            let up = target > now;
             held.target[i] = target;
             held.gap[i] = now - target;
-            held.factor[i] = (tau != 0.0).then_some(k);
+            held.up[i] = up;
+            held.lagged[i] = if up { self.lag[0] } else { self.lag[1] };
         }
         held
     }
@@ -334,6 +356,7 @@ impl Motors {
     /// Draw one standard-normal sample per rotor (rotors 1..4 in order) for
     /// the next period's noise; all zeros, **without touching `rng`**, when
     /// the noise is off.
+    #[inline]
     pub fn sample_noise(&self, rng: &mut ChaCha8Rng) -> [f64; 4] {
         match self.params.noise {
             Some(_) => core::array::from_fn(|_| StandardNormal.sample(rng)),
@@ -343,6 +366,7 @@ impl Motors {
 
     /// Speeds with the noise `z` (from [`Motors::sample_noise`]) applied and
     /// clamped to the limits, rad/s; `speeds` unchanged when noise is off.
+    #[inline]
     pub fn with_noise(&self, speeds: &[f64; 4], z: &[f64; 4]) -> [f64; 4] {
         match self.params.noise {
             None => *speeds,
@@ -368,9 +392,12 @@ pub struct HeldCommand {
     pub(crate) target: [f64; 4],
     /// `ω − ω_cmd` at the start of the step, rad/s.
     pub(crate) gap: [f64; 4],
-    /// Index of the decay factor per rotor (0: spin-up τ, 1: spin-down τ),
-    /// `None` where that τ is 0 (the command is reached at once).
-    pub(crate) factor: [Option<usize>; 4],
+    /// The rotor lags: the time constant of its direction is nonzero (else
+    /// the command is reached at once).
+    pub(crate) lagged: [bool; 4],
+    /// The rotor spins up (`ω_cmd > ω`: τ_up and the first decay factor;
+    /// else τ_down and the second).
+    pub(crate) up: [bool; 4],
     /// The noise, per rotor: `σ z` (absolute) or `1 + σ z` (relative).
     pub(crate) noise: Option<(NoiseScale, [f64; 4])>,
     /// `[ω_min, ω_max]`, rad/s.
@@ -386,8 +413,8 @@ impl HeldCommand {
         let [lo, hi] = self.limits;
         let mut w = self.target;
         for i in 0..4 {
-            if let Some(k) = self.factor[i] {
-                w[i] += self.gap[i] * decay[k];
+            if self.lagged[i] {
+                w[i] += self.gap[i] * if self.up[i] { decay[0] } else { decay[1] };
             }
         }
         match &self.noise {
@@ -456,6 +483,11 @@ pub struct MixerOutput {
 pub struct Mixer {
     allocation: [[f64; 4]; 4],
     inverse: [[f64; 4]; 4],
+    /// The columns of `inverse` (`columns[k][i] = inverse[i][k]`): the
+    /// squared speeds `A⁻¹ u` as four columns scaled and added, each
+    /// rotor's sum in the order of its row (the compiler works on several
+    /// rotors at once).
+    columns: [[f64; 4]; 4],
     w_min: f64,
     w_max: f64,
     thrust_range: [f64; 2],
@@ -542,7 +574,8 @@ impl Mixer {
                 expected: "a speed range wide enough for some torque-free thrust",
             });
         }
-        Ok(Self { allocation, inverse, w_min, w_max, thrust_range, kind: actuators.mixer })
+        let columns = core::array::from_fn(|k| core::array::from_fn(|i| inverse[i][k]));
+        Ok(Self { allocation, inverse, columns, w_min, w_max, thrust_range, kind: actuators.mixer })
     }
 
     /// The mixer of paper Eq. 2 ([`paper_allocation_matrix`]).
@@ -561,8 +594,17 @@ impl Mixer {
         Command { thrust: row(0), torque: [row(1), row(2), row(3)] }
     }
 
+    /// `A⁻¹ u`, rotor `i`'s entry `Σ_k inverse[i][k] u[k]` summed in the
+    /// order of `k` (the float sum starts at `−0.0`, which `−0.0 + x = x`
+    /// for every `x` drops).
+    #[inline]
     fn squared(&self, u: &[f64; 4]) -> [f64; 4] {
-        core::array::from_fn(|i| (0..4).map(|k| self.inverse[i][k] * u[k]).sum())
+        let c = &self.columns;
+        let mut w = [0.0; 4];
+        for i in 0..4 {
+            w[i] = c[0][i] * u[0] + c[1][i] * u[1] + c[2][i] * u[2] + c[3][i] * u[3];
+        }
+        w
     }
 
     /// Largest `s ∈ [0, 1]` with `base + s·dir` inside `[w_min, w_max]`
@@ -635,13 +677,23 @@ impl Mixer {
         if self.kind == MixerKind::Clamp {
             return self.mix_clamped(command);
         }
+        let raw = [command.thrust, command.torque[0], command.torque[1], command.torque[2]];
+        // `x − x` is +0 for a finite `x` and NaN otherwise: the sum is 0
+        // exactly when every component is finite (then nothing is replaced).
+        #[allow(clippy::eq_op)] // `x − x` on purpose: the finiteness test above
+        let all_finite = (raw[0] - raw[0]) + (raw[1] - raw[1]) + (raw[2] - raw[2]) + (raw[3] - raw[3]) == 0.0;
         let finite = |v: f64| if v.is_finite() { v } else { 0.0 };
-        let commanded = Command { thrust: finite(command.thrust), torque: command.torque.map(finite) };
-        let all_finite = commanded == *command;
+        let commanded = if all_finite {
+            *command
+        } else {
+            Command { thrust: finite(command.thrust), torque: command.torque.map(finite) }
+        };
         let u = [commanded.thrust, commanded.torque[0], commanded.torque[1], commanded.torque[2]];
         let w = self.squared(&u);
         let speeds = |w: &[f64; 4]| w.map(|wi| wi.clamp(self.w_min, self.w_max).sqrt());
-        if all_finite && w.iter().all(|&wi| wi >= self.w_min && wi <= self.w_max) {
+        // Every rotor tested (no early exit): the same answer, without branches.
+        let in_range = w.iter().fold(true, |ok, &wi| ok & (wi >= self.w_min) & (wi <= self.w_max));
+        if all_finite && in_range {
             return MixerOutput { commanded, applied: commanded, rotor_speeds: speeds(&w), saturated: false };
         }
         let column = |k: usize, scale: f64| -> [f64; 4] { core::array::from_fn(|i| self.inverse[i][k] * scale) };
@@ -663,5 +715,40 @@ impl Mixer {
         let applied = Command { thrust, torque: [s_rp * u[1], s_rp * u[2], s_y * u[3]] };
         let saturated = !all_finite || applied != commanded;
         MixerOutput { commanded, applied, rotor_speeds: speeds(&w), saturated }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::{RngExt, SeedableRng};
+
+    /// The squared speeds from the columns are the row sums
+    /// `Σ_k inverse[i][k] u[k]` bit for bit, signed zeros and non-finite
+    /// commands included, for the paper's and a "×" rigid body's allocation.
+    #[test]
+    fn squared_speeds_from_columns_are_the_row_sums_bit_for_bit() {
+        let rigid = crate::vehicle::RigidBodyParams {
+            configuration: crate::vehicle::Configuration::Cross,
+            ..crate::vehicle::RigidBodyParams::hummingbird()
+        };
+        let allocations = [paper_allocation_matrix(&QuadrotorParams::default()), rigid.allocation_matrix()];
+        let mut rng = ChaCha8Rng::seed_from_u64(3);
+        let specials = [0.0, -0.0, 1e-300, -1e300, f64::INFINITY, f64::NAN];
+        for a in allocations {
+            let mixer = Mixer::new(a, &ActuatorParams::hummingbird()).unwrap();
+            for n in 0..20_000 {
+                let mut u: [f64; 4] = core::array::from_fn(|_| rng.random_range(-20.0..20.0));
+                if n % 3 == 0 {
+                    u[n % 4] = specials[n % specials.len()];
+                }
+                if n % 5 == 0 {
+                    u[(n + 1) % 4] = -0.0;
+                }
+                let sums: [f64; 4] = core::array::from_fn(|i| (0..4).map(|k| mixer.inverse[i][k] * u[k]).sum());
+                let bits = |w: [f64; 4]| w.map(|v| if v.is_nan() { u64::MAX } else { v.to_bits() });
+                assert_eq!(bits(mixer.squared(&u)), bits(sums), "{u:?}");
+            }
+        }
     }
 }

@@ -5,6 +5,7 @@
 mod disturbance;
 pub mod ground;
 mod payload;
+mod phasors;
 mod variation;
 pub mod wind;
 
@@ -59,6 +60,10 @@ struct Grid {
     /// The window all seven signals have (`Some(None)`: none has one;
     /// `None`: their windows differ), tested once per sample.
     shared_window: Option<Option<[f64; 2]>>,
+    /// The signals' sinusoids side by side (the six disturbances, then the
+    /// inertia variation if any), when they are made of nothing else: the
+    /// grid signals' bits in one pass ([`phasors`]).
+    bank: Option<phasors::PhasorBank>,
 }
 
 impl<'a> Environment<'a> {
@@ -89,7 +94,10 @@ impl<'a> Environment<'a> {
         let first = windows.next().flatten();
         let same = |w: Option<[f64; 2]>| w.map(|w| w.map(f64::to_bits)) == first.map(|w| w.map(f64::to_bits));
         let shared_window = windows.all(same).then_some(first);
-        self.grid = Some(Grid { disturbance, inertia_variation, shared_window });
+        let signals: Vec<&Signal> =
+            [&d.x, &d.y, &d.z, &d.phi, &d.theta, &d.psi].into_iter().chain(self.params.inertia_variation).collect();
+        let bank = phasors::PhasorBank::new(&signals, step);
+        self.grid = Some(Grid { disturbance, inertia_variation, shared_window, bank });
         self
     }
 
@@ -160,6 +168,30 @@ impl<'a> Environment<'a> {
             // One window for all: outside, every value is 0 (as each signal's own test gives).
             Some(Some([start, end])) if t < start || t > end => {
                 (grid.inertia_variation.as_ref().map(|_| 0.0), [0.0; 6])
+            }
+            Some(_) if grid.bank.is_some() => {
+                let mut v = [0.0; 7];
+                if let Some(bank) = grid.bank.as_mut() {
+                    bank.values(m, t, &mut v);
+                }
+                let [x, y, z, phi, theta, psi, variation] = v;
+                (grid.inertia_variation.as_ref().map(|_| variation), [x, y, z, phi, theta, psi])
+            }
+            None if grid.bank.is_some() => {
+                let mut v = [0.0; 7];
+                if let Some(bank) = grid.bank.as_mut() {
+                    bank.values(m, t, &mut v);
+                }
+                // Each signal's own window (outside: 0, as its own test gives).
+                let inside = |s: &GridSignal| s.window().is_none_or(|[start, end]| !(t < start || t > end));
+                let mut disturbance = [0.0; 6];
+                for (k, s) in grid.disturbance.iter().enumerate() {
+                    if inside(s) {
+                        disturbance[k] = v[k];
+                    }
+                }
+                let variation = grid.inertia_variation.as_ref().map(|s| if inside(s) { v[6] } else { 0.0 });
+                (variation, disturbance)
             }
             Some(_) => {
                 let variation = grid.inertia_variation.as_mut().map(|var| var.value_inside(m, t));
@@ -250,20 +282,27 @@ mod tests {
 
     /// With one window for all seven signals (tested once) or with
     /// different ones (each its own), the grid's time-varying inputs have
-    /// the bits of every signal's own [`GridSignal::value`].
+    /// the bits of every signal's own [`GridSignal::value`]: with a
+    /// polynomial among them (the grid signals) and with sinusoids and
+    /// constants only (the phasor bank).
     #[test]
     fn a_shared_window_gives_the_bits_of_every_signals_own_window() {
         let payload = Payload { mass: 0.37, start: 1.0, decay_start: Some(2.0), tau: Some(3.0) };
-        for windows in
-            [[Some([1.0, 2.0]); 7], [None; 7], [Some([1.0, 2.0]), None, None, None, None, None, Some([0.5, 1.5])]]
+        let polynomial = vec![Term::Constant { value: 0.1 }, Term::Polynomial { coefficients: vec![0.0, 0.2] }];
+        let sinusoids = vec![
+            Term::Constant { value: 0.1 },
+            Term::Cosine { amplitude: 0.2, omega: None, frequency: Some(1.5), phase: -0.4 },
+            Term::Sine { amplitude: -0.3, omega: Some(2.2), frequency: None, phase: 0.0 },
+        ];
+        let windows_list =
+            [[Some([1.0, 2.0]); 7], [None; 7], [Some([1.0, 2.0]), None, None, None, None, None, Some([0.5, 1.5])]];
+        for (windows, y_terms) in windows_list.iter().flat_map(|w| [(*w, polynomial.clone()), (*w, sinusoids.clone())])
         {
+            let banked = y_terms.len() == 3;
             let [wx, wy, wz, wphi, wtheta, wpsi, wvar] = windows;
             let disturbance = DisturbanceSignals {
                 x: sine(0.5, 0.4, wx),
-                y: Signal {
-                    terms: vec![Term::Constant { value: 0.1 }, Term::Polynomial { coefficients: vec![0.0, 0.2] }],
-                    window: wy,
-                },
+                y: Signal { terms: y_terms, window: wy },
                 z: sine(0.7, 0.3, wz),
                 phi: sine(0.5, 0.4, wphi),
                 theta: sine(-0.5, 0.5, wtheta),
@@ -280,6 +319,7 @@ mod tests {
             };
             let step = 2.5e-4;
             let mut env = Environment::new(params).on_grid(step);
+            assert_eq!(env.grid.as_ref().is_some_and(|g| g.bank.is_some()), banked);
             let d = &disturbance;
             let mut own = [&d.x, &d.y, &d.z, &d.phi, &d.theta, &d.psi, &variation].map(|s| GridSignal::new(s, step));
             for m in 0..12_000u64 {

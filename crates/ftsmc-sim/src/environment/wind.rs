@@ -519,14 +519,45 @@ impl SecondOrder {
         let l22 = (q22 - l21 * l21).max(0.0).sqrt();
         Self { phi, chol: [[l11, 0.0], [l21, l22]] }
     }
+}
 
-    /// One step of state `z` with the draws `n₁`, `n₂` (in this order).
+/// The `v` and `w` filters ([`SecondOrder`]) side by side, entry by entry
+/// (`[v, w]`), so that one step of both is one pass of paired operations.
+#[derive(Clone, Copy, Debug, Default)]
+struct SecondOrderPair {
+    /// `Φ[r][c]` of each filter.
+    phi: [[[f64; 2]; 2]; 2],
+    /// `L[r][c]` of each filter (lower triangular).
+    chol: [[[f64; 2]; 2]; 2],
+}
+
+impl SecondOrderPair {
+    fn new(filters: &[SecondOrder; 2]) -> Self {
+        let mut pair = Self::default();
+        for (k, f) in filters.iter().enumerate() {
+            for r in 0..2 {
+                for c in 0..2 {
+                    pair.phi[r][c][k] = f.phi[r][c];
+                    pair.chol[r][c][k] = f.chol[r][c];
+                }
+            }
+        }
+        pair
+    }
+
+    /// One step of both filters' states `(z₁, z₂)` (`z1[k]`, `z2[k]` of
+    /// filter `k`) with their draws `n₁`, `n₂`: for each filter
+    /// `z₁ ← Φ₁₁ z₁ + Φ₁₂ z₂ + L₁₁ n₁`, `z₂ ← Φ₂₁ z₁ + Φ₂₂ z₂ + L₂₁ n₁ + L₂₂ n₂`
+    /// (old `z` on the right), summed left to right.
     #[cfg_attr(not(debug_assertions), inline(always))]
-    fn step(&self, z: &mut [f64; 2], n1: f64, n2: f64) {
-        let [phi, chol] = [self.phi, self.chol];
-        let [z1, z2] = *z;
-        z[0] = phi[0][0] * z1 + phi[0][1] * z2 + chol[0][0] * n1;
-        z[1] = phi[1][0] * z1 + phi[1][1] * z2 + chol[1][0] * n1 + chol[1][1] * n2;
+    fn step(&self, z1: &mut [f64; 2], z2: &mut [f64; 2], n1: [f64; 2], n2: [f64; 2]) {
+        let [[p11, p12], [p21, p22]] = self.phi;
+        let [[l11, _], [l21, l22]] = self.chol;
+        let (a, b) = (*z1, *z2);
+        for k in 0..2 {
+            z1[k] = p11[k] * a[k] + p12[k] * b[k] + l11[k] * n1[k];
+            z2[k] = p21[k] * a[k] + p22[k] * b[k] + l21[k] * n1[k] + l22[k] * n2[k];
+        }
     }
 }
 
@@ -541,10 +572,12 @@ pub struct Dryden {
     airspeed: f64,
     /// The `u` filter.
     u_filter: FirstOrder,
-    /// The `v` and `w` filters.
-    vw_filters: [SecondOrder; 2],
-    /// u: `state[0][0]`; v, w: `(z₁, z₂)`.
-    state: [[f64; 2]; 3],
+    /// The `v` and `w` filters, side by side.
+    vw_filters: SecondOrderPair,
+    /// The `u` state.
+    u: f64,
+    /// The `v` and `w` states: `z₁` of each, then `z₂` of each.
+    vw: [[f64; 2]; 2],
     rngs: [NoiseStream; 3],
 }
 
@@ -560,25 +593,22 @@ impl Dryden {
             NoiseStream::new(rng)
         });
         let scales = params.scales();
-        let mut state = [[0.0; 2]; 3];
-        for (k, (s, rng)) in state.iter_mut().zip(rngs.iter_mut()).enumerate() {
-            let sigma = scales.sigma[k];
-            if k == 0 {
-                s[0] = sigma * rng.normal();
-            } else {
-                s[0] = 0.5 * sigma * rng.normal();
-                s[1] = 0.5 * sigma * rng.normal();
-            }
+        let u = scales.sigma[0] * rngs[0].normal();
+        let mut vw = [[0.0; 2]; 2];
+        for k in 0..2 {
+            let sigma = scales.sigma[1 + k];
+            vw[0][k] = 0.5 * sigma * rngs[1 + k].normal();
+            vw[1][k] = 0.5 * sigma * rngs[1 + k].normal();
         }
-        let idle = SecondOrder { phi: [[0.0; 2]; 2], chol: [[0.0; 2]; 2] };
         let mut d = Self {
             params,
             scales,
             dt,
             airspeed: f64::NAN,
             u_filter: FirstOrder { phi: 0.0, gain: 0.0 },
-            vw_filters: [idle; 2],
-            state,
+            vw_filters: SecondOrderPair::default(),
+            u,
+            vw,
             rngs,
         };
         d.set_airspeed(airspeed);
@@ -597,10 +627,10 @@ impl Dryden {
         self.airspeed = v;
         let s = &self.scales;
         self.u_filter = FirstOrder::new(s.sigma[0], v / s.length[0], self.dt);
-        self.vw_filters = [
+        self.vw_filters = SecondOrderPair::new(&[
             SecondOrder::new(s.sigma[1], v / s.length[1], self.dt),
             SecondOrder::new(s.sigma[2], v / s.length[2], self.dt),
-        ];
+        ]);
     }
 
     /// The airspeed in use, m/s.
@@ -616,8 +646,9 @@ impl Dryden {
     /// The current turbulence `[u, v, w]` (m/s, wind axes).
     #[inline]
     pub fn current(&self) -> [f64; 3] {
-        let out = |s: &[f64; 2]| s[0] + 3f64.sqrt() * s[1];
-        [self.state[0][0], out(&self.state[1]), out(&self.state[2])]
+        let [z1, z2] = self.vw;
+        let out = |k: usize| z1[k] + 3f64.sqrt() * z2[k];
+        [self.u, out(0), out(1)]
     }
 
     /// Return the current turbulence `[u, v, w]` (m/s, wind axes), then
@@ -627,13 +658,12 @@ impl Dryden {
     pub fn step(&mut self) -> [f64; 3] {
         let now = self.current();
         let [u_rng, v_rng, w_rng] = &mut self.rngs;
-        let [u, v, w] = &mut self.state;
         let FirstOrder { phi, gain } = self.u_filter;
-        u[0] = phi * u[0] + gain * u_rng.normal();
-        let (n1, n2) = (v_rng.normal(), v_rng.normal());
-        self.vw_filters[0].step(v, n1, n2);
-        let (n1, n2) = (w_rng.normal(), w_rng.normal());
-        self.vw_filters[1].step(w, n1, n2);
+        self.u = phi * self.u + gain * u_rng.normal();
+        let (v1, v2) = (v_rng.normal(), v_rng.normal());
+        let (w1, w2) = (w_rng.normal(), w_rng.normal());
+        let [z1, z2] = &mut self.vw;
+        self.vw_filters.step(z1, z2, [v1, w1], [v2, w2]);
         now
     }
 }
@@ -704,5 +734,39 @@ impl Wind {
             }
         }
         v
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::{RngExt, SeedableRng};
+
+    /// The paired `v`, `w` step is each filter's own step
+    /// `z₁ ← Φ₁₁ z₁ + Φ₁₂ z₂ + L₁₁ n₁`, `z₂ ← Φ₂₁ z₁ + Φ₂₂ z₂ + L₂₁ n₁ + L₂₂ n₂`
+    /// bit for bit, over airspeeds from the floor to a gale.
+    #[test]
+    fn paired_filters_step_as_each_filter_alone() {
+        let mut rng = ChaCha8Rng::seed_from_u64(5);
+        let scales = TurbulenceParams::moderate().scales();
+        for airspeed in [0.5, 1.0, 14.8, 60.0] {
+            let filters: [SecondOrder; 2] =
+                core::array::from_fn(|k| SecondOrder::new(scales.sigma[1 + k], airspeed / scales.length[1 + k], 1e-3));
+            let pair = SecondOrderPair::new(&filters);
+            let (mut z1, mut z2) = ([0.3, -1.2], [0.7, 0.05]);
+            let mut alone = [[z1[0], z2[0]], [z1[1], z2[1]]];
+            for _ in 0..2000 {
+                let n1: [f64; 2] = core::array::from_fn(|_| rng.random_range(-4.0..4.0));
+                let n2: [f64; 2] = core::array::from_fn(|_| rng.random_range(-4.0..4.0));
+                pair.step(&mut z1, &mut z2, n1, n2);
+                for (k, (f, z)) in filters.iter().zip(alone.iter_mut()).enumerate() {
+                    let (p, l) = (f.phi, f.chol);
+                    let [a, b] = *z;
+                    z[0] = p[0][0] * a + p[0][1] * b + l[0][0] * n1[k];
+                    z[1] = p[1][0] * a + p[1][1] * b + l[1][0] * n1[k] + l[1][1] * n2[k];
+                    assert_eq!([z1[k].to_bits(), z2[k].to_bits()], [z[0].to_bits(), z[1].to_bits()]);
+                }
+            }
+        }
     }
 }

@@ -43,7 +43,7 @@ use crate::environment::Environment;
 use crate::environment::TimeVarying;
 use crate::scenario::Scenario;
 use crate::vehicle::paper::{derivative_in_wind_of, derivative_of, rk4_step_staged, Eq1Params};
-use crate::vehicle::rigid_body::{normalize_quaternion, RigidBodyState};
+use crate::vehicle::rigid_body::{has_plain_diagonal, normalize_quaternion, RigidBodyState};
 use crate::vehicle::{from_quad_state, to_quad_state, RigidBody, RigidBodyInput, RigidBodyParams, VehicleModel};
 
 use super::actuation::Drive;
@@ -354,7 +354,7 @@ struct LaneRotors<R: Real> {
     gap: [R; 4],
     /// The rotor lags (its time constant is nonzero).
     lagged: [R::Mask; 4],
-    /// The rotor lags with the spin-up time constant (else spin-down).
+    /// The rotor spins up (its lag, if any, has the spin-up time constant; else spin-down).
     up: [R::Mask; 4],
     /// Absolute noise: `ω + σ z`, clamped.
     absolute: R::Mask,
@@ -408,8 +408,8 @@ impl<R: Real> LaneRotors<R> {
                     r.target.put_lane(i, held.target);
                     r.gap.put_lane(i, held.gap);
                     for k in 0..4 {
-                        r.lagged[k].put_lane(i, held.factor[k].is_some());
-                        r.up[k].put_lane(i, held.factor[k] == Some(0));
+                        r.lagged[k].put_lane(i, held.lagged[k]);
+                        r.up[k].put_lane(i, held.up[k]);
                     }
                     match held.noise {
                         None => {}
@@ -502,6 +502,9 @@ struct RigidLane {
     /// The added mass (kg) and inertia scale the lane's body flies: its mass
     /// is `base.mass + key.0`, its inertia `key.1 · base.inertia`.
     key: (f64, f64),
+    /// `base.inertia` is diagonal with `+0.0` products of inertia
+    /// (`has_plain_diagonal`): its scaled inverse takes the diagonal shortcut.
+    plain_diagonal: bool,
 }
 
 /// The rigid body of `scenario` at its initial state, one flight.
@@ -509,7 +512,8 @@ fn rigid_flight(scenario: &Scenario) -> Result<(RigidBody, RigidLane, RigidBodyS
     let base = scenario.rigid_body_params();
     let body =
         RigidBody::new(base).map_err(|_| Divergence::RigidBodyOutOfRange { mass: base.mass, inertia_scale: 1.0 })?;
-    Ok((body, RigidLane { base, key: (0.0, 1.0) }, from_quad_state(&scenario.initial_state.state())))
+    let lane = RigidLane { base, key: (0.0, 1.0), plain_diagonal: has_plain_diagonal(&base.inertia) };
+    Ok((body, lane, from_quad_state(&scenario.initial_state.state())))
 }
 
 /// The Newton–Euler rigid body ([`RigidBody`]), one vehicle per lane.
@@ -555,6 +559,8 @@ impl<R: Real> TruthModel<R> for RigidTruth<R> {
             // has not changed (a payload alone): then only the mass moves.
             let updated = if scale == l.key.1 {
                 self.body.set_mass_in_lane(lane, mass)
+            } else if l.plain_diagonal {
+                self.body.set_mass_and_scaled_diagonal_inertia_in_lane(lane, mass, &l.base.inertia, scale)
             } else {
                 self.body.set_mass_and_scaled_inertia_in_lane(lane, mass, &l.base.inertia, scale)
             };
@@ -605,7 +611,7 @@ impl<R: Real> TruthModel<R> for RigidTruth<R> {
                 for k in 0..6 {
                     d[k] = d_a[k] + w * d_gap[k];
                 }
-                body.prepare(&RigidBodyInput {
+                body.prepare_owned(RigidBodyInput {
                     rotor_speeds: rotors.after(s, tau - t0),
                     wind,
                     force: [mass * d[0], mass * d[1], mass * d[2]],

@@ -502,6 +502,12 @@ ftsmc_core::lanewise_struct!(RigidBody {
     parasitic,
 });
 
+/// No products of inertia, each one `+0.0` bit for bit (not `−0.0`): what
+/// [`RigidBody::set_mass_and_scaled_diagonal_inertia_in_lane`] takes.
+pub(crate) fn has_plain_diagonal(j: &Mat3) -> bool {
+    (0..3).all(|r| (0..3).all(|c| r == c || j[r][c].to_bits() == 0))
+}
+
 /// No products of inertia: every off-diagonal entry is zero.
 fn is_diagonal(j: &Mat3) -> bool {
     j[0][1] == 0.0 && j[0][2] == 0.0 && j[1][0] == 0.0 && j[1][2] == 0.0 && j[2][0] == 0.0 && j[2][1] == 0.0
@@ -713,6 +719,44 @@ impl<R: Real> RigidBody<R> {
         Ok(())
     }
 
+    /// [`RigidBody::set_mass_and_scaled_inertia_in_lane`] for a base inertia
+    /// `diag(base)` whose products of inertia are `+0.0` (bit for bit, as
+    /// [`has_plain_diagonal`] tells): the same result and the same bits with
+    /// the zero products worked out once. With `J = diag(d)`,
+    /// `d = scale · base`, and `+0.0` elsewhere, the adjugate formula of
+    /// `inverse3` reduces exactly to `det = d₀ (d₁ d₂)` (the terms it drops
+    /// are `x − (+0)` and `x + (+0)` of a finite `x ≥ 0`, which are `x`),
+    /// the diagonal `(d₁ d₂)/det`, `(d₀ d₂)/det`, `(d₀ d₁)/det`, and the
+    /// products of inertia `±0/det` with the adjugate's signs (`det > 0`
+    /// keeps them). Anything the shortcut does not cover (a scale or mass
+    /// out of range, a determinant that is not a positive normal number)
+    /// goes to the full method, which answers as before.
+    pub(crate) fn set_mass_and_scaled_diagonal_inertia_in_lane(
+        &mut self,
+        lane: usize,
+        mass: f64,
+        base: &Mat3,
+        scale: f64,
+    ) -> Result<(), GainError> {
+        let d = [base[0][0] * scale, base[1][1] * scale, base[2][2] * scale];
+        let in_range = |v: f64| (-1e6..=1e6).contains(&v);
+        if scale > 0.0 && scale.is_finite() && (1e-6..=1e6).contains(&mass) && d.into_iter().all(in_range) {
+            let p = d[1] * d[2];
+            let det = d[0] * p;
+            if det > 0.0 && det.is_normal() {
+                let (z, n) = (0.0, -0.0);
+                let inertia = [[d[0], z, z], [z, d[1], z], [z, z, d[2]]];
+                let inverse = [[p / det, n, z], [n, (d[0] * d[2]) / det, n], [z, n, (d[0] * d[1]) / det]];
+                self.mass.put_lane(lane, mass);
+                self.inertia.put_lane(lane, inertia);
+                self.inertia_inv.put_lane(lane, inverse);
+                self.diagonal.put_lane(lane, true);
+                return Ok(());
+            }
+        }
+        self.set_mass_and_scaled_inertia_in_lane(lane, mass, base, scale)
+    }
+
     /// [`RigidBody::set_mass`] on lane `lane` alone (`lane < R::LANES`; the
     /// other lanes are untouched, and so is this one on error).
     pub fn set_mass_in_lane(&mut self, lane: usize, mass: f64) -> Result<(), GainError> {
@@ -741,6 +785,13 @@ impl<R: Real> RigidBody<R> {
     /// [`RigidBody::derivative_prepared`].
     #[cfg_attr(not(debug_assertions), inline(always))]
     pub fn prepare(&self, input: &RigidBodyInput<R>) -> PreparedInput<R> {
+        self.prepare_owned(*input)
+    }
+
+    /// [`RigidBody::prepare`] of an input handed over by value (built in
+    /// place in the result, not copied from a reference).
+    #[cfg_attr(not(debug_assertions), inline(always))]
+    pub fn prepare_owned(&self, input: RigidBodyInput<R>) -> PreparedInput<R> {
         let w = input.rotor_speeds;
         // Loops rather than `map`: its out-of-line instances would compile
         // for the baseline instruction set, outside a dispatched kernel.
@@ -751,7 +802,7 @@ impl<R: Real> RigidBody<R> {
             drag_xy[i] = w[i] * self.rotor_drag_xy;
             drag_z[i] = w[i] * self.rotor_drag_z;
         }
-        PreparedInput { input: *input, thrust, reaction, drag_xy, drag_z, momentum: self.rotor_momentum(&w) }
+        PreparedInput { input, thrust, reaction, drag_xy, drag_z, momentum: self.rotor_momentum(&w) }
     }
 
     /// [`RigidBody::body_wrench`] with the body-to-world rotation `r` of `x`
@@ -1201,6 +1252,57 @@ mod tests {
                 assert_eq!(got, want, "{params:?}");
             }
         }
+    }
+
+    /// The diagonal shortcut of the scaled inertia's inverse gives the bits
+    /// (and the errors) of the full method: masses, inertias and scales in
+    /// range, at and past its edges, non-finite ones, and a determinant
+    /// that underflows.
+    #[test]
+    fn the_diagonal_shortcut_is_the_full_inverse_bit_for_bit() {
+        let bits = |b: &RigidBody| {
+            let mut v = vec![b.mass.to_bits(), u64::from(b.diagonal)];
+            v.extend(b.inertia.iter().chain(&b.inertia_inv).flatten().map(|x| x.to_bits()));
+            v
+        };
+        let mut rng = ChaCha8Rng::seed_from_u64(17);
+        let bases = [
+            RigidBodyParams::hummingbird().inertia,
+            RigidBodyParams::crazyflie().inertia,
+            diag([1e-100, 1e-100, 1e-100]),
+            diag([5e5, 2e5, 9e5]),
+        ];
+        let mut checked = (0, 0);
+        for base in bases {
+            assert!(has_plain_diagonal(&base));
+            let body = RigidBody::new(RigidBodyParams { inertia: base, ..RigidBodyParams::hummingbird() }).ok();
+            let Some(body) = body else { continue };
+            let edges =
+                [1.0, 0.0, -0.0, -1.0, 2.0, 1e6, 1e300, f64::INFINITY, f64::NAN, 1e-300, 1e-3, f64::MIN_POSITIVE];
+            for k in 0..4000 {
+                let scale = if k < edges.len() { edges[k] } else { rng.random_range(0.5..1.5) };
+                let mass = match k % 7 {
+                    0 => 1e-7,
+                    1 => 2e6,
+                    2 => f64::NAN,
+                    _ => rng.random_range(0.1..2.0),
+                };
+                let (mut full, mut short) = (body, body);
+                let a = full.set_mass_and_scaled_inertia_in_lane(0, mass, &base, scale);
+                let b = short.set_mass_and_scaled_diagonal_inertia_in_lane(0, mass, &base, scale);
+                // (Debug text: an error may carry a NaN, which `==` never equals.)
+                assert_eq!(format!("{a:?}"), format!("{b:?}"), "scale {scale}, mass {mass}");
+                assert_eq!(bits(&full), bits(&short), "scale {scale}, mass {mass}");
+                if a.is_ok() {
+                    checked.0 += 1;
+                } else {
+                    checked.1 += 1;
+                }
+            }
+        }
+        assert!(checked.0 > 1000 && checked.1 > 100, "{checked:?}");
+        // A `−0.0` product of inertia is not plain (the shortcut's signs would differ).
+        assert!(!has_plain_diagonal(&[[1.0, -0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]));
     }
 
     /// Four different vehicles in `Lanes<4>` (and the same four, twice, in
