@@ -219,8 +219,8 @@ impl<'s> Lane<'s> {
         Substep {
             t0: self.k as f64 * self.dt + j as f64 * self.h,
             h: self.h,
-            a: self.tv_now,
-            b: self.tv_next,
+            a: &self.tv_now,
+            b: &self.tv_next,
             env: &self.env,
             drive: self.actuators.drive(&self.delivered, self.omega_bar),
             wind: self.wind_now,

@@ -55,10 +55,12 @@ pub(crate) struct Substep<'a> {
     pub t0: f64,
     /// Length, s.
     pub h: f64,
-    /// Time-varying plant inputs at `t0` and `t0 + h` (interpolated linearly inside).
-    pub a: TimeVarying,
+    /// Time-varying plant inputs at `t0` and `t0 + h` (interpolated
+    /// linearly inside), borrowed from the lane: a substep is gathered for
+    /// every lane every substep, and copying them was most of its cost.
+    pub a: &'a TimeVarying,
     /// See `a`.
-    pub b: TimeVarying,
+    pub b: &'a TimeVarying,
     /// The environment (drag noise of the period).
     pub env: &'a Environment<'a>,
     /// The rotors.
@@ -990,8 +992,8 @@ mod lane_tests {
                     .map(|(i, lane)| Substep {
                         t0: lane.t0(j),
                         h: lane.h,
-                        a: lane.tv_now,
-                        b: next[i],
+                        a: &lane.tv_now,
+                        b: &next[i],
                         env: &lane.env,
                         drive: lane.actuators.drive(&delivered[i], residual_speed(&delivered[i].target)),
                         wind: winds[i],
