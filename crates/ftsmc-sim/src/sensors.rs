@@ -780,12 +780,27 @@ mod tests {
     #[test]
     fn line_advance_is_hold_then_delay() {
         let control_rate = 1000.0;
-        for sample_rate in [None, Some(1000.0), Some(2000.0), Some(200.0), Some(300.0), Some(7.0)] {
+        let rates = [
+            None,
+            Some(1000.0),
+            Some(2000.0),
+            Some(200.0),
+            Some(300.0),
+            Some(7.0),
+            Some(999.0),
+            Some(1000.0 / 3.0),
+            Some(0.5),
+            Some(1e-300),
+            Some(-5.0),
+            Some(f64::NAN),
+            Some(f64::INFINITY),
+        ];
+        for sample_rate in rates {
             for latency in [0u32, 1, 2, 6, 13] {
                 let mut line = Line::<u64>::new(SensorClock { sample_rate, latency }, control_rate);
                 let every = sample_rate.map_or(1.0, |r| (r / control_rate).min(1.0));
                 let (mut held, mut last, mut history) = (0u64, 0u64, Vec::new());
-                for k in 0..500u64 {
+                for k in 0..2500u64 {
                     // The reading of period k is 1000 + k; a sample is taken
                     // when the index moves on.
                     let index = (k as f64 * every + 1e-9).floor() as u64;
