@@ -8,6 +8,12 @@
 //! `asin`/`acos`): `scalar` calls `libm` once per argument, `lanes4` /
 //! `lanes8` call the kernel on 16 / 8 vectors. Throughput is in elements,
 //! so the rates compare per element.
+//!
+//! The group `avx2/…` (x86-64 CPUs with AVX2 and FMA) runs the same loops
+//! inside a `#[target_feature(enable = "avx2,fma")]` function, where the
+//! kernels are inlined as they are in the dispatched run loop: `scalar`
+//! (libm per element) against `lanes4` (the kernel on 4 lanes). These
+//! cells decide `ftsmc_core::lanes::KERNEL_LANES`.
 
 use std::hint::black_box;
 
@@ -99,5 +105,90 @@ fn kernels(c: &mut Criterion) {
     );
 }
 
+/// `scalar` and `lanes4` loops over 64 arguments compiled for AVX2 + FMA.
+#[cfg(target_arch = "x86_64")]
+macro_rules! avx2_pair {
+    ($name:ident, $scalar:expr, $lanes:expr) => {
+        mod $name {
+            use super::*;
+            #[target_feature(enable = "avx2,fma")]
+            pub fn scalar(x: &[f64; LEN]) -> [f64; LEN] {
+                let mut out = [0.0; LEN];
+                for i in 0..LEN {
+                    out[i] = $scalar(x[i]);
+                }
+                out
+            }
+            #[target_feature(enable = "avx2,fma")]
+            pub fn lanes4(x: &[f64; LEN]) -> [f64; LEN] {
+                let mut out = [0.0; LEN];
+                for k in 0..LEN / 4 {
+                    let v: [f64; 4] = core::array::from_fn(|i| x[4 * k + i]);
+                    let r = $lanes(v);
+                    out[4 * k..4 * k + 4].copy_from_slice(&r);
+                }
+                out
+            }
+        }
+    };
+}
+
+#[cfg(target_arch = "x86_64")]
+mod avx2 {
+    use super::*;
+    avx2_pair!(exp, libm::exp, lm::exp::<4>);
+    avx2_pair!(atan2, |x: f64| libm::atan2(x * 0.7 - 0.4, x), |x: [f64; 4]| lm::atan2(x.map(|v| v * 0.7 - 0.4), x));
+    avx2_pair!(asin, libm::asin, lm::asin::<4>);
+    avx2_pair!(acos, libm::acos, lm::acos::<4>);
+    avx2_pair!(atan, libm::atan, lm::atan::<4>);
+    avx2_pair!(sin, libm::sin, lm::sin::<4>);
+    avx2_pair!(cos, libm::cos, lm::cos::<4>);
+    avx2_pair!(
+        sin_cos,
+        |x: f64| {
+            let (s, c) = libm::sincos(x);
+            s + c
+        },
+        |x: [f64; 4]| -> [f64; 4] {
+            let (s, c) = lm::sin_cos::<4>(x);
+            core::array::from_fn(|i| s[i] + c[i])
+        }
+    );
+
+    /// One `avx2/<name>` group: scalar against lanes4.
+    fn pair(
+        c: &mut Criterion,
+        name: &str,
+        xs: [f64; LEN],
+        scalar: fn(&[f64; LEN]) -> [f64; LEN],
+        l4: fn(&[f64; LEN]) -> [f64; LEN],
+    ) {
+        let mut group = c.benchmark_group(format!("avx2/{name}"));
+        group.throughput(Throughput::Elements(LEN as u64));
+        group.bench_function("scalar", |b| b.iter(|| black_box(scalar(&black_box(xs)))));
+        group.bench_function("lanes4", |b| b.iter(|| black_box(l4(&black_box(xs)))));
+        group.finish();
+    }
+
+    pub fn kernels(c: &mut Criterion) {
+        if !(std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")) {
+            eprintln!("avx2/*: this CPU has no AVX2 + FMA; skipped");
+            return;
+        }
+        // SAFETY (each `unsafe` below): AVX2 and FMA were detected just above.
+        pair(c, "exp", args(-3.0, 3.0), |x| unsafe { exp::scalar(x) }, |x| unsafe { exp::lanes4(x) });
+        pair(c, "atan", args(-3.0, 3.0), |x| unsafe { atan::scalar(x) }, |x| unsafe { atan::lanes4(x) });
+        pair(c, "atan2", args(-2.0, 3.0), |x| unsafe { atan2::scalar(x) }, |x| unsafe { atan2::lanes4(x) });
+        pair(c, "asin", args(-0.999, 0.999), |x| unsafe { asin::scalar(x) }, |x| unsafe { asin::lanes4(x) });
+        pair(c, "acos", args(-0.999, 0.999), |x| unsafe { acos::scalar(x) }, |x| unsafe { acos::lanes4(x) });
+        pair(c, "sin", args(-3.0, 3.0), |x| unsafe { sin::scalar(x) }, |x| unsafe { sin::lanes4(x) });
+        pair(c, "cos", args(-3.0, 3.0), |x| unsafe { cos::scalar(x) }, |x| unsafe { cos::lanes4(x) });
+        pair(c, "sin_cos", args(-3.0, 3.0), |x| unsafe { sin_cos::scalar(x) }, |x| unsafe { sin_cos::lanes4(x) });
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+criterion_group!(benches, kernels, avx2::kernels);
+#[cfg(not(target_arch = "x86_64"))]
 criterion_group!(benches, kernels);
 criterion_main!(benches);

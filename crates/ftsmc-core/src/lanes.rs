@@ -616,35 +616,33 @@ impl<const N: usize> Real for Lanes<N> {
         Self(lanes_of(|i| f(self.0[i], o.0[i])))
     }
     // The kernels of `lanes_math` give the bits of the scalar functions
-    // on every lane, so which one runs is a matter of speed only. Measured
-    // (benches/lanes_math.rs): `ln`'s kernel is faster than per-lane libm
-    // at every width; the others only at 8 lanes and more (with AVX2);
-    // below that the scalar calls are faster, so they stay.
-    /// [`crate::lanes_math::sin`] (8 lanes and more) or
+    // on every lane, so which one runs is a matter of speed only
+    // ([`KERNEL_LANES`]).
+    /// [`crate::lanes_math::sin`] (4 lanes and more) or
     /// [`crate::elementary::sin`] per lane: the same bits.
     #[cfg_attr(not(debug_assertions), inline(always))]
     fn sin(self) -> Self {
-        if N >= 8 {
+        if N >= KERNEL_LANES {
             Self(crate::lanes_math::sin(self.0))
         } else {
             self.map(crate::elementary::sin)
         }
     }
-    /// [`crate::lanes_math::cos`] (8 lanes and more) or
+    /// [`crate::lanes_math::cos`] (4 lanes and more) or
     /// [`crate::elementary::cos`] per lane: the same bits.
     #[cfg_attr(not(debug_assertions), inline(always))]
     fn cos(self) -> Self {
-        if N >= 8 {
+        if N >= KERNEL_LANES {
             Self(crate::lanes_math::cos(self.0))
         } else {
             self.map(crate::elementary::cos)
         }
     }
-    /// [`crate::lanes_math::sin_cos`] (8 lanes and more) or
+    /// [`crate::lanes_math::sin_cos`] (4 lanes and more) or
     /// [`crate::elementary::sin_cos`] per lane: the same bits.
     #[cfg_attr(not(debug_assertions), inline(always))]
     fn sin_cos(self) -> (Self, Self) {
-        if N >= 8 {
+        if N >= KERNEL_LANES {
             let (s, c) = crate::lanes_math::sin_cos(self.0);
             (Self(s), Self(c))
         } else {
@@ -656,11 +654,11 @@ impl<const N: usize> Real for Lanes<N> {
             (s, c)
         }
     }
-    /// [`crate::lanes_math::exp`] (8 lanes and more) or
+    /// [`crate::lanes_math::exp`] (4 lanes and more) or
     /// [`crate::elementary::exp`] per lane: the same bits.
     #[cfg_attr(not(debug_assertions), inline(always))]
     fn exp(self) -> Self {
-        if N >= 8 {
+        if N >= KERNEL_LANES {
             Self(crate::lanes_math::exp(self.0))
         } else {
             self.map(crate::elementary::exp)
@@ -671,11 +669,11 @@ impl<const N: usize> Real for Lanes<N> {
     fn ln(self) -> Self {
         Self(crate::lanes_math::ln(self.0))
     }
-    /// [`crate::lanes_math::asin`] (8 lanes and more) or
+    /// [`crate::lanes_math::asin`] (4 lanes and more) or
     /// [`crate::elementary::asin`] per lane: the same bits.
     #[cfg_attr(not(debug_assertions), inline(always))]
     fn asin(self) -> Self {
-        if N >= 8 {
+        if N >= KERNEL_LANES {
             Self(crate::lanes_math::asin(self.0))
         } else {
             self.map(crate::elementary::asin)
@@ -685,7 +683,7 @@ impl<const N: usize> Real for Lanes<N> {
     /// [`crate::elementary::acos`] per lane: the same bits.
     #[cfg_attr(not(debug_assertions), inline(always))]
     fn acos(self) -> Self {
-        if N >= 8 {
+        if N >= ARCTAN_KERNEL_LANES {
             Self(crate::lanes_math::acos(self.0))
         } else {
             self.map(crate::elementary::acos)
@@ -695,7 +693,7 @@ impl<const N: usize> Real for Lanes<N> {
     /// [`crate::elementary::atan`] per lane: the same bits.
     #[cfg_attr(not(debug_assertions), inline(always))]
     fn atan(self) -> Self {
-        if N >= 8 {
+        if N >= ARCTAN_KERNEL_LANES {
             Self(crate::lanes_math::atan(self.0))
         } else {
             self.map(crate::elementary::atan)
@@ -705,13 +703,29 @@ impl<const N: usize> Real for Lanes<N> {
     /// [`crate::elementary::atan2`] per lane: the same bits.
     #[cfg_attr(not(debug_assertions), inline(always))]
     fn atan2(self, x: Self) -> Self {
-        if N >= 8 {
+        if N >= ARCTAN_KERNEL_LANES {
             Self(crate::lanes_math::atan2(self.0, x.0))
         } else {
             self.map2(x, crate::elementary::atan2)
         }
     }
 }
+
+/// Lane count from which `Lanes` computes `exp`, `sin`, `cos`,
+/// `sin_cos` and `asin` with the kernels of [`crate::lanes_math`] instead
+/// of the scalar function lane by lane (`ln` always uses its kernel).
+/// Either way each lane has the scalar function's bits, so this is a
+/// matter of speed only. Measured inside an AVX2 + FMA function on 4 lanes
+/// (`cargo bench -p ftsmc-core --bench lanes_math -- avx2/`, time of the
+/// kernel over time of four scalar calls): `exp` 0.57, `asin` 0.74,
+/// `cos` 0.81, `sin` 0.92, `sin_cos` 0.70.
+pub const KERNEL_LANES: usize = 4;
+
+/// [`KERNEL_LANES`] for `atan`, `atan2` and `acos`: on 4 lanes their
+/// kernels were no faster than four scalar calls whose branches the CPU
+/// predicts (`atan` 1.12, `atan2` 1.06, `acos` 2.07 in the same
+/// measurement), so they take over from 8 lanes.
+pub const ARCTAN_KERNEL_LANES: usize = 8;
 
 // ---------------------------------------------------------------- composites
 

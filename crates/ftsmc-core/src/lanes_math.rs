@@ -66,9 +66,46 @@ fn high(x: f64) -> u32 {
     (x.to_bits() >> 32) as u32
 }
 
+/// The sign bit of an `f64`.
+const SIGN: u64 = 0x8000_0000_0000_0000;
+
+/// `1.5 · 2⁵²`: `(t + ROUNDER) − ROUNDER` is `t` rounded to the nearest
+/// integer (ties to even) for `|t| < 2⁵¹`.
+const ROUNDER: f64 = 6_755_399_441_055_744.0;
+
+/// `2⁵²`: for an integer `0 ≤ v < 2⁵²`, the bits of `2⁵² + v` are
+/// `0x4330_0000_0000_0000 | v`, so `v` can be read from them.
+const TWO52: f64 = 4_503_599_627_370_496.0;
+
+/// The smallest non-negative double whose high 32 bits are `h`: for `|x|`
+/// (not NaN), `high(|x|) ≥ h` exactly when `|x| ≥ at_high(h)`, so the
+/// scalar code's high-word range tests become comparisons of doubles.
+const fn at_high(h: u32) -> f64 {
+    f64::from_bits((h as u64) << 32)
+}
+
+/// `a` where the mask `m` is all ones, `b` where it is zero.
+#[cfg_attr(not(debug_assertions), inline(always))]
+fn selb(m: u64, a: f64, b: f64) -> f64 {
+    f64::from_bits((a.to_bits() & m) | (b.to_bits() & !m))
+}
+
+/// `t` truncated towards zero, as `t as i32 as f64` for `|t| < 2³¹`
+/// (exact: the nearest integer, moved one towards zero when it is
+/// farther from zero than `t`).
+#[cfg_attr(not(debug_assertions), inline(always))]
+fn trunc_small(t: f64) -> f64 {
+    let r = (t + ROUNDER) - ROUNDER;
+    let away = bits(f64::from_bits(r.to_bits() & !SIGN) > f64::from_bits(t.to_bits() & !SIGN));
+    let one = f64::from_bits(1f64.to_bits() | (t.to_bits() & SIGN));
+    selb(away, r - one, r)
+}
+
 /// Overwrite the flagged lanes of `out` with the scalar function of `x`.
-#[cold]
-#[inline(never)]
+/// Inlined: an out-of-line helper taking `&mut out` makes `out` live in
+/// memory, and the vectoriser then splits the kernel into 2-lane halves
+/// (measured on `exp`: 2 × slower at 4 lanes with AVX2).
+#[cfg_attr(not(debug_assertions), inline(always))]
 fn patch<const N: usize>(out: &mut [f64; N], rare: &[u64; N], x: &[f64; N], f: fn(f64) -> f64) {
     for i in 0..N {
         if rare[i] != 0 {
@@ -95,49 +132,47 @@ const P5: f64 = 4.13813679705723846039e-08; /* 0x3E663769, 0x72BEA4D0 */
 /// `|x| < 708.39…` (where `2ᵏ` is a normal number) and `x < −745.13…`
 /// (`+0`, down to `−∞`); NaN, `+∞`, overflow and the subnormal results go
 /// through the scalar function.
+///
+/// Written for the vectoriser: every range test compares `|x|` with the
+/// smallest double of the scalar code's high-word bound ([`at_high`]),
+/// `k` stays a double (the truncation `(x/ln2 ± ½) as i32` is a rounding
+/// by [`ROUNDER`] corrected towards zero), and `2ᵏ` is built from the bits
+/// of `k + 1023 + 2⁵²`, so no lane leaves the `f64`/`u64` registers.
 #[cfg_attr(not(debug_assertions), inline(always))]
 pub fn exp<const N: usize>(x: [f64; N]) -> [f64; N] {
     let mut out = [0.0; N];
     let mut rare = [0u64; N];
     for i in 0..N {
         let xi = x[i];
-        let hfull = high(xi);
-        let sign = hfull >> 31;
-        let hx = hfull & 0x7fff_ffff;
-        // |x| >= 708.39...: NaN, overflow, underflow (scalar), except
-        // x < -745.13... (down to -inf), where libm returns +0.
-        let zero = xi < -745.133_219_101_941_108_42;
-        rare[i] = bits(hx >= 0x4086_232b && !zero);
-        // Argument reduction (|x| > 0.5 ln2).
-        let reduce = hx > 0x3fd6_2e42;
-        let half = sel(sign != 0, -HALF_EXP, HALF_EXP);
-        let k_big = (INVLN2 * xi + half) as i32;
-        let k_mid = 1 - sign as i32 - sign as i32;
-        let k = if reduce {
-            if hx >= 0x3ff0_a2b2 {
-                k_big
-            } else {
-                k_mid
-            }
-        } else {
-            0
-        };
-        let kf = k as f64;
+        let sign = xi.to_bits() & SIGN;
+        let ax = f64::from_bits(xi.to_bits() & !SIGN);
+        // x < -745.13...: +0 (down to -inf).
+        let zero = bits(xi < -745.133_219_101_941_108_42);
+        // |x| >= 708.39... (hx >= 0x4086232b) or NaN: scalar, except zero.
+        rare[i] = !bits(ax < at_high(0x4086_232b)) & !zero;
+        // Argument reduction for |x| > 0.5 ln2 (hx > 0x3fd62e42); k from
+        // the quotient for |x| >= 1.5 ln2 (hx >= 0x3ff0a2b2), else ±1.
+        let reduce = bits(ax >= at_high(0x3fd6_2e43));
+        let big = bits(ax >= at_high(0x3ff0_a2b2));
+        let t = INVLN2 * xi + f64::from_bits(HALF_EXP.to_bits() | sign);
+        let k_big = trunc_small(t);
+        let k_mid = f64::from_bits(1f64.to_bits() | sign);
+        let kf = f64::from_bits(selb(big, k_big, k_mid).to_bits() & reduce);
         let hi_r = xi - kf * LN2HI;
         let lo_r = kf * LN2LO;
-        let hi = sel(reduce, hi_r, xi);
-        let lo = sel(reduce, lo_r, 0.0);
-        let r = sel(reduce, hi_r - lo_r, xi);
+        let hi = selb(reduce, hi_r, xi);
+        let lo = selb(reduce, lo_r, 0.0);
+        let r = selb(reduce, hi_r - lo_r, xi);
         // x is now in the primary range.
         let xx = r * r;
         let c = r - xx * (P1 + xx * (P2 + xx * (P3 + xx * (P4 + xx * P5))));
         let y = 1. + (r * c / (2. - c) - lo + hi);
         // scalbn(y, k) for -1022 <= k <= 1023 is one product by 2^k.
-        let scale = f64::from_bits((0x3ff_i32.wrapping_add(k) as u64) << 52);
-        let scaled = sel(k == 0, y, y * scale);
-        // |x| <= 2^-28: 1 + x.
-        let v = sel(hx > 0x3e30_0000, scaled, 1. + xi);
-        out[i] = sel(zero, 0.0, v);
+        let scale = f64::from_bits((kf + (1023.0 + TWO52)).to_bits() << 52);
+        let scaled = selb(bits(kf == 0.0), y, y * scale);
+        // |x| <= 2^-28 (hx <= 0x3e300000): 1 + x.
+        let v = selb(bits(ax >= at_high(0x3e30_0001)), scaled, 1. + xi);
+        out[i] = selb(zero, 0.0, v);
     }
     if any(&rare) {
         patch(&mut out, &rare, &x, math::exp);
@@ -531,102 +566,107 @@ fn k_cos(x: f64, y: f64) -> f64 {
 }
 
 /// The Cody-Waite reduction of `__rem_pio2`'s medium case
-/// (`|x| < 2²⁰ π/2`): `(n, y0, y1)`, up to three rounds as the scalar code
-/// takes them (computed all, then selected).
+/// (`|x| < 2²⁰ π/2`): `(q, y0, y1)` with `q = n mod 4`, up to three rounds
+/// as the scalar code takes them (computed all, then selected). The
+/// exponent tests `ex − ey > 16` (`> 49`) are made on the biased exponents
+/// as `u64`s, and `n mod 4` is read from the bits of `x · 2/π + 1.5·2⁵²`
+/// (`n` itself is `f_n`), so a lane never leaves the 64-bit registers.
 #[cfg_attr(not(debug_assertions), inline(always))]
-fn medium_lane(x: f64, ix: u32) -> (i32, f64, f64) {
+fn medium_lane(x: f64) -> (u64, f64, f64) {
     let tmp = x * INV_PIO2 + TO_INT;
     let f_n = tmp - TO_INT;
-    let n = f_n as i32;
+    let q = tmp.to_bits() & 3;
     let r1 = x - f_n * PIO2_1;
     let w1 = f_n * PIO2_1T;
     let y01 = r1 - w1;
-    let ex = (ix >> 20) as i32;
-    let ey1 = (y01.to_bits() >> 52) as i32 & 0x7ff;
+    let exponent = |v: f64| (v.to_bits() >> 52) & 0x7ff;
+    let ex = exponent(x);
+    let ey1 = exponent(y01);
     let t = r1;
     let w2a = f_n * PIO2_2;
     let r2 = t - w2a;
     let w2 = f_n * PIO2_2T - ((t - r2) - w2a);
     let y02 = r2 - w2;
-    let ey2 = (y02.to_bits() >> 52) as i32 & 0x7ff;
+    let ey2 = exponent(y02);
     let t = r2;
     let w3a = f_n * PIO2_3;
     let r3 = t - w3a;
     let w3 = f_n * PIO2_3T - ((t - r3) - w3a);
     let y03 = r3 - w3;
-    let round2 = ex - ey1 > 16;
-    let round3 = round2 && ex - ey2 > 49;
-    let r = sel(round3, r3, sel(round2, r2, r1));
-    let w = sel(round3, w3, sel(round2, w2, w1));
-    let y0 = sel(round3, y03, sel(round2, y02, y01));
-    (n, y0, (r - y0) - w)
+    let round2 = bits(ex > ey1 + 16);
+    let round3 = round2 & bits(ex > ey2 + 49);
+    let r = selb(round3, r3, selb(round2, r2, r1));
+    let w = selb(round3, w3, selb(round2, w2, w1));
+    let y0 = selb(round3, y03, selb(round2, y02, y01));
+    (q, y0, (r - y0) - w)
 }
 
-/// `sin`/`cos`/`sincos` up to the quadrant, on all lanes: `(s, c, q, ix,
+/// `sin`/`cos`/`sincos` up to the quadrant, on all lanes: `(s, c, q, ax,
 /// rare)` with `s = __sin`, `c = __cos` of the reduced argument (of `x`
-/// itself for `|x| ≤ π/4`, with `iy = 0` for `__sin`), `q = n & 3` the
-/// quadrant (0 when not reduced), `ix` the high word of `|x|`, `rare` for
-/// ±∞, NaN and `|x| ≥ 2²⁰ π/2` (`__rem_pio2_large`). The medium reduction
-/// is computed only when some lane needs it.
+/// itself for `|x| ≤ π/4`, with `iy = 0` for `__sin`), `q = n mod 4` the
+/// quadrant (0 when not reduced), `ax = |x|`, `rare` for ±∞, NaN and
+/// `|x| ≥ 2²⁰ π/2` (`__rem_pio2_large`). The medium reduction is computed
+/// only when some lane needs it. Written for the vectoriser like [`exp`]:
+/// the high-word range tests are comparisons of `|x|` with [`at_high`]
+/// bounds, the small multiple `n` of π/2 is a double, and the quadrant is
+/// read from the bits of `n + 1.5·2⁵²`.
 #[allow(clippy::type_complexity)]
 #[cfg_attr(not(debug_assertions), inline(always))]
-fn sin_cos_core<const N: usize>(x: &[f64; N]) -> ([f64; N], [f64; N], [u32; N], [u32; N], [u64; N]) {
+fn sin_cos_core<const N: usize>(x: &[f64; N]) -> ([f64; N], [f64; N], [u64; N], [f64; N], [u64; N]) {
     let mut y0 = [0.0; N];
     let mut y1 = [0.0; N];
-    let mut nn = [0i32; N];
-    let mut ixs = [0u32; N];
+    let mut q = [0u64; N];
+    let mut axs = [0.0; N];
     let mut rare = [0u64; N];
     let mut med = [0u64; N];
     let mut reduced = [0u64; N];
     for i in 0..N {
         let xi = x[i];
-        let sign = (xi.to_bits() >> 63) != 0;
-        let ix = high(xi) & 0x7fff_ffff;
-        ixs[i] = ix;
-        rare[i] = bits(ix >= 0x4139_21fb);
-        let reduce = ix > 0x3fe9_21fb;
-        reduced[i] = bits(reduce);
+        let sign = xi.to_bits() & SIGN;
+        let ax = f64::from_bits(xi.to_bits() & !SIGN);
+        let ix = ax.to_bits() >> 32;
+        axs[i] = ax;
+        // ix >= 0x413921fb, or NaN.
+        rare[i] = !bits(ax < at_high(0x4139_21fb));
+        // ix > 0x3fe921fb: |x| > pi/4.
+        let reduce = bits(ax >= at_high(0x3fe9_21fc));
+        reduced[i] = reduce;
         // __rem_pio2, small multiples of pi/2 (|x| ~<= 9pi/4): n = +-1..4
         // and x - n pio2_1 - n pio2_1t, unless close to a multiple (medium).
-        let le_5pio4 = ix <= 0x400f_6a7a;
-        let le_9pio4 = ix <= 0x401c_463b;
-        let cancel = if le_5pio4 {
-            (ix & 0xfffff) == 0x921fb
-        } else if ix <= 0x4015_fdbc {
-            ix == 0x4012_d97c
-        } else {
-            ix == 0x4019_21fb
-        };
+        let le_5pio4 = bits(ax < at_high(0x400f_6a7b));
+        let le_9pio4 = bits(ax < at_high(0x401c_463c));
+        let le_7pio4 = bits(ax < at_high(0x4015_fdbd));
+        let cancel = (le_5pio4 & bits((ix & 0xfffff) == 0x921fb))
+            | (!le_5pio4 & le_7pio4 & bits(ix == 0x4012_d97c))
+            | (!le_7pio4 & bits(ix == 0x4019_21fb));
         // 1 + [> 3pi/4] + [> 5pi/4] + [> 7pi/4] (each range test 0 or 1).
-        let k_small = 1 + (ix > 0x4002_d97c) as i32 + (!le_5pio4) as i32 + (ix > 0x4015_fdbc) as i32;
-        let n_small = (k_small ^ -(sign as i32)) + sign as i32;
-        let nf_small = n_small as f64;
+        let step = |m: u64| f64::from_bits(1f64.to_bits() & m);
+        let k_small = 1.0 + step(bits(ax >= at_high(0x4002_d97d))) + step(!le_5pio4) + step(!le_7pio4);
+        let nf_small = f64::from_bits(k_small.to_bits() | sign);
         let zs = xi - nf_small * PIO2_1;
         let y0s = zs - nf_small * PIO2_1T;
         let y1s = (zs - y0s) - nf_small * PIO2_1T;
-        med[i] = bits(reduce && (!le_9pio4 || cancel));
-        y0[i] = sel(reduce, y0s, xi);
-        y1[i] = sel(reduce, y1s, 0.0);
-        nn[i] = n_small & -(reduce as i32);
+        med[i] = reduce & (!le_9pio4 | cancel);
+        y0[i] = selb(reduce, y0s, xi);
+        y1[i] = selb(reduce, y1s, 0.0);
+        q[i] = (nf_small + TO_INT).to_bits() & 3 & reduce;
     }
     if any(&med) {
         for i in 0..N {
-            let (n, a, b) = medium_lane(x[i], ixs[i]);
-            let m = med[i] != 0;
-            y0[i] = sel(m, a, y0[i]);
-            y1[i] = sel(m, b, y1[i]);
-            nn[i] = (n & -(m as i32)) | (nn[i] & !(-(m as i32)));
+            let (qm, a, b) = medium_lane(x[i]);
+            let m = med[i];
+            y0[i] = selb(m, a, y0[i]);
+            y1[i] = selb(m, b, y1[i]);
+            q[i] = (qm & m) | (q[i] & !m);
         }
     }
     let mut s = [0.0; N];
     let mut c = [0.0; N];
-    let mut q = [0u32; N];
     for i in 0..N {
         s[i] = k_sin(y0[i], y1[i], reduced[i] != 0);
         c[i] = k_cos(y0[i], y1[i]);
-        q[i] = (nn[i] & 3) as u32;
     }
-    (s, c, q, ixs, rare)
+    (s, c, q, axs, rare)
 }
 
 /// `sin x` (rad) on each lane: [`crate::math::sin`] (`libm::sin`, fdlibm's
@@ -636,14 +676,14 @@ fn sin_cos_core<const N: usize>(x: &[f64; N]) -> ([f64; N], [f64; N], [u32; N], 
 #[cfg_attr(not(debug_assertions), inline(always))]
 pub fn sin<const N: usize>(x: [f64; N]) -> [f64; N] {
     let mut out = [0.0; N];
-    let (s, c, q, ix, rare) = sin_cos_core(&x);
+    let (s, c, q, ax, rare) = sin_cos_core(&x);
     for i in 0..N {
-        let (s, c, q, ix) = (s[i], c[i], q[i], ix[i]);
+        let (s, c, q, ax) = (s[i], c[i], q[i], ax[i]);
         // q: 0 => s, 1 => c, 2 => -s, 3 => -c (selects, not a jump table).
-        let v = sel(q & 1 != 0, c, s);
-        let v = sel(q & 2 != 0, -v, v);
-        // |x| < 2^-26: x itself.
-        out[i] = sel(ix < 0x3e50_0000, x[i], v);
+        let v = selb(bits(q & 1 != 0), c, s);
+        let v = selb(bits(q & 2 != 0), -v, v);
+        // |x| < 2^-26 (ix < 0x3e500000): x itself.
+        out[i] = selb(bits(ax < at_high(0x3e50_0000)), x[i], v);
     }
     if any(&rare) {
         patch(&mut out, &rare, &x, math::sin);
@@ -657,14 +697,14 @@ pub fn sin<const N: usize>(x: [f64; N]) -> [f64; N] {
 #[cfg_attr(not(debug_assertions), inline(always))]
 pub fn cos<const N: usize>(x: [f64; N]) -> [f64; N] {
     let mut out = [0.0; N];
-    let (s, c, q, ix, rare) = sin_cos_core(&x);
+    let (s, c, q, ax, rare) = sin_cos_core(&x);
     for i in 0..N {
-        let (s, c, q, ix) = (s[i], c[i], q[i], ix[i]);
+        let (s, c, q, ax) = (s[i], c[i], q[i], ax[i]);
         // q: 0 => c, 1 => -s, 2 => -c, 3 => s (selects, not a jump table).
-        let v = sel(q & 1 != 0, s, c);
-        let v = sel((q + 1) & 2 != 0, -v, v);
-        // |x| < 2^-27 sqrt(2): 1.
-        out[i] = sel(ix < 0x3e46_a09e, 1.0, v);
+        let v = selb(bits(q & 1 != 0), s, c);
+        let v = selb(bits((q + 1) & 2 != 0), -v, v);
+        // |x| < 2^-27 sqrt(2) (ix < 0x3e46a09e): 1.
+        out[i] = selb(bits(ax < at_high(0x3e46_a09e)), 1.0, v);
     }
     if any(&rare) {
         patch(&mut out, &rare, &x, math::cos);
@@ -679,18 +719,19 @@ pub fn cos<const N: usize>(x: [f64; N]) -> [f64; N] {
 pub fn sin_cos<const N: usize>(x: [f64; N]) -> ([f64; N], [f64; N]) {
     let mut so = [0.0; N];
     let mut co = [0.0; N];
-    let (s, c, q, ix, rare) = sin_cos_core(&x);
+    let (s, c, q, ax, rare) = sin_cos_core(&x);
     for i in 0..N {
-        let (s, c, q, ix) = (s[i], c[i], q[i], ix[i]);
+        let (s, c, q, ax) = (s[i], c[i], q[i], ax[i]);
         // q: 0 => (s, c), 1 => (c, -s), 2 => (-s, -c), 3 => (-c, s).
-        let vs = sel(q & 1 != 0, c, s);
-        let vs = sel(q & 2 != 0, -vs, vs);
-        let vc = sel(q & 1 != 0, s, c);
-        let vc = sel((q + 1) & 2 != 0, -vc, vc);
-        // |x| < 2^-27 sqrt(2): (x, 1).
-        let tiny = ix < 0x3e46_a09e;
-        so[i] = sel(tiny, x[i], vs);
-        co[i] = sel(tiny, 1.0, vc);
+        let odd = bits(q & 1 != 0);
+        let vs = selb(odd, c, s);
+        let vs = selb(bits(q & 2 != 0), -vs, vs);
+        let vc = selb(odd, s, c);
+        let vc = selb(bits((q + 1) & 2 != 0), -vc, vc);
+        // |x| < 2^-27 sqrt(2) (ix < 0x3e46a09e): (x, 1).
+        let tiny = bits(ax < at_high(0x3e46_a09e));
+        so[i] = selb(tiny, x[i], vs);
+        co[i] = selb(tiny, 1.0, vc);
     }
     if any(&rare) {
         for i in 0..N {

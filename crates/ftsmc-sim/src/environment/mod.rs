@@ -15,8 +15,8 @@ pub use variation::DragNoise;
 use ftsmc_core::model::QuadrotorParams;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
-use rand_distr::{Distribution, StandardNormal};
 
+use crate::sensors::NoiseStream;
 use crate::signal::grid::GridSignal;
 use crate::signal::Signal;
 
@@ -44,7 +44,9 @@ pub struct EnvironmentParams<'a> {
 /// variation, drag noise and disturbances. The controller never sees these.
 pub struct Environment<'a> {
     params: EnvironmentParams<'a>,
-    drag_rngs: Option<[ChaCha8Rng; 6]>,
+    /// One noise stream per drag coefficient, read a block ahead
+    /// ([`NoiseStream`]: the generator's own draws, fewer instructions each).
+    drag_rngs: Option<[NoiseStream; 6]>,
     drag_factor: [f64; 6],
     grid: Option<Grid>,
 }
@@ -67,7 +69,7 @@ impl<'a> Environment<'a> {
             core::array::from_fn(|k| {
                 let mut rng = ChaCha8Rng::seed_from_u64(params.seed);
                 rng.set_stream(1 + k as u64);
-                rng
+                NoiseStream::new(rng)
             })
         });
         Self { params, drag_rngs, drag_factor: [1.0; 6], grid: None }
@@ -105,7 +107,7 @@ impl<'a> Environment<'a> {
     fn draw_drag_factors(&mut self) {
         if let (Some(rngs), Some(noise)) = (&mut self.drag_rngs, self.params.drag_noise) {
             for (factor, rng) in self.drag_factor.iter_mut().zip(rngs.iter_mut()) {
-                let w: f64 = StandardNormal.sample(rng);
+                let w = rng.normal();
                 *factor = (1.0 + noise.std * w).max(0.0);
             }
         }
