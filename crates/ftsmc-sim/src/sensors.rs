@@ -265,7 +265,10 @@ impl NoiseStream {
     /// The next two words as a `u64`, the first one low.
     #[cfg_attr(not(debug_assertions), inline(always))]
     fn word_pair(&mut self) -> u64 {
-        if self.next + 1 < BLOCK_WORDS {
+        // `next < BLOCK_WORDS - 1` (not `next + 1 < BLOCK_WORDS`, which may
+        // wrap): the compiler then sees `i + 8 <= 256` and drops the bounds
+        // check of the slice.
+        if self.next < BLOCK_WORDS - 1 {
             let i = 4 * self.next;
             self.next += 2;
             let mut bytes = [0u8; 8];
@@ -320,21 +323,49 @@ impl TryRng for NoiseStream {
     }
 }
 
+/// Which axes of a quantity carry an error term (noise or bias), decided
+/// once from its parameters.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Axes {
+    /// No axis: nothing to add.
+    None,
+    /// Every axis: the term is added without a per-axis test.
+    Every,
+    /// Some axes: each axis is tested.
+    Some,
+}
+
+impl Axes {
+    /// The axes whose value is not zero.
+    fn of(values: &[f64; 3]) -> Self {
+        match values.iter().filter(|v| **v != 0.0).count() {
+            0 => Axes::None,
+            3 => Axes::Every,
+            _ => Axes::Some,
+        }
+    }
+}
+
 /// One noise source: its error model and its own generator.
 #[derive(Clone, Debug)]
 struct Source {
     error: QuantityError,
     rng: NoiseStream,
-    /// [`QuantityError::has_noise`], decided once.
-    noisy: bool,
-    /// Any axis has a bias.
-    biased: bool,
+    /// The axes with a noise std ([`QuantityError::has_noise`] unless `None`).
+    noise: Axes,
+    /// The axes with a bias.
+    bias: Axes,
 }
 
 impl Source {
     fn new(error: QuantityError, seed: u64, stream: u64) -> Self {
-        let biased = error.bias.iter().any(|b| *b != 0.0);
-        Self { error, rng: NoiseStream::new(sensor_noise_rng(seed, stream)), noisy: error.has_noise(), biased }
+        debug_assert_eq!(error.has_noise(), Axes::of(&error.std) != Axes::None);
+        Self {
+            error,
+            rng: NoiseStream::new(sensor_noise_rng(seed, stream)),
+            noise: Axes::of(&error.std),
+            bias: Axes::of(&error.bias),
+        }
     }
 
     /// `truth + bias + std · z` per axis. Three draws per reading whenever
@@ -344,18 +375,37 @@ impl Source {
     #[cfg_attr(not(debug_assertions), inline(always))]
     fn corrupt(&mut self, truth: [f64; 3]) -> [f64; 3] {
         let mut out = truth;
-        if self.noisy {
-            for k in 0..3 {
-                let z = self.rng.normal();
-                if self.error.std[k] != 0.0 {
-                    out[k] += self.error.std[k] * z;
+        match self.noise {
+            Axes::None => {}
+            Axes::Every => {
+                // The three draws in axis order, then the same sums as below
+                // without the tests (every std is non-zero).
+                let z = [self.rng.normal(), self.rng.normal(), self.rng.normal()];
+                for k in 0..3 {
+                    out[k] += self.error.std[k] * z[k];
+                }
+            }
+            Axes::Some => {
+                for k in 0..3 {
+                    let z = self.rng.normal();
+                    if self.error.std[k] != 0.0 {
+                        out[k] += self.error.std[k] * z;
+                    }
                 }
             }
         }
-        if self.biased {
-            for k in 0..3 {
-                if self.error.bias[k] != 0.0 {
+        match self.bias {
+            Axes::None => {}
+            Axes::Every => {
+                for k in 0..3 {
                     out[k] += self.error.bias[k];
+                }
+            }
+            Axes::Some => {
+                for k in 0..3 {
+                    if self.error.bias[k] != 0.0 {
+                        out[k] += self.error.bias[k];
+                    }
                 }
             }
         }
@@ -427,7 +477,7 @@ impl<T: Copy + Default> Line<T> {
             self.last_sample = period;
             return true;
         }
-        let index = (period as f64 * self.samples_per_period + 1e-9).floor() as u64;
+        let index = sample_index(period, self.samples_per_period);
         if period == 0 || index != self.last_sample {
             self.last_sample = index;
             true
@@ -436,18 +486,39 @@ impl<T: Copy + Default> Line<T> {
         }
     }
 
-    /// Push this period's held reading and return the one of `latency`
-    /// periods ago (the first reading until then).
-    #[inline]
-    fn delayed(&mut self, period: u64) -> T {
-        if period == 0 {
-            self.ring.fill(self.held);
+    /// Advance by control period `period`: take a sample with `read` when
+    /// one is due ([`Line::due`]), push the held reading into the ring and
+    /// return the one of `latency` periods ago (the first reading until
+    /// then). A line sampled every period writes `read`'s reading straight
+    /// into the ring (holding it as well would only copy it).
+    #[cfg_attr(not(debug_assertions), inline(always))]
+    fn advance(&mut self, period: u64, read: impl FnOnce() -> T) -> &T {
+        let slot = self.head;
+        if self.every_period {
+            self.ring[slot] = read();
+        } else {
+            if self.due(period) {
+                self.held = read();
+            }
+            self.ring[slot] = self.held;
         }
-        let n = self.ring.len();
-        self.ring[self.head] = self.held;
-        self.head = if self.head + 1 == n { 0 } else { self.head + 1 };
-        self.ring[self.head]
+        if period == 0 {
+            let first = self.ring[slot];
+            self.ring.fill(first);
+        }
+        self.head = if slot + 1 == self.ring.len() { 0 } else { slot + 1 };
+        &self.ring[self.head]
     }
+}
+
+/// The sample index `⌊k · s + 1e-9⌋` of control period `k` at `s` samples
+/// per period. For `x = k · s + 1e-9`, `x as u64` is `⌊x⌋ as u64` for
+/// every `x` (truncation is the floor of a non-negative number; a negative
+/// `x` gives 0 both ways, NaN 0 and `+∞` `u64::MAX` both ways), without a
+/// call to `floor` (baseline x86-64 has no rounding instruction).
+#[cfg_attr(not(debug_assertions), inline(always))]
+fn sample_index(period: u64, samples_per_period: f64) -> u64 {
+    (period as f64 * samples_per_period + 1e-9) as u64
 }
 
 /// The four noise sources and the frame the rates are measured in.
@@ -543,26 +614,24 @@ impl Sensors {
         let sources = &mut self.sources;
         let (translation, rotation) = match &mut self.lines {
             Lines::Shared(line) => {
-                if line.due(k) {
+                let reading = line.advance(k, || {
                     let translation = sources.read_translation(&truth.euler);
-                    line.held = Reading { translation, rotation: sources.read_rotation(truth) };
-                }
-                let reading = line.delayed(k);
-                (reading.translation, reading.rotation)
+                    Reading { translation, rotation: sources.read_rotation(truth) }
+                });
+                (&reading.translation, &reading.rotation)
             }
-            Lines::Split { translation, rotation } => {
-                if translation.due(k) {
-                    translation.held = sources.read_translation(&truth.euler);
-                }
-                if rotation.due(k) {
-                    rotation.held = sources.read_rotation(truth);
-                }
-                (translation.delayed(k), rotation.delayed(k))
-            }
+            Lines::Split { translation, rotation } => (
+                translation.advance(k, || sources.read_translation(&truth.euler)),
+                rotation.advance(k, || sources.read_rotation(truth)),
+            ),
         };
-        let [position, velocity] = translation;
         Measurement {
-            euler: QuadState { position, attitude: rotation.attitude, velocity, angular_rate: rotation.angular_rate },
+            euler: QuadState {
+                position: translation[0],
+                attitude: rotation.attitude,
+                velocity: translation[1],
+                angular_rate: rotation.angular_rate,
+            },
             body: rotation.body,
         }
     }
@@ -586,7 +655,7 @@ impl Sources {
     fn read_rotation(&mut self, truth: &Measurement) -> Rotation {
         let euler = &truth.euler;
         let attitude = self.attitude.corrupt(euler.attitude);
-        match (self.rates, truth.body) {
+        match (self.rates, &truth.body) {
             (RateFrame::Euler, _) => {
                 Rotation { attitude, angular_rate: self.angular_rate.corrupt(euler.angular_rate), body: None }
             }
@@ -650,6 +719,106 @@ mod tests {
         for i in 0..5000 {
             let z: f64 = StandardNormal.sample(&mut reference);
             assert_eq!(stream.normal().to_bits(), z.to_bits(), "draw {i}");
+        }
+    }
+
+    /// `sample_index` (truncation) is the floor of the same product for
+    /// every sample rate the sensors accept and for the values they should
+    /// never see (negative, zero, NaN, infinite ratios).
+    #[test]
+    fn sample_index_is_the_floor() {
+        let floor_index = |k: u64, s: f64| (k as f64 * s + 1e-9).floor() as u64;
+        let mut ratios: Vec<f64> = vec![1.0, 0.5, 0.2, 0.1, 1.0 / 3.0, 0.3, 0.7, 1e-6, 0.0, -0.0, -0.3, -2.0];
+        ratios.extend([f64::NAN, f64::INFINITY, f64::NEG_INFINITY, f64::MIN_POSITIVE, f64::MAX]);
+        ratios.extend((1..200).map(|r| f64::from(r) * 5.0 / 1000.0));
+        ratios.extend((1..50).map(|r| 1000.0 / (f64::from(r) * 333.0 + 1.0)).filter(|r| *r <= 1.0));
+        for s in ratios {
+            for k in (0..3000u64).chain([1 << 40, (1 << 53) - 1, u64::MAX]) {
+                assert_eq!(sample_index(k, s), floor_index(k, s), "k = {k}, s = {s}");
+            }
+        }
+    }
+
+    /// `Source::corrupt` with its per-axis plan gives the bits of the plain
+    /// per-axis tests (three draws whenever any axis is noisy, zero terms
+    /// skipped), for every mix of zero and non-zero std and bias.
+    #[test]
+    fn corrupt_plan_gives_the_bits_of_the_per_axis_tests() {
+        let values = [0.0, 0.02, -0.5];
+        let truth = [1.25, -0.0, 3.5e-3];
+        for code in 0..(3usize.pow(6)) {
+            let pick = |axis: usize| values[(code / 3usize.pow(axis as u32)) % 3];
+            let error =
+                QuantityError { std: [pick(0), pick(1), pick(2)].map(f64::abs), bias: [pick(3), pick(4), pick(5)] };
+            let mut source = Source::new(error, 5, ATTITUDE_NOISE_STREAM);
+            let mut rng = NoiseStream::new(sensor_noise_rng(5, ATTITUDE_NOISE_STREAM));
+            for reading in 0..40 {
+                let mut want = truth;
+                if error.std.iter().any(|s| *s != 0.0) {
+                    for k in 0..3 {
+                        let z = rng.normal();
+                        if error.std[k] != 0.0 {
+                            want[k] += error.std[k] * z;
+                        }
+                    }
+                }
+                for k in 0..3 {
+                    if error.bias[k] != 0.0 {
+                        want[k] += error.bias[k];
+                    }
+                }
+                let got = source.corrupt(truth);
+                assert_eq!(got.map(f64::to_bits), want.map(f64::to_bits), "{error:?}, reading {reading}");
+            }
+        }
+    }
+
+    /// `Line::advance` returns what holding every sample, pushing the held
+    /// reading into a ring of `latency + 1` and reading it `latency` periods
+    /// later gives, at every sample rate and latency (the first reading
+    /// until then).
+    #[test]
+    fn line_advance_is_hold_then_delay() {
+        let control_rate = 1000.0;
+        let rates = [
+            None,
+            Some(1000.0),
+            Some(2000.0),
+            Some(200.0),
+            Some(300.0),
+            Some(7.0),
+            Some(999.0),
+            Some(1000.0 / 3.0),
+            Some(0.5),
+            Some(1e-300),
+            Some(-5.0),
+            Some(f64::NAN),
+            Some(f64::INFINITY),
+        ];
+        for sample_rate in rates {
+            for latency in [0u32, 1, 2, 6, 13] {
+                let mut line = Line::<u64>::new(SensorClock { sample_rate, latency }, control_rate);
+                let every = sample_rate.map_or(1.0, |r| (r / control_rate).min(1.0));
+                let (mut held, mut last, mut history) = (0u64, 0u64, Vec::new());
+                for k in 0..2500u64 {
+                    // The reading of period k is 1000 + k; a sample is taken
+                    // when the index moves on.
+                    let index = (k as f64 * every + 1e-9).floor() as u64;
+                    if k == 0 || index != last {
+                        last = index;
+                        held = 1000 + k;
+                    }
+                    history.push(held);
+                    let want = history[(k as usize).saturating_sub(latency as usize)];
+                    let mut reads = 0;
+                    let got = *line.advance(k, || {
+                        reads += 1;
+                        1000 + k
+                    });
+                    assert_eq!(got, want, "rate {sample_rate:?}, latency {latency}, period {k}");
+                    assert!(reads <= 1);
+                }
+            }
         }
     }
 }
