@@ -13,7 +13,8 @@
 //! inside a `#[target_feature(enable = "avx2,fma")]` function, where the
 //! kernels are inlined as they are in the dispatched run loop: `scalar`
 //! (libm per element) against `lanes4` (the kernel on 4 lanes). These
-//! cells decide `ftsmc_core::lanes::KERNEL_LANES`.
+//! cells inform `ftsmc_core::lanes::KERNEL_LANES` and `EXP_KERNEL_LANES`
+//! (which the Monte Carlo then decides: see their docs).
 
 use std::hint::black_box;
 

@@ -617,8 +617,8 @@ impl<const N: usize> Real for Lanes<N> {
     }
     // The kernels of `lanes_math` give the bits of the scalar functions
     // on every lane, so which one runs is a matter of speed only
-    // ([`KERNEL_LANES`]).
-    /// [`crate::lanes_math::sin`] (4 lanes and more) or
+    // ([`KERNEL_LANES`], [`EXP_KERNEL_LANES`]).
+    /// [`crate::lanes_math::sin`] (8 lanes and more) or
     /// [`crate::elementary::sin`] per lane: the same bits.
     #[cfg_attr(not(debug_assertions), inline(always))]
     fn sin(self) -> Self {
@@ -628,7 +628,7 @@ impl<const N: usize> Real for Lanes<N> {
             self.map(crate::elementary::sin)
         }
     }
-    /// [`crate::lanes_math::cos`] (4 lanes and more) or
+    /// [`crate::lanes_math::cos`] (8 lanes and more) or
     /// [`crate::elementary::cos`] per lane: the same bits.
     #[cfg_attr(not(debug_assertions), inline(always))]
     fn cos(self) -> Self {
@@ -638,7 +638,7 @@ impl<const N: usize> Real for Lanes<N> {
             self.map(crate::elementary::cos)
         }
     }
-    /// [`crate::lanes_math::sin_cos`] (4 lanes and more) or
+    /// [`crate::lanes_math::sin_cos`] (8 lanes and more) or
     /// [`crate::elementary::sin_cos`] per lane: the same bits.
     #[cfg_attr(not(debug_assertions), inline(always))]
     fn sin_cos(self) -> (Self, Self) {
@@ -658,7 +658,7 @@ impl<const N: usize> Real for Lanes<N> {
     /// [`crate::elementary::exp`] per lane: the same bits.
     #[cfg_attr(not(debug_assertions), inline(always))]
     fn exp(self) -> Self {
-        if N >= KERNEL_LANES {
+        if N >= EXP_KERNEL_LANES {
             Self(crate::lanes_math::exp(self.0))
         } else {
             self.map(crate::elementary::exp)
@@ -669,7 +669,7 @@ impl<const N: usize> Real for Lanes<N> {
     fn ln(self) -> Self {
         Self(crate::lanes_math::ln(self.0))
     }
-    /// [`crate::lanes_math::asin`] (4 lanes and more) or
+    /// [`crate::lanes_math::asin`] (8 lanes and more) or
     /// [`crate::elementary::asin`] per lane: the same bits.
     #[cfg_attr(not(debug_assertions), inline(always))]
     fn asin(self) -> Self {
@@ -683,7 +683,7 @@ impl<const N: usize> Real for Lanes<N> {
     /// [`crate::elementary::acos`] per lane: the same bits.
     #[cfg_attr(not(debug_assertions), inline(always))]
     fn acos(self) -> Self {
-        if N >= ARCTAN_KERNEL_LANES {
+        if N >= KERNEL_LANES {
             Self(crate::lanes_math::acos(self.0))
         } else {
             self.map(crate::elementary::acos)
@@ -693,7 +693,7 @@ impl<const N: usize> Real for Lanes<N> {
     /// [`crate::elementary::atan`] per lane: the same bits.
     #[cfg_attr(not(debug_assertions), inline(always))]
     fn atan(self) -> Self {
-        if N >= ARCTAN_KERNEL_LANES {
+        if N >= KERNEL_LANES {
             Self(crate::lanes_math::atan(self.0))
         } else {
             self.map(crate::elementary::atan)
@@ -703,7 +703,7 @@ impl<const N: usize> Real for Lanes<N> {
     /// [`crate::elementary::atan2`] per lane: the same bits.
     #[cfg_attr(not(debug_assertions), inline(always))]
     fn atan2(self, x: Self) -> Self {
-        if N >= ARCTAN_KERNEL_LANES {
+        if N >= KERNEL_LANES {
             Self(crate::lanes_math::atan2(self.0, x.0))
         } else {
             self.map2(x, crate::elementary::atan2)
@@ -711,21 +711,30 @@ impl<const N: usize> Real for Lanes<N> {
     }
 }
 
-/// Lane count from which `Lanes` computes `exp`, `sin`, `cos`,
-/// `sin_cos` and `asin` with the kernels of [`crate::lanes_math`] instead
-/// of the scalar function lane by lane (`ln` always uses its kernel).
-/// Either way each lane has the scalar function's bits, so this is a
-/// matter of speed only. Measured inside an AVX2 + FMA function on 4 lanes
-/// (`cargo bench -p ftsmc-core --bench lanes_math -- avx2/`, time of the
-/// kernel over time of four scalar calls): `exp` 0.57, `asin` 0.74,
-/// `cos` 0.81, `sin` 0.92, `sin_cos` 0.70.
-pub const KERNEL_LANES: usize = 4;
+/// Lane count from which `Lanes` computes `sin`, `cos`, `sin_cos`, `asin`,
+/// `acos`, `atan` and `atan2` with the kernels of [`crate::lanes_math`]
+/// instead of the scalar function lane by lane (`ln` always uses its
+/// kernel, `exp` from [`EXP_KERNEL_LANES`]). Either way each lane has the
+/// scalar function's bits: this is a matter of speed only, and the Monte
+/// Carlo decides it, not the kernels' own benchmark. Inside an AVX2 + FMA
+/// function on 4 lanes the kernels of `asin`, `sin_cos` and `cos` take
+/// 0.74, 0.70 and 0.81 × the time of four scalar calls on independent
+/// arguments (`cargo bench -p ftsmc-core --bench lanes_math -- avx2/`),
+/// `atan`, `atan2` and `acos` 1.12, 1.06 and 2.07 ×. Yet with `sin`, `cos`,
+/// `sin_cos` and `asin` on kernels from 4 lanes every Monte Carlo cell
+/// measured flew fewer or as many steps per CPU-second as with `exp`
+/// alone (one thread, 48 runs, same run: realistic-scenario-2 PID 2.23–2.26
+/// against 2.28–2.30 M, paper-scenario-2 SE(3) 3.64 against 3.75–3.81 M):
+/// in a flight the scalar functions' branches are predicted and their
+/// calls overlap.
+pub const KERNEL_LANES: usize = 8;
 
-/// [`KERNEL_LANES`] for `atan`, `atan2` and `acos`: on 4 lanes their
-/// kernels were no faster than four scalar calls whose branches the CPU
-/// predicts (`atan` 1.12, `atan2` 1.06, `acos` 2.07 in the same
-/// measurement), so they take over from 8 lanes.
-pub const ARCTAN_KERNEL_LANES: usize = 8;
+/// Lane count from which `Lanes::exp` uses [`crate::lanes_math::exp`]:
+/// 0.57 × the time of four scalar calls in the benchmark above, and the
+/// controllers whose fractional powers are `exp(a ln|x|)` fly faster with
+/// it (paper-scenario-2 FTAFTSMC on 4 lanes: 2.86–2.89 M steps per
+/// CPU-second against 2.76–2.79 M with the other kernels as well).
+pub const EXP_KERNEL_LANES: usize = 4;
 
 // ---------------------------------------------------------------- composites
 
