@@ -134,9 +134,9 @@ const P5: f64 = 4.13813679705723846039e-08; /* 0x3E663769, 0x72BEA4D0 */
 /// through the scalar function.
 ///
 /// Written for the vectoriser: every range test compares `|x|` with the
-/// smallest double of the scalar code's high-word bound ([`at_high`]),
+/// smallest double of the scalar code's high-word bound,
 /// `k` stays a double (the truncation `(x/ln2 ± ½) as i32` is a rounding
-/// by [`ROUNDER`] corrected towards zero), and `2ᵏ` is built from the bits
+/// by `1.5 · 2⁵²` corrected towards zero), and `2ᵏ` is built from the bits
 /// of `k + 1023 + 2⁵²`, so no lane leaves the `f64`/`u64` registers.
 #[cfg_attr(not(debug_assertions), inline(always))]
 pub fn exp<const N: usize>(x: [f64; N]) -> [f64; N] {
@@ -607,7 +607,7 @@ fn medium_lane(x: f64) -> (u64, f64, f64) {
 /// quadrant (0 when not reduced), `ax = |x|`, `rare` for ±∞, NaN and
 /// `|x| ≥ 2²⁰ π/2` (`__rem_pio2_large`). The medium reduction is computed
 /// only when some lane needs it. Written for the vectoriser like [`exp`]:
-/// the high-word range tests are comparisons of `|x|` with [`at_high`]
+/// the high-word range tests are comparisons of `|x|` with `at_high`
 /// bounds, the small multiple `n` of π/2 is a double, and the quadrant is
 /// read from the bits of `n + 1.5·2⁵²`.
 #[allow(clippy::type_complexity)]
