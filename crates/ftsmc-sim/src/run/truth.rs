@@ -135,7 +135,7 @@ ftsmc_core::lanewise_struct!(PaperStage { plant, command, omega_bar, disturbance
 /// the one the lagged rotors deliver at `tau`.
 #[cfg_attr(not(debug_assertions), inline(always))]
 fn paper_stage(s: &Substep<'_>, tau: f64) -> PaperStage {
-    let tv = TimeVarying::lerp(&s.a, &s.b, (tau - s.t0) / s.h);
+    let tv = TimeVarying::lerp(s.a, s.b, (tau - s.t0) / s.h);
     let p = s.env.params_with(&tv);
     let wind = s.wind.unwrap_or([0.0; 3]);
     match s.drive {
@@ -184,7 +184,7 @@ struct HeldPlant<R: Real> {
 /// [`HeldPlant`] of every lane's substep.
 #[cfg_attr(not(debug_assertions), inline(always))]
 fn held_plant<R: Real>(s: &[Substep<'_>]) -> HeldPlant<R> {
-    let base = <Eq1Params<R>>::from_lanes(s, |s| Eq1Params::of(&s.env.params_with(&s.a)));
+    let base = <Eq1Params<R>>::from_lanes(s, |s| Eq1Params::of(&s.env.params_with(s.a)));
     let (m_a, m_b) = (R::from_lanes(s, |s| s.a.mass), R::from_lanes(s, |s| s.b.mass));
     let (i_a, i_b) = (<[R; 3]>::from_lanes(s, |s| s.a.inertia), <[R; 3]>::from_lanes(s, |s| s.b.inertia));
     let (d_a, d_b) = (<[R; 6]>::from_lanes(s, |s| s.a.disturbance), <[R; 6]>::from_lanes(s, |s| s.b.disturbance));
