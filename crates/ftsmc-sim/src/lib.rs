@@ -52,6 +52,7 @@
 //!            variation.rs       DragNoise (inertia variation is a Signal)
 //!            ground.rs          ground plane, touchdown and crash (`[ground]`)
 //!            wind.rs            mean wind, 1−cos gusts, Dryden turbulence (`[wind]`)
+//!            phasors.rs         the environment's sinusoid terms on the loop's grid, four at a time
 //!          envelope.rs          success envelope and its verdict (`[envelope]`)
 //!          metrics.rs           ISE, IAE, ITAE, settling, chattering, online
 //!          sensors.rs           measured state: noise, bias, sample rate, latency (`[sensors]`)
@@ -70,6 +71,7 @@
 //!          limits.rs            cost limits and their arithmetic
 //!          text.rs              values in error messages, exact-length TOML arrays
 //!          isa.rs               the instruction set of the lane kernels, picked at run time
+//!          noise.rs             NoiseStream: a noise source's ChaCha generator read a block ahead
 //! ```
 #![warn(missing_docs)]
 
@@ -84,6 +86,7 @@ pub mod gym;
 pub mod isa;
 pub mod limits;
 pub mod metrics;
+pub mod noise;
 pub mod registry;
 pub mod run;
 pub mod scenario;

@@ -19,6 +19,7 @@ const FLOORS: &[(&str, u32)] = &[
     ("limits", 1),
     ("isa", 1),
     ("signal", 1),
+    ("noise", 1),
     ("vehicle", 2),
     ("actuators", 2),
     ("environment", 2),

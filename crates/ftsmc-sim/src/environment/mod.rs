@@ -17,7 +17,7 @@ use ftsmc_core::model::QuadrotorParams;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
-use crate::sensors::NoiseStream;
+use crate::noise::NoiseStream;
 use crate::signal::grid::GridSignal;
 use crate::signal::Signal;
 

@@ -74,7 +74,7 @@
 //! seed, streams [`WIND_TURBULENCE_STREAMS`] (u, v, w), distinct from the
 //! drag noise (1–6), motor noise (16) and Monte Carlo sampling (100+), so
 //! turning turbulence on or off changes no other source's draws.
-//! Each stream is read through a [`crate::sensors::NoiseStream`] (the
+//! Each stream is read through a [`crate::noise::NoiseStream`] (the
 //! generator's own words, read a block ahead), so the draws are those of
 //! `rand_distr::StandardNormal` on the `ChaCha8Rng` itself.
 
@@ -83,7 +83,7 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
-use crate::sensors::NoiseStream;
+use crate::noise::NoiseStream;
 
 /// One knot in m/s (exact: 1852 m / 3600 s ≈ 0.514444).
 pub const KNOT: f64 = 1852.0 / 3600.0;
