@@ -57,7 +57,7 @@ fn any<const N: usize>(m: &[u64; N]) -> bool {
 /// `a` where `m`, else `b` (a select, not a branch, once vectorised).
 #[cfg_attr(not(debug_assertions), inline(always))]
 fn sel(m: bool, a: f64, b: f64) -> f64 {
-    f64::from_bits((a.to_bits() & bits(m)) | (b.to_bits() & !bits(m)))
+    selb(bits(m), a, b)
 }
 
 /// High 32 bits of `x`'s representation (fdlibm's `GET_HIGH_WORD`).
@@ -69,9 +69,11 @@ fn high(x: f64) -> u32 {
 /// The sign bit of an `f64`.
 const SIGN: u64 = 0x8000_0000_0000_0000;
 
-/// `1.5 · 2⁵²`: `(t + ROUNDER) − ROUNDER` is `t` rounded to the nearest
-/// integer (ties to even) for `|t| < 2⁵¹`.
-const ROUNDER: f64 = 6_755_399_441_055_744.0;
+/// `1.5 · 2⁵²` (`__rem_pio2`'s `toint`, `1.5/EPSILON`): `(t + TO_INT) −
+/// TO_INT` is `t` rounded to the nearest integer (ties to even) for
+/// `|t| < 2⁵¹`, and for an integer `n` there the low bits of `n + TO_INT`
+/// are those of `n` (two's complement).
+const TO_INT: f64 = 6_755_399_441_055_744.0;
 
 /// `2⁵²`: for an integer `0 ≤ v < 2⁵²`, the bits of `2⁵² + v` are
 /// `0x4330_0000_0000_0000 | v`, so `v` can be read from them.
@@ -95,7 +97,7 @@ fn selb(m: u64, a: f64, b: f64) -> f64 {
 /// farther from zero than `t`).
 #[cfg_attr(not(debug_assertions), inline(always))]
 fn trunc_small(t: f64) -> f64 {
-    let r = (t + ROUNDER) - ROUNDER;
+    let r = (t + TO_INT) - TO_INT;
     let away = bits(f64::from_bits(r.to_bits() & !SIGN) > f64::from_bits(t.to_bits() & !SIGN));
     let one = f64::from_bits(1f64.to_bits() | (t.to_bits() & SIGN));
     selb(away, r - one, r)
@@ -535,7 +537,6 @@ const C4: f64 = -2.75573143513906633035e-07; /* 0xBE927E4F, 0x809C52AD */
 const C5: f64 = 2.08757232129817482790e-09; /* 0x3E21EE9E, 0xBDB4B1C4 */
 const C6: f64 = -1.13596475577881948265e-11; /* 0xBDA8FAE9, 0xBE8838D4 */
 
-const TO_INT: f64 = 1.5 / 2.2204460492503131e-16;
 const INV_PIO2: f64 = 6.36619772367581382433e-01; /* 0x3FE45F30, 0x6DC9C883 */
 const PIO2_1: f64 = 1.57079632673412561417e+00; /* 0x3FF921FB, 0x54400000 */
 const PIO2_1T: f64 = 6.07710050650619224932e-11; /* 0x3DD0B461, 0x1A626331 */
