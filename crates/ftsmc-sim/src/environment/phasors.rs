@@ -19,13 +19,14 @@
 //! groups of four, field by field, so that one pass computes four terms
 //! per operation (compiled for AVX2 when the CPU has it, [`crate::isa`]),
 //! and then sums each signal's terms in its order from its leading
-//! constants' sum: every term has the operations of
-//! [`crate::signal::grid::GridSignal`] in their order, so every signal has
-//! its bits (`tests` compare them sample by sample).
+//! constants' sum. The leading constants, the tables, the anchors and each
+//! term's value are the grid signals' own functions
+//! ([`crate::signal::grid`]'s `leading_constants`, `table_row`, `anchor`,
+//! `term_value`), so every signal has the bits of its
+//! [`crate::signal::grid::GridSignal`] (`tests` compare them sample by
+//! sample).
 
-use ftsmc_core::math::sin_cos;
-
-use crate::signal::grid::{BLOCK, MAX_PHASORS};
+use crate::signal::grid::{anchor, leading_constants, table_row, term_value, BLOCK, MAX_PHASORS};
 use crate::signal::{Signal, Term};
 
 /// Terms per group (one AVX2 register of `f64`).
@@ -79,11 +80,7 @@ impl PhasorBank {
         let mut terms = Vec::new();
         let mut ranges = Vec::new();
         for signal in signals {
-            let leading = signal.terms.iter().take_while(|term| matches!(term, Term::Constant { .. })).count();
-            let mut start = 0.0;
-            for term in &signal.terms[..leading] {
-                start += term.value(0.0);
-            }
+            let (start, leading) = leading_constants(signal);
             let rest = &signal.terms[leading..];
             if rest.len() > MAX_PHASORS {
                 return None;
@@ -109,8 +106,7 @@ impl PhasorBank {
             groups[g].omega[k] = omega;
             groups[g].phase[k] = phase;
             for n in 0..BLOCK as usize {
-                let tau = omega * (n as f64 * step);
-                let (s, c) = sin_cos(tau);
+                let (tau, s, c) = table_row(omega, n, step);
                 let row = &mut table[n * count + g];
                 row[0][k] = tau;
                 row[1][k] = s;
@@ -137,10 +133,8 @@ impl PhasorBank {
         for (p, &cosine) in self.cosine.iter().enumerate() {
             let g = &mut self.groups[p / WIDTH];
             let k = p % WIDTH;
-            let theta_a = g.omega[k] * ((block * BLOCK) as f64 * self.step) + g.phase[k];
-            let (s, c) = sin_cos(theta_a);
+            let ((theta_a, _, _), rotation) = anchor(g.omega[k], g.phase[k], cosine, block, self.step);
             g.anchor[k] = theta_a;
-            let rotation = if cosine { [c, -s, -s, -c] } else { [s, c, c, -s] };
             for (field, value) in g.rotation.iter_mut().zip(rotation) {
                 field[k] = value;
             }
@@ -184,10 +178,9 @@ fn terms(groups: &[Group], rows: &[Row], t: f64, values: &mut [f64]) {
         let [u, v, w, z] = &g.rotation;
         let [tau, s_n, c_n] = row;
         for k in 0..WIDTH {
-            let theta = g.omega[k] * t + g.phase[k];
-            let r = (theta - g.anchor[k]) - tau[k];
-            let (x, y) = (u[k] * c_n[k] + v[k] * s_n[k], w[k] * c_n[k] + z[k] * s_n[k]);
-            out[k] = g.amplitude[k] * (x + y * r);
+            let rotation = [u[k], v[k], w[k], z[k]];
+            let row = (tau[k], s_n[k], c_n[k]);
+            out[k] = term_value(g.amplitude[k], g.omega[k], g.phase[k], g.anchor[k], rotation, row, t);
         }
     }
 }

@@ -48,6 +48,60 @@ pub const MAX_PHASORS: usize = 256;
 /// (fixed length: the offset `m mod BLOCK` indexes it without a bounds check).
 type Table = [(f64, f64, f64); BLOCK as usize];
 
+/// The sum `0.0 + c_1 + … + c_j` of `signal`'s leading constant terms and
+/// their count `j` (the sum [`Signal::value`] has after them).
+pub(crate) fn leading_constants(signal: &Signal) -> (f64, usize) {
+    let leading = signal.terms.iter().take_while(|term| matches!(term, Term::Constant { .. })).count();
+    let mut start = 0.0;
+    for term in &signal.terms[..leading] {
+        start += term.value(0.0);
+    }
+    (start, leading)
+}
+
+/// Row `n` of a sinusoid term's table: `(τ_n, sin τ_n, cos τ_n)` with
+/// `τ_n = ω·(n·δ)` (ω in rad/s, δ = `step` in s).
+pub(crate) fn table_row(omega: f64, n: usize, step: f64) -> (f64, f64, f64) {
+    let tau = omega * (n as f64 * step);
+    let (s, c) = sin_cos(tau);
+    (tau, s, c)
+}
+
+/// The anchor of `block` for a term of angular frequency `omega` (rad/s)
+/// and phase `phase` (rad): `(θ_a, sin θ_a, cos θ_a)` with
+/// `θ_a = ω·(a·δ) + φ`, `a = block·BLOCK`, and the rotation `[U, V, W, Z]`
+/// the term's value reads ([`term_value`]): `[sin θ_a, cos θ_a, cos θ_a,
+/// −sin θ_a]` for a sine, `[cos θ_a, −sin θ_a, −sin θ_a, −cos θ_a]` for a
+/// cosine.
+pub(crate) fn anchor(omega: f64, phase: f64, cosine: bool, block: u64, step: f64) -> ((f64, f64, f64), [f64; 4]) {
+    let theta_a = omega * ((block * BLOCK) as f64 * step) + phase;
+    let (s, c) = sin_cos(theta_a);
+    ((theta_a, s, c), if cosine { [c, -s, -s, -c] } else { [s, c, c, -s] })
+}
+
+/// A term's value at time `t` (s) from its anchor's `θ_a` and rotation
+/// ([`anchor`]) and its table row `(τ_n, sin τ_n, cos τ_n)`
+/// ([`table_row`]): `A·(X + Y·r)` with `X = U cos τ_n + V sin τ_n`,
+/// `Y = W cos τ_n + Z sin τ_n` and the residual `r = (θ − θ_a) − τ_n` of
+/// `θ = ω t + φ` ([`Phasor::value`] explains why these are the bits of
+/// the rotated `A·sin` or `A·cos`).
+#[allow(clippy::too_many_arguments)]
+#[cfg_attr(not(debug_assertions), inline(always))]
+pub(crate) fn term_value(
+    amplitude: f64,
+    omega: f64,
+    phase: f64,
+    theta_a: f64,
+    [u, v, w, z]: [f64; 4],
+    (tau, s_n, c_n): (f64, f64, f64),
+    t: f64,
+) -> f64 {
+    let theta = omega * t + phase;
+    let r = (theta - theta_a) - tau;
+    let (x, y) = (u * c_n + v * s_n, w * c_n + z * s_n);
+    amplitude * (x + y * r)
+}
+
 /// One `A·sin(ω t + φ)` or `A·cos(ω t + φ)` term on the grid.
 #[derive(Clone, Debug)]
 struct Phasor {
@@ -72,20 +126,13 @@ struct Phasor {
 
 impl Phasor {
     fn new(amplitude: f64, omega: f64, phase: f64, cosine: bool, step: f64) -> Self {
-        let table = Box::new(core::array::from_fn(|n| {
-            let tau = omega * (n as f64 * step);
-            let (s, c) = sin_cos(tau);
-            (tau, s, c)
-        }));
+        let table = Box::new(core::array::from_fn(|n| table_row(omega, n, step)));
         Self { amplitude, omega, phase, cosine, anchor: (0.0, 0.0, 1.0), rotation: [0.0; 4], table }
     }
 
     /// Take the anchor of `block`.
     fn set_anchor(&mut self, block: u64, step: f64) {
-        let theta_a = self.omega * ((block * BLOCK) as f64 * step) + self.phase;
-        let (s, c) = sin_cos(theta_a);
-        self.anchor = (theta_a, s, c);
-        self.rotation = if self.cosine { [c, -s, -s, -c] } else { [s, c, c, -s] };
+        (self.anchor, self.rotation) = anchor(self.omega, self.phase, self.cosine, block, step);
     }
 
     /// The residual `r = θ − θ_a − τ_n` of the term's argument `θ = ω t + φ`
@@ -120,10 +167,7 @@ impl Phasor {
     /// cosine, is then ±1 to rounding).
     #[cfg_attr(not(debug_assertions), inline(always))]
     fn value(&self, n: usize, t: f64) -> f64 {
-        let [u, v, w, z] = self.rotation;
-        let (r, s_n, c_n) = self.residual(n, t);
-        let (x, y) = (u * c_n + v * s_n, w * c_n + z * s_n);
-        self.amplitude * (x + y * r)
+        term_value(self.amplitude, self.omega, self.phase, self.anchor.0, self.rotation, self.table[n], t)
     }
 
     /// The term's value and derivatives at offset `n` of the anchor's block,
@@ -201,11 +245,7 @@ impl GridSignal {
     /// `BLOCK` angles with their sines and cosines for each of the first
     /// [`MAX_PHASORS`] sinusoid terms (1.5 KiB each).
     pub fn new(signal: &Signal, step: f64) -> Self {
-        let leading = signal.terms.iter().take_while(|term| matches!(term, Term::Constant { .. })).count();
-        let mut start = 0.0;
-        for term in &signal.terms[..leading] {
-            start += term.value(0.0);
-        }
+        let (start, leading) = leading_constants(signal);
         let mut phasors = Vec::new();
         let terms: Vec<GridTerm> = signal.terms[leading..]
             .iter()
