@@ -169,21 +169,15 @@ impl<'a> Environment<'a> {
             Some(Some([start, end])) if t < start || t > end => {
                 (grid.inertia_variation.as_ref().map(|_| 0.0), [0.0; 6])
             }
-            Some(_) if grid.bank.is_some() => {
+            _ if grid.bank.is_some() => {
                 let mut v = [0.0; 7];
                 if let Some(bank) = grid.bank.as_mut() {
                     bank.values(m, t, &mut v);
                 }
-                let [x, y, z, phi, theta, psi, variation] = v;
-                (grid.inertia_variation.as_ref().map(|_| variation), [x, y, z, phi, theta, psi])
-            }
-            None if grid.bank.is_some() => {
-                let mut v = [0.0; 7];
-                if let Some(bank) = grid.bank.as_mut() {
-                    bank.values(m, t, &mut v);
-                }
-                // Each signal's own window (outside: 0, as its own test gives).
-                let inside = |s: &GridSignal| s.window().is_none_or(|[start, end]| !(t < start || t > end));
+                // Inside a shared window every signal counts; without one,
+                // each signal's own window (outside: 0, as its own test gives).
+                let shared = grid.shared_window.is_some();
+                let inside = |s: &GridSignal| shared || !s.outside(t);
                 let mut disturbance = [0.0; 6];
                 for (k, s) in grid.disturbance.iter().enumerate() {
                     if inside(s) {

@@ -613,7 +613,7 @@ impl<R: Real> TruthModel<R> for RigidTruth<R> {
                 for k in 0..6 {
                     d[k] = d_a[k] + w * d_gap[k];
                 }
-                body.prepare_owned(RigidBodyInput {
+                body.prepare(&RigidBodyInput {
                     rotor_speeds: rotors.after(s, tau - t0),
                     wind,
                     force: [mass * d[0], mass * d[1], mass * d[2]],

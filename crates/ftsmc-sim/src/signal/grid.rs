@@ -308,7 +308,7 @@ impl GridSignal {
 
     /// True when `t` (s) is outside the window (as [`Signal::value`] tests it).
     #[cfg_attr(not(debug_assertions), inline(always))]
-    fn outside(&self, t: f64) -> bool {
+    pub(crate) fn outside(&self, t: f64) -> bool {
         match self.window {
             Some([start, end]) => t < start || t > end,
             None => false,

@@ -508,6 +508,14 @@ pub(crate) fn has_plain_diagonal(j: &Mat3) -> bool {
     (0..3).all(|r| (0..3).all(|c| r == c || j[r][c].to_bits() == 0))
 }
 
+/// The range in which the per-lane mass and inertia setters take their
+/// fast path: a positive finite `scale`, `mass` in [1e-6, 1e6] kg and every
+/// given inertia entry in [−1e6, 1e6] kg·m². Anything else goes to the full
+/// check, which accepts or refuses it with its reason.
+fn in_fast_range(mass: f64, scale: f64, mut inertia: impl Iterator<Item = f64>) -> bool {
+    scale > 0.0 && scale.is_finite() && (1e-6..=1e6).contains(&mass) && inertia.all(|v| (-1e6..=1e6).contains(&v))
+}
+
 /// No products of inertia: every off-diagonal entry is zero.
 fn is_diagonal(j: &Mat3) -> bool {
     j[0][1] == 0.0 && j[0][2] == 0.0 && j[1][0] == 0.0 && j[1][2] == 0.0 && j[2][0] == 0.0 && j[2][1] == 0.0
@@ -703,11 +711,11 @@ impl<R: Real> RigidBody<R> {
         scale: f64,
     ) -> Result<(), GainError> {
         let inertia = base_inertia.map(|r| r.map(|v| v * scale));
-        let fast = scale > 0.0
-            && scale.is_finite()
-            && (1e-6..=1e6).contains(&mass)
-            && inertia.iter().flatten().all(|v| (-1e6..=1e6).contains(v));
-        let inverse = if fast { inverse3_positive(&inertia) } else { None };
+        let inverse = if in_fast_range(mass, scale, inertia.iter().flatten().copied()) {
+            inverse3_positive(&inertia)
+        } else {
+            None
+        };
         let inverse = match inverse {
             Some(inv) => inv,
             None => RigidBodyParams { mass, inertia, ..self.lane_params(lane) }.check_mass_inertia()?,
@@ -739,8 +747,7 @@ impl<R: Real> RigidBody<R> {
         scale: f64,
     ) -> Result<(), GainError> {
         let d = [base[0][0] * scale, base[1][1] * scale, base[2][2] * scale];
-        let in_range = |v: f64| (-1e6..=1e6).contains(&v);
-        if scale > 0.0 && scale.is_finite() && (1e-6..=1e6).contains(&mass) && d.into_iter().all(in_range) {
+        if in_fast_range(mass, scale, d.into_iter()) {
             let p = d[1] * d[2];
             let det = d[0] * p;
             if det > 0.0 && det.is_normal() {
@@ -785,13 +792,7 @@ impl<R: Real> RigidBody<R> {
     /// [`RigidBody::derivative_prepared`].
     #[cfg_attr(not(debug_assertions), inline(always))]
     pub fn prepare(&self, input: &RigidBodyInput<R>) -> PreparedInput<R> {
-        self.prepare_owned(*input)
-    }
-
-    /// [`RigidBody::prepare`] of an input handed over by value (built in
-    /// place in the result, not copied from a reference).
-    #[cfg_attr(not(debug_assertions), inline(always))]
-    pub fn prepare_owned(&self, input: RigidBodyInput<R>) -> PreparedInput<R> {
+        let input = *input;
         let w = input.rotor_speeds;
         // Loops rather than `map`: its out-of-line instances would compile
         // for the baseline instruction set, outside a dispatched kernel.
