@@ -4,6 +4,7 @@ the single-process call's, also when a worker is killed while flying."""
 from __future__ import annotations
 
 import logging
+import math
 import os
 import signal
 import threading
@@ -66,20 +67,28 @@ def test_rows_equal_the_local_call(client: Any) -> None:
 
 
 def test_a_worker_killed_mid_task_loses_and_repeats_nothing(client: Any) -> None:
-    runs = 24
+    # Size the tasks from this machine's speed, so that each one flies for
+    # about two seconds: long enough for the killer below to find a worker
+    # mid-task on a fast machine, short enough for CI.
+    shards = 4
+    started = time.monotonic()
+    local(2)
+    per_run = max((time.monotonic() - started) / 2.0, 1e-3)
+    runs = shards * min(max(6, math.ceil(2.0 / per_run)), 500)
     expected = local(runs)
     pids: Dict[str, int] = client.run(os.getpid)
     killed: List[str] = []
+    done = threading.Event()
 
     def kill_a_busy_worker() -> None:
         # Wait until a worker has been flying a task for a moment, then SIGKILL it.
         deadline = time.monotonic() + 60.0
         busy_since: Dict[str, float] = {}
-        while time.monotonic() < deadline:
+        while time.monotonic() < deadline and not done.is_set():
             for address, keys in client.processing().items():
                 if keys and address in pids:
-                    started = busy_since.setdefault(address, time.monotonic())
-                    if time.monotonic() - started > 0.3:
+                    since = busy_since.setdefault(address, time.monotonic())
+                    if time.monotonic() - since > 0.3:
                         os.kill(pids[address], signal.SIGKILL)
                         killed.append(address)
                         return
@@ -87,9 +96,14 @@ def test_a_worker_killed_mid_task_loses_and_repeats_nothing(client: Any) -> None
 
     killer = threading.Thread(target=kill_a_busy_worker)
     killer.start()
-    got = ftsmc.montecarlo(ftsmc.Scenario.builtin(SCENARIO), runs, controllers=CONTROLLERS, client=client, shards=4)
-    killer.join()
-    assert killed, "no worker was killed while flying: the test did not test anything"
+    try:
+        got = ftsmc.montecarlo(
+            ftsmc.Scenario.builtin(SCENARIO), runs, controllers=CONTROLLERS, client=client, shards=shards
+        )
+    finally:
+        done.set()
+        killer.join()
+    assert killed, f"no worker was killed while flying ({runs} runs, {per_run:.3f} s a run): the test tested nothing"
     with pytest.raises(ProcessLookupError):
         os.kill(pids[killed[0]], 0)
     same_rows(expected, got)
