@@ -12,21 +12,26 @@
 //! generator's words exactly as it does: one `u64` per attempt (its low 8
 //! bits pick the layer, its high 52 bits the abscissa), one more per wedge
 //! test (53-bit uniform in `[0, 1)`) and two per tail attempt (52-bit
-//! uniforms in `(0, 1)`). The difference is the maths: the wedge's `exp`
-//! and the tail's `ln` are [`ftsmc_core::math`]'s (the pure-Rust `libm`
-//! crate, FreeBSD msun's algorithms), where `rand_distr` calls `f64::exp`
-//! and `f64::ln`, i.e. the platform's C library (glibc, macOS's libm, musl …,
-//! which need not agree in the last bit). With the platform's functions
-//! the draws are `rand_distr`'s bit for bit (tested). About 1.5 % of draws
-//! reach the wedge and 0.026 % the tail; every draw of the log-normal calls
-//! `exp`.
+//! uniforms in `(0, 1)`). The difference is where `exp` (the wedge, and
+//! every log-normal draw) and `ln` (the tail) come from: here always
+//! [`ftsmc_core::math`] (the pure-Rust `libm` crate, FreeBSD msun's
+//! algorithms). `rand_distr` takes them from `num-traits`' `Float`, which
+//! is the `libm` crate too unless any package of the build enables
+//! `num-traits`' `std` feature, and then `f64::exp` and `f64::ln`, i.e.
+//! the platform's C library. The Python module (through `numpy`) and the
+//! test builds enable it and the command line alone does not, so the same
+//! seed drew different normals in the `ftsmc` binary built alone, in one
+//! built with `cargo build --workspace`, and in Python. With the
+//! platform's functions substituted, the draws here are `rand_distr`'s
+//! bit for bit (tested). About 1.5 % of draws reach the wedge and 0.026 %
+//! the tail.
 //!
 //! Against glibc 2.36 (x86-64, FMA) `libm` differs by one unit in the last
 //! place for about 9 % of the wedge's `exp` arguments and 7 % of the
-//! tail's `ln` arguments. On 10.2 million standard normal draws that moved
-//! 16 tail draws by one unit in the last place and no other draw (a wedge
-//! draw moves only if `exp`'s last bit flips the acceptance test); a
-//! log-normal draw moves by one unit in the last place when `exp` does.
+//! tail's `ln` arguments; on 10.2 million standard normal draws that is
+//! 16 tail draws moved by one unit in the last place and no other draw (a
+//! wedge draw moves only if `exp`'s last bit flips the acceptance test),
+//! and one log-normal draw in about 20 (`σ = 0.1`).
 
 use ftsmc_core::math;
 use rand::Rng;
@@ -335,8 +340,9 @@ impl Normal {
 }
 
 /// The log-normal distribution: `exp(X)` with `X ~ N(μ, σ²)` ([`Normal`]),
-/// `exp` from [`ftsmc_core::math`] (`rand_distr::LogNormal` calls the
-/// platform's `f64::exp` on every draw).
+/// `exp` from [`ftsmc_core::math`] on every draw (`rand_distr::LogNormal`
+/// calls the C library's when `num-traits`' `std` feature is on; module
+/// docs).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct LogNormal {
     normal: Normal,
@@ -429,7 +435,8 @@ mod tests {
     }
 
     /// The platform's `exp` and `ln` (`f64::exp`, `f64::ln`): what
-    /// `rand_distr` calls, for the draw-for-draw comparisons.
+    /// `rand_distr` calls in the tests (its dev-dependency enables
+    /// `std_math`), for the draw-for-draw comparisons.
     #[allow(clippy::disallowed_methods)] // the platform's exp, on purpose
     fn platform_exp(x: f64) -> f64 {
         x.exp()
@@ -616,7 +623,7 @@ mod tests {
     }
 
     /// The algorithm is `rand_distr::StandardNormal`'s: with the platform's
-    /// `exp` and `ln` (the functions `rand_distr` calls) the draws are bit
+    /// `exp` and `ln` (the functions `rand_distr` calls here) the draws are bit
     /// for bit its draws on the same generators, 10.2 million draws over
     /// six seeds × streams, and the same words are consumed; the draws
     /// whose first attempt took the wedge and the tail are counted, so both
@@ -688,6 +695,17 @@ mod tests {
             "libm against the platform's exp/ln: {moved_tail} of {tail} tail draws and {moved_wedge} wedge draws moved, \
              at most {max_ulps} ulp"
         );
+        // Log-normal exp(0.1 z) (a Monte Carlo inertia factor): exp on
+        // every draw, the same z.
+        let (mut rng, n) = (generator(9, 100), 1_000_000);
+        let mut moved = 0;
+        for _ in 0..n {
+            let a = 0.1 * standard_normal(&mut rng);
+            let d = ulps(platform_exp(a), math::exp(a));
+            assert!(d.abs() <= 1, "exp({a:e}): {d} ulp");
+            moved += u32::from(d != 0);
+        }
+        println!("log-normal(0, 0.1): {moved} of {n} draws moved by one ulp");
     }
 
     /// `libm`'s `exp` and `ln` against the platform's on the arguments the

@@ -88,7 +88,7 @@ impl NoiseStream {
     }
 
     /// One standard normal draw `z ~ N(0, 1)`: [`standard_normal`]
-    /// (ziggurat, the draws of `rand_distr::StandardNormal`) on this stream.
+    /// (`rand_distr::StandardNormal`'s ziggurat on `libm`'s `exp` and `ln`) on this stream.
     #[cfg_attr(not(debug_assertions), inline(always))]
     pub fn normal(&mut self) -> f64 {
         standard_normal(self)
