@@ -196,16 +196,16 @@ static ZIG_F: [f64; 257] = [
 const TWO_POW_M53: f64 = 1.0 / (1u64 << 53) as f64;
 
 /// One standard normal draw `z ~ N(0, 1)` from `rng`: the ZIGNOR ziggurat
-/// (module docs), the draws of `rand_distr::StandardNormal` (0.6) on the
-/// same generator, with `exp` and `ln` from [`ftsmc_core::math`].
+/// (module docs) of `rand_distr::StandardNormal` (0.6), reading the same
+/// words of the generator, with `exp` and `ln` from [`ftsmc_core::math`].
 ///
 /// An attempt reads one `u64` `b`: layer `i = b & 0xff`, `u ∈ [−1, 1)`
 /// from the high 52 bits (`1.b₆₃…b₁₂ × 2 − 3`), `x = u x_i`; `x` is the
 /// draw when `|x| < x_{i+1}` (about 98.5 % of attempts, the inlined fast
 /// path). Otherwise the base layer (`i = 0`) samples the tail beyond `r`
-/// (Marsaglia 1964: `x = −ln U₁ / r`, `y = −ln U₂` until `2y > x²`) and
+/// (`tail`: `x = ln U₁ / r`, `y = ln U₂` until `−2y ≥ x²`, `±(r − x)`) and
 /// the other layers accept `x` when `f_{i+1} + (f_i − f_{i+1}) U <
-/// exp(−x²/2)`, else a new attempt ([`rest`], out of line).
+/// exp(−x²/2)`, else a new attempt (`rest`, out of line).
 #[cfg_attr(not(debug_assertions), inline(always))]
 pub fn standard_normal<R: Rng + ?Sized>(rng: &mut R) -> f64 {
     ziggurat(rng, math::exp, math::ln)
