@@ -15,23 +15,24 @@
 //! uniforms in `(0, 1)`). The difference is where `exp` (the wedge, and
 //! every log-normal draw) and `ln` (the tail) come from: here always
 //! [`ftsmc_core::math`] (the pure-Rust `libm` crate, FreeBSD msun's
-//! algorithms). `rand_distr` takes them from `num-traits`' `Float`, which
-//! is the `libm` crate too unless any package of the build enables
-//! `num-traits`' `std` feature, and then `f64::exp` and `f64::ln`, i.e.
-//! the platform's C library. The Python module (through `numpy`) and the
-//! test builds enable it and the command line alone does not, so the same
-//! seed drew different normals in the `ftsmc` binary built alone, in one
-//! built with `cargo build --workspace`, and in Python. With the
-//! platform's functions substituted, the draws here are `rand_distr`'s
-//! bit for bit (tested). About 1.5 % of draws reach the wedge and 0.026 %
-//! the tail.
+//! algorithms). `rand_distr`'s standard normal calls `f64::exp` and
+//! `f64::ln`, i.e. the platform's C library (glibc, macOS's libm, musl …,
+//! which need not agree in the last bit). Its `LogNormal` calls
+//! `num-traits`' `Float::exp`: the `libm` crate, unless any package of the
+//! build enables `num-traits`' `std` feature, and then the C library's; the
+//! Python module (through `numpy`), `cargo build --workspace` and the test
+//! builds enable it and the `ftsmc` binary built alone does not, so the same
+//! seed drew different log-normals depending on what was built together.
+//! With the platform's functions substituted, the draws here are
+//! `rand_distr`'s bit for bit (tested). About 1.5 % of draws reach the
+//! wedge and 0.026 % the tail.
 //!
 //! Against glibc 2.36 (x86-64, FMA) `libm` differs by one unit in the last
 //! place for about 9 % of the wedge's `exp` arguments and 7 % of the
 //! tail's `ln` arguments; on 10.2 million standard normal draws that is
 //! 16 tail draws moved by one unit in the last place and no other draw (a
 //! wedge draw moves only if `exp`'s last bit flips the acceptance test),
-//! and one log-normal draw in about 20 (`σ = 0.1`).
+//! and one log-normal draw in about 20 (`σ = 0.1`) against glibc's `exp`.
 
 use ftsmc_core::math;
 use rand::Rng;
