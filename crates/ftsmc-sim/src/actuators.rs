@@ -20,8 +20,9 @@ use ftsmc_core::law::GainError;
 use ftsmc_core::model::{Command, QuadrotorParams};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
-use rand_distr::{Distribution, StandardNormal};
 use serde::{Deserialize, Serialize};
+
+use crate::gauss::standard_normal;
 
 /// ChaCha stream of the motor-speed noise generator. The run loop's drag
 /// noise uses streams 1–6 of the scenario seed (`environment`); motors use
@@ -359,7 +360,7 @@ impl Motors {
     #[inline]
     pub fn sample_noise(&self, rng: &mut ChaCha8Rng) -> [f64; 4] {
         match self.params.noise {
-            Some(_) => core::array::from_fn(|_| StandardNormal.sample(rng)),
+            Some(_) => core::array::from_fn(|_| standard_normal(rng)),
             None => [0.0; 4],
         }
     }

@@ -72,6 +72,7 @@
 //!          text.rs              values in error messages, exact-length TOML arrays
 //!          isa.rs               the instruction set of the lane kernels, picked at run time
 //!          noise.rs             NoiseStream: a noise source's ChaCha generator read a block ahead
+//! floor 0  gauss.rs             normal and log-normal draws (ziggurat) on the libm crate's exp and ln
 //! ```
 #![warn(missing_docs)]
 
@@ -82,6 +83,7 @@ pub mod batch;
 pub mod controllers;
 pub mod envelope;
 pub mod environment;
+pub mod gauss;
 pub mod gym;
 pub mod isa;
 pub mod limits;

@@ -76,7 +76,7 @@
 //! turning turbulence on or off changes no other source's draws.
 //! Each stream is read through a [`crate::noise::NoiseStream`] (the
 //! generator's own words, read a block ahead), so the draws are those of
-//! `rand_distr::StandardNormal` on the `ChaCha8Rng` itself.
+//! [`crate::gauss::standard_normal`] on the `ChaCha8Rng` itself.
 
 use ftsmc_core::law::GainError;
 use rand::SeedableRng;

@@ -9,9 +9,9 @@
 
 use rand::{Rng, RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use rand_distr::{Distribution as _, LogNormal, Normal};
 use serde::{Deserialize, Serialize};
 
+use crate::gauss::{LogNormal, Normal};
 use crate::scenario::Scenario;
 use crate::signal::Term;
 

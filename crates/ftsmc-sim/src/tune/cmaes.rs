@@ -13,7 +13,8 @@
 
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
-use rand_distr::{Distribution as _, StandardNormal};
+
+use crate::gauss::standard_normal;
 
 /// CMA-ES state for minimisation in `n` dimensions.
 #[derive(Clone, Debug)]
@@ -113,7 +114,7 @@ impl Cmaes {
         let n = self.n;
         (0..self.lambda)
             .map(|_| {
-                let z: Vec<f64> = (0..n).map(|_| StandardNormal.sample(&mut self.rng)).collect();
+                let z: Vec<f64> = (0..n).map(|_| standard_normal(&mut self.rng)).collect();
                 (0..n)
                     .map(|i| {
                         let y: f64 = (0..n).map(|j| self.b[i * n + j] * self.d[j] * z[j]).sum();
