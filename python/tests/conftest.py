@@ -13,8 +13,9 @@ from __future__ import annotations
 import os
 import shutil
 import subprocess
+import tempfile
 from pathlib import Path
-from typing import List
+from typing import Iterator, List
 
 import pytest
 
@@ -60,6 +61,21 @@ def _find_cli() -> Path:
         "no ftsmc binary: set FTSMC_BIN, or install Rust (cargo) so the tests can build it "
         "(cargo build --release -p ftsmc-cli); the byte-identity tests compare against it"
     )
+
+
+@pytest.fixture(scope="session", autouse=True)
+def temp_dir_inside_pytests_own(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Path]:
+    """The temporary folder of the test session, and of every process it
+    starts (the CLI, the examples, Dask's scheduler and worker processes),
+    is a folder inside pytest's base temp, which pytest prunes to the last
+    three runs: what the tests and the libraries they call write to the
+    temporary folder (Dask's ``dask-scratch-space``, the folder of a worker
+    killed on purpose) does not pile up in the system's temporary folder."""
+    tmp = tmp_path_factory.mktemp("tmp")
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setenv("TMPDIR", str(tmp))
+        mp.setattr(tempfile, "tempdir", str(tmp))
+        yield tmp
 
 
 @pytest.fixture(scope="session")

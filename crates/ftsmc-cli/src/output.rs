@@ -656,11 +656,10 @@ pub fn sha256_hex(data: &[u8]) -> String {
 mod tests {
     use super::*;
 
-    fn temp(name: &str) -> PathBuf {
-        let d = std::env::temp_dir().join(format!("ftsmc-output-{name}-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&d);
-        std::fs::create_dir_all(&d).unwrap();
-        d
+    /// A fresh scratch folder `<temp dir>/ftsmc-output-<name>-<random>`,
+    /// removed when the returned guard drops: when the test ends, passed or failed.
+    fn temp(name: &str) -> tempfile::TempDir {
+        tempfile::Builder::new().prefix(&format!("ftsmc-output-{name}-")).tempdir().unwrap()
     }
 
     /// Names in `dir`, sorted.
@@ -673,7 +672,8 @@ mod tests {
 
     #[test]
     fn a_failed_write_removes_the_staging_folder_and_keeps_the_old_result() {
-        let root = temp("fail");
+        let tmp = temp("fail");
+        let root = tmp.path();
         let dest = root.join("res");
         std::fs::create_dir_all(&dest).unwrap();
         std::fs::write(dest.join("old.csv"), "old").unwrap();
@@ -682,25 +682,25 @@ mod tests {
             dir.write("a.csv", b"1,2\n").unwrap();
             // Fails midway, like a full disk: `a.csv` is a file, not a folder.
             assert!(dir.write("a.csv/b.csv", b"x").is_err());
-            assert_eq!(names(&root).len(), 2, "staging exists while writing: {:?}", names(&root));
+            assert_eq!(names(root).len(), 2, "staging exists while writing: {:?}", names(root));
         }
-        assert_eq!(names(&root), ["res"], "staging folder left behind");
+        assert_eq!(names(root), ["res"], "staging folder left behind");
         assert_eq!(names(&dest), ["old.csv"]);
-        std::fs::remove_dir_all(&root).ok();
     }
 
     #[test]
     fn a_failed_transaction_removes_the_folders_it_created() {
-        let root = temp("created");
+        let tmp = temp("created");
+        let root = tmp.path();
         let dest = root.join("a/b/res");
         drop(ResultDir::begin(&dest, "run").unwrap());
-        assert!(names(&root).is_empty(), "{:?}", names(&root));
-        std::fs::remove_dir_all(&root).ok();
+        assert!(names(root).is_empty(), "{:?}", names(root));
     }
 
     #[test]
     fn a_file_another_command_replaced_is_no_longer_the_first_commands_to_delete() {
-        let root = temp("disown");
+        let tmp = temp("disown");
+        let root = tmp.path();
         let dest = root.join("res").join("scen");
         // `run` writes summary.json and its CSV; `montecarlo` then replaces summary.json.
         write_result(&dest, "run", &[("summary.json", b"run"), ("pid.csv", b"csv")]).unwrap();
@@ -715,12 +715,12 @@ mod tests {
         std::fs::write(parent.join(".ftsmc-reproduce.manifest"), "scen/pid.csv\nsummary.json\n").unwrap();
         write_result(&dest, "run", &[("pid.csv", b"csv3")]).unwrap();
         assert_eq!(std::fs::read_to_string(parent.join(".ftsmc-reproduce.manifest")).unwrap(), "summary.json\n");
-        std::fs::remove_dir_all(&root).ok();
     }
 
     #[test]
     fn commit_replaces_the_owners_files_and_keeps_every_other_file() {
-        let root = temp("commit");
+        let tmp = temp("commit");
+        let root = tmp.path();
         let dest = root.join("res");
         std::fs::create_dir_all(dest.join("montecarlo/paper-scenario-2")).unwrap();
         std::fs::write(dest.join("montecarlo/paper-scenario-2/summary.json"), "{}").unwrap();
@@ -739,7 +739,7 @@ mod tests {
         dir.write("paper-scenario-1/both.csv", b"new").unwrap();
         dir.write("summary.json", b"{2}").unwrap();
         dir.commit().unwrap();
-        assert_eq!(names(&root), ["res"], "no staging or old folder left");
+        assert_eq!(names(root), ["res"], "no staging or old folder left");
         assert_eq!(
             names(&dest),
             [".ftsmc-reproduce.manifest", "montecarlo", "notes.txt", "paper-scenario-1", "summary.json"]
@@ -757,24 +757,24 @@ mod tests {
         assert!(dest.join("merged.csv").is_file() && dest.join(".ftsmc-merge.manifest").is_file());
         assert!(write_result(&dest, "merge", &[("../escape.csv", b"m")]).is_err());
         assert!(!root.join("escape.csv").exists());
-        std::fs::remove_dir_all(&root).ok();
     }
 
     #[test]
     fn a_destination_under_a_regular_file_is_refused_and_nothing_is_written() {
-        let root = temp("refuse");
+        let tmp = temp("refuse");
+        let root = tmp.path();
         std::fs::write(root.join("file"), "x").unwrap();
         let err = ResultDir::begin(&root.join("file/sub/res"), "run").unwrap_err().to_string();
         assert!(err.contains("is not a directory"), "{err}");
         assert!(ResultDir::begin(&root.join("file"), "run").is_err(), "an existing file as destination");
         assert!(ResultDir::begin(Path::new("."), "run").is_err());
-        assert_eq!(names(&root), ["file"]);
-        std::fs::remove_dir_all(&root).ok();
+        assert_eq!(names(root), ["file"]);
     }
 
     #[test]
     fn stale_staging_folders_of_a_killed_run_are_removed_by_the_next_commit() {
-        let root = temp("stale");
+        let tmp = temp("stale");
+        let root = tmp.path();
         let stale = root.join(".res.tmp-4194305-1"); // above Linux pid_max
         let fresh = root.join(".res.tmp-4194305-2");
         let other = root.join(".other.tmp-4194305-1");
@@ -791,14 +791,13 @@ mod tests {
         dir.commit().unwrap();
         // The stale one goes; a fresh one may belong to a concurrent run,
         // and another destination's is not ours to touch.
-        assert_eq!(names(&root), [".other.tmp-4194305-1", ".res.tmp-4194305-2", "res"]);
+        assert_eq!(names(root), [".other.tmp-4194305-1", ".res.tmp-4194305-2", "res"]);
         // An old staging folder of a live process (a long run) stays.
         let live = root.join(format!(".res.tmp-{}-3", std::process::id()));
         std::fs::create_dir_all(&live).unwrap();
         std::fs::File::open(&live).unwrap().set_modified(two_hours_ago).unwrap();
         ResultDir::begin(&root.join("res"), "run").unwrap().commit().unwrap();
         assert!(live.exists());
-        std::fs::remove_dir_all(&root).ok();
     }
 
     #[test]

@@ -1000,15 +1000,16 @@ fn draw_box_panel(svg: &mut Svg, rect: (f64, f64, f64, f64), panel: &BoxPanel, l
 mod tests {
     use super::*;
 
-    fn tmp_dir(name: &str) -> PathBuf {
-        let d = std::env::temp_dir().join(format!("ftsmc-plot-{name}-{}", std::process::id()));
-        std::fs::create_dir_all(&d).unwrap();
-        d
+    /// A fresh scratch folder `<temp dir>/ftsmc-plot-<name>-<random>`,
+    /// removed when the returned guard drops: when the test ends, passed or failed.
+    fn tmp_dir(name: &str) -> tempfile::TempDir {
+        tempfile::Builder::new().prefix(&format!("ftsmc-plot-{name}-")).tempdir().unwrap()
     }
 
     #[test]
     fn renders_svg_and_png_and_survives_nan_and_empty_input() {
-        let dir = tmp_dir("fig");
+        let tmp = tmp_dir("fig");
+        let dir = tmp.path();
         let t: Vec<f64> = (0..20_000).map(|k| k as f64 * 1e-3).collect();
         let fig = Figure {
             title: "test φ θ ψ δ̂".into(),
@@ -1084,14 +1085,14 @@ mod tests {
         )
         .unwrap();
         assert_eq!(s3.len(), 2);
-        std::fs::remove_dir_all(&dir).ok();
     }
 
     #[test]
     fn a_box_plot_of_values_up_to_1e308_is_drawn_with_bounded_ticks() {
         // A legal batch whose ISE reaches 1e308: the padded log axis passes
         // f64::MAX, and the ticks once enumerated every decade to i32::MAX.
-        let dir = tmp_dir("huge");
+        let tmp = tmp_dir("huge");
+        let dir = tmp.path();
         let files = write_boxplots(
             "huge",
             &[BoxPanel {
@@ -1113,7 +1114,6 @@ mod tests {
         let decades = svg.matches(r#"text-anchor="end">10"#).count();
         assert!(svg.contains(">10⁻³<") && (4..=12).contains(&decades), "decade labels from 1e-3 up: {decades}");
         assert!(!svg.contains("NaN") && !svg.contains("inf"), "every coordinate is finite");
-        std::fs::remove_dir_all(&dir).ok();
     }
 
     #[test]

@@ -1,7 +1,9 @@
 //! The `ftsmc` binary as a user runs it.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Command, Output};
+
+use tempfile::TempDir;
 
 fn ftsmc(args: &[&str], cwd: &Path) -> Output {
     // RUST_BACKTRACE=1: errors must stay one readable line even then.
@@ -13,11 +15,10 @@ fn ftsmc(args: &[&str], cwd: &Path) -> Output {
         .expect("binary runs")
 }
 
-fn temp_dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("ftsmc-cli-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+/// A fresh scratch folder `<temp dir>/ftsmc-cli-<name>-<random>`, removed
+/// when the returned guard drops: when the test ends, passed or failed.
+fn scratch(name: &str) -> TempDir {
+    tempfile::Builder::new().prefix(&format!("ftsmc-cli-{name}-")).tempdir().unwrap()
 }
 
 fn scenario_text(name: &str) -> String {
@@ -40,8 +41,9 @@ fn no_files_with_suffix(dir: &Path, suffix: &str) -> bool {
 
 #[test]
 fn reproduce_from_any_directory_writes_table_json_and_csv() {
-    let dir = temp_dir("reproduce");
-    let out = ftsmc(&["reproduce", "--out", "res", "--no-figures", "--realistic-runs", "4"], &dir);
+    let tmp = scratch("reproduce");
+    let dir = tmp.path();
+    let out = ftsmc(&["reproduce", "--out", "res", "--no-figures", "--realistic-runs", "4"], dir);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(stdout.contains("Table 3") && stdout.contains("0.2674"), "{stdout}");
@@ -59,16 +61,16 @@ fn reproduce_from_any_directory_writes_table_json_and_csv() {
     let csv = std::fs::read_to_string(dir.join("res/paper-scenario-1/ftaftsmc.csv")).unwrap();
     assert!(csv.starts_with("t,x,y,z,phi,theta,psi"));
     assert!(csv.lines().count() > 1000);
-    assert!(no_files_with_suffix(&dir, ".tmp"));
-    std::fs::remove_dir_all(&dir).ok();
+    assert!(no_files_with_suffix(dir, ".tmp"));
 }
 
 #[test]
 fn a_bad_scenario_file_is_a_clear_error_not_a_panic() {
-    let dir = temp_dir("bad");
+    let tmp = scratch("bad");
+    let dir = tmp.path();
     let text = scenario_text("paper-scenario-1.toml").replacen("p = 0.1", "p = 1.2", 1);
     std::fs::write(dir.join("bad.toml"), text).unwrap();
-    let out = ftsmc(&["run", "bad.toml", "--out", "res"], &dir);
+    let out = ftsmc(&["run", "bad.toml", "--out", "res"], dir);
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("bad.toml") && err.contains("ftaftsmc.x.p") && err.contains("1.2"), "{err}");
@@ -77,20 +79,20 @@ fn a_bad_scenario_file_is_a_clear_error_not_a_panic() {
     assert!(!dir.join("res").exists(), "a failed run must not leave output");
 
     std::fs::write(dir.join("typo.toml"), "name = \"t\"\nduration = 1.0\n[plant]\nmas = 1.0\n").unwrap();
-    let out = ftsmc(&["run", "typo.toml"], &dir);
+    let out = ftsmc(&["run", "typo.toml"], dir);
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(!out.status.success() && err.contains("typo.toml") && err.contains("mas"), "{err}");
 
-    let out = ftsmc(&["run", "missing.toml"], &dir);
+    let out = ftsmc(&["run", "missing.toml"], dir);
     assert!(!out.status.success() && String::from_utf8_lossy(&out.stderr).contains("missing.toml"));
-    let out = ftsmc(&["run", "paper-scenario-1", "-c", "pidd"], &dir);
+    let out = ftsmc(&["run", "paper-scenario-1", "-c", "pidd"], dir);
     assert!(!out.status.success() && String::from_utf8_lossy(&out.stderr).contains("unknown controller `pidd`"));
-    std::fs::remove_dir_all(&dir).ok();
 }
 
 #[test]
 fn montecarlo_csv_is_byte_identical_across_thread_counts() {
-    let dir = temp_dir("mc");
+    let tmp = scratch("mc");
+    let dir = tmp.path();
     let text = scenario_text("paper-scenario-2.toml").replace("duration = 50.0", "duration = 4.0");
     std::fs::write(dir.join("short.toml"), text).unwrap();
     for threads in ["1", "2"] {
@@ -108,7 +110,7 @@ fn montecarlo_csv_is_byte_identical_across_thread_counts() {
                 &format!("mc{threads}"),
                 "--no-figures",
             ],
-            &dir,
+            dir,
         );
         assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
         // 4 runs × 3 controllers × 4 s at 1 kHz, none diverges: 48,000 steps.
@@ -139,7 +141,6 @@ fn montecarlo_csv_is_byte_identical_across_thread_counts() {
         v
     };
     assert_eq!(summary("mc1"), summary("mc2"));
-    std::fs::remove_dir_all(&dir).ok();
 }
 
 #[test]
@@ -163,11 +164,12 @@ fn diverging_scenario() -> String {
 
 #[test]
 fn a_diverged_run_is_marked_in_the_table_and_the_json() {
-    let dir = temp_dir("diverged");
+    let tmp = scratch("diverged");
+    let dir = tmp.path();
     let text = diverging_scenario();
     assert!(text.contains("max_rotor_speed = 1000") && text.contains("duration = 6.0"));
     std::fs::write(dir.join("s.toml"), text).unwrap();
-    let out = ftsmc(&["run", "s.toml", "--out", "res", "--no-figures"], &dir);
+    let out = ftsmc(&["run", "s.toml", "--out", "res", "--no-figures"], dir);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let stdout = String::from_utf8_lossy(&out.stdout);
     let rows: Vec<&str> = stdout.lines().filter(|l| l.starts_with("| FTAFTSMC")).collect();
@@ -194,14 +196,14 @@ fn a_diverged_run_is_marked_in_the_table_and_the_json() {
     assert_eq!(ran["completed"], true);
     assert!(ran["max_error_after"]["z"].is_number());
     assert!((ran["covered"][1].as_f64().unwrap() - 6.0).abs() < 1e-9, "{}", ran["covered"]);
-    std::fs::remove_dir_all(&dir).ok();
 }
 
 #[test]
 fn montecarlo_marks_diverged_rows_and_leaves_after_t_metrics_empty() {
-    let dir = temp_dir("mc-diverged");
+    let tmp = scratch("mc-diverged");
+    let dir = tmp.path();
     std::fs::write(dir.join("s.toml"), diverging_scenario().replacen("duration = 6.0", "duration = 2.0", 1)).unwrap();
-    let out = ftsmc(&["montecarlo", "s.toml", "--runs", "2", "--out", "mc", "--no-figures"], &dir);
+    let out = ftsmc(&["montecarlo", "s.toml", "--runs", "2", "--out", "mc", "--no-figures"], dir);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let stdout = String::from_utf8_lossy(&out.stdout);
     let row = stdout.lines().find(|l| l.starts_with("| FTAFTSMC")).unwrap();
@@ -217,35 +219,34 @@ fn montecarlo_marks_diverged_rows_and_leaves_after_t_metrics_empty() {
         assert_eq!(f[col("completed")], if diverged { "false" } else { "true" }, "{line}");
         assert_eq!(f[col("duration")].parse::<f64>().unwrap(), if diverged { 0.639 } else { 2.0 }, "{line}");
     }
-    std::fs::remove_dir_all(&dir).ok();
 }
 
 #[test]
 fn an_io_error_names_its_cause_once() {
-    let dir = temp_dir("io");
+    let tmp = scratch("io");
+    let dir = tmp.path();
     std::fs::create_dir_all(dir.join("adir.toml")).unwrap();
-    let out = ftsmc(&["run", "adir.toml", "--out", "res"], &dir);
+    let out = ftsmc(&["run", "adir.toml", "--out", "res"], dir);
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(!out.status.success() && err.contains("adir.toml"), "{err}");
     assert!(err.matches("os error").count() <= 1, "cause repeated: {err}");
     assert!(err.matches("directory").count() <= 1, "cause repeated: {err}");
-    std::fs::remove_dir_all(&dir).ok();
 }
 
 #[test]
 fn a_deeply_nested_file_gives_one_short_error_line() {
-    let dir = temp_dir("nested");
+    let tmp = scratch("nested");
+    let dir = tmp.path();
     std::fs::write(dir.join("deep.toml"), format!("a = {}\n", "[".repeat(10_000))).unwrap();
     std::fs::write(dir.join("long.toml"), format!("name = \"{}\n", "x".repeat(300_000))).unwrap();
     for file in ["deep.toml", "long.toml"] {
-        let out = ftsmc(&["run", file, "--out", "res"], &dir);
+        let out = ftsmc(&["run", file, "--out", "res"], dir);
         let err = String::from_utf8_lossy(&out.stderr);
         assert!(!out.status.success());
         assert_eq!(err.lines().count(), 1, "{file}: one line, got {} bytes", err.len());
         assert!(err.chars().count() <= 320, "{file}: {} chars", err.chars().count());
         assert!(err.starts_with("error: ") && err.contains(file) && err.contains("line 1, column"), "{err}");
     }
-    std::fs::remove_dir_all(&dir).ok();
 }
 
 #[test]
@@ -253,9 +254,10 @@ fn a_realistic_run_reports_success_and_rotor_demand() {
     // Paper scenario 1 on the rigid body with 0-350 rad/s rotors, motor lag,
     // ground and envelope: TSM-STA flies it inside the envelope without
     // saturating; FTAFTSMC asks for far more than the rotors give and tilts over.
-    let dir = temp_dir("realistic");
+    let tmp = scratch("realistic");
+    let dir = tmp.path();
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenarios/realism/rigid-body-scenario-1.toml");
-    let out = ftsmc(&["run", root.to_str().unwrap(), "-c", "tsm-sta,ftaftsmc", "--no-figures", "--out", "res"], &dir);
+    let out = ftsmc(&["run", root.to_str().unwrap(), "-c", "tsm-sta,ftaftsmc", "--no-figures", "--out", "res"], dir);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let stdout = String::from_utf8_lossy(&out.stdout);
     let row = |label: &str| {
@@ -286,12 +288,13 @@ fn reproduce_prints_the_papers_part_before_the_beyond_part_starts() {
     // One pipe for stdout and stderr keeps their order: Table 3 and the
     // verdicts must be on screen before the beyond part (and its minutes of
     // Monte Carlo) starts, not after it.
-    let dir = temp_dir("order");
+    let tmp = scratch("order");
+    let dir = tmp.path();
     let exe = env!("CARGO_BIN_EXE_ftsmc");
     let out = Command::new("sh")
         .arg("-c")
         .arg(format!("exec '{exe}' reproduce --out res --no-figures --realistic-runs 2 2>&1"))
-        .current_dir(&dir)
+        .current_dir(dir)
         .output()
         .expect("sh runs");
     let text = String::from_utf8_lossy(&out.stdout);
@@ -303,5 +306,4 @@ fn reproduce_prints_the_papers_part_before_the_beyond_part_starts() {
     let monte_carlo = at("the wind ladder, 2 runs");
     assert!(table3 < beyond_starts && verdict < beyond_starts, "paper part after the beyond part started:\n{text}");
     assert!(verdict < monte_carlo, "{text}");
-    std::fs::remove_dir_all(&dir).ok();
 }

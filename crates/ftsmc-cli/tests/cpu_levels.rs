@@ -17,14 +17,15 @@
 //! The batches below are flown on 4 lanes both ways, and on one lane, and
 //! must give the same bytes.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::Command;
 
-fn temp_dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("ftsmc-cli-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+use tempfile::TempDir;
+
+/// A fresh scratch folder `<temp dir>/ftsmc-cli-<name>-<random>`, removed
+/// when the returned guard drops: when the test ends, passed or failed.
+fn scratch(name: &str) -> TempDir {
+    tempfile::Builder::new().prefix(&format!("ftsmc-cli-{name}-")).tempdir().unwrap()
 }
 
 /// Fly `file` as a Monte Carlo batch on `lanes` lanes into `dir/<out>`;
@@ -49,7 +50,8 @@ fn fly(dir: &Path, file: &str, out: &str, baseline: bool, lanes: &str) -> Vec<u8
 
 #[test]
 fn monte_carlo_is_byte_identical_with_and_without_avx2_and_fma() {
-    let dir = temp_dir("cpu-levels");
+    let tmp = scratch("cpu-levels");
+    let dir = tmp.path();
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenarios");
     // Shortened so the debug build flies them in seconds; every controller
     // of each scenario, with its turbulence, sensors and disturbances.
@@ -65,12 +67,11 @@ fn monte_carlo_is_byte_identical_with_and_without_avx2_and_fma() {
         }
         assert!(short.contains("duration = 10.0"), "{file} has no top-level `name`");
         std::fs::write(dir.join(file), short).unwrap();
-        let native = fly(&dir, file, "native", false, "4");
-        let baseline = fly(&dir, file, "baseline", true, "4");
-        let one_lane = fly(&dir, file, "one-lane", false, "1");
+        let native = fly(dir, file, "native", false, "4");
+        let baseline = fly(dir, file, "baseline", true, "4");
+        let one_lane = fly(dir, file, "one-lane", false, "1");
         assert!(String::from_utf8_lossy(&native).lines().count() > 3, "{file}: no rows");
         assert!(native == baseline, "{file}: runs.csv differs between the CPU's maths and the baseline maths");
         assert!(native == one_lane, "{file}: runs.csv differs between 4 lanes and one");
     }
-    std::fs::remove_dir_all(&dir).ok();
 }

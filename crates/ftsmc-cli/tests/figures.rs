@@ -8,6 +8,9 @@ use std::process::Command;
 use std::sync::OnceLock;
 
 use resvg::tiny_skia::Pixmap;
+use tempfile::TempDir;
+
+mod common;
 
 const FIGURES: [&str; 10] = [
     "fig1-attitude-scenario1",
@@ -22,11 +25,10 @@ const FIGURES: [&str; 10] = [
     "fig9-trajectory-3d-scenario2",
 ];
 
-fn temp_dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("ftsmc-figures-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+/// A fresh scratch folder `<temp dir>/ftsmc-figures-<name>-<random>`, removed
+/// when the returned guard drops: when the test ends, passed or failed.
+fn scratch(name: &str) -> TempDir {
+    tempfile::Builder::new().prefix(&format!("ftsmc-figures-{name}-")).tempdir().unwrap()
 }
 
 fn ftsmc(args: &[&str]) {
@@ -82,9 +84,10 @@ fn check_pair(stem: &Path) -> (u32, u32) {
 fn reproduced() -> &'static Path {
     static OUT: OnceLock<PathBuf> = OnceLock::new();
     OUT.get_or_init(|| {
-        let out = temp_dir("reproduce").join("res");
+        let tmp = scratch("reproduce");
+        let out = tmp.path().join("res");
         ftsmc(&["reproduce", "--realistic-runs", "4", "--out", out.to_str().unwrap()]);
-        out
+        common::removed_at_exit(tmp).join("res")
     })
 }
 
@@ -92,10 +95,10 @@ fn reproduced() -> &'static Path {
 fn flipped() -> &'static Path {
     static OUT: OnceLock<PathBuf> = OnceLock::new();
     OUT.get_or_init(|| {
-        let dir = temp_dir("flip");
+        let tmp = scratch("flip");
         let scenario = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenarios/realism/rigid-body-scenario-1.toml");
-        ftsmc(&["run", scenario.to_str().unwrap(), "--out", dir.to_str().unwrap()]);
-        dir.join("rigid-body-scenario-1/figures")
+        ftsmc(&["run", scenario.to_str().unwrap(), "--out", tmp.path().to_str().unwrap()]);
+        common::removed_at_exit(tmp).join("rigid-body-scenario-1/figures")
     })
 }
 
@@ -227,7 +230,8 @@ fn ftsmc_run_draws_the_x_y_path() {
 
 #[test]
 fn paper_style_is_journal_sized_at_300_dpi() {
-    let dir = temp_dir("paper");
+    let tmp = scratch("paper");
+    let dir = tmp.path();
     ftsmc(&["run", "paper-scenario-1", "--style", "paper", "--out", dir.to_str().unwrap()]);
     let figs = dir.join("paper-scenario-1/figures");
     for name in ["position", "attitude", "controls"] {
@@ -242,5 +246,4 @@ fn paper_style_is_journal_sized_at_300_dpi() {
             assert!(size >= 8.0, "{name}: {size} pt text");
         }
     }
-    std::fs::remove_dir_all(&dir).ok();
 }

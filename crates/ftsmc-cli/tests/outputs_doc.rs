@@ -13,6 +13,7 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use serde_json::Value;
+use tempfile::TempDir;
 
 const AXES: [&str; 6] = ["x", "y", "z", "phi", "theta", "psi"];
 const SIGNALS: [&str; 4] = ["thrust", "roll_torque", "pitch_torque", "yaw_torque"];
@@ -22,11 +23,10 @@ fn ftsmc(args: &[&str], cwd: &Path) {
     assert!(out.status.success(), "ftsmc {args:?}: {}", String::from_utf8_lossy(&out.stderr));
 }
 
-fn temp_dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("ftsmc-outputs-doc-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+/// A fresh scratch folder `<temp dir>/ftsmc-outputs-doc-<name>-<random>`, removed
+/// when the returned guard drops: when the test ends, passed or failed.
+fn scratch(name: &str) -> TempDir {
+    tempfile::Builder::new().prefix(&format!("ftsmc-outputs-doc-{name}-")).tempdir().unwrap()
 }
 
 /// The names docs/outputs.md gives a table row of their own: the
@@ -118,8 +118,9 @@ fn json_paths(file: &Path) -> BTreeSet<String> {
 
 #[test]
 fn every_csv_column_and_json_key_is_in_docs_outputs_md() {
-    let dir = temp_dir("all");
-    ftsmc(&["reproduce", "--no-figures", "--realistic-runs", "4", "--out", "repro"], &dir);
+    let tmp = scratch("all");
+    let dir = tmp.path();
+    ftsmc(&["reproduce", "--no-figures", "--realistic-runs", "4", "--out", "repro"], dir);
     // A run that diverges (FTAFTSMC under a 1000 rad/s rotor limit tilts
     // over at 0.64 s) writes the divergence keys too.
     let scenario = Command::new(env!("CARGO_BIN_EXE_ftsmc")).args(["scenario", "paper-scenario-1"]).output().unwrap();
@@ -131,20 +132,17 @@ fn every_csv_column_and_json_key_is_in_docs_outputs_md() {
         1,
     );
     std::fs::write(dir.join("diverging.toml"), text).unwrap();
-    ftsmc(&["run", "diverging.toml", "--no-figures", "--out", "run"], &dir);
-    ftsmc(&["montecarlo", "paper-scenario-2", "--runs", "3", "--no-figures", "--out", "mc"], &dir);
-    ftsmc(
-        &["montecarlo", "paper-scenario-2", "--runs", "3", "--shard", "1/1", "--no-figures", "--out", "shards"],
-        &dir,
-    );
-    ftsmc(&["merge", "shards/paper-scenario-2-shard-1-of-1", "--no-figures", "--out", "merged"], &dir);
-    ftsmc(&["fixed-time", "--per-decade", "1", "--out", "ft"], &dir);
+    ftsmc(&["run", "diverging.toml", "--no-figures", "--out", "run"], dir);
+    ftsmc(&["montecarlo", "paper-scenario-2", "--runs", "3", "--no-figures", "--out", "mc"], dir);
+    ftsmc(&["montecarlo", "paper-scenario-2", "--runs", "3", "--shard", "1/1", "--no-figures", "--out", "shards"], dir);
+    ftsmc(&["merge", "shards/paper-scenario-2-shard-1-of-1", "--no-figures", "--out", "merged"], dir);
+    ftsmc(&["fixed-time", "--per-decade", "1", "--out", "ft"], dir);
 
     let doc = documented();
     let mut missing = BTreeSet::new();
 
     let mut columns = Vec::new();
-    csv_columns(&dir, &mut columns);
+    csv_columns(dir, &mut columns);
     let files: BTreeSet<String> =
         columns.iter().map(|(f, _)| f.file_name().unwrap().to_string_lossy().into_owned()).collect();
     for expected in ["ftaftsmc.csv", "ranftsmc.csv", "tsm-sta.csv", "runs.csv", "fixed-time.csv"] {
@@ -205,7 +203,6 @@ fn every_csv_column_and_json_key_is_in_docs_outputs_md() {
         "not documented in docs/outputs.md:\n{}",
         missing.into_iter().collect::<Vec<_>>().join("\n")
     );
-    std::fs::remove_dir_all(&dir).ok();
 }
 
 #[test]

@@ -2,22 +2,22 @@
 //! exactly as flown, so flying it again gives byte-identical results, and
 //! `summary.json` says which program, commit, command and scenario made it.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::Command;
 
 use ftsmc_sim::scenario::{Scenario, BUILT_IN_SCENARIOS};
 use serde_json::Value;
+use tempfile::TempDir;
 
 fn ftsmc(args: &[&str], cwd: &Path) {
     let out = Command::new(env!("CARGO_BIN_EXE_ftsmc")).args(args).current_dir(cwd).output().expect("binary runs");
     assert!(out.status.success(), "{args:?}: {}", String::from_utf8_lossy(&out.stderr));
 }
 
-fn temp_dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("ftsmc-provenance-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+/// A fresh scratch folder `<temp dir>/ftsmc-provenance-<name>-<random>`, removed
+/// when the returned guard drops: when the test ends, passed or failed.
+fn scratch(name: &str) -> TempDir {
+    tempfile::Builder::new().prefix(&format!("ftsmc-provenance-{name}-")).tempdir().unwrap()
 }
 
 fn json(path: &Path) -> Value {
@@ -69,10 +69,11 @@ fn every_built_in_scenario_survives_a_toml_round_trip() {
 
 #[test]
 fn rerunning_a_written_scenario_gives_byte_identical_results() {
-    let dir = temp_dir("run");
-    ftsmc(&["run", "paper-scenario-2", "--out", "A", "--no-figures"], &dir);
+    let tmp = scratch("run");
+    let dir = tmp.path();
+    ftsmc(&["run", "paper-scenario-2", "--out", "A", "--no-figures"], dir);
     let a = dir.join("A/paper-scenario-2");
-    ftsmc(&["run", a.join("scenario.toml").to_str().unwrap(), "--out", "B", "--no-figures"], &dir);
+    ftsmc(&["run", a.join("scenario.toml").to_str().unwrap(), "--out", "B", "--no-figures"], dir);
     // The scenario's `name` decides the sub-folder.
     let b = dir.join("B/paper-scenario-2");
     assert_eq!(files(&a), files(&b));
@@ -87,12 +88,12 @@ fn rerunning_a_written_scenario_gives_byte_identical_results() {
     sa.as_object_mut().unwrap().remove("provenance");
     sb.as_object_mut().unwrap().remove("provenance");
     assert_eq!(sa, sb, "metrics identical");
-    std::fs::remove_dir_all(&dir).ok();
 }
 
 #[test]
 fn rerunning_a_monte_carlo_scenario_gives_an_identical_runs_csv() {
-    let dir = temp_dir("mc");
+    let tmp = scratch("mc");
+    let dir = tmp.path();
     // A short copy, with a master seed and controllers given on the command
     // line: the written scenario must carry both.
     let text = BUILT_IN_SCENARIOS[1].1.replacen("duration = 50.0", "duration = 2.0", 1);
@@ -101,12 +102,12 @@ fn rerunning_a_monte_carlo_scenario_gives_an_identical_runs_csv() {
     let args = ["--runs", "3", "--no-figures", "--threads", "2"];
     let mut first = vec!["montecarlo", "short.toml", "--seed", "11", "-c", "ftaftsmc,ranftsmc", "--out", "A"];
     first.extend(args);
-    ftsmc(&first, &dir);
+    ftsmc(&first, dir);
     let a = dir.join("A/paper-scenario-2");
     let scenario = a.join("scenario.toml");
     let mut second = vec!["montecarlo", scenario.to_str().unwrap(), "--out", "B"];
     second.extend(args);
-    ftsmc(&second, &dir);
+    ftsmc(&second, dir);
     let b = dir.join("B/paper-scenario-2");
     let runs_a = std::fs::read(a.join("runs.csv")).unwrap();
     assert!(runs_a == std::fs::read(b.join("runs.csv")).unwrap(), "runs.csv differs");
@@ -115,13 +116,13 @@ fn rerunning_a_monte_carlo_scenario_gives_an_identical_runs_csv() {
     assert_eq!(sa["master_seed"], 11);
     assert_eq!(check_provenance(&sa, &a), check_provenance(&sb, &b));
     assert_eq!(sa["controllers"], sb["controllers"]);
-    std::fs::remove_dir_all(&dir).ok();
 }
 
 #[test]
 fn reproduce_and_fixed_time_record_their_scenarios() {
-    let dir = temp_dir("reproduce");
-    ftsmc(&["reproduce", "--out", "res", "--no-figures", "--realistic-runs", "4"], &dir);
+    let tmp = scratch("reproduce");
+    let dir = tmp.path();
+    ftsmc(&["reproduce", "--out", "res", "--no-figures", "--realistic-runs", "4"], dir);
     let summary = json(&dir.join("res/summary.json"));
     let list = summary["provenance"]["scenarios"].as_array().unwrap();
     assert!(list.len() >= 2);
@@ -134,8 +135,7 @@ fn reproduce_and_fixed_time_record_their_scenarios() {
         assert!(dir.join("res").join(name).join("scenario.toml").is_file(), "{name}");
     }
 
-    ftsmc(&["fixed-time", "-c", "ftaftsmc", "--per-decade", "1", "--out", "ft"], &dir);
+    ftsmc(&["fixed-time", "-c", "ftaftsmc", "--per-decade", "1", "--out", "ft"], dir);
     let folder = dir.join("ft/paper-scenario-1");
     check_provenance(&json(&folder.join("fixed-time.json")), &folder);
-    std::fs::remove_dir_all(&dir).ok();
 }

@@ -2,18 +2,18 @@
 //! time limit, with a non-zero exit code, a one-line `error:` message naming
 //! the key or limit, and nothing written under `--out`.
 
-use std::path::PathBuf;
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
+
+use tempfile::TempDir;
 
 /// Longest time a refusal may take (they take milliseconds).
 const TIME_LIMIT: Duration = Duration::from_secs(20);
 
-fn temp_dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("ftsmc-refusals-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+/// A fresh scratch folder `<temp dir>/ftsmc-refusals-<name>-<random>`, removed
+/// when the returned guard drops: when the test ends, passed or failed.
+fn scratch(name: &str) -> TempDir {
+    tempfile::Builder::new().prefix(&format!("ftsmc-refusals-{name}-")).tempdir().unwrap()
 }
 
 /// Run `ftsmc args… --out <dir>/out/sub` in a fresh directory (with
@@ -21,7 +21,8 @@ fn temp_dir(name: &str) -> PathBuf {
 /// non-zero exit, one `error:` line containing every `expected` string,
 /// nothing under `<dir>/out`.
 fn refused(test: &str, args: &[&str], scenario: Option<&str>, expected: &[&str]) {
-    let dir = temp_dir(test);
+    let tmp = scratch(test);
+    let dir = tmp.path();
     if let Some(text) = scenario {
         std::fs::write(dir.join("s.toml"), text).unwrap();
     }
@@ -32,7 +33,7 @@ fn refused(test: &str, args: &[&str], scenario: Option<&str>, expected: &[&str])
         .args(args)
         .arg("--out")
         .arg(&out)
-        .current_dir(&dir)
+        .current_dir(dir)
         .env("RUST_BACKTRACE", "1")
         .stdin(Stdio::null())
         .stdout(stdout)
@@ -62,7 +63,6 @@ fn refused(test: &str, args: &[&str], scenario: Option<&str>, expected: &[&str])
     }
     let written: Vec<_> = std::fs::read_dir(dir.join("out")).map(|rd| rd.flatten().collect()).unwrap_or_default();
     assert!(written.is_empty(), "{test}: files written under --out: {written:?}");
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 fn run_refused(test: &str, extra: &str, expected: &[&str]) {
@@ -151,11 +151,11 @@ fn dev_zero() {
 
 #[test]
 fn a_fifo() {
-    let dir = temp_dir("fifo-holder");
+    let tmp = scratch("fifo-holder");
+    let dir = tmp.path();
     let fifo = dir.join("fifo.toml");
     assert!(Command::new("mkfifo").arg(&fifo).status().expect("mkfifo runs").success());
     refused("fifo", &["run", fifo.to_str().unwrap()], None, &["regular file"]);
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]
@@ -273,9 +273,10 @@ fn rigid_body_draws_outside_its_range() {
 
 #[test]
 fn a_seed_of_2_pow_64_minus_1_writes_a_scenario_that_runs_again() {
-    let dir = temp_dir("big-seed");
+    let tmp = scratch("big-seed");
+    let dir = tmp.path();
     let run = |args: &[&str]| {
-        let out = Command::new(env!("CARGO_BIN_EXE_ftsmc")).args(args).current_dir(&dir).output().unwrap();
+        let out = Command::new(env!("CARGO_BIN_EXE_ftsmc")).args(args).current_dir(dir).output().unwrap();
         assert!(out.status.success(), "{args:?}: {}", String::from_utf8_lossy(&out.stderr));
     };
     run(&[
@@ -307,7 +308,6 @@ fn a_seed_of_2_pow_64_minus_1_writes_a_scenario_that_runs_again() {
     run(&["run", "row.toml", "-c", "pid", "--out", "c", "--no-figures"]);
     let again = std::fs::read_to_string(dir.join("c/row/scenario.toml")).unwrap();
     assert!(again.contains(&format!("seed = \"{big}\"")), "{again}");
-    std::fs::remove_dir_all(&dir).ok();
 }
 
 #[test]

@@ -4,18 +4,19 @@
 //! did not write (the user's, or another command's results).
 
 use std::collections::BTreeSet;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Command, Output, Stdio};
+
+use tempfile::TempDir;
 
 fn ftsmc(args: &[&str], cwd: &Path) -> Output {
     Command::new(env!("CARGO_BIN_EXE_ftsmc")).args(args).current_dir(cwd).output().expect("binary runs")
 }
 
-fn temp_dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("ftsmc-folders-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+/// A fresh scratch folder `<temp dir>/ftsmc-folders-<name>-<random>`, removed
+/// when the returned guard drops: when the test ends, passed or failed.
+fn scratch(name: &str) -> TempDir {
+    tempfile::Builder::new().prefix(&format!("ftsmc-folders-{name}-")).tempdir().unwrap()
 }
 
 /// Every name in `dir` (hidden ones included), sorted.
@@ -25,14 +26,15 @@ fn names(dir: &Path) -> BTreeSet<String> {
 
 #[test]
 fn stale_files_of_an_older_run_are_gone_and_the_users_files_stay() {
-    let dir = temp_dir("stale");
+    let tmp = scratch("stale");
+    let dir = tmp.path();
     let folder = dir.join("res/paper-scenario-1");
     std::fs::create_dir_all(&folder).unwrap();
     std::fs::write(folder.join("junk.csv"), "t,x\n0,1\n").unwrap();
-    let first = ftsmc(&["run", "paper-scenario-1", "-c", "tsm-sta", "--out", "res", "--no-figures"], &dir);
+    let first = ftsmc(&["run", "paper-scenario-1", "-c", "tsm-sta", "--out", "res", "--no-figures"], dir);
     assert!(first.status.success(), "{}", String::from_utf8_lossy(&first.stderr));
     assert!(folder.join("tsm-sta.csv").is_file());
-    let out = ftsmc(&["run", "paper-scenario-1", "-c", "ftaftsmc", "--out", "res", "--no-figures"], &dir);
+    let out = ftsmc(&["run", "paper-scenario-1", "-c", "ftaftsmc", "--out", "res", "--no-figures"], dir);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     // The first run's tsm-sta.csv is gone (the run wrote it); junk.csv is the user's.
     let expected: BTreeSet<String> =
@@ -40,19 +42,19 @@ fn stale_files_of_an_older_run_are_gone_and_the_users_files_stay() {
     assert_eq!(names(&folder), expected);
     assert_eq!(std::fs::read_to_string(folder.join("junk.csv")).unwrap(), "t,x\n0,1\n");
     assert_eq!(names(&dir.join("res")), ["paper-scenario-1".to_string()].into(), "no staging or old folder left");
-    std::fs::remove_dir_all(&dir).ok();
 }
 
 #[test]
 fn commands_sharing_an_out_keep_each_others_results() {
-    let dir = temp_dir("shared");
+    let tmp = scratch("shared");
+    let dir = tmp.path();
     let folder = dir.join("out/paper-scenario-2");
-    let run = ftsmc(&["run", "paper-scenario-2", "-c", "ftaftsmc", "--out", "out", "--no-figures"], &dir);
+    let run = ftsmc(&["run", "paper-scenario-2", "-c", "ftaftsmc", "--out", "out", "--no-figures"], dir);
     assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
     let run_csv = std::fs::read(folder.join("ftaftsmc.csv")).unwrap();
     let mc = ftsmc(
         &["montecarlo", "paper-scenario-2", "--runs", "2", "-c", "ftaftsmc", "--out", "out", "--no-figures"],
-        &dir,
+        dir,
     );
     assert!(mc.status.success(), "{}", String::from_utf8_lossy(&mc.stderr));
     let err = String::from_utf8_lossy(&mc.stderr);
@@ -62,7 +64,7 @@ fn commands_sharing_an_out_keep_each_others_results() {
     assert!(folder.join("runs.csv").is_file());
     // A user's file in the reproduce folder survives `run` and `reproduce`.
     std::fs::write(dir.join("out/notes.md"), "my notes").unwrap();
-    let rep = ftsmc(&["reproduce", "--out", "out", "--no-figures", "--realistic-runs", "0"], &dir);
+    let rep = ftsmc(&["reproduce", "--out", "out", "--no-figures", "--realistic-runs", "0"], dir);
     assert!(rep.status.success(), "{}", String::from_utf8_lossy(&rep.stderr));
     assert_eq!(std::fs::read_to_string(dir.join("out/notes.md")).unwrap(), "my notes");
     assert!(folder.join("runs.csv").is_file(), "reproduce keeps the Monte Carlo batch");
@@ -70,7 +72,7 @@ fn commands_sharing_an_out_keep_each_others_results() {
     // so reproduce's summary.json points only at files that exist.
     let s1 = dir.join("out/paper-scenario-1");
     assert!(s1.join("ftaftsmc-tuned.csv").is_file());
-    let run1 = ftsmc(&["run", "paper-scenario-1", "--out", "out", "--no-figures"], &dir);
+    let run1 = ftsmc(&["run", "paper-scenario-1", "--out", "out", "--no-figures"], dir);
     assert!(run1.status.success(), "{}", String::from_utf8_lossy(&run1.stderr));
     let err = String::from_utf8_lossy(&run1.stderr);
     assert!(err.contains("note: replaced ftaftsmc.csv, ranftsmc.csv, scenario.toml, tsm-sta.csv"), "{err}");
@@ -88,12 +90,12 @@ fn commands_sharing_an_out_keep_each_others_results() {
         assert!(dir.join("out").join(s["scenario_file"].as_str().unwrap()).is_file(), "{s}");
     }
     assert_eq!(std::fs::read_to_string(dir.join("out/notes.md")).unwrap(), "my notes");
-    std::fs::remove_dir_all(&dir).ok();
 }
 
 #[test]
 fn a_bad_out_is_refused_before_any_flight_and_nothing_is_written() {
-    let dir = temp_dir("badout");
+    let tmp = scratch("badout");
+    let dir = tmp.path();
     std::fs::write(dir.join("file"), "a regular file").unwrap();
     let cases: [&[&str]; 4] = [
         &["reproduce", "--out", "file/res", "--no-figures"],
@@ -102,7 +104,7 @@ fn a_bad_out_is_refused_before_any_flight_and_nothing_is_written() {
         &["fixed-time", "--controllers", "ftaftsmc", "--per-decade", "1", "--out", "file/ft"],
     ];
     for args in cases {
-        let out = ftsmc(args, &dir);
+        let out = ftsmc(args, dir);
         let err = String::from_utf8_lossy(&out.stderr);
         assert!(!out.status.success(), "{args:?}");
         assert!(
@@ -112,14 +114,14 @@ fn a_bad_out_is_refused_before_any_flight_and_nothing_is_written() {
         // `reproduce` announces its flights on stderr; nothing was flown or printed.
         assert!(!err.contains("flying"), "{args:?}: {err}");
         assert!(out.stdout.is_empty(), "{args:?}: {}", String::from_utf8_lossy(&out.stdout));
-        assert_eq!(names(&dir), ["file".to_string()].into(), "{args:?}");
+        assert_eq!(names(dir), ["file".to_string()].into(), "{args:?}");
     }
-    std::fs::remove_dir_all(&dir).ok();
 }
 
 #[test]
 fn concurrent_runs_into_one_folder_leave_one_whole_result() {
-    let dir = temp_dir("concurrent");
+    let tmp = scratch("concurrent");
+    let dir = tmp.path();
     // Two different runs of the same scenario name into the same folder.
     let a: &[&str] = &["run", "paper-scenario-1", "-c", "ftaftsmc", "--out", "res", "--no-figures"];
     let b: &[&str] = &["run", "paper-scenario-1", "-c", "ranftsmc,tsm-sta", "--out", "res", "--no-figures"];
@@ -128,7 +130,7 @@ fn concurrent_runs_into_one_folder_leave_one_whole_result() {
         let spawn = |args: &[&str]| {
             Command::new(env!("CARGO_BIN_EXE_ftsmc"))
                 .args(args)
-                .current_dir(&dir)
+                .current_dir(dir)
                 .stdout(Stdio::null())
                 .stderr(Stdio::piped())
                 .spawn()
@@ -158,5 +160,4 @@ fn concurrent_runs_into_one_folder_leave_one_whole_result() {
         );
         assert_eq!(names(&dir.join("res")), ["paper-scenario-1".to_string()].into(), "round {round}");
     }
-    std::fs::remove_dir_all(&dir).ok();
 }

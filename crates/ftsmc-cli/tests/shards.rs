@@ -8,6 +8,9 @@ use std::process::{Command, Output};
 use std::sync::OnceLock;
 
 use serde_json::Value;
+use tempfile::TempDir;
+
+mod common;
 
 const SCENARIO: &str = "paper-scenario-2";
 const RUNS: &str = "7";
@@ -31,23 +34,28 @@ fn refused(args: &[&str], cwd: &Path) -> String {
     err
 }
 
+/// A fresh scratch folder `<temp dir>/ftsmc-shards-<name>-<random>`, removed
+/// when the returned guard drops: when the test ends, passed or failed.
+fn scratch(name: &str) -> TempDir {
+    tempfile::Builder::new().prefix(&format!("ftsmc-shards-{name}-")).tempdir().unwrap()
+}
+
 /// One campaign flown once for every test: the unsharded batch in
 /// `whole/`, its three shards in `shards/`, and foreign shards (another
 /// seed, another run count) in `foreign/`.
 fn campaign() -> &'static Path {
     static DIR: OnceLock<PathBuf> = OnceLock::new();
     DIR.get_or_init(|| {
-        let d = std::env::temp_dir().join(format!("ftsmc-shards-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&d);
-        std::fs::create_dir_all(&d).unwrap();
+        let tmp = scratch("campaign");
+        let d = tmp.path();
         let mc = ["montecarlo", SCENARIO, "-c", CONTROLLERS, "--no-figures"];
-        ok(&[&mc[..], &["--runs", RUNS, "--out", "whole"]].concat(), &d);
+        ok(&[&mc[..], &["--runs", RUNS, "--out", "whole"]].concat(), d);
         for k in ["1/3", "2/3", "3/3"] {
-            ok(&[&mc[..], &["--runs", RUNS, "--shard", k, "--out", "shards"]].concat(), &d);
+            ok(&[&mc[..], &["--runs", RUNS, "--shard", k, "--out", "shards"]].concat(), d);
         }
-        ok(&[&mc[..], &["--runs", RUNS, "--seed", "99", "--shard", "2/3", "--out", "seed99"]].concat(), &d);
-        ok(&[&mc[..], &["--runs", "8", "--shard", "2/3", "--out", "runs8"]].concat(), &d);
-        d
+        ok(&[&mc[..], &["--runs", RUNS, "--seed", "99", "--shard", "2/3", "--out", "seed99"]].concat(), d);
+        ok(&[&mc[..], &["--runs", "8", "--shard", "2/3", "--out", "runs8"]].concat(), d);
+        common::removed_at_exit(tmp)
     })
 }
 
@@ -162,8 +170,8 @@ fn merge_refuses_a_missing_repeated_foreign_or_incomplete_shard() {
 
 #[test]
 fn bad_shard_values_are_refused_before_any_flight() {
-    let d = std::env::temp_dir().join(format!("ftsmc-shards-bad-{}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
+    let tmp = scratch("bad");
+    let d = tmp.path();
     for (shard, runs, expected) in [
         ("4/3", "7", "need 1 <= K <= N"),
         ("0/3", "7", "need 1 <= K <= N"),
@@ -171,11 +179,10 @@ fn bad_shard_values_are_refused_before_any_flight() {
         ("1/5", "3", "5 shards for 3 runs"),
     ] {
         // (clap's own usage hint may follow the error line.)
-        let out = ftsmc(&["montecarlo", SCENARIO, "--runs", runs, "--shard", shard, "--out", "out"], &d);
+        let out = ftsmc(&["montecarlo", SCENARIO, "--runs", runs, "--shard", shard, "--out", "out"], d);
         assert!(!out.status.success());
         let err = String::from_utf8_lossy(&out.stderr).lines().next().unwrap_or("").to_string();
         assert!(err.contains(expected) && err.contains(shard), "{shard}: {err}");
         assert!(!d.join("out").exists());
     }
-    std::fs::remove_dir_all(&d).ok();
 }

@@ -3,8 +3,10 @@
 //! `--out` keep both results, and that the tuned file does not depend on
 //! the thread count.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Command, Output};
+
+use tempfile::TempDir;
 
 /// A 1.5 s realistic scenario 2 with 2 training flights per candidate, 4
 /// candidates per generation and 3 held-out flights per gain set.
@@ -30,11 +32,12 @@ fn ok(args: &[&str], cwd: &Path) {
     assert!(out.status.success(), "ftsmc {args:?}: {}", String::from_utf8_lossy(&out.stderr));
 }
 
-fn temp_dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("ftsmc-tune-cli-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    std::fs::write(d.join("tiny.toml"), TINY).unwrap();
+/// A fresh scratch folder `<temp dir>/ftsmc-tune-cli-<name>-<random>` holding
+/// `tiny.toml`, removed when the returned guard drops: when the test
+/// ends, passed or failed.
+fn scratch(name: &str) -> TempDir {
+    let d = tempfile::Builder::new().prefix(&format!("ftsmc-tune-cli-{name}-")).tempdir().unwrap();
+    std::fs::write(d.path().join("tiny.toml"), TINY).unwrap();
     d
 }
 
@@ -59,9 +62,10 @@ fn tuned_without_command(path: &Path) -> String {
 
 #[test]
 fn two_controllers_tuned_into_one_folder_keep_both_results() {
-    let dir = temp_dir("two");
-    tune(&dir, "pid", "2", "out", true);
-    tune(&dir, "se3", "2", "out", false);
+    let tmp = scratch("two");
+    let dir = tmp.path();
+    tune(dir, "pid", "2", "out", true);
+    tune(dir, "se3", "2", "out", false);
     let folder = dir.join("out/tiny-tune");
     for c in ["pid", "se3"] {
         for f in ["tuned.toml", "history.csv", "summary.json", "scenario.toml"] {
@@ -94,23 +98,22 @@ fn two_controllers_tuned_into_one_folder_keep_both_results() {
 
     // Re-tuning PID replaces PID's files and keeps SE(3)'s.
     let se3_before = std::fs::read(folder.join("se3.summary.json")).unwrap();
-    tune(&dir, "pid", "1", "out", false);
+    tune(dir, "pid", "1", "out", false);
     assert_eq!(std::fs::read(folder.join("se3.summary.json")).unwrap(), se3_before);
     assert!(!folder.join("pid.convergence.svg").exists(), "pid's old figure is pid's to remove");
     assert!(folder.join("pid.tuned.toml").is_file());
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]
 fn one_and_two_threads_give_the_same_tuned_file() {
-    let dir = temp_dir("threads");
-    tune(&dir, "ftaftsmc", "1", "one", false);
-    tune(&dir, "ftaftsmc", "2", "two", false);
+    let tmp = scratch("threads");
+    let dir = tmp.path();
+    tune(dir, "ftaftsmc", "1", "one", false);
+    tune(dir, "ftaftsmc", "2", "two", false);
     let one = tuned_without_command(&dir.join("one/tiny-tune/ftaftsmc.tuned.toml"));
     let two = tuned_without_command(&dir.join("two/tiny-tune/ftaftsmc.tuned.toml"));
     assert_eq!(one, two);
     let h1 = std::fs::read(dir.join("one/tiny-tune/ftaftsmc.history.csv")).unwrap();
     let h2 = std::fs::read(dir.join("two/tiny-tune/ftaftsmc.history.csv")).unwrap();
     assert_eq!(h1, h2, "history.csv differs between 1 and 2 threads");
-    let _ = std::fs::remove_dir_all(&dir);
 }

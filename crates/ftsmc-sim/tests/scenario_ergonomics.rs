@@ -6,12 +6,12 @@ use std::path::{Path, PathBuf};
 use ftsmc_sim::scenario::{Scenario, PAPER_SCENARIO_1, PAPER_SCENARIO_2};
 use ftsmc_sim::signal::waypoints::{WaypointVelocity, Waypoints};
 use ftsmc_sim::signal::{Signal, Term};
+use tempfile::TempDir;
 
-fn temp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("ftsmc-ergonomics-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+/// A fresh scratch folder `<temp dir>/ftsmc-ergonomics-<name>-<random>`, removed
+/// when the returned guard drops: when the test ends, passed or failed.
+fn scratch(name: &str) -> TempDir {
+    tempfile::Builder::new().prefix(&format!("ftsmc-ergonomics-{name}-")).tempdir().unwrap()
 }
 
 fn write(dir: &Path, file: &str, text: &str) -> PathBuf {
@@ -26,8 +26,9 @@ fn paper(text: &str, name: &str) -> Scenario {
 
 #[test]
 fn extends_with_one_gain_override_changes_only_that_gain() {
-    let dir = temp_dir("one-gain");
-    let child = write(&dir, "child.toml", "extends = \"paper-scenario-1\"\n[ftaftsmc.z]\nlambda = 3.5\n");
+    let tmp = scratch("one-gain");
+    let dir = tmp.path();
+    let child = write(dir, "child.toml", "extends = \"paper-scenario-1\"\n[ftaftsmc.z]\nlambda = 3.5\n");
     let got = Scenario::from_file(&child).unwrap();
     let mut want = paper(PAPER_SCENARIO_1, "paper-scenario-1.toml");
     assert_ne!(want.gains.ftaftsmc.z.lambda, 3.5);
@@ -47,11 +48,12 @@ fn extends_of_a_built_in_equals_the_built_in_with_or_without_toml() {
 
 #[test]
 fn chains_resolve_relative_to_each_file_and_the_nearest_file_wins() {
-    let dir = temp_dir("chain");
+    let tmp = scratch("chain");
+    let dir = tmp.path();
     std::fs::create_dir_all(dir.join("sub")).unwrap();
-    write(&dir, "base.toml", "extends = \"paper-scenario-2\"\nname = \"base\"\n[payload]\nmass = 0.5\n");
-    write(&dir, "sub/mid.toml", "extends = \"../base.toml\"\nname = \"mid\"\nduration = 30.0\n");
-    let top = write(&dir, "sub/top.toml", "extends = \"mid.toml\"\n[payload]\nstart = 12.0\n");
+    write(dir, "base.toml", "extends = \"paper-scenario-2\"\nname = \"base\"\n[payload]\nmass = 0.5\n");
+    write(dir, "sub/mid.toml", "extends = \"../base.toml\"\nname = \"mid\"\nduration = 30.0\n");
+    let top = write(dir, "sub/top.toml", "extends = \"mid.toml\"\n[payload]\nstart = 12.0\n");
     let loaded = Scenario::load_with_warnings(&top, &[]).unwrap();
     let s = loaded.scenario;
     assert_eq!(loaded.files.len(), 4, "{:?}", loaded.files);
@@ -63,20 +65,21 @@ fn chains_resolve_relative_to_each_file_and_the_nearest_file_wins() {
 
 #[test]
 fn cycles_and_overlong_chains_are_refused_naming_the_chain() {
-    let dir = temp_dir("cycle");
-    let a = write(&dir, "a.toml", "extends = \"b.toml\"\nname = \"a\"\n");
-    write(&dir, "b.toml", "extends = \"a.toml\"\n");
+    let tmp = scratch("cycle");
+    let dir = tmp.path();
+    let a = write(dir, "a.toml", "extends = \"b.toml\"\nname = \"a\"\n");
+    write(dir, "b.toml", "extends = \"a.toml\"\n");
     let msg = Scenario::from_file(&a).unwrap_err().to_string();
     assert!(msg.contains("cycle") && msg.contains("a.toml → ") && msg.contains("b.toml"), "{msg}");
 
-    let selfish = write(&dir, "self.toml", "extends = \"./self.toml\"\n");
+    let selfish = write(dir, "self.toml", "extends = \"./self.toml\"\n");
     let msg = Scenario::from_file(&selfish).unwrap_err().to_string();
     assert!(msg.contains("cycle"), "{msg}");
 
     for i in 0..20 {
-        write(&dir, &format!("l{i}.toml"), &format!("extends = \"l{}.toml\"\n", i + 1));
+        write(dir, &format!("l{i}.toml"), &format!("extends = \"l{}.toml\"\n", i + 1));
     }
-    write(&dir, "l20.toml", "extends = \"paper-scenario-1\"\n");
+    write(dir, "l20.toml", "extends = \"paper-scenario-1\"\n");
     let msg = Scenario::from_file(&dir.join("l0.toml")).unwrap_err().to_string();
     assert!(msg.contains("longer than 16"), "{msg}");
     // 16 files in all (l6 … l20 and the built-in) is fine.
@@ -93,14 +96,15 @@ fn a_missing_base_or_a_non_string_extends_is_an_error() {
 
 #[test]
 fn every_file_of_a_chain_gets_the_file_checks() {
-    let dir = temp_dir("file-checks");
+    let tmp = scratch("file-checks");
+    let dir = tmp.path();
     std::fs::create_dir_all(dir.join("adir")).unwrap();
-    let child = write(&dir, "child.toml", "extends = \"adir\"\nname = \"c\"\n");
+    let child = write(dir, "child.toml", "extends = \"adir\"\nname = \"c\"\n");
     let msg = Scenario::from_file(&child).unwrap_err().to_string();
     assert!(msg.contains("directory"), "{msg}");
 
-    write(&dir, "big.toml", &format!("extends = \"paper-scenario-1\"\n{}", "# padding\n".repeat(200)));
-    let child = write(&dir, "small.toml", "extends = \"big.toml\"\n");
+    write(dir, "big.toml", &format!("extends = \"paper-scenario-1\"\n{}", "# padding\n".repeat(200)));
+    let child = write(dir, "small.toml", "extends = \"big.toml\"\n");
     let msg = Scenario::from_file_with_limits(&child, &["max_scenario_bytes=1000".into()]).unwrap_err().to_string();
     assert!(msg.contains("max_scenario_bytes") && msg.contains("big.toml"), "{msg}");
     Scenario::from_file_with_limits(&child, &["max_scenario_bytes=3000".into()]).unwrap();
@@ -108,22 +112,23 @@ fn every_file_of_a_chain_gets_the_file_checks() {
 
 #[test]
 fn unknown_keys_in_an_extending_file_are_errors_naming_key_and_file() {
-    let dir = temp_dir("unknown");
-    let child = write(&dir, "child.toml", "extends = \"paper-scenario-1\"\n\n[ftaftsmc.z]\nlambdda = 2.0\n");
+    let tmp = scratch("unknown");
+    let dir = tmp.path();
+    let child = write(dir, "child.toml", "extends = \"paper-scenario-1\"\n\n[ftaftsmc.z]\nlambdda = 2.0\n");
     let msg = Scenario::from_file(&child).unwrap_err().to_string();
     assert!(msg.contains("child.toml") && msg.contains("unknown field `lambdda`"), "{msg}");
     assert!(msg.contains("line 4"), "{msg}");
 
     // A typo in the base is attributed to the base.
-    write(&dir, "base.toml", "extends = \"paper-scenario-1\"\n[plant]\nmas = 0.8\n");
-    let child = write(&dir, "child2.toml", "extends = \"base.toml\"\nname = \"c\"\n");
+    write(dir, "base.toml", "extends = \"paper-scenario-1\"\n[plant]\nmas = 0.8\n");
+    let child = write(dir, "child2.toml", "extends = \"base.toml\"\nname = \"c\"\n");
     let msg = Scenario::from_file(&child).unwrap_err().to_string();
     assert!(msg.starts_with(&dir.join("base.toml").display().to_string()), "{msg}");
     assert!(msg.contains("extended by") && msg.contains("unknown field `mas`"), "{msg}");
 
     // A range error in the base names the base too.
-    write(&dir, "base3.toml", "extends = \"paper-scenario-1\"\n[ftaftsmc.z]\np = 1.5\n");
-    let child = write(&dir, "child3.toml", "extends = \"base3.toml\"\nname = \"c\"\n");
+    write(dir, "base3.toml", "extends = \"paper-scenario-1\"\n[ftaftsmc.z]\np = 1.5\n");
+    let child = write(dir, "child3.toml", "extends = \"base3.toml\"\nname = \"c\"\n");
     let msg = Scenario::from_file(&child).unwrap_err().to_string();
     assert!(msg.contains("base3.toml") && msg.contains("`ftaftsmc.z.p` = 1.5"), "{msg}");
 }
@@ -327,7 +332,8 @@ fn piecewise_switches_signals_at_until() {
 
 #[test]
 fn unit_slip_warnings_fire_and_name_file_key_and_value() {
-    let dir = temp_dir("warnings");
+    let tmp = scratch("warnings");
+    let dir = tmp.path();
     let cases = [
         ("[initial_state]\nattitude = [0.0, 0.0, 45.0]\n", "`initial_state.attitude[2]` = 45"),
         ("[reference]\npsi = 45.0\n", "`reference.psi.terms[0].value` = 45"),
@@ -345,8 +351,7 @@ fn unit_slip_warnings_fire_and_name_file_key_and_value() {
         ("[inertia_variation]\nwindow = [21.0, 30.0]\n", "`inertia_variation.window`"),
     ];
     for (i, (extra, want)) in cases.iter().enumerate() {
-        let file =
-            write(&dir, &format!("w{i}.toml"), &format!("extends = \"paper-scenario-1\"\nname = \"w\"\n{extra}"));
+        let file = write(dir, &format!("w{i}.toml"), &format!("extends = \"paper-scenario-1\"\nname = \"w\"\n{extra}"));
         let loaded = Scenario::load_with_warnings(&file, &[]).unwrap();
         assert_eq!(loaded.warnings.len(), 1, "{extra}: {:?}", loaded.warnings);
         let w = &loaded.warnings[0];

@@ -74,15 +74,14 @@ fn the_limits_on_the_flown_tilt_keep_their_name_without_a_warning() {
 /// file nearer the scenario wins, as for any key.
 #[test]
 fn across_an_extends_chain_the_nearer_file_wins() {
-    let dir = std::env::temp_dir().join(format!("ftsmc-tilt-names-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let tmp = tempfile::Builder::new().prefix("ftsmc-tilt-names-").tempdir().unwrap();
+    let dir = tmp.path();
     std::fs::write(dir.join("base.toml"), "extends = \"paper-scenario-1\"\nname = \"b\"\n[cascade]\nmax_tilt = 0.3\n")
         .unwrap();
     std::fs::write(dir.join("top.toml"), "extends = \"base.toml\"\nname = \"t\"\n[cascade]\nmax_demanded_tilt = 0.4\n")
         .unwrap();
     let top = Scenario::load_with_warnings(&dir.join("top.toml"), &[]).unwrap();
     let base = Scenario::load_with_warnings(&dir.join("base.toml"), &[]).unwrap();
-    std::fs::remove_dir_all(&dir).unwrap();
     assert_eq!(top.scenario.cascade.max_tilt, 0.4);
     assert!(
         top.warnings.iter().any(|w| w.contains("base.toml") && w.contains("cascade.max_tilt")),

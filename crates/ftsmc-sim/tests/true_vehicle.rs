@@ -187,13 +187,11 @@ fn old_and_new_spellings_together_are_refused_naming_both_keys() {
 /// the error names the file that wrote each key.
 #[test]
 fn an_old_key_over_a_converted_built_in_is_refused_naming_the_files() {
-    let dir = std::env::temp_dir().join(format!("ftsmc-true-vehicle-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let path = dir.join("mine.toml");
+    let dir = tempfile::Builder::new().prefix("ftsmc-true-vehicle-").tempdir().unwrap();
+    let path = dir.path().join("mine.toml");
     std::fs::write(&path, "extends = \"realistic-calm-1\"\nname = \"mine\"\n[vehicle.rigid_body]\nmass = 0.8\n")
         .unwrap();
     let e = Scenario::from_file(&path).unwrap_err().to_string();
-    std::fs::remove_dir_all(&dir).unwrap();
     assert!(e.contains("vehicle.rigid_body.mass") && e.contains("`vehicle.mass`"), "{e}");
     assert!(e.contains("realistic-calm-1.toml"), "the new key's file: {e}");
 }

@@ -195,8 +195,8 @@ fn the_tuned_toml_round_trips_the_parameter_map() {
         let best = r.best;
         r.history[best].values = values;
         let text = tuned_toml(&r, "base.toml", "test").unwrap();
-        let dir = std::env::temp_dir().join(format!("ftsmc-tune-test-{}-{controller}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
+        let tmp = tempfile::Builder::new().prefix(&format!("ftsmc-tune-test-{controller}-")).tempdir().unwrap();
+        let dir = tmp.path();
         std::fs::write(dir.join("base.toml"), base.to_toml().unwrap()).unwrap();
         std::fs::write(dir.join("tuned.toml"), &text).unwrap();
         let loaded = Scenario::from_file(&dir.join("tuned.toml")).unwrap_or_else(|e| panic!("{e}\n{text}"));
@@ -206,6 +206,5 @@ fn the_tuned_toml_round_trips_the_parameter_map() {
         // Only gain (and cascade) keys are written below the header.
         let body: Vec<&str> = text.lines().filter(|l| l.starts_with('[')).collect();
         assert!(body.iter().all(|l| l.starts_with(&format!("[{controller}")) || l.starts_with("[cascade")), "{body:?}");
-        std::fs::remove_dir_all(&dir).ok();
     }
 }
