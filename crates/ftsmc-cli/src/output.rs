@@ -52,6 +52,7 @@
 
 use std::collections::HashSet;
 use std::ffi::OsString;
+use std::io::Write as _;
 use std::path::{Component, Path, PathBuf};
 use std::time::{Duration, SystemTime, UNIX_EPOCH};
 
@@ -461,19 +462,28 @@ fn write_file(path: &Path, bytes: &[u8]) -> Result<()> {
     Ok(())
 }
 
-/// Write `bytes` to `path` (temporary file + rename). Commands write inside
+/// Write `bytes` to `path` (temporary file + rename), creating its parent
+/// folders. Commands write inside
 /// a [`ResultDir`] staging folder, which is what makes results whole; this
 /// only keeps a single file from being seen half-written. The temporary
-/// file is removed when writing fails.
+/// file is a new hidden file of a unique name beside `path` (created
+/// exclusively: never a file someone else wrote, and two processes
+/// rewriting one manifest do not share it), removed when writing fails.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
-    let mut tmp = path.as_os_str().to_owned();
-    tmp.push(".tmp");
-    let tmp = PathBuf::from(tmp);
-    write_file(&tmp, bytes)?;
-    if let Err(e) = std::fs::rename(&tmp, path) {
-        let _ = std::fs::remove_file(&tmp);
-        return Err(e).with_context(|| format!("cannot rename {} to {}", tmp.display(), path.display()));
-    }
+    let dir = match path.parent() {
+        Some(parent) if !parent.as_os_str().is_empty() => parent,
+        _ => Path::new("."),
+    };
+    std::fs::create_dir_all(dir).with_context(|| format!("cannot create directory {}", dir.display()))?;
+    let mut tmp = tempfile::Builder::new()
+        .prefix(".ftsmc-")
+        .suffix(".tmp")
+        .tempfile_in(dir)
+        .with_context(|| format!("cannot create a temporary file in {}", dir.display()))?;
+    tmp.write_all(bytes).with_context(|| format!("cannot write {}", tmp.path().display()))?;
+    tmp.persist(path).map_err(|e| {
+        anyhow::Error::new(e.error).context(format!("cannot rename a temporary file to {}", path.display()))
+    })?;
     Ok(())
 }
 
@@ -668,6 +678,47 @@ mod tests {
             std::fs::read_dir(dir).unwrap().flatten().map(|e| e.file_name().to_string_lossy().into_owned()).collect();
         v.sort();
         v
+    }
+
+    #[test]
+    fn write_atomic_never_touches_a_file_it_did_not_write() {
+        let tmp = temp("atomic");
+        let root = tmp.path();
+        // A user's file with the name a fixed-suffix temporary would take.
+        std::fs::write(root.join("fig.svg.tmp"), "mine").unwrap();
+        write_atomic(&root.join("fig.svg"), b"<svg/>").unwrap();
+        write_atomic(&root.join("fig.svg"), b"<svg></svg>").unwrap();
+        assert_eq!(std::fs::read_to_string(root.join("fig.svg.tmp")).unwrap(), "mine");
+        assert_eq!(std::fs::read_to_string(root.join("fig.svg")).unwrap(), "<svg></svg>");
+        assert_eq!(names(root), ["fig.svg", "fig.svg.tmp"], "no temporary file left");
+        // Parent folders are created; a failed write leaves nothing behind.
+        write_atomic(&root.join("a/b/c.txt"), b"x").unwrap();
+        assert_eq!(std::fs::read_to_string(root.join("a/b/c.txt")).unwrap(), "x");
+        assert!(write_atomic(&root.join("fig.svg/inside"), b"x").is_err(), "a file is not a folder");
+        std::fs::create_dir(root.join("d")).unwrap();
+        assert!(write_atomic(&root.join("d"), b"x").is_err(), "a folder is not replaced by a file");
+        assert_eq!(names(root), ["a", "d", "fig.svg", "fig.svg.tmp"]);
+        assert!(names(&root.join("d")).is_empty());
+    }
+
+    #[test]
+    fn concurrent_write_atomic_of_one_file_leaves_one_whole_version() {
+        let tmp = temp("atomic-race");
+        let path = tmp.path().join("manifest");
+        let texts: Vec<String> = (0..8).map(|k| format!("{k}\n").repeat(20_000)).collect();
+        std::thread::scope(|scope| {
+            for text in &texts {
+                let path = &path;
+                scope.spawn(move || {
+                    for _ in 0..20 {
+                        write_atomic(path, text.as_bytes()).unwrap();
+                    }
+                });
+            }
+        });
+        let got = std::fs::read_to_string(&path).unwrap();
+        assert!(texts.contains(&got), "a torn or mixed file ({} bytes)", got.len());
+        assert_eq!(names(tmp.path()), ["manifest"], "no temporary file left");
     }
 
     #[test]
