@@ -463,12 +463,12 @@ fn write_file(path: &Path, bytes: &[u8]) -> Result<()> {
 }
 
 /// Write `bytes` to `path` (temporary file + rename), creating its parent
-/// folders. Commands write inside
-/// a [`ResultDir`] staging folder, which is what makes results whole; this
-/// only keeps a single file from being seen half-written. The temporary
-/// file is a new hidden file of a unique name beside `path` (created
-/// exclusively: never a file someone else wrote, and two processes
-/// rewriting one manifest do not share it), removed when writing fails.
+/// folders. Commands write inside a [`ResultDir`] staging folder, which is
+/// what makes results whole; this only keeps a single file from being seen
+/// half-written. The temporary file is a new hidden file of a unique name
+/// beside `path` (created exclusively: never a file someone else wrote, and
+/// two processes rewriting one manifest do not share it), removed when
+/// writing fails.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
     let dir = match path.parent() {
         Some(parent) if !parent.as_os_str().is_empty() => parent,
