@@ -3,7 +3,8 @@
 use std::path::Path;
 use std::process::{Command, Output};
 
-use tempfile::TempDir;
+mod common;
+use common::scratch;
 
 fn ftsmc(args: &[&str], cwd: &Path) -> Output {
     // RUST_BACKTRACE=1: errors must stay one readable line even then.
@@ -13,12 +14,6 @@ fn ftsmc(args: &[&str], cwd: &Path) -> Output {
         .env("RUST_BACKTRACE", "1")
         .output()
         .expect("binary runs")
-}
-
-/// A fresh scratch folder `<temp dir>/ftsmc-cli-<name>-<random>`, removed
-/// when the returned guard drops: when the test ends, passed or failed.
-fn scratch(name: &str) -> TempDir {
-    tempfile::Builder::new().prefix(&format!("ftsmc-cli-{name}-")).tempdir().unwrap()
 }
 
 fn scenario_text(name: &str) -> String {

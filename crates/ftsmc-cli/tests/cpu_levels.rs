@@ -20,13 +20,8 @@
 use std::path::Path;
 use std::process::Command;
 
-use tempfile::TempDir;
-
-/// A fresh scratch folder `<temp dir>/ftsmc-cli-<name>-<random>`, removed
-/// when the returned guard drops: when the test ends, passed or failed.
-fn scratch(name: &str) -> TempDir {
-    tempfile::Builder::new().prefix(&format!("ftsmc-cli-{name}-")).tempdir().unwrap()
-}
+mod common;
+use common::scratch;
 
 /// Fly `file` as a Monte Carlo batch on `lanes` lanes into `dir/<out>`;
 /// `baseline` asks glibc for its baseline (no AVX, no FMA) maths and ftsmc

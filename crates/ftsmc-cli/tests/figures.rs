@@ -8,9 +8,9 @@ use std::process::Command;
 use std::sync::OnceLock;
 
 use resvg::tiny_skia::Pixmap;
-use tempfile::TempDir;
 
 mod common;
+use common::scratch;
 
 const FIGURES: [&str; 10] = [
     "fig1-attitude-scenario1",
@@ -24,12 +24,6 @@ const FIGURES: [&str; 10] = [
     "fig8-attitude-scenario2",
     "fig9-trajectory-3d-scenario2",
 ];
-
-/// A fresh scratch folder `<temp dir>/ftsmc-figures-<name>-<random>`, removed
-/// when the returned guard drops: when the test ends, passed or failed.
-fn scratch(name: &str) -> TempDir {
-    tempfile::Builder::new().prefix(&format!("ftsmc-figures-{name}-")).tempdir().unwrap()
-}
 
 fn ftsmc(args: &[&str]) {
     let out = Command::new(env!("CARGO_BIN_EXE_ftsmc"))

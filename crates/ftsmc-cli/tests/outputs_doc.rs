@@ -13,7 +13,9 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use serde_json::Value;
-use tempfile::TempDir;
+
+mod common;
+use common::scratch;
 
 const AXES: [&str; 6] = ["x", "y", "z", "phi", "theta", "psi"];
 const SIGNALS: [&str; 4] = ["thrust", "roll_torque", "pitch_torque", "yaw_torque"];
@@ -21,12 +23,6 @@ const SIGNALS: [&str; 4] = ["thrust", "roll_torque", "pitch_torque", "yaw_torque
 fn ftsmc(args: &[&str], cwd: &Path) {
     let out = Command::new(env!("CARGO_BIN_EXE_ftsmc")).args(args).current_dir(cwd).output().expect("binary runs");
     assert!(out.status.success(), "ftsmc {args:?}: {}", String::from_utf8_lossy(&out.stderr));
-}
-
-/// A fresh scratch folder `<temp dir>/ftsmc-outputs-doc-<name>-<random>`, removed
-/// when the returned guard drops: when the test ends, passed or failed.
-fn scratch(name: &str) -> TempDir {
-    tempfile::Builder::new().prefix(&format!("ftsmc-outputs-doc-{name}-")).tempdir().unwrap()
 }
 
 /// The names docs/outputs.md gives a table row of their own: the

@@ -7,17 +7,13 @@ use std::process::Command;
 
 use ftsmc_sim::scenario::{Scenario, BUILT_IN_SCENARIOS};
 use serde_json::Value;
-use tempfile::TempDir;
+
+mod common;
+use common::scratch;
 
 fn ftsmc(args: &[&str], cwd: &Path) {
     let out = Command::new(env!("CARGO_BIN_EXE_ftsmc")).args(args).current_dir(cwd).output().expect("binary runs");
     assert!(out.status.success(), "{args:?}: {}", String::from_utf8_lossy(&out.stderr));
-}
-
-/// A fresh scratch folder `<temp dir>/ftsmc-provenance-<name>-<random>`, removed
-/// when the returned guard drops: when the test ends, passed or failed.
-fn scratch(name: &str) -> TempDir {
-    tempfile::Builder::new().prefix(&format!("ftsmc-provenance-{name}-")).tempdir().unwrap()
 }
 
 fn json(path: &Path) -> Value {

@@ -5,16 +5,11 @@
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
-use tempfile::TempDir;
+mod common;
+use common::scratch;
 
 /// Longest time a refusal may take (they take milliseconds).
 const TIME_LIMIT: Duration = Duration::from_secs(20);
-
-/// A fresh scratch folder `<temp dir>/ftsmc-refusals-<name>-<random>`, removed
-/// when the returned guard drops: when the test ends, passed or failed.
-fn scratch(name: &str) -> TempDir {
-    tempfile::Builder::new().prefix(&format!("ftsmc-refusals-{name}-")).tempdir().unwrap()
-}
 
 /// Run `ftsmc args… --out <dir>/out/sub` in a fresh directory (with
 /// `s.toml` = `scenario` when given) and check the refusal: in time,

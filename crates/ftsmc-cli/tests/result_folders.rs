@@ -7,16 +7,11 @@ use std::collections::BTreeSet;
 use std::path::Path;
 use std::process::{Command, Output, Stdio};
 
-use tempfile::TempDir;
+mod common;
+use common::scratch;
 
 fn ftsmc(args: &[&str], cwd: &Path) -> Output {
     Command::new(env!("CARGO_BIN_EXE_ftsmc")).args(args).current_dir(cwd).output().expect("binary runs")
-}
-
-/// A fresh scratch folder `<temp dir>/ftsmc-folders-<name>-<random>`, removed
-/// when the returned guard drops: when the test ends, passed or failed.
-fn scratch(name: &str) -> TempDir {
-    tempfile::Builder::new().prefix(&format!("ftsmc-folders-{name}-")).tempdir().unwrap()
 }
 
 /// Every name in `dir` (hidden ones included), sorted.

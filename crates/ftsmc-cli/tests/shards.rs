@@ -8,9 +8,9 @@ use std::process::{Command, Output};
 use std::sync::OnceLock;
 
 use serde_json::Value;
-use tempfile::TempDir;
 
 mod common;
+use common::scratch;
 
 const SCENARIO: &str = "paper-scenario-2";
 const RUNS: &str = "7";
@@ -32,12 +32,6 @@ fn refused(args: &[&str], cwd: &Path) -> String {
     let err = String::from_utf8_lossy(&out.stderr).trim().to_string();
     assert_eq!(err.lines().count(), 1, "one line: {err}");
     err
-}
-
-/// A fresh scratch folder `<temp dir>/ftsmc-shards-<name>-<random>`, removed
-/// when the returned guard drops: when the test ends, passed or failed.
-fn scratch(name: &str) -> TempDir {
-    tempfile::Builder::new().prefix(&format!("ftsmc-shards-{name}-")).tempdir().unwrap()
 }
 
 /// One campaign flown once for every test: the unsharded batch in

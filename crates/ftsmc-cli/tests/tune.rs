@@ -8,6 +8,8 @@ use std::process::{Command, Output};
 
 use tempfile::TempDir;
 
+mod common;
+
 /// A 1.5 s realistic scenario 2 with 2 training flights per candidate, 4
 /// candidates per generation and 3 held-out flights per gain set.
 const TINY: &str = r#"extends = "realistic-scenario-2"
@@ -32,11 +34,9 @@ fn ok(args: &[&str], cwd: &Path) {
     assert!(out.status.success(), "ftsmc {args:?}: {}", String::from_utf8_lossy(&out.stderr));
 }
 
-/// A fresh scratch folder `<temp dir>/ftsmc-tune-cli-<name>-<random>` holding
-/// `tiny.toml`, removed when the returned guard drops: when the test
-/// ends, passed or failed.
+/// A fresh scratch folder ([`common::scratch`]) holding `tiny.toml`.
 fn scratch(name: &str) -> TempDir {
-    let d = tempfile::Builder::new().prefix(&format!("ftsmc-tune-cli-{name}-")).tempdir().unwrap();
+    let d = common::scratch(name);
     std::fs::write(d.path().join("tiny.toml"), TINY).unwrap();
     d
 }

@@ -11,7 +11,9 @@ use std::time::Duration;
 
 use ftsmc_sim::limits::{self, Limits};
 use ftsmc_sim::scenario::{show, show_str, Scenario, ScenarioError, PAPER_SCENARIO_2};
-use tempfile::TempDir;
+
+mod common;
+use common::scratch;
 
 const BASE: &str = "name = \"t\"\nduration = 1.0\n";
 
@@ -31,12 +33,6 @@ fn refused(extra: &str) -> String {
 
 fn accepted(extra: &str) -> Scenario {
     parse(&format!("{BASE}{extra}")).unwrap_or_else(|e| panic!("{e}"))
-}
-
-/// A fresh scratch folder `<temp dir>/ftsmc-hostile-<name>-<random>`, removed
-/// when the returned guard drops: when the test ends, passed or failed.
-fn scratch(name: &str) -> TempDir {
-    tempfile::Builder::new().prefix(&format!("ftsmc-hostile-{name}-")).tempdir().unwrap()
 }
 
 /// Load `path` on another thread; the load must finish within 10 s

@@ -6,13 +6,9 @@ use std::path::{Path, PathBuf};
 use ftsmc_sim::scenario::{Scenario, PAPER_SCENARIO_1, PAPER_SCENARIO_2};
 use ftsmc_sim::signal::waypoints::{WaypointVelocity, Waypoints};
 use ftsmc_sim::signal::{Signal, Term};
-use tempfile::TempDir;
 
-/// A fresh scratch folder `<temp dir>/ftsmc-ergonomics-<name>-<random>`, removed
-/// when the returned guard drops: when the test ends, passed or failed.
-fn scratch(name: &str) -> TempDir {
-    tempfile::Builder::new().prefix(&format!("ftsmc-ergonomics-{name}-")).tempdir().unwrap()
-}
+mod common;
+use common::scratch;
 
 fn write(dir: &Path, file: &str, text: &str) -> PathBuf {
     let path = dir.join(file);

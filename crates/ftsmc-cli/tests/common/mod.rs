@@ -8,10 +8,20 @@
 //! exits (C `atexit`, run by `exit(3)` after the test harness finishes,
 //! whether the tests passed or failed).
 
+// Each test binary compiles this module and uses only part of it.
+#![allow(dead_code)]
+
 use std::path::PathBuf;
 use std::sync::{Mutex, Once};
 
 use tempfile::TempDir;
+
+/// A fresh scratch folder `<temp dir>/ftsmc-<test binary>-<name>-<random>`,
+/// removed when the returned guard drops: when the test ends, passed or
+/// failed.
+pub fn scratch(name: &str) -> TempDir {
+    tempfile::Builder::new().prefix(&format!("ftsmc-{}-{name}-", env!("CARGO_CRATE_NAME"))).tempdir().unwrap()
+}
 
 /// Folders to remove when the process exits.
 static AT_EXIT: Mutex<Vec<TempDir>> = Mutex::new(Vec::new());
