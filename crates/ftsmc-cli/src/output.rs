@@ -46,9 +46,16 @@
 //! one run's CSV beside the other's summary. A run killed with SIGKILL
 //! leaves only a hidden `.<name>.tmp-…` (or, if killed between the two
 //! renames, `.<name>.old-…`) folder beside the destination; the next
-//! successful run into the same destination deletes such leftovers older
+//! successful run into the same destination cleans up such leftovers older
 //! than [`STALE_AFTER`] whose process no longer exists (on Linux; elsewhere
-//! the age alone decides).
+//! the age alone decides) — but only the files ftsmc provably wrote: a
+//! staging folder carries a marker ([`STAGING_MARKER`], naming its command)
+//! until it is renamed into place, so one without it is never touched; in a
+//! staging folder killed while committing, only its manifest's files go;
+//! in an old folder, only the files its manifests list. Anything else (your
+//! files, caught mid-move by the kill) stays where it is and the run says
+//! so on stderr. The same rule removes the old folder after a commit, so a
+//! file that could not be moved into the new result is kept, not deleted.
 
 use std::collections::HashSet;
 use std::ffi::OsString;
@@ -63,6 +70,11 @@ use serde_json::{json, Map, Value};
 /// Leftover staging / old folders older than this are deleted by the next
 /// successful run into the same destination.
 pub const STALE_AFTER: Duration = Duration::from_secs(3600);
+
+/// The marker file of a staging folder, holding the name of the command
+/// writing it: present from [`ResultDir::begin`] until the folder is renamed
+/// into place. A leftover folder is cleaned only when it has it.
+pub const STAGING_MARKER: &str = ".ftsmc-staging";
 
 /// How often a commit retries when a concurrent run puts a folder back in
 /// place between our two renames.
@@ -81,6 +93,10 @@ pub struct ResultDir {
     /// again if they are still empty when the transaction fails.
     created: Vec<PathBuf>,
     committed: bool,
+    /// Once a commit has started: the files of the result (relative to the
+    /// staging folder). Entries of the old folder are moved in beside them,
+    /// so from then on only these (and the manifest) are ours to delete.
+    written: Option<HashSet<String>>,
 }
 
 fn unique_suffix() -> String {
@@ -151,7 +167,19 @@ impl ResultDir {
             remove_created(&created);
             return Err(e).with_context(|| format!("cannot write to `{}`", dest.display()));
         }
-        Ok(Self { dest: dest.to_path_buf(), owner: owner.to_string(), staging, created, committed: false })
+        let dir = Self {
+            dest: dest.to_path_buf(),
+            owner: owner.to_string(),
+            staging,
+            created,
+            committed: false,
+            written: None,
+        };
+        // On failure `dir` is dropped: the staging folder and the folders
+        // created for it go again.
+        write_file(&dir.staging.join(STAGING_MARKER), format!("{owner}\n").as_bytes())
+            .with_context(|| format!("cannot write to `{}`", dest.display()))?;
+        Ok(dir)
     }
 
     /// The staging folder: write every file of the result below it.
@@ -171,9 +199,11 @@ impl ResultDir {
         let parent = self.staging.parent().map(Path::to_path_buf).unwrap_or_else(|| PathBuf::from("."));
         let name = self.dest.file_name().map(ToOwned::to_owned).unwrap_or_default();
         let manifest_name = manifest_file(&self.owner);
-        // The manifest lists what this result wrote: every file in staging.
+        // The manifest lists what this result wrote: every file in staging
+        // but the marker.
         let mut written = Vec::new();
         list_files(&self.staging, "", &mut written);
+        written.retain(|f| f != STAGING_MARKER);
         written.sort();
         let mut text = String::new();
         for f in &written {
@@ -182,6 +212,9 @@ impl ResultDir {
         }
         write_file(&self.staging.join(&manifest_name), text.as_bytes())?;
         let written: HashSet<String> = written.into_iter().collect();
+        // From here on the old folder's entries join the staging folder:
+        // an error path deletes only the result's own files.
+        self.written = Some(written.clone());
         let mut olds = Vec::new();
         // Entries moved from an old folder into staging: (from, to).
         let mut carried: Vec<(PathBuf, PathBuf)> = Vec::new();
@@ -205,6 +238,10 @@ impl ResultDir {
                     }
                 }
             }
+            // The marker must not reach the destination. Without it a
+            // staging folder left by a kill from here on is never cleaned
+            // (it may hold files carried from the old folder).
+            let _ = std::fs::remove_file(self.staging.join(STAGING_MARKER));
             match std::fs::rename(&self.staging, &self.dest) {
                 Ok(()) => break,
                 // A concurrent run put its result in place between our renames: move that aside too.
@@ -216,8 +253,10 @@ impl ResultDir {
                     if let Some(old) = olds.pop() {
                         let _ = std::fs::rename(&old, &self.dest);
                     }
+                    // Results of concurrent runs moved aside: nothing of
+                    // ours replaced them, so only their own files go.
                     for old in &olds {
-                        let _ = std::fs::remove_dir_all(old);
+                        remove_old(old, &HashSet::new(), &self.dest);
                     }
                     return Err(e).with_context(|| {
                         format!("cannot move {} into place as {}", self.staging.display(), self.dest.display())
@@ -227,9 +266,9 @@ impl ResultDir {
         }
         self.committed = true;
         for old in &olds {
-            let _ = std::fs::remove_dir_all(old);
+            remove_old(old, &written, &self.dest);
         }
-        remove_stale(&parent, &name);
+        remove_stale(&parent, &name, &self.dest);
         disown_replaced(&self.dest, &self.owner, &written);
         Ok(())
     }
@@ -408,10 +447,97 @@ fn undo_carries(carried: &[(PathBuf, PathBuf)]) {
 impl Drop for ResultDir {
     fn drop(&mut self) {
         if !self.committed {
-            let _ = std::fs::remove_dir_all(&self.staging);
+            match &self.written {
+                // Before the commit everything in the staging folder is ours.
+                None => {
+                    let _ = std::fs::remove_dir_all(&self.staging);
+                }
+                // A failed commit has moved the old folder's entries back;
+                // any it could not move stay, with a note.
+                Some(written) => {
+                    let manifest = manifest_file(&self.owner);
+                    let ours = |rel: &str| written.contains(rel) || rel == manifest || rel == STAGING_MARKER;
+                    let kept = remove_ours(&self.staging, &ours);
+                    warn_kept(&self.staging, &kept, &self.dest);
+                }
+            }
             remove_created(&self.created);
         }
     }
+}
+
+/// Delete the files of `folder` for which `ours(relative path)` holds, then
+/// every folder below it left empty, and `folder` itself if empty. Returns
+/// the files kept, relative to `folder`, sorted.
+fn remove_ours(folder: &Path, ours: &dyn Fn(&str) -> bool) -> Vec<String> {
+    let mut files = Vec::new();
+    list_files(folder, "", &mut files);
+    let mut kept: Vec<String> = Vec::new();
+    for f in files {
+        if ours(&f) {
+            let _ = std::fs::remove_file(folder.join(&f));
+        } else {
+            kept.push(f);
+        }
+    }
+    remove_empty_dirs(folder);
+    let _ = std::fs::remove_dir(folder);
+    kept.sort();
+    kept
+}
+
+/// Remove the empty folders below `dir`, deepest first.
+fn remove_empty_dirs(dir: &Path) {
+    let Ok(entries) = std::fs::read_dir(dir) else { return };
+    for entry in entries.flatten() {
+        if entry.file_type().is_ok_and(|t| t.is_dir()) {
+            remove_empty_dirs(&entry.path());
+            let _ = std::fs::remove_dir(entry.path());
+        }
+    }
+}
+
+/// Tell the user that `folder` was kept because it still holds `kept`,
+/// files ftsmc did not write (a leftover of a run into `dest`).
+fn warn_kept(folder: &Path, kept: &[String], dest: &Path) {
+    if kept.is_empty() {
+        return;
+    }
+    let shown: Vec<&str> = kept.iter().take(3).map(String::as_str).collect();
+    let more = if kept.len() > 3 { format!(" and {} more", kept.len() - 3) } else { String::new() };
+    eprintln!(
+        "note: kept {}: it holds {} file(s) ftsmc did not write ({}{more}), left there by an interrupted run into {}; \
+         move them where you want them and delete the folder",
+        folder.display(),
+        kept.len(),
+        shown.join(", "),
+        dest.display()
+    );
+}
+
+/// The files of an old result folder that ftsmc wrote: those its manifests
+/// (`.ftsmc-<command>.manifest` at its top) list, and the manifests.
+fn old_result_files(old: &Path) -> HashSet<String> {
+    let mut ours = HashSet::new();
+    let Ok(entries) = std::fs::read_dir(old) else { return ours };
+    for entry in entries.flatten() {
+        let name = entry.file_name().to_string_lossy().into_owned();
+        if name.starts_with(".ftsmc-") && name.ends_with(".manifest") {
+            ours.extend(read_manifest(&entry.path()));
+            ours.insert(name);
+        }
+    }
+    ours
+}
+
+/// Remove the old result folder `old` after a commit: the files its
+/// manifests list and those the new result (`written`) replaced by name;
+/// anything else (an entry that could not be moved into the new result) is
+/// kept, with a note.
+fn remove_old(old: &Path, written: &HashSet<String>, dest: &Path) {
+    let ours = old_result_files(old);
+    let kept = remove_ours(old, &|rel: &str| ours.contains(rel) || written.contains(rel));
+    warn_kept(old, &kept, dest);
 }
 
 /// Remove directories we created (deepest first) if they are still empty.
@@ -421,16 +547,31 @@ fn remove_created(created: &[PathBuf]) {
     }
 }
 
-/// Delete `.<name>.tmp-*` / `.<name>.old-*` folders in `parent` older than
-/// [`STALE_AFTER`] whose process is gone (left by a killed run).
-fn remove_stale(parent: &Path, name: &std::ffi::OsStr) {
+/// Clean up the `.<name>.tmp-*` / `.<name>.old-*` folders in `parent`
+/// older than [`STALE_AFTER`] whose process is gone (left by a killed run
+/// into `dest`), deleting only files ftsmc wrote:
+/// - a staging folder with its [`STAGING_MARKER`] and no manifest of its
+///   command was killed before committing: all of it is the result's;
+/// - one with its marker and its manifest was killed while moving the old
+///   folder's entries in: only the manifest's files (and the manifest and
+///   marker) go;
+/// - one without the marker is not touched (not ours, or past the marker's
+///   removal just before the final rename);
+/// - an old folder loses the files its manifests list.
+///
+/// What is kept is reported on stderr.
+fn remove_stale(parent: &Path, name: &std::ffi::OsStr, dest: &Path) {
     let Ok(entries) = std::fs::read_dir(parent) else { return };
     let name = name.to_string_lossy();
-    let prefixes = [format!(".{name}.tmp-"), format!(".{name}.old-")];
+    let (tmp, old) = (format!(".{name}.tmp-"), format!(".{name}.old-"));
     for entry in entries.flatten() {
         let file_name = entry.file_name();
         let file_name = file_name.to_string_lossy();
-        let Some(rest) = prefixes.iter().find_map(|p| file_name.strip_prefix(p.as_str())) else { continue };
+        let (rest, staging) = match (file_name.strip_prefix(tmp.as_str()), file_name.strip_prefix(old.as_str())) {
+            (Some(rest), _) => (rest, true),
+            (None, Some(rest)) => (rest, false),
+            (None, None) => continue,
+        };
         // A long run's staging folder can be old while it is still flying:
         // keep it while its process (`<pid>-<nanos>`) is alive (Linux /proc).
         let pid = rest.split('-').next().unwrap_or("");
@@ -443,9 +584,25 @@ fn remove_stale(parent: &Path, name: &std::ffi::OsStr) {
             .ok()
             .and_then(|t| t.elapsed().ok())
             .is_some_and(|age| age >= STALE_AFTER);
-        if old_enough && entry.path().is_dir() {
-            let _ = std::fs::remove_dir_all(entry.path());
+        let folder = entry.path();
+        if !old_enough || !entry.file_type().is_ok_and(|t| t.is_dir()) {
+            continue;
         }
+        let kept = if staging {
+            let Ok(owner) = std::fs::read_to_string(folder.join(STAGING_MARKER)) else { continue };
+            let manifest = manifest_file(owner.trim());
+            match std::fs::symlink_metadata(folder.join(&manifest)) {
+                Err(_) => remove_ours(&folder, &|_| true),
+                Ok(_) => {
+                    let listed = read_manifest(&folder.join(&manifest));
+                    remove_ours(&folder, &|rel: &str| listed.contains(rel) || rel == manifest || rel == STAGING_MARKER)
+                }
+            }
+        } else {
+            let ours = old_result_files(&folder);
+            remove_ours(&folder, &|rel: &str| ours.contains(rel))
+        };
+        warn_kept(&folder, &kept, dest);
     }
 }
 
@@ -822,33 +979,101 @@ mod tests {
         assert_eq!(names(root), ["file"]);
     }
 
+    /// A staging folder as a run killed at that point leaves it: `dir`'s
+    /// folder renamed to a dead process's name (a pid above Linux's
+    /// `pid_max`) with `tag`, its age set two hours back.
+    fn killed(dir: ResultDir, tag: &str) -> PathBuf {
+        let staging = dir.path().to_path_buf();
+        std::mem::forget(dir);
+        let name = staging.file_name().unwrap().to_string_lossy().into_owned();
+        let (prefix, _) = name.split_once(".tmp-").unwrap();
+        let dead = staging.with_file_name(format!("{prefix}.tmp-4194305-{tag}"));
+        std::fs::rename(&staging, &dead).unwrap();
+        age(&dead);
+        dead
+    }
+
+    /// Set `dir`'s modification time two hours back (older than
+    /// [`STALE_AFTER`]).
+    fn age(dir: &Path) {
+        let two_hours_ago = SystemTime::now() - Duration::from_secs(7200);
+        std::fs::File::open(dir).unwrap().set_modified(two_hours_ago).unwrap();
+    }
+
     #[test]
     fn stale_staging_folders_of_a_killed_run_are_removed_by_the_next_commit() {
         let tmp = temp("stale");
         let root = tmp.path();
-        let stale = root.join(".res.tmp-4194305-1"); // above Linux pid_max
-        let fresh = root.join(".res.tmp-4194305-2");
-        let other = root.join(".other.tmp-4194305-1");
-        for d in [&stale, &fresh, &other] {
-            std::fs::create_dir_all(d).unwrap();
-            std::fs::write(d.join("x.csv"), "partial").unwrap();
-        }
-        let two_hours_ago = SystemTime::now() - Duration::from_secs(7200);
-        for d in [&stale, &other] {
-            std::fs::File::open(d).unwrap().set_modified(two_hours_ago).unwrap();
-        }
+        let dir = ResultDir::begin(&root.join("res"), "run").unwrap();
+        dir.write("sub/x.csv", b"partial").unwrap();
+        let stale = killed(dir, "1");
+        assert!(stale.join(STAGING_MARKER).exists());
+        let dir = ResultDir::begin(&root.join("res"), "run").unwrap();
+        dir.write("x.csv", b"partial").unwrap();
+        let fresh = killed(dir, "2");
+        std::fs::File::open(&fresh).unwrap().set_modified(SystemTime::now()).unwrap();
+        let dir = ResultDir::begin(&root.join("other"), "run").unwrap();
+        let other = killed(dir, "1");
         let dir = ResultDir::begin(&root.join("res"), "run").unwrap();
         dir.write("summary.json", b"{}").unwrap();
         dir.commit().unwrap();
         // The stale one goes; a fresh one may belong to a concurrent run,
         // and another destination's is not ours to touch.
         assert_eq!(names(root), [".other.tmp-4194305-1", ".res.tmp-4194305-2", "res"]);
+        assert!(fresh.exists() && other.exists() && !stale.exists());
+        // The marker never reaches the result, nor its manifest.
+        assert_eq!(names(&root.join("res")), [".ftsmc-run.manifest", "summary.json"]);
+        assert_eq!(std::fs::read_to_string(root.join("res/.ftsmc-run.manifest")).unwrap(), "summary.json\n");
         // An old staging folder of a live process (a long run) stays.
         let live = root.join(format!(".res.tmp-{}-3", std::process::id()));
         std::fs::create_dir_all(&live).unwrap();
-        std::fs::File::open(&live).unwrap().set_modified(two_hours_ago).unwrap();
+        std::fs::write(live.join(STAGING_MARKER), "run\n").unwrap();
+        age(&live);
         ResultDir::begin(&root.join("res"), "run").unwrap().commit().unwrap();
         assert!(live.exists());
+    }
+
+    #[test]
+    fn leftovers_are_cleaned_of_ftsmc_files_only() {
+        let tmp = temp("leftover");
+        let root = tmp.path();
+        // A folder named like a staging folder but without the marker: a
+        // user's (or past the marker's removal): untouched.
+        let foreign = root.join(".res.tmp-4194305-1");
+        std::fs::create_dir_all(foreign.join("deep")).unwrap();
+        std::fs::write(foreign.join("deep/notes.txt"), "mine").unwrap();
+        age(&foreign);
+        // A staging folder killed while committing: its manifest's files
+        // beside a user's file carried in from the old folder.
+        let dir = ResultDir::begin(&root.join("res"), "montecarlo").unwrap();
+        dir.write("runs.csv", b"a,b\n").unwrap();
+        let mid_commit = killed(dir, "2");
+        std::fs::write(mid_commit.join(".ftsmc-montecarlo.manifest"), "runs.csv\n").unwrap();
+        std::fs::create_dir_all(mid_commit.join("data")).unwrap();
+        std::fs::write(mid_commit.join("data/mine.csv"), "mine").unwrap();
+        age(&mid_commit);
+        // An old result folder caught mid-move: listed files and a user's.
+        let old = root.join(".res.old-4194305-3");
+        std::fs::create_dir_all(&old).unwrap();
+        std::fs::write(old.join(".ftsmc-run.manifest"), "a.csv\nsub/b.csv\n").unwrap();
+        std::fs::write(old.join("a.csv"), "ours").unwrap();
+        std::fs::create_dir_all(old.join("sub")).unwrap();
+        std::fs::write(old.join("sub/b.csv"), "ours").unwrap();
+        std::fs::write(old.join("paper.pdf"), "mine").unwrap();
+        age(&old);
+        // And one holding only listed files: removed whole.
+        let old_ours = root.join(".res.old-4194305-4");
+        std::fs::create_dir_all(&old_ours).unwrap();
+        std::fs::write(old_ours.join(".ftsmc-run.manifest"), "a.csv\n").unwrap();
+        std::fs::write(old_ours.join("a.csv"), "ours").unwrap();
+        age(&old_ours);
+
+        ResultDir::begin(&root.join("res"), "run").unwrap().commit().unwrap();
+        assert_eq!(names(root), [".res.old-4194305-3", ".res.tmp-4194305-1", ".res.tmp-4194305-2", "res"]);
+        assert_eq!(std::fs::read_to_string(foreign.join("deep/notes.txt")).unwrap(), "mine");
+        assert_eq!(names(&mid_commit), ["data"]);
+        assert_eq!(std::fs::read_to_string(mid_commit.join("data/mine.csv")).unwrap(), "mine");
+        assert_eq!(names(&old), ["paper.pdf"]);
     }
 
     #[test]
