@@ -220,7 +220,9 @@ fn control_specs<'a>() -> [PanelSpec<'a>; 4] {
 }
 
 /// Adaptive states of one controller: one panel per channel; each estimate
-/// is `(legend label, CSV column prefix (the column is `<prefix>_<axis>`), colour, units on position channels, units on attitude channels)`.
+/// is `(legend label, CSV column prefix, colour, units on position
+/// channels, units on attitude channels)`; the column of an axis is
+/// `<prefix>_<axis>`.
 type Estimate<'a> = (&'a str, &'a str, crate::plot::Rgb, &'a str, &'a str);
 
 fn adaptive_figure(title: &str, run: &RunOutput, estimates: &[Estimate], y_name: &str) -> Figure {

@@ -55,13 +55,13 @@ struct Cli {
 enum Command {
     /// Run both paper scenarios with every controller; print Table 3 beside the paper's; write CSV, JSON, figures.
     Reproduce {
-        /// Parent folder: writes OUT/<scenario>/ per paper scenario, and summary.json, report.md, figures/ in OUT.
+        /// Parent folder: writes `OUT/<scenario>/` per paper scenario, and summary.json, report.md, figures/ in OUT.
         #[arg(long, default_value = "results")]
         out: PathBuf,
         /// Skip figure rendering (tables, CSV and JSON only).
         #[arg(long)]
         no_figures: bool,
-        /// Monte Carlo runs of each wind-ladder rung (realistic-<level>-<n>) per controller in the "Beyond the paper" section (0: none).
+        /// Monte Carlo runs of each wind-ladder rung (`realistic-<level>-<n>`) per controller in the "Beyond the paper" section (0: none).
         #[arg(long, default_value_t = reproduce::DEFAULT_REALISTIC_RUNS)]
         realistic_runs: u64,
         /// Raise a cost limit of the realistic Monte Carlo, e.g. `--limit max_flights=1e7` (repeatable; see docs/scenarios.md).
@@ -75,7 +75,7 @@ enum Command {
         /// Controller(s) to run (repeat or comma-separate); default: the scenario's `controllers` list.
         #[arg(long, short = 'c', alias = "controller", value_delimiter = ',')]
         controllers: Vec<String>,
-        /// Parent folder: the results go to OUT/<scenario name>/.
+        /// Parent folder: the results go to `OUT/<scenario name>/`.
         #[arg(long, default_value = "results")]
         out: PathBuf,
         /// Skip figure rendering.
@@ -97,7 +97,7 @@ enum Command {
         /// Log-spaced magnitudes per decade.
         #[arg(long, default_value_t = 3)]
         per_decade: usize,
-        /// Parent folder: the results go to OUT/<scenario name>/.
+        /// Parent folder: the results go to `OUT/<scenario name>/`.
         #[arg(long, default_value = "results/fixed-time")]
         out: PathBuf,
         /// Raise a cost limit, e.g. `--limit max_steps=1e10` (repeatable; keys: max_steps, max_samples,
@@ -124,7 +124,7 @@ enum Command {
         /// Controller(s) to fly (repeat or comma-separate); default: the scenario's `controllers` list.
         #[arg(long, short = 'c', value_delimiter = ',')]
         controllers: Vec<String>,
-        /// Parent folder: the results go to OUT/<scenario name>/.
+        /// Parent folder: the results go to `OUT/<scenario name>/`.
         #[arg(long, default_value = "results/montecarlo")]
         out: PathBuf,
         /// Skip the box-plot figure.
@@ -134,7 +134,7 @@ enum Command {
         /// max_output_bytes, max_flights, max_sweep_points, max_threads, max_scenario_bytes; see docs/scenarios.md).
         #[arg(long = "limit", value_name = "KEY=VALUE")]
         limit: Vec<String>,
-        /// Fly only shard K of N (a contiguous block of the runs) into OUT/<name>-shard-K-of-N/;
+        /// Fly only shard K of N (a contiguous block of the runs) into `OUT/<name>-shard-K-of-N/`;
         /// `ftsmc merge` joins the N shards into the unsharded result (docs/campaigns.md).
         #[arg(long, value_name = "K/N")]
         shard: Option<ftsmc_sim::batch::shard::Shard>,
@@ -144,7 +144,7 @@ enum Command {
         /// Shard folders (all N of one campaign, any order).
         #[arg(required = true, value_name = "DIR")]
         shards: Vec<PathBuf>,
-        /// Parent folder: the merged result goes to OUT/<scenario name>/.
+        /// Parent folder: the merged result goes to `OUT/<scenario name>/`.
         #[arg(long, default_value = "results/montecarlo")]
         out: PathBuf,
         /// Skip the box-plot figure.
@@ -167,7 +167,7 @@ enum Command {
         /// Worker threads (default: all cores). Results do not depend on it.
         #[arg(long)]
         threads: Option<usize>,
-        /// Parent folder: the results go to OUT/<scenario name>/.
+        /// Parent folder: the results go to `OUT/<scenario name>/`.
         #[arg(long, default_value = "results/tune")]
         out: PathBuf,
         /// Skip the convergence figure.
