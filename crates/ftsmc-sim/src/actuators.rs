@@ -18,7 +18,6 @@
 
 use ftsmc_core::law::GainError;
 use ftsmc_core::model::{Command, QuadrotorParams};
-use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
@@ -32,9 +31,7 @@ pub const MOTOR_NOISE_STREAM: u64 = 16;
 /// The motor-noise generator of a run: `ChaCha8Rng` seeded with the run's
 /// seed, stream [`MOTOR_NOISE_STREAM`].
 pub fn motor_noise_rng(seed: u64) -> ChaCha8Rng {
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    rng.set_stream(MOTOR_NOISE_STREAM);
-    rng
+    crate::rng::chacha_stream(seed, MOTOR_NOISE_STREAM)
 }
 
 /// How the motor-noise standard deviation is expressed.

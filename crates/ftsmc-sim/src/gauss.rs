@@ -368,15 +368,9 @@ impl LogNormal {
 mod tests {
     use super::*;
     use core::convert::Infallible;
-    use rand::{SeedableRng, TryRng};
-    use rand_chacha::ChaCha8Rng;
+    use rand::TryRng;
 
-    /// The generator of `seed` on `stream`.
-    fn generator(seed: u64, stream: u64) -> ChaCha8Rng {
-        let mut rng = ChaCha8Rng::seed_from_u64(seed);
-        rng.set_stream(stream);
-        rng
-    }
+    use crate::rng::chacha_stream as generator;
 
     /// A generator serving given `u64` words in order (then zeros).
     struct Words {

@@ -72,7 +72,8 @@
 //!          text.rs              values in error messages, exact-length TOML arrays
 //!          isa.rs               the instruction set of the lane kernels, picked at run time
 //!          noise.rs             NoiseStream: a noise source's ChaCha generator read a block ahead
-//! floor 0  gauss.rs             normal and log-normal draws (ziggurat) on the libm crate's exp and ln
+//! floor 0  rng.rs               the ChaCha8 generator of a seed on a stream: every draw starts there
+//!          gauss.rs             normal and log-normal draws (ziggurat) on the libm crate's exp and ln
 //! ```
 #![warn(missing_docs)]
 
@@ -90,6 +91,7 @@ pub mod limits;
 pub mod metrics;
 pub mod noise;
 pub mod registry;
+pub mod rng;
 pub mod run;
 pub mod scenario;
 pub mod sensors;

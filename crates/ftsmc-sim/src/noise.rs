@@ -125,14 +125,8 @@ impl TryRng for NoiseStream {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use rand::SeedableRng;
 
-    /// The generator of `seed` on `stream`.
-    fn generator(seed: u64, stream: u64) -> ChaCha8Rng {
-        let mut rng = ChaCha8Rng::seed_from_u64(seed);
-        rng.set_stream(stream);
-        rng
-    }
+    use crate::rng::chacha_stream as generator;
 
     /// The stream serves the generator's own words, whatever the mix of
     /// `u32`, `u64` and byte reads and wherever they fall against the

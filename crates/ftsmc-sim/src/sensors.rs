@@ -39,7 +39,6 @@ use ftsmc_core::kinematics::{
 use ftsmc_core::law::GainError;
 use ftsmc_core::measured::{BodyAttitude, Measurement};
 use ftsmc_core::model::QuadState;
-use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
@@ -207,9 +206,7 @@ impl SensorParams {
 /// The generator of one noise source: `ChaCha8Rng` seeded with the run's
 /// seed, on `stream`.
 pub fn sensor_noise_rng(seed: u64, stream: u64) -> ChaCha8Rng {
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    rng.set_stream(stream);
-    rng
+    crate::rng::chacha_stream(seed, stream)
 }
 
 /// Which axes of a quantity carry an error term (noise or bias), decided

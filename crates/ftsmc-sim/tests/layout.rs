@@ -15,6 +15,7 @@ use source::{module_of, paths_after, rust_files, without_comments};
 /// prefix decides, so a sub-module may sit on another floor than its parent.
 const FLOORS: &[(&str, u32)] = &[
     ("gauss", 0),
+    ("rng", 0),
     ("text", 1),
     ("axes", 1),
     ("limits", 1),

@@ -13,9 +13,8 @@ pub use disturbance::DisturbanceSignals;
 pub use payload::Payload;
 pub use variation::DragNoise;
 
+use crate::rng::chacha_stream;
 use ftsmc_core::model::QuadrotorParams;
-use rand::SeedableRng;
-use rand_chacha::ChaCha8Rng;
 
 use crate::noise::NoiseStream;
 use crate::signal::grid::GridSignal;
@@ -70,13 +69,9 @@ impl<'a> Environment<'a> {
     /// Drag noise streams are derived from `params.seed`: stream `k` for
     /// coefficient `k` (K_f1x, K_f1y, K_f1z, K_f2x, K_f2y, K_f2z).
     pub fn new(params: EnvironmentParams<'a>) -> Self {
-        let drag_rngs = params.drag_noise.map(|_| {
-            core::array::from_fn(|k| {
-                let mut rng = ChaCha8Rng::seed_from_u64(params.seed);
-                rng.set_stream(1 + k as u64);
-                NoiseStream::new(rng)
-            })
-        });
+        let drag_rngs = params
+            .drag_noise
+            .map(|_| core::array::from_fn(|k| NoiseStream::new(chacha_stream(params.seed, 1 + k as u64))));
         Self { params, drag_rngs, drag_factor: [1.0; 6], grid: None }
     }
 

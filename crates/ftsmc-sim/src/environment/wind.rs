@@ -78,9 +78,8 @@
 //! generator's own words, read a block ahead), so the draws are those of
 //! [`crate::gauss::standard_normal`] on the `ChaCha8Rng` itself.
 
+use crate::rng::chacha_stream;
 use ftsmc_core::law::GainError;
-use rand::SeedableRng;
-use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
 use crate::noise::NoiseStream;
@@ -587,11 +586,8 @@ impl Dryden {
     /// start in their stationary distribution (first draws of each stream).
     /// `params` and `dt` are assumed checked ([`WindParams::check`], `dt > 0`).
     pub fn new(params: TurbulenceParams, dt: f64, airspeed: f64, seed: u64) -> Self {
-        let mut rngs: [NoiseStream; 3] = core::array::from_fn(|k| {
-            let mut rng = ChaCha8Rng::seed_from_u64(seed);
-            rng.set_stream(WIND_TURBULENCE_STREAMS[k]);
-            NoiseStream::new(rng)
-        });
+        let mut rngs: [NoiseStream; 3] =
+            core::array::from_fn(|k| NoiseStream::new(chacha_stream(seed, WIND_TURBULENCE_STREAMS[k])));
         let scales = params.scales();
         let u = scales.sigma[0] * rngs[0].normal();
         let mut vw = [[0.0; 2]; 2];
@@ -741,6 +737,7 @@ impl Wind {
 mod tests {
     use super::*;
     use rand::{RngExt, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
 
     /// The paired `v`, `w` step is each filter's own step
     /// `z₁ ← Φ₁₁ z₁ + Φ₁₂ z₂ + L₁₁ n₁`, `z₂ ← Φ₂₁ z₁ + Φ₂₂ z₂ + L₂₁ n₁ + L₂₂ n₂`

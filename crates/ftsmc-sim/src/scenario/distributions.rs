@@ -7,8 +7,8 @@
 //! master seed and the run index only (never from thread state), so results
 //! are identical whatever the thread count.
 
-use rand::{Rng, RngExt, SeedableRng};
-use rand_chacha::ChaCha8Rng;
+use crate::rng::chacha_stream;
+use rand::{Rng, RngExt};
 use serde::{Deserialize, Serialize};
 
 use crate::gauss::{LogNormal, Normal};
@@ -380,11 +380,7 @@ impl MonteCarloSpec {
     /// the draws of the others.
     pub fn sample(&self, base: &Scenario, master: u64, index: u64) -> (Scenario, u64, [f64; 12]) {
         let seed = run_seed(master, index);
-        let stream = |k: u64| {
-            let mut rng = ChaCha8Rng::seed_from_u64(seed);
-            rng.set_stream(100 + k);
-            rng
-        };
+        let stream = |k: u64| chacha_stream(seed, 100 + k);
         let mut s = base.clone();
         s.seed = seed;
         let mass = self.mass.map(|d| d.sample(&mut stream(0)));
@@ -513,7 +509,5 @@ fn drawn_rigid_body(
 /// Seed of run `index`: the first word of ChaCha8 stream `index` keyed by
 /// the master seed.
 pub fn run_seed(master: u64, index: u64) -> u64 {
-    let mut rng = ChaCha8Rng::seed_from_u64(master);
-    rng.set_stream(index);
-    rng.next_u64()
+    chacha_stream(master, index).next_u64()
 }
