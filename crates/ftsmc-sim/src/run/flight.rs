@@ -109,6 +109,9 @@ struct Lane<'s> {
     substeps: u32,
     steps: u64,
     k: u64,
+    /// The time of the period boundary `k`, `k as f64 · dt` (s), converted
+    /// once per period (every reader takes these bits).
+    t: f64,
     env: Environment<'s>,
     actuators: ActuatorStage,
     demand_params: QuadrotorParams,
@@ -179,6 +182,7 @@ impl<'s> Lane<'s> {
             substeps: sim.substeps,
             steps,
             k: 0,
+            t: 0u64 as f64 * dt,
             env,
             actuators,
             demand_params,
@@ -217,7 +221,7 @@ impl<'s> Lane<'s> {
     #[inline]
     fn substep(&self, j: u32) -> Substep<'_> {
         Substep {
-            t0: self.k as f64 * self.dt + j as f64 * self.h,
+            t0: self.t + j as f64 * self.h,
             h: self.h,
             a: &self.tv_now,
             b: &self.tv_next,
@@ -336,7 +340,7 @@ impl<'s, C: Controller + ?Sized> Flight<'s, C, f64> {
     /// first sees the boundary the flight is at (`t = 0` for a new flight).
     pub fn observe_with(&mut self, observer: &'s mut dyn Observer) {
         if self.lanes[0].flying() {
-            let t = self.lanes[0].k as f64 * self.lanes[0].dt;
+            let t = self.lanes[0].t;
             observer.boundary(t, &self.state, &self.reference);
         }
         self.observers.push(observer);
@@ -488,6 +492,7 @@ impl<'s, C: Controller<R> + ?Sized, R: Real> Flight<'s, C, R> {
         let (mut idle, _) = Lane::new(scenario, recorder);
         idle.exit = Some(ExitStatus::Completed);
         idle.k = idle.steps;
+        idle.t = idle.k as f64 * idle.dt;
         let done = core::mem::replace(&mut self.lanes[lane], idle);
         done.output(self.controller.name(), &self.options)
     }
@@ -631,7 +636,7 @@ impl<'s, C: Controller<R> + ?Sized, R: Real> Flight<'s, C, R> {
             if !lane.flying() {
                 continue;
             }
-            let t = lane.k as f64 * lane.dt;
+            let t = lane.t;
             if let Err(divergence) = self.truth.begin_period(i, &lane.tv_now, &lane.base_plant) {
                 lane.exit = Some(ExitStatus::Diverged { divergence, time: t });
                 lane.unobserved_period = true;
@@ -704,7 +709,7 @@ impl<'s, C: Controller<R> + ?Sized, R: Real> Flight<'s, C, R> {
         let substeps = self.lanes[0].substeps;
         for j in 0..substeps {
             for lane in &mut self.lanes {
-                let t0 = lane.k as f64 * lane.dt + j as f64 * lane.h;
+                let t0 = lane.t + j as f64 * lane.h;
                 if lane.flying() {
                     lane.wind_now = lane.wind.as_mut().map(|w| w.step(t0));
                     lane.tv_next =
@@ -738,8 +743,9 @@ impl<'s, C: Controller<R> + ?Sized, R: Real> Flight<'s, C, R> {
                     let contact = g.contact(lane.z_prev, &mut z, &mut vz);
                     self.truth.set_vertical(i, z, vz);
                     if let Some((fraction, impact_speed)) = contact {
-                        let t0 = lane.k as f64 * lane.dt + j as f64 * lane.h;
+                        let t0 = lane.t + j as f64 * lane.h;
                         lane.k += 1;
+                        lane.t = lane.k as f64 * lane.dt;
                         lane.exit = Some(ExitStatus::Crashed { time: t0 + fraction * lane.h, impact_speed });
                         continue;
                     }
@@ -757,11 +763,12 @@ impl<'s, C: Controller<R> + ?Sized, R: Real> Flight<'s, C, R> {
             }
             let k = lane.k;
             lane.k = k + 1;
+            let t_next = (k + 1) as f64 * lane.dt;
+            lane.t = t_next;
             if self.options.step_done(lane.k) {
-                lane.exit = Some(ExitStatus::Interrupted { time: lane.k as f64 * lane.dt });
+                lane.exit = Some(ExitStatus::Interrupted { time: t_next });
                 continue;
             }
-            let t_next = (k + 1) as f64 * lane.dt;
             lane.reference = lane.reference_grid.at(k + 1, t_next);
             self.reference.put_lane(i, lane.reference);
             lane.at_boundary = true;
@@ -772,7 +779,7 @@ impl<'s, C: Controller<R> + ?Sized, R: Real> Flight<'s, C, R> {
         }
         for i in 0..n {
             if self.lanes[i].at_boundary {
-                let t_next = self.lanes[i].k as f64 * self.lanes[i].dt;
+                let t_next = self.lanes[i].t;
                 self.lane_boundary(i, t_next, true);
             }
         }
