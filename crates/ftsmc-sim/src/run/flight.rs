@@ -139,7 +139,9 @@ struct Lane<'s> {
     /// the statistics do not.
     unobserved_period: bool,
     /// This period's delivery (the truth reads its drive during the substeps),
-    /// its unlimited rotor-speed demand and the true plant of the period.
+    /// its unlimited rotor-speed demand and the true plant of the period
+    /// (formed only where it is read: one flight's observers, or an actuator
+    /// stage that reads it, [`ActuatorStage::reads_plant`]).
     delivered: Delivered,
     demand: [f64; 4],
     plant_now: QuadrotorParams,
@@ -618,9 +620,12 @@ impl<'s, C: Controller<R> + ?Sized, R: Real> Flight<'s, C, R> {
             }
             let command_i: Command = command.get_lane(i);
             lane.env.next_period();
-            // Computed in place (no copies of the plant and the delivery).
-            lane.plant_now = lane.env.params_with(&lane.tv_now);
-            lane.delivered = lane.actuators.deliver(&command_i, &lane.plant_now);
+            // Computed in place (no copies of the plant and the delivery),
+            // the plant only where it is read.
+            if n == 1 || lane.actuators.reads_plant() {
+                lane.plant_now = lane.env.params_with(&lane.tv_now);
+            }
+            lane.actuators.deliver_into(&command_i, &lane.plant_now, &mut lane.delivered);
             let delivered = &lane.delivered;
             let demand =
                 delivered.demand.unwrap_or_else(|| rotor_speeds(&lane.demand_params, &command_i, f64::INFINITY));
