@@ -329,6 +329,23 @@ pub struct Flight<'s, C: Controller<R> + ?Sized, R: Real = f64> {
     /// The allocation the lanes' substeps are gathered in (kept between
     /// substeps; empty in between).
     substeps: Vec<Substep<'static>>,
+    /// Per lane, an earlier lane flying the same reference on the same
+    /// control grid ([`reference_twins`]): when both reach a boundary at
+    /// the same step, its reference is copied, not evaluated again.
+    reference_twin: Vec<Option<usize>>,
+}
+
+/// Per lane, the first earlier lane whose scenario has the same reference
+/// signals, bit for bit, on the same control period: [`ReferenceGrid::at`]
+/// is a function of the step and its time alone, so both lanes' references
+/// at one step are the same bits. `Debug` spells every number of a
+/// validated signal (all finite) exactly, `-0.0` included, so equal texts
+/// are equal signals.
+fn reference_twins(lanes: &[Lane<'_>]) -> Vec<Option<usize>> {
+    let keys: Vec<String> = lanes.iter().map(|lane| format!("{:?}", lane.scenario.reference)).collect();
+    (0..lanes.len())
+        .map(|i| (0..i).find(|&j| lanes[j].dt.to_bits() == lanes[i].dt.to_bits() && keys[j] == keys[i]))
+        .collect()
 }
 
 impl<'s, C: Controller + ?Sized> Flight<'s, C, f64> {
@@ -456,7 +473,9 @@ impl<'s, C: Controller<R> + ?Sized, R: Real> Flight<'s, C, R> {
             measured_ahead: None,
             body_ahead: None,
             substeps: Vec::new(),
+            reference_twin: Vec::new(),
         };
+        flight.reference_twin = reference_twins(&flight.lanes);
         for i in 0..R::LANES {
             flight.lane_boundary(i, 0.0, false);
         }
@@ -478,6 +497,7 @@ impl<'s, C: Controller<R> + ?Sized, R: Real> Flight<'s, C, R> {
         self.controller.reset_lane(lane);
         self.reference.put_lane(lane, r);
         self.lanes[lane] = fresh;
+        self.reference_twin = reference_twins(&self.lanes);
         self.refresh_lane(lane);
         if started.is_err() {
             // A flight that cannot start is seen at its initial state.
@@ -761,7 +781,9 @@ impl<'s, C: Controller<R> + ?Sized, R: Real> Flight<'s, C, R> {
         }
 
         // 7. The next reference and boundary; divergence checks.
-        for (i, lane) in self.lanes.iter_mut().enumerate() {
+        for i in 0..n {
+            let (earlier, rest) = self.lanes.split_at_mut(i);
+            let lane = &mut rest[0];
             lane.at_boundary = false;
             if !lane.flying() {
                 continue;
@@ -774,7 +796,12 @@ impl<'s, C: Controller<R> + ?Sized, R: Real> Flight<'s, C, R> {
                 lane.exit = Some(ExitStatus::Interrupted { time: t_next });
                 continue;
             }
-            lane.reference = lane.reference_grid.at(k + 1, t_next);
+            // A twin at the same boundary has this very reference already.
+            let twin = self.reference_twin[i].map(|j| &earlier[j]).filter(|twin| twin.at_boundary && twin.k == k + 1);
+            lane.reference = match twin {
+                Some(twin) => twin.reference,
+                None => lane.reference_grid.at(k + 1, t_next),
+            };
             self.reference.put_lane(i, lane.reference);
             lane.at_boundary = true;
         }
