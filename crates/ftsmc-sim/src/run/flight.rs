@@ -333,6 +333,11 @@ pub struct Flight<'s, C: Controller<R> + ?Sized, R: Real = f64> {
     /// control grid ([`reference_twins`]): when both reach a boundary at
     /// the same step, its reference is copied, not evaluated again.
     reference_twin: Vec<Option<usize>>,
+    /// Per lane, `simulation.max_tilt` (rad) and
+    /// `simulation.max_position_error` (m), NaN where not finite (no
+    /// comparison with NaN holds: [`Flight::sound_lanes`] then leaves the
+    /// lane to the ordered checks).
+    limits: [R; 2],
 }
 
 /// Per lane, the first earlier lane whose scenario has the same reference
@@ -474,10 +479,12 @@ impl<'s, C: Controller<R> + ?Sized, R: Real> Flight<'s, C, R> {
             body_ahead: None,
             substeps: Vec::new(),
             reference_twin: Vec::new(),
+            limits: [R::splat(f64::NAN); 2],
         };
         flight.reference_twin = reference_twins(&flight.lanes);
         for i in 0..R::LANES {
-            flight.lane_boundary(i, 0.0, false);
+            flight.set_limits(i);
+            flight.lane_boundary(i, 0.0, false, false);
         }
         flight
     }
@@ -498,12 +505,13 @@ impl<'s, C: Controller<R> + ?Sized, R: Real> Flight<'s, C, R> {
         self.reference.put_lane(lane, r);
         self.lanes[lane] = fresh;
         self.reference_twin = reference_twins(&self.lanes);
+        self.set_limits(lane);
         self.refresh_lane(lane);
         if started.is_err() {
             // A flight that cannot start is seen at its initial state.
             self.state.put_lane(lane, scenario.initial_state.state());
         }
-        self.lane_boundary(lane, 0.0, false);
+        self.lane_boundary(lane, 0.0, false, false);
     }
 
     /// The outcome of lane `lane`'s flight so far, its lane left as it is
@@ -554,10 +562,46 @@ impl<'s, C: Controller<R> + ?Sized, R: Real> Flight<'s, C, R> {
         }
     }
 
+    /// Lanes whose boundary state certainly passes [`check_divergence`]:
+    /// `|φ|` and `|θ|` at most `simulation.max_tilt`, every position error
+    /// at most `simulation.max_position_error` (both finite:
+    /// [`Flight::limits`]; then these five components are finite too) and
+    /// the seven other components finite, tested on every lane at once
+    /// (comparisons and `x − x` sums only: no number of the flight changes).
+    /// Any other lane takes the ordered checks.
+    #[allow(clippy::eq_op)] // `x − x` on purpose: the finiteness test below
+    fn sound_lanes(&self) -> R::Mask {
+        let (s, r) = (&self.state, &self.reference);
+        let zero = R::splat(0.0);
+        // `x − x` is +0 for a finite `x` and NaN otherwise: the sum is 0
+        // exactly when every component is finite.
+        let mut z = s.attitude[2] - s.attitude[2];
+        for part in [&s.velocity, &s.angular_rate] {
+            for &v in part {
+                z += v - v;
+            }
+        }
+        let [max_tilt, max_error] = self.limits;
+        let mut sound = z.le(zero) & s.attitude[0].abs().le(max_tilt) & s.attitude[1].abs().le(max_tilt);
+        for i in 0..3 {
+            sound = sound & (s.position[i] - r.position[i]).abs().le(max_error);
+        }
+        sound
+    }
+
+    /// Lane `lane`'s entries of [`Flight::limits`] for its scenario.
+    fn set_limits(&mut self, lane: usize) {
+        let sim = &self.lanes[lane].scenario.simulation;
+        let finite = |v: f64| if v.is_finite() { v } else { f64::NAN };
+        self.limits[0].put_lane(lane, finite(sim.max_tilt));
+        self.limits[1].put_lane(lane, finite(sim.max_position_error));
+    }
+
     /// Lane `i`'s envelope, statistics (and, one flight, the observers) see
     /// the truth at the period boundary `t` (s); with `check`, the
-    /// divergence checks and the planned end follow on the same state.
-    fn lane_boundary(&mut self, i: usize, t: f64, check: bool) {
+    /// divergence checks (skipped when `sound`: [`Flight::sound_lanes`])
+    /// and the planned end follow on the same state.
+    fn lane_boundary(&mut self, i: usize, t: f64, check: bool, sound: bool) {
         let mut s_slot = None;
         let s = lane_ref(&self.state, i, &mut s_slot);
         let lane = &mut self.lanes[i];
@@ -570,7 +614,8 @@ impl<'s, C: Controller<R> + ?Sized, R: Real> Flight<'s, C, R> {
             }
         }
         if check {
-            if let Some(divergence) = check_divergence(lane.scenario, s, r) {
+            let divergence = if sound { None } else { check_divergence(lane.scenario, s, r) };
+            if let Some(divergence) = divergence {
                 lane.exit = Some(ExitStatus::Diverged { divergence, time: t });
             } else if lane.k >= lane.steps {
                 lane.exit = Some(ExitStatus::Completed);
@@ -809,10 +854,11 @@ impl<'s, C: Controller<R> + ?Sized, R: Real> Flight<'s, C, R> {
         if self.wants_body {
             self.body = self.truth.body_attitude();
         }
+        let sound = self.sound_lanes();
         for i in 0..n {
             if self.lanes[i].at_boundary {
                 let t_next = self.lanes[i].t;
-                self.lane_boundary(i, t_next, true);
+                self.lane_boundary(i, t_next, true, sound.get_lane(i));
             }
         }
         if self.lanes.iter().any(Lane::flying) {
