@@ -143,12 +143,13 @@ impl ActuatorStage {
         }
     }
 
-    /// What the rotors make of `command` this period; `plant` is the true
-    /// plant of the period (paper Eq. 2's coefficients for the ideal and
-    /// clamp stages on the paper truth model).
+    /// What the rotors make of `command` this period, written into `out`
+    /// (the lane's delivery, overwritten field by field: no copy of it);
+    /// `plant` is the true plant of the period (paper Eq. 2's coefficients
+    /// for the ideal and clamp stages on the paper truth model).
     #[inline]
-    pub(crate) fn deliver(&mut self, command: &Command, plant: &QuadrotorParams) -> Delivered {
-        match self {
+    pub(crate) fn deliver_into(&mut self, command: &Command, plant: &QuadrotorParams, out: &mut Delivered) {
+        *out = match self {
             ActuatorStage::Ideal => {
                 let target = rotor_speeds(plant, command, f64::INFINITY);
                 let demand = Some(target);
@@ -187,7 +188,14 @@ impl ActuatorStage {
                     demand: None,
                 }
             }
-        }
+        };
+    }
+
+    /// True when [`ActuatorStage::deliver_into`] reads the true plant (the
+    /// ideal stage and the paper plant's clamp: Eq. 2's coefficients).
+    #[inline]
+    pub(crate) fn reads_plant(&self) -> bool {
+        matches!(self, ActuatorStage::Ideal | ActuatorStage::Clamp { mixer: None, .. })
     }
 
     /// How the truth model sees the rotors over the next substep.

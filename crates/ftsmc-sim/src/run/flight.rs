@@ -109,6 +109,9 @@ struct Lane<'s> {
     substeps: u32,
     steps: u64,
     k: u64,
+    /// The time of the period boundary `k`, `k as f64 · dt` (s), converted
+    /// once per period (every reader takes these bits).
+    t: f64,
     env: Environment<'s>,
     actuators: ActuatorStage,
     demand_params: QuadrotorParams,
@@ -136,7 +139,9 @@ struct Lane<'s> {
     /// the statistics do not.
     unobserved_period: bool,
     /// This period's delivery (the truth reads its drive during the substeps),
-    /// its unlimited rotor-speed demand and the true plant of the period.
+    /// its unlimited rotor-speed demand and the true plant of the period
+    /// (formed only where it is read: one flight's observers, or an actuator
+    /// stage that reads it, [`ActuatorStage::reads_plant`]).
     delivered: Delivered,
     demand: [f64; 4],
     plant_now: QuadrotorParams,
@@ -179,6 +184,7 @@ impl<'s> Lane<'s> {
             substeps: sim.substeps,
             steps,
             k: 0,
+            t: 0u64 as f64 * dt,
             env,
             actuators,
             demand_params,
@@ -217,7 +223,7 @@ impl<'s> Lane<'s> {
     #[inline]
     fn substep(&self, j: u32) -> Substep<'_> {
         Substep {
-            t0: self.k as f64 * self.dt + j as f64 * self.h,
+            t0: self.t + j as f64 * self.h,
             h: self.h,
             a: &self.tv_now,
             b: &self.tv_next,
@@ -323,6 +329,28 @@ pub struct Flight<'s, C: Controller<R> + ?Sized, R: Real = f64> {
     /// The allocation the lanes' substeps are gathered in (kept between
     /// substeps; empty in between).
     substeps: Vec<Substep<'static>>,
+    /// Per lane, an earlier lane flying the same reference on the same
+    /// control grid ([`reference_twins`]): when both reach a boundary at
+    /// the same step, its reference is copied, not evaluated again.
+    reference_twin: Vec<Option<usize>>,
+    /// Per lane, `simulation.max_tilt` (rad) and
+    /// `simulation.max_position_error` (m), NaN where not finite (no
+    /// comparison with NaN holds: [`Flight::sound_lanes`] then leaves the
+    /// lane to the ordered checks).
+    limits: [R; 2],
+}
+
+/// Per lane, the first earlier lane whose scenario has the same reference
+/// signals, bit for bit, on the same control period: [`ReferenceGrid::at`]
+/// is a function of the step and its time alone, so both lanes' references
+/// at one step are the same bits. `Debug` spells every number of a
+/// validated signal (all finite) exactly, `-0.0` included, so equal texts
+/// are equal signals.
+fn reference_twins(lanes: &[Lane<'_>]) -> Vec<Option<usize>> {
+    let keys: Vec<String> = lanes.iter().map(|lane| format!("{:?}", lane.scenario.reference)).collect();
+    (0..lanes.len())
+        .map(|i| (0..i).find(|&j| lanes[j].dt.to_bits() == lanes[i].dt.to_bits() && keys[j] == keys[i]))
+        .collect()
 }
 
 impl<'s, C: Controller + ?Sized> Flight<'s, C, f64> {
@@ -336,7 +364,7 @@ impl<'s, C: Controller + ?Sized> Flight<'s, C, f64> {
     /// first sees the boundary the flight is at (`t = 0` for a new flight).
     pub fn observe_with(&mut self, observer: &'s mut dyn Observer) {
         if self.lanes[0].flying() {
-            let t = self.lanes[0].k as f64 * self.lanes[0].dt;
+            let t = self.lanes[0].t;
             observer.boundary(t, &self.state, &self.reference);
         }
         self.observers.push(observer);
@@ -450,9 +478,13 @@ impl<'s, C: Controller<R> + ?Sized, R: Real> Flight<'s, C, R> {
             measured_ahead: None,
             body_ahead: None,
             substeps: Vec::new(),
+            reference_twin: Vec::new(),
+            limits: [R::splat(f64::NAN); 2],
         };
+        flight.reference_twin = reference_twins(&flight.lanes);
         for i in 0..R::LANES {
-            flight.lane_boundary(i, 0.0, false);
+            flight.set_limits(i);
+            flight.lane_boundary(i, 0.0, false, false);
         }
         flight
     }
@@ -472,12 +504,14 @@ impl<'s, C: Controller<R> + ?Sized, R: Real> Flight<'s, C, R> {
         self.controller.reset_lane(lane);
         self.reference.put_lane(lane, r);
         self.lanes[lane] = fresh;
+        self.reference_twin = reference_twins(&self.lanes);
+        self.set_limits(lane);
         self.refresh_lane(lane);
         if started.is_err() {
             // A flight that cannot start is seen at its initial state.
             self.state.put_lane(lane, scenario.initial_state.state());
         }
-        self.lane_boundary(lane, 0.0, false);
+        self.lane_boundary(lane, 0.0, false, false);
     }
 
     /// The outcome of lane `lane`'s flight so far, its lane left as it is
@@ -488,6 +522,7 @@ impl<'s, C: Controller<R> + ?Sized, R: Real> Flight<'s, C, R> {
         let (mut idle, _) = Lane::new(scenario, recorder);
         idle.exit = Some(ExitStatus::Completed);
         idle.k = idle.steps;
+        idle.t = idle.k as f64 * idle.dt;
         let done = core::mem::replace(&mut self.lanes[lane], idle);
         done.output(self.controller.name(), &self.options)
     }
@@ -527,10 +562,46 @@ impl<'s, C: Controller<R> + ?Sized, R: Real> Flight<'s, C, R> {
         }
     }
 
+    /// Lanes whose boundary state certainly passes [`check_divergence`]:
+    /// `|φ|` and `|θ|` at most `simulation.max_tilt`, every position error
+    /// at most `simulation.max_position_error` (both finite:
+    /// [`Flight::limits`]; then these five components are finite too) and
+    /// the seven other components finite, tested on every lane at once
+    /// (comparisons and `x − x` sums only: no number of the flight changes).
+    /// Any other lane takes the ordered checks.
+    #[allow(clippy::eq_op)] // `x − x` on purpose: the finiteness test below
+    fn sound_lanes(&self) -> R::Mask {
+        let (s, r) = (&self.state, &self.reference);
+        let zero = R::splat(0.0);
+        // `x − x` is +0 for a finite `x` and NaN otherwise: the sum is 0
+        // exactly when every component is finite.
+        let mut z = s.attitude[2] - s.attitude[2];
+        for part in [&s.velocity, &s.angular_rate] {
+            for &v in part {
+                z += v - v;
+            }
+        }
+        let [max_tilt, max_error] = self.limits;
+        let mut sound = z.le(zero) & s.attitude[0].abs().le(max_tilt) & s.attitude[1].abs().le(max_tilt);
+        for i in 0..3 {
+            sound = sound & (s.position[i] - r.position[i]).abs().le(max_error);
+        }
+        sound
+    }
+
+    /// Lane `lane`'s entries of [`Flight::limits`] for its scenario.
+    fn set_limits(&mut self, lane: usize) {
+        let sim = &self.lanes[lane].scenario.simulation;
+        let finite = |v: f64| if v.is_finite() { v } else { f64::NAN };
+        self.limits[0].put_lane(lane, finite(sim.max_tilt));
+        self.limits[1].put_lane(lane, finite(sim.max_position_error));
+    }
+
     /// Lane `i`'s envelope, statistics (and, one flight, the observers) see
     /// the truth at the period boundary `t` (s); with `check`, the
-    /// divergence checks and the planned end follow on the same state.
-    fn lane_boundary(&mut self, i: usize, t: f64, check: bool) {
+    /// divergence checks (skipped when `sound`: [`Flight::sound_lanes`])
+    /// and the planned end follow on the same state.
+    fn lane_boundary(&mut self, i: usize, t: f64, check: bool, sound: bool) {
         let mut s_slot = None;
         let s = lane_ref(&self.state, i, &mut s_slot);
         let lane = &mut self.lanes[i];
@@ -543,7 +614,8 @@ impl<'s, C: Controller<R> + ?Sized, R: Real> Flight<'s, C, R> {
             }
         }
         if check {
-            if let Some(divergence) = check_divergence(lane.scenario, s, r) {
+            let divergence = if sound { None } else { check_divergence(lane.scenario, s, r) };
+            if let Some(divergence) = divergence {
                 lane.exit = Some(ExitStatus::Diverged { divergence, time: t });
             } else if lane.k >= lane.steps {
                 lane.exit = Some(ExitStatus::Completed);
@@ -613,9 +685,12 @@ impl<'s, C: Controller<R> + ?Sized, R: Real> Flight<'s, C, R> {
             }
             let command_i: Command = command.get_lane(i);
             lane.env.next_period();
-            // Computed in place (no copies of the plant and the delivery).
-            lane.plant_now = lane.env.params_with(&lane.tv_now);
-            lane.delivered = lane.actuators.deliver(&command_i, &lane.plant_now);
+            // Computed in place (no copies of the plant and the delivery),
+            // the plant only where it is read.
+            if n == 1 || lane.actuators.reads_plant() {
+                lane.plant_now = lane.env.params_with(&lane.tv_now);
+            }
+            lane.actuators.deliver_into(&command_i, &lane.plant_now, &mut lane.delivered);
             let delivered = &lane.delivered;
             let demand =
                 delivered.demand.unwrap_or_else(|| rotor_speeds(&lane.demand_params, &command_i, f64::INFINITY));
@@ -631,7 +706,7 @@ impl<'s, C: Controller<R> + ?Sized, R: Real> Flight<'s, C, R> {
             if !lane.flying() {
                 continue;
             }
-            let t = lane.k as f64 * lane.dt;
+            let t = lane.t;
             if let Err(divergence) = self.truth.begin_period(i, &lane.tv_now, &lane.base_plant) {
                 lane.exit = Some(ExitStatus::Diverged { divergence, time: t });
                 lane.unobserved_period = true;
@@ -704,7 +779,7 @@ impl<'s, C: Controller<R> + ?Sized, R: Real> Flight<'s, C, R> {
         let substeps = self.lanes[0].substeps;
         for j in 0..substeps {
             for lane in &mut self.lanes {
-                let t0 = lane.k as f64 * lane.dt + j as f64 * lane.h;
+                let t0 = lane.t + j as f64 * lane.h;
                 if lane.flying() {
                     lane.wind_now = lane.wind.as_mut().map(|w| w.step(t0));
                     lane.tv_next =
@@ -738,8 +813,9 @@ impl<'s, C: Controller<R> + ?Sized, R: Real> Flight<'s, C, R> {
                     let contact = g.contact(lane.z_prev, &mut z, &mut vz);
                     self.truth.set_vertical(i, z, vz);
                     if let Some((fraction, impact_speed)) = contact {
-                        let t0 = lane.k as f64 * lane.dt + j as f64 * lane.h;
+                        let t0 = lane.t + j as f64 * lane.h;
                         lane.k += 1;
+                        lane.t = lane.k as f64 * lane.dt;
                         lane.exit = Some(ExitStatus::Crashed { time: t0 + fraction * lane.h, impact_speed });
                         continue;
                     }
@@ -750,19 +826,27 @@ impl<'s, C: Controller<R> + ?Sized, R: Real> Flight<'s, C, R> {
         }
 
         // 7. The next reference and boundary; divergence checks.
-        for (i, lane) in self.lanes.iter_mut().enumerate() {
+        for i in 0..n {
+            let (earlier, rest) = self.lanes.split_at_mut(i);
+            let lane = &mut rest[0];
             lane.at_boundary = false;
             if !lane.flying() {
                 continue;
             }
             let k = lane.k;
             lane.k = k + 1;
+            let t_next = (k + 1) as f64 * lane.dt;
+            lane.t = t_next;
             if self.options.step_done(lane.k) {
-                lane.exit = Some(ExitStatus::Interrupted { time: lane.k as f64 * lane.dt });
+                lane.exit = Some(ExitStatus::Interrupted { time: t_next });
                 continue;
             }
-            let t_next = (k + 1) as f64 * lane.dt;
-            lane.reference = lane.reference_grid.at(k + 1, t_next);
+            // A twin at the same boundary has this very reference already.
+            let twin = self.reference_twin[i].map(|j| &earlier[j]).filter(|twin| twin.at_boundary && twin.k == k + 1);
+            lane.reference = match twin {
+                Some(twin) => twin.reference,
+                None => lane.reference_grid.at(k + 1, t_next),
+            };
             self.reference.put_lane(i, lane.reference);
             lane.at_boundary = true;
         }
@@ -770,10 +854,11 @@ impl<'s, C: Controller<R> + ?Sized, R: Real> Flight<'s, C, R> {
         if self.wants_body {
             self.body = self.truth.body_attitude();
         }
+        let sound = self.sound_lanes();
         for i in 0..n {
             if self.lanes[i].at_boundary {
-                let t_next = self.lanes[i].k as f64 * self.lanes[i].dt;
-                self.lane_boundary(i, t_next, true);
+                let t_next = self.lanes[i].t;
+                self.lane_boundary(i, t_next, true, sound.get_lane(i));
             }
         }
         if self.lanes.iter().any(Lane::flying) {

@@ -959,7 +959,9 @@ mod lane_tests {
                 }
                 lane.env.next_period();
                 let plant_now = lane.env.params_with(&lane.tv_now);
-                delivered.push(lane.actuators.deliver(&command, &plant_now));
+                let mut d = Delivered::none();
+                lane.actuators.deliver_into(&command, &plant_now, &mut d);
+                delivered.push(d);
                 let mut tv = lane.tv_now;
                 if i % 2 == 0 && period % 3 == 0 {
                     tv.mass += 0.1 * rng.next();
