@@ -850,9 +850,10 @@ impl<'s, C: Controller<R> + ?Sized, R: Real> Flight<'s, C, R> {
             self.reference.put_lane(i, lane.reference);
             lane.at_boundary = true;
         }
-        self.state = self.truth.quad_state();
+        // Written in place: the boundary state is not copied on the way.
+        self.truth.quad_state_into(&mut self.state);
         if self.wants_body {
-            self.body = self.truth.body_attitude();
+            self.truth.body_attitude_into(&mut self.body);
         }
         let sound = self.sound_lanes();
         for i in 0..n {

@@ -92,6 +92,16 @@ pub(crate) trait TruthModel<R: Real = f64> {
     fn body_attitude(&self) -> Option<BodyAttitude<R>> {
         None
     }
+    /// [`TruthModel::quad_state`] written into `out` (the loop's boundary
+    /// state, overwritten in place: the same bits, no copy on the way).
+    fn quad_state_into(&self, out: &mut QuadState<R>) {
+        *out = self.quad_state();
+    }
+    /// [`TruthModel::body_attitude`] written into `out` (in place, as
+    /// [`TruthModel::quad_state_into`]).
+    fn body_attitude_into(&self, out: &mut Option<BodyAttitude<R>>) {
+        *out = self.body_attitude();
+    }
     /// The start of a control period of lane `lane`'s flight with the plant
     /// variation `tv` (the rigid body's payload and inertia scaling); `base`
     /// is that flight's true plant. An error stops that flight: the model
@@ -551,6 +561,14 @@ impl<R: Real> TruthModel<R> for RigidTruth<R> {
         Some(BodyAttitude { quaternion: [x[6], x[7], x[8], x[9]], body_rates: [x[10], x[11], x[12]] })
     }
 
+    #[inline]
+    fn body_attitude_into(&self, out: &mut Option<BodyAttitude<R>>) {
+        let x = &self.x;
+        let b = out.get_or_insert_with(BodyAttitude::default);
+        b.quaternion = [x[6], x[7], x[8], x[9]];
+        b.body_rates = [x[10], x[11], x[12]];
+    }
+
     fn begin_period(&mut self, lane: usize, tv: &TimeVarying, base_plant: &QuadrotorParams) -> Result<(), Divergence> {
         let added = tv.mass - base_plant.mass;
         let scale = tv.inertia[0] / base_plant.inertia[0];
@@ -662,15 +680,23 @@ struct OnIsa<T> {
 
 impl<R: Real, T: TruthModel<R>> TruthModel<R> for OnIsa<T> {
     fn quad_state(&self) -> QuadState<R> {
-        match self.isa {
-            #[cfg(target_arch = "x86_64")]
-            // SAFETY: `Isa::Avx2Fma` is only detected on a CPU with AVX2 and FMA.
-            crate::isa::Isa::Avx2Fma => unsafe { quad_state_avx2(&self.inner) },
-            _ => self.inner.quad_state(),
-        }
+        let mut state = QuadState::default();
+        self.quad_state_into(&mut state);
+        state
     }
     fn body_attitude(&self) -> Option<BodyAttitude<R>> {
         self.inner.body_attitude()
+    }
+    fn quad_state_into(&self, out: &mut QuadState<R>) {
+        match self.isa {
+            #[cfg(target_arch = "x86_64")]
+            // SAFETY: `Isa::Avx2Fma` is only detected on a CPU with AVX2 and FMA.
+            crate::isa::Isa::Avx2Fma => unsafe { quad_state_avx2(&self.inner, out) },
+            _ => self.inner.quad_state_into(out),
+        }
+    }
+    fn body_attitude_into(&self, out: &mut Option<BodyAttitude<R>>) {
+        self.inner.body_attitude_into(out);
     }
     fn begin_period(&mut self, lane: usize, tv: &TimeVarying, base: &QuadrotorParams) -> Result<(), Divergence> {
         self.inner.begin_period(lane, tv, base)
@@ -705,16 +731,16 @@ unsafe fn substep_avx2<R: Real, T: TruthModel<R>>(truth: &mut T, s: &[Substep<'_
     truth.substep(s);
 }
 
-/// [`TruthModel::quad_state`] compiled with AVX2 and FMA (the Euler
-/// conversion of the lanes; `atan2` and `asin` stay calls to the one maths
-/// library, per lane).
+/// [`TruthModel::quad_state_into`] compiled with AVX2 and FMA (the Euler
+/// conversion of the lanes, written into `out`; `atan2` and `asin` stay
+/// calls to the one maths library, per lane).
 ///
 /// # Safety
 /// The CPU must have AVX2 and FMA.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
-unsafe fn quad_state_avx2<R: Real, T: TruthModel<R>>(truth: &T) -> QuadState<R> {
-    truth.quad_state()
+unsafe fn quad_state_avx2<R: Real, T: TruthModel<R>>(truth: &T, out: &mut QuadState<R>) {
+    truth.quad_state_into(out);
 }
 
 /// What a flight's truth model brings to the loop ([`truth_of`]).
