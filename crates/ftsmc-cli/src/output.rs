@@ -467,34 +467,35 @@ impl Drop for ResultDir {
 }
 
 /// Delete the files of `folder` for which `ours(relative path)` holds, then
-/// every folder below it left empty, and `folder` itself if empty. Returns
+/// the sub-folders that held them once empty (deepest first; an empty
+/// folder of someone else's stays), and `folder` itself if empty. Returns
 /// the files kept, relative to `folder`, sorted.
 fn remove_ours(folder: &Path, ours: &dyn Fn(&str) -> bool) -> Vec<String> {
     let mut files = Vec::new();
     list_files(folder, "", &mut files);
     let mut kept: Vec<String> = Vec::new();
+    let mut emptied: Vec<PathBuf> = Vec::new();
     for f in files {
         if ours(&f) {
             let _ = std::fs::remove_file(folder.join(&f));
+            let mut dir = Path::new(&f).parent();
+            while let Some(d) = dir.filter(|d| !d.as_os_str().is_empty()) {
+                emptied.push(d.to_path_buf());
+                dir = d.parent();
+            }
         } else {
             kept.push(f);
         }
     }
-    remove_empty_dirs(folder);
+    // Deepest first: a folder goes only once everything below it has.
+    emptied.sort_by(|a, b| b.components().count().cmp(&a.components().count()).then_with(|| a.cmp(b)));
+    emptied.dedup();
+    for d in &emptied {
+        let _ = std::fs::remove_dir(folder.join(d));
+    }
     let _ = std::fs::remove_dir(folder);
     kept.sort();
     kept
-}
-
-/// Remove the empty folders below `dir`, deepest first.
-fn remove_empty_dirs(dir: &Path) {
-    let Ok(entries) = std::fs::read_dir(dir) else { return };
-    for entry in entries.flatten() {
-        if entry.file_type().is_ok_and(|t| t.is_dir()) {
-            remove_empty_dirs(&entry.path());
-            let _ = std::fs::remove_dir(entry.path());
-        }
-    }
 }
 
 /// Tell the user that `folder` was kept because it still holds `kept`,
@@ -1060,6 +1061,7 @@ mod tests {
         std::fs::create_dir_all(old.join("sub")).unwrap();
         std::fs::write(old.join("sub/b.csv"), "ours").unwrap();
         std::fs::write(old.join("paper.pdf"), "mine").unwrap();
+        std::fs::create_dir_all(old.join("drafts/empty")).unwrap();
         age(&old);
         // And one holding only listed files: removed whole.
         let old_ours = root.join(".res.old-4194305-4");
@@ -1073,7 +1075,9 @@ mod tests {
         assert_eq!(std::fs::read_to_string(foreign.join("deep/notes.txt")).unwrap(), "mine");
         assert_eq!(names(&mid_commit), ["data"]);
         assert_eq!(std::fs::read_to_string(mid_commit.join("data/mine.csv")).unwrap(), "mine");
-        assert_eq!(names(&old), ["paper.pdf"]);
+        // The sub-folder emptied of listed files goes; the user's empty one stays.
+        assert_eq!(names(&old), ["drafts", "paper.pdf"]);
+        assert_eq!(names(&old.join("drafts")), ["empty"]);
     }
 
     #[test]
