@@ -447,21 +447,29 @@ fn undo_carries(carried: &[(PathBuf, PathBuf)]) {
 impl Drop for ResultDir {
     fn drop(&mut self) {
         if !self.committed {
-            match &self.written {
-                // Before the commit everything in the staging folder is ours.
-                None => {
-                    let _ = std::fs::remove_dir_all(&self.staging);
-                }
-                // A failed commit has moved the old folder's entries back;
-                // any it could not move stay, with a note.
-                Some(written) => {
-                    let manifest = manifest_file(&self.owner);
-                    let ours = |rel: &str| written.contains(rel) || rel == manifest || rel == STAGING_MARKER;
-                    let kept = remove_ours(&self.staging, &ours);
-                    warn_kept(&self.staging, &kept, &self.dest);
-                }
-            }
+            // A failed commit has moved the old folder's entries back; any
+            // it could not move stay, with a note.
+            remove_staging(&self.staging, &self.owner, self.written.as_ref(), &self.dest);
             remove_created(&self.created);
+        }
+    }
+}
+
+/// Remove the staging folder `staging` of the command `owner` for a result
+/// into `dest`: whole before its commit started (`written` `None`: all of
+/// it is the result's), else only the result's files `written`, its
+/// manifest and its marker, with a note naming what is kept (entries of
+/// the old folder moved in).
+fn remove_staging(staging: &Path, owner: &str, written: Option<&HashSet<String>>, dest: &Path) {
+    match written {
+        None => {
+            let _ = std::fs::remove_dir_all(staging);
+        }
+        Some(written) => {
+            let manifest = manifest_file(owner);
+            let ours = |rel: &str| written.contains(rel) || rel == manifest || rel == STAGING_MARKER;
+            let kept = remove_ours(staging, &ours);
+            warn_kept(staging, &kept, dest);
         }
     }
 }
@@ -531,10 +539,11 @@ fn old_result_files(old: &Path) -> HashSet<String> {
     ours
 }
 
-/// Remove the old result folder `old` after a commit: the files its
-/// manifests list and those the new result (`written`) replaced by name;
-/// anything else (an entry that could not be moved into the new result) is
-/// kept, with a note.
+/// Remove the old result folder `old`: the files its manifests list and
+/// those a new result (`written`, empty when none of ours replaced it)
+/// replaced by name; anything else (an entry that could not be moved into
+/// the new result, or that a kill caught before its move) is kept, with a
+/// note.
 fn remove_old(old: &Path, written: &HashSet<String>, dest: &Path) {
     let ours = old_result_files(old);
     let kept = remove_ours(old, &|rel: &str| ours.contains(rel) || written.contains(rel));
@@ -589,21 +598,16 @@ fn remove_stale(parent: &Path, name: &std::ffi::OsStr, dest: &Path) {
         if !old_enough || !entry.file_type().is_ok_and(|t| t.is_dir()) {
             continue;
         }
-        let kept = if staging {
+        if staging {
             let Ok(owner) = std::fs::read_to_string(folder.join(STAGING_MARKER)) else { continue };
-            let manifest = manifest_file(owner.trim());
-            match std::fs::symlink_metadata(folder.join(&manifest)) {
-                Err(_) => remove_ours(&folder, &|_| true),
-                Ok(_) => {
-                    let listed = read_manifest(&folder.join(&manifest));
-                    remove_ours(&folder, &|rel: &str| listed.contains(rel) || rel == manifest || rel == STAGING_MARKER)
-                }
-            }
+            let owner = owner.trim();
+            // Its manifest is written when the commit starts.
+            let manifest = folder.join(manifest_file(owner));
+            let listed = std::fs::symlink_metadata(&manifest).is_ok().then(|| read_manifest(&manifest));
+            remove_staging(&folder, owner, listed.as_ref(), dest);
         } else {
-            let ours = old_result_files(&folder);
-            remove_ours(&folder, &|rel: &str| ours.contains(rel))
-        };
-        warn_kept(&folder, &kept, dest);
+            remove_old(&folder, &HashSet::new(), dest);
+        }
     }
 }
 
