@@ -144,7 +144,8 @@ impl ActuatorStage {
     }
 
     /// What the rotors make of `command` this period, written into `out`
-    /// (the lane's delivery, overwritten field by field: no copy of it);
+    /// (the lane's delivery, assigned in place rather than returned and
+    /// copied);
     /// `plant` is the true plant of the period (paper Eq. 2's coefficients
     /// for the ideal and clamp stages on the paper truth model).
     #[inline]

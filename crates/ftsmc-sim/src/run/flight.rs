@@ -110,7 +110,8 @@ struct Lane<'s> {
     steps: u64,
     k: u64,
     /// The time of the period boundary `k`, `k as f64 · dt` (s), converted
-    /// once per period (every reader takes these bits).
+    /// once per period (every reader takes these bits); set with `k` by
+    /// [`Lane::set_step`].
     t: f64,
     env: Environment<'s>,
     actuators: ActuatorStage,
@@ -220,6 +221,13 @@ impl<'s> Lane<'s> {
     }
 
     /// Substep `j` of the current period as the truth model takes it.
+    /// Put the lane at period boundary `k` and its time `k·dt`.
+    #[inline]
+    fn set_step(&mut self, k: u64) {
+        self.k = k;
+        self.t = k as f64 * self.dt;
+    }
+
     #[inline]
     fn substep(&self, j: u32) -> Substep<'_> {
         Substep {
@@ -521,8 +529,7 @@ impl<'s, C: Controller<R> + ?Sized, R: Real> Flight<'s, C, R> {
         let recorder = Recorder::new(scenario, false, 0, &*self.controller);
         let (mut idle, _) = Lane::new(scenario, recorder);
         idle.exit = Some(ExitStatus::Completed);
-        idle.k = idle.steps;
-        idle.t = idle.k as f64 * idle.dt;
+        idle.set_step(idle.steps);
         let done = core::mem::replace(&mut self.lanes[lane], idle);
         done.output(self.controller.name(), &self.options)
     }
@@ -814,8 +821,7 @@ impl<'s, C: Controller<R> + ?Sized, R: Real> Flight<'s, C, R> {
                     self.truth.set_vertical(i, z, vz);
                     if let Some((fraction, impact_speed)) = contact {
                         let t0 = lane.t + j as f64 * lane.h;
-                        lane.k += 1;
-                        lane.t = lane.k as f64 * lane.dt;
+                        lane.set_step(lane.k + 1);
                         lane.exit = Some(ExitStatus::Crashed { time: t0 + fraction * lane.h, impact_speed });
                         continue;
                     }
@@ -834,9 +840,8 @@ impl<'s, C: Controller<R> + ?Sized, R: Real> Flight<'s, C, R> {
                 continue;
             }
             let k = lane.k;
-            lane.k = k + 1;
-            let t_next = (k + 1) as f64 * lane.dt;
-            lane.t = t_next;
+            lane.set_step(k + 1);
+            let t_next = lane.t;
             if self.options.step_done(lane.k) {
                 lane.exit = Some(ExitStatus::Interrupted { time: t_next });
                 continue;
