@@ -220,7 +220,6 @@ impl<'s> Lane<'s> {
         self.exit.is_none()
     }
 
-    /// Substep `j` of the current period as the truth model takes it.
     /// Put the lane at period boundary `k` and its time `k·dt`.
     #[inline]
     fn set_step(&mut self, k: u64) {
@@ -228,6 +227,7 @@ impl<'s> Lane<'s> {
         self.t = k as f64 * self.dt;
     }
 
+    /// Substep `j` of the current period as the truth model takes it.
     #[inline]
     fn substep(&self, j: u32) -> Substep<'_> {
         Substep {
@@ -839,18 +839,17 @@ impl<'s, C: Controller<R> + ?Sized, R: Real> Flight<'s, C, R> {
             if !lane.flying() {
                 continue;
             }
-            let k = lane.k;
-            lane.set_step(k + 1);
-            let t_next = lane.t;
-            if self.options.step_done(lane.k) {
-                lane.exit = Some(ExitStatus::Interrupted { time: t_next });
+            lane.set_step(lane.k + 1);
+            let (k, t) = (lane.k, lane.t);
+            if self.options.step_done(k) {
+                lane.exit = Some(ExitStatus::Interrupted { time: t });
                 continue;
             }
             // A twin at the same boundary has this very reference already.
-            let twin = self.reference_twin[i].map(|j| &earlier[j]).filter(|twin| twin.at_boundary && twin.k == k + 1);
+            let twin = self.reference_twin[i].map(|j| &earlier[j]).filter(|twin| twin.at_boundary && twin.k == k);
             lane.reference = match twin {
                 Some(twin) => twin.reference,
-                None => lane.reference_grid.at(k + 1, t_next),
+                None => lane.reference_grid.at(k, t),
             };
             self.reference.put_lane(i, lane.reference);
             lane.at_boundary = true;
