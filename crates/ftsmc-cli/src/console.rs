@@ -4,6 +4,7 @@
 
 use std::fmt::Write as _;
 
+use ftsmc_sim::escape::markdown_cell;
 use indicatif::{ProgressBar, ProgressStyle};
 
 /// A progress bar over `total` simulated control steps (on stderr; hidden
@@ -65,11 +66,12 @@ impl Table {
         self.rows.push(cells);
     }
 
-    /// The Markdown text, one line per row, each ending in a newline (a `|`
-    /// inside a cell is escaped as `\|`).
+    /// The Markdown text, one line per row, each ending in a newline (cells
+    /// escaped by [`markdown_cell`]: a `|` inside a cell is `\|`, a newline
+    /// `\n`, so every row keeps its columns).
     pub fn render(&self) -> String {
         let width = |s: &str| s.chars().count();
-        let escape = |cells: &[String]| cells.iter().map(|c| c.replace('|', "\\|")).collect::<Vec<_>>();
+        let escape = |cells: &[String]| cells.iter().map(|c| markdown_cell(c)).collect::<Vec<_>>();
         let header = escape(&self.header);
         let rows: Vec<Vec<String>> = self.rows.iter().map(|r| escape(r)).collect();
         let widths: Vec<usize> = (0..header.len())

@@ -2,6 +2,7 @@
 //!
 //! Run `ftsmc --help` for the commands.
 
+mod bounded_read;
 mod console;
 mod cpu;
 mod figures;
@@ -13,6 +14,7 @@ mod output;
 mod plot;
 mod raster;
 mod reproduce;
+mod result_dir;
 mod svg;
 mod ticks;
 mod tune;

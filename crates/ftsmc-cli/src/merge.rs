@@ -5,7 +5,10 @@
 //! Each shard folder holds its block of runs (`runs.csv`, contiguous run
 //! indices, see [`ftsmc_sim::batch::shard`]), the resolved `scenario.toml`
 //! and a `summary.json` with a `shard` object (`index`, `count`,
-//! `first_run`, `end_run`). The merge checks that the shards are one
+//! `first_run`, `end_run`, `runs_csv_sha256`). Every file is read only if
+//! it is a regular file within a size limit ([`crate::bounded_read`]); the
+//! rows must have the SHA-256 the shard recorded, and a completed run's
+//! metrics must be finite. The merge checks that the shards are one
 //! campaign — same `scenario.toml` (SHA-256), master seed, run count,
 //! controllers, shard count N and `runs.csv` columns — and that every shard
 //! 1..N is there exactly once and holds exactly its runs; otherwise it
@@ -25,6 +28,7 @@ use ftsmc_sim::batch::shard::Shard;
 use ftsmc_sim::scenario::Scenario;
 use serde_json::{json, Map, Value};
 
+use crate::bounded_read::{read_limited, MAX_RUNS_CSV_BYTES, MAX_SHARD_TEXT_BYTES};
 use crate::montecarlo::{mc_table, shard_json, write_ise_boxplots};
 use crate::output::{provenance, sha256_hex, ResultDir, ScenarioFile};
 
@@ -57,8 +61,8 @@ fn u64_field(summary: &Value, path: &[&str], dir: &Path) -> Result<u64> {
 fn read_shard(dir: &Path) -> Result<ShardFolder> {
     let shown = dir.display();
     let summary_path = dir.join("summary.json");
-    let text =
-        std::fs::read_to_string(&summary_path).with_context(|| format!("shard `{shown}`: cannot read summary.json"))?;
+    let text = read_limited(&summary_path, MAX_SHARD_TEXT_BYTES, &format!("shard `{shown}`: summary.json"))?;
+    let text = String::from_utf8(text).with_context(|| format!("shard `{shown}`: summary.json is not UTF-8"))?;
     let summary: Value =
         serde_json::from_str(&text).with_context(|| format!("shard `{shown}`: summary.json is not valid JSON"))?;
     if !summary["shard"].is_object() {
@@ -78,8 +82,8 @@ fn read_shard(dir: &Path) -> Result<ShardFolder> {
         bail!("shard `{shown}`: holds runs {first}..{end}, but shard {shard} of {runs} runs is runs {range:?}");
     }
 
-    let scenario_bytes = std::fs::read(dir.join("scenario.toml"))
-        .with_context(|| format!("shard `{shown}`: cannot read scenario.toml"))?;
+    let scenario_bytes =
+        read_limited(&dir.join("scenario.toml"), MAX_SHARD_TEXT_BYTES, &format!("shard `{shown}`: scenario.toml"))?;
     let scenario_sha256 = sha256_hex(&scenario_bytes);
     let recorded = summary["provenance"]["scenario_sha256"].as_str().unwrap_or("");
     if recorded != scenario_sha256 {
@@ -96,8 +100,8 @@ fn read_shard(dir: &Path) -> Result<ShardFolder> {
     }
 
     let csv_path = dir.join("runs.csv");
-    let mut reader =
-        csv::Reader::from_path(&csv_path).with_context(|| format!("shard `{shown}`: cannot read runs.csv"))?;
+    let csv_bytes = read_limited(&csv_path, MAX_RUNS_CSV_BYTES, &format!("shard `{shown}`: runs.csv"))?;
+    let mut reader = csv::Reader::from_reader(csv_bytes.as_slice());
     let header = reader.headers().with_context(|| format!("shard `{shown}`: runs.csv has no header"))?.clone();
     let rows = reader
         .records()
@@ -124,6 +128,14 @@ fn read_shard(dir: &Path) -> Result<ShardFolder> {
         bail!(
             "shard `{shown}`: runs.csv has {} rows, expected {expected} (incomplete shard: fly it again)",
             rows.len()
+        );
+    }
+    // Whole rows, but are they the shard's?
+    let csv_sha256 = sha256_hex(&csv_bytes);
+    let recorded = summary["shard"]["runs_csv_sha256"].as_str().unwrap_or("");
+    if recorded != csv_sha256 {
+        bail!(
+            "shard `{shown}`: runs.csv has sha256 {csv_sha256}, but summary.json records {recorded:?} (the rows were changed after the shard was flown, or it was written by an ftsmc that recorded no digest: fly it again)"
         );
     }
     Ok(ShardFolder {
@@ -302,6 +314,19 @@ pub fn merge(dirs: &[PathBuf], out: &Path, figures: bool) -> Result<()> {
                 metrics,
             };
             if outcome.completed {
+                // A completed flight has finite metrics; only a settling time
+                // (`NaN`: not settled) and the error after steady state
+                // (empty: not reached) may have none.
+                if let Some((name, v)) = outcome.metrics.iter().find(|(name, v)| {
+                    !v.is_finite()
+                        && !(v.is_nan() && (name.starts_with("settling_time_") || name.starts_with("max_error_after_")))
+                }) {
+                    bail!(
+                        "shard `{}`: runs.csv row {line}, column `{name}`: a completed run with the value {} (a completed run's metrics are finite)",
+                        s.dir.display(),
+                        crate::output::format_number(*v)
+                    );
+                }
                 let value = |i: usize| {
                     if i == usize::MAX {
                         f64::NAN

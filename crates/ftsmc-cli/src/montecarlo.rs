@@ -118,7 +118,8 @@ pub fn run(
     let period = scenario.control_period();
     let steps: u64 = rows.iter().map(|r| (r.metrics.duration / period).round() as u64).sum();
 
-    dir.write("runs.csv", &runs_csv(&rows)?)?;
+    let csv = runs_csv(&rows)?;
+    dir.write("runs.csv", &csv)?;
     // The resolved scenario, with the master seed and the controllers flown:
     // `ftsmc montecarlo <out>/<name>/scenario.toml --runs N` repeats the batch.
     let file = dir.write_scenario("scenario.toml", scenario, "scenario.toml")?;
@@ -136,6 +137,8 @@ pub fn run(
     });
     if let Some(shard) = shard {
         summary["shard"] = shard_json(shard, &indices);
+        // `ftsmc merge` checks the rows against it.
+        summary["shard"]["runs_csv_sha256"] = json!(crate::output::sha256_hex(&csv));
     }
     dir.write("summary.json", serde_json::to_string_pretty(&summary)?.as_bytes())?;
 

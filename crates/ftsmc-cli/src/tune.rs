@@ -135,8 +135,9 @@ pub fn run(
     let elapsed = started.elapsed().as_secs_f64();
     let training_seconds = elapsed; // whole command; training share printed below
 
-    let args: Vec<String> = std::env::args().skip(1).collect();
-    let command = format!("ftsmc {}", args.join(" "));
+    // As shell words: a path with a newline stays one line (and reads back).
+    let args: Vec<String> = std::env::args_os().skip(1).map(|a| a.to_string_lossy().into_owned()).collect();
+    let command = ftsmc_sim::escape::command_line(&[&["ftsmc".to_string()], args.as_slice()].concat());
     // A file input is extended by its absolute path; a built-in by its name.
     let extends = if Path::new(scenario_arg).exists() {
         std::fs::canonicalize(scenario_arg)

@@ -84,6 +84,7 @@ pub mod batch;
 pub mod controllers;
 pub mod envelope;
 pub mod environment;
+pub mod escape;
 pub mod gauss;
 pub mod gym;
 pub mod isa;

@@ -25,6 +25,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::batch::montecarlo::{run_seed, MonteCarloSpec, DEFAULT_LANES};
+use crate::escape::toml_comment;
 use crate::run::RunOptions;
 use crate::scenario::tune_section::TuneSection;
 use crate::scenario::Scenario;
@@ -336,7 +337,8 @@ pub fn judge(
 /// (`<scenario>-<controller>-tuned`), `controllers = [controller]` and only
 /// the keys the tune changed, after comment lines recording the command,
 /// the cost weights, budget, seed, parameters and the training and held-out
-/// statistics.
+/// statistics. User text in the comments (`command`, names) is escaped
+/// ([`toml_comment`]): it cannot end a comment line and add a key.
 pub fn tuned_toml(result: &TuneResult, extends: &str, command: &str) -> Result<String, String> {
     let base = space::scenario_table(&result.start)?;
     let tuned = space::scenario_table(&result.tuned)?;
@@ -351,11 +353,11 @@ pub fn tuned_toml(result: &TuneResult, extends: &str, command: &str) -> Result<S
     };
     line(format!(
         "# {} tuned on {} by `ftsmc tune` (ftsmc {}).",
-        result.controller,
-        result.start.name,
+        toml_comment(&result.controller),
+        toml_comment(&result.start.name),
         env!("CARGO_PKG_VERSION")
     ));
-    line(format!("# Made by: {command}"));
+    line(format!("# Made by: {}", toml_comment(command)));
     line(format!(
         "# Budget {} training flights ({} flown, {} per candidate, same draws for all), seed {}, {} held-out flights per gain set.",
         result.options.budget, result.training_flights, s.runs, result.options.seed, result.held_out_indices.len()
@@ -369,7 +371,14 @@ pub fn tuned_toml(result: &TuneResult, extends: &str, command: &str) -> Result<S
         b.generation, b.candidate, b.cost, result.history[0].cost
     ));
     for (d, v) in result.space.dims.iter().zip(&b.values) {
-        line(format!("#   {} = {} (searched {} … {}{})", d.name, v, d.low, d.high, if d.log { ", log" } else { "" }));
+        line(format!(
+            "#   {} = {} (searched {} … {}{})",
+            toml_comment(&d.name),
+            v,
+            d.low,
+            d.high,
+            if d.log { ", log" } else { "" }
+        ));
     }
     let describe = |name: &str, st: &FlightStats| {
         format!(
