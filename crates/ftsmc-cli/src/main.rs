@@ -19,6 +19,8 @@ mod svg;
 mod ticks;
 mod tune;
 mod tuned;
+#[cfg(test)]
+mod writers_fuzz;
 
 use std::path::PathBuf;
 

@@ -71,12 +71,11 @@ fn two_controllers_tuned_into_one_folder_keep_both_results() {
         for f in ["tuned.toml", "history.csv", "summary.json", "scenario.toml"] {
             assert!(folder.join(format!("{c}.{f}")).is_file(), "{c}.{f} missing after tuning pid then se3");
         }
+        // `<sha256> <size> <path>` per file.
         let manifest = std::fs::read_to_string(folder.join(format!(".ftsmc-tune-{c}.manifest"))).unwrap();
-        assert!(manifest.lines().any(|l| l == format!("{c}.tuned.toml")), "{c}'s manifest: {manifest}");
-        assert!(
-            manifest.lines().all(|l| l.starts_with(&format!("{c}.")) || l.starts_with(".ftsmc-")),
-            "{c} owns only its files: {manifest}"
-        );
+        let listed: Vec<&str> = manifest.lines().map(|l| l.splitn(3, ' ').nth(2).unwrap_or("")).collect();
+        assert!(listed.contains(&format!("{c}.tuned.toml").as_str()), "{c}'s manifest: {manifest}");
+        assert!(listed.iter().all(|l| l.starts_with(&format!("{c}."))), "{c} owns only its files: {manifest}");
     }
     // PID's figure survives SE(3)'s tune without figures.
     assert!(folder.join("pid.convergence.svg").is_file() && folder.join("pid.convergence.png").is_file());
@@ -116,4 +115,34 @@ fn one_and_two_threads_give_the_same_tuned_file() {
     let h1 = std::fs::read(dir.join("one/tiny-tune/ftaftsmc.history.csv")).unwrap();
     let h2 = std::fs::read(dir.join("two/tiny-tune/ftaftsmc.history.csv")).unwrap();
     assert_eq!(h1, h2, "history.csv differs between 1 and 2 threads");
+}
+
+/// A scenario path with a newline cannot add a key to the tuned file: the
+/// command line is recorded as one comment line, the path as an escaped
+/// TOML string, and flying the tuned file keeps the input's seed.
+#[test]
+fn a_path_with_a_newline_cannot_inject_a_key_into_the_tuned_file() {
+    let tmp = scratch("inject");
+    let dir = tmp.path();
+    let evil = "x\nseed = 4242\n#.toml";
+    std::fs::copy(dir.join("tiny.toml"), dir.join(evil)).unwrap();
+    ok(&["tune", evil, "-c", "pid", "--budget", "10", "--threads", "1", "--out", "ti", "--no-figures"], dir);
+    let tuned_path = dir.join("ti/tiny-tune/pid.tuned.toml");
+    let text = std::fs::read_to_string(&tuned_path).unwrap();
+    let made_by: Vec<&str> = text.lines().filter(|l| l.starts_with("# Made by:")).collect();
+    assert_eq!(
+        made_by,
+        ["# Made by: ftsmc tune $'x\\nseed = 4242\\n#.toml' -c pid --budget 10 --threads 1 --out ti --no-figures"]
+    );
+    let table: toml::Table = toml::from_str(&text).unwrap();
+    assert!(!table.contains_key("seed"), "{text}");
+    assert!(table["extends"].as_str().unwrap().ends_with(evil), "{text}");
+    // Flying it: the seed is the input's, not 4242.
+    ok(&["run", "ti/tiny-tune/pid.tuned.toml", "--out", "flown", "--no-figures"], dir);
+    let flown = std::fs::read_to_string(dir.join("flown/tiny-tune-pid-tuned/scenario.toml")).unwrap();
+    let flown: toml::Table = toml::from_str(&flown).unwrap();
+    let input = std::fs::read_to_string(dir.join("ti/tiny-tune/pid.scenario.toml")).unwrap();
+    let input: toml::Table = toml::from_str(&input).unwrap();
+    assert_ne!(flown["seed"].as_integer(), Some(4242));
+    assert_eq!(flown["seed"], input["seed"]);
 }
