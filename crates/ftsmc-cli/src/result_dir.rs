@@ -299,12 +299,30 @@ fn swap(a: &Path, b: &Path) -> std::io::Result<PathBuf> {
     Ok(aside)
 }
 
-/// Hold an exclusive lock on `dir` (a directory) while the returned file is
-/// open; `None` where directories cannot be locked.
+/// Hold an exclusive lock (`flock`) on `dir` (a directory) while the
+/// returned file is open, waiting for it or not; `None` when it is held
+/// elsewhere, or where directories cannot be locked (not Unix).
 fn lock_dir(dir: &Path, wait: bool) -> Option<File> {
-    let file = File::open(dir).ok()?;
-    let locked = if wait { file.lock().is_ok() } else { file.try_lock().is_ok() };
-    locked.then_some(file)
+    #[cfg(unix)]
+    {
+        use std::os::fd::AsRawFd as _;
+        let file = File::open(dir).ok()?;
+        let op = if wait { libc::LOCK_EX } else { libc::LOCK_EX | libc::LOCK_NB };
+        loop {
+            // SAFETY: flock on a file descriptor this function owns.
+            if unsafe { libc::flock(file.as_raw_fd(), op) } == 0 {
+                return Some(file);
+            }
+            if std::io::Error::last_os_error().kind() != std::io::ErrorKind::Interrupted {
+                return None;
+            }
+        }
+    }
+    #[cfg(not(unix))]
+    {
+        let _ = (dir, wait);
+        None
+    }
 }
 
 impl ResultDir {
