@@ -117,3 +117,17 @@ fn one_and_two_threads_give_the_same_tuned_file() {
     let h2 = std::fs::read(dir.join("two/tiny-tune/ftaftsmc.history.csv")).unwrap();
     assert_eq!(h1, h2, "history.csv differs between 1 and 2 threads");
 }
+
+#[test]
+fn tune_refuses_seed_duration_and_unknown_extra_keys() {
+    let d = scratch("tune-extra-keys");
+    for key in ["seed", "duration", "no_such_key"] {
+        let text = format!("{TINY}\n[[tune.extra]]\nkey = \"{key}\"\nlow = 1.0\nhigh = 100.0\n");
+        std::fs::write(d.path().join("extra.toml"), text).unwrap();
+        let out = ftsmc(&["tune", "extra.toml", "-c", "pid", "--budget", "5", "--out", "o"], d.path());
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{key}: accepted");
+        assert!(err.contains("extra.toml") && err.contains(&format!("\"{key}\"")), "{key}: {err}");
+        assert!(!d.path().join("o").join("tiny-tune").exists(), "{key}: a result folder was written");
+    }
+}
