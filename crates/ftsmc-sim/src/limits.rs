@@ -283,7 +283,8 @@ impl Limits {
     /// `Err` when `requested > limit` (or is NaN).
     pub fn ensure(&self, key: &'static str, what: impl Into<String>, requested: f64) -> Result<(), LimitError> {
         let allowed = self.named().into_iter().find(|(k, _)| *k == key).map_or(0.0, |(_, v)| v);
-        if !(requested <= allowed) {
+        // NaN is refused too: it is not `<=` anything.
+        if requested.partial_cmp(&allowed).is_none_or(|o| o == core::cmp::Ordering::Greater) {
             return Err(LimitError { key, what: what.into(), requested, allowed, hard: None });
         }
         let (bound, why) = hard_bound(key);
