@@ -56,10 +56,7 @@ def shard_ranges(runs: int, shards: int) -> List[Tuple[int, int]]:
     if runs < 1:
         raise ValueError("runs must be at least 1")
     if not 1 <= shards <= min(runs, MAX_SHARDS):
-        raise ValueError(
-            f"shards must be between 1 and min(runs, MAX_SHARDS) = {min(runs, MAX_SHARDS)} "
-            f"(runs = {runs}, MAX_SHARDS = {MAX_SHARDS}), got {shards}"
-        )
+        raise ValueError(f"shards must be between 1 and runs ({runs}) and at most MAX_SHARDS ({MAX_SHARDS}), got {shards}")
     return [((k - 1) * runs // shards, k * runs // shards) for k in range(1, shards + 1)]
 
 
