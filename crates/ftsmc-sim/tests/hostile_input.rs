@@ -78,7 +78,12 @@ fn megahertz_recording_is_refused_by_rows_and_bytes() {
     assert!(msg.contains("max_steps"), "{msg}");
     let msg = parse(&format!("{sim}[limits]\nmax_steps = 1e12\n")).map(|_| ()).unwrap_err().to_string();
     assert!(msg.contains("max_samples"), "{msg}");
+    // 10⁹ rows are above the hard bound of memory whatever max_samples says …
     let msg = parse(&format!("{sim}[limits]\nmax_steps = 1e12\nmax_samples = 1e12\n")).map(|_| ()).unwrap_err();
+    assert!(msg.to_string().contains("hard bound") && msg.to_string().contains("max_samples"), "{msg}");
+    // … and 10⁶ rows of three controllers' CSV are above max_output_bytes.
+    let kilohertz = sim.replace("record_rate = 1e6", "record_rate = 1e3");
+    let msg = parse(&format!("{kilohertz}[limits]\nmax_steps = 1e12\nmax_samples = 1e12\n")).map(|_| ()).unwrap_err();
     assert!(msg.to_string().contains("max_output_bytes"), "{msg}");
 }
 
@@ -447,8 +452,14 @@ const NO_LIMITS: &str = "[limits]\nmax_steps = inf\nmax_samples = inf\nmax_outpu
 fn an_inf_limit_lifts_the_check_without_overflow_and_the_run_can_be_cancelled() {
     use ftsmc_sim::{registry, ExitStatus, RunOptions};
     use std::sync::atomic::{AtomicBool, Ordering};
-    // 1e300 s at 1 kHz: u64::MAX steps and rows; refused by default, accepted with `inf`.
-    let huge = "extends = \"paper-scenario-1\"\nname = \"t\"\nduration = 1e300\n";
+    // 1e300 s at 1 kHz: refused by default, and with `inf` by the hard bound on steps.
+    let endless = "extends = \"paper-scenario-1\"\nname = \"t\"\nduration = 1e300\n";
+    let msg = Scenario::from_toml_str(endless, "inf.toml").unwrap_err().to_string();
+    assert!(msg.contains("max_steps"), "{msg}");
+    let msg = Scenario::from_toml_str(&format!("{endless}{NO_LIMITS}"), "inf.toml").unwrap_err().to_string();
+    assert!(msg.contains("max_steps") && msg.contains("hard bound"), "{msg}");
+    // 1e7 s (1e10 steps, 1e6 rows at 0.1 Hz): refused by default, accepted with `inf`.
+    let huge = "extends = \"paper-scenario-1\"\nname = \"t\"\nduration = 1e7\n[simulation]\nrecord_rate = 0.1\n";
     let msg = Scenario::from_toml_str(huge, "inf.toml").unwrap_err().to_string();
     assert!(msg.contains("max_steps"), "{msg}");
     let text = format!("{huge}{NO_LIMITS}");
