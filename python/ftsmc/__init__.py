@@ -267,6 +267,8 @@ def montecarlo(
                 )
 
     names_arg = None if controllers is None else list(controllers)
+    if names_arg is not None and not names_arg:
+        raise ValueError(f"controllers = [] is invalid (expected at least one controller name; known: {', '.join(CONTROLLERS)})")
     if client is not None:
         from .dask import montecarlo_columns
 

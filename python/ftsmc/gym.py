@@ -73,7 +73,10 @@ def _scenario(scenario: ScenarioLike) -> Scenario:
 
 
 def _batch(scenario: ScenarioLike, num_envs: int, settings: Mapping[str, Any]) -> _ftsmc.GymBatch:
-    return _ftsmc.GymBatch(_scenario(scenario), [0] * num_envs, **settings)
+    s = _scenario(scenario)
+    # Priced before anything is allocated for the environments.
+    _ftsmc.gym_check_envs(s, num_envs)
+    return _ftsmc.GymBatch(s, [0] * num_envs, **settings)
 
 
 def _settings(

@@ -81,6 +81,7 @@ def _end_marker(ax: matplotlib.axes.Axes, run: Run, t: np.ndarray, y: np.ndarray
 def _tracking(runs: Sequence[Run], what: str) -> matplotlib.figure.Figure:
     import matplotlib.pyplot as plt
 
+    _check_recorded(runs)
     fig, axes = plt.subplots(1, 3, figsize=(10, 3.2), constrained_layout=True)
     for ax, (col, ref, ylabel) in zip(axes, _AXES[what]):
         first = runs[0].columns
@@ -115,6 +116,7 @@ def rotors(runs: Union[Run, Sequence[Run]]) -> matplotlib.figure.Figure:
     import matplotlib.pyplot as plt
 
     rs = _runs(runs)
+    _check_recorded(rs)
     fig, axes = plt.subplots(1, len(rs), figsize=(3.6 * len(rs), 3.2), squeeze=False, constrained_layout=True)
     for ax, r in zip(axes[0], rs):
         c = r.columns
@@ -134,7 +136,19 @@ def run(r: Run, what: str = "position") -> matplotlib.figure.Figure:
     makers = {"position": position, "attitude": attitude, "rotors": rotors}
     if what not in makers:
         raise ValueError(f"what = {what!r}: expected one of {', '.join(makers)}")
+    _check_recorded([r])
     return makers[what](r)
+
+
+def _check_recorded(runs: Sequence[Run]) -> None:
+    """Refuse to plot a run without a recorded time series, saying why."""
+    for r in runs:
+        if "t" not in r.columns or len(r.columns["t"]) == 0:
+            raise ValueError(
+                f"{r.controller} on {r.scenario} has no recorded rows to plot "
+                "(simulation.record_rate = 0 records none): fly it with record_rate > 0, e.g. "
+                "scenario.with_overrides({'simulation.record_rate': 100.0})"
+            )
 
 
 def montecarlo_box(

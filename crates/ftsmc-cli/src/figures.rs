@@ -45,6 +45,7 @@ pub fn end_note(exit: &ExitStatus) -> Option<String> {
                 Divergence::NonFinite => "non-finite state",
                 Divergence::Tilt { .. } => "tilt",
                 Divergence::PositionError { .. } => "position error",
+                Divergence::NonFiniteMetric => "metric overflow",
                 Divergence::RigidBodyOutOfRange { .. } => {
                     return Some(format!("stopped (rigid body out of range) at {time:.2} s"))
                 }

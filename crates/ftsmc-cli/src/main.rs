@@ -66,7 +66,7 @@ enum Command {
         #[arg(long)]
         no_figures: bool,
         /// Monte Carlo runs of each wind-ladder rung (`realistic-<level>-<n>`) per controller in the "Beyond the paper" section (0: none).
-        #[arg(long, default_value_t = reproduce::DEFAULT_REALISTIC_RUNS)]
+        #[arg(long, allow_negative_numbers = true, default_value_t = reproduce::DEFAULT_REALISTIC_RUNS)]
         realistic_runs: u64,
         /// Raise a cost limit of the realistic Monte Carlo, e.g. `--limit max_flights=1e7` (repeatable; see docs/scenarios.md).
         #[arg(long = "limit", value_name = "KEY=VALUE")]
@@ -99,7 +99,7 @@ enum Command {
         #[arg(long, short = 'c', value_delimiter = ',')]
         controllers: Vec<String>,
         /// Log-spaced magnitudes per decade.
-        #[arg(long, default_value_t = 3)]
+        #[arg(long, allow_negative_numbers = true, default_value_t = 3)]
         per_decade: usize,
         /// Parent folder: the results go to `OUT/<scenario name>/`.
         #[arg(long, default_value = "results/fixed-time")]
@@ -114,16 +114,16 @@ enum Command {
         /// Scenario file (TOML) or built-in name.
         scenario: String,
         /// Number of randomised runs (each flown by every controller).
-        #[arg(long, default_value_t = 100)]
+        #[arg(long, allow_negative_numbers = true, default_value_t = 100)]
         runs: u64,
         /// Master seed (default: the scenario's `seed`).
-        #[arg(long)]
+        #[arg(long, allow_negative_numbers = true)]
         seed: Option<u64>,
         /// Worker threads (default: all cores). Results do not depend on it.
-        #[arg(long)]
+        #[arg(long, allow_negative_numbers = true)]
         threads: Option<usize>,
         /// Flights each thread flies side by side in vector lanes: 1, 2, 4 or 8. Results do not depend on it.
-        #[arg(long, default_value_t = ftsmc_sim::batch::montecarlo::DEFAULT_LANES)]
+        #[arg(long, allow_negative_numbers = true, default_value_t = ftsmc_sim::batch::montecarlo::DEFAULT_LANES)]
         lanes: usize,
         /// Controller(s) to fly (repeat or comma-separate); default: the scenario's `controllers` list.
         #[arg(long, short = 'c', value_delimiter = ',')]
@@ -163,13 +163,13 @@ enum Command {
         #[arg(long, short = 'c')]
         controller: String,
         /// Training flights the search may fly (the start's included).
-        #[arg(long, default_value_t = tune::DEFAULT_BUDGET)]
+        #[arg(long, allow_negative_numbers = true, default_value_t = tune::DEFAULT_BUDGET)]
         budget: u64,
         /// Seed of the search and of the Monte Carlo draws (default: the scenario's `seed`).
-        #[arg(long)]
+        #[arg(long, allow_negative_numbers = true)]
         seed: Option<u64>,
         /// Worker threads (default: all cores). Results do not depend on it.
-        #[arg(long)]
+        #[arg(long, allow_negative_numbers = true)]
         threads: Option<usize>,
         /// Parent folder: the results go to `OUT/<scenario name>/`.
         #[arg(long, default_value = "results/tune")]
@@ -326,7 +326,11 @@ fn run(cli: Cli) -> Result<()> {
             check_names(std::slice::from_ref(&controller))?;
             anyhow::ensure!(threads != Some(0), "--threads must be at least 1");
             let settings = scenario.tune.clone().unwrap_or_default();
-            ftsmc_sim::limits::check_batch(&scenario.flight_size(), budget + 2 * settings.validation_runs, 1)?;
+            ftsmc_sim::limits::check_batch(
+                &scenario.flight_size(),
+                budget.saturating_add(2 * settings.validation_runs),
+                1,
+            )?;
             if let Some(n) = threads {
                 ftsmc_sim::limits::check_threads(&scenario.limits, n)?;
             }

@@ -120,7 +120,7 @@ pub fn run(
     }
     let pool = builder.build().context("cannot start the thread pool")?;
     let settings = scenario.tune.clone().unwrap_or_default();
-    let total = budget + 2 * settings.validation_runs;
+    let total = budget.saturating_add(2 * settings.validation_runs);
     let bar = ProgressBar::new(total);
     bar.set_style(
         ProgressStyle::with_template(

@@ -146,3 +146,17 @@ fn a_path_with_a_newline_cannot_inject_a_key_into_the_tuned_file() {
     assert_ne!(flown["seed"].as_integer(), Some(4242));
     assert_eq!(flown["seed"], input["seed"]);
 }
+
+#[test]
+fn tune_refuses_seed_duration_and_unknown_extra_keys() {
+    let d = scratch("tune-extra-keys");
+    for key in ["seed", "duration", "no_such_key"] {
+        let text = format!("{TINY}\n[[tune.extra]]\nkey = \"{key}\"\nlow = 1.0\nhigh = 100.0\n");
+        std::fs::write(d.path().join("extra.toml"), text).unwrap();
+        let out = ftsmc(&["tune", "extra.toml", "-c", "pid", "--budget", "5", "--out", "o"], d.path());
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{key}: accepted");
+        assert!(err.contains("extra.toml") && err.contains(&format!("\"{key}\"")), "{key}: {err}");
+        assert!(!d.path().join("o").join("tiny-tune").exists(), "{key}: a result folder was written");
+    }
+}

@@ -19,6 +19,18 @@ use crate::scenario::Scenario;
 use crate::value_error;
 
 /// N environments (docs/python.md, "Gymnasium environments").
+/// Price `num_envs` environments of `scenario` before anything is
+/// allocated for them ([`ftsmc_sim::limits::check_envs`]): `ValueError`
+/// naming `num_envs`, the limit and the bound.
+#[pyfunction]
+pub fn gym_check_envs(scenario: PyRef<'_, Scenario>, num_envs: u64) -> PyResult<()> {
+    if num_envs < 1 {
+        return Err(value_error(format!("`num_envs` = {num_envs} is invalid (expected at least 1 environment)")));
+    }
+    ftsmc_sim::limits::check_envs(&scenario.inner.limits, num_envs as f64)
+        .map_err(|e| value_error(format!("`num_envs` = {num_envs}: {e}")))
+}
+
 #[pyclass(module = "ftsmc._ftsmc", name = "GymBatch", frozen)]
 pub struct GymBatch {
     batch: Mutex<Batch>,

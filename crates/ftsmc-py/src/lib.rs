@@ -34,6 +34,7 @@ fn _ftsmc(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(flight::simulate_native, m)?)?;
     m.add_function(wrap_pyfunction!(flight::simulate_python, m)?)?;
     m.add_function(wrap_pyfunction!(flight::montecarlo_columns, m)?)?;
+    m.add_function(wrap_pyfunction!(gym::gym_check_envs, m)?)?;
     m.add_function(wrap_pyfunction!(tune::tune_native, m)?)?;
     m.add_function(wrap_pyfunction!(tune::tune_evaluate, m)?)?;
     m.add_function(wrap_pyfunction!(kinematics::kinematics_euler_from_quaternion, m)?)?;

@@ -85,6 +85,9 @@ impl Scenario {
     #[staticmethod]
     #[pyo3(signature = (text, path = "<string>"))]
     fn from_toml(py: Python<'_>, text: &str, path: &str) -> PyResult<Self> {
+        // The CLI's size limit on a scenario file, before the text is parsed.
+        ftsmc_sim::limits::check_file_size(&ftsmc_sim::limits::Limits::default(), text.len() as u64)
+            .map_err(|e| value_error(format!("{}: {e}", ftsmc_sim::scenario::show_str(path))))?;
         let loaded = ftsmc_sim::Scenario::from_toml_str_with_warnings(text, path, &[])
             .map_err(|e| value_error(chain_message(&e)))?;
         warn_all(py, loaded)

@@ -208,3 +208,58 @@ fn the_tuned_toml_round_trips_the_parameter_map() {
         assert!(body.iter().all(|l| l.starts_with(&format!("[{controller}")) || l.starts_with("[cascade")), "{body:?}");
     }
 }
+
+/// A scenario text with one `[[tune.extra]]` of `key` (any range).
+fn with_extra(key: &str) -> String {
+    format!(
+        "extends = \"paper-scenario-1\"\nname = \"extra\"\n\n[tune]\nruns = 1\n\n[[tune.extra]]\nkey = \"{key}\"\nlow = 1.0\nhigh = 100.0\n"
+    )
+}
+
+#[test]
+fn tune_extra_refuses_anything_but_a_declared_gain() {
+    // The seed, the duration, a rate, a vehicle limit of the pid section,
+    // an unknown key and a structural one: refused when the file is loaded,
+    // the message naming the file and the key.
+    for key in ["seed", "duration", "simulation.control_rate", "pid.thrust_max", "no.such.key", "controllers"] {
+        let err = Scenario::from_toml_str(&with_extra(key), "my-tune.toml").expect_err(key).to_string();
+        assert!(err.starts_with("my-tune.toml:") && err.contains(&format!("\"{key}\"")), "{key}: {err}");
+        assert!(err.contains("tune.extra[0].key") && err.lines().next().unwrap().len() <= 300, "{err}");
+    }
+    // Gains of a controller's own section and the command filter load.
+    for key in ["pid.rate_p.0", "ftaftsmc.x.lambda", "cascade.command_filter.damping"] {
+        Scenario::from_toml_str(&with_extra(key), "my-tune.toml").unwrap_or_else(|e| panic!("{key}: {e}"));
+    }
+}
+
+#[test]
+fn tune_refuses_a_key_of_another_controller_and_never_spins() {
+    let base = Scenario::from_toml_str(&with_extra("ftaftsmc.x.lambda"), "t.toml").unwrap();
+    let options = TuneOptions { controller: "pid".into(), budget: 5, seed: 1 };
+    // A gain of another controller: refused by the search (before any flight).
+    let err = tune(&base, &options, &|_| {}).unwrap_err();
+    assert!(err.contains("ftaftsmc.x.lambda") && err.contains("pid"), "{err}");
+    // Keys set past the loader (as a program may): refused the same way.
+    for key in ["seed", "duration"] {
+        let mut s = base.clone();
+        s.tune.as_mut().unwrap().extra[0].key = key.into();
+        let err = tune(&s, &options, &|_| {}).unwrap_err();
+        assert!(err.contains(&format!("\"{key}\"")), "{key}: {err}");
+    }
+}
+
+#[test]
+fn a_search_whose_candidates_are_all_invalid_ends_within_its_budget() {
+    // Every candidate sets the z velocity D gain negative (invalid), so none
+    // flies; the budget still counts them, and the search ends after the
+    // generations the budget pays for, handing back the start.
+    let text = "extends = \"paper-scenario-1\"\nname = \"invalid\"\nduration = 0.05\n\n[tune]\nruns = 1\nvalidation_runs = 0\npopulation = 2\nparameters = []\n\n[[tune.extra]]\nkey = \"pid.velocity_d.2\"\nlow = -2.0\nhigh = -1.0\nlog = false\n";
+    let base = Scenario::from_toml_str(text, "invalid.toml").unwrap();
+    let options = TuneOptions { controller: "pid".into(), budget: 7, seed: 3 };
+    let r = tune(&base, &options, &|_| {}).unwrap();
+    // Start (1 flight) + 3 generations of 2 candidates (2 flights charged each).
+    assert_eq!(r.history.iter().map(|e| e.generation).max(), Some(3));
+    assert!(r.history[1..].iter().all(|e| e.error.is_some()), "{:?}", r.history);
+    assert_eq!((r.training_flights, r.best), (1, 0));
+    assert_eq!(r.tuned.gains.pid, base.gains.pid);
+}

@@ -31,6 +31,10 @@ pub enum Divergence {
         /// Inertia scale asked for (1 + ΔI/I), dimensionless.
         inertia_scale: f64,
     },
+    /// The flight reached its end with a finite state, but a metric (an
+    /// error or control integral) overflowed to ±∞ or NaN: the flight is
+    /// not reported completed ([`crate::metrics::Metrics::first_non_finite`]).
+    NonFiniteMetric,
 }
 
 /// How a run ended.
@@ -99,6 +103,9 @@ impl core::fmt::Display for ExitStatus {
                 Divergence::Tilt { angle } => write!(f, "diverged: tilt {angle:.3} rad at t = {time:.3} s"),
                 Divergence::PositionError { error } => {
                     write!(f, "diverged: position error {error:.3} m at t = {time:.3} s")
+                }
+                Divergence::NonFiniteMetric => {
+                    write!(f, "diverged: a metric (error or control integral) overflowed by t = {time:.3} s")
                 }
                 Divergence::RigidBodyOutOfRange { mass, inertia_scale } => write!(
                     f,

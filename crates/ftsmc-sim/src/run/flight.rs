@@ -253,9 +253,14 @@ impl<'s> Lane<'s> {
     /// The outcome of this lane's flight (a flight stopped early reports
     /// `Completed` over the steps flown).
     fn output(self, controller: &str, options: &RunOptions<'_>) -> RunOutput {
-        let exit = self.exit.unwrap_or(ExitStatus::Completed);
+        let mut exit = self.exit.unwrap_or(ExitStatus::Completed);
         options.flight_done(self.steps, self.k);
         let mut metrics = self.metrics.finish();
+        // A completed flight's metrics are finite: one that overflowed
+        // (an error of 1e160 m squared and integrated) is not completed.
+        if exit.is_completed() && metrics.first_non_finite().is_some() {
+            exit = ExitStatus::Diverged { divergence: Divergence::NonFiniteMetric, time: metrics.duration };
+        }
         if self.legacy_rotor_metrics {
             // Every delivered period: the observed ones (the statistics'
             // running maximum and count, the same operations in the same

@@ -342,6 +342,47 @@ impl MonteCarloSpec {
             if base.initial_state.position.iter().any(|p| !((p + lo).is_finite() && (p + hi).is_finite())) {
                 return err("initial_position_offset", d, "offsets giving a finite initial position".into());
             }
+            // A single file must start at or above the ground; so must every draw.
+            if let Some(g) = base.ground.as_ref().filter(|g| g.enabled) {
+                let z0 = base.initial_state.position[2];
+                if z0 + lo < g.height {
+                    return err(
+                        "initial_position_offset",
+                        d,
+                        format!(
+                            "offsets keeping the start at or above ground.height = {} (the lowest draw starts at z = {} + {} = {})",
+                            show(g.height),
+                            show(z0),
+                            show(lo),
+                            show(z0 + lo)
+                        ),
+                    );
+                }
+            }
+        }
+        // Scaled disturbances are held to a file's range: finite values.
+        if let Some(d) = &self.disturbance_amplitude {
+            let (lo, hi) = d.support();
+            for factor in [lo, hi] {
+                let mut scaled = base.disturbance.clone();
+                for signal in
+                    [&mut scaled.x, &mut scaled.y, &mut scaled.z, &mut scaled.phi, &mut scaled.theta, &mut scaled.psi]
+                {
+                    signal.for_each_leaf_term_mut(&mut |term| scale_term(term, factor));
+                }
+                for (axis, signal) in scaled.named() {
+                    if let Err((key, value, expected)) = signal.check() {
+                        return err(
+                            "disturbance_amplitude",
+                            d,
+                            format!(
+                                "factors keeping every disturbance in range (factor {} gives disturbance.{axis}.{key} = {value}; expected {expected})",
+                                show(factor)
+                            ),
+                        );
+                    }
+                }
+            }
         }
         if let Some(d) = &self.initial_attitude_offset {
             let (lo, hi) = d.support();
@@ -404,11 +445,9 @@ impl MonteCarloSpec {
             &mut s.disturbance.psi,
         ] {
             signal.for_each_leaf_term_mut(&mut |term| {
+                scale_term(term, amplitude);
                 match term {
-                    Term::Constant { value } => *value *= amplitude,
-                    Term::Step { height, .. } => *height *= amplitude,
-                    Term::Sine { amplitude: a, phase, .. } | Term::Cosine { amplitude: a, phase, .. } => {
-                        *a *= amplitude;
+                    Term::Sine { phase, .. } | Term::Cosine { phase, .. } => {
                         if let Some(d) = &self.disturbance_phase {
                             let extra = d.sample(&mut phase_rng);
                             if n_phase == 0 {
@@ -418,9 +457,7 @@ impl MonteCarloSpec {
                             *phase += extra;
                         }
                     }
-                    Term::Polynomial { coefficients } => coefficients.iter_mut().for_each(|c| *c *= amplitude),
-                    Term::Waypoints(w) => w.scale(amplitude),
-                    Term::Piecewise { .. } => {} // never a leaf
+                    _ => {}
                 }
             });
         }
@@ -452,6 +489,20 @@ impl MonteCarloSpec {
             init.attitude[2],
         ];
         (s, seed, sampled)
+    }
+}
+
+/// Multiply a disturbance term's size by the drawn `amplitude` factor
+/// (`disturbance_amplitude`): constants, step heights, sine and cosine
+/// amplitudes, polynomial coefficients and waypoint values.
+fn scale_term(term: &mut Term, amplitude: f64) {
+    match term {
+        Term::Constant { value } => *value *= amplitude,
+        Term::Step { height, .. } => *height *= amplitude,
+        Term::Sine { amplitude: a, .. } | Term::Cosine { amplitude: a, .. } => *a *= amplitude,
+        Term::Polynomial { coefficients } => coefficients.iter_mut().for_each(|c| *c *= amplitude),
+        Term::Waypoints(w) => w.scale(amplitude),
+        Term::Piecewise { .. } => {} // never a leaf
     }
 }
 

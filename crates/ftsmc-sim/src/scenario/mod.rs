@@ -236,7 +236,9 @@ pub fn read_scenario_text(path: &Path, limits: &Limits) -> Result<String, Scenar
         let kind = if meta.is_dir() { "a directory" } else { "not a regular file (a device, FIFO or socket)" };
         ScenarioError::File { path: shown.clone(), message: format!("{kind}; a scenario must be a regular file") }
     };
-    let max = limits.max_scenario_bytes.min(u64::MAX as f64) as u64;
+    // The limit, and with it switched off (`inf`) its hard bound.
+    let max =
+        limits.max_scenario_bytes.min(crate::limits::hard_bound("max_scenario_bytes").0).min(u64::MAX as f64) as u64;
     let too_big = |bytes: u64| ScenarioError::Limit {
         path: shown.clone(),
         limit: crate::limits::check_file_size(limits, bytes).expect_err("over the limit"),
@@ -501,7 +503,11 @@ impl Scenario {
             signal_cost: {
                 let r = &self.reference;
                 let signals = [&r.x, &r.y, &r.z, &r.psi].into_iter().chain(self.disturbance.named().map(|(_, s)| s));
-                signals.chain(self.inertia_variation.as_ref()).map(crate::signal::Signal::evaluation_cost).sum()
+                let terms: f64 =
+                    signals.chain(self.inertia_variation.as_ref()).map(crate::signal::Signal::evaluation_cost).sum();
+                // Every discrete gust is evaluated at every substep (a
+                // 1 − cosine: priced like a sine term).
+                terms + self.wind.as_ref().map_or(0.0, |w| w.gusts.len() as f64)
             },
             limits: &self.limits,
         }

@@ -240,8 +240,19 @@ impl Chain {
     }
 }
 
+/// Whether the first layer of a chain was read from a file or given as text.
+#[derive(Clone, Copy)]
+enum SourceKind {
+    File,
+    Text,
+}
+
 /// Load the chain starting at `source`.
 fn load_chain(source: Source<'_>, limits: &Limits) -> Result<Chain, ScenarioError> {
+    let source_kind = match source {
+        Source::File(_) => SourceKind::File,
+        Source::Text { .. } => SourceKind::Text,
+    };
     let (mut shown, mut text, mut dir, mut id) = match source {
         Source::File(path) => {
             let text = read_scenario_text(path, limits)?;
@@ -261,6 +272,12 @@ fn load_chain(source: Source<'_>, limits: &Limits) -> Result<Chain, ScenarioErro
             // A file reached through `extends` may be anything (a system
             // file): name it and the position, never quote its content.
             message: match layers.last() {
+                // A file whose name does not end in `.toml` may be anything
+                // (`/etc/passwd`): never quote its content either.
+                None if !shown.ends_with(".toml") && matches!(source_kind, SourceKind::File) => format!(
+                    "not a scenario file: {} (content not shown: the name does not end in .toml)",
+                    crate::text::parse_position(&text, &e)
+                ),
                 None => crate::text::parse_message(&text, &e),
                 Some(by) => format!(
                     "not a scenario file (`extends` target of {}): {} (content not shown)",

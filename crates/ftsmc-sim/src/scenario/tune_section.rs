@@ -3,8 +3,9 @@
 //!
 //! The parameters themselves are declared with each controller
 //! (`crate::controllers::tunable`); this section narrows that set
-//! (`parameters`), moves bounds (`bounds`), adds any numeric gain key
-//! (`[[tune.extra]]`) and holds the cost weights. docs/tuning.md explains
+//! (`parameters`), moves bounds (`bounds`), adds gains of the controller's
+//! own section (`[[tune.extra]]`, checked by
+//! `crate::controllers::tunable::check_extra_key`) and holds the cost weights. docs/tuning.md explains
 //! the cost; docs/scenarios.md lists every key.
 
 use std::collections::BTreeMap;
@@ -12,7 +13,7 @@ use std::collections::BTreeMap;
 use ftsmc_core::law::GainError;
 use serde::{Deserialize, Serialize};
 
-/// One extra tuned value: any numeric key of the scenario, by its dotted
+/// One extra tuned value: a gain of the tuned controller, by its dotted
 /// path (`ftaftsmc.x.lambda`, `pid.rate_p.0` for element 0 of an array,
 /// `cascade.command_filter.damping`), searched between `low` and `high`
 /// starting from the value the scenario gives it.
@@ -47,7 +48,7 @@ pub struct TuneSection {
     /// on the scenario's own gains, like the declared ones).
     #[serde(skip_serializing_if = "BTreeMap::is_empty")]
     pub bounds: BTreeMap<String, [f64; 2]>,
-    /// Extra parameters: any numeric key, absolute values.
+    /// Extra parameters: gains of the controller's own section, absolute values.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub extra: Vec<ExtraParameter>,
     /// Training flights per candidate (the same Monte Carlo draws for every

@@ -220,11 +220,17 @@ pub fn tune_with(base: &Scenario, options: &TuneOptions, evaluator: &Evaluator<'
     }
 
     let mut history = Vec::new();
+    // `flights`: training flights flown. `charged`: the budget spent, every
+    // candidate charged its `runs` flights whether it flew or was refused
+    // (invalid gains), so every generation spends `lambda × runs` and the
+    // loop ends within the budget whatever the candidates are.
     let mut flights = 0u64;
+    let mut charged;
     // Generation 0: the start.
     let start_values = space.start_values();
     let start_stats = one(evaluator(std::slice::from_ref(&start), &train)?, 1)?[0];
     flights += runs;
+    charged = runs;
     history.push(Evaluated {
         generation: 0,
         candidate: 0,
@@ -235,8 +241,9 @@ pub fn tune_with(base: &Scenario, options: &TuneOptions, evaluator: &Evaluator<'
         error: None,
     });
     let mut generation = 0u64;
-    while flights + lambda * runs <= options.budget {
+    while charged + lambda * runs <= options.budget {
         generation += 1;
+        charged += lambda * runs;
         let points = es.ask();
         let values: Vec<Vec<f64>> = points.iter().map(|u| space.values(u)).collect();
         let built: Vec<Result<Scenario, String>> = values.iter().map(|v| space.apply(&start, v)).collect();
@@ -275,7 +282,9 @@ pub fn tune_with(base: &Scenario, options: &TuneOptions, evaluator: &Evaluator<'
     let best = (0..history.len())
         .min_by(|&a, &b| history[a].cost.total_cmp(&history[b].cost).then(a.cmp(&b)))
         .expect("the start is always evaluated");
-    let mut tuned = space.apply(&start, &history[best].values)?;
+    // The start is flown as given (an extra key's start may have been
+    // clamped into its range, which the scenario itself is not).
+    let mut tuned = if best == 0 { start.clone() } else { space.apply(&start, &history[best].values)? };
     tuned.controllers = vec![options.controller.clone()];
     let training = Comparison { start: history[0].stats, tuned: history[best].stats };
     let held = held_out_indices(options.seed, runs, settings.validation_runs);

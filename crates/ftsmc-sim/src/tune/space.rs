@@ -92,9 +92,19 @@ impl Space {
         if !section.extra.is_empty() {
             let table = scenario_table(base)?;
             for (i, e) in section.extra.iter().enumerate() {
-                let v = get_number(&table, &e.key).ok_or_else(|| {
-                    format!("`tune.extra[{i}].key` = \"{}\": not a numeric key of the scenario", e.key)
-                })?;
+                let shown = crate::text::show_str(&e.key);
+                crate::controllers::tunable::check_extra_key(controller, &e.key)
+                    .map_err(|why| format!("{}: `tune.extra[{i}].key` = \"{shown}\": {why}", base.name))?;
+                // A gain is a real number: an integer key (a count) is not searched.
+                let v = match walk(&table, &e.key) {
+                    Some(toml::Value::Float(f)) => *f,
+                    _ => {
+                        return Err(format!(
+                            "{}: `tune.extra[{i}].key` = \"{shown}\": not a real-valued gain of the scenario",
+                            base.name
+                        ))
+                    }
+                };
                 dims.push(Dim {
                     name: e.key.clone(),
                     low: e.low,
