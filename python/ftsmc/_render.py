@@ -23,9 +23,9 @@ ARM = 0.25
 FloatArray = npt.NDArray[np.float64]
 
 
-def rotation(attitude: Sequence[float]) -> FloatArray:
+def rotation(attitude: npt.ArrayLike) -> FloatArray:
     """Body-to-world rotation ``Rz(ψ) Ry(θ) Rx(φ)`` of Euler angles (φ, θ, ψ), rad."""
-    phi, theta, psi = (float(a) for a in attitude)
+    phi, theta, psi = (float(a) for a in np.asarray(attitude, dtype=float))
     cf, sf = np.cos(phi), np.sin(phi)
     ct, st = np.cos(theta), np.sin(theta)
     cp, sp = np.cos(psi), np.sin(psi)
@@ -38,7 +38,7 @@ def rotation(attitude: Sequence[float]) -> FloatArray:
     )
 
 
-def arms(position: Sequence[float], attitude: Sequence[float], arm: float = ARM) -> Tuple[FloatArray, FloatArray]:
+def arms(position: npt.ArrayLike, attitude: npt.ArrayLike, arm: float = ARM) -> Tuple[FloatArray, FloatArray]:
     """World coordinates (m) of the four arm tips (4×3) and of the tip of the
     body z axis (3,) of a vehicle at ``position`` with ``attitude``."""
     r = rotation(attitude)
@@ -62,7 +62,7 @@ class FrameRenderer:
         self.height, self.width, self.span = int(height), int(width), float(span)
         dpi = 100
         self.figure = Figure(figsize=(self.width / dpi, self.height / dpi), dpi=dpi)
-        self.canvas = FigureCanvasAgg(self.figure)
+        self.canvas: Any = FigureCanvasAgg(self.figure)
         self.axes = self.figure.subplots(1, 2)
         self.figure.subplots_adjust(left=0.08, right=0.98, bottom=0.14, top=0.84, wspace=0.25)
         self.trail: List[FloatArray] = []
