@@ -151,6 +151,14 @@ pub fn run(
             .collect();
         write_ise_boxplots(&title, controllers, &summaries, &completed, &dir.path().join("montecarlo-ise"))?;
     }
+    let md = format!(
+        "Monte Carlo: {} × {runs} runs of {} (master seed {seed}); every run's row is in [runs.csv](runs.csv).\n\n{}\n",
+        controllers.len(),
+        scenario.name,
+        mc_table(&summaries)
+    );
+    let html = crate::html::report(dir.path(), &format!("ftsmc montecarlo {}", scenario.name), &md)?;
+    dir.write("report.html", html.as_bytes())?;
     dir.commit()?;
 
     let what = match shard {
