@@ -373,7 +373,7 @@ pub fn merge(dirs: &[PathBuf], out: &Path, figures: bool) -> Result<()> {
     );
     println!("{}", mc_table(&summaries));
     println!(
-        "\nwrote {}/ (runs.csv, summary.json, scenario.toml{})",
+        "\nwrote {}/ (runs.csv, summary.json, scenario.toml, report.html{})",
         folder.display(),
         if figures { ", montecarlo-ise.{svg,png}" } else { "" }
     );

@@ -168,7 +168,7 @@ pub fn run(
     println!("Monte Carlo: {} × {what} of {} (seed {seed})\n", controllers.len(), scenario.name);
     println!("{}", mc_table(&summaries));
     println!(
-        "\n{} flights, {:.2} M control steps in {elapsed:.2} s ({:.0} flights/s{}; {lanes} lane{} per thread, {}); wrote {}/ (runs.csv, summary.json, scenario.toml{})",
+        "\n{} flights, {:.2} M control steps in {elapsed:.2} s ({:.0} flights/s{}; {lanes} lane{} per thread, {}); wrote {}/ (runs.csv, summary.json, scenario.toml, report.html{})",
         rows.len(),
         steps as f64 / 1e6,
         rows.len() as f64 / elapsed.max(1e-9),

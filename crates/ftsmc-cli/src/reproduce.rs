@@ -535,7 +535,7 @@ pub fn reproduce(out: &Path, figures: bool, realistic_runs: u64) -> Result<()> {
     dir.commit()?;
     let o = out.display();
     println!(
-        "wrote {o}/summary.json, {o}/report.md, per-run CSV and scenario.toml under {o}/<scenario>/{}; {} flights in {:.2} s",
+        "wrote {o}/summary.json, {o}/report.md, {o}/report.html, per-run CSV and scenario.toml under {o}/<scenario>/{}; {} flights in {:.2} s",
         if figures { format!(", figures under {o}/figures/") } else { String::new() },
         runs.len(),
         elapsed
@@ -900,7 +900,7 @@ pub fn run_scenario(scenario: &Scenario, out: &Path, figures: bool) -> Result<()
     dir.commit()?;
     println!("{table}");
     println!(
-        "wrote {}/ (CSV per controller, scenario.toml, summary.json{}); {} flight{} in {flight_seconds:.3} s",
+        "wrote {}/ (CSV per controller, scenario.toml, summary.json, report.html{}); {} flight{} in {flight_seconds:.3} s",
         out.join(&scenario.name).display(),
         if figures { ", figures/" } else { "" },
         runs.len(),

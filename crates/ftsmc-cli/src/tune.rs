@@ -202,7 +202,7 @@ pub fn run(
     }
     let flights = result.training_flights + result.held_out_flights;
     println!(
-        "\n{flights} flights ({} training, {} held-out) in {training_seconds:.1} s ({:.0} flights/s); wrote {}/ ({tuned_name}, {history_name}, {controller}.summary.json, {scenario_name}{})",
+        "\n{flights} flights ({} training, {} held-out) in {training_seconds:.1} s ({:.0} flights/s); wrote {}/ ({tuned_name}, {history_name}, {controller}.summary.json, {scenario_name}, {controller}.report.html{})",
         result.training_flights,
         result.held_out_flights,
         flights as f64 / elapsed.max(1e-9),
