@@ -196,8 +196,9 @@ class Run:
         """The time series exactly as the CLI writes ``<controller>.csv``."""
         return self._data.csv()
 
-    def plot(self, what: str = "position") -> matplotlib.figure.Figure:
-        """A matplotlib figure of this run: ``"position"``, ``"attitude"`` or
+    def plot(self, what: str = "all") -> matplotlib.figure.Figure:
+        """A matplotlib figure of this run: ``"all"`` (position, attitude and
+        rotor speeds, one row each), ``"position"``, ``"attitude"`` or
         ``"rotors"`` (see :mod:`ftsmc.plot`)."""
         from . import plot
 
@@ -333,4 +334,5 @@ class Controller:
         return f"Controller({self.name!r})"
 
 
+from . import plot  # noqa: E402  (``ftsmc.plot`` after ``import ftsmc``; matplotlib is imported when a figure is drawn)
 from .tuning import Tuned, tune  # noqa: E402  (re-export; the code lives in tuning.py)

@@ -21,9 +21,22 @@ pub fn steps_bar(total: u64, flights: u64) -> ProgressBar {
     bar
 }
 
+/// Print `text` on stdout and flush at once, so a table reaches a pipe or
+/// a file as soon as it is computed, not when the command ends.
+pub fn print_now(text: &str) {
+    use std::io::Write as _;
+    let mut out = std::io::stdout().lock();
+    let _ = writeln!(out, "{text}");
+    let _ = out.flush();
+}
+
 /// Four decimals, or scientific notation for small non-zero values (below
-/// 1e-3) and large ones (1e6 and above).
+/// 1e-3) and large ones (1e6 and above); `—` for NaN (a metric that does
+/// not apply, e.g. the RMS error of a gain set none of whose runs completed).
 pub fn num(v: f64) -> String {
+    if v.is_nan() {
+        return "—".to_string();
+    }
     if v != 0.0 && (v.abs() < 1e-3 || v.abs() >= 1e6) {
         format!("{v:.3e}")
     } else {

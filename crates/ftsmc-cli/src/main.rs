@@ -7,6 +7,7 @@ mod console;
 mod cpu;
 mod figures;
 mod fixed_time;
+mod html;
 mod ladder;
 mod merge;
 mod montecarlo;
@@ -35,10 +36,13 @@ use ftsmc_sim::scenario::{Scenario, BUILT_IN_SCENARIOS};
     version,
     about = "Fixed-time adaptive terminal sliding-mode control of a quadrotor: reproduce the paper, run scenarios",
     long_about = "ftsmc simulates a quadrotor (paper Eq. 1-2, corrected) under the fixed-time adaptive fast terminal \
-sliding-mode controller FTAFTSMC and two earlier controllers (RANFTSMC, TSM-STA).\n\n\
-Start with `ftsmc reproduce`: it runs the paper's two scenarios with all three controllers, prints the paper's \
-Table 3 beside ours with a verdict on each claim, and writes CSV time series, summary.json and the nine figures \
-(SVG + PNG) under results/.\n\n\
+sliding-mode controller FTAFTSMC, the two earlier sliding-mode controllers the paper compares it with \
+(RANFTSMC, TSM-STA) and two practitioners' baselines (PID, the PX4 cascade; SE(3), Lee et al. 2010): five \
+controllers.\n\n\
+Start with `ftsmc reproduce`: it runs the paper's two scenarios with the paper's three controllers, prints the \
+paper's Table 3 beside ours with a verdict on each claim, flies all five controllers beyond the paper, and writes \
+CSV time series, summary.json, the figures (SVG + PNG), report.md and report.html (one self-contained page with \
+every table and figure) under results/.\n\n\
 Write your own scenario as a TOML file (start from `ftsmc scenario paper-scenario-1 > my.toml`) and run it with \
 `ftsmc run my.toml`.\n\n\
 Every command takes `--out DIR`, the parent folder of its results: `run`, `montecarlo` and `fixed-time` write \

@@ -375,6 +375,17 @@ pub fn merge(dirs: &[PathBuf], out: &Path, figures: bool) -> Result<()> {
         let title = format!("{} runs of {}", first.runs, first.scenario_name);
         write_ise_boxplots(&title, &first.controllers, &summaries, &completed, &dir.path().join("montecarlo-ise"))?;
     }
+    let md = format!(
+        "Monte Carlo: {} × {} runs of {} (master seed {}), merged from {} shards; every run's row is in [runs.csv](runs.csv).\n\n{}\n",
+        first.controllers.len(),
+        first.runs,
+        first.scenario_name,
+        first.master_seed,
+        shards.len(),
+        mc_table(&summaries)
+    );
+    let html = crate::html::report(dir.path(), &format!("ftsmc merge {}", first.scenario_name), &md)?;
+    dir.write("report.html", html.as_bytes())?;
     dir.commit()?;
 
     println!(
@@ -387,7 +398,7 @@ pub fn merge(dirs: &[PathBuf], out: &Path, figures: bool) -> Result<()> {
     );
     println!("{}", mc_table(&summaries));
     println!(
-        "\nwrote {}/ (runs.csv, summary.json, scenario.toml{})",
+        "\nwrote {}/ (runs.csv, summary.json, scenario.toml, report.html{})",
         folder.display(),
         if figures { ", montecarlo-ise.{svg,png}" } else { "" }
     );

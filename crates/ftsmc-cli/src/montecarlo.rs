@@ -154,6 +154,14 @@ pub fn run(
             .collect();
         write_ise_boxplots(&title, controllers, &summaries, &completed, &dir.path().join("montecarlo-ise"))?;
     }
+    let md = format!(
+        "Monte Carlo: {} × {runs} runs of {} (master seed {seed}); every run's row is in [runs.csv](runs.csv).\n\n{}\n",
+        controllers.len(),
+        scenario.name,
+        mc_table(&summaries)
+    );
+    let html = crate::html::report(dir.path(), &format!("ftsmc montecarlo {}", scenario.name), &md)?;
+    dir.write("report.html", html.as_bytes())?;
     dir.commit()?;
 
     let what = match shard {
@@ -163,7 +171,7 @@ pub fn run(
     println!("Monte Carlo: {} × {what} of {} (seed {seed})\n", controllers.len(), scenario.name);
     println!("{}", mc_table(&summaries));
     println!(
-        "\n{} flights, {:.2} M control steps in {elapsed:.2} s ({:.0} flights/s{}; {lanes} lane{} per thread, {}); wrote {}/ (runs.csv, summary.json, scenario.toml{})",
+        "\n{} flights, {:.2} M control steps in {elapsed:.2} s ({:.0} flights/s{}; {lanes} lane{} per thread, {}); wrote {}/ (runs.csv, summary.json, scenario.toml, report.html{})",
         rows.len(),
         steps as f64 / 1e6,
         rows.len() as f64 / elapsed.max(1e-9),

@@ -18,7 +18,7 @@ use serde_json::json;
 
 use crate::console::{num, stats_cells, Table};
 use crate::output::{provenance, ResultDir};
-use crate::plot::{controller_color, write_figure, Figure, Panel, Series};
+use crate::plot::{controller_color, write_figure, Figure, Panel, Rgb, Series};
 
 /// Default training-flight budget of `ftsmc tune`.
 pub const DEFAULT_BUDGET: u64 = 2000;
@@ -180,6 +180,15 @@ pub fn run(
         // last one for svg/png, which must not eat `.convergence`.
         write_convergence(&result, &dir.path().join(format!("{controller}.convergence.svg")))?;
     }
+    // One page per tuned controller: the folder is shared by the tunes of
+    // every controller of the scenario.
+    let md = format!(
+        "Tuned {controller} on {} (budget {budget} flights, seed {seed}); the gains: [{tuned_name}]({tuned_name}).\n\n{}\n",
+        scenario.name,
+        comparison_table(&result)
+    );
+    let html = crate::html::report(dir.path(), &format!("ftsmc tune {controller} on {}", scenario.name), &md)?;
+    dir.write(format!("{controller}.report.html"), html.as_bytes())?;
     dir.commit()?;
 
     println!(
@@ -194,7 +203,7 @@ pub fn run(
     }
     let flights = result.training_flights + result.held_out_flights;
     println!(
-        "\n{flights} flights ({} training, {} held-out) in {training_seconds:.1} s ({:.0} flights/s); wrote {}/ ({tuned_name}, {history_name}, {controller}.summary.json, {scenario_name}{})",
+        "\n{flights} flights ({} training, {} held-out) in {training_seconds:.1} s ({:.0} flights/s); wrote {}/ ({tuned_name}, {history_name}, {controller}.summary.json, {scenario_name}, {controller}.report.html{})",
         result.training_flights,
         result.held_out_flights,
         flights as f64 / elapsed.max(1e-9),
@@ -222,8 +231,17 @@ fn write_convergence(r: &TuneResult, stem: &Path) -> Result<()> {
         x_label: "training flights".into(),
         y_label: "cost, log scale".into(),
         series: vec![
-            Series { label: "best so far".into(), xs: xs.clone(), ys: best_so_far, color, dashed: false, end: None },
-            Series { label: "candidate".into(), xs, ys: costs, color, dashed: true, end: None },
+            // Each candidate is an independent sample: a point, not a line.
+            Series {
+                points: true,
+                label: "candidate".into(),
+                xs: xs.clone(),
+                ys: costs,
+                color: Rgb(127, 127, 127),
+                dashed: false,
+                end: None,
+            },
+            Series { points: false, label: "best so far".into(), xs, ys: best_so_far, color, dashed: false, end: None },
         ],
         log_x: false,
         log_y: true,

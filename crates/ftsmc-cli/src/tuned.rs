@@ -125,15 +125,33 @@ pub fn table(rows: &[Row]) -> String {
             "τ act.",
             "sat.",
         ]);
+        let mut kept = false;
         for r in rows.iter().filter(|r| r.scenario == scenario) {
-            for (gains, s) in [("default", &r.default), ("tuned", &r.tuned)] {
+            let same = kept_defaults(&r.scenario, &r.controller);
+            kept |= same;
+            let tuned = if same { "tuned (= default)" } else { "tuned" };
+            for (gains, s) in [("default", &r.default), (tuned, &r.tuned)] {
                 t.row([r.controller.clone(), gains.to_string()].into_iter().chain(stats_cells(s)).collect());
             }
         }
         out.push_str(&format!("\n{scenario} ({}):\n\n", label_list(rows, scenario)));
         out.push_str(&t.render());
+        if kept {
+            out.push_str(
+                "\n(= default): the search found nothing better than the default gains, so the tuned file holds \
+                 them and its row repeats the default row. `—`: no run completed, so no RMS error.\n",
+            );
+        }
     }
     out
+}
+
+/// True when the committed tuned file of `controller` on `scenario` holds
+/// the default gains (its search found nothing better than its start).
+fn kept_defaults(scenario: &str, controller: &str) -> bool {
+    TUNED_FILES
+        .iter()
+        .any(|(s, c, text)| *s == scenario && *c == controller && text.contains("# Best: generation 0, candidate 0,"))
 }
 
 /// The controllers' labels of `scenario`'s rows, comma-separated.
@@ -159,6 +177,46 @@ pub fn write(dir: &crate::output::ResultDir, runs: u64) -> Result<Option<String>
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_tuned_row_equal_to_its_default_says_so_and_nan_reads_as_a_dash() {
+        let stats = |rms: f64| FlightStats {
+            runs: 4,
+            success: 4,
+            completed: 4,
+            crashed: 0,
+            diverged: 0,
+            envelope_failures: 0,
+            rms_median: rms,
+            rms_p90: rms,
+            rms_p95: rms,
+            thrust_activity: 1.0,
+            torque_activity: 0.1,
+            saturated: 0.0,
+            divergence_score: 0.0,
+        };
+        let rows = vec![
+            Row {
+                scenario: "realistic-light-2".into(),
+                controller: "tsm-sta".into(),
+                default: stats(1.0),
+                tuned: stats(1.0),
+            },
+            Row {
+                scenario: "realistic-light-2".into(),
+                controller: "pid".into(),
+                default: stats(f64::NAN),
+                tuned: stats(0.5),
+            },
+        ];
+        let md = table(&rows);
+        assert!(
+            md.contains("tuned (= default)") && md.contains("(= default): the search found nothing better"),
+            "{md}"
+        );
+        assert_eq!(md.matches("tuned (= default)").count(), 1, "{md}");
+        assert!(!md.contains("NaN") && md.contains("| —"), "{md}");
+    }
 
     #[test]
     fn every_committed_tuned_file_loads_and_changes_only_its_controller() {

@@ -33,7 +33,9 @@ fn stale_files_of_an_older_run_are_gone_and_the_users_files_stay() {
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     // The first run's tsm-sta.csv is gone (the run wrote it); junk.csv is the user's.
     let expected: BTreeSet<String> =
-        [".ftsmc-run.manifest", "ftaftsmc.csv", "junk.csv", "scenario.toml", "summary.json"].map(String::from).into();
+        [".ftsmc-run.manifest", "ftaftsmc.csv", "junk.csv", "report.html", "scenario.toml", "summary.json"]
+            .map(String::from)
+            .into();
     assert_eq!(names(&folder), expected);
     assert_eq!(std::fs::read_to_string(folder.join("junk.csv")).unwrap(), "t,x\n0,1\n");
     assert_eq!(names(&dir.join("res")), ["paper-scenario-1".to_string()].into(), "no staging or old folder left");
@@ -53,8 +55,8 @@ fn commands_sharing_an_out_keep_each_others_results() {
     );
     assert!(mc.status.success(), "{}", String::from_utf8_lossy(&mc.stderr));
     let err = String::from_utf8_lossy(&mc.stderr);
-    // Both write summary.json and scenario.toml: the user is told.
-    assert!(err.contains("replaced scenario.toml, summary.json") && err.contains("ftsmc run"), "{err}");
+    // Both write report.html, summary.json and scenario.toml: the user is told.
+    assert!(err.contains("replaced report.html, scenario.toml, summary.json") && err.contains("ftsmc run"), "{err}");
     assert_eq!(std::fs::read(folder.join("ftaftsmc.csv")).unwrap(), run_csv, "the run's CSV is kept");
     assert!(folder.join("runs.csv").is_file());
     // A user's file in the reproduce folder survives `run` and `reproduce`.
@@ -147,6 +149,7 @@ fn concurrent_runs_into_one_folder_leave_one_whole_result() {
         expected.insert(".ftsmc-run.manifest".into());
         expected.insert("summary.json".into());
         expected.insert("scenario.toml".into());
+        expected.insert("report.html".into());
         assert_eq!(names(&folder), expected, "round {round}: the files must be exactly those of one run");
         assert!(
             controllers == ["ftaftsmc".to_string()].into()

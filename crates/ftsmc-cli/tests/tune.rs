@@ -80,6 +80,16 @@ fn two_controllers_tuned_into_one_folder_keep_both_results() {
     // PID's figure survives SE(3)'s tune without figures.
     assert!(folder.join("pid.convergence.svg").is_file() && folder.join("pid.convergence.png").is_file());
     assert!(!folder.join("se3.convergence.svg").exists());
+    // Candidates are independent samples: points, with the best so far as
+    // the one line (a dashed line through them read as a time series).
+    let convergence = std::fs::read_to_string(folder.join("pid.convergence.svg")).unwrap();
+    assert!(convergence.contains(r#"<g class="points">"#) && !convergence.contains("stroke-dasharray"));
+    assert!(convergence.contains(">best so far</text>") && convergence.contains(">candidate</text>"));
+    // Each tune writes its own page of the shared folder.
+    for c in ["pid", "se3"] {
+        let page = std::fs::read_to_string(folder.join(format!("{c}.report.html"))).unwrap();
+        assert!(page.contains(&format!("{c}.tuned.toml")) && page.contains("<table>"), "{c}.report.html");
+    }
 
     // Each tuned file is a scenario of its own controller that extends the input.
     let pid = std::fs::read_to_string(folder.join("pid.tuned.toml")).unwrap();
