@@ -66,6 +66,7 @@
 //!            per_lane.rs        any one-flight controller on lanes (one controller per lane)
 //!            on_isa.rs          a controller's updates on the instruction set picked at run time
 //! floor 1  axes.rs              AxisSet and other per-axis containers
+//!          desaturation.rs      PX4's sequential-desaturation allocation (airmode off)
 //!          signal/              time signals with analytic derivatives
 //!            waypoints.rs       quintic waypoint splines
 //!          limits.rs            cost limits and their arithmetic
@@ -82,6 +83,7 @@ pub mod analysis;
 pub mod axes;
 pub mod batch;
 pub mod controllers;
+pub mod desaturation;
 pub mod envelope;
 pub mod environment;
 pub mod gauss;
