@@ -93,6 +93,10 @@ enum Command {
         /// max_output_bytes, max_flights, max_sweep_points, max_threads, max_scenario_bytes; see docs/scenarios.md).
         #[arg(long = "limit", value_name = "KEY=VALUE")]
         limit: Vec<String>,
+        /// Set a scenario key, e.g. `--set vehicle.preset=crazyflie-2` or `--set wind.preset=breeze` (repeatable;
+        /// the dotted keys of Python's `Scenario.with_overrides`; recorded in the written scenario.toml).
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
     },
     /// Measure reaching and settling times against the initial error (1e-3 … 1e2) beside the paper's fixed-time bound.
     FixedTime {
@@ -112,6 +116,10 @@ enum Command {
         /// max_output_bytes, max_flights, max_sweep_points, max_threads, max_scenario_bytes; see docs/scenarios.md).
         #[arg(long = "limit", value_name = "KEY=VALUE")]
         limit: Vec<String>,
+        /// Set a scenario key, e.g. `--set vehicle.preset=crazyflie-2` or `--set wind.preset=breeze` (repeatable;
+        /// the dotted keys of Python's `Scenario.with_overrides`; recorded in the written scenario.toml).
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
     },
     /// Fly N randomised copies of a scenario (its [montecarlo] section) with each controller, in parallel.
     Montecarlo {
@@ -142,6 +150,10 @@ enum Command {
         /// max_output_bytes, max_flights, max_sweep_points, max_threads, max_scenario_bytes; see docs/scenarios.md).
         #[arg(long = "limit", value_name = "KEY=VALUE")]
         limit: Vec<String>,
+        /// Set a scenario key, e.g. `--set vehicle.preset=crazyflie-2` or `--set wind.preset=breeze` (repeatable;
+        /// the dotted keys of Python's `Scenario.with_overrides`; recorded in the written scenario.toml).
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
         /// Fly only shard K of N (a contiguous block of the runs) into `OUT/<name>-shard-K-of-N/`;
         /// `ftsmc merge` joins the N shards into the unsharded result (docs/campaigns.md).
         #[arg(long, value_name = "K/N")]
@@ -184,12 +196,20 @@ enum Command {
         /// Raise a cost limit, e.g. `--limit max_flights=1e6` (repeatable; see docs/scenarios.md).
         #[arg(long = "limit", value_name = "KEY=VALUE")]
         limit: Vec<String>,
+        /// Set a scenario key, e.g. `--set vehicle.preset=crazyflie-2` or `--set wind.preset=breeze` (repeatable;
+        /// the dotted keys of Python's `Scenario.with_overrides`; recorded in the written scenario.toml).
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
     },
     /// Rerun the documented TSM-STA gain procedure (match RANFTSMC's scenario-1 settling times) and print the gains as TOML.
     TuneTsmSta {
         /// Scenario to tune on (file or built-in name).
         #[arg(long, default_value = "paper-scenario-1")]
         scenario: String,
+        /// Set a scenario key, e.g. `--set vehicle.preset=crazyflie-2` or `--set wind.preset=breeze` (repeatable;
+        /// the dotted keys of Python's `Scenario.with_overrides`; recorded in the written scenario.toml).
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
     },
     /// Print a built-in scenario as TOML (a starting point for your own; `ftsmc list` describes them).
     Scenario {
@@ -203,12 +223,13 @@ enum Command {
 
 /// Load a scenario from a file path or a built-in name.
 pub fn load_scenario(arg: &str) -> Result<Scenario> {
-    load_scenario_with_limits(arg, &[])
+    load_scenario_with_limits(arg, &[], &[])
 }
 
 /// [`load_scenario`] with `--limit KEY=VALUE` overrides applied before the
-/// scenario is priced (they win over its `[limits]`).
-pub fn load_scenario_with_limits(arg: &str, limits: &[String]) -> Result<Scenario> {
+/// scenario is priced (they win over its `[limits]`), then the `--set
+/// KEY=VALUE` keys (`Scenario::with_overrides`, as Python's).
+pub fn load_scenario_with_limits(arg: &str, limits: &[String], sets: &[String]) -> Result<Scenario> {
     let path = PathBuf::from(arg);
     let loaded = if path.exists() {
         Some(Scenario::load_with_warnings(&path, limits)?)
@@ -218,7 +239,20 @@ pub fn load_scenario_with_limits(arg: &str, limits: &[String]) -> Result<Scenari
             None => None,
         }
     };
-    if let Some(loaded) = loaded {
+    if let Some(mut loaded) = loaded {
+        if !sets.is_empty() {
+            let sets = sets
+                .iter()
+                .map(|a| ftsmc_sim::scenario::overrides::parse_set(a))
+                .collect::<Result<Vec<_>, _>>()
+                .map_err(anyhow::Error::msg)?;
+            let warnings = std::mem::take(&mut loaded.warnings);
+            loaded = loaded.scenario.with_overrides(&sets)?;
+            // The file's own warnings, then those of the overridden scenario not already given.
+            let extra: Vec<String> = std::mem::take(&mut loaded.warnings);
+            loaded.warnings = warnings;
+            loaded.warnings.extend(extra);
+        }
         for warning in &loaded.warnings {
             eprintln!("warning: {warning}");
         }
@@ -267,8 +301,8 @@ fn run(cli: Cli) -> Result<()> {
             reproduce::price_realistic_runs(realistic_runs, &limit)?;
             reproduce::reproduce(&out, !no_figures, realistic_runs)
         }
-        Command::Run { scenario, controllers, out, no_figures, limit } => {
-            let mut scenario = load_scenario_with_limits(&scenario, &limit)?;
+        Command::Run { scenario, controllers, out, no_figures, limit, set } => {
+            let mut scenario = load_scenario_with_limits(&scenario, &limit, &set)?;
             let names = if controllers.is_empty() { scenario.controllers.clone() } else { controllers };
             check_names(&names)?;
             scenario.check_cost(names.len())?;
@@ -276,8 +310,8 @@ fn run(cli: Cli) -> Result<()> {
             scenario.controllers = names;
             reproduce::run_scenario(&scenario, &out, !no_figures)
         }
-        Command::FixedTime { scenario, controllers, per_decade, out, limit } => {
-            let mut scenario = load_scenario_with_limits(&scenario, &limit)?;
+        Command::FixedTime { scenario, controllers, per_decade, out, limit, set } => {
+            let mut scenario = load_scenario_with_limits(&scenario, &limit, &set)?;
             let controllers = if controllers.is_empty() { scenario.controllers.clone() } else { controllers };
             check_names(&controllers)?;
             scenario.controllers = controllers.clone();
@@ -302,8 +336,20 @@ fn run(cli: Cli) -> Result<()> {
             };
             fixed_time::run(&scenario, &controllers, &settings, &out)
         }
-        Command::Montecarlo { scenario, runs, seed, threads, lanes, controllers, out, no_figures, limit, shard } => {
-            let mut scenario = load_scenario_with_limits(&scenario, &limit)?;
+        Command::Montecarlo {
+            scenario,
+            runs,
+            seed,
+            threads,
+            lanes,
+            controllers,
+            out,
+            no_figures,
+            limit,
+            set,
+            shard,
+        } => {
+            let mut scenario = load_scenario_with_limits(&scenario, &limit, &set)?;
             let names = if controllers.is_empty() { scenario.controllers.clone() } else { controllers };
             check_names(&names)?;
             anyhow::ensure!(runs >= 1, "--runs must be at least 1");
@@ -325,8 +371,8 @@ fn run(cli: Cli) -> Result<()> {
             );
             montecarlo::run(&scenario, runs, shard, threads, lanes, &out, !no_figures)
         }
-        Command::Tune { scenario: arg, controller, budget, seed, threads, out, no_figures, limit } => {
-            let scenario = load_scenario_with_limits(&arg, &limit)?;
+        Command::Tune { scenario: arg, controller, budget, seed, threads, out, no_figures, limit, set } => {
+            let scenario = load_scenario_with_limits(&arg, &limit, &set)?;
             check_names(std::slice::from_ref(&controller))?;
             anyhow::ensure!(threads != Some(0), "--threads must be at least 1");
             let settings = scenario.tune.clone().unwrap_or_default();
@@ -342,8 +388,8 @@ fn run(cli: Cli) -> Result<()> {
             tune::run(&scenario, &arg, &controller, budget, seed, threads, &out, !no_figures)
         }
         Command::Merge { shards, out, no_figures } => merge::merge(&shards, &out, !no_figures),
-        Command::TuneTsmSta { scenario } => {
-            let scenario = load_scenario(&scenario)?;
+        Command::TuneTsmSta { scenario, set } => {
+            let scenario = load_scenario_with_limits(&scenario, &[], &set)?;
             let r = ftsmc_sim::analysis::tuning::tune_tsm_sta(
                 &scenario,
                 &ftsmc_core::tsm_sta::TsmStaGains::BASE_POSITION,
@@ -403,6 +449,10 @@ fn list_text() -> Result<String> {
     for (name, what) in &scenarios {
         text.push_str(&format!("  {name:<width$}  {what}\n"));
     }
+    text.push_str("vehicle presets ([vehicle] preset = NAME, --set vehicle.preset=NAME; docs/vehicles.md):\n");
+    for preset in ftsmc_sim::vehicle::VehiclePreset::ALL {
+        text.push_str(&format!("  {:<width$}  {}\n", preset.name(), preset.description()));
+    }
     Ok(text)
 }
 
@@ -430,7 +480,7 @@ mod tests {
     }
 
     #[test]
-    fn list_names_every_built_in_scenario_in_one_aligned_column() {
+    fn list_names_every_built_in_scenario_and_vehicle_preset_in_one_aligned_column() {
         let text = list_text().unwrap();
         for (file, _) in BUILT_IN_SCENARIOS {
             assert!(text.contains(file.trim_end_matches(".toml")), "{file} missing:\n{text}");
@@ -443,7 +493,14 @@ mod tests {
                 name_end + l[name_end..].chars().take_while(|c| *c == ' ').count()
             })
             .collect();
-        assert_eq!(starts.len(), registry::CONTROLLERS.len() + BUILT_IN_SCENARIOS.len());
+        let presets = ftsmc_sim::vehicle::VehiclePreset::ALL;
+        assert_eq!(starts.len(), registry::CONTROLLERS.len() + BUILT_IN_SCENARIOS.len() + presets.len());
+        for p in presets {
+            assert!(
+                text.lines().any(|l| l.trim_start().starts_with(p.name()) && l.ends_with(&p.description())),
+                "{text}"
+            );
+        }
         for (name, what) in registry::CONTROLLERS {
             assert!(text.lines().any(|l| l.trim_start().starts_with(name) && l.ends_with(what)), "{name}:\n{text}");
         }

@@ -302,3 +302,47 @@ fn reproduce_prints_the_papers_part_before_the_beyond_part_starts() {
     assert!(table3 < beyond_starts && verdict < beyond_starts, "paper part after the beyond part started:\n{text}");
     assert!(verdict < monte_carlo, "{text}");
 }
+
+/// `--set KEY=VALUE` changes the scenario as Python's `with_overrides`
+/// does, and the written scenario.toml records it: flying that file again
+/// is the same scenario.
+#[test]
+fn set_changes_the_scenario_and_the_written_file_records_it() {
+    let tmp = scratch("set");
+    let dir = tmp.path();
+    let out = ftsmc(
+        &[
+            "run",
+            "realistic-calm-1",
+            "--set",
+            "vehicle.preset=crazyflie-2",
+            "--set",
+            "duration=2.0",
+            "-c",
+            "se3",
+            "--no-figures",
+            "--out",
+            "out",
+        ],
+        dir,
+    );
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let written = dir.join("out/realistic-calm-1/scenario.toml");
+    let text = std::fs::read_to_string(&written).unwrap();
+    assert!(text.contains("preset = \"crazyflie-2\""), "{text}");
+    let again = ftsmc_sim::Scenario::from_file(&written).unwrap();
+    let (file, calm) = ftsmc_sim::scenario::resolve::built_in("realistic-calm-1").unwrap();
+    let calm = ftsmc_sim::Scenario::from_toml_str(calm, file).unwrap();
+    let sets = [
+        ("vehicle.preset".to_string(), toml::Value::String("crazyflie-2".into())),
+        ("duration".to_string(), toml::Value::Float(2.0)),
+    ];
+    let mut expected = calm.with_overrides(&sets).unwrap().scenario;
+    expected.controllers = vec!["se3".into()];
+    assert_eq!(again, expected);
+    assert_eq!(again.plant.mass, 0.03);
+    // A malformed --set is one clear line.
+    let bad = ftsmc(&["run", "paper-scenario-1", "--set", "duration", "--out", "out"], dir);
+    let err = String::from_utf8_lossy(&bad.stderr);
+    assert!(!bad.status.success() && err.contains("KEY=VALUE"), "{err}");
+}

@@ -35,7 +35,8 @@
 //!            recording.rs       Recording, recording_columns, CSV numbers
 //! floor 3  scenario/            the file format; composes every part's parameters; validation
 //!            validate.rs        range checks, names, array lengths, cost limits
-//!            resolve.rs         extends chains, deep merge, --set overrides, unit-slip warnings
+//!            resolve.rs         extends chains, deep merge, vehicle and wind presets, unit-slip warnings
+//!            overrides.rs       dotted-key overrides: --set KEY=VALUE and Python's with_overrides
 //!            distributions.rs   Dist, MonteCarloSpec, SAMPLED_COLUMNS, run_seed, per-run sampling
 //!            ladder.rs          the wind ladder's built-in scenarios realistic-<level>-<n>
 //!            tune_section.rs    `[tune]`: parameter set and cost weights of `ftsmc tune`
@@ -45,6 +46,7 @@
 //!            rigid_body.rs      Newton–Euler rigid body with quaternion attitude
 //!            math.rs            small vector/quaternion helpers
 //!            section.rs         `[vehicle]`: the truth model and every true parameter, one key set
+//!            presets.rs         named real vehicles (`[vehicle] preset`), their sourced files in vehicles/
 //!          actuators.rs         motor limits, lag, noise; mixer under saturation
 //!          environment/         plant-side variations, built from their own sections
 //!            disturbance.rs     DisturbanceSignals
@@ -66,6 +68,7 @@
 //!            per_lane.rs        any one-flight controller on lanes (one controller per lane)
 //!            on_isa.rs          a controller's updates on the instruction set picked at run time
 //! floor 1  axes.rs              AxisSet and other per-axis containers
+//!          desaturation.rs      PX4's sequential-desaturation allocation (airmode off)
 //!          signal/              time signals with analytic derivatives
 //!            waypoints.rs       quintic waypoint splines
 //!          limits.rs            cost limits and their arithmetic
@@ -82,6 +85,7 @@ pub mod analysis;
 pub mod axes;
 pub mod batch;
 pub mod controllers;
+pub mod desaturation;
 pub mod envelope;
 pub mod environment;
 pub mod escape;

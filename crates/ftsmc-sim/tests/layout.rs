@@ -20,6 +20,7 @@ const FLOORS: &[(&str, u32)] = &[
     ("axes", 1),
     ("limits", 1),
     ("isa", 1),
+    ("desaturation", 1),
     ("signal", 1),
     ("noise", 1),
     ("vehicle", 2),

@@ -13,6 +13,7 @@ use serde::{Deserialize, Serialize};
 mod deprecated;
 pub mod distributions;
 pub mod ladder;
+pub mod overrides;
 pub mod resolve;
 pub mod seed;
 pub mod tune_section;
