@@ -3,11 +3,14 @@
 //! Run `ftsmc --help` for the commands.
 
 mod bounded_read;
+mod compare;
 mod console;
 mod cpu;
 mod figures;
 mod fixed_time;
+mod forest;
 mod html;
+mod intervals;
 mod ladder;
 mod merge;
 mod montecarlo;
@@ -158,6 +161,55 @@ enum Command {
         /// `ftsmc merge` joins the N shards into the unsharded result (docs/campaigns.md).
         #[arg(long, value_name = "K/N")]
         shard: Option<ftsmc_sim::batch::shard::Shard>,
+    },
+    /// Fly controllers or gain files on one scenario's draws; intervals, paired verdicts, a forest plot.
+    Compare {
+        /// Scenario file (TOML) or built-in name: its vehicle, wind and [montecarlo] draws.
+        scenario: String,
+        /// Contestants (comma-separated or repeated): controller names, or files (a `*.tuned.toml`, any
+        /// scenario) whose controller section is flown on SCENARIO.
+        #[arg(long, short = 'c', value_delimiter = ',', required = true)]
+        contestants: Vec<String>,
+        /// Runs per contestant (ignored with --until-decided).
+        #[arg(long, default_value_t = 100)]
+        runs: u64,
+        /// Fly batches of --batch runs until every pair is decided (alpha spending keeps the error rate).
+        #[arg(long)]
+        until_decided: bool,
+        /// Most runs per contestant with --until-decided.
+        #[arg(long, default_value_t = 1000)]
+        max_runs: u64,
+        /// Runs per look with --until-decided.
+        #[arg(long, default_value_t = 50)]
+        batch: u64,
+        /// Confidence level of every interval and verdict (family-wise error 1 − confidence).
+        #[arg(long, default_value_t = ftsmc_sim::stats::DEFAULT_CONFIDENCE)]
+        confidence: f64,
+        /// Fly a file's gains even if it was made for another vehicle.
+        #[arg(long)]
+        allow_other_vehicle: bool,
+        /// Master seed (default: the scenario's `seed`).
+        #[arg(long)]
+        seed: Option<u64>,
+        /// Worker threads (default: all cores). Results do not depend on it.
+        #[arg(long)]
+        threads: Option<usize>,
+        /// Flights each thread flies side by side: 1, 2, 4 or 8. Results do not depend on it.
+        #[arg(long, default_value_t = ftsmc_sim::batch::montecarlo::DEFAULT_LANES)]
+        lanes: usize,
+        /// Parent folder: the results go to `OUT/<scenario name>/`.
+        #[arg(long, default_value = "results/compare")]
+        out: PathBuf,
+        /// Skip the forest plot.
+        #[arg(long)]
+        no_figures: bool,
+        /// Raise a cost limit (repeatable; see docs/scenarios.md).
+        #[arg(long = "limit", value_name = "KEY=VALUE")]
+        limit: Vec<String>,
+        /// Set a scenario key, e.g. `--set vehicle.preset=crazyflie-2` (repeatable; the dotted keys of Python's
+        /// `Scenario.with_overrides`).
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
     },
     /// Join the shard folders of `ftsmc montecarlo --shard K/N` into the unsharded result (runs.csv, summary.json).
     Merge {
@@ -386,6 +438,57 @@ fn run(cli: Cli) -> Result<()> {
             }
             let seed = seed.unwrap_or(scenario.seed);
             tune::run(&scenario, &arg, &controller, budget, seed, threads, &out, !no_figures)
+        }
+        Command::Compare {
+            scenario,
+            contestants,
+            runs,
+            until_decided,
+            max_runs,
+            batch,
+            confidence,
+            allow_other_vehicle,
+            seed,
+            threads,
+            lanes,
+            out,
+            no_figures,
+            limit,
+            set,
+        } => {
+            let mut scenario = load_scenario_with_limits(&scenario, &limit, &set)?;
+            ftsmc_sim::stats::check_confidence(confidence).map_err(|e| anyhow::anyhow!("--confidence: {e}"))?;
+            anyhow::ensure!(
+                runs >= 1 && max_runs >= 1 && batch >= 1,
+                "--runs, --max-runs and --batch must be at least 1"
+            );
+            anyhow::ensure!(threads != Some(0), "--threads must be at least 1");
+            anyhow::ensure!(
+                ftsmc_sim::batch::montecarlo::LANE_COUNTS.contains(&lanes),
+                "--lanes {lanes}: expected one of {:?}",
+                ftsmc_sim::batch::montecarlo::LANE_COUNTS
+            );
+            if let Some(n) = threads {
+                ftsmc_sim::limits::check_threads(&scenario.limits, n)?;
+            }
+            scenario.seed = seed.unwrap_or(scenario.seed);
+            let plan = if until_decided {
+                ftsmc_sim::batch::compare::Plan::UntilDecided { batch, max_runs }
+            } else {
+                ftsmc_sim::batch::compare::Plan::Fixed { runs }
+            };
+            compare::run(&compare::Request {
+                scenario: &scenario,
+                contestants: &contestants,
+                plan,
+                confidence,
+                allow_other_vehicle,
+                threads,
+                lanes,
+                out: &out,
+                figures: !no_figures,
+                limits: &limit,
+            })
         }
         Command::Merge { shards, out, no_figures } => merge::merge(&shards, &out, !no_figures),
         Command::TuneTsmSta { scenario, set } => {

@@ -17,6 +17,7 @@ mod gym;
 mod kinematics;
 mod progress;
 mod scenario;
+mod stats;
 mod tune;
 
 /// A `ValueError` carrying `message` (the text the CLI prints after `error: `).
@@ -41,6 +42,11 @@ fn _ftsmc(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(kinematics::kinematics_quaternion_from_euler, m)?)?;
     m.add_function(wrap_pyfunction!(kinematics::kinematics_euler_rates, m)?)?;
     m.add_function(wrap_pyfunction!(kinematics::kinematics_body_rates, m)?)?;
+    m.add_function(wrap_pyfunction!(stats::stats_wilson, m)?)?;
+    m.add_function(wrap_pyfunction!(stats::stats_clopper_pearson, m)?)?;
+    m.add_function(wrap_pyfunction!(stats::stats_binomial_quantile, m)?)?;
+    m.add_function(wrap_pyfunction!(stats::stats_mcnemar_exact, m)?)?;
+    m.add_function(wrap_pyfunction!(stats::stats_wilcoxon, m)?)?;
     m.add_function(wrap_pyfunction!(controller_names, m)?)?;
     m.add_function(wrap_pyfunction!(controller_label, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;

@@ -77,6 +77,7 @@
 //!          noise.rs             NoiseStream: a noise source's ChaCha generator read a block ahead
 //! floor 0  rng.rs               the ChaCha8 generator of a seed on a stream: every draw starts there
 //!          gauss.rs             normal and log-normal draws (ziggurat) on the libm crate's exp and ln
+//!          stats/               intervals (rates, quantiles, means), paired tests, Holm, sequential looks
 //! ```
 #![warn(missing_docs)]
 
@@ -101,6 +102,7 @@ pub mod run;
 pub mod scenario;
 pub mod sensors;
 pub mod signal;
+pub mod stats;
 pub mod text;
 pub mod tune;
 pub mod vehicle;

@@ -16,6 +16,7 @@ use source::{module_of, paths_after, rust_files, without_comments};
 const FLOORS: &[(&str, u32)] = &[
     ("gauss", 0),
     ("rng", 0),
+    ("stats", 0),
     ("text", 1),
     ("axes", 1),
     ("limits", 1),
