@@ -13,16 +13,15 @@
 //! CSS (`report.css`) hides the replay controls and keeps figures whole.
 //!
 //! Hand-written rather than a templating or Markdown crate: the page needs
-//! only the subset above, and the escaping below (text and attributes)
+//! only the subset above, and the escaping (text and double-quoted
+//! attributes, `ftsmc_sim::escape::xml_text`, shared with the SVG writer)
 //! is the whole of what a template engine would add.
-//! TODO(merge): the escaping belongs with the project-wide text-escaping
-//! module (TOML/CSV/Markdown/SVG/HTML) once it lands; `escape` is local
-//! until then.
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
+use ftsmc_sim::escape::xml_text as escape;
 
 /// Points per flight in the replay at most (the recording is decimated evenly).
 const REPLAY_POINTS: usize = 400;
@@ -33,22 +32,6 @@ const MAX_INLINE_SVG: u64 = 4 << 20;
 
 const CSS: &str = include_str!("report.css");
 const JS: &str = include_str!("report.js");
-
-/// `s` with `& < > " '` escaped, for HTML text and attribute values.
-pub fn escape(s: &str) -> String {
-    let mut out = String::with_capacity(s.len());
-    for c in s.chars() {
-        match c {
-            '&' => out.push_str("&amp;"),
-            '<' => out.push_str("&lt;"),
-            '>' => out.push_str("&gt;"),
-            '"' => out.push_str("&quot;"),
-            '\'' => out.push_str("&#39;"),
-            c => out.push(c),
-        }
-    }
-    out
-}
 
 /// A relative path as a URL path (`/`-separated, each part percent-encoded
 /// where it is not a plain file-name character).

@@ -171,12 +171,12 @@ pub fn run(
     };
     println!("Monte Carlo: {} × {what} of {} (seed {seed})\n", controllers.len(), scenario.name);
     println!("{}", mc_table(&summaries));
-    let rows: Vec<(String, ftsmc_sim::batch::verdicts::Intervals)> =
+    let interval_rows: Vec<(String, ftsmc_sim::batch::verdicts::Intervals)> =
         summaries.iter().map(|(n, s)| (n.clone(), s.intervals.clone())).collect();
     println!(
         "\nHeadline: success and RMS position error √(rms_x² + rms_y² + rms_z²). {}\n\n{}",
         crate::intervals::level_note(ftsmc_sim::stats::DEFAULT_CONFIDENCE),
-        crate::intervals::interval_table(&rows).render()
+        crate::intervals::interval_table(&interval_rows).render()
     );
     println!(
         "\n{} flights, {:.2} M control steps in {elapsed:.2} s ({:.0} flights/s{}; {lanes} lane{} per thread, {}); wrote {}/ (runs.csv, summary.json, scenario.toml, report.html{})",
