@@ -366,6 +366,7 @@ pub fn merge(dirs: &[PathBuf], out: &Path, figures: bool) -> Result<()> {
         "scenario": first.scenario_name,
         "runs": first.runs,
         "master_seed": first.master_seed,
+        "confidence": ftsmc_sim::stats::DEFAULT_CONFIDENCE,
         "controllers": Value::Object(per_controller),
         "provenance": prov,
     });

@@ -18,6 +18,7 @@ const FLOORS: &[(&str, u32)] = &[
     ("rng", 0),
     ("stats", 0),
     ("text", 1),
+    ("escape", 1),
     ("axes", 1),
     ("limits", 1),
     ("isa", 1),
