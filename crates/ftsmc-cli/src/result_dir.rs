@@ -3,8 +3,8 @@
 //! "Result folders").
 //!
 //! 1. [`ResultDir::begin`] checks the destination and creates a hidden
-//!    staging folder beside it, `.<name>.tmp-<pid>-<nanos>-<n>`; every file of
-//!    the result is written there.
+//!    staging folder beside it, `.<name>.tmp-XXXXXX` (a unique name made by
+//!    the `tempfile` crate); every file of the result is written there.
 //! 2. [`ResultDir::commit`], holding an exclusive lock on the parent folder
 //!    (so commits into one parent take turns), builds the whole new folder
 //!    in the staging folder: beside the new files it puts a *hard link* to
@@ -36,17 +36,15 @@
 use std::collections::{BTreeMap, BTreeSet};
 use std::ffi::OsString;
 use std::fs::File;
-use std::io::Read as _;
 use std::path::{Component, Path, PathBuf};
-use std::time::{SystemTime, UNIX_EPOCH};
 
 use anyhow::{bail, Context, Result};
 use sha2::{Digest as _, Sha256};
 
 use crate::bounded_read::{read_limited, MAX_MANIFEST_BYTES};
 
-/// Size and SHA-256 of a file ftsmc wrote.
-type Stamp = (u64, [u8; 32]);
+/// Size and SHA-256 (lowercase hex) of a file ftsmc wrote.
+type Stamp = (u64, String);
 
 /// A result folder being written: files go into a hidden staging folder
 /// beside `dest`; [`ResultDir::commit`] swaps it into place; dropping it
@@ -77,33 +75,18 @@ pub fn manifest_file(owner: &str) -> String {
 
 /// SHA-256 of `data` as lowercase hex, as `sha256sum` prints it.
 pub fn sha256_hex(data: &[u8]) -> String {
-    hex(&Sha256::digest(data).into())
+    format!("{:x}", Sha256::digest(data))
 }
 
-fn hex(digest: &[u8; 32]) -> String {
-    digest.iter().map(|b| format!("{b:02x}")).collect()
-}
-
-/// Size and SHA-256 of the regular file `path` (`None` for anything else).
+/// Size and SHA-256 of the regular file `path` (`None` for anything else),
+/// read in a stream: results may hold files of any size.
 fn stamp(path: &Path) -> Option<Stamp> {
-    let meta = std::fs::symlink_metadata(path).ok()?;
-    if !meta.is_file() {
+    if !std::fs::symlink_metadata(path).ok()?.is_file() {
         return None;
     }
     let mut hasher = Sha256::new();
-    let mut file = File::open(path).ok()?;
-    let mut buf = vec![0u8; 1 << 16];
-    let mut size = 0u64;
-    loop {
-        match file.read(&mut buf).ok()? {
-            0 => break,
-            n => {
-                hasher.update(&buf[..n]);
-                size += n as u64;
-            }
-        }
-    }
-    Some((size, hasher.finalize().into()))
+    let size = std::io::copy(&mut File::open(path).ok()?, &mut hasher).ok()?;
+    Some((size, format!("{:x}", hasher.finalize())))
 }
 
 /// What a manifest lists: the files with their stamps, and the lines that
@@ -119,17 +102,9 @@ fn read_manifest(path: &Path) -> Result<(BTreeMap<String, Stamp>, Vec<String>)> 
     for line in String::from_utf8_lossy(&bytes).lines().filter(|l| !l.is_empty()) {
         let mut parts = line.splitn(3, ' ');
         let (sha, size, rel) = (parts.next().unwrap_or(""), parts.next().unwrap_or(""), parts.next());
-        let mut digest = [0u8; 32];
-        let hex_ok = sha.len() == 64
-            && sha.is_ascii()
-            && digest
-                .iter_mut()
-                .enumerate()
-                .all(|(i, d)| u8::from_str_radix(&sha[2 * i..2 * i + 2], 16).map(|v| *d = v).is_ok());
-        match (hex_ok, size.parse::<u64>(), rel) {
-            (true, Ok(size), Some(rel)) => {
-                listed.insert(rel.to_string(), (size, digest));
-            }
+        let sha_ok = sha.len() == 64 && sha.bytes().all(|b| matches!(b, b'0'..=b'9' | b'a'..=b'f'));
+        match (sha_ok, size.parse::<u64>(), rel) {
+            (true, Ok(size), Some(rel)) => drop(listed.insert(rel.to_string(), (size, sha.to_string()))),
             _ => bad.push(line.to_string()),
         }
     }
@@ -143,17 +118,10 @@ fn read_manifest(path: &Path) -> Result<(BTreeMap<String, Stamp>, Vec<String>)> 
 fn manifests_for(dest: &Path) -> Result<Vec<(String, BTreeMap<String, Stamp>)>> {
     let mut found = Vec::new();
     let name = dest.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-    let parent = parent_of(dest);
-    let mut folders = vec![(parent, None)];
-    let mut stack = vec![(dest.to_path_buf(), String::new())];
-    while let Some((dir, prefix)) = stack.pop() {
-        folders.push((dir.clone(), Some(prefix.clone())));
-        for entry in std::fs::read_dir(&dir).into_iter().flatten().flatten() {
-            if entry.file_type().is_ok_and(|t| t.is_dir()) {
-                stack.push((entry.path(), format!("{prefix}{}/", entry.file_name().to_string_lossy())));
-            }
-        }
-    }
+    let (mut files, mut dirs) = (Vec::new(), Vec::new());
+    walk(dest, "", &mut files, &mut dirs);
+    let mut folders = vec![(parent_of(dest), None), (dest.to_path_buf(), Some(String::new()))];
+    folders.extend(dirs.into_iter().map(|d| (dest.join(&d), Some(format!("{d}/")))));
     for (dir, prefix) in folders {
         for entry in std::fs::read_dir(&dir).into_iter().flatten().flatten() {
             let file_name = entry.file_name().to_string_lossy().into_owned();
@@ -176,17 +144,6 @@ fn parent_of(dest: &Path) -> PathBuf {
         Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
         _ => PathBuf::from("."),
     }
-}
-
-/// `.<name>.tmp-<pid>-<nanos>-<n>`: unique per process, time and result.
-fn hidden_name(name: &std::ffi::OsStr) -> OsString {
-    static COUNT: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
-    let n = COUNT.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-    let nanos = SystemTime::now().duration_since(UNIX_EPOCH).map_or(0, |d| d.as_nanos());
-    let mut s = OsString::from(".");
-    s.push(name);
-    s.push(format!(".tmp-{}-{nanos}-{n}", std::process::id()));
-    s
 }
 
 /// Every non-directory entry below `dir` as `/`-separated relative paths
@@ -222,15 +179,16 @@ fn same_file(a: &Path, b: &Path) -> bool {
 
 /// Remove from `folder` what is provably ours to delete: entries that are
 /// the same file as `dest`'s entry of that name, and files `ours` lists
-/// with their current stamp; then the folders left empty. Returns what is
-/// kept.
-fn remove_ours(folder: &Path, dest: &Path, ours: &BTreeMap<String, Stamp>) -> Vec<String> {
+/// with their current stamp; then the folders left empty. What is kept is
+/// named on stderr.
+fn remove_ours(folder: &Path, dest: &Path, ours: &BTreeMap<String, Stamp>) {
     let (mut files, mut dirs) = (Vec::new(), Vec::new());
     walk(folder, "", &mut files, &mut dirs);
     let mut kept = Vec::new();
     for rel in files {
         let path = folder.join(&rel);
-        let removable = same_file(&path, &dest.join(&rel)) || ours.get(&rel).is_some_and(|s| stamp(&path) == Some(*s));
+        let removable =
+            same_file(&path, &dest.join(&rel)) || ours.get(&rel).is_some_and(|s| stamp(&path).as_ref() == Some(s));
         if !(removable && std::fs::remove_file(&path).is_ok()) {
             kept.push(rel);
         }
@@ -241,22 +199,15 @@ fn remove_ours(folder: &Path, dest: &Path, ours: &BTreeMap<String, Stamp>) -> Ve
     }
     let _ = std::fs::remove_dir(folder);
     kept.sort();
-    kept
-}
-
-fn note_kept(folder: &Path, kept: &[String], dest: &Path) {
-    if kept.is_empty() {
-        return;
+    if !kept.is_empty() {
+        eprintln!(
+            "note: kept {} beside {}: it holds {} file(s) ftsmc cannot prove it wrote ({}); move them where you want them",
+            folder.display(),
+            dest.display(),
+            kept.len(),
+            kept[..kept.len().min(3)].join(", ")
+        );
     }
-    let shown: Vec<&str> = kept.iter().take(3).map(String::as_str).collect();
-    let more = if kept.len() > 3 { format!(" and {} more", kept.len() - 3) } else { String::new() };
-    eprintln!(
-        "note: kept {} beside {}: it holds {} file(s) ftsmc cannot prove it wrote ({}{more}); move them where you want them",
-        folder.display(),
-        dest.display(),
-        kept.len(),
-        shown.join(", ")
-    );
 }
 
 /// Swap the folders `a` and `b` (both exist) in one step where the system
@@ -331,9 +282,7 @@ impl ResultDir {
     /// written, that its manifests can be read, and create the staging
     /// folder. Call before doing any work.
     pub fn begin(dest: &Path, owner: &str) -> Result<Self> {
-        if owner.is_empty() || !owner.chars().all(|c| c.is_ascii_alphanumeric() || c == '-' || c == '_') {
-            bail!("internal: result owner `{owner}` must be a plain name");
-        }
+        debug_assert!(owner.chars().all(|c| c.is_ascii_alphanumeric() || c == '-'), "owner `{owner}`");
         let name = match dest.components().next_back() {
             Some(Component::Normal(n)) => n.to_owned(),
             _ => bail!("output folder `{}` must end in a folder name (not `.`, `..` or `/`)", dest.display()),
@@ -364,7 +313,7 @@ impl ResultDir {
         let mut dir = Self {
             dest: dest.to_path_buf(),
             owner: owner.to_string(),
-            staging: parent.join(hidden_name(&name)),
+            staging: PathBuf::new(),
             _lock: None,
             created: Vec::new(),
             written: None,
@@ -378,7 +327,11 @@ impl ResultDir {
                 Err(e) => return Err(e).with_context(|| format!("cannot create {}", d.display())),
             }
         }
-        std::fs::create_dir(&dir.staging).with_context(|| format!("cannot write to `{}`", dest.display()))?;
+        let mut prefix = OsString::from(".");
+        prefix.push(&name);
+        prefix.push(".tmp-");
+        let staging = tempfile::Builder::new().prefix(&prefix).tempdir_in(&parent);
+        dir.staging = staging.with_context(|| format!("cannot write to `{}`", dest.display()))?.keep();
         dir._lock = lock_dir(&dir.staging, false);
         Ok(dir)
     }
@@ -421,13 +374,6 @@ impl ResultDir {
         let (own_old, by_hand) = read_manifest(&self.dest.join(&manifest_name))?;
         let (mut old_files, mut old_dirs) = (Vec::new(), Vec::new());
         walk(&self.dest, "", &mut old_files, &mut old_dirs);
-        for line in by_hand.iter().filter(|l| !written.contains_key(*l) && old_files.contains(l)) {
-            eprintln!(
-                "note: kept {}: the manifest of `ftsmc {}` names it without the size and SHA-256 ftsmc records",
-                self.dest.join(line).display(),
-                self.owner
-            );
-        }
         let mut dropped = BTreeMap::new();
         let mut replaced: BTreeMap<&str, Vec<&str>> = BTreeMap::new();
         let new_dirs: BTreeSet<&str> = dirs.iter().map(String::as_str).collect();
@@ -458,14 +404,14 @@ impl ResultDir {
                 dropped.insert(rel.clone(), now);
                 continue;
             }
-            if own_old.contains_key(rel) {
+            if own_old.contains_key(rel) || by_hand.contains(rel) {
                 match stamp(&path) {
                     Some(now) if own_old.get(rel) == Some(&now) => {
                         dropped.insert(rel.clone(), now);
                         continue;
                     }
                     _ => eprintln!(
-                        "note: kept {}: it changed since `ftsmc {}` wrote it (or was listed by hand)",
+                        "note: kept {}: the manifest of `ftsmc {}` lists it, but not with its present size and SHA-256 (changed since, or listed by hand)",
                         path.display(),
                         self.owner
                     ),
@@ -500,7 +446,7 @@ impl ResultDir {
         }
         let mut text = String::new();
         for (rel, (size, sha)) in &written {
-            text.push_str(&format!("{} {size} {rel}\n", hex(sha)));
+            text.push_str(&format!("{sha} {size} {rel}\n"));
         }
         write_file(&self.staging.join(&manifest_name), text.as_bytes())?;
         if let (Some(w), Some(s)) = (self.written.as_mut(), stamp(&self.staging.join(&manifest_name))) {
@@ -530,8 +476,7 @@ impl ResultDir {
             if let Some(s) = stamp(&old.join(&manifest_name)) {
                 ours.insert(manifest_name.clone(), s);
             }
-            let kept = remove_ours(&old, &self.dest, &ours);
-            note_kept(&old, &kept, &self.dest);
+            remove_ours(&old, &self.dest, &ours);
         }
         self.note_leftovers(&parent);
         Ok(())
@@ -574,10 +519,7 @@ impl Drop for ResultDir {
                 None => {
                     let _ = std::fs::remove_dir_all(&self.staging);
                 }
-                Some(written) => {
-                    let kept = remove_ours(&self.staging, &self.dest, written);
-                    note_kept(&self.staging, &kept, &self.dest);
-                }
+                Some(written) => remove_ours(&self.staging, &self.dest, written),
             }
             for d in self.created.iter().rev() {
                 let _ = std::fs::remove_dir(d);
@@ -594,16 +536,14 @@ thread_local! {
 
 /// Whether a test asked the commit to stop at `step` as a kill would
 /// (1: files listed, 2: kept entries linked, 3: manifest written, 4: swapped).
+#[cfg(test)]
 fn killed_at(step: u32) -> bool {
-    #[cfg(test)]
-    {
-        KILL_AT.with(|k| k.get() == step)
-    }
-    #[cfg(not(test))]
-    {
-        let _ = step;
-        false
-    }
+    KILL_AT.with(|k| k.get() == step)
+}
+
+#[cfg(not(test))]
+fn killed_at(_step: u32) -> bool {
+    false
 }
 
 /// Write a whole result folder in one call: `files` (paths relative to
