@@ -30,6 +30,7 @@ if TYPE_CHECKING:
 __all__ = [
     "CONTROLLERS",
     "Command",
+    "Comparison",
     "Controller",
     "Exit",
     "PythonController",
@@ -38,6 +39,7 @@ __all__ = [
     "Scenario",
     "State",
     "Telemetry",
+    "compare",
     "label",
     "montecarlo",
     "simulate",
@@ -335,4 +337,5 @@ class Controller:
 
 
 from . import plot  # noqa: E402  (``ftsmc.plot`` after ``import ftsmc``; matplotlib is imported when a figure is drawn)
+from .comparing import Comparison, compare  # noqa: E402  (re-export; the code lives in comparing.py)
 from .tuning import Tuned, tune  # noqa: E402  (re-export; the code lives in tuning.py)

@@ -153,6 +153,29 @@ def tune_evaluate(
     indices: List[int],
     threads: Optional[int] = None,
 ) -> List[List[float]]: ...
+def compare_native(
+    scenario: Scenario,
+    contestants: List[Any],
+    runs: int,
+    until_decided: bool,
+    batch: int,
+    max_runs: int,
+    confidence: float,
+    seed: Optional[int] = None,
+    threads: Optional[int] = None,
+    allow_other_vehicle: bool = False,
+    progress: Optional[Callable[[int, int], Any]] = None,
+) -> Tuple[
+    Tuple[List[str], List[Union[npt.NDArray[Any], List[str]]]],
+    List[str],
+    List[List[Tuple[str, float]]],
+    List[Tuple[Tuple[str, str, str, str], Tuple[int, float, float, float, float, float]]],
+    int,
+    bool,
+]: ...
+def stats_intervals(
+    success: Sequence[bool], completed: Sequence[bool], crashed: Sequence[bool], rms: Sequence[float], confidence: float
+) -> List[Tuple[str, float]]: ...
 def stats_wilson(k: int, n: int, confidence: float) -> Tuple[float, float, float]: ...
 def stats_clopper_pearson(k: int, n: int, confidence: float) -> Tuple[float, float, float]: ...
 def stats_binomial_quantile(prob: float, n: int, p: float) -> int: ...

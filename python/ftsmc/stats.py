@@ -7,9 +7,12 @@
 
 from __future__ import annotations
 
-from typing import NamedTuple, Sequence
+from typing import TYPE_CHECKING, NamedTuple, Sequence
 
 from . import _ftsmc
+
+if TYPE_CHECKING:
+    import pandas
 
 
 class Interval(NamedTuple):
@@ -55,3 +58,34 @@ def mcnemar_exact(b: int, c: int) -> float:
 def wilcoxon(diffs: Sequence[float]) -> SignedRank:
     """Wilcoxon signed-rank test of paired differences ``A − B``."""
     return SignedRank(*_ftsmc.stats_wilcoxon([float(d) for d in diffs]))
+
+
+def summary(runs: "pandas.DataFrame", confidence: float = 0.95) -> "pandas.DataFrame":
+    """The intervals of a Monte Carlo batch, one row per controller.
+
+    ``runs`` holds the rows of ``runs.csv`` (as :func:`ftsmc.montecarlo`
+    returns them). Each controller's row has ``runs``, ``successes`` and
+    ``<x>``, ``<x>_lo``, ``<x>_hi`` for the rates ``success``,
+    ``completed``, ``crashed``, ``diverged`` (Wilson) and the RMS position
+    error ``√(rms_x² + rms_y² + rms_z²)`` of the completed runs, m:
+    ``rms_median``, ``rms_p95`` (order statistics; ``inf`` where the runs
+    cannot give a bound) and ``rms_mean`` (t). The same code and numbers
+    as the ``intervals`` of ``ftsmc montecarlo``'s summary.json.
+    """
+    import numpy as np
+    import pandas
+
+    rows = {}
+    for name, group in runs.groupby("controller", sort=False):
+        rms = np.sqrt(group["rms_x"] ** 2 + group["rms_y"] ** 2 + group["rms_z"] ** 2)
+        row = _ftsmc.stats_intervals(
+            [bool(v) for v in group["success"]],
+            [bool(v) for v in group["completed"]],
+            [bool(v) for v in group["crashed"]],
+            [float(v) for v in rms],
+            confidence,
+        )
+        rows[str(name)] = dict(row)
+    table = pandas.DataFrame.from_dict(rows, orient="index")
+    table.index.name = "controller"
+    return table.astype({"runs": "int64", "successes": "int64"})

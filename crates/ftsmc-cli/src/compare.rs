@@ -6,7 +6,7 @@
 //! `α` over the looks (`ftsmc_sim::batch::compare`, docs/statistics.md).
 //!
 //! Writes `OUT/<scenario>/`: `runs.csv`, `summary.json`, `report.md`,
-//! `scenario.toml` and `forest.svg` / `forest.png`.
+//! `report.html`, `scenario.toml` and `forest.svg` / `forest.png`.
 
 use std::fmt::Write as _;
 use std::path::Path;
@@ -142,10 +142,12 @@ pub fn run(req: &Request<'_>) -> Result<()> {
         );
         write_forest(&title, &panels, &dir.path().join("forest"))?;
     }
+    let html = crate::html::report(dir.path(), &format!("ftsmc compare {}", scenario.name), &report)?;
+    dir.write("report.html", html.as_bytes())?;
     dir.commit()?;
     println!("{report}");
     println!(
-        "{} flights in {elapsed:.1} s; wrote {}/ (runs.csv, summary.json, report.md, scenario.toml{})",
+        "{} flights in {elapsed:.1} s; wrote {}/ (runs.csv, summary.json, report.md, report.html, scenario.toml{})",
         result.rows.len(),
         folder.display(),
         if req.figures { ", forest.svg/.png" } else { "" }

@@ -161,6 +161,9 @@ enum Command {
         /// `ftsmc merge` joins the N shards into the unsharded result (docs/campaigns.md).
         #[arg(long, value_name = "K/N")]
         shard: Option<ftsmc_sim::batch::shard::Shard>,
+        /// Confidence level of every interval in the tables and summary.json (recorded there).
+        #[arg(long, default_value_t = ftsmc_sim::stats::DEFAULT_CONFIDENCE)]
+        confidence: f64,
     },
     /// Fly controllers or gain files on one scenario's draws; intervals, paired verdicts, a forest plot.
     Compare {
@@ -222,6 +225,9 @@ enum Command {
         /// Skip the box-plot figure.
         #[arg(long)]
         no_figures: bool,
+        /// Confidence level of every interval in the tables and summary.json (recorded there).
+        #[arg(long, default_value_t = ftsmc_sim::stats::DEFAULT_CONFIDENCE)]
+        confidence: f64,
     },
     /// Tune one controller's declared gains on a scenario by CMA-ES over Monte Carlo flights; judge on held-out seeds.
     Tune {
@@ -400,7 +406,9 @@ fn run(cli: Cli) -> Result<()> {
             limit,
             set,
             shard,
+            confidence,
         } => {
+            ftsmc_sim::stats::check_confidence(confidence).map_err(|e| anyhow::anyhow!("--confidence: {e}"))?;
             let mut scenario = load_scenario_with_limits(&scenario, &limit, &set)?;
             let names = if controllers.is_empty() { scenario.controllers.clone() } else { controllers };
             check_names(&names)?;
@@ -421,7 +429,8 @@ fn run(cli: Cli) -> Result<()> {
                 "--lanes {lanes}: expected one of {:?}",
                 ftsmc_sim::batch::montecarlo::LANE_COUNTS
             );
-            montecarlo::run(&scenario, runs, shard, threads, lanes, &out, !no_figures)
+            let options = montecarlo::Options { runs, shard, threads, lanes, confidence, figures: !no_figures };
+            montecarlo::run(&scenario, &options, &out)
         }
         Command::Tune { scenario: arg, controller, budget, seed, threads, out, no_figures, limit, set } => {
             let scenario = load_scenario_with_limits(&arg, &limit, &set)?;
@@ -490,7 +499,10 @@ fn run(cli: Cli) -> Result<()> {
                 limits: &limit,
             })
         }
-        Command::Merge { shards, out, no_figures } => merge::merge(&shards, &out, !no_figures),
+        Command::Merge { shards, out, no_figures, confidence } => {
+            ftsmc_sim::stats::check_confidence(confidence).map_err(|e| anyhow::anyhow!("--confidence: {e}"))?;
+            merge::merge(&shards, &out, !no_figures, confidence)
+        }
         Command::TuneTsmSta { scenario, set } => {
             let scenario = load_scenario_with_limits(&scenario, &[], &set)?;
             let r = ftsmc_sim::analysis::tuning::tune_tsm_sta(

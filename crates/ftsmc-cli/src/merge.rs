@@ -16,20 +16,20 @@
 //! shards' rows in run order: byte-identical to the unsharded one),
 //! `scenario.toml`, and `summary.json`, whose statistics are recomputed from
 //! the merged rows by the same code as the unsharded batch's
-//! ([`summarize_outcomes`]); only its `provenance` differs: it records the
+//! ([`summarize_outcomes_at`]); only its `provenance` differs: it records the
 //! merge and lists the shards (`merged_from`).
 
 use std::ops::Range;
 use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context, Result};
-use ftsmc_sim::batch::montecarlo::{summarize_outcomes, RowOutcome, SAMPLED_COLUMNS};
+use ftsmc_sim::batch::montecarlo::{summarize_outcomes_at, RowOutcome, SAMPLED_COLUMNS};
 use ftsmc_sim::batch::shard::Shard;
 use ftsmc_sim::scenario::Scenario;
 use serde_json::{json, Map, Value};
 
 use crate::bounded_read::{read_limited, MAX_RUNS_CSV_BYTES, MAX_SHARD_TEXT_BYTES};
-use crate::montecarlo::{mc_table, shard_json, write_ise_boxplots};
+use crate::montecarlo::{shard_json, tables, write_ise_boxplots};
 use crate::output::{provenance, sha256_hex, ResultDir, ScenarioFile};
 
 /// One shard folder, read and checked on its own.
@@ -253,7 +253,7 @@ fn boolean(cell: &str, dir: &Path, row: usize, column: &str) -> Result<bool> {
 /// Merge `dirs` (the N shard folders of one campaign) into
 /// `out/<scenario name>/`: `runs.csv`, `scenario.toml`, `summary.json` and,
 /// with `figures`, the ISE box plots.
-pub fn merge(dirs: &[PathBuf], out: &Path, figures: bool) -> Result<()> {
+pub fn merge(dirs: &[PathBuf], out: &Path, figures: bool, confidence: f64) -> Result<()> {
     let shards = dirs.iter().map(|d| read_shard(d)).collect::<Result<Vec<_>>>()?;
     let shards = check_campaign(shards)?;
     let first = &shards[0];
@@ -342,7 +342,7 @@ pub fn merge(dirs: &[PathBuf], out: &Path, figures: bool) -> Result<()> {
             outcomes.push(outcome);
         }
     }
-    let summaries = summarize_outcomes(&outcomes, &first.controllers);
+    let summaries = summarize_outcomes_at(&outcomes, &first.controllers, confidence);
     let mut per_controller = Map::new();
     for (name, s) in &summaries {
         per_controller.insert(name.clone(), serde_json::to_value(s)?);
@@ -366,7 +366,7 @@ pub fn merge(dirs: &[PathBuf], out: &Path, figures: bool) -> Result<()> {
         "scenario": first.scenario_name,
         "runs": first.runs,
         "master_seed": first.master_seed,
-        "confidence": ftsmc_sim::stats::DEFAULT_CONFIDENCE,
+        "confidence": confidence,
         "controllers": Value::Object(per_controller),
         "provenance": prov,
     });
@@ -383,7 +383,7 @@ pub fn merge(dirs: &[PathBuf], out: &Path, figures: bool) -> Result<()> {
         first.scenario_name,
         first.master_seed,
         shards.len(),
-        mc_table(&summaries)
+        tables(&summaries, confidence)
     );
     let html = crate::html::report(dir.path(), &format!("ftsmc merge {}", first.scenario_name), &md)?;
     dir.write("report.html", html.as_bytes())?;
@@ -397,7 +397,7 @@ pub fn merge(dirs: &[PathBuf], out: &Path, figures: bool) -> Result<()> {
         first.master_seed,
         shards.len()
     );
-    println!("{}", mc_table(&summaries));
+    println!("{}", tables(&summaries, confidence));
     println!(
         "\nwrote {}/ (runs.csv, summary.json, scenario.toml, report.html{})",
         folder.display(),

@@ -53,6 +53,7 @@ fn reproduce_from_any_directory_writes_table_json_and_csv() {
         assert_eq!(run["exit"], "completed");
         assert!(summary["scenarios"]["paper-scenario-2"][c]["iae"]["z"].is_number());
     }
+    readme_sentences_match(&summary["table3"]);
     let csv = std::fs::read_to_string(dir.join("res/paper-scenario-1/ftaftsmc.csv")).unwrap();
     assert!(csv.starts_with("t,x,y,z,phi,theta,psi"));
     assert!(csv.lines().count() > 1000);
@@ -201,8 +202,11 @@ fn montecarlo_marks_diverged_rows_and_leaves_after_t_metrics_empty() {
     let out = ftsmc(&["montecarlo", "s.toml", "--runs", "2", "--out", "mc", "--no-figures"], dir);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let stdout = String::from_utf8_lossy(&out.stdout);
-    let row = stdout.lines().find(|l| l.starts_with("| FTAFTSMC")).unwrap();
-    assert!(row.contains("— (all 2 diverged)"), "{row}");
+    // The headline table (with intervals) first, then the ISE table.
+    let rows: Vec<&str> = stdout.lines().filter(|l| l.starts_with("| FTAFTSMC")).collect();
+    assert_eq!(rows.len(), 3, "{stdout}");
+    assert!(rows[0].contains("| 0.0 % [") && rows[0].contains("| — "), "{}", rows[0]);
+    assert!(rows[1].contains("— (all 2 diverged)"), "{}", rows[1]);
     let csv = std::fs::read_to_string(dir.join("mc/paper-scenario-1/runs.csv")).unwrap();
     let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
     let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
@@ -276,6 +280,32 @@ fn a_realistic_run_reports_success_and_rotor_demand() {
     // The demand is what the law asked for before the 350 rad/s limit.
     assert!(run["ftaftsmc"]["peak_rotor_speed_demand"].as_f64().unwrap() > 350.0);
     assert!(stdout.lines().all(|l| l.chars().count() <= 120), "a line is wider than 120 columns");
+}
+
+/// The README's comparative sentences about the paper's scenario 1 say
+/// what `reproduce` computes (its Table 3 record `t3`): "FTAFTSMC has the
+/// lowest ISE on x, y, z and ψ", "its z ISE is N % below both baselines",
+/// and the ours/paper ratios of every Table 3 cell.
+fn readme_sentences_match(t3: &serde_json::Value) {
+    let readme = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../../README.md")).unwrap();
+    let text = readme.split_whitespace().collect::<Vec<_>>().join(" ");
+    let ise = |axis: &str, c: &str| t3[axis]["ours"][c].as_f64().unwrap_or_else(|| panic!("{axis} {c}: {t3}"));
+    let paper = |axis: &str, c: &str| t3[axis]["paper"][c].as_f64().unwrap();
+    assert!(text.contains("FTAFTSMC has the lowest ISE on x, y, z and ψ in scenario 1"), "README sentence moved");
+    for axis in ["x", "y", "z", "psi"] {
+        let f = ise(axis, "ftaftsmc");
+        assert!(f < ise(axis, "ranftsmc") && f < ise(axis, "tsm-sta"), "README: lowest {axis} ISE, reproduce: {t3}");
+    }
+    let below = 100.0 * (1.0 - ise("z", "ftaftsmc") / ise("z", "ranftsmc").min(ise("z", "tsm-sta")));
+    assert!(
+        text.contains(&format!("its z ISE is {below:.0} % below both baselines")),
+        "README's z reduction, reproduce: {below:.2} %"
+    );
+    for (c, shown) in [("ranftsmc", "RANFTSMC"), ("tsm-sta", "TSM-STA"), ("ftaftsmc", "FTAFTSMC")] {
+        let r = |axis: &str| ise(axis, c) / paper(axis, c);
+        let sentence = format!("{shown} x {:.1}, y {:.1}, z {:.1}, ψ {:.1}", r("x"), r("y"), r("z"), r("psi"));
+        assert!(text.contains(&sentence), "README's Table 3 ratios: reproduce gives `{sentence}`");
+    }
 }
 
 #[test]

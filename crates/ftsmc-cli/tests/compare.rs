@@ -45,7 +45,7 @@ fn a_short_comparison_writes_intervals_and_verdicts() {
     );
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let dir = tmp.path().join("o/paper-scenario-1");
-    for f in ["runs.csv", "summary.json", "report.md", "scenario.toml", "forest.svg", "forest.png"] {
+    for f in ["runs.csv", "summary.json", "report.md", "report.html", "scenario.toml", "forest.svg", "forest.png"] {
         assert!(dir.join(f).exists(), "{f} missing");
     }
     let s: serde_json::Value =
@@ -59,4 +59,9 @@ fn a_short_comparison_writes_intervals_and_verdicts() {
     }
     let report = std::fs::read_to_string(dir.join("report.md")).unwrap();
     assert!(report.contains("90 % intervals") && report.contains("Verdict matrix"), "{report}");
+    // The page holds the same tables and the forest plot, and links the data.
+    let page = std::fs::read_to_string(dir.join("report.html")).unwrap();
+    for part in ["Verdict matrix", "<table>", "<svg", "href=\"runs.csv\"", "href=\"summary.json\""] {
+        assert!(page.contains(part), "report.html lacks {part}");
+    }
 }

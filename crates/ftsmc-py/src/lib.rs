@@ -11,6 +11,7 @@
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 
+mod compare;
 mod controller;
 mod flight;
 mod gym;
@@ -42,6 +43,8 @@ fn _ftsmc(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(kinematics::kinematics_quaternion_from_euler, m)?)?;
     m.add_function(wrap_pyfunction!(kinematics::kinematics_euler_rates, m)?)?;
     m.add_function(wrap_pyfunction!(kinematics::kinematics_body_rates, m)?)?;
+    m.add_function(wrap_pyfunction!(compare::compare_native, m)?)?;
+    m.add_function(wrap_pyfunction!(compare::stats_intervals, m)?)?;
     m.add_function(wrap_pyfunction!(stats::stats_wilson, m)?)?;
     m.add_function(wrap_pyfunction!(stats::stats_clopper_pearson, m)?)?;
     m.add_function(wrap_pyfunction!(stats::stats_binomial_quantile, m)?)?;
