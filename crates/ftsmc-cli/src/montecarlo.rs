@@ -223,10 +223,10 @@ pub fn write_ise_boxplots(
                 groups: controllers
                     .iter()
                     .map(|c| BoxGroup {
-                        label: format!(
-                            "{} ({:.0} % ok)",
-                            label(c),
-                            100.0 * summaries.iter().find(|(n, _)| n == c).map_or(0.0, |(_, s)| s.success_rate)
+                        // Counts, not a rate: the rate's interval is in the tables.
+                        label: summaries.iter().find(|(n, _)| n == c).map_or_else(
+                            || label(c).to_string(),
+                            |(_, s)| format!("{} ({}/{} ok)", label(c), s.intervals.successes, s.intervals.runs),
                         ),
                         values: completed
                             .iter()

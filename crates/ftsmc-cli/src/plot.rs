@@ -1000,7 +1000,7 @@ fn percentile(sorted: &[f64], q: f64) -> f64 {
 }
 
 /// Word wrap of `s` to `width` at `size`: whole if it fits, else a
-/// parenthesised tail ("(100 % ok)") on its own line, then greedy by words.
+/// parenthesised tail ("(1000/1000 ok)") on its own line, then greedy by words.
 fn wrap(s: &str, width: f64, size: f64) -> Vec<String> {
     if text_width(s, size) <= width {
         return vec![s.to_string()];
