@@ -216,7 +216,7 @@ pub fn ladder(dir: &ResultDir, runs: u64, controllers: &[&str], figures: bool) -
         verdict_lines.push(rung_verdict(&s.name, &names, &cells));
         for (name, c) in names.iter().zip(&cells) {
             table.row(vec![
-                s.name.trim_start_matches("realistic-").to_string(),
+                s.name.clone(),
                 label(name).to_string(),
                 crate::intervals::rate_cell(&c.success_interval),
                 format!("{}/{}", c.completed, c.runs),

@@ -572,8 +572,8 @@ pub const DEFAULT_REALISTIC_RUNS: u64 = 10;
 pub const BEYOND_SCENARIOS: [(&str, &str); 4] = [
     ("paper-scenario-1.toml", ftsmc_sim::scenario::PAPER_SCENARIO_1),
     ("paper-scenario-2.toml", ftsmc_sim::scenario::PAPER_SCENARIO_2),
-    ("realistic-scenario-1.toml", ftsmc_sim::scenario::REALISTIC_SCENARIO_1),
-    ("realistic-scenario-2.toml", ftsmc_sim::scenario::REALISTIC_SCENARIO_2),
+    ("realistic-moderate-1.toml", ftsmc_sim::scenario::ladder::REALISTIC_MODERATE_1),
+    ("realistic-moderate-2.toml", ftsmc_sim::scenario::ladder::REALISTIC_MODERATE_2),
 ];
 
 /// What [`beyond_the_paper`] produced.
@@ -666,7 +666,7 @@ pub fn beyond_the_paper(dir: &ResultDir, figures: bool, mc_runs: u64) -> Result<
     );
     let _ = writeln!(
         md,
-        "The paper's three controllers beside the two practitioners fly — PID (the PX4 cascade, PX4's gains rescaled to the vehicle) and SE(3) (Lee, Leok & McClamroch 2010; docs/controllers.md) — on the paper's two scenarios and on realistic versions of them: the paper's references, disturbances and gains on an AscTec Hummingbird rigid body (RotorS parameters: 0.716 kg, rotors 0–838 rad/s, motor lag 12.5/25 ms), measured by motion capture and an MPU-6000 IMU (200 Hz, 6 ms latency), in moderate Dryden turbulence, taking off from the ground (scenarios/realistic-scenario-{{1,2}}.toml; every value's source is cited there).\n"
+        "The paper's three controllers beside the two practitioners fly — PID (the PX4 cascade, PX4's gains rescaled to the vehicle) and SE(3) (Lee, Leok & McClamroch 2010; docs/controllers.md) — on the paper's two scenarios and on realistic versions of them: the paper's references, disturbances and gains on an AscTec Hummingbird rigid body (RotorS parameters: 0.716 kg, rotors 0–838 rad/s, motor lag 12.5/25 ms), measured by motion capture and an MPU-6000 IMU (200 Hz, 6 ms latency), in moderate Dryden turbulence, taking off from the ground (scenarios/realistic-moderate-{{1,2}}.toml, the moderate rung of the wind ladder; every value's source is cited there).\n"
     );
     let mut outcome = Table::new([
         "scenario",

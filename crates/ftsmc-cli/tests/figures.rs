@@ -266,9 +266,9 @@ fn a_run_that_stops_early_ends_in_a_marker_with_its_reason_in_the_legend() {
 
 #[test]
 fn rotor_speeds_come_apart_and_their_notes_sit_in_titles() {
-    // realistic-scenario-2-rotors: four traces overplotted and
+    // realistic-moderate-2-rotors: four traces overplotted and
     // "diverged (tilt) at 6.49 s" sat over them.
-    let svg = read(&reproduced().join("figures/beyond/realistic-scenario-2-rotors.svg"));
+    let svg = read(&reproduced().join("figures/beyond/realistic-moderate-2-rotors.svg"));
     assert!(!svg.contains(r#"<g class="end">"#), "no note or marker over the rotor traces");
     assert_eq!(svg.matches(": ωᵢ − mean of the four<").count(), 5, "a spread panel per controller");
     assert!(svg.contains("FTAFTSMC — "), "the panel title says how the run ended");
