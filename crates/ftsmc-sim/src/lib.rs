@@ -40,6 +40,7 @@
 //!            distributions.rs   Dist, MonteCarloSpec, SAMPLED_COLUMNS, run_seed, per-run sampling
 //!            ladder.rs          the wind ladder's built-in scenarios realistic-<level>-<n>
 //!            tune_section.rs    `[tune]`: parameter set and cost weights of `ftsmc tune`
+//!            falsify_section.rs `[falsify]`: bounded search space with nominal distributions, applied to a scenario
 //!            deprecated.rs      old spellings ([actual_plant], [vehicle.rigid_body], max_tilt) moved to the new keys
 //! floor 2  vehicle/             truth models
 //!            paper.rs           Eq. 1 (the paper's plant) and the generic rk4_step
@@ -56,6 +57,7 @@
 //!            wind.rs            mean wind, 1−cos gusts, Dryden turbulence (`[wind]`)
 //!            phasors.rs         the environment's sinusoid terms on the loop's grid, four at a time
 //!          envelope.rs          success envelope and its verdict (`[envelope]`)
+//!          margin.rs            signed robustness margin to the envelope (STL robustness)
 //!          metrics.rs           ISE, IAE, ITAE, settling, chattering, online
 //!          sensors.rs           measured state: noise, bias, sample rate, latency (`[sensors]`)
 //!          controllers/         each controller declared once: name, label, gain section, constructor
@@ -94,6 +96,7 @@ pub mod gauss;
 pub mod gym;
 pub mod isa;
 pub mod limits;
+pub mod margin;
 pub mod metrics;
 pub mod noise;
 pub mod registry;
