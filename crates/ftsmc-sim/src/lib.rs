@@ -11,7 +11,10 @@
 //! floor or below, never above (checked by `tests/layout.rs`):
 //!
 //! ```text
-//! floor 7  tune/                `ftsmc tune`: parameter space, cost, CMA-ES, held-out validation
+//! floor 7  falsify/             worst cases and rare failures (docs/falsification.md)
+//!            search.rs          CMA-ES with IPOP restarts and uniform random search over the [falsify] box
+//!            rare.rs            P(margin < 0) by cross-entropy importance sampling, and plain Monte Carlo
+//!          tune/                `ftsmc tune`: parameter space, cost, CMA-ES, held-out validation
 //!            cmaes.rs           ask/tell CMA-ES
 //!            cost.rs            flight statistics and the tuning cost
 //!            space.rs           declared + [tune] parameters, normalised coordinates, tuned TOML diff
@@ -92,6 +95,7 @@ pub mod desaturation;
 pub mod envelope;
 pub mod environment;
 pub mod escape;
+pub mod falsify;
 pub mod gauss;
 pub mod gym;
 pub mod isa;
