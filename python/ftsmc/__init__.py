@@ -42,6 +42,8 @@ __all__ = [
     "montecarlo",
     "simulate",
     "tune",
+    "falsify",
+    "failure_probability",
     "Tuned",
 ]
 
@@ -336,3 +338,4 @@ class Controller:
 
 from . import plot  # noqa: E402  (``ftsmc.plot`` after ``import ftsmc``; matplotlib is imported when a figure is drawn)
 from .tuning import Tuned, tune  # noqa: E402  (re-export; the code lives in tuning.py)
+from .falsification import failure_probability, falsify  # noqa: E402  (re-export; the code lives in falsification.py)
