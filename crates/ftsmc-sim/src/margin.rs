@@ -31,9 +31,11 @@
 //! margin = min(ρ, 0) − 1 − (T − t_end)/T      ∈ (−∞, −1]
 //! ```
 //!
-//! (`ρ` the envelope margin up to `t_end`, 0 without an envelope): below
-//! every completed flight, and lower the earlier it ended, so a search that
-//! minimises the margin is still led towards earlier failures.
+//! (`ρ` the envelope margin up to `t_end`, 0 without an envelope): at most
+//! −1, below the envelope margin it had reached, and lower the earlier it
+//! ended, so a search that minimises the margin is still led towards
+//! earlier failures. (A completed flight far outside the envelope can have
+//! a margin below −1 too: an error of 10 m against a 0.5 m limit is −19.)
 //!
 //! The ground clearance `min_t (z − h_ground)` (m) is reported beside the
 //! margin when the scenario has a `[ground]`; it is not part of the

@@ -29,7 +29,7 @@
 //!
 //! ```text
 //! p̂ = (1/N) Σ 1{margin_k < 0} w_k,   s² = sample variance of the terms,
-//! interval p̂ ± z_{1−α/2} s/√N   (central limit theorem, clipped at 0)
+//! interval p̂ ± z_{1−α/2} s/√N   (central limit theorem, clipped to [0, 1])
 //! ```
 //!
 //! With no failing draw the estimate is 0 and the upper bound is the
@@ -218,7 +218,7 @@ fn summarise(margins: &[f64], weights: &[f64], confidence: f64) -> Estimate {
         let max_w = weights.iter().copied().fold(0.0, f64::max);
         (0.0, (1.0 - ftsmc_core::math::powf(1.0 - confidence, 1.0 / n)) * max_w)
     } else {
-        ((p - half).max(0.0), p + half)
+        ((p - half).max(0.0), (p + half).min(1.0))
     };
     Estimate {
         p,
