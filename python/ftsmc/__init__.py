@@ -44,6 +44,8 @@ __all__ = [
     "montecarlo",
     "simulate",
     "tune",
+    "falsify",
+    "failure_probability",
     "Tuned",
 ]
 
@@ -339,3 +341,4 @@ class Controller:
 from . import plot  # noqa: E402  (``ftsmc.plot`` after ``import ftsmc``; matplotlib is imported when a figure is drawn)
 from .comparing import Comparison, compare  # noqa: E402  (re-export; the code lives in comparing.py)
 from .tuning import Tuned, tune  # noqa: E402  (re-export; the code lives in tuning.py)
+from .falsification import failure_probability, falsify  # noqa: E402  (re-export; the code lives in falsification.py)

@@ -146,6 +146,21 @@ def tune_native(
     extends: Optional[str] = None,
     evaluator: Optional[Callable[[List[str], List[int]], List[List[float]]]] = None,
 ) -> Tuple[Scenario, str, str]: ...
+def falsify_native(
+    scenario: Scenario,
+    controller: str,
+    budget: int = 200,
+    seed: Optional[int] = None,
+    threads: Optional[int] = None,
+) -> str: ...
+def failure_probability_native(
+    scenario: Scenario,
+    controller: str,
+    budget: int = 2000,
+    confidence: float = 0.95,
+    seed: Optional[int] = None,
+    threads: Optional[int] = None,
+) -> str: ...
 def tune_evaluate(
     tomls: List[str],
     controller: str,

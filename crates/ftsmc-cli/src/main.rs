@@ -6,6 +6,7 @@ mod bounded_read;
 mod compare;
 mod console;
 mod cpu;
+mod falsify;
 mod figures;
 mod fixed_time;
 mod forest;
@@ -164,6 +165,67 @@ enum Command {
         /// Confidence level of every interval in the tables and summary.json (recorded there).
         #[arg(long, default_value_t = ftsmc_sim::stats::DEFAULT_CONFIDENCE)]
         confidence: f64,
+    },
+    /// Search the scenario's [falsify] space for the flight with the lowest robustness margin (CMA-ES with restarts), beside uniform random search at the same budget.
+    Falsify {
+        /// Scenario file (TOML) or built-in name with a [falsify] section and an [envelope].
+        scenario: String,
+        /// Controller to falsify.
+        #[arg(long, short = 'c')]
+        controller: String,
+        /// Flights per method (default: `[falsify] budget`, else 200).
+        #[arg(long, allow_negative_numbers = true)]
+        budget: Option<u64>,
+        /// Seed of the search (default: the scenario's `seed`); the turbulence seed is the scenario's, held fixed.
+        #[arg(long, allow_negative_numbers = true)]
+        seed: Option<u64>,
+        /// Worker threads (default: all cores). Results do not depend on it.
+        #[arg(long, allow_negative_numbers = true)]
+        threads: Option<usize>,
+        /// Parent folder: the results go to `OUT/<scenario name>/`.
+        #[arg(long, default_value = "results/falsify")]
+        out: PathBuf,
+        /// Skip the worst-vs-nominal figure.
+        #[arg(long)]
+        no_figures: bool,
+        /// Raise a cost limit (repeatable; see docs/scenarios.md).
+        #[arg(long = "limit", value_name = "KEY=VALUE")]
+        limit: Vec<String>,
+        /// Set a scenario key (repeatable; dotted keys as `Scenario.with_overrides`).
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
+    },
+    /// Estimate P(margin < 0) under the scenario's own draws by cross-entropy importance sampling, with its interval.
+    FailureProbability {
+        /// Scenario file (TOML) or built-in name with a [falsify] section and an [envelope].
+        scenario: String,
+        /// Controller.
+        #[arg(long, short = 'c')]
+        controller: String,
+        /// Flights, CE levels included.
+        #[arg(long, allow_negative_numbers = true, default_value_t = 2000)]
+        budget: u64,
+        /// Confidence level of the interval.
+        #[arg(long, allow_negative_numbers = true, default_value_t = 0.95)]
+        confidence: f64,
+        /// Also fly N plain Monte Carlo flights and print their estimate beside it (0: none).
+        #[arg(long, allow_negative_numbers = true, default_value_t = 0)]
+        plain: u64,
+        /// Seed of the proposal draws (default: the scenario's `seed`, also the master seed of the draws).
+        #[arg(long, allow_negative_numbers = true)]
+        seed: Option<u64>,
+        /// Worker threads (default: all cores). Results do not depend on it.
+        #[arg(long, allow_negative_numbers = true)]
+        threads: Option<usize>,
+        /// Parent folder: the results go to `OUT/<scenario name>/`.
+        #[arg(long, default_value = "results/failure-probability")]
+        out: PathBuf,
+        /// Raise a cost limit (repeatable).
+        #[arg(long = "limit", value_name = "KEY=VALUE")]
+        limit: Vec<String>,
+        /// Set a scenario key (repeatable).
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
     },
     /// Fly controllers or gain files on one scenario's draws; intervals, paired verdicts, a forest plot.
     Compare {
@@ -447,6 +509,42 @@ fn run(cli: Cli) -> Result<()> {
             }
             let seed = seed.unwrap_or(scenario.seed);
             tune::run(&scenario, &arg, &controller, budget, seed, threads, &out, !no_figures)
+        }
+        Command::Falsify { scenario: arg, controller, budget, seed, threads, out, no_figures, limit, set } => {
+            let scenario = load_scenario_with_limits(&arg, &limit, &set)?;
+            check_names(std::slice::from_ref(&controller))?;
+            anyhow::ensure!(threads != Some(0), "--threads must be at least 1");
+            let budget = falsify::budget_of(&scenario, budget);
+            falsify::check_budget(budget)?;
+            ftsmc_sim::limits::check_batch(&scenario.flight_size(), budget.saturating_mul(2).saturating_add(3), 1)?;
+            if let Some(n) = threads {
+                ftsmc_sim::limits::check_threads(&scenario.limits, n)?;
+            }
+            let seed = seed.unwrap_or(scenario.seed);
+            falsify::run(&scenario, &controller, budget, seed, threads, &out, !no_figures)
+        }
+        Command::FailureProbability {
+            scenario: arg,
+            controller,
+            budget,
+            confidence,
+            plain,
+            seed,
+            threads,
+            out,
+            limit,
+            set,
+        } => {
+            let scenario = load_scenario_with_limits(&arg, &limit, &set)?;
+            check_names(std::slice::from_ref(&controller))?;
+            anyhow::ensure!(threads != Some(0), "--threads must be at least 1");
+            falsify::check_budget(budget)?;
+            ftsmc_sim::limits::check_batch(&scenario.flight_size(), budget.saturating_add(plain), 1)?;
+            if let Some(n) = threads {
+                ftsmc_sim::limits::check_threads(&scenario.limits, n)?;
+            }
+            let seed = seed.unwrap_or(scenario.seed);
+            falsify::run_failure_probability(&scenario, &controller, budget, seed, confidence, plain, threads, &out)
         }
         Command::Compare {
             scenario,

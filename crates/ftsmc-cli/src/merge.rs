@@ -281,8 +281,11 @@ pub fn merge(dirs: &[PathBuf], out: &Path, figures: bool, confidence: f64) -> Re
     let names: Vec<&str> = first.header.iter().collect();
     let tail = ["completed", "success", "crashed"];
     let metrics_from = 5 + SAMPLED_COLUMNS.len();
-    if names.len() < metrics_from + ftsmc_sim::batch::runs_table::STATS_COLUMNS.len() + tail.len()
-        || names[names.len() - 3..] != tail
+    // The robustness-margin columns follow the tail; the summary does not read them.
+    let margin = ftsmc_sim::batch::runs_table::MARGIN_COLUMNS;
+    let end = if names.ends_with(&margin) { names.len() - margin.len() } else { names.len() };
+    if end < metrics_from + ftsmc_sim::batch::runs_table::STATS_COLUMNS.len() + tail.len()
+        || names[end - 3..end] != tail
         || names[2] != "controller"
     {
         bail!("shard `{}`: runs.csv columns are not those of `ftsmc montecarlo`", first.dir.display());
@@ -290,7 +293,7 @@ pub fn merge(dirs: &[PathBuf], out: &Path, figures: bool, confidence: f64) -> Re
     // The flight-statistics columns sit between the metrics and the tail;
     // summary.json summarises the metrics only.
     let stats = ftsmc_sim::batch::runs_table::STATS_COLUMNS.len();
-    let metric_columns = metrics_from..names.len() - 3 - stats;
+    let metric_columns = metrics_from..end - 3 - stats;
     let mut outcomes = Vec::with_capacity(shards.iter().map(|s| s.rows.len()).sum());
     let mut completed_ise: Vec<(String, [f64; 4])> = Vec::new();
     let ise_at: Vec<usize> = ["ise_x", "ise_y", "ise_z", "ise_psi"]
@@ -305,7 +308,7 @@ pub fn merge(dirs: &[PathBuf], out: &Path, figures: bool, confidence: f64) -> Re
                 .clone()
                 .map(|i| Ok((names[i].to_string(), number(cell(i), &s.dir, line, names[i])?)))
                 .collect::<Result<Vec<_>>>()?;
-            let n = names.len();
+            let n = end;
             let outcome = RowOutcome {
                 controller: cell(2).to_string(),
                 completed: boolean(cell(n - 3), &s.dir, line, "completed")?,

@@ -13,6 +13,7 @@ use pyo3::prelude::*;
 
 mod compare;
 mod controller;
+mod falsify;
 mod flight;
 mod gym;
 mod kinematics;
@@ -38,6 +39,8 @@ fn _ftsmc(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(flight::montecarlo_columns, m)?)?;
     m.add_function(wrap_pyfunction!(gym::gym_check_envs, m)?)?;
     m.add_function(wrap_pyfunction!(tune::tune_native, m)?)?;
+    m.add_function(wrap_pyfunction!(falsify::falsify_native, m)?)?;
+    m.add_function(wrap_pyfunction!(falsify::failure_probability_native, m)?)?;
     m.add_function(wrap_pyfunction!(tune::tune_evaluate, m)?)?;
     m.add_function(wrap_pyfunction!(kinematics::kinematics_euler_from_quaternion, m)?)?;
     m.add_function(wrap_pyfunction!(kinematics::kinematics_quaternion_from_euler, m)?)?;

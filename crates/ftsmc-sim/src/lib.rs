@@ -11,7 +11,10 @@
 //! floor or below, never above (checked by `tests/layout.rs`):
 //!
 //! ```text
-//! floor 7  tune/                `ftsmc tune`: parameter space, cost, CMA-ES, held-out validation
+//! floor 7  falsify/             worst cases and rare failures (docs/falsification.md)
+//!            search.rs          CMA-ES with IPOP restarts and uniform random search over the [falsify] box
+//!            rare.rs            P(margin < 0) by cross-entropy importance sampling, and plain Monte Carlo
+//!          tune/                `ftsmc tune`: parameter space, cost, CMA-ES, held-out validation
 //!            cmaes.rs           ask/tell CMA-ES
 //!            cost.rs            flight statistics and the tuning cost
 //!            space.rs           declared + [tune] parameters, normalised coordinates, tuned TOML diff
@@ -40,6 +43,7 @@
 //!            distributions.rs   Dist, MonteCarloSpec, SAMPLED_COLUMNS, run_seed, per-run sampling
 //!            ladder.rs          the wind ladder's built-in scenarios realistic-<level>-<n>
 //!            tune_section.rs    `[tune]`: parameter set and cost weights of `ftsmc tune`
+//!            falsify_section.rs `[falsify]`: bounded search space with nominal distributions, applied to a scenario
 //!            deprecated.rs      old spellings ([actual_plant], [vehicle.rigid_body], max_tilt) moved to the new keys
 //! floor 2  vehicle/             truth models
 //!            paper.rs           Eq. 1 (the paper's plant) and the generic rk4_step
@@ -56,6 +60,7 @@
 //!            wind.rs            mean wind, 1−cos gusts, Dryden turbulence (`[wind]`)
 //!            phasors.rs         the environment's sinusoid terms on the loop's grid, four at a time
 //!          envelope.rs          success envelope and its verdict (`[envelope]`)
+//!          margin.rs            signed robustness margin to the envelope (STL robustness)
 //!          metrics.rs           ISE, IAE, ITAE, settling, chattering, online
 //!          sensors.rs           measured state: noise, bias, sample rate, latency (`[sensors]`)
 //!          controllers/         each controller declared once: name, label, gain section, constructor
@@ -90,10 +95,12 @@ pub mod desaturation;
 pub mod envelope;
 pub mod environment;
 pub mod escape;
+pub mod falsify;
 pub mod gauss;
 pub mod gym;
 pub mod isa;
 pub mod limits;
+pub mod margin;
 pub mod metrics;
 pub mod noise;
 pub mod registry;

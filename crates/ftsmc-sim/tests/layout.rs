@@ -30,6 +30,7 @@ const FLOORS: &[(&str, u32)] = &[
     ("environment", 2),
     ("metrics", 2),
     ("envelope", 2),
+    ("margin", 2),
     ("sensors", 2),
     ("controllers", 2),
     ("scenario", 3),
@@ -39,6 +40,7 @@ const FLOORS: &[(&str, u32)] = &[
     ("batch", 6),
     ("gym", 6),
     ("tune", 7),
+    ("falsify", 7),
     // The crate root only re-exports.
     ("", 8),
 ];

@@ -31,6 +31,8 @@ pub struct McRun {
     pub success: bool,
     /// Tilt, saturation and rotor statistics of the flight (observed, not recorded).
     pub stats: crate::run::FlightStats,
+    /// Robustness margin to the envelope ([`crate::margin`]).
+    pub margin: Option<crate::margin::Margin>,
 }
 
 /// Fly `runs` randomised copies of `base` with each controller, in parallel
@@ -158,6 +160,7 @@ pub fn run_batch_lanes(
                         success: out_run.success(),
                         metrics: out_run.metrics,
                         stats: out_run.stats,
+                        margin: out_run.margin,
                     });
                 }
             }

@@ -150,3 +150,16 @@ pub(super) fn check_divergence(scenario: &Scenario, state: &QuadState, reference
     }
     None
 }
+
+impl ExitStatus {
+    /// How the flight ended, for its robustness margin ([`crate::margin`]):
+    /// a stopped flight counts as completed over what it flew.
+    pub fn margin_end(&self) -> crate::margin::End {
+        use crate::margin::End;
+        match *self {
+            ExitStatus::Completed | ExitStatus::Interrupted { .. } => End::Completed,
+            ExitStatus::Crashed { time, .. } => End::Crashed(time),
+            ExitStatus::Diverged { time, .. } => End::Diverged(time),
+        }
+    }
+}

@@ -133,6 +133,7 @@ struct Lane<'s> {
     metrics: MetricsAccumulator,
     recorder: Recorder,
     envelope: Tracker,
+    margin: crate::margin::MarginTracker,
     stats: FlightStats,
     legacy_rotor_metrics: bool,
     /// The last delivered period was not observed (the flight ended at its
@@ -202,6 +203,10 @@ impl<'s> Lane<'s> {
             metrics,
             recorder,
             envelope: Tracker::new(scenario.envelope),
+            margin: crate::margin::MarginTracker::new(
+                scenario.envelope,
+                scenario.ground.filter(|g| g.enabled).map(|g| g.height),
+            ),
             stats: FlightStats::default(),
             legacy_rotor_metrics: reports_rotor_metrics(scenario),
             unobserved_period: false,
@@ -278,6 +283,7 @@ impl<'s> Lane<'s> {
             controller: controller.to_string(),
             scenario: self.scenario.name.clone(),
             envelope: self.envelope.verdict((!exit.is_completed()).then(|| exit.to_string())),
+            margin: self.margin.finish(exit.margin_end(), self.scenario.duration),
             exit,
             metrics,
             recording: self.recorder.recording,
@@ -619,6 +625,7 @@ impl<'s, C: Controller<R> + ?Sized, R: Real> Flight<'s, C, R> {
         let lane = &mut self.lanes[i];
         let r = &lane.reference;
         lane.envelope.boundary(t, s, r);
+        lane.margin.update(t, &s.position, &r.position, &s.attitude);
         lane.stats.boundary(t, s, r);
         if R::LANES == 1 {
             for o in &mut self.observers {

@@ -12,6 +12,7 @@ use serde::{Deserialize, Serialize};
 
 mod deprecated;
 pub mod distributions;
+pub mod falsify_section;
 pub mod ladder;
 pub mod overrides;
 pub mod resolve;
@@ -356,6 +357,10 @@ pub struct Scenario {
     /// by every other command).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub tune: Option<tune_section::TuneSection>,
+    /// The search space of `ftsmc falsify` and `ftsmc failure-probability`
+    /// (`[falsify]`; ignored by every other command).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub falsify: Option<falsify_section::FalsifySection>,
 }
 
 fn is_default_limits(l: &Limits) -> bool {

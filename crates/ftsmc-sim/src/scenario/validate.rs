@@ -236,6 +236,12 @@ impl Scenario {
                 })?;
             }
         }
+        if let Some(f) = &self.falsify {
+            f.check().and_then(|()| f.check_against(self, path)).map_err(|(key, message)| ScenarioError::Parse {
+                path: path.to_string(),
+                message: format!("`{key}`: {message}"),
+            })?;
+        }
         // The rigid body flies the payload too: its mass with the payload
         // must stay in the rigid body's valid range.
         if let (crate::vehicle::VehicleModel::RigidBody, Some(p)) = (self.vehicle.model, &self.payload) {
