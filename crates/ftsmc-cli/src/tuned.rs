@@ -149,9 +149,14 @@ pub fn table(rows: &[Row]) -> String {
 /// True when the committed tuned file of `controller` on `scenario` holds
 /// the default gains (its search found nothing better than its start).
 fn kept_defaults(scenario: &str, controller: &str) -> bool {
-    TUNED_FILES
-        .iter()
-        .any(|(s, c, text)| *s == scenario && *c == controller && text.contains("# Best: generation 0, candidate 0,"))
+    TUNED_FILES.iter().any(|(s, c, text)| *s == scenario && *c == controller && holds_defaults(text))
+}
+
+/// True when a tuned file's header says its search kept the start
+/// (`# Improved: false`; files of the first tuner: `# Best: generation 0,
+/// candidate 0,`).
+fn holds_defaults(text: &str) -> bool {
+    text.contains("# Improved: false") || text.contains("# Best: generation 0, candidate 0,")
 }
 
 /// The controllers' labels of `scenario`'s rows, comma-separated.
@@ -229,7 +234,7 @@ mod tests {
             let base = Scenario::from_toml_str(base, file).unwrap();
             // A search that found nothing better than the defaults writes
             // them back (and says so); every other file changes the gains.
-            if text.contains("# Best: generation 0, candidate 0,") {
+            if holds_defaults(text) {
                 assert_eq!(tuned.gains, base.gains, "{scenario}/{controller}: the start is the best, yet gains differ");
             } else {
                 assert_ne!(tuned.gains, base.gains, "{scenario}/{controller}: nothing tuned");
