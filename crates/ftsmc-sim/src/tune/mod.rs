@@ -607,12 +607,27 @@ pub fn judge(
     runs: u64,
     progress: &(dyn Fn(u64) + Sync),
 ) -> Result<FlightStats, String> {
+    let flights = judge_flights(scenario, controller, master, training_runs, runs, progress)?;
+    Ok(FlightStats::of(&flights, scenario.duration))
+}
+
+/// The flights [`judge`] summarises, in run order: every gain set judged
+/// with the same `master`, `training_runs` and `runs` flies the same
+/// draws, so run `i` of two of them is a matched pair.
+pub fn judge_flights(
+    scenario: &Scenario,
+    controller: &str,
+    master: u64,
+    training_runs: u64,
+    runs: u64,
+    progress: &(dyn Fn(u64) + Sync),
+) -> Result<Vec<Flight>, String> {
     crate::registry::check_name(controller)
         .map_err(|known| format!("unknown controller `{controller}` (known: {known})"))?;
     let spec = scenario.montecarlo.clone().unwrap_or_default();
     let held = held_out_indices(master, training_runs, runs);
-    let flights = fly(std::slice::from_ref(scenario), &spec, &held, master, controller, progress)?;
-    Ok(FlightStats::of(&flights[0], scenario.duration))
+    let mut flights = fly(std::slice::from_ref(scenario), &spec, &held, master, controller, progress)?;
+    Ok(flights.pop().unwrap_or_default())
 }
 
 /// The tuned scenario file: `extends = "<extends>"`, a new name

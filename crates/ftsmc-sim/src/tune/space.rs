@@ -65,7 +65,7 @@ pub const DEFAULT_LINEAR_STEP: f64 = 0.1;
 /// inside, a triangle wave of period `2 (hi − lo)` outside.
 pub fn reflect(x: f64, lo: f64, hi: f64) -> f64 {
     let w = hi - lo;
-    if !(w > 0.0) || !x.is_finite() {
+    if w.is_nan() || w <= 0.0 || !x.is_finite() {
         return x.clamp(lo, hi.max(lo));
     }
     if (lo..=hi).contains(&x) {
