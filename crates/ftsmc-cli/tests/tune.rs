@@ -215,7 +215,9 @@ fn a_tiny_budget_that_finds_nothing_warns_and_records_improved_false() {
     let summary: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(folder.join("tsm-sta.summary.json")).unwrap()).unwrap();
     assert_eq!(summary["improved"], false, "{summary}");
-    assert_eq!(summary["training_flights"], 7);
+    // The flights actually flown (a candidate with invalid gains is charged but not flown).
+    let flown = summary["training_flights"].as_u64().unwrap();
+    assert!((1..=7).contains(&flown) && summary["race_flights"] == 0, "{summary}");
     let tuned = std::fs::read_to_string(folder.join("tsm-sta.tuned.toml")).unwrap();
     assert!(tuned.contains("# Improved: false"), "{tuned}");
     // The start's gains, unchanged: no gain key below the header.
