@@ -90,6 +90,8 @@ pub struct Row {
     pub default_runs: Vec<Flight>,
     /// The tuned gains' held-out flights, in run order.
     pub tuned_runs: Vec<Flight>,
+    /// The tuned file holds the default gains (its search kept the start).
+    pub kept_defaults: bool,
 }
 
 /// Fly every committed tuned file and its controller's default gains on
@@ -116,6 +118,7 @@ pub fn fly(runs: u64) -> Result<Vec<Row>> {
                 tuned: FlightStats::of(&tuned_runs, tuned.duration),
                 default_runs,
                 tuned_runs,
+                kept_defaults: holds_defaults(text),
             })
         })
         .collect()
@@ -214,7 +217,7 @@ pub fn table(rows: &[Row], confidence: f64) -> String {
         ]);
         let mut kept = false;
         for r in rows.iter().filter(|r| r.scenario == scenario) {
-            let same = kept_defaults(&r.scenario, &r.controller);
+            let same = r.kept_defaults;
             kept |= same;
             let tuned = if same { "tuned (= default)" } else { "tuned" };
             for (gains, s, runs) in [("default", &r.default, &r.default_runs), (tuned, &r.tuned, &r.tuned_runs)] {
@@ -236,12 +239,6 @@ pub fn table(rows: &[Row], confidence: f64) -> String {
         }
     }
     out
-}
-
-/// True when the committed tuned file of `controller` on `scenario` holds
-/// the default gains (its search found nothing better than its start).
-fn kept_defaults(scenario: &str, controller: &str) -> bool {
-    TUNED_FILES.iter().any(|(s, c, text)| *s == scenario && *c == controller && holds_defaults(text))
 }
 
 /// True when a tuned file's header says its search kept the start
@@ -301,6 +298,7 @@ mod tests {
                 tuned: stats(1.0),
                 default_runs: Vec::new(),
                 tuned_runs: Vec::new(),
+                kept_defaults: true,
             },
             Row {
                 scenario: "realistic-light-2".into(),
@@ -309,6 +307,7 @@ mod tests {
                 tuned: stats(0.5),
                 default_runs: Vec::new(),
                 tuned_runs: Vec::new(),
+                kept_defaults: false,
             },
         ];
         let md = table(&rows, 0.95);
