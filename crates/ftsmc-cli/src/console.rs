@@ -44,22 +44,6 @@ pub fn num(v: f64) -> String {
     }
 }
 
-/// The cells of a gain set's Monte Carlo statistics in the tune tables:
-/// success/runs, completed, crashed, RMS median and p95 (m), thrust and
-/// torque activity, saturated fraction.
-pub fn stats_cells(s: &ftsmc_sim::tune::FlightStats) -> [String; 8] {
-    [
-        format!("{}/{}", s.success, s.runs),
-        s.completed.to_string(),
-        s.crashed.to_string(),
-        num(s.rms_median),
-        num(s.rms_p95),
-        num(s.thrust_activity),
-        num(s.torque_activity),
-        num(s.saturated),
-    ]
-}
-
 /// A Markdown table with every column padded to its widest cell, so it
 /// reads aligned on a console too.
 pub struct Table {

@@ -291,14 +291,18 @@ enum Command {
         #[arg(long, default_value_t = ftsmc_sim::stats::DEFAULT_CONFIDENCE)]
         confidence: f64,
     },
-    /// Tune one controller's declared gains on a scenario by CMA-ES over Monte Carlo flights; judge on held-out seeds.
+    /// Tune controllers' declared gains on a scenario by CMA-ES over Monte Carlo flights; judge on held-out seeds.
     Tune {
         /// Scenario file (TOML) or built-in name; its [tune] section (optional) narrows the parameters and sets the cost.
         scenario: String,
-        /// Controller to tune.
+        /// Controller to tune; a comma-separated list or `all` tunes each on an equal budget, then compares them on
+        /// the same held-out draws.
         #[arg(long, short = 'c')]
         controller: String,
-        /// Training flights the search may fly (the start's included).
+        /// Confidence level of every interval and verdict (family-wise error 1 − confidence).
+        #[arg(long, default_value_t = ftsmc_sim::stats::DEFAULT_CONFIDENCE)]
+        confidence: f64,
+        /// Training flights the search may fly per controller (the start's and the race's included).
         #[arg(long, allow_negative_numbers = true, default_value_t = tune::DEFAULT_BUDGET)]
         budget: u64,
         /// Seed of the search and of the Monte Carlo draws (default: the scenario's `seed`).
@@ -494,21 +498,25 @@ fn run(cli: Cli) -> Result<()> {
             let options = montecarlo::Options { runs, shard, threads, lanes, confidence, figures: !no_figures };
             montecarlo::run(&scenario, &options, &out)
         }
-        Command::Tune { scenario: arg, controller, budget, seed, threads, out, no_figures, limit, set } => {
+        Command::Tune { scenario: arg, controller, confidence, budget, seed, threads, out, no_figures, limit, set } => {
             let scenario = load_scenario_with_limits(&arg, &limit, &set)?;
-            check_names(std::slice::from_ref(&controller))?;
+            let controllers = tune::controller_list(&controller);
+            check_names(&controllers)?;
+            ftsmc_sim::stats::check_confidence(confidence).map_err(|e| anyhow::anyhow!("--confidence: {e}"))?;
             anyhow::ensure!(threads != Some(0), "--threads must be at least 1");
             let settings = scenario.tune.clone().unwrap_or_default();
             ftsmc_sim::limits::check_batch(
                 &scenario.flight_size(),
                 budget.saturating_add(2 * settings.validation_runs),
-                1,
+                controllers.len(),
             )?;
             if let Some(n) = threads {
                 ftsmc_sim::limits::check_threads(&scenario.limits, n)?;
             }
             let seed = seed.unwrap_or(scenario.seed);
-            tune::run(&scenario, &arg, &controller, budget, seed, threads, &out, !no_figures)
+            let request =
+                tune::Request { budget, seed: Some(seed), threads, out: &out, figures: !no_figures, confidence };
+            tune::run(&scenario, &arg, &controllers, &request)
         }
         Command::Falsify { scenario: arg, controller, budget, seed, threads, out, no_figures, limit, set } => {
             let scenario = load_scenario_with_limits(&arg, &limit, &set)?;

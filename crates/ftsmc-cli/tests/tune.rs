@@ -170,3 +170,87 @@ fn tune_refuses_seed_duration_and_unknown_extra_keys() {
         assert!(!d.path().join("o").join("tiny-tune").exists(), "{key}: a result folder was written");
     }
 }
+
+/// The paper's plant with a tilt limit the start barely keeps (0.25 rad)
+/// and TSM-STA's gains searched over factors 10⁻³ … 10³ with steps as wide
+/// as that range: the one generation a budget of 7 flights pays for
+/// diverges, so the tune finds nothing better than the start.
+const CLIFF: &str = r#"extends = "paper-scenario-1"
+name = "cliff"
+duration = 4.0
+
+[simulation]
+max_tilt = 0.25
+
+[tune]
+runs = 1
+validation_runs = 2
+population = 6
+sigma = 1.0
+
+[tune.bounds]
+time_xy = [0.001, 1000.0]
+time_z = [0.001, 1000.0]
+time_roll_pitch = [0.001, 1000.0]
+time_yaw = [0.001, 1000.0]
+k1_position = [0.001, 1000.0]
+k2_position = [0.001, 1000.0]
+k1_attitude = [0.001, 1000.0]
+k2_attitude = [0.001, 1000.0]
+command_filter = [0.001, 1000.0]
+"#;
+
+#[test]
+fn a_tiny_budget_that_finds_nothing_warns_and_records_improved_false() {
+    let d = scratch("tune-nothing");
+    std::fs::write(d.path().join("cliff.toml"), CLIFF).unwrap();
+    let out = ftsmc(
+        &["tune", "cliff.toml", "-c", "tsm-sta", "--budget", "7", "--seed", "4", "--out", "o", "--no-figures"],
+        d.path(),
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    assert!(err.contains("found nothing better than the start") && err.contains("--budget"), "{err}");
+    let folder = d.path().join("o/cliff");
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(folder.join("tsm-sta.summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["improved"], false, "{summary}");
+    // The flights actually flown (a candidate with invalid gains is charged but not flown).
+    let flown = summary["training_flights"].as_u64().unwrap();
+    assert!((1..=7).contains(&flown) && summary["race_flights"] == 0, "{summary}");
+    let tuned = std::fs::read_to_string(folder.join("tsm-sta.tuned.toml")).unwrap();
+    assert!(tuned.contains("# Improved: false"), "{tuned}");
+    // The start's gains, unchanged: no gain key below the header.
+    assert!(!tuned.lines().any(|l| l.starts_with("[tsm")), "{tuned}");
+}
+
+#[test]
+fn tune_all_is_identical_with_one_and_two_threads() {
+    let tmp = scratch("tune-all");
+    let dir = tmp.path();
+    for (threads, out) in [("1", "one"), ("2", "two")] {
+        let args = ["tune", "tiny.toml", "-c", "all", "--budget", BUDGET, "--threads", threads, "--out", out];
+        let o = ftsmc(&[&args[..], &["--no-figures"]].concat(), dir);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let stdout = String::from_utf8_lossy(&o.stdout);
+        assert!(stdout.contains("Paired verdicts") && stdout.contains("p (Holm)"), "{stdout}");
+    }
+    let read = |p: &str| std::fs::read_to_string(dir.join(p)).unwrap_or_else(|e| panic!("{p}: {e}"));
+    assert_eq!(read("one/tiny-tune/comparison.md"), read("two/tiny-tune/comparison.md"));
+    assert_eq!(read("one/tiny-tune/comparison.json"), read("two/tiny-tune/comparison.json"));
+    let md = read("one/tiny-tune/comparison.md");
+    let json: serde_json::Value = serde_json::from_str(&read("one/tiny-tune/comparison.json")).unwrap();
+    let names: Vec<&str> =
+        json["controllers"].as_array().unwrap().iter().map(|c| c["controller"].as_str().unwrap()).collect();
+    let expected: Vec<&str> = ftsmc_sim::registry::CONTROLLERS.iter().map(|(n, _)| *n).collect();
+    assert_eq!(names, expected);
+    // Every pair on both metrics, on the same held-out draws.
+    assert_eq!(json["verdicts"].as_array().unwrap().len(), names.len() * (names.len() - 1));
+    assert!(md.contains("same 3 held-out draws"), "{md}");
+    for c in &names {
+        assert_eq!(
+            tuned_without_command(&dir.join(format!("one/tiny-tune/{c}.tuned.toml"))),
+            tuned_without_command(&dir.join(format!("two/tiny-tune/{c}.tuned.toml")))
+        );
+    }
+}

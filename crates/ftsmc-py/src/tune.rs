@@ -136,11 +136,15 @@ pub fn tune_native(
         "controller": result.controller,
         "parameters": names,
         "best": result.best(),
+        "improved": result.improved,
         "start_cost": result.history[0].cost,
         "training": result.training,
         "held_out": result.held_out,
         "training_flights": result.training_flights,
+        "race_flights": result.race_flights,
         "held_out_flights": result.held_out_flights,
+        "generations": result.generations,
+        "race": result.race,
         "history": result.history,
     });
     let json = serde_json::to_string(&summary).map_err(value_error)?;
