@@ -934,15 +934,15 @@ mod lane_tests {
         assert_eq!(bits(lanes.quad_state().get_lane(i)), bits(scalar.quad_state()), "lane {i} {at}");
         let body = |b: Option<BodyAttitude>| b.map(|b| (b.quaternion.map(to_bits), b.body_rates.map(to_bits)));
         assert_eq!(body(lanes.body_attitude().map(|b| b.get_lane(i))), body(scalar.body_attitude()), "lane {i} {at}");
-        let v = |(z, vz): (f64, f64)| (to_bits(z), to_bits(vz));
-        assert_eq!(v(lanes.vertical(i)), v(scalar.vertical(0)), "lane {i} {at}");
+        let v = |(p, v): ([f64; 3], [f64; 3])| (p.map(to_bits), v.map(to_bits));
+        assert_eq!(v(lanes.translation(i)), v(scalar.translation(0)), "lane {i} {at}");
     }
 
     /// Fly `periods` control periods of `R::LANES` flights of one model in
     /// lanes and one by one, comparing every lane after every substep.
     /// Lanes cycle through [`scenarios`]; every lane's commands are random,
     /// with saturating ones now and then; the lanes below ground are
-    /// clamped (`set_vertical`); lane 2 starts a new flight a third of the
+    /// clamped (`set_translation`); lane 2 starts a new flight a third of the
     /// way (`start_lane`); lane 3 gets a NaN command and disturbance late; even lanes see
     /// their mass and inertia change (`begin_period`), once out of range.
     /// Returns the number of substeps flown and how many lanes went
@@ -1045,12 +1045,13 @@ mod lane_tests {
                 }
                 drop(subs);
                 for (i, scalar) in scalars.iter_mut().enumerate() {
-                    let (z, vz) = scalar.vertical(0);
-                    if z < 0.0 {
-                        // A ground at z = 0.
-                        let vz = if vz < 0.0 { 0.0 } else { vz };
-                        scalar.set_vertical(0, 0.0, vz);
-                        model.set_vertical(i, 0.0, vz);
+                    let (mut p, mut v) = scalar.translation(0);
+                    if p[2] < 0.0 {
+                        // A ground at z = 0 (frictionless here).
+                        p[2] = 0.0;
+                        v[2] = v[2].max(0.0);
+                        scalar.set_translation(0, &p, &v);
+                        model.set_translation(i, &p, &v);
                     }
                     assert_lane(&*model, i, &**scalar, &format!("period {period} substep {j}"));
                 }
