@@ -154,7 +154,8 @@ class PythonController(Protocol):
 class Exit(NamedTuple):
     """How a run ended.
 
-    status: ``"completed"``, ``"diverged"`` or ``"crashed"``.
+    status: ``"completed"``, ``"diverged"``, ``"crashed"`` or ``"grounded"``
+    (rested on the ground longer than ``[ground] max_ground_time`` after take-off).
     time: s, when it stopped (the scenario's duration when completed).
     text: the CLI's wording (``summary.json``'s ``exit``).
     detail: ``summary.json``'s ``exit_status`` (with the divergence reason).

@@ -54,6 +54,7 @@ pub fn end_note(exit: &ExitStatus) -> Option<String> {
             Some(format!("diverged ({why}) at {time:.2} s"))
         }
         ExitStatus::Crashed { time, .. } => Some(format!("crashed at {time:.2} s")),
+        ExitStatus::Grounded { since, .. } => Some(format!("landed at {since:.2} s")),
         ExitStatus::Interrupted { time } => Some(format!("interrupted at {time:.2} s")),
     }
 }

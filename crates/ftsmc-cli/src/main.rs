@@ -17,6 +17,7 @@ mod merge;
 mod montecarlo;
 mod output;
 mod plot;
+mod px4;
 mod raster;
 mod reproduce;
 mod result_dir;
@@ -343,6 +344,40 @@ enum Command {
     },
     /// List controllers and built-in scenarios.
     List,
+    /// PX4 gains in and out: the PID's gains as a QGroundControl parameter file, and back (docs/px4.md).
+    Px4 {
+        #[command(subcommand)]
+        action: Px4Action,
+    },
+}
+
+#[derive(Subcommand)]
+enum Px4Action {
+    /// Write the scenario's [pid] gains as a QGroundControl .params file under PX4's names and units.
+    Export {
+        /// Scenario file (TOML) or built-in name: its [pid] gains and its vehicle (the normalisation).
+        scenario: String,
+        /// Output file (never overwritten); default: standard output.
+        #[arg(long, short = 'o')]
+        out: Option<PathBuf>,
+        /// Set a scenario key, e.g. `--set vehicle.preset=px4-x500` (repeatable).
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
+    },
+    /// Convert a QGroundControl .params file into a [pid] section for a scenario's vehicle.
+    Import {
+        /// QGroundControl parameter file (.params).
+        params: PathBuf,
+        /// Scenario file or built-in name whose vehicle the gains are normalised to (the rotors' thrust, arm, inertia).
+        #[arg(long)]
+        scenario: String,
+        /// Output file (never overwritten); default: standard output.
+        #[arg(long, short = 'o')]
+        out: Option<PathBuf>,
+        /// Set a scenario key, e.g. `--set vehicle.preset=px4-x500` (repeatable).
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
+    },
 }
 
 /// Load a scenario from a file path or a built-in name.
@@ -608,6 +643,14 @@ fn run(cli: Cli) -> Result<()> {
         Command::Merge { shards, out, no_figures, confidence } => {
             ftsmc_sim::stats::check_confidence(confidence).map_err(|e| anyhow::anyhow!("--confidence: {e}"))?;
             merge::merge(&shards, &out, !no_figures, confidence)
+        }
+        Command::Px4 { action: Px4Action::Export { scenario: arg, out, set } } => {
+            let scenario = load_scenario_with_limits(&arg, &[], &set)?;
+            px4::export(&scenario, &arg, out.as_deref())
+        }
+        Command::Px4 { action: Px4Action::Import { params, scenario: arg, out, set } } => {
+            let scenario = load_scenario_with_limits(&arg, &[], &set)?;
+            px4::import(&params, &scenario, &arg, out.as_deref())
         }
         Command::TuneTsmSta { scenario, set } => {
             let scenario = load_scenario_with_limits(&scenario, &[], &set)?;

@@ -590,16 +590,18 @@ fn exit_time(run: &RunOutput) -> Option<f64> {
         ftsmc_sim::run::ExitStatus::Completed => None,
         ftsmc_sim::run::ExitStatus::Diverged { time, .. }
         | ftsmc_sim::run::ExitStatus::Crashed { time, .. }
+        | ftsmc_sim::run::ExitStatus::Grounded { time, .. }
         | ftsmc_sim::run::ExitStatus::Interrupted { time } => Some(time),
     }
 }
 
-/// `completed`, `diverged` or `crashed`.
+/// `completed`, `diverged`, `crashed`, `landed` or `interrupted`.
 fn exit_kind(run: &RunOutput) -> &'static str {
     match run.exit {
         ftsmc_sim::run::ExitStatus::Completed => "completed",
         ftsmc_sim::run::ExitStatus::Diverged { .. } => "diverged",
         ftsmc_sim::run::ExitStatus::Crashed { .. } => "crashed",
+        ftsmc_sim::run::ExitStatus::Grounded { .. } => "landed",
         ftsmc_sim::run::ExitStatus::Interrupted { .. } => "interrupted",
     }
 }

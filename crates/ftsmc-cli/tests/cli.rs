@@ -376,3 +376,30 @@ fn set_changes_the_scenario_and_the_written_file_records_it() {
     let err = String::from_utf8_lossy(&bad.stderr);
     assert!(!bad.status.success() && err.contains("KEY=VALUE"), "{err}");
 }
+
+#[test]
+fn px4_export_then_import_writes_a_pid_section_that_flies() {
+    let tmp = scratch("px4");
+    let dir = tmp.path();
+    let out = ftsmc(&["px4", "export", "realistic-scenario-1", "-o", "hb.params"], dir);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let params = std::fs::read_to_string(dir.join("hb.params")).unwrap();
+    assert!(params.contains("1\t1\tMC_ROLLRATE_P\t0.15\t9\n"), "{params}");
+    // Never over an existing file.
+    let again = ftsmc(&["px4", "export", "realistic-scenario-1", "-o", "hb.params"], dir);
+    assert!(!again.status.success() && String::from_utf8_lossy(&again.stderr).contains("never overwritten"));
+    let out = ftsmc(&["px4", "import", "hb.params", "--scenario", "realistic-scenario-1", "-o", "pid.toml"], dir);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    // The section appended to a scenario loads: `ftsmc px4 export` of it gives the same file body.
+    let pid = std::fs::read_to_string(dir.join("pid.toml")).unwrap();
+    std::fs::write(dir.join("s.toml"), format!("extends = \"realistic-scenario-1\"\n{pid}")).unwrap();
+    let out = ftsmc(&["px4", "export", "s.toml"], dir);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let body = |t: &str| t.lines().filter(|l| !l.starts_with('#')).map(str::to_owned).collect::<Vec<_>>();
+    assert_eq!(body(&String::from_utf8_lossy(&out.stdout)), body(&params));
+    // A bad line: one error line naming file, line and parameter.
+    std::fs::write(dir.join("bad.params"), "1\t1\tMC_YAW_P\tx\t9\n").unwrap();
+    let out = ftsmc(&["px4", "import", "bad.params", "--scenario", "realistic-scenario-1"], dir);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success() && err.contains("bad.params, line 1") && err.contains("MC_YAW_P"), "{err}");
+}

@@ -100,7 +100,10 @@ pub fn runs_table(rows: &[McRun]) -> RunsTable {
             rows.iter()
                 .map(|r| match r.exit {
                     ExitStatus::Diverged { time, .. } => Some(time),
-                    ExitStatus::Completed | ExitStatus::Crashed { .. } | ExitStatus::Interrupted { .. } => None,
+                    ExitStatus::Completed
+                    | ExitStatus::Crashed { .. }
+                    | ExitStatus::Grounded { .. }
+                    | ExitStatus::Interrupted { .. } => None,
                 })
                 .collect(),
         ),

@@ -83,6 +83,7 @@ pub mod ftaftsmc;
 pub mod on_isa;
 pub mod per_lane;
 pub mod pid;
+pub mod px4_params;
 pub mod ranftsmc;
 pub mod se3;
 pub mod tsm_sta;

@@ -57,6 +57,14 @@ pub enum ExitStatus {
         /// Downward speed at touchdown, m/s.
         impact_speed: f64,
     },
+    /// Rested on the ground (`[ground]`) for longer than
+    /// `max_ground_time` after take-off: landed where it should fly.
+    Grounded {
+        /// Simulated time at which the flight was stopped, s.
+        time: f64,
+        /// When the vehicle came to rest on the ground, s.
+        since: f64,
+    },
     /// Stopped at `time` (s) on request ([`crate::run::RunOptions::cancel`], e.g. Ctrl-C).
     Interrupted {
         /// Simulated time at which the run stopped, s.
@@ -74,13 +82,18 @@ impl ExitStatus {
     pub fn diverged_at(&self) -> Option<f64> {
         match self {
             ExitStatus::Diverged { time, .. } => Some(*time),
-            ExitStatus::Completed | ExitStatus::Crashed { .. } | ExitStatus::Interrupted { .. } => None,
+            ExitStatus::Completed
+            | ExitStatus::Crashed { .. }
+            | ExitStatus::Grounded { .. }
+            | ExitStatus::Interrupted { .. } => None,
         }
     }
 
-    /// True for [`ExitStatus::Crashed`].
+    /// True for a flight that ended on the ground: [`ExitStatus::Crashed`]
+    /// (too fast) and [`ExitStatus::Grounded`] (stayed there); the
+    /// `crashed` column of `runs.csv`.
     pub fn is_crashed(&self) -> bool {
-        matches!(self, ExitStatus::Crashed { .. })
+        matches!(self, ExitStatus::Crashed { .. } | ExitStatus::Grounded { .. })
     }
 
     /// Short form for table cells: `completed`, `diverged at 0.64 s` or `crashed at 1.23 s`.
@@ -89,6 +102,7 @@ impl ExitStatus {
             ExitStatus::Completed => "completed".into(),
             ExitStatus::Diverged { time, .. } => format!("diverged at {time:.2} s"),
             ExitStatus::Crashed { time, .. } => format!("crashed at {time:.2} s"),
+            ExitStatus::Grounded { since, .. } => format!("landed at {since:.2} s"),
             ExitStatus::Interrupted { time } => format!("interrupted at {time:.2} s"),
         }
     }
@@ -115,6 +129,11 @@ impl core::fmt::Display for ExitStatus {
             ExitStatus::Crashed { time, impact_speed } => {
                 write!(f, "crashed: hit the ground at {impact_speed:.1} m/s at t = {time:.3} s")
             }
+            ExitStatus::Grounded { time, since } => write!(
+                f,
+                "landed: on the ground since t = {since:.3} s after take-off, stopped at t = {time:.3} s ([ground] \
+                 max_ground_time)"
+            ),
             ExitStatus::Interrupted { time } => write!(f, "interrupted at t = {time:.3} s"),
         }
     }
@@ -158,7 +177,8 @@ impl ExitStatus {
         use crate::margin::End;
         match *self {
             ExitStatus::Completed | ExitStatus::Interrupted { .. } => End::Completed,
-            ExitStatus::Crashed { time, .. } => End::Crashed(time),
+            // Grounded counts as crashed, as in runs.csv's `crashed` column.
+            ExitStatus::Crashed { time, .. } | ExitStatus::Grounded { time, .. } => End::Crashed(time),
             ExitStatus::Diverged { time, .. } => End::Diverged(time),
         }
     }

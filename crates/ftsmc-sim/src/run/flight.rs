@@ -39,7 +39,7 @@ use ftsmc_core::measured::{BodyAttitude, Measurement};
 use ftsmc_core::model::{Command, QuadState, QuadrotorParams, Reference};
 
 use crate::envelope::Tracker;
-use crate::environment::ground::GroundSettings;
+use crate::environment::ground::{Contact, GroundContact, GroundSettings};
 use crate::environment::wind::Wind;
 use crate::environment::{Environment, TimeVarying};
 use crate::metrics::MetricsAccumulator;
@@ -120,12 +120,15 @@ struct Lane<'s> {
     sensors: Option<Sensors>,
     wind: Option<Wind>,
     ground: Option<GroundSettings>,
+    /// The flight's ground-contact history (take-off, time on the ground).
+    contact: GroundContact,
     tv_now: TimeVarying,
     /// The next substep boundary's plant variation, wind and height (set
     /// before the truth integrates the lanes).
     tv_next: TimeVarying,
     wind_now: Option<[f64; 3]>,
-    z_prev: f64,
+    /// Position at the start of the substep (ground contact only).
+    p_prev: [f64; 3],
     reference_grid: ReferenceGrid,
     /// The reference at the lane's current period boundary (the lane's copy
     /// of [`Flight`]'s reference, read by the observers and the checks).
@@ -194,10 +197,11 @@ impl<'s> Lane<'s> {
             sensors,
             wind,
             ground: scenario.ground.filter(|g| g.enabled),
+            contact: GroundContact::default(),
             tv_now,
             tv_next: tv_now,
             wind_now: None,
-            z_prev: 0.0,
+            p_prev: [0.0; 3],
             reference_grid,
             reference,
             metrics,
@@ -808,7 +812,7 @@ impl<'s, C: Controller<R> + ?Sized, R: Real> Flight<'s, C, R> {
             for i in 0..n {
                 // Only the ground contact reads it.
                 if self.lanes[i].ground.is_some() {
-                    self.lanes[i].z_prev = self.truth.vertical(i).0;
+                    self.lanes[i].p_prev = self.truth.translation(i).0;
                 }
             }
             {
@@ -828,13 +832,18 @@ impl<'s, C: Controller<R> + ?Sized, R: Real> Flight<'s, C, R> {
                     continue;
                 }
                 if let Some(g) = &lane.ground {
-                    let (mut z, mut vz) = self.truth.vertical(i);
-                    let contact = g.contact(lane.z_prev, &mut z, &mut vz);
-                    self.truth.set_vertical(i, z, vz);
-                    if let Some((fraction, impact_speed)) = contact {
-                        let t0 = lane.t + j as f64 * lane.h;
+                    let (mut p, mut v) = self.truth.translation(i);
+                    let t0 = lane.t + j as f64 * lane.h;
+                    let contact = g.contact(&mut lane.contact, t0 + lane.h, &lane.p_prev, &mut p, &mut v);
+                    self.truth.set_translation(i, &p, &v);
+                    if let Some(contact) = contact {
                         lane.set_step(lane.k + 1);
-                        lane.exit = Some(ExitStatus::Crashed { time: t0 + fraction * lane.h, impact_speed });
+                        lane.exit = Some(match contact {
+                            Contact::Crashed { fraction, impact_speed } => {
+                                ExitStatus::Crashed { time: t0 + fraction * lane.h, impact_speed }
+                            }
+                            Contact::Grounded { since } => ExitStatus::Grounded { time: t0 + lane.h, since },
+                        });
                         continue;
                     }
                 }

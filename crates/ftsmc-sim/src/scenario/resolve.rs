@@ -29,7 +29,7 @@ use std::path::{Path, PathBuf};
 
 use serde::Deserialize;
 
-use crate::controllers::{GainSections, SectionParseError};
+use crate::controllers::{GainSections, NominalVehicle, SectionParseError};
 use crate::limits::Limits;
 use crate::scenario::{read_scenario_text, Scenario, ScenarioError, BUILT_IN_SCENARIOS};
 use crate::signal::{Signal, Term};
@@ -69,6 +69,9 @@ struct Layer {
     shown: String,
     text: String,
     table: toml::Table,
+    /// The directory relative paths in the file resolve against (`None`: a
+    /// built-in scenario; the working directory).
+    dir: Option<PathBuf>,
 }
 
 /// The built-in scenario called `name` (`paper-scenario-1`, with or without
@@ -301,7 +304,7 @@ fn load_chain(source: Source<'_>, limits: &Limits) -> Result<Chain, ScenarioErro
         })?;
         let extends = table.remove("extends");
         ids.push(id);
-        layers.push(Layer { shown: shown.clone(), text, table });
+        layers.push(Layer { shown: shown.clone(), text, table, dir: dir.clone() });
         let Some(extends) = extends else { break };
         let toml::Value::String(target) = extends else {
             return Err(ScenarioError::Parse {
@@ -602,6 +605,7 @@ pub fn load(source: Source<'_>, overrides: &[String]) -> Result<Loaded, Scenario
         super::deprecated::convert(&mut scenario, old_actual, old_rigid, &old).map_err(|(key, value, expected)| {
             ScenarioError::Invalid { path: chain.shown(chain.writer(&key)), key, value, expected }
         })?;
+    import_px4_params(&mut gain_tables, &scenario.nominal_vehicle(), &chain)?;
     scenario.gains = GainSections::take_from(&mut gain_tables, &scenario.nominal_vehicle()).map_err(
         |SectionParseError { section, error }| {
             let inner = error_path(&error);
@@ -623,6 +627,35 @@ pub fn load(source: Source<'_>, overrides: &[String]) -> Result<Loaded, Scenario
         .map(|w| format!("{}: `{}` = {}: {}", chain.shown(chain.writer(&w.key)), w.key, w.value, w.message))
         .collect();
     Ok(Loaded { scenario, files: chain.layers.iter().map(|l| l.shown.clone()).collect(), warnings })
+}
+
+/// `[pid] px4_params = "FILE.params"`: the PX4 gains of a QGroundControl
+/// parameter file (path relative to the file that sets the key), converted
+/// for `vehicle` ([`crate::controllers::px4_params`]), become the `[pid]`
+/// table; keys the `[pid]` tables of the chain set beside it replace the
+/// imported values.
+fn import_px4_params(
+    gain_tables: &mut toml::Table,
+    vehicle: &NominalVehicle,
+    chain: &Chain,
+) -> Result<(), ScenarioError> {
+    use crate::controllers::px4_params;
+    const KEY: &str = "pid.px4_params";
+    let Some(toml::Value::Table(pid)) = gain_tables.get_mut("pid") else { return Ok(()) };
+    let Some(value) = pid.remove("px4_params") else { return Ok(()) };
+    let toml::Value::String(file) = value else {
+        return Err(chain.parse_error(KEY, "expected a string: the path of a QGroundControl .params file"));
+    };
+    let dir = chain.layers[chain.writer(KEY)].dir.clone().unwrap_or_default();
+    let gains = px4_params::read_qgc(&dir.join(&file))
+        .and_then(|params| px4_params::gains_from_params(&params, vehicle))
+        .map_err(|e| chain.parse_error(KEY, &e.to_string()))?;
+    let mut table = toml::Table::try_from(gains).map_err(|e| chain.parse_error(KEY, &e.to_string()))?;
+    for (key, value) in std::mem::take(pid) {
+        table.insert(key, value);
+    }
+    *pid = table;
+    Ok(())
 }
 
 /// A likely unit slip: valid, but probably not what was meant.
