@@ -21,6 +21,7 @@ from typing import TYPE_CHECKING, Any, Dict, NamedTuple, Optional, Protocol, Seq
 import numpy as np
 
 from . import _ftsmc, _progress
+from ._frames import frame as _frame
 from ._ftsmc import Scenario
 
 if TYPE_CHECKING:
@@ -248,7 +249,7 @@ def montecarlo(
     workers (default: all cores; the rows do not depend on it), with the
     GIL released. Same rows and values as ``ftsmc montecarlo``: ``run``,
     ``seed`` and ``saturated_periods`` are uint64, empty CSV cells are NaN, ``completed``/``success``/
-    ``crashed`` are bool. ``progress`` (local batches): a tqdm bar (shown
+    ``crashed`` are bool, text columns are objects (None for an empty cell). ``progress`` (local batches): a tqdm bar (shown
     after 1 s) when the session is interactive and tqdm is installed
     (``None``), always (``True``), never (``False``), or a callable
     ``progress(done, total)`` (control steps), called about every 0.2 s.
@@ -289,7 +290,7 @@ def montecarlo(
             names, columns = _ftsmc.montecarlo_columns(scenario, runs, seed, names_arg, threads, None, cb)
         finally:
             _progress.close(cb)
-    return pandas.DataFrame(dict(zip(names, columns)))
+    return _frame(names, columns)
 
 
 class Controller:

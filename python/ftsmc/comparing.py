@@ -10,6 +10,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING, Any, NamedTuple, Optional, Sequence, Union
 
 from . import _ftsmc, _progress
+from ._frames import frame as _frame
 from ._ftsmc import Scenario
 
 if TYPE_CHECKING:
@@ -95,7 +96,7 @@ def compare(
         for (a, b, metric, verdict), (pairs, effect, lo, hi, p, p_holm) in verdicts
     ]
     return Comparison(
-        runs=pandas.DataFrame(dict(zip(names, columns))),
+        runs=_frame(names, columns),
         summary=summary,
         verdicts=pandas.DataFrame(verdict_rows),
         runs_flown=flown,

@@ -53,6 +53,9 @@ def _cli_runs(path: Path) -> pd.DataFrame:
     # pandas reads integers as int64 where they fit; ftsmc gives uint64.
     for column in ("run", "seed", "saturated_periods"):
         frame[column] = frame[column].astype(np.uint64)
+    # A text column with empty cells (margin_binds where no envelope limits
+    # the flight): ftsmc gives None there, as for an empty number NaN.
+    frame["margin_binds"] = pd.Series([None if pd.isna(v) else v for v in frame["margin_binds"]], dtype=object)
     return frame
 
 

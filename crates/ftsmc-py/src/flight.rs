@@ -213,7 +213,7 @@ pub fn montecarlo_columns<'py>(
             Column::Integer(v) => PyArray1::from_vec(py, v).into_any(),
             Column::Number(v) => PyArray1::from_iter(py, v.into_iter().map(|x| x.unwrap_or(f64::NAN))).into_any(),
             Column::Boolean(v) => PyArray1::from_vec(py, v).into_any(),
-            Column::Text(v) => PyList::new(py, v)?.into_any(),
+            Column::Text(v) => PyList::new(py, v.into_iter().map(|s| (!s.is_empty()).then_some(s)))?.into_any(),
         });
     }
     Ok((table.names, columns))
