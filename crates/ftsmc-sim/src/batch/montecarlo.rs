@@ -197,10 +197,9 @@ fn fly_lanes<const N: usize>(name: &str, scenarios: &[&Scenario], options: RunOp
     if n == 0 {
         return Vec::new();
     }
-    let mut controller = crate::registry::build_lanes::<N>(name, scenarios[0]).expect("controller names checked above");
-    let first: Vec<&Scenario> = (0..N).map(|i| scenarios[i.min(n - 1)]).collect();
-    let mut flight =
-        Flight::<dyn Controller<Lanes<N>> + Send, Lanes<N>>::new_lanes(&first, controller.as_mut(), options);
+    let controller = crate::registry::build_lanes::<N>(name, scenarios[0]).expect("controller names checked above");
+    let first: Vec<std::sync::Arc<Scenario>> = (0..N).map(|i| (*scenarios[i.min(n - 1)]).clone().into()).collect();
+    let mut flight = Flight::<Box<dyn Controller<Lanes<N>> + Send>, Lanes<N>>::new_lanes(first, controller, options);
     // The run each lane flies (`None`: idle).
     let mut run_of: [Option<usize>; N] = core::array::from_fn(|i| (i < n).then_some(i));
     for (i, run) in run_of.iter().enumerate() {
@@ -221,7 +220,7 @@ fn fly_lanes<const N: usize>(name: &str, scenarios: &[&Scenario], options: RunOp
             out[run] = Some(output);
             *slot = None;
             if next < n {
-                flight.start_lane(i, scenarios[next]);
+                flight.start_lane(i, (*scenarios[next]).clone());
                 *slot = Some(next);
                 next += 1;
             }

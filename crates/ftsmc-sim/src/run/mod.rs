@@ -163,5 +163,5 @@ pub(crate) fn tracking_errors(state: &[f64; 12], reference: &Reference, telemetr
 
 /// Fly `controller` through `scenario` ([`Flight`] stepped to the end).
 pub fn simulate(scenario: &Scenario, controller: &mut dyn Controller, options: RunOptions<'_>) -> RunOutput {
-    Flight::new(scenario, controller, options).run()
+    Flight::new(scenario.clone(), controller, options).run()
 }

@@ -100,13 +100,19 @@ pub struct FlightStats {
 }
 
 impl FlightStats {
-    /// Fraction of the observed periods in which the actuator stage saturated (0 with none).
-    pub fn saturation_fraction(&self) -> f64 {
-        if self.periods > 0 {
-            self.saturated_periods as f64 / self.periods as f64
-        } else {
-            0.0
+    /// The two rotor metrics of [`crate::metrics::Metrics`] of a flight of
+    /// `steps` delivered control periods: the peak unlimited rotor-speed
+    /// demand (rad/s) and the saturation fraction, the saturated periods
+    /// over `steps` (0 with none). `unobserved` is the saturation and
+    /// demand of a last period that was delivered but not observed (the
+    /// flight diverged at its tick), counted too.
+    pub fn rotor_metrics(&self, steps: u64, unobserved: Option<(bool, [f64; 4])>) -> (f64, f64) {
+        let (mut peak, mut saturated) = (self.peak_rotor_speed_demand, self.saturated_periods);
+        if let Some((last_saturated, demand)) = unobserved {
+            peak = demand.iter().fold(peak, |m, &w| if w.is_finite() { m.max(w) } else { m });
+            saturated += u64::from(last_saturated);
         }
+        (peak, if steps > 0 { saturated as f64 / steps as f64 } else { 0.0 })
     }
 }
 

@@ -50,6 +50,7 @@ use super::actuation::Drive;
 use super::Divergence;
 
 /// One RK4 substep `[t0, t0 + h]` as the loop hands it to a truth model.
+#[derive(Clone, Copy)]
 pub(crate) struct Substep<'a> {
     /// Start time, s.
     pub t0: f64,
@@ -62,7 +63,7 @@ pub(crate) struct Substep<'a> {
     /// See `a`.
     pub b: &'a TimeVarying,
     /// The environment (drag noise of the period).
-    pub env: &'a Environment<'a>,
+    pub env: &'a Environment,
     /// The rotors.
     pub drive: Drive<'a>,
     /// Wind held over the substep, world frame, m/s (`None`: still air, no `[wind]`).
@@ -688,12 +689,12 @@ impl<R: Real, T: TruthModel<R>> TruthModel<R> for OnIsa<T> {
         self.inner.body_attitude()
     }
     fn quad_state_into(&self, out: &mut QuadState<R>) {
-        match self.isa {
-            #[cfg(target_arch = "x86_64")]
-            // SAFETY: `Isa::Avx2Fma` is only detected on a CPU with AVX2 and FMA.
-            crate::isa::Isa::Avx2Fma => unsafe { quad_state_avx2(&self.inner, out) },
-            _ => self.inner.quad_state_into(out),
-        }
+        let inner = &self.inner;
+        crate::isa::run_on(
+            self.isa,
+            #[cfg_attr(not(debug_assertions), inline(always))]
+            || inner.quad_state_into(out),
+        );
     }
     fn body_attitude_into(&self, out: &mut Option<BodyAttitude<R>>) {
         self.inner.body_attitude_into(out);
@@ -702,12 +703,12 @@ impl<R: Real, T: TruthModel<R>> TruthModel<R> for OnIsa<T> {
         self.inner.begin_period(lane, tv, base)
     }
     fn substep(&mut self, s: &[Substep<'_>]) {
-        match self.isa {
-            #[cfg(target_arch = "x86_64")]
-            // SAFETY: `Isa::Avx2Fma` is only detected on a CPU with AVX2 and FMA.
-            crate::isa::Isa::Avx2Fma => unsafe { substep_avx2(&mut self.inner, s) },
-            _ => self.inner.substep(s),
-        }
+        let inner = &mut self.inner;
+        crate::isa::run_on(
+            self.isa,
+            #[cfg_attr(not(debug_assertions), inline(always))]
+            || inner.substep(s),
+        );
     }
     fn vertical(&self, lane: usize) -> (f64, f64) {
         self.inner.vertical(lane)
@@ -718,29 +719,6 @@ impl<R: Real, T: TruthModel<R>> TruthModel<R> for OnIsa<T> {
     fn start_lane(&mut self, lane: usize, scenario: &Scenario) -> Result<(), LaneStart> {
         self.inner.start_lane(lane, scenario)
     }
-}
-
-/// [`TruthModel::substep`] compiled with AVX2 and FMA (the models mark it
-/// and their kernels `#[cfg_attr(not(debug_assertions), inline(always))]`, so the whole RK4 is compiled here).
-///
-/// # Safety
-/// The CPU must have AVX2 and FMA.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,fma")]
-unsafe fn substep_avx2<R: Real, T: TruthModel<R>>(truth: &mut T, s: &[Substep<'_>]) {
-    truth.substep(s);
-}
-
-/// [`TruthModel::quad_state_into`] compiled with AVX2 and FMA (the Euler
-/// conversion of the lanes, written into `out`; `atan2` and `asin` stay
-/// calls to the one maths library, per lane).
-///
-/// # Safety
-/// The CPU must have AVX2 and FMA.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,fma")]
-unsafe fn quad_state_avx2<R: Real, T: TruthModel<R>>(truth: &T, out: &mut QuadState<R>) {
-    truth.quad_state_into(out);
 }
 
 /// What a flight's truth model brings to the loop ([`truth_of`]).
@@ -875,7 +853,7 @@ mod lane_tests {
     /// the latter integrates).
     struct Lane<'s> {
         scenario: &'s Scenario,
-        env: Environment<'s>,
+        env: Environment,
         actuators: ActuatorStage,
         wind: Option<Wind>,
         tv_now: TimeVarying,
