@@ -11,7 +11,7 @@ use super::{GymSpec, Observe, ACTION_LEN, OBSERVATION_LEN};
 
 /// What one environment step gave.
 #[derive(Clone, Debug, PartialEq)]
-pub struct LaneStep {
+pub struct EnvStep {
     /// Reward of the step.
     pub reward: f64,
     /// The episode ended by a crash or divergence.
@@ -23,7 +23,7 @@ pub struct LaneStep {
 }
 
 /// One environment: its current episode.
-pub struct Lane {
+pub struct Env {
     /// The episode's flight; it owns its scenario and the agent.
     flight: Flight<'static, Agent>,
     observe: Observe,
@@ -69,7 +69,7 @@ pub fn observation(state: &QuadState, reference: &Reference) -> [f64; OBSERVATIO
     o
 }
 
-impl Lane {
+impl Env {
     /// A new episode of `spec` seeded `seed`.
     pub fn new(spec: &GymSpec, seed: u64) -> Self {
         let scenario = spec.episode_scenario(seed);
@@ -105,7 +105,7 @@ impl Lane {
 
     /// Fly one environment step with `action` held; the reward is scored
     /// with `spec`'s weights on the truth at the end of the step.
-    pub fn step(&mut self, spec: &GymSpec, action: [f64; ACTION_LEN]) -> LaneStep {
+    pub fn step(&mut self, spec: &GymSpec, action: [f64; ACTION_LEN]) -> EnvStep {
         let periods = self.periods;
         let f = &mut self.flight;
         f.controller_mut().set_action(action);
@@ -144,6 +144,6 @@ impl Lane {
             // A non-finite truth ends the flight (divergence): keep the reward finite.
             reward = -w.crash;
         }
-        LaneStep { reward, terminated, truncated, reason }
+        EnvStep { reward, terminated, truncated, reason }
     }
 }

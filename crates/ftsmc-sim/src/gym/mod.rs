@@ -52,7 +52,7 @@ mod batch;
 mod lane;
 
 pub use batch::{Batch, StepResult};
-pub use lane::{observation, Lane, LaneStep};
+pub use lane::{observation, Env, EnvStep};
 
 use crate::scenario::Scenario;
 use crate::signal::Signal;

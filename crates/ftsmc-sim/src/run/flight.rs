@@ -9,35 +9,35 @@
 //!   → substeps: each lane begins, truth.substep (on R), each lane ends → boundary
 //! ```
 //!
-//! 1. **Measure** ([`Lane::measure`]): the sensors' reading of the truth
+//! 1. **Measure** ([`LaneFlight::measure`]): the sensors' reading of the truth
 //!    (`[sensors]`; the truth itself with perfect sensors).
 //! 2. **Controller** on its own clock: one update per control period
 //!    `dt = 1 / simulation.control_rate`, its command held over the period.
-//! 3. **Actuate** ([`Lane::actuate`]): the period's drag noise, then the
+//! 3. **Actuate** ([`LaneFlight::actuate`]): the period's drag noise, then the
 //!    actuator stage ([`super::actuation`]: ideal, per-rotor clamp, or
 //!    mixer + lagged noisy motors); its saturation flag goes back to the
 //!    controller (`actuator_feedback`).
-//! 4. **Observe** ([`Lane::observe`]): the flight's one observer list
+//! 4. **Observe** ([`LaneFlight::observe`]): the flight's one observer list
 //!    (metrics, recorder, statistics, envelope, the user's observers) sees
 //!    the whole tick ([`Tick`]).
 //! 5. **Substeps**: the truth model integrates the period by
 //!    `simulation.substeps` RK4 substeps (`run/truth.rs`); before each,
 //!    every lane samples its wind and plant variation
-//!    ([`Lane::begin_substep`]), after each it checks the ground and moves
-//!    its motors on ([`Lane::end_substep`]).
+//!    ([`LaneFlight::begin_substep`]), after each it checks the ground and moves
+//!    its motors on ([`LaneFlight::end_substep`]).
 //! 6. **Boundary**: the next reference, the observers, the divergence checks.
 //!
 //! # Lanes
 //!
 //! A flight's numbers may be `f64` (one flight, [`Flight::new`]) or lanes
-//! of `N` flights side by side ([`Flight::new_lanes`], `R = Lanes<N>`,
+//! of `N` flights side by side ([`Flights::new_lanes`], `R = Lanes<N>`,
 //! [`ftsmc_core::lanes`]). Only the controller's update and the truth's
 //! substep compute on the lanes; every other stage is a method of
-//! [`Lane`], one flight's code whatever `N`, fed lane `i`'s numbers. Each
+//! [`LaneFlight`], one flight's code whatever `N`, fed lane `i`'s numbers. Each
 //! lane is an independent flight with its own scenario, clock, observers
 //! and exit: lane `i` has exactly the bits the same flight has alone,
 //! whatever `N` and whatever lane it lands in, and a batch starts the next
-//! flight in a lane whose flight ended ([`Flight::start_lane`]).
+//! flight in a lane whose flight ended ([`Flights::start_lane`]).
 
 use std::sync::Arc;
 
@@ -122,6 +122,14 @@ struct Observers<'o> {
 }
 
 impl Observers<'_> {
+    /// Some observer reads [`Tick::telemetry`] at tick `k`
+    /// ([`Observer::reads_telemetry`]): only then is the lane's telemetry
+    /// gathered from the controller's lanes.
+    #[cfg_attr(not(debug_assertions), inline(always))]
+    fn read_telemetry(&self, k: u64) -> bool {
+        self.recorder.reads_telemetry(k) || self.user.iter().any(|o| o.reads_telemetry(k))
+    }
+
     /// Every observer sees `tick`.
     #[cfg_attr(not(debug_assertions), inline(always))]
     fn tick(&mut self, tick: &Tick<'_>) {
@@ -147,7 +155,7 @@ impl Observers<'_> {
 /// One flight of a [`Flight`] (one lane): its scenario, clock,
 /// environment, sensors, actuator stage, wind, observers and exit, and the
 /// stages of a tick that run flight by flight ([`Flight::step`]).
-struct Lane<'o> {
+struct LaneFlight<'o> {
     scenario: Arc<Scenario>,
     dt: f64,
     h: f64,
@@ -156,7 +164,7 @@ struct Lane<'o> {
     k: u64,
     /// The time of the period boundary `k`, `k as f64 · dt` (s), converted
     /// once per period (every reader takes these bits); set with `k` by
-    /// [`Lane::set_step`].
+    /// [`LaneFlight::set_step`].
     t: f64,
     env: Environment,
     actuators: ActuatorStage,
@@ -166,6 +174,14 @@ struct Lane<'o> {
     /// The measurement of the coming tick, when it was taken ahead of the
     /// step ([`Flight::measurement`]).
     measured_ahead: Option<Measurement>,
+    /// The truth's Euler state at the lane's period boundary (its copy of
+    /// lane `i` of [`Flights`]'s boundary state).
+    state: QuadState,
+    /// What the controller was given this tick ([`LaneFlight::measure`]).
+    measured: QuadState,
+    /// The controller's telemetry of this lane, gathered from the lanes at
+    /// the ticks some observer reads it ([`Observers::read_telemetry`]).
+    telemetry: Telemetry,
     wind: Option<Wind>,
     ground: Option<GroundSettings>,
     tv_now: TimeVarying,
@@ -198,7 +214,7 @@ struct Lane<'o> {
     exit: Option<ExitStatus>,
 }
 
-impl<'o> Lane<'o> {
+impl<'o> LaneFlight<'o> {
     /// The flight of `scenario` at `t = 0` (its actuator stage built from
     /// the truth model's allocation) and its reference at `t = 0`.
     fn new(owned: Arc<Scenario>, recorder: Recorder) -> (Self, Reference) {
@@ -225,7 +241,7 @@ impl<'o> Lane<'o> {
         let tv_now = env.time_varying_on_grid(0, 0.0);
         let mut reference_grid = ReferenceGrid::new(scenario, dt);
         let reference = reference_grid.at(0, 0.0);
-        let base_plant = scenario.true_plant();
+        let base_plant = scenario.true_vehicle();
         let observers = Observers {
             metrics,
             recorder,
@@ -246,6 +262,9 @@ impl<'o> Lane<'o> {
             base_plant,
             sensors,
             measured_ahead: None,
+            state: QuadState::default(),
+            measured: QuadState::default(),
+            telemetry: Telemetry::default(),
             wind,
             ground: scenario.ground.filter(|g| g.enabled),
             tv_now,
@@ -280,18 +299,24 @@ impl<'o> Lane<'o> {
         self.t = k as f64 * self.dt;
     }
 
-    /// Stage 1: the sensors' reading of `truth` (the truth itself with
-    /// perfect sensors, or once the flight is over), or the reading taken
-    /// ahead ([`Flight::measurement`]).
+    /// Stage 1: the sensors' reading of the truth at the lane's boundary
+    /// (its Euler state and, for a full-state controller, `body`; the
+    /// truth itself with perfect sensors, or once the flight is over), or
+    /// the reading taken ahead ([`Flight::measurement`]).
     #[cfg_attr(not(debug_assertions), inline(always))]
-    fn measure(&mut self, truth: Measurement) -> Measurement {
-        if let Some(ahead) = self.measured_ahead.take() {
-            return ahead;
-        }
-        match self.sensors.as_mut() {
-            Some(s) if self.exit.is_none() => s.measure_full(&truth),
-            _ => truth,
-        }
+    fn measure(&mut self, body: Option<BodyAttitude>) -> Measurement {
+        let m = match self.measured_ahead.take() {
+            Some(ahead) => ahead,
+            None => {
+                let truth = Measurement { euler: self.state, body };
+                match self.sensors.as_mut() {
+                    Some(s) if self.exit.is_none() => s.measure_full(&truth),
+                    _ => truth,
+                }
+            }
+        };
+        self.measured = m.euler;
+        m
     }
 
     /// Stage 3: the period's drag noise, then the actuator stage delivers
@@ -309,17 +334,17 @@ impl<'o> Lane<'o> {
         delivered.saturated
     }
 
-    /// Stage 4: the observers see the tick, unless the truth could not
-    /// begin the period (`begun`) or the applied command is not finite:
-    /// then the flight diverged at this tick.
+    /// Stage 4: the observers see the tick (lane `i` of the controller's
+    /// `telemetry`, gathered only when an observer reads it), unless the
+    /// truth could not begin the period (`begun`) or the applied command is
+    /// not finite: then the flight diverged at this tick.
     #[cfg_attr(not(debug_assertions), inline(always))]
-    fn observe(
+    fn observe<R: Real>(
         &mut self,
         begun: Result<(), Divergence>,
-        state: &QuadState,
-        measured: &QuadState,
         command: &Command,
-        telemetry: &Telemetry,
+        telemetry: &Telemetry<R>,
+        i: usize,
     ) {
         let t = self.t;
         let delivered = &self.delivered;
@@ -335,16 +360,21 @@ impl<'o> Lane<'o> {
             self.unobserved = Some((delivered.saturated, self.demand));
             return;
         }
-        let x = state.to_array();
+        if self.observers.read_telemetry(self.k) {
+            self.telemetry = telemetry.get_lane(i);
+        }
+        let attitude_reference =
+            [telemetry.attitude_reference[0].get_lane(i), telemetry.attitude_reference[1].get_lane(i)];
+        let x = self.state.to_array();
         let reference = &self.reference;
         let tick = Tick {
             k: self.k,
             t,
             state: x,
-            measured,
+            measured: &self.measured,
             reference,
-            telemetry,
-            errors: tracking_errors(&x, reference, telemetry),
+            telemetry: &self.telemetry,
+            errors: tracking_errors(&x, reference, attitude_reference),
             command,
             applied: u,
             omega: delivered.omega,
@@ -431,9 +461,10 @@ impl<'o> Lane<'o> {
     }
 
     /// The observers (and, with `check`, the divergence checks, skipped
-    /// when `sound`: [`Flight::sound_lanes`], and the planned end) see the
+    /// when `sound`: [`Flights::sound_lanes`], and the planned end) see the
     /// truth `s` at the lane's period boundary.
     fn boundary(&mut self, s: &QuadState, check: bool, sound: bool) {
+        self.state = *s;
         let (t, r) = (self.t, &self.reference);
         self.observers.boundary(t, s, r);
         if check {
@@ -481,15 +512,21 @@ fn refusal(scenario: &Scenario, why: LaneStart) -> Divergence {
     }
 }
 
-/// Most flights a [`Flight`] flies side by side (`Lanes<8>`).
-const MAX_LANES: usize = 8;
+/// Most flights a [`Flights`] flies side by side (`Lanes<4>`, the widest
+/// lane count a batch flies, `batch::montecarlo::LANE_COUNTS`).
+const MAX_LANES: usize = 4;
 
-/// One flight of a controller through a scenario (or, with lanes, `N`
-/// flights side by side), advanced one control period at a time. The
-/// flight owns its scenarios and its controller (`C` may itself be a
+/// One flight of a controller through a scenario: [`Flights`] of one
+/// `f64` lane. [`Flight::new`] builds it; it steps, reads and finishes one
+/// flight.
+pub type Flight<'o, C> = Flights<'o, C, f64>;
+
+/// `R::LANES` flights of one controller side by side (`R = Lanes<N>`;
+/// [`Flight`] for one), advanced one control period at a time. The
+/// flights own their scenarios and the controller (`C` may itself be a
 /// `&mut` or a `Box` of a controller); `'o` is the lifetime of the
 /// progress callback, the cancellation flag and the user's observers.
-pub struct Flight<'o, C: Controller<R>, R: Real = f64> {
+pub struct Flights<'o, C: Controller<R>, R: Real> {
     controller: C,
     options: RunOptions<'o>,
     truth: Box<dyn TruthModel<R> + Send>,
@@ -500,14 +537,14 @@ pub struct Flight<'o, C: Controller<R>, R: Real = f64> {
     /// The controller flies [`Measurement::body`] (`Controller::uses_body_attitude`).
     wants_body: bool,
     reference: Reference<R>,
-    lanes: Vec<Lane<'o>>,
+    lanes: Vec<LaneFlight<'o>>,
     /// Per lane, an earlier lane flying the same reference on the same
     /// control grid ([`reference_twins`]): when both reach a boundary at
     /// the same step, its reference is copied, not evaluated again.
     reference_twin: Vec<Option<usize>>,
     /// Per lane, `simulation.max_tilt` (rad) and
     /// `simulation.max_position_error` (m), NaN where not finite (no
-    /// comparison with NaN holds: [`Flight::sound_lanes`] then leaves the
+    /// comparison with NaN holds: [`Flights::sound_lanes`] then leaves the
     /// lane to the ordered checks).
     limits: [R; 2],
 }
@@ -518,14 +555,14 @@ pub struct Flight<'o, C: Controller<R>, R: Real = f64> {
 /// at one step are the same bits. `Debug` spells every number of a
 /// validated signal (all finite) exactly, `-0.0` included, so equal texts
 /// are equal signals (`PartialEq` would take `-0.0` for `0.0`).
-fn reference_twins(lanes: &[Lane<'_>]) -> Vec<Option<usize>> {
+fn reference_twins(lanes: &[LaneFlight<'_>]) -> Vec<Option<usize>> {
     let keys: Vec<String> = lanes.iter().map(|lane| format!("{:?}", lane.scenario.reference)).collect();
     (0..lanes.len())
         .map(|i| (0..i).find(|&j| lanes[j].dt.to_bits() == lanes[i].dt.to_bits() && keys[j] == keys[i]))
         .collect()
 }
 
-impl<'o, C: Controller> Flight<'o, C, f64> {
+impl<'o, C: Controller> Flights<'o, C, f64> {
     /// A flight of `controller` through `scenario` at `t = 0` (the scenario
     /// validated: `Scenario::validate`).
     pub fn new(scenario: impl Into<Arc<Scenario>>, controller: C, options: RunOptions<'o>) -> Self {
@@ -601,7 +638,7 @@ impl<'o, C: Controller> Flight<'o, C, f64> {
     }
 }
 
-impl<'o, C: Controller<R>, R: Real> Flight<'o, C, R> {
+impl<'o, C: Controller<R>, R: Real> Flights<'o, C, R> {
     /// `R::LANES` flights of `controller` side by side, lane `i` flying
     /// `scenarios[i]` from `t = 0` (validated scenarios of one base: the
     /// same vehicle model, control rate and substeps; [`Flight::new`] for
@@ -627,7 +664,7 @@ impl<'o, C: Controller<R>, R: Real> Flight<'o, C, R> {
         for (i, scenario) in scenarios.iter().enumerate() {
             let steps = super::planned_steps(scenario);
             let recorder = Recorder::new(scenario, options.record, steps, &controller);
-            let (mut lane, r) = Lane::new(scenario.clone(), recorder);
+            let (mut lane, r) = LaneFlight::new(scenario.clone(), recorder);
             if let Err(why) = truth.start_lane(i, scenario) {
                 lane.exit = Some(ExitStatus::Diverged { divergence: refusal(scenario, why), time: 0.0 });
                 refused.push(i);
@@ -664,12 +701,12 @@ impl<'o, C: Controller<R>, R: Real> Flight<'o, C, R> {
     /// Start a new flight of `scenario` in lane `lane` (its flight ended, or
     /// it idles): the lane's truth, controller states, environment, sensors,
     /// actuators and observers start afresh at `t = 0`. `scenario` must be of
-    /// the same base as the others ([`Flight::new_lanes`]).
+    /// the same base as the others ([`Flights::new_lanes`]).
     pub fn start_lane(&mut self, lane: usize, scenario: impl Into<Arc<Scenario>>) {
         let scenario: Arc<Scenario> = scenario.into();
         let steps = super::planned_steps(&scenario);
         let recorder = Recorder::new(&scenario, self.options.record, steps, &self.controller);
-        let (mut fresh, r) = Lane::new(scenario.clone(), recorder);
+        let (mut fresh, r) = LaneFlight::new(scenario.clone(), recorder);
         let started = self.truth.start_lane(lane, &scenario);
         if let Err(why) = started {
             fresh.exit = Some(ExitStatus::Diverged { divergence: refusal(&scenario, why), time: 0.0 });
@@ -688,11 +725,11 @@ impl<'o, C: Controller<R>, R: Real> Flight<'o, C, R> {
     }
 
     /// The outcome of lane `lane`'s flight so far, its lane left as it is
-    /// (to be restarted with [`Flight::start_lane`] or left idle).
+    /// (to be restarted with [`Flights::start_lane`] or left idle).
     pub fn lane_output(&mut self, lane: usize) -> RunOutput {
         let scenario = self.lanes[lane].scenario.clone();
         let recorder = Recorder::new(&scenario, false, 0, &self.controller);
-        let (mut idle, _) = Lane::new(scenario, recorder);
+        let (mut idle, _) = LaneFlight::new(scenario, recorder);
         idle.exit = Some(ExitStatus::Completed);
         idle.set_step(idle.steps);
         let done = core::mem::replace(&mut self.lanes[lane], idle);
@@ -737,7 +774,7 @@ impl<'o, C: Controller<R>, R: Real> Flight<'o, C, R> {
     /// Lanes whose boundary state certainly passes [`check_divergence`]:
     /// `|φ|` and `|θ|` at most `simulation.max_tilt`, every position error
     /// at most `simulation.max_position_error` (both finite:
-    /// [`Flight::limits`]; then these five components are finite too) and
+    /// [`Flights::limits`]; then these five components are finite too) and
     /// the seven other components finite, tested on every lane at once
     /// (comparisons and `x − x` sums only: no number of the flight changes).
     /// Any other lane takes the ordered checks.
@@ -761,7 +798,7 @@ impl<'o, C: Controller<R>, R: Real> Flight<'o, C, R> {
         sound
     }
 
-    /// Lane `lane`'s entries of [`Flight::limits`] for its scenario.
+    /// LaneFlight `lane`'s entries of [`Flights::limits`] for its scenario.
     fn set_limits(&mut self, lane: usize) {
         let sim = &self.lanes[lane].scenario.simulation;
         let finite = |v: f64| if v.is_finite() { v } else { f64::NAN };
@@ -772,21 +809,20 @@ impl<'o, C: Controller<R>, R: Real> Flight<'o, C, R> {
     /// Fly one control period of every flying lane (module docs);
     /// [`StepOutcome::Done`] once every lane's flight is over (and on every
     /// later call). Only the controller's update and the truth's substeps
-    /// compute on the lanes; every other stage is a method of [`Lane`],
+    /// compute on the lanes; every other stage is a method of [`LaneFlight`],
     /// flight by flight.
     pub fn step(&mut self) -> StepOutcome {
         // Lanes at their planned end complete before anything is computed.
         for lane in self.lanes.iter_mut().filter(|lane| lane.flying() && lane.k >= lane.steps) {
             lane.exit = Some(ExitStatus::Completed);
         }
-        if !self.lanes.iter().any(Lane::flying) {
+        if !self.lanes.iter().any(LaneFlight::flying) {
             return StepOutcome::Done;
         }
         // 1. Measure each lane; 2. the controller on the lanes.
         let mut measured = Measurement::<R>::default();
         for (i, lane) in self.lanes.iter_mut().enumerate() {
-            let truth = Measurement { euler: self.state.get_lane(i), body: self.body.as_ref().map(|b| b.get_lane(i)) };
-            measured.put_lane(i, lane.measure(truth));
+            measured.put_lane(i, lane.measure(self.body.as_ref().map(|b| b.get_lane(i))));
         }
         let dt = self.lanes[0].dt;
         let command = if self.wants_body {
@@ -804,8 +840,7 @@ impl<'o, C: Controller<R>, R: Real> Flight<'o, C, R> {
         let telemetry = self.controller.telemetry();
         for (i, lane) in self.lanes.iter_mut().enumerate().filter(|(_, lane)| lane.flying()) {
             let begun = self.truth.begin_period(i, &lane.tv_now, &lane.base_plant);
-            let (state, measured_i) = (self.state.get_lane(i), measured.euler.get_lane(i));
-            lane.observe(begun, &state, &measured_i, &command.get_lane(i), &telemetry.get_lane(i));
+            lane.observe(begun, &command.get_lane(i), telemetry, i);
         }
         // 5. The substeps: each lane begins, the truth integrates the lanes, each lane ends.
         let n = self.lanes.len();
@@ -813,10 +848,7 @@ impl<'o, C: Controller<R>, R: Real> Flight<'o, C, R> {
             for (i, lane) in self.lanes.iter_mut().enumerate() {
                 lane.begin_substep(i, j, &*self.truth);
             }
-            let mut gathered = [self.lanes[0].substep(j); MAX_LANES];
-            for (slot, lane) in gathered.iter_mut().zip(&self.lanes).skip(1) {
-                *slot = lane.substep(j);
-            }
+            let gathered: [Substep<'_>; MAX_LANES] = core::array::from_fn(|i| self.lanes[i.min(n - 1)].substep(j));
             self.truth.substep(&gathered[..n]);
             for (i, lane) in self.lanes.iter_mut().enumerate() {
                 lane.end_substep(i, j, &mut *self.truth);
@@ -854,7 +886,7 @@ impl<'o, C: Controller<R>, R: Real> Flight<'o, C, R> {
         for (i, lane) in self.lanes.iter_mut().enumerate().filter(|(_, lane)| lane.at_boundary) {
             lane.boundary(&self.state.get_lane(i), true, sound.get_lane(i));
         }
-        if self.lanes.iter().any(Lane::flying) {
+        if self.lanes.iter().any(LaneFlight::flying) {
             StepOutcome::Flying
         } else {
             StepOutcome::Done

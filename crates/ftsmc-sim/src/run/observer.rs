@@ -25,7 +25,9 @@ pub struct Tick<'a> {
     pub measured: &'a QuadState,
     /// Reference of this tick.
     pub reference: &'a Reference,
-    /// The controller's telemetry after this tick's update.
+    /// The controller's telemetry after this tick's update (for an
+    /// observer whose [`Observer::reads_telemetry`] is true at this tick;
+    /// the others must not read it).
     pub telemetry: &'a Telemetry,
     /// Tracking errors `[e_x, e_y, e_z, e_φ, e_θ, e_ψ]` of the truth: the
     /// truth minus the reference, φ and θ against the controller's attitude
@@ -62,12 +64,24 @@ pub trait Observer {
     fn boundary(&mut self, t: f64, truth: &QuadState, reference: &Reference) {
         let _ = (t, truth, reference);
     }
+    /// True when this observer reads [`Tick::telemetry`] at control step
+    /// `k` (the default). A flight gathers a lane's telemetry from the
+    /// controller's lanes only at the ticks some observer of it reads it;
+    /// an observer that says false here must not read that field.
+    fn reads_telemetry(&self, k: u64) -> bool {
+        let _ = k;
+        true
+    }
 }
 
 impl Observer for MetricsAccumulator {
     #[inline]
     fn tick(&mut self, tick: &Tick<'_>) {
         self.observe(tick.t, &tick.errors, &tick.applied);
+    }
+    #[inline]
+    fn reads_telemetry(&self, _: u64) -> bool {
+        false
     }
 }
 
@@ -77,6 +91,10 @@ impl Observer for Tracker {
     #[inline]
     fn boundary(&mut self, t: f64, truth: &QuadState, reference: &Reference) {
         self.observe(t, &truth.position, &reference.position, &truth.attitude);
+    }
+    #[inline]
+    fn reads_telemetry(&self, _: u64) -> bool {
+        false
     }
 }
 
@@ -149,5 +167,9 @@ impl Observer for FlightStats {
         if tilt > self.peak_tilt {
             self.peak_tilt = tilt;
         }
+    }
+    #[inline]
+    fn reads_telemetry(&self, _: u64) -> bool {
+        false
     }
 }

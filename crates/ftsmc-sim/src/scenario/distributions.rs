@@ -238,7 +238,7 @@ impl MonteCarloSpec {
         let range = |(lo, hi): (f64, f64)| format!("draws in [{}, {}]", show(lo), show(hi));
         let err =
             |name: &str, d: &Dist, expected: String| Err((format!("montecarlo.{name}"), range(d.support()), expected));
-        let truth = base.true_plant();
+        let truth = base.true_vehicle();
         let mut mass_low = truth.mass;
         if let Some(d) = &self.mass {
             let (lo, _) = d.support();
@@ -390,7 +390,7 @@ impl MonteCarloSpec {
         let inertia_factor = self.inertia_factor.map_or(1.0, |d| d.sample(&mut stream(2)));
         let drag_factor = self.drag_factor.map_or(1.0, |d| d.sample(&mut stream(3)));
         draw_true_vehicle(&mut s.vehicle, &base.plant, mass, inertia_factor, drag_factor);
-        let truth = s.true_plant();
+        let truth = s.true_vehicle();
         let amplitude = self.disturbance_amplitude.map_or(1.0, |d| d.sample(&mut stream(4)));
         let mut phase_rng = stream(5);
         let mut first_phase = 0.0;
