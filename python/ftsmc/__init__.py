@@ -30,6 +30,7 @@ if TYPE_CHECKING:
 __all__ = [
     "CONTROLLERS",
     "Command",
+    "Comparison",
     "Controller",
     "Exit",
     "PythonController",
@@ -38,10 +39,13 @@ __all__ = [
     "Scenario",
     "State",
     "Telemetry",
+    "compare",
     "label",
     "montecarlo",
     "simulate",
     "tune",
+    "falsify",
+    "failure_probability",
     "Tuned",
 ]
 
@@ -150,7 +154,8 @@ class PythonController(Protocol):
 class Exit(NamedTuple):
     """How a run ended.
 
-    status: ``"completed"``, ``"diverged"`` or ``"crashed"``.
+    status: ``"completed"``, ``"diverged"``, ``"crashed"`` or ``"grounded"``
+    (rested on the ground longer than ``[ground] max_ground_time`` after take-off).
     time: s, when it stopped (the scenario's duration when completed).
     text: the CLI's wording (``summary.json``'s ``exit``).
     detail: ``summary.json``'s ``exit_status`` (with the divergence reason).
@@ -196,8 +201,9 @@ class Run:
         """The time series exactly as the CLI writes ``<controller>.csv``."""
         return self._data.csv()
 
-    def plot(self, what: str = "position") -> matplotlib.figure.Figure:
-        """A matplotlib figure of this run: ``"position"``, ``"attitude"`` or
+    def plot(self, what: str = "all") -> matplotlib.figure.Figure:
+        """A matplotlib figure of this run: ``"all"`` (position, attitude and
+        rotor speeds, one row each), ``"position"``, ``"attitude"`` or
         ``"rotors"`` (see :mod:`ftsmc.plot`)."""
         from . import plot
 
@@ -267,6 +273,8 @@ def montecarlo(
                 )
 
     names_arg = None if controllers is None else list(controllers)
+    if names_arg is not None and not names_arg:
+        raise ValueError(f"controllers = [] is invalid (expected at least one controller name; known: {', '.join(CONTROLLERS)})")
     if client is not None:
         from .dask import montecarlo_columns
 
@@ -331,4 +339,7 @@ class Controller:
         return f"Controller({self.name!r})"
 
 
+from . import plot  # noqa: E402  (``ftsmc.plot`` after ``import ftsmc``; matplotlib is imported when a figure is drawn)
+from .comparing import Comparison, compare  # noqa: E402  (re-export; the code lives in comparing.py)
 from .tuning import Tuned, tune  # noqa: E402  (re-export; the code lives in tuning.py)
+from .falsification import failure_probability, falsify  # noqa: E402  (re-export; the code lives in falsification.py)

@@ -1,5 +1,9 @@
 """A progress bar for long batches: tqdm when it is installed and the session
-is interactive (a terminal or a notebook), nothing otherwise."""
+is interactive (a terminal or a notebook), nothing otherwise.
+
+In a notebook the bar is ``tqdm.auto``'s widget, which needs ipywidgets;
+without ipywidgets there is no bar (tqdm's text fallback would store a line
+per update and a ``TqdmWarning`` in the notebook's outputs)."""
 
 from __future__ import annotations
 
@@ -21,6 +25,20 @@ def interactive() -> bool:
     shell = sys.modules.get("IPython")
     get_ipython = getattr(shell, "get_ipython", None)
     return get_ipython is not None and get_ipython() is not None
+
+
+def _notebook_without_widgets() -> bool:
+    """True in a Jupyter kernel where ipywidgets cannot be imported."""
+    shell = sys.modules.get("IPython")
+    get_ipython = getattr(shell, "get_ipython", None)
+    ip = get_ipython() if get_ipython is not None else None
+    if ip is None or type(ip).__name__ != "ZMQInteractiveShell":
+        return False
+    try:
+        import ipywidgets  # noqa: F401
+    except ImportError:
+        return True
+    return False
 
 
 class _Bar:
@@ -48,7 +66,7 @@ def callback(progress: ProgressArg, flights: int, description: str) -> Optional[
     """The callable to hand to the native batch for ``progress`` (see :data:`ProgressArg`)."""
     if callable(progress) and not isinstance(progress, bool):
         return progress
-    if progress is False or (progress is None and not interactive()):
+    if progress is False or (progress is None and (not interactive() or _notebook_without_widgets())):
         return None
     try:
         return _Bar(flights, description)

@@ -31,7 +31,7 @@ import numpy.typing as npt
 
 from . import _ftsmc
 
-__all__ = ["map_batches", "montecarlo_columns", "shard_ranges"]
+__all__ = ["MAX_SHARDS", "map_batches", "montecarlo_columns", "shard_ranges"]
 
 T = TypeVar("T")
 R = TypeVar("R")
@@ -45,13 +45,18 @@ small share of the batch, few enough that the per-task overhead (a few ms,
 docs/campaigns.md) stays negligible against a shard's flights."""
 
 
+MAX_SHARDS = 100_000
+"""Most Dask tasks of one batch: each is a task on the scheduler and a
+range held on the client, so the count is capped before any is built."""
+
+
 def shard_ranges(runs: int, shards: int) -> List[Tuple[int, int]]:
     """The ``shards`` contiguous blocks ``[⌊(k−1)·runs/N⌋, ⌊k·runs/N⌋)`` of
     ``range(runs)``, k = 1 … N: the runs of ``ftsmc montecarlo --shard k/N``."""
     if runs < 1:
         raise ValueError("runs must be at least 1")
-    if not 1 <= shards <= runs:
-        raise ValueError(f"shards must be between 1 and runs ({runs}), got {shards}")
+    if not 1 <= shards <= min(runs, MAX_SHARDS):
+        raise ValueError(f"shards must be between 1 and runs ({runs}) and at most MAX_SHARDS ({MAX_SHARDS}), got {shards}")
     return [((k - 1) * runs // shards, k * runs // shards) for k in range(1, shards + 1)]
 
 
@@ -103,7 +108,7 @@ def montecarlo_columns(
         raise ValueError("runs must be at least 1")
     if shards is None:
         total_threads = sum(int(n) for n in client.nthreads().values())
-        shards = min(runs, TASKS_PER_THREAD * max(1, total_threads))
+        shards = min(runs, MAX_SHARDS, TASKS_PER_THREAD * max(1, total_threads))
     ranges = shard_ranges(runs, shards)
     names = list(scenario.controllers) if controllers is None else list(controllers)
     results = map_batches(client, _fly_shard, ranges, scenario.to_toml(), runs, seed, names, threads)

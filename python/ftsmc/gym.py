@@ -3,11 +3,26 @@
 ``import ftsmc.gym`` registers:
 
 - ``ftsmc/Hover-v0``: hold a point (default 1 m above the origin) from rest
-  there; collective thrust and body rates (``action="ctbr"``); 10 s episodes.
+  there; collective thrust and body rates (``action="ctbr"``); 10 s episodes
+  (``max_episode_steps`` 1000 at the default 100 Hz), which end (terminated)
+  once the vehicle is more than ``hover_radius`` (default 2 m) from the
+  target along any axis.
 - ``ftsmc/HoverMotors-v0``: the same with the four rotor speeds as the action
   (``action="motors"``).
 - ``ftsmc/Track-v0``: track the scenario's own reference from its initial
-  state; collective thrust and body rates; the scenario's duration.
+  state; collective thrust and body rates; the scenario's duration
+  (``max_episode_steps`` 2000: the default scenario's 20 s at 100 Hz).
+
+``max_episode_steps`` matches the default ``agent_rate``; the environment
+itself truncates at its episode time, so with another rate pass
+``max_episode_steps`` to ``gym.make`` too (or ``None``).
+
+``render_mode="rgb_array"`` makes :meth:`FtsmcEnv.render` return an H×W×3
+uint8 frame (``RENDER_SHAPE``): a top view (x–y) and a side view (x–z) of
+the vehicle (a "+" of its arms rotated by its true attitude, the front arm
+red), its trail and the target (a red ring), drawn with matplotlib's Agg
+canvas (no display needed); ``render_mode="human"`` shows the same frames
+in a matplotlib window at ``metadata["render_fps"]``.
 
 The default scenario is ``realistic-breeze-1``, the breeze rung of the wind
 ladder (an AscTec Hummingbird rigid body with lagged motors and PX4's mixer,
@@ -36,8 +51,18 @@ from gymnasium.vector.utils import batch_space
 
 from . import _ftsmc
 from ._ftsmc import Scenario
+from ._render import FrameRenderer, HumanWindow
 
-__all__ = ["FtsmcEnv", "FtsmcVectorEnv", "OBSERVATION_NAMES", "DEFAULT_SCENARIO", "ENV_IDS"]
+__all__ = [
+    "FtsmcEnv",
+    "FtsmcVectorEnv",
+    "OBSERVATION_NAMES",
+    "DEFAULT_SCENARIO",
+    "ENV_IDS",
+    "HOVER_RADIUS",
+    "RENDER_MODES",
+    "RENDER_SHAPE",
+]
 
 ObsArray = npt.NDArray[np.float32]
 ActArray = npt.NDArray[np.float32]
@@ -51,6 +76,20 @@ OBSERVATION_NAMES: List[str] = list(_ftsmc.GymBatch.observation_names())
 
 ENV_IDS = ("ftsmc/Hover-v0", "ftsmc/HoverMotors-v0", "ftsmc/Track-v0")
 """The registered environment ids."""
+
+HOVER_RADIUS = 2.0
+"""Default ``hover_radius``, m: a hover episode ends (terminated, ``"diverged
+(position error)"``) once any axis of the position error exceeds it."""
+
+RENDER_MODES = ["rgb_array", "human"]
+"""The render modes."""
+
+RENDER_SHAPE = (320, 640, 3)
+"""Shape of a frame of ``render_mode="rgb_array"`` (H, W, RGB), uint8."""
+
+RENDER_FPS = 100
+"""Frames per second of ``render_mode="human"`` (one per environment step at
+the default ``agent_rate``)."""
 
 ScenarioLike = Union[None, Scenario, str, "PathLike[str]"]
 
@@ -73,7 +112,10 @@ def _scenario(scenario: ScenarioLike) -> Scenario:
 
 
 def _batch(scenario: ScenarioLike, num_envs: int, settings: Mapping[str, Any]) -> _ftsmc.GymBatch:
-    return _ftsmc.GymBatch(_scenario(scenario), [0] * num_envs, **settings)
+    s = _scenario(scenario)
+    # Priced before anything is allocated for the environments.
+    _ftsmc.gym_check_envs(s, num_envs)
+    return _ftsmc.GymBatch(s, [0] * num_envs, **settings)
 
 
 def _settings(
@@ -87,8 +129,12 @@ def _settings(
     rate_gain: Optional[Sequence[float]],
     max_rate: Optional[Sequence[float]],
     randomize: bool,
+    hover_radius: Optional[float] = None,
 ) -> Dict[str, Any]:
+    if hover_radius is None and task == "hover":
+        hover_radius = HOVER_RADIUS
     return {
+        "hover_radius": None if hover_radius is None else float(hover_radius),
         "task": task,
         "target": None if target is None else [float(v) for v in target],
         "action": action,
@@ -102,8 +148,27 @@ def _settings(
     }
 
 
-def _spaces() -> Tuple[spaces.Space[ObsArray], spaces.Space[ActArray]]:
-    obs = spaces.Box(low=-np.inf, high=np.inf, shape=(len(OBSERVATION_NAMES),), dtype=np.float32)
+MAX_BODY_RATE = 200.0 * np.pi
+"""Bound of the observed body rates, rad/s (100 revolutions per second:
+beyond any quadrotor; ``max_tilt`` ends a flight long before)."""
+
+WIND_ALLOWANCE = 100.0
+"""Speed, m/s, added to the thrust-and-gravity bound of the velocity error
+(a wind can carry the vehicle and the reference can move)."""
+
+
+def _spaces(engine: _ftsmc.GymBatch) -> Tuple[spaces.Space[ObsArray], spaces.Space[ActArray]]:
+    """Observation bounds that the physics and the episode's end guarantee:
+    the rows of R lie in [-1, 1]; the velocity error stays below
+    ``(max_thrust / mass + g) · episode_time + WIND_ALLOWANCE``; the position
+    error below ``max_position_error`` (the divergence limit, or
+    ``hover_radius``) plus one step at that speed plus 1 m of sensor error
+    (a divergence ends the episode after the step that crossed it); the body
+    rates below ``MAX_BODY_RATE``."""
+    speed = (engine.max_thrust / engine.mass + 9.81) * engine.episode_time + WIND_ALLOWANCE
+    position = engine.max_position_error + speed * engine.step_time + 1.0
+    high = np.array([position] * 3 + [speed] * 3 + [1.0] * 9 + [MAX_BODY_RATE] * 3, dtype=np.float32)
+    obs = spaces.Box(low=-high, high=high, dtype=np.float32)
     act = spaces.Box(low=-1.0, high=1.0, shape=(4,), dtype=np.float32)
     return cast("spaces.Space[ObsArray]", obs), cast("spaces.Space[ActArray]", act)
 
@@ -135,15 +200,20 @@ class FtsmcEnv(gym.Env[ObsArray, ActArray]):
         ``rate``, ``action``, ``crash``; docs/python.md has the formula).
     randomize: draw the plant (and initial offsets) from the scenario's
         ``[montecarlo]`` at every reset.
+    hover_radius: m (task ``"hover"`` only; default ``HOVER_RADIUS`` = 2):
+        the episode is terminated once the true position is farther than
+        this from the target along any axis.
+    render_mode: ``None``, ``"rgb_array"`` or ``"human"`` (module docs).
 
-    ``terminated`` on a crash (ground) or divergence (position error, tilt,
+    ``terminated`` on a crash (ground) or divergence (position error beyond
+    ``hover_radius`` or ``simulation.max_position_error``, tilt,
     non-finite state), with ``info["reason"]`` (e.g. ``"crashed: hit the
     ground at 4.3 m/s at t = 0.478 s"``); ``truncated`` at the end of the episode (``"completed"``).
     ``info["time"]`` is the time into the episode (s), ``info["seed"]`` the
     episode's seed (its sensor noise and turbulence).
     """
 
-    metadata: Dict[str, Any] = {"render_modes": []}
+    metadata: Dict[str, Any] = {"render_modes": RENDER_MODES, "render_fps": RENDER_FPS}
 
     def __init__(
         self,
@@ -158,12 +228,23 @@ class FtsmcEnv(gym.Env[ObsArray, ActArray]):
         rate_gain: Optional[Sequence[float]] = None,
         max_rate: Optional[Sequence[float]] = None,
         randomize: bool = False,
+        hover_radius: Optional[float] = None,
+        render_mode: Optional[str] = None,
     ) -> None:
-        settings = _settings(task, target, action, observe, agent_rate, max_episode_time, reward, rate_gain, max_rate, randomize)
+        if render_mode is not None and render_mode not in RENDER_MODES:
+            raise ValueError(f"`render_mode` = {render_mode!r} is invalid (expected None, {', '.join(map(repr, RENDER_MODES))})")
+        settings = _settings(
+            task, target, action, observe, agent_rate, max_episode_time, reward, rate_gain, max_rate, randomize, hover_radius
+        )
         self._batch = _batch(scenario, 1, settings)
-        self.observation_space, self.action_space = _spaces()
+        self.observation_space, self.action_space = _spaces(self._batch)
         self._ended = True
         self._no_seed = np.zeros(1, dtype=np.uint64)
+        self.render_mode = render_mode
+        self._span = float(settings["hover_radius"] or HOVER_RADIUS)
+        self._renderer: Optional[FrameRenderer] = None
+        self._window: Optional[HumanWindow] = None
+        self._time = 0.0
 
     @property
     def engine(self) -> _ftsmc.GymBatch:
@@ -176,6 +257,11 @@ class FtsmcEnv(gym.Env[ObsArray, ActArray]):
         episode_seed = _draw_seed(self.np_random)
         obs, _, _, _, _, _, _ = self._batch.reset(np.array([episode_seed], dtype=np.uint64))
         self._ended = False
+        self._time = 0.0
+        if self._renderer is not None:
+            self._renderer.clear_trail()
+        if self.render_mode == "human":
+            self.render()
         return obs[0], {"time": 0.0, "seed": episode_seed}
 
     def step(self, action: ActArray) -> Tuple[ObsArray, SupportsFloat, bool, bool, Dict[str, Any]]:
@@ -185,16 +271,43 @@ class FtsmcEnv(gym.Env[ObsArray, ActArray]):
         a = np.asarray(action, dtype=np.float64).reshape(1, 4)
         obs, reward, terminated, truncated, reason, time, _ = self._batch.step(a, self._no_seed)
         info: Dict[str, Any] = {"time": float(time[0])}
+        self._time = float(time[0])
         if terminated[0] or truncated[0]:
             info["reason"] = reason[0]
             self._ended = True
+        if self.render_mode == "human":
+            self.render()
         return obs[0], float(reward[0]), bool(terminated[0]), bool(truncated[0]), info
+
+    def render(self) -> Optional[AnyArray]:
+        """The current frame (``render_mode="rgb_array"``: ``RENDER_SHAPE``
+        uint8), or show it (``"human"``); ``None`` without a render mode."""
+        if self.render_mode is None:
+            return None
+        if self._renderer is None:
+            self._renderer = FrameRenderer(RENDER_SHAPE[0], RENDER_SHAPE[1], span=self._span)
+        position, attitude, target = self._batch.pose(0)
+        frame: AnyArray = self._renderer.draw(position, attitude, target, self._time)
+        if self.render_mode == "rgb_array":
+            return frame
+        if self._window is None:
+            self._window = HumanWindow(self.metadata["render_fps"])
+        self._window.show(frame)
+        return None
+
+    def close(self) -> None:
+        """Close the render window, if any."""
+        if self._window is not None:
+            self._window.close()
+            self._window = None
 
 
 class FtsmcVectorEnv(VectorEnv[ObsArray, ActArray, AnyArray]):
     """``num_envs`` flights of one scenario stepped in Rust in one call (GIL released).
 
-    Same keywords as :class:`FtsmcEnv`. Auto-reset is Gymnasium's
+    Same keywords as :class:`FtsmcEnv`, and ``max_episode_steps`` (what
+    ``gym.make_vec`` passes from the registration): episodes are truncated
+    at ``min(max_episode_time, max_episode_steps / agent_rate)``. Auto-reset is Gymnasium's
     ``NEXT_STEP``: an environment whose episode ended at one step is reset
     at the next, which ignores its action and returns its first observation
     with reward 0, ``terminated`` and ``truncated`` False. Seeds follow
@@ -222,13 +335,24 @@ class FtsmcVectorEnv(VectorEnv[ObsArray, ActArray, AnyArray]):
         rate_gain: Optional[Sequence[float]] = None,
         max_rate: Optional[Sequence[float]] = None,
         randomize: bool = False,
+        hover_radius: Optional[float] = None,
+        max_episode_steps: Optional[int] = None,
     ) -> None:
         if int(num_envs) < 1:
             raise ValueError(f"`num_envs` = {num_envs} is invalid (expected at least 1 environment)")
-        settings = _settings(task, target, action, observe, agent_rate, max_episode_time, reward, rate_gain, max_rate, randomize)
+        if max_episode_steps is not None:
+            # Gymnasium's make_vec passes the registration's TimeLimit: the
+            # episodes end at whichever comes first.
+            if int(max_episode_steps) < 1:
+                raise ValueError(f"`max_episode_steps` = {max_episode_steps} is invalid (expected at least 1)")
+            by_steps = int(max_episode_steps) / float(agent_rate)
+            max_episode_time = by_steps if max_episode_time is None else min(float(max_episode_time), by_steps)
+        settings = _settings(
+            task, target, action, observe, agent_rate, max_episode_time, reward, rate_gain, max_rate, randomize, hover_radius
+        )
         self.num_envs = int(num_envs)
         self._batch = _batch(scenario, self.num_envs, settings)
-        self.single_observation_space, self.single_action_space = _spaces()
+        self.single_observation_space, self.single_action_space = _spaces(self._batch)
         self.observation_space = batch_space(self.single_observation_space, self.num_envs)
         self.action_space = batch_space(self.single_action_space, self.num_envs)
         self._rngs: List[np.random.Generator] = [seeding.np_random(None)[0] for _ in range(self.num_envs)]
@@ -278,15 +402,19 @@ class FtsmcVectorEnv(VectorEnv[ObsArray, ActArray, AnyArray]):
 
 
 def _register() -> None:
-    kwargs: Dict[str, Dict[str, Any]] = {
-        "ftsmc/Hover-v0": {"task": "hover", "action": "ctbr", "max_episode_time": 10.0},
-        "ftsmc/HoverMotors-v0": {"task": "hover", "action": "motors", "max_episode_time": 10.0},
-        "ftsmc/Track-v0": {"task": "track", "action": "ctbr"},
+    kwargs: Dict[str, Tuple[Dict[str, Any], int]] = {
+        "ftsmc/Hover-v0": ({"task": "hover", "action": "ctbr", "max_episode_time": 10.0}, 1000),
+        "ftsmc/HoverMotors-v0": ({"task": "hover", "action": "motors", "max_episode_time": 10.0}, 1000),
+        "ftsmc/Track-v0": ({"task": "track", "action": "ctbr"}, 2000),
     }
-    for env_id, kw in kwargs.items():
+    for env_id, (kw, steps) in kwargs.items():
         if env_id not in gym.registry:
             gym.register(
-                id=env_id, entry_point="ftsmc.gym:FtsmcEnv", vector_entry_point="ftsmc.gym:FtsmcVectorEnv", kwargs=kw
+                id=env_id,
+                entry_point="ftsmc.gym:FtsmcEnv",
+                vector_entry_point="ftsmc.gym:FtsmcVectorEnv",
+                kwargs=kw,
+                max_episode_steps=steps,
             )
 
 

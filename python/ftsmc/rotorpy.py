@@ -118,13 +118,22 @@ def scenario_for(
     base: Optional[Scenario] = None,
     overrides: Optional[Mapping[str, Any]] = None,
     aero: bool = True,
+    vehicle: Optional[str] = None,
 ) -> Scenario:
     """``base`` (default ``paper-scenario-1``: the paper's gains) with its
     ``[plant]`` replaced by :func:`plant_from_rotorpy` and then ``overrides``
-    applied (dotted keys, e.g. ``{"ftaftsmc.z.lambda2": 0.8}``)."""
+    applied (dotted keys, e.g. ``{"ftaftsmc.z.lambda2": 0.8}``).
+
+    The scenario is named after the vehicle: ``<vehicle>-<base name>``,
+    ``vehicle`` defaulting to ``rotorpy-<mass in g>g`` (RotorPy's parameter
+    dicts carry no name), e.g. ``rotorpy-500g-paper-scenario-1`` for the
+    Hummingbird; an override of ``name`` wins."""
     scenario = base if base is not None else Scenario.builtin("paper-scenario-1")
     plant = {f"plant.{k}": v for k, v in plant_from_rotorpy(quad_params, aero).items()}
-    return scenario.with_overrides({**plant, **dict(overrides or {})})
+    if vehicle is None:
+        vehicle = f"rotorpy-{round(float(quad_params['mass']) * 1000):d}g"
+    named = {"name": f"{vehicle}-{scenario.name}"}
+    return scenario.with_overrides({**named, **plant, **dict(overrides or {})})
 
 
 class Controller:

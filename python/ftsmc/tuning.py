@@ -22,7 +22,8 @@ class Tuned(NamedTuple):
     toml: str
     """The tuned scenario file: ``extends`` the input, sets only the tuned gains, records the cost and statistics."""
     summary: Dict[str, Any]
-    """Parameters, best candidate, every candidate (``history``), training and held-out statistics (NaN as None)."""
+    """Parameters, chosen candidate, ``improved`` (false: the start's gains), every candidate (``history``), the
+    generations and the race, training and held-out statistics (NaN as None)."""
 
 
 def tune(

@@ -60,3 +60,11 @@ def test_gym_hover_example(tmp_path: Path) -> None:
     assert "pd episode 0: return" in out and "steps, completed" in out, out
     assert "random episode 0" in out and "random episode 0: return" in out and ", completed" not in out.split("pd episode")[0], out
     assert "0 terminated" in out, out
+
+
+def test_train_hover_runs_and_plots_its_reward_curve(tmp_path: Path) -> None:
+    # Two tiny iterations: the example runs end to end (docs/python.md shows a full run's curve).
+    args = ["--iterations", "2", "--population", "6", "--episode-time", "0.5", "--out", str(tmp_path)]
+    out = run([str(EXAMPLES / "train_hover.py"), *args], tmp_path)
+    assert out.count("iteration") == 2 and "held-out seeds" in out, out
+    assert (tmp_path / "train-hover-reward.png").stat().st_size > 5_000

@@ -5,7 +5,8 @@ crashes terminate with a reason; bad settings are refused by name."""
 
 from __future__ import annotations
 
-from typing import Any, List, Tuple
+import warnings
+from typing import Any, List, Optional, Tuple
 
 import numpy as np
 import pytest
@@ -13,19 +14,58 @@ import pytest
 gym = pytest.importorskip("gymnasium")
 
 import ftsmc  # noqa: E402
-from ftsmc.gym import ENV_IDS, FtsmcEnv, FtsmcVectorEnv  # noqa: E402
+from ftsmc.gym import ENV_IDS, RENDER_MODES, RENDER_SHAPE, FtsmcEnv, FtsmcVectorEnv  # noqa: E402
 from gymnasium.utils.env_checker import check_env  # noqa: E402
 
 # Short episodes keep the suite fast.
 SHORT = {"max_episode_time": 0.3}
 
 
+@pytest.mark.parametrize("render_mode", [None, *RENDER_MODES])
 @pytest.mark.parametrize("env_id", ENV_IDS)
-def test_check_env(env_id: str) -> None:
-    env = gym.make(env_id, **SHORT)
-    check_env(env.unwrapped, skip_render_check=True)
+def test_check_env_without_warnings(env_id: str, render_mode: Optional[str]) -> None:
+    env = gym.make(env_id, render_mode=render_mode, **SHORT)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        check_env(env.unwrapped)
+    assert [str(w.message) for w in caught] == []
     assert env.observation_space.shape == (18,) and env.action_space.shape == (4,)
+    assert env.spec is not None and env.spec.max_episode_steps in (1000, 2000)
+    assert env.metadata["render_modes"] == ["rgb_array", "human"] and env.metadata["render_fps"] > 0
     env.close()
+
+
+def test_rgb_array_frames_show_the_vehicle_and_its_target() -> None:
+    env = gym.make("ftsmc/Hover-v0", render_mode="rgb_array", **SHORT)
+    env.reset(seed=0)
+    first = env.render()
+    assert first.shape == RENDER_SHAPE and first.dtype == np.uint8
+    # The target's red ring and the vehicle's dark arms are drawn.
+    red = (first[:, :, 0] > 180) & (first[:, :, 1] < 90) & (first[:, :, 2] < 90)
+    dark = first.sum(axis=2) < 200
+    assert red.sum() > 50 and dark.sum() > 50
+    for _ in range(20):
+        env.step(np.array([1.0, 0.5, 0.0, 0.0], dtype=np.float32))  # climb and roll
+    later = env.render()
+    assert later.shape == RENDER_SHAPE and (later != first).any()
+    assert FtsmcEnv(max_episode_time=0.1).render() is None
+    with pytest.raises(ValueError, match="render_mode"):
+        FtsmcEnv(render_mode="video")
+
+
+def test_hover_ends_outside_the_radius() -> None:
+    env = FtsmcEnv(hover_radius=0.5, observe="truth")
+    env.reset(seed=0)
+    for _ in range(300):
+        obs, reward, terminated, truncated, info = env.step(np.array([1.0, 0, 0, 0], dtype=np.float32))
+        if terminated or truncated:
+            break
+    assert terminated and "position" in info["reason"], info
+    assert 0.5 < obs[2] < 0.8 and info["time"] < 3.0  # just beyond 0.5 m above the target
+    with pytest.raises(ValueError, match="hover_radius"):
+        FtsmcEnv(task="track", hover_radius=1.0)
+    with pytest.raises(ValueError, match="hover_radius"):
+        FtsmcEnv(hover_radius=-1.0)
 
 
 def rollout(env: Any, seed: int, steps: int) -> Tuple[np.ndarray, np.ndarray, List[Any]]:

@@ -5,6 +5,7 @@ the full u64 range."""
 
 from __future__ import annotations
 
+import importlib
 import os
 import signal
 import threading
@@ -126,3 +127,100 @@ def test_montecarlo_with_a_python_controller_says_why_and_what_to_do() -> None:
 
     with pytest.raises(TypeError, match="built-in controllers by name.*got a Pd object.*ftsmc.simulate"):
         ftsmc.montecarlo(ftsmc.Scenario.builtin("paper-scenario-2"), 2, controllers=[Pd()])  # type: ignore[list-item]
+
+
+# ---- checks before allocations (limits off included) ----------------------
+
+LIMITS_OFF = {
+    "limits": {
+        k: float("inf")
+        for k in [
+            "max_steps",
+            "max_samples",
+            "max_output_bytes",
+            "max_flights",
+            "max_sweep_points",
+            "max_threads",
+            "max_scenario_bytes",
+        ]
+    }
+}
+
+
+def _nonempty(e: BaseException) -> str:
+    text = str(e)
+    assert text.strip(), f"{type(e).__name__} without a message"
+    assert len(text.splitlines()[0]) <= 300, text
+    return text
+
+
+def test_simulate_with_limits_off_is_bounded() -> None:
+    with pytest.raises(ValueError) as e:
+        ftsmc.Scenario.builtin("paper-scenario-1").with_overrides({**LIMITS_OFF, "duration": 1e300})
+    assert "hard bound" in _nonempty(e.value) and "max_steps" in str(e.value)
+
+
+def test_montecarlo_with_limits_off_is_bounded() -> None:
+    s = ftsmc.Scenario.builtin("paper-scenario-1").with_overrides(LIMITS_OFF)
+    for runs in [10**12, 2**64 - 1]:
+        with pytest.raises(ValueError) as e:
+            ftsmc.montecarlo(s, runs=runs, progress=False)
+        assert "hard bound" in _nonempty(e.value) and "max_flights" in str(e.value)
+    with pytest.raises(ValueError) as e:
+        ftsmc.montecarlo(s, runs=2, threads=100_000, progress=False)
+    assert "max_threads" in _nonempty(e.value)
+
+
+def test_montecarlo_without_controllers_is_refused() -> None:
+    with pytest.raises(ValueError, match="controllers") as e:
+        ftsmc.montecarlo(ftsmc.Scenario.builtin("paper-scenario-1"), runs=2, controllers=[], progress=False)
+    _nonempty(e.value)
+
+
+def test_shards_are_capped_before_any_range_is_built() -> None:
+    from ftsmc.dask import MAX_SHARDS, shard_ranges
+
+    with pytest.raises(ValueError, match="MAX_SHARDS") as e:
+        shard_ranges(10**9, 10**9)
+    _nonempty(e.value)
+    assert len(shard_ranges(10**9, MAX_SHARDS)) == MAX_SHARDS
+
+
+def test_from_toml_has_the_cli_size_limit() -> None:
+    text = 'name = "big"\n' + "# padding\n" * 120_000  # 1.2 MB
+    with pytest.raises(ValueError, match="max_scenario_bytes") as e:
+        ftsmc.Scenario.from_toml(text)
+    _nonempty(e.value)
+
+
+def test_an_unrecorded_run_says_why_it_cannot_be_plotted() -> None:
+    pytest.importorskip("matplotlib")
+    s = ftsmc.Scenario.builtin("paper-scenario-1").with_overrides({"duration": 0.05, "simulation.record_rate": 0.0})
+    r = ftsmc.simulate(s, "pid")
+    with pytest.raises(ValueError, match="record_rate") as e:
+        r.plot()
+    _nonempty(e.value)
+
+
+def test_num_envs_is_priced_with_a_message() -> None:
+    gym = pytest.importorskip("gymnasium")
+    importlib.import_module("ftsmc.gym")  # registers the environments
+
+    for n in [10**9, 10**7]:
+        with pytest.raises(ValueError, match="num_envs") as e:
+            gym.make_vec("ftsmc/Hover-v0", num_envs=n, vectorization_mode="vector_entry_point")
+        _nonempty(e.value)
+
+
+def test_a_non_toml_file_is_never_echoed(tmp_path: Any) -> None:
+    secret = tmp_path / "passwd"
+    secret.write_text("root:x:0:0:root:/root:/bin/bash\n")
+    with pytest.raises(ValueError) as e:
+        ftsmc.Scenario.from_file(str(secret))
+    assert "root" not in _nonempty(e.value).replace(str(tmp_path), "")
+    gym = pytest.importorskip("gymnasium")
+    importlib.import_module("ftsmc.gym")
+
+    with pytest.raises(ValueError) as e:
+        gym.make("ftsmc/Hover-v0", scenario=str(secret))
+    assert "root" not in _nonempty(e.value).replace(str(tmp_path), "")

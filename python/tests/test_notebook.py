@@ -23,6 +23,11 @@ def test_quickstart_notebook_executes(tmp_path: Path) -> None:
     print(f"quickstart.ipynb executed in {elapsed:.1f} s")
     outputs = [o for c in nb.cells if c.cell_type == "code" for o in c.get("outputs", [])]
     assert not [o for o in outputs if o.get("output_type") == "error"]
+    # Clean outputs: no warning, no progress-bar lines, nothing on stderr.
+    noise = [o for o in outputs if o.get("output_type") == "stream" and o.get("name") == "stderr"]
+    assert not noise, "".join(o.get("text", "") for o in noise)
+    shown = "".join(str(o.get("text", "")) + str(o.get("data", {}).get("text/plain", "")) for o in outputs)
+    assert "Warning" not in shown and "it/s" not in shown, shown
     text = "".join(o.get("text", "") for o in outputs if o.get("output_type") == "stream")
     assert "FTAFTSMC: completed" in text and "ISE x" in text, text
     assert "completed" in text.split("ISE x")[-1], text

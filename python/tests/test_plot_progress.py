@@ -1,6 +1,8 @@
 """ftsmc.plot returns matplotlib figures drawn like the CLI's (reference
-beneath, a × where a run stopped early); montecarlo's progress reporting
-(callable, silent when not interactive) leaves the rows unchanged."""
+on top, a × where a run stopped early, its reason in the legend); run.plot()
+shows position, attitude and rotors; animate replays a run in 3-D;
+montecarlo's progress reporting (callable, silent when not interactive)
+leaves the rows unchanged."""
 
 from __future__ import annotations
 
@@ -10,7 +12,6 @@ from typing import List, Tuple
 import pytest
 
 import ftsmc
-import ftsmc.plot
 
 matplotlib = pytest.importorskip("matplotlib", reason='pip install "./python[plot]"')
 matplotlib.use("Agg")
@@ -19,8 +20,21 @@ from matplotlib.figure import Figure  # noqa: E402
 REPO = Path(__file__).resolve().parents[2]
 
 
-def test_run_plot_returns_a_figure_per_view_with_the_reference_beneath() -> None:
+def test_import_ftsmc_brings_ftsmc_plot() -> None:
+    import subprocess
+    import sys
+
+    code = "import ftsmc; print(callable(ftsmc.plot.montecarlo_box))"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "True", out.stderr
+
+
+def test_run_plot_shows_position_attitude_and_rotors_with_the_reference_on_top() -> None:
     run = ftsmc.simulate(ftsmc.Scenario.builtin("paper-scenario-1"), "ftaftsmc")
+    fig = run.plot()
+    assert isinstance(fig, Figure) and len(fig.axes) == 7  # x, y, z; φ, θ, ψ; rotor speeds
+    labels = {ax.get_ylabel() for ax in fig.axes}
+    assert {"x (m)", "φ (rad)", "rotor speed (rad/s)"} <= labels, labels
     for what in ("position", "attitude", "rotors"):
         fig = run.plot(what)
         assert isinstance(fig, Figure) and len(fig.axes) >= 1, what
@@ -28,19 +42,35 @@ def test_run_plot_returns_a_figure_per_view_with_the_reference_beneath() -> None
     ax = fig.axes[0]
     reference = [ln for ln in ax.get_lines() if ln.get_label() == "reference"]
     flight = [ln for ln in ax.get_lines() if ln.get_label() == "FTAFTSMC"]
-    assert reference and flight and reference[0].get_zorder() < flight[0].get_zorder()
+    assert reference and flight and reference[0].get_zorder() > flight[0].get_zorder()
     with pytest.raises(ValueError, match="expected one of"):
         run.plot("bogus")
 
 
-def test_a_diverged_run_ends_in_a_marker_with_its_reason() -> None:
+def test_a_diverged_run_ends_in_a_marker_with_its_reason_in_the_legend() -> None:
     scenario = ftsmc.Scenario.from_file(str(REPO / "scenarios" / "realism" / "rigid-body-scenario-1.toml"))
     run = ftsmc.simulate(scenario, "ftaftsmc")
     assert run.exit.status == "diverged"
-    ax = run.plot("position").axes[0]
+    fig = run.plot("position")
+    ax = fig.axes[0]
     assert any(ln.get_marker() == "x" for ln in ax.get_lines())
-    notes = [t.get_text() for t in ax.texts]
-    assert any(n.startswith("diverged (tilt) at") for n in notes), notes
+    assert not ax.texts, "no note over the data"
+    entries = [t.get_text() for legend in fig.legends for t in legend.get_texts()]
+    assert any("diverged (tilt) at" in e for e in entries), entries
+
+
+def test_animate_replays_a_run_in_3d_and_saves_a_gif(tmp_path: Path) -> None:
+    from matplotlib.animation import FuncAnimation
+
+    run = ftsmc.simulate(ftsmc.Scenario.builtin("paper-scenario-1").with_overrides({"duration": 2.0}), "ftaftsmc")
+    anim = ftsmc.plot.animate(run, frames=4)
+    assert isinstance(anim, FuncAnimation)
+    gif = tmp_path / "flight.gif"
+    anim.save(str(gif), writer="pillow", dpi=40)
+    assert gif.read_bytes()[:6] in (b"GIF87a", b"GIF89a")
+    assert "<img" in anim.to_jshtml() or "<script" in anim.to_jshtml()
+    with pytest.raises(ValueError, match="frames"):
+        ftsmc.plot.animate(run, frames=0)
 
 
 def test_montecarlo_box_has_a_box_per_controller() -> None:

@@ -50,7 +50,11 @@ def test_the_nominal_model_is_the_rotorpy_vehicle() -> None:
     assert plant["arm_length"] == pytest.approx(0.17) and plant["rotor_inertia"] == 0.0
     hover = np.sqrt(0.5 * 9.81 / (4 * 5.57e-6))
     np.testing.assert_allclose(plant["drag_translational"], [4 * 1.19e-4 * hover, 4 * 1.19e-4 * hover, 4 * 2.32e-4 * hover])
-    assert s == ftsmc.Scenario.builtin("paper-scenario-1").with_overrides({f"plant.{k}": v for k, v in plant.items()})
+    expected = {"name": "rotorpy-500g-paper-scenario-1", **{f"plant.{k}": v for k, v in plant.items()}}
+    assert s == ftsmc.Scenario.builtin("paper-scenario-1").with_overrides(expected)
+    # Named after the vehicle, not after the paper's scenario it extends.
+    assert s.name == "rotorpy-500g-paper-scenario-1"
+    assert fr.scenario_for(quad_params, vehicle="hummingbird").name == "hummingbird-paper-scenario-1"
 
 
 def test_control_dict_feeds_every_rotorpy_abstraction_we_claim() -> None:

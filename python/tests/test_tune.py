@@ -72,3 +72,13 @@ def test_the_dask_objective_refuses_bad_input() -> None:
         ftsmc._ftsmc.tune_evaluate(["duration = -1"], "pid", 1, [0])
     stats = ftsmc._ftsmc.tune_evaluate([tiny().to_toml()], "pid", 3, [0, 1])
     assert len(stats) == 1 and len(stats[0]) == 13 and stats[0][0] == 2
+
+
+@pytest.mark.parametrize("key", ["seed", "duration", "no_such_key"])
+def test_only_declared_gains_are_tunable(key: str) -> None:
+    extra = {"tune": {"runs": 2, "population": 4, "extra": [{"key": key, "low": 1.0, "high": 100.0}]}}
+    with pytest.raises(ValueError, match=f'tune.extra\\[0\\].key.*"{key}"'):
+        ftsmc.tune(tiny().with_overrides(extra), "pid", budget=5)
+    # A gain of the controller's own section is accepted.
+    gain = {"tune": {"extra": [{"key": "pid.rate_p.0", "low": 0.01, "high": 1.0}]}}
+    assert tiny().with_overrides(gain).to_toml()

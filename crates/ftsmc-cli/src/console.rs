@@ -4,6 +4,7 @@
 
 use std::fmt::Write as _;
 
+use ftsmc_sim::escape::markdown_cell;
 use indicatif::{ProgressBar, ProgressStyle};
 
 /// A progress bar over `total` simulated control steps (on stderr; hidden
@@ -20,30 +21,27 @@ pub fn steps_bar(total: u64, flights: u64) -> ProgressBar {
     bar
 }
 
+/// Print `text` on stdout and flush at once, so a table reaches a pipe or
+/// a file as soon as it is computed, not when the command ends.
+pub fn print_now(text: &str) {
+    use std::io::Write as _;
+    let mut out = std::io::stdout().lock();
+    let _ = writeln!(out, "{text}");
+    let _ = out.flush();
+}
+
 /// Four decimals, or scientific notation for small non-zero values (below
-/// 1e-3) and large ones (1e6 and above).
+/// 1e-3) and large ones (1e6 and above); `—` for NaN (a metric that does
+/// not apply, e.g. the RMS error of a gain set none of whose runs completed).
 pub fn num(v: f64) -> String {
+    if v.is_nan() {
+        return "—".to_string();
+    }
     if v != 0.0 && (v.abs() < 1e-3 || v.abs() >= 1e6) {
         format!("{v:.3e}")
     } else {
         format!("{v:.4}")
     }
-}
-
-/// The cells of a gain set's Monte Carlo statistics in the tune tables:
-/// success/runs, completed, crashed, RMS median and p95 (m), thrust and
-/// torque activity, saturated fraction.
-pub fn stats_cells(s: &ftsmc_sim::tune::FlightStats) -> [String; 8] {
-    [
-        format!("{}/{}", s.success, s.runs),
-        s.completed.to_string(),
-        s.crashed.to_string(),
-        num(s.rms_median),
-        num(s.rms_p95),
-        num(s.thrust_activity),
-        num(s.torque_activity),
-        num(s.saturated),
-    ]
 }
 
 /// A Markdown table with every column padded to its widest cell, so it
@@ -65,11 +63,12 @@ impl Table {
         self.rows.push(cells);
     }
 
-    /// The Markdown text, one line per row, each ending in a newline (a `|`
-    /// inside a cell is escaped as `\|`).
+    /// The Markdown text, one line per row, each ending in a newline (cells
+    /// escaped by [`markdown_cell`]: a `|` inside a cell is `\|`, a newline
+    /// `\n`, so every row keeps its columns).
     pub fn render(&self) -> String {
         let width = |s: &str| s.chars().count();
-        let escape = |cells: &[String]| cells.iter().map(|c| c.replace('|', "\\|")).collect::<Vec<_>>();
+        let escape = |cells: &[String]| cells.iter().map(|c| markdown_cell(c)).collect::<Vec<_>>();
         let header = escape(&self.header);
         let rows: Vec<Vec<String>> = self.rows.iter().map(|r| escape(r)).collect();
         let widths: Vec<usize> = (0..header.len())

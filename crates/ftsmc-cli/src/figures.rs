@@ -25,6 +25,7 @@ struct PanelSpec<'a> {
 
 fn series(run: &RunOutput, column: &str, label: String, dashed: bool) -> Series {
     Series {
+        points: false,
         label,
         xs: run.recording.column("t").to_vec(),
         ys: run.recording.column(column).to_vec(),
@@ -45,6 +46,7 @@ pub fn end_note(exit: &ExitStatus) -> Option<String> {
                 Divergence::NonFinite => "non-finite state",
                 Divergence::Tilt { .. } => "tilt",
                 Divergence::PositionError { .. } => "position error",
+                Divergence::NonFiniteMetric => "metric overflow",
                 Divergence::RigidBodyOutOfRange { .. } => {
                     return Some(format!("stopped (rigid body out of range) at {time:.2} s"))
                 }
@@ -52,6 +54,7 @@ pub fn end_note(exit: &ExitStatus) -> Option<String> {
             Some(format!("diverged ({why}) at {time:.2} s"))
         }
         ExitStatus::Crashed { time, .. } => Some(format!("crashed at {time:.2} s")),
+        ExitStatus::Grounded { since, .. } => Some(format!("landed at {since:.2} s")),
         ExitStatus::Interrupted { time } => Some(format!("interrupted at {time:.2} s")),
     }
 }
@@ -63,6 +66,7 @@ fn comparison(title: &str, runs: &[&RunOutput], specs: &[PanelSpec], columns: us
             let mut s: Vec<Series> = Vec::new();
             if let (Some(col), Some(first)) = (spec.shared_reference, runs.first()) {
                 s.push(Series {
+                    points: false,
                     label: "reference".into(),
                     xs: first.recording.column("t").to_vec(),
                     ys: first.recording.column(col).to_vec(),
@@ -119,19 +123,81 @@ fn error_panels(runs: &[&RunOutput], specs: &[PanelSpec]) -> Vec<Panel> {
         .collect()
 }
 
+/// Seconds shown by the zoomed row of figures whose action is in the first
+/// seconds of a long run (fig. 1 and 4).
+pub const FIRST_SECONDS: f64 = 3.0;
+
+/// `panels` again over `0 ≤ t ≤ seconds` only (the same data, cut): a row
+/// that shows the transient a full-length axis squeezes into a few pixels.
+fn first_seconds(panels: &[Panel], seconds: f64) -> Vec<Panel> {
+    panels
+        .iter()
+        .map(|p| Panel {
+            title: format!("{}, first {seconds} s", p.title),
+            x_label: p.x_label.clone(),
+            y_label: p.y_label.clone(),
+            series: p
+                .series
+                .iter()
+                .map(|s| {
+                    let keep = s.xs.iter().take_while(|&&x| x.is_nan() || x <= seconds).count();
+                    Series {
+                        points: s.points,
+                        label: s.label.clone(),
+                        xs: s.xs[..keep].to_vec(),
+                        ys: s.ys[..keep.min(s.ys.len())].to_vec(),
+                        color: s.color,
+                        dashed: s.dashed,
+                        // A run that stops after the window does not stop in it.
+                        end: s.end.clone().filter(|_| keep == s.xs.len()),
+                    }
+                })
+                .collect(),
+            log_x: p.log_x,
+            log_y: p.log_y,
+        })
+        .collect()
+}
+
 /// The horizontal path y against x of each run, over the reference path
 /// (dashed): the view of a flight a plan of the ground gives.
 fn path_figure(title: &str, runs: &[&RunOutput]) -> Figure {
     let mut s: Vec<Series> = Vec::new();
     if let Some(first) = runs.first() {
-        s.push(Series {
-            label: "reference".into(),
-            xs: first.recording.column("x_ref").to_vec(),
-            ys: first.recording.column("y_ref").to_vec(),
-            color: controller_color("reference"),
-            dashed: true,
-            end: None,
-        });
+        let (xs, ys) = (first.recording.column("x_ref"), first.recording.column("y_ref"));
+        // A step reference holds a few set-points: drawn as a dashed line
+        // it is a point or a jump that draws (next to) nothing, so its
+        // distinct set-points are drawn as points instead.
+        let mut setpoints: Vec<(f64, f64)> = Vec::new();
+        for (&x, &y) in xs.iter().zip(ys) {
+            if x.is_finite() && y.is_finite() && setpoints.last() != Some(&(x, y)) && !setpoints.contains(&(x, y)) {
+                setpoints.push((x, y));
+                if setpoints.len() > 40 {
+                    break;
+                }
+            }
+        }
+        if setpoints.len() <= 40 {
+            s.push(Series {
+                points: true,
+                label: "reference set-points".into(),
+                xs: setpoints.iter().map(|p| p.0).collect(),
+                ys: setpoints.iter().map(|p| p.1).collect(),
+                color: controller_color("reference"),
+                dashed: false,
+                end: None,
+            });
+        } else {
+            s.push(Series {
+                points: false,
+                label: "reference".into(),
+                xs: xs.to_vec(),
+                ys: ys.to_vec(),
+                color: controller_color("reference"),
+                dashed: true,
+                end: None,
+            });
+        }
     }
     for run in runs {
         let mut one = series(run, "y", label(&run.controller).to_string(), false);
@@ -260,10 +326,10 @@ fn adaptive_figure(title: &str, run: &RunOutput, estimates: &[Estimate], y_name:
 /// Figures 1–4 (scenario 1): attitude, controls, adaptive gains, position.
 pub fn scenario_1(runs: &[&RunOutput], dir: &Path) -> Result<Vec<PathBuf>> {
     let mut out = Vec::new();
-    out.extend(write_figure(
-        &comparison("Fig. 1 — attitude tracking (scenario 1)", runs, &attitude_specs(), 3),
-        &dir.join("fig1-attitude-scenario1"),
-    )?);
+    let mut fig1 = comparison("Fig. 1 — attitude tracking (scenario 1)", runs, &attitude_specs(), 3);
+    let zoom = first_seconds(&fig1.panels, FIRST_SECONDS);
+    fig1.panels.extend(zoom);
+    out.extend(write_figure(&fig1, &dir.join("fig1-attitude-scenario1"))?);
     out.extend(write_figure(
         &comparison("Fig. 2 — thrust and torques (scenario 1)", runs, &control_specs(), 2),
         &dir.join("fig2-controls-scenario1"),
@@ -298,6 +364,8 @@ pub fn scenario_1(runs: &[&RunOutput], dir: &Path) -> Result<Vec<PathBuf>> {
         }
     }
     let mut fig4 = comparison("Fig. 4 — position tracking (scenario 1)", runs, &position_specs(), 3);
+    let zoom = first_seconds(&fig4.panels, FIRST_SECONDS);
+    fig4.panels.extend(zoom);
     fig4.panels.extend(error_panels(runs, &position_specs()));
     out.extend(write_figure(&fig4, &dir.join("fig4-position-scenario1"))?);
     Ok(out)
@@ -313,6 +381,7 @@ pub fn scenario_2(runs: &[&RunOutput], no_mass: Option<&RunOutput>, dir: &Path) 
             x_label: "time (s)".into(),
             y_label: format!("I{i} (kg·m²)"),
             series: vec![Series {
+                points: false,
                 label: "plant (true value)".into(),
                 xs: first.recording.column("t").to_vec(),
                 ys: first.recording.column(&format!("inertia_{i}")).to_vec(),
@@ -328,11 +397,12 @@ pub fn scenario_2(runs: &[&RunOutput], no_mass: Option<&RunOutput>, dir: &Path) 
         &Figure { title: "Fig. 5 — moments of inertia (scenario 2)".into(), panels: inertia_panels, columns: 3 },
         &dir.join("fig5-inertia-scenario2"),
     )?);
-    out.extend(write_figure(
-        &comparison("Fig. 6 — position tracking (scenario 2)", runs, &position_specs(), 3),
-        &dir.join("fig6-position-scenario2"),
-    )?);
+    // The error row shows what the reference, under the FTAFTSMC line, hides.
+    let mut fig6 = comparison("Fig. 6 — position tracking (scenario 2)", runs, &position_specs(), 3);
+    fig6.panels.extend(error_panels(runs, &position_specs()));
+    out.extend(write_figure(&fig6, &dir.join("fig6-position-scenario2"))?);
     let mut mass = vec![Series {
+        points: false,
         label: "true mass".into(),
         xs: first.recording.column("t").to_vec(),
         ys: first.recording.column("mass_true").to_vec(),
@@ -418,44 +488,69 @@ pub fn beyond(runs: &[&RunOutput], omega_max: f64, dir: &Path) -> Result<Vec<Pat
         &dir.join(format!("{name}-position")),
     )?);
     let shades = [Rgb(31, 119, 180), Rgb(255, 127, 14), Rgb(44, 160, 44), Rgb(214, 39, 40)];
-    let panels = runs
-        .iter()
-        .map(|run| {
-            let t = run.recording.column("t").to_vec();
-            let mut s: Vec<Series> = (1..=4)
-                .map(|i| Series {
-                    label: format!("ω{i}"),
-                    xs: t.clone(),
-                    ys: run.recording.column(&format!("omega_{i}")).to_vec(),
-                    color: shades[i - 1],
-                    dashed: false,
-                    // One note per panel: on ω1.
-                    end: if i == 1 { end_note(&run.exit) } else { None },
-                })
-                .collect();
-            if omega_max.is_finite() {
-                let span = [t.first().copied().unwrap_or(0.0), t.last().copied().unwrap_or(0.0)];
-                s.push(Series {
-                    label: "ω max".into(),
-                    xs: span.to_vec(),
-                    ys: vec![omega_max; 2],
-                    color: controller_color("reference"),
-                    dashed: true,
-                    end: None,
-                });
-            }
-            Panel {
-                title: format!("{} ({})", label(&run.controller), run.exit.short()),
-                x_label: "time (s)".into(),
-                y_label: "rotor speed (rad/s)".into(),
-                series: s,
-                log_x: false,
-                log_y: false,
-            }
-        })
-        .collect();
+    // One row per controller: the four speeds with the limit, and beside
+    // them each speed minus the mean of the four, where the four traces,
+    // which overplot at the speeds' scale, come apart.
+    let mut panels = Vec::new();
+    for run in runs {
+        let t = run.recording.column("t").to_vec();
+        let omegas: Vec<&[f64]> = (1..=4).map(|i| run.recording.column(&format!("omega_{i}"))).collect();
+        let mean: Vec<f64> = (0..t.len()).map(|k| omegas.iter().map(|w| w[k]).sum::<f64>() / 4.0).collect();
+        // Why and when the run stopped: in the panel title, not over the data.
+        let why = end_note(&run.exit).unwrap_or_else(|| "completed".to_string());
+        let mut s: Vec<Series> = (1..=4)
+            .map(|i| Series {
+                points: false,
+                label: format!("ω{i}"),
+                xs: t.clone(),
+                ys: omegas[i - 1].to_vec(),
+                color: shades[i - 1],
+                dashed: false,
+                end: None,
+            })
+            .collect();
+        if omega_max.is_finite() {
+            let span = [t.first().copied().unwrap_or(0.0), t.last().copied().unwrap_or(0.0)];
+            s.push(Series {
+                points: false,
+                label: "ω max".into(),
+                xs: span.to_vec(),
+                ys: vec![omega_max; 2],
+                color: controller_color("reference"),
+                dashed: true,
+                end: None,
+            });
+        }
+        panels.push(Panel {
+            title: format!("{} — {why}", label(&run.controller)),
+            x_label: "time (s)".into(),
+            y_label: "rotor speed (rad/s)".into(),
+            series: s,
+            log_x: false,
+            log_y: false,
+        });
+        let spread = (1..=4)
+            .map(|i| Series {
+                points: false,
+                label: format!("ω{i}"),
+                xs: t.clone(),
+                ys: omegas[i - 1].iter().zip(&mean).map(|(w, m)| w - m).collect(),
+                color: shades[i - 1],
+                dashed: false,
+                end: None,
+            })
+            .collect();
+        panels.push(Panel {
+            title: format!("{}: ωᵢ − mean of the four", label(&run.controller)),
+            x_label: "time (s)".into(),
+            y_label: "ωᵢ − mean ω (rad/s)".into(),
+            series: spread,
+            log_x: false,
+            log_y: false,
+        });
+    }
     out.extend(write_figure(
-        &Figure { title: format!("Beyond the paper — rotor speeds ({name})"), panels, columns: 3 },
+        &Figure { title: format!("Beyond the paper — rotor speeds ({name})"), panels, columns: 2 },
         &dir.join(format!("{name}-rotors")),
     )?);
     Ok(out)

@@ -252,6 +252,7 @@ smallest |e0| that did not settle:\n\n{}",
                         pts.push((m, worst(times).unwrap_or(f64::NAN)));
                     }
                     series.push(Series {
+                        points: false,
                         label: label(c).into(),
                         xs: pts.iter().map(|p| p.0).collect(),
                         ys: pts.iter().map(|p| p.1).collect(),
@@ -261,6 +262,7 @@ smallest |e0| that did not settle:\n\n{}",
                     });
                     if let (0, Some(b)) = (field, fixed_time::reaching_time_bound(c, scenario, axis)) {
                         series.push(Series {
+                            points: false,
                             label: format!("Eq. 38 bound, {}", label(c)),
                             xs: vec![settings.magnitudes[0], *settings.magnitudes.last().unwrap()],
                             ys: vec![b, b],
@@ -388,6 +390,7 @@ fn cascade_sweep(
             let ys: Vec<f64> =
                 settings.magnitudes.iter().map(|&m| cell(c, axis, m).parse::<f64>().unwrap_or(f64::NAN)).collect();
             series.push(Series {
+                points: false,
                 label: label(c).into(),
                 xs: settings.magnitudes.clone(),
                 ys,

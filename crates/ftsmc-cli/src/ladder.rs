@@ -60,6 +60,9 @@ struct Cell {
     thrust_activity: Option<f64>,
     torque_activity: Option<f64>,
     why: String,
+    success_interval: ftsmc_sim::stats::Interval,
+    rms_median_interval: Option<ftsmc_sim::stats::Interval>,
+    outcomes: ftsmc_sim::batch::verdicts::Outcomes,
 }
 
 fn cell(rows: &[&McRun]) -> Cell {
@@ -123,7 +126,23 @@ fn cell(rows: &[&McRun]) -> Cell {
     if envelope > 0 {
         why.push(format!("{envelope} left the envelope"));
     }
+    let mut outcomes = ftsmc_sim::batch::verdicts::Outcomes::default();
+    for r in rows {
+        outcomes.push(
+            r.success,
+            r.exit.is_completed(),
+            r.exit.is_crashed(),
+            ftsmc_sim::batch::verdicts::rms_position_error(&r.metrics),
+        );
+    }
+    let conf = ftsmc_sim::stats::DEFAULT_CONFIDENCE;
+    let success_interval =
+        ftsmc_sim::stats::rate::wilson(success as u64, rows.len() as u64, conf).expect("counts and level are valid");
+    let rms_median_interval = ftsmc_sim::stats::order::quantile_interval(&rms, 0.5, conf).ok().flatten();
     Cell {
+        success_interval,
+        rms_median_interval,
+        outcomes,
         runs: rows.len(),
         success,
         completed: done.len(),
@@ -165,7 +184,7 @@ pub fn ladder(dir: &ResultDir, runs: u64, controllers: &[&str], figures: bool) -
         "success",
         "completed",
         "crashed",
-        "RMS pos. err. median / p95 (m)",
+        "RMS pos. err. median [interval] / p95 (m)",
         "saturated",
         "thrust activity (N/s)",
         "torque activity (N·m/s)",
@@ -173,6 +192,7 @@ pub fn ladder(dir: &ResultDir, runs: u64, controllers: &[&str], figures: bool) -
     ]);
     let mut wind_table = Table::new(["rung", "mean wind (m/s)", "σ_u, σ_v, σ_w (m/s)", "u variance below 0.1 Hz"]);
     let mut rungs = Map::new();
+    let mut verdict_lines: Vec<String> = Vec::new();
     for s in &scenarios {
         let spec = s.montecarlo.clone().unwrap_or_default();
         let rows = run_batch(
@@ -197,16 +217,17 @@ pub fn ladder(dir: &ResultDir, runs: u64, controllers: &[&str], figures: bool) -
             ]);
         }
         let mut per = Map::new();
-        for name in &names {
-            let mine: Vec<&McRun> = rows.iter().filter(|r| &r.controller == name).collect();
-            let c = cell(&mine);
+        let cells: Vec<Cell> =
+            names.iter().map(|name| cell(&rows.iter().filter(|r| &r.controller == name).collect::<Vec<_>>())).collect();
+        verdict_lines.push(rung_verdict(&s.name, &names, &cells));
+        for (name, c) in names.iter().zip(&cells) {
             table.row(vec![
-                s.name.trim_start_matches("realistic-").to_string(),
+                s.name.clone(),
                 label(name).to_string(),
-                format!("{:.1} %", 100.0 * c.success as f64 / c.runs.max(1) as f64),
+                crate::intervals::rate_cell(&c.success_interval),
                 format!("{}/{}", c.completed, c.runs),
                 c.crashed.to_string(),
-                format!("{} / {}", opt(c.rms_median, 3), opt(c.rms_p95, 3)),
+                format!("{} / {}", crate::intervals::metre_cell(c.rms_median_interval.as_ref()), opt(c.rms_p95, 3)),
                 c.saturated.map_or_else(|| "—".into(), |x| format!("{:.1} %", 100.0 * x)),
                 opt(c.thrust_activity, 1),
                 opt(c.torque_activity, 2),
@@ -218,7 +239,9 @@ pub fn ladder(dir: &ResultDir, runs: u64, controllers: &[&str], figures: bool) -
                        "diverged": c.diverged, "median_rms_position_error": c.rms_median,
                        "p95_rms_position_error": c.rms_p95, "median_saturation_fraction": c.saturated,
                        "median_thrust_activity": c.thrust_activity, "median_torque_activity": c.torque_activity,
-                       "why_not": c.why}),
+                       "why_not": c.why, "confidence": ftsmc_sim::stats::DEFAULT_CONFIDENCE,
+                       "success_rate_interval": c.success_interval,
+                       "median_rms_position_error_interval": c.rms_median_interval}),
             );
         }
         rungs.insert(
@@ -247,5 +270,52 @@ pub fn ladder(dir: &ResultDir, runs: u64, controllers: &[&str], figures: bool) -
          torque) over the completed runs; saturated: median share of control periods in which the mixer saturated:\n\n{}",
         table.render()
     );
-    Ok(Ladder { markdown: md, json: json!({"runs": runs, "rungs": rungs}), flights })
+    let _ = writeln!(
+        md,
+        "Success with its 95 % Wilson interval, the median RMS position error with its distribution-free 95 % \
+         interval. Rung by rung, the two controllers with the lowest median RMS position error, paired on the same \
+         draws (Wilcoxon signed-rank on RMS position error, McNemar's exact test on success, Holm over both; \
+         docs/statistics.md); `no difference shown` is where {runs} runs cannot decide:\n"
+    );
+    for line in &verdict_lines {
+        let _ = writeln!(md, "- {line}");
+    }
+    Ok(Ladder { markdown: md, json: json!({"runs": runs, "rungs": rungs, "verdicts": verdict_lines}), flights })
+}
+
+/// The verdict line of one rung: the two controllers with the lowest
+/// median RMS position error, paired.
+fn rung_verdict(rung: &str, names: &[String], cells: &[Cell]) -> String {
+    let mut order: Vec<usize> = (0..names.len()).filter(|&i| cells[i].rms_median.is_some()).collect();
+    order.sort_by(|&a, &b| {
+        cells[a].rms_median.unwrap_or(f64::INFINITY).total_cmp(&cells[b].rms_median.unwrap_or(f64::INFINITY))
+    });
+    let (Some(&a), Some(&b)) = (order.first(), order.get(1)) else {
+        return format!("{rung}: fewer than two controllers completed a run");
+    };
+    let pair = [(names[a].clone(), &cells[a].outcomes), (names[b].clone(), &cells[b].outcomes)];
+    match ftsmc_sim::batch::verdicts::pairwise(&pair, ftsmc_sim::stats::DEFAULT_CONFIDENCE) {
+        Ok(v) => {
+            let parts: Vec<String> = v
+                .iter()
+                .map(|v| {
+                    let sentence = match v.verdict {
+                        ftsmc_sim::stats::paired::Verdict::NoDifference => "no difference shown".to_string(),
+                        _ => format!(
+                            "{} better",
+                            label(if v.verdict == ftsmc_sim::stats::paired::Verdict::ABetter { &v.a } else { &v.b })
+                        ),
+                    };
+                    format!(
+                        "{}: {sentence} (effect {}, Holm p = {})",
+                        ftsmc_sim::batch::verdicts::metric_label(v.test.metric),
+                        crate::intervals::effect_cell(v),
+                        crate::intervals::p_cell(v.p_holm)
+                    )
+                })
+                .collect();
+            format!("{rung}, {} against {}: {}", label(&names[a]), label(&names[b]), parts.join("; "))
+        }
+        Err(e) => format!("{rung}: {e}"),
+    }
 }

@@ -2,21 +2,31 @@
 //!
 //! Run `ftsmc --help` for the commands.
 
+mod bounded_read;
+mod compare;
 mod console;
 mod cpu;
+mod falsify;
 mod figures;
 mod fixed_time;
+mod forest;
+mod html;
+mod intervals;
 mod ladder;
 mod merge;
 mod montecarlo;
 mod output;
 mod plot;
+mod px4;
 mod raster;
 mod reproduce;
+mod result_dir;
 mod svg;
 mod ticks;
 mod tune;
 mod tuned;
+#[cfg(test)]
+mod writers_fuzz;
 
 use std::path::PathBuf;
 
@@ -31,10 +41,13 @@ use ftsmc_sim::scenario::{Scenario, BUILT_IN_SCENARIOS};
     version,
     about = "Fixed-time adaptive terminal sliding-mode control of a quadrotor: reproduce the paper, run scenarios",
     long_about = "ftsmc simulates a quadrotor (paper Eq. 1-2, corrected) under the fixed-time adaptive fast terminal \
-sliding-mode controller FTAFTSMC and two earlier controllers (RANFTSMC, TSM-STA).\n\n\
-Start with `ftsmc reproduce`: it runs the paper's two scenarios with all three controllers, prints the paper's \
-Table 3 beside ours with a verdict on each claim, and writes CSV time series, summary.json and the nine figures \
-(SVG + PNG) under results/.\n\n\
+sliding-mode controller FTAFTSMC, the two earlier sliding-mode controllers the paper compares it with \
+(RANFTSMC, TSM-STA) and two practitioners' baselines (PID, the PX4 cascade; SE(3), Lee et al. 2010): five \
+controllers.\n\n\
+Start with `ftsmc reproduce`: it runs the paper's two scenarios with the paper's three controllers, prints the \
+paper's Table 3 beside ours with a verdict on each claim, flies all five controllers beyond the paper, and writes \
+CSV time series, summary.json, the figures (SVG + PNG), report.md and report.html (one self-contained page with \
+every table and figure) under results/.\n\n\
 Write your own scenario as a TOML file (start from `ftsmc scenario paper-scenario-1 > my.toml`) and run it with \
 `ftsmc run my.toml`.\n\n\
 Every command takes `--out DIR`, the parent folder of its results: `run`, `montecarlo` and `fixed-time` write \
@@ -62,7 +75,7 @@ enum Command {
         #[arg(long)]
         no_figures: bool,
         /// Monte Carlo runs of each wind-ladder rung (`realistic-<level>-<n>`) per controller in the "Beyond the paper" section (0: none).
-        #[arg(long, default_value_t = reproduce::DEFAULT_REALISTIC_RUNS)]
+        #[arg(long, allow_negative_numbers = true, default_value_t = reproduce::DEFAULT_REALISTIC_RUNS)]
         realistic_runs: u64,
         /// Raise a cost limit of the realistic Monte Carlo, e.g. `--limit max_flights=1e7` (repeatable; see docs/scenarios.md).
         #[arg(long = "limit", value_name = "KEY=VALUE")]
@@ -85,6 +98,10 @@ enum Command {
         /// max_output_bytes, max_flights, max_sweep_points, max_threads, max_scenario_bytes; see docs/scenarios.md).
         #[arg(long = "limit", value_name = "KEY=VALUE")]
         limit: Vec<String>,
+        /// Set a scenario key, e.g. `--set vehicle.preset=crazyflie-2` or `--set wind.preset=breeze` (repeatable;
+        /// the dotted keys of Python's `Scenario.with_overrides`; recorded in the written scenario.toml).
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
     },
     /// Measure reaching and settling times against the initial error (1e-3 … 1e2) beside the paper's fixed-time bound.
     FixedTime {
@@ -95,7 +112,7 @@ enum Command {
         #[arg(long, short = 'c', value_delimiter = ',')]
         controllers: Vec<String>,
         /// Log-spaced magnitudes per decade.
-        #[arg(long, default_value_t = 3)]
+        #[arg(long, allow_negative_numbers = true, default_value_t = 3)]
         per_decade: usize,
         /// Parent folder: the results go to `OUT/<scenario name>/`.
         #[arg(long, default_value = "results/fixed-time")]
@@ -104,22 +121,26 @@ enum Command {
         /// max_output_bytes, max_flights, max_sweep_points, max_threads, max_scenario_bytes; see docs/scenarios.md).
         #[arg(long = "limit", value_name = "KEY=VALUE")]
         limit: Vec<String>,
+        /// Set a scenario key, e.g. `--set vehicle.preset=crazyflie-2` or `--set wind.preset=breeze` (repeatable;
+        /// the dotted keys of Python's `Scenario.with_overrides`; recorded in the written scenario.toml).
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
     },
     /// Fly N randomised copies of a scenario (its [montecarlo] section) with each controller, in parallel.
     Montecarlo {
         /// Scenario file (TOML) or built-in name.
         scenario: String,
         /// Number of randomised runs (each flown by every controller).
-        #[arg(long, default_value_t = 100)]
+        #[arg(long, allow_negative_numbers = true, default_value_t = 100)]
         runs: u64,
         /// Master seed (default: the scenario's `seed`).
-        #[arg(long)]
+        #[arg(long, allow_negative_numbers = true)]
         seed: Option<u64>,
         /// Worker threads (default: all cores). Results do not depend on it.
-        #[arg(long)]
+        #[arg(long, allow_negative_numbers = true)]
         threads: Option<usize>,
         /// Flights each thread flies side by side in vector lanes: 1 or 4. Results do not depend on it.
-        #[arg(long, default_value_t = ftsmc_sim::batch::montecarlo::DEFAULT_LANES)]
+        #[arg(long, allow_negative_numbers = true, default_value_t = ftsmc_sim::batch::montecarlo::DEFAULT_LANES)]
         lanes: usize,
         /// Controller(s) to fly (repeat or comma-separate); default: the scenario's `controllers` list.
         #[arg(long, short = 'c', value_delimiter = ',')]
@@ -134,10 +155,127 @@ enum Command {
         /// max_output_bytes, max_flights, max_sweep_points, max_threads, max_scenario_bytes; see docs/scenarios.md).
         #[arg(long = "limit", value_name = "KEY=VALUE")]
         limit: Vec<String>,
+        /// Set a scenario key, e.g. `--set vehicle.preset=crazyflie-2` or `--set wind.preset=breeze` (repeatable;
+        /// the dotted keys of Python's `Scenario.with_overrides`; recorded in the written scenario.toml).
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
         /// Fly only shard K of N (a contiguous block of the runs) into `OUT/<name>-shard-K-of-N/`;
         /// `ftsmc merge` joins the N shards into the unsharded result (docs/campaigns.md).
         #[arg(long, value_name = "K/N")]
         shard: Option<ftsmc_sim::batch::shard::Shard>,
+        /// Confidence level of every interval in the tables and summary.json (recorded there).
+        #[arg(long, default_value_t = ftsmc_sim::stats::DEFAULT_CONFIDENCE)]
+        confidence: f64,
+    },
+    /// Search the scenario's [falsify] space for the flight with the lowest robustness margin (CMA-ES with restarts), beside uniform random search at the same budget.
+    Falsify {
+        /// Scenario file (TOML) or built-in name with a [falsify] section and an [envelope].
+        scenario: String,
+        /// Controller to falsify.
+        #[arg(long, short = 'c')]
+        controller: String,
+        /// Flights per method (default: `[falsify] budget`, else 200).
+        #[arg(long, allow_negative_numbers = true)]
+        budget: Option<u64>,
+        /// Seed of the search (default: the scenario's `seed`); the turbulence seed is the scenario's, held fixed.
+        #[arg(long, allow_negative_numbers = true)]
+        seed: Option<u64>,
+        /// Worker threads (default: all cores). Results do not depend on it.
+        #[arg(long, allow_negative_numbers = true)]
+        threads: Option<usize>,
+        /// Parent folder: the results go to `OUT/<scenario name>/`.
+        #[arg(long, default_value = "results/falsify")]
+        out: PathBuf,
+        /// Skip the worst-vs-nominal figure.
+        #[arg(long)]
+        no_figures: bool,
+        /// Raise a cost limit (repeatable; see docs/scenarios.md).
+        #[arg(long = "limit", value_name = "KEY=VALUE")]
+        limit: Vec<String>,
+        /// Set a scenario key (repeatable; dotted keys as `Scenario.with_overrides`).
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
+    },
+    /// Estimate P(margin < 0) under the scenario's own draws by cross-entropy importance sampling, with its interval.
+    FailureProbability {
+        /// Scenario file (TOML) or built-in name with a [falsify] section and an [envelope].
+        scenario: String,
+        /// Controller.
+        #[arg(long, short = 'c')]
+        controller: String,
+        /// Flights, CE levels included.
+        #[arg(long, allow_negative_numbers = true, default_value_t = 2000)]
+        budget: u64,
+        /// Confidence level of the interval.
+        #[arg(long, allow_negative_numbers = true, default_value_t = 0.95)]
+        confidence: f64,
+        /// Also fly N plain Monte Carlo flights and print their estimate beside it (0: none).
+        #[arg(long, allow_negative_numbers = true, default_value_t = 0)]
+        plain: u64,
+        /// Seed of the proposal draws (default: the scenario's `seed`, also the master seed of the draws).
+        #[arg(long, allow_negative_numbers = true)]
+        seed: Option<u64>,
+        /// Worker threads (default: all cores). Results do not depend on it.
+        #[arg(long, allow_negative_numbers = true)]
+        threads: Option<usize>,
+        /// Parent folder: the results go to `OUT/<scenario name>/`.
+        #[arg(long, default_value = "results/failure-probability")]
+        out: PathBuf,
+        /// Raise a cost limit (repeatable).
+        #[arg(long = "limit", value_name = "KEY=VALUE")]
+        limit: Vec<String>,
+        /// Set a scenario key (repeatable).
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
+    },
+    /// Fly controllers or gain files on one scenario's draws; intervals, paired verdicts, a forest plot.
+    Compare {
+        /// Scenario file (TOML) or built-in name: its vehicle, wind and [montecarlo] draws.
+        scenario: String,
+        /// Contestants (comma-separated or repeated): controller names, or files (a `*.tuned.toml`, any
+        /// scenario) whose controller section is flown on SCENARIO.
+        #[arg(long, short = 'c', value_delimiter = ',', required = true)]
+        contestants: Vec<String>,
+        /// Runs per contestant (ignored with --until-decided).
+        #[arg(long, default_value_t = 100)]
+        runs: u64,
+        /// Fly batches of --batch runs until every pair is decided (alpha spending keeps the error rate).
+        #[arg(long)]
+        until_decided: bool,
+        /// Most runs per contestant with --until-decided.
+        #[arg(long, default_value_t = 1000)]
+        max_runs: u64,
+        /// Runs per look with --until-decided.
+        #[arg(long, default_value_t = 50)]
+        batch: u64,
+        /// Confidence level of every interval and verdict (family-wise error 1 − confidence).
+        #[arg(long, default_value_t = ftsmc_sim::stats::DEFAULT_CONFIDENCE)]
+        confidence: f64,
+        /// Fly a file's gains even if it was made for another vehicle.
+        #[arg(long)]
+        allow_other_vehicle: bool,
+        /// Master seed (default: the scenario's `seed`).
+        #[arg(long)]
+        seed: Option<u64>,
+        /// Worker threads (default: all cores). Results do not depend on it.
+        #[arg(long)]
+        threads: Option<usize>,
+        /// Flights each thread flies side by side: 1, 2, 4 or 8. Results do not depend on it.
+        #[arg(long, default_value_t = ftsmc_sim::batch::montecarlo::DEFAULT_LANES)]
+        lanes: usize,
+        /// Parent folder: the results go to `OUT/<scenario name>/`.
+        #[arg(long, default_value = "results/compare")]
+        out: PathBuf,
+        /// Skip the forest plot.
+        #[arg(long)]
+        no_figures: bool,
+        /// Raise a cost limit (repeatable; see docs/scenarios.md).
+        #[arg(long = "limit", value_name = "KEY=VALUE")]
+        limit: Vec<String>,
+        /// Set a scenario key, e.g. `--set vehicle.preset=crazyflie-2` (repeatable; the dotted keys of Python's
+        /// `Scenario.with_overrides`).
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
     },
     /// Join the shard folders of `ftsmc montecarlo --shard K/N` into the unsharded result (runs.csv, summary.json).
     Merge {
@@ -150,22 +288,29 @@ enum Command {
         /// Skip the box-plot figure.
         #[arg(long)]
         no_figures: bool,
+        /// Confidence level of every interval in the tables and summary.json (recorded there).
+        #[arg(long, default_value_t = ftsmc_sim::stats::DEFAULT_CONFIDENCE)]
+        confidence: f64,
     },
-    /// Tune one controller's declared gains on a scenario by CMA-ES over Monte Carlo flights; judge on held-out seeds.
+    /// Tune controllers' declared gains on a scenario by CMA-ES over Monte Carlo flights; judge on held-out seeds.
     Tune {
         /// Scenario file (TOML) or built-in name; its [tune] section (optional) narrows the parameters and sets the cost.
         scenario: String,
-        /// Controller to tune.
+        /// Controller to tune; a comma-separated list or `all` tunes each on an equal budget, then compares them on
+        /// the same held-out draws.
         #[arg(long, short = 'c')]
         controller: String,
-        /// Training flights the search may fly (the start's included).
-        #[arg(long, default_value_t = tune::DEFAULT_BUDGET)]
+        /// Confidence level of every interval and verdict (family-wise error 1 − confidence).
+        #[arg(long, default_value_t = ftsmc_sim::stats::DEFAULT_CONFIDENCE)]
+        confidence: f64,
+        /// Training flights the search may fly per controller (the start's and the race's included).
+        #[arg(long, allow_negative_numbers = true, default_value_t = tune::DEFAULT_BUDGET)]
         budget: u64,
         /// Seed of the search and of the Monte Carlo draws (default: the scenario's `seed`).
-        #[arg(long)]
+        #[arg(long, allow_negative_numbers = true)]
         seed: Option<u64>,
         /// Worker threads (default: all cores). Results do not depend on it.
-        #[arg(long)]
+        #[arg(long, allow_negative_numbers = true)]
         threads: Option<usize>,
         /// Parent folder: the results go to `OUT/<scenario name>/`.
         #[arg(long, default_value = "results/tune")]
@@ -176,12 +321,20 @@ enum Command {
         /// Raise a cost limit, e.g. `--limit max_flights=1e6` (repeatable; see docs/scenarios.md).
         #[arg(long = "limit", value_name = "KEY=VALUE")]
         limit: Vec<String>,
+        /// Set a scenario key, e.g. `--set vehicle.preset=crazyflie-2` or `--set wind.preset=breeze` (repeatable;
+        /// the dotted keys of Python's `Scenario.with_overrides`; recorded in the written scenario.toml).
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
     },
     /// Rerun the documented TSM-STA gain procedure (match RANFTSMC's scenario-1 settling times) and print the gains as TOML.
     TuneTsmSta {
         /// Scenario to tune on (file or built-in name).
         #[arg(long, default_value = "paper-scenario-1")]
         scenario: String,
+        /// Set a scenario key, e.g. `--set vehicle.preset=crazyflie-2` or `--set wind.preset=breeze` (repeatable;
+        /// the dotted keys of Python's `Scenario.with_overrides`; recorded in the written scenario.toml).
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
     },
     /// Print a built-in scenario as TOML (a starting point for your own; `ftsmc list` describes them).
     Scenario {
@@ -191,16 +344,51 @@ enum Command {
     },
     /// List controllers and built-in scenarios.
     List,
+    /// PX4 gains in and out: the PID's gains as a QGroundControl parameter file, and back (docs/px4.md).
+    Px4 {
+        #[command(subcommand)]
+        action: Px4Action,
+    },
+}
+
+#[derive(Subcommand)]
+enum Px4Action {
+    /// Write the scenario's [pid] gains as a QGroundControl .params file under PX4's names and units.
+    Export {
+        /// Scenario file (TOML) or built-in name: its [pid] gains and its vehicle (the normalisation).
+        scenario: String,
+        /// Output file (never overwritten); default: standard output.
+        #[arg(long, short = 'o')]
+        out: Option<PathBuf>,
+        /// Set a scenario key, e.g. `--set vehicle.preset=px4-x500` (repeatable).
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
+    },
+    /// Convert a QGroundControl .params file into a [pid] section for a scenario's vehicle.
+    Import {
+        /// QGroundControl parameter file (.params).
+        params: PathBuf,
+        /// Scenario file or built-in name whose vehicle the gains are normalised to (the rotors' thrust, arm, inertia).
+        #[arg(long)]
+        scenario: String,
+        /// Output file (never overwritten); default: standard output.
+        #[arg(long, short = 'o')]
+        out: Option<PathBuf>,
+        /// Set a scenario key, e.g. `--set vehicle.preset=px4-x500` (repeatable).
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
+    },
 }
 
 /// Load a scenario from a file path or a built-in name.
 pub fn load_scenario(arg: &str) -> Result<Scenario> {
-    load_scenario_with_limits(arg, &[])
+    load_scenario_with_limits(arg, &[], &[])
 }
 
 /// [`load_scenario`] with `--limit KEY=VALUE` overrides applied before the
-/// scenario is priced (they win over its `[limits]`).
-pub fn load_scenario_with_limits(arg: &str, limits: &[String]) -> Result<Scenario> {
+/// scenario is priced (they win over its `[limits]`), then the `--set
+/// KEY=VALUE` keys (`Scenario::with_overrides`, as Python's).
+pub fn load_scenario_with_limits(arg: &str, limits: &[String], sets: &[String]) -> Result<Scenario> {
     let path = PathBuf::from(arg);
     let loaded = if path.exists() {
         Some(Scenario::load_with_warnings(&path, limits)?)
@@ -210,7 +398,20 @@ pub fn load_scenario_with_limits(arg: &str, limits: &[String]) -> Result<Scenari
             None => None,
         }
     };
-    if let Some(loaded) = loaded {
+    if let Some(mut loaded) = loaded {
+        if !sets.is_empty() {
+            let sets = sets
+                .iter()
+                .map(|a| ftsmc_sim::scenario::overrides::parse_set(a))
+                .collect::<Result<Vec<_>, _>>()
+                .map_err(anyhow::Error::msg)?;
+            let warnings = std::mem::take(&mut loaded.warnings);
+            loaded = loaded.scenario.with_overrides(&sets)?;
+            // The file's own warnings, then those of the overridden scenario not already given.
+            let extra: Vec<String> = std::mem::take(&mut loaded.warnings);
+            loaded.warnings = warnings;
+            loaded.warnings.extend(extra);
+        }
         for warning in &loaded.warnings {
             eprintln!("warning: {warning}");
         }
@@ -259,8 +460,8 @@ fn run(cli: Cli) -> Result<()> {
             reproduce::price_realistic_runs(realistic_runs, &limit)?;
             reproduce::reproduce(&out, !no_figures, realistic_runs)
         }
-        Command::Run { scenario, controllers, out, no_figures, limit } => {
-            let mut scenario = load_scenario_with_limits(&scenario, &limit)?;
+        Command::Run { scenario, controllers, out, no_figures, limit, set } => {
+            let mut scenario = load_scenario_with_limits(&scenario, &limit, &set)?;
             let names = if controllers.is_empty() { scenario.controllers.clone() } else { controllers };
             check_names(&names)?;
             scenario.check_cost(names.len())?;
@@ -268,8 +469,8 @@ fn run(cli: Cli) -> Result<()> {
             scenario.controllers = names;
             reproduce::run_scenario(&scenario, &out, !no_figures)
         }
-        Command::FixedTime { scenario, controllers, per_decade, out, limit } => {
-            let mut scenario = load_scenario_with_limits(&scenario, &limit)?;
+        Command::FixedTime { scenario, controllers, per_decade, out, limit, set } => {
+            let mut scenario = load_scenario_with_limits(&scenario, &limit, &set)?;
             let controllers = if controllers.is_empty() { scenario.controllers.clone() } else { controllers };
             check_names(&controllers)?;
             scenario.controllers = controllers.clone();
@@ -294,8 +495,22 @@ fn run(cli: Cli) -> Result<()> {
             };
             fixed_time::run(&scenario, &controllers, &settings, &out)
         }
-        Command::Montecarlo { scenario, runs, seed, threads, lanes, controllers, out, no_figures, limit, shard } => {
-            let mut scenario = load_scenario_with_limits(&scenario, &limit)?;
+        Command::Montecarlo {
+            scenario,
+            runs,
+            seed,
+            threads,
+            lanes,
+            controllers,
+            out,
+            no_figures,
+            limit,
+            set,
+            shard,
+            confidence,
+        } => {
+            ftsmc_sim::stats::check_confidence(confidence).map_err(|e| anyhow::anyhow!("--confidence: {e}"))?;
+            let mut scenario = load_scenario_with_limits(&scenario, &limit, &set)?;
             let names = if controllers.is_empty() { scenario.controllers.clone() } else { controllers };
             check_names(&names)?;
             anyhow::ensure!(runs >= 1, "--runs must be at least 1");
@@ -315,23 +530,130 @@ fn run(cli: Cli) -> Result<()> {
                 "--lanes {lanes}: expected one of {:?}",
                 ftsmc_sim::batch::montecarlo::LANE_COUNTS
             );
-            montecarlo::run(&scenario, runs, shard, threads, lanes, &out, !no_figures)
+            let options = montecarlo::Options { runs, shard, threads, lanes, confidence, figures: !no_figures };
+            montecarlo::run(&scenario, &options, &out)
         }
-        Command::Tune { scenario: arg, controller, budget, seed, threads, out, no_figures, limit } => {
-            let scenario = load_scenario_with_limits(&arg, &limit)?;
-            check_names(std::slice::from_ref(&controller))?;
+        Command::Tune { scenario: arg, controller, confidence, budget, seed, threads, out, no_figures, limit, set } => {
+            let scenario = load_scenario_with_limits(&arg, &limit, &set)?;
+            let controllers = tune::controller_list(&controller);
+            check_names(&controllers)?;
+            ftsmc_sim::stats::check_confidence(confidence).map_err(|e| anyhow::anyhow!("--confidence: {e}"))?;
             anyhow::ensure!(threads != Some(0), "--threads must be at least 1");
             let settings = scenario.tune.clone().unwrap_or_default();
-            ftsmc_sim::limits::check_batch(&scenario.flight_size(), budget + 2 * settings.validation_runs, 1)?;
+            ftsmc_sim::limits::check_batch(
+                &scenario.flight_size(),
+                budget.saturating_add(2 * settings.validation_runs),
+                controllers.len(),
+            )?;
             if let Some(n) = threads {
                 ftsmc_sim::limits::check_threads(&scenario.limits, n)?;
             }
             let seed = seed.unwrap_or(scenario.seed);
-            tune::run(&scenario, &arg, &controller, budget, seed, threads, &out, !no_figures)
+            let request =
+                tune::Request { budget, seed: Some(seed), threads, out: &out, figures: !no_figures, confidence };
+            tune::run(&scenario, &arg, &controllers, &request)
         }
-        Command::Merge { shards, out, no_figures } => merge::merge(&shards, &out, !no_figures),
-        Command::TuneTsmSta { scenario } => {
-            let scenario = load_scenario(&scenario)?;
+        Command::Falsify { scenario: arg, controller, budget, seed, threads, out, no_figures, limit, set } => {
+            let scenario = load_scenario_with_limits(&arg, &limit, &set)?;
+            check_names(std::slice::from_ref(&controller))?;
+            anyhow::ensure!(threads != Some(0), "--threads must be at least 1");
+            let budget = falsify::budget_of(&scenario, budget);
+            falsify::check_budget(budget)?;
+            ftsmc_sim::limits::check_batch(&scenario.flight_size(), budget.saturating_mul(2).saturating_add(3), 1)?;
+            if let Some(n) = threads {
+                ftsmc_sim::limits::check_threads(&scenario.limits, n)?;
+            }
+            let seed = seed.unwrap_or(scenario.seed);
+            falsify::run(&scenario, &controller, budget, seed, threads, &out, !no_figures)
+        }
+        Command::FailureProbability {
+            scenario: arg,
+            controller,
+            budget,
+            confidence,
+            plain,
+            seed,
+            threads,
+            out,
+            limit,
+            set,
+        } => {
+            let scenario = load_scenario_with_limits(&arg, &limit, &set)?;
+            check_names(std::slice::from_ref(&controller))?;
+            anyhow::ensure!(threads != Some(0), "--threads must be at least 1");
+            falsify::check_budget(budget)?;
+            ftsmc_sim::limits::check_batch(&scenario.flight_size(), budget.saturating_add(plain), 1)?;
+            if let Some(n) = threads {
+                ftsmc_sim::limits::check_threads(&scenario.limits, n)?;
+            }
+            let seed = seed.unwrap_or(scenario.seed);
+            falsify::run_failure_probability(&scenario, &controller, budget, seed, confidence, plain, threads, &out)
+        }
+        Command::Compare {
+            scenario,
+            contestants,
+            runs,
+            until_decided,
+            max_runs,
+            batch,
+            confidence,
+            allow_other_vehicle,
+            seed,
+            threads,
+            lanes,
+            out,
+            no_figures,
+            limit,
+            set,
+        } => {
+            let mut scenario = load_scenario_with_limits(&scenario, &limit, &set)?;
+            ftsmc_sim::stats::check_confidence(confidence).map_err(|e| anyhow::anyhow!("--confidence: {e}"))?;
+            anyhow::ensure!(
+                runs >= 1 && max_runs >= 1 && batch >= 1,
+                "--runs, --max-runs and --batch must be at least 1"
+            );
+            anyhow::ensure!(threads != Some(0), "--threads must be at least 1");
+            anyhow::ensure!(
+                ftsmc_sim::batch::montecarlo::LANE_COUNTS.contains(&lanes),
+                "--lanes {lanes}: expected one of {:?}",
+                ftsmc_sim::batch::montecarlo::LANE_COUNTS
+            );
+            if let Some(n) = threads {
+                ftsmc_sim::limits::check_threads(&scenario.limits, n)?;
+            }
+            scenario.seed = seed.unwrap_or(scenario.seed);
+            let plan = if until_decided {
+                ftsmc_sim::batch::compare::Plan::UntilDecided { batch, max_runs }
+            } else {
+                ftsmc_sim::batch::compare::Plan::Fixed { runs }
+            };
+            compare::run(&compare::Request {
+                scenario: &scenario,
+                contestants: &contestants,
+                plan,
+                confidence,
+                allow_other_vehicle,
+                threads,
+                lanes,
+                out: &out,
+                figures: !no_figures,
+                limits: &limit,
+            })
+        }
+        Command::Merge { shards, out, no_figures, confidence } => {
+            ftsmc_sim::stats::check_confidence(confidence).map_err(|e| anyhow::anyhow!("--confidence: {e}"))?;
+            merge::merge(&shards, &out, !no_figures, confidence)
+        }
+        Command::Px4 { action: Px4Action::Export { scenario: arg, out, set } } => {
+            let scenario = load_scenario_with_limits(&arg, &[], &set)?;
+            px4::export(&scenario, &arg, out.as_deref())
+        }
+        Command::Px4 { action: Px4Action::Import { params, scenario: arg, out, set } } => {
+            let scenario = load_scenario_with_limits(&arg, &[], &set)?;
+            px4::import(&params, &scenario, &arg, out.as_deref())
+        }
+        Command::TuneTsmSta { scenario, set } => {
+            let scenario = load_scenario_with_limits(&scenario, &[], &set)?;
             let r = ftsmc_sim::analysis::tuning::tune_tsm_sta(
                 &scenario,
                 &ftsmc_core::tsm_sta::TsmStaGains::BASE_POSITION,
@@ -391,6 +713,10 @@ fn list_text() -> Result<String> {
     for (name, what) in &scenarios {
         text.push_str(&format!("  {name:<width$}  {what}\n"));
     }
+    text.push_str("vehicle presets ([vehicle] preset = NAME, --set vehicle.preset=NAME; docs/vehicles.md):\n");
+    for preset in ftsmc_sim::vehicle::VehiclePreset::ALL {
+        text.push_str(&format!("  {:<width$}  {}\n", preset.name(), preset.description()));
+    }
     Ok(text)
 }
 
@@ -418,7 +744,7 @@ mod tests {
     }
 
     #[test]
-    fn list_names_every_built_in_scenario_in_one_aligned_column() {
+    fn list_names_every_built_in_scenario_and_vehicle_preset_in_one_aligned_column() {
         let text = list_text().unwrap();
         for (file, _) in BUILT_IN_SCENARIOS {
             assert!(text.contains(file.trim_end_matches(".toml")), "{file} missing:\n{text}");
@@ -431,7 +757,14 @@ mod tests {
                 name_end + l[name_end..].chars().take_while(|c| *c == ' ').count()
             })
             .collect();
-        assert_eq!(starts.len(), registry::CONTROLLERS.len() + BUILT_IN_SCENARIOS.len());
+        let presets = ftsmc_sim::vehicle::VehiclePreset::ALL;
+        assert_eq!(starts.len(), registry::CONTROLLERS.len() + BUILT_IN_SCENARIOS.len() + presets.len());
+        for p in presets {
+            assert!(
+                text.lines().any(|l| l.trim_start().starts_with(p.name()) && l.ends_with(&p.description())),
+                "{text}"
+            );
+        }
         for (name, what) in registry::CONTROLLERS {
             assert!(text.lines().any(|l| l.trim_start().starts_with(name) && l.ends_with(what)), "{name}:\n{text}");
         }

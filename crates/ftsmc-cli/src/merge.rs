@@ -5,7 +5,10 @@
 //! Each shard folder holds its block of runs (`runs.csv`, contiguous run
 //! indices, see [`ftsmc_sim::batch::shard`]), the resolved `scenario.toml`
 //! and a `summary.json` with a `shard` object (`index`, `count`,
-//! `first_run`, `end_run`). The merge checks that the shards are one
+//! `first_run`, `end_run`, `runs_csv_sha256`). Every file is read only if
+//! it is a regular file within a size limit ([`crate::bounded_read`]); the
+//! rows must have the SHA-256 the shard recorded, and a completed run's
+//! metrics must be finite. The merge checks that the shards are one
 //! campaign — same `scenario.toml` (SHA-256), master seed, run count,
 //! controllers, shard count N and `runs.csv` columns — and that every shard
 //! 1..N is there exactly once and holds exactly its runs; otherwise it
@@ -13,19 +16,20 @@
 //! shards' rows in run order: byte-identical to the unsharded one),
 //! `scenario.toml`, and `summary.json`, whose statistics are recomputed from
 //! the merged rows by the same code as the unsharded batch's
-//! ([`summarize_outcomes`]); only its `provenance` differs: it records the
+//! ([`summarize_outcomes_at`]); only its `provenance` differs: it records the
 //! merge and lists the shards (`merged_from`).
 
 use std::ops::Range;
 use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context, Result};
-use ftsmc_sim::batch::montecarlo::{summarize_outcomes, RowOutcome, SAMPLED_COLUMNS};
+use ftsmc_sim::batch::montecarlo::{summarize_outcomes_at, RowOutcome, SAMPLED_COLUMNS};
 use ftsmc_sim::batch::shard::Shard;
 use ftsmc_sim::scenario::Scenario;
 use serde_json::{json, Map, Value};
 
-use crate::montecarlo::{mc_table, shard_json, write_ise_boxplots};
+use crate::bounded_read::{read_limited, MAX_RUNS_CSV_BYTES, MAX_SHARD_TEXT_BYTES};
+use crate::montecarlo::{shard_json, tables, write_ise_boxplots};
 use crate::output::{provenance, sha256_hex, ResultDir, ScenarioFile};
 
 /// One shard folder, read and checked on its own.
@@ -57,8 +61,8 @@ fn u64_field(summary: &Value, path: &[&str], dir: &Path) -> Result<u64> {
 fn read_shard(dir: &Path) -> Result<ShardFolder> {
     let shown = dir.display();
     let summary_path = dir.join("summary.json");
-    let text =
-        std::fs::read_to_string(&summary_path).with_context(|| format!("shard `{shown}`: cannot read summary.json"))?;
+    let text = read_limited(&summary_path, MAX_SHARD_TEXT_BYTES, &format!("shard `{shown}`: summary.json"))?;
+    let text = String::from_utf8(text).with_context(|| format!("shard `{shown}`: summary.json is not UTF-8"))?;
     let summary: Value =
         serde_json::from_str(&text).with_context(|| format!("shard `{shown}`: summary.json is not valid JSON"))?;
     if !summary["shard"].is_object() {
@@ -78,8 +82,8 @@ fn read_shard(dir: &Path) -> Result<ShardFolder> {
         bail!("shard `{shown}`: holds runs {first}..{end}, but shard {shard} of {runs} runs is runs {range:?}");
     }
 
-    let scenario_bytes = std::fs::read(dir.join("scenario.toml"))
-        .with_context(|| format!("shard `{shown}`: cannot read scenario.toml"))?;
+    let scenario_bytes =
+        read_limited(&dir.join("scenario.toml"), MAX_SHARD_TEXT_BYTES, &format!("shard `{shown}`: scenario.toml"))?;
     let scenario_sha256 = sha256_hex(&scenario_bytes);
     let recorded = summary["provenance"]["scenario_sha256"].as_str().unwrap_or("");
     if recorded != scenario_sha256 {
@@ -96,8 +100,8 @@ fn read_shard(dir: &Path) -> Result<ShardFolder> {
     }
 
     let csv_path = dir.join("runs.csv");
-    let mut reader =
-        csv::Reader::from_path(&csv_path).with_context(|| format!("shard `{shown}`: cannot read runs.csv"))?;
+    let csv_bytes = read_limited(&csv_path, MAX_RUNS_CSV_BYTES, &format!("shard `{shown}`: runs.csv"))?;
+    let mut reader = csv::Reader::from_reader(csv_bytes.as_slice());
     let header = reader.headers().with_context(|| format!("shard `{shown}`: runs.csv has no header"))?.clone();
     let rows = reader
         .records()
@@ -124,6 +128,14 @@ fn read_shard(dir: &Path) -> Result<ShardFolder> {
         bail!(
             "shard `{shown}`: runs.csv has {} rows, expected {expected} (incomplete shard: fly it again)",
             rows.len()
+        );
+    }
+    // Whole rows, but are they the shard's?
+    let csv_sha256 = sha256_hex(&csv_bytes);
+    let recorded = summary["shard"]["runs_csv_sha256"].as_str().unwrap_or("");
+    if recorded != csv_sha256 {
+        bail!(
+            "shard `{shown}`: runs.csv has sha256 {csv_sha256}, but summary.json records {recorded:?} (the rows were changed after the shard was flown, or it was written by an ftsmc that recorded no digest: fly it again)"
         );
     }
     Ok(ShardFolder {
@@ -241,7 +253,7 @@ fn boolean(cell: &str, dir: &Path, row: usize, column: &str) -> Result<bool> {
 /// Merge `dirs` (the N shard folders of one campaign) into
 /// `out/<scenario name>/`: `runs.csv`, `scenario.toml`, `summary.json` and,
 /// with `figures`, the ISE box plots.
-pub fn merge(dirs: &[PathBuf], out: &Path, figures: bool) -> Result<()> {
+pub fn merge(dirs: &[PathBuf], out: &Path, figures: bool, confidence: f64) -> Result<()> {
     let shards = dirs.iter().map(|d| read_shard(d)).collect::<Result<Vec<_>>>()?;
     let shards = check_campaign(shards)?;
     let first = &shards[0];
@@ -269,8 +281,11 @@ pub fn merge(dirs: &[PathBuf], out: &Path, figures: bool) -> Result<()> {
     let names: Vec<&str> = first.header.iter().collect();
     let tail = ["completed", "success", "crashed"];
     let metrics_from = 5 + SAMPLED_COLUMNS.len();
-    if names.len() < metrics_from + ftsmc_sim::batch::runs_table::STATS_COLUMNS.len() + tail.len()
-        || names[names.len() - 3..] != tail
+    // The robustness-margin columns follow the tail; the summary does not read them.
+    let margin = ftsmc_sim::batch::runs_table::MARGIN_COLUMNS;
+    let end = if names.ends_with(&margin) { names.len() - margin.len() } else { names.len() };
+    if end < metrics_from + ftsmc_sim::batch::runs_table::STATS_COLUMNS.len() + tail.len()
+        || names[end - 3..end] != tail
         || names[2] != "controller"
     {
         bail!("shard `{}`: runs.csv columns are not those of `ftsmc montecarlo`", first.dir.display());
@@ -278,7 +293,7 @@ pub fn merge(dirs: &[PathBuf], out: &Path, figures: bool) -> Result<()> {
     // The flight-statistics columns sit between the metrics and the tail;
     // summary.json summarises the metrics only.
     let stats = ftsmc_sim::batch::runs_table::STATS_COLUMNS.len();
-    let metric_columns = metrics_from..names.len() - 3 - stats;
+    let metric_columns = metrics_from..end - 3 - stats;
     let mut outcomes = Vec::with_capacity(shards.iter().map(|s| s.rows.len()).sum());
     let mut completed_ise: Vec<(String, [f64; 4])> = Vec::new();
     let ise_at: Vec<usize> = ["ise_x", "ise_y", "ise_z", "ise_psi"]
@@ -293,7 +308,7 @@ pub fn merge(dirs: &[PathBuf], out: &Path, figures: bool) -> Result<()> {
                 .clone()
                 .map(|i| Ok((names[i].to_string(), number(cell(i), &s.dir, line, names[i])?)))
                 .collect::<Result<Vec<_>>>()?;
-            let n = names.len();
+            let n = end;
             let outcome = RowOutcome {
                 controller: cell(2).to_string(),
                 completed: boolean(cell(n - 3), &s.dir, line, "completed")?,
@@ -302,6 +317,19 @@ pub fn merge(dirs: &[PathBuf], out: &Path, figures: bool) -> Result<()> {
                 metrics,
             };
             if outcome.completed {
+                // A completed flight has finite metrics; only a settling time
+                // (`NaN`: not settled) and the error after steady state
+                // (empty: not reached) may have none.
+                if let Some((name, v)) = outcome.metrics.iter().find(|(name, v)| {
+                    !v.is_finite()
+                        && !(v.is_nan() && (name.starts_with("settling_time_") || name.starts_with("max_error_after_")))
+                }) {
+                    bail!(
+                        "shard `{}`: runs.csv row {line}, column `{name}`: a completed run with the value {} (a completed run's metrics are finite)",
+                        s.dir.display(),
+                        crate::output::format_number(*v)
+                    );
+                }
                 let value = |i: usize| {
                     if i == usize::MAX {
                         f64::NAN
@@ -317,7 +345,7 @@ pub fn merge(dirs: &[PathBuf], out: &Path, figures: bool) -> Result<()> {
             outcomes.push(outcome);
         }
     }
-    let summaries = summarize_outcomes(&outcomes, &first.controllers);
+    let summaries = summarize_outcomes_at(&outcomes, &first.controllers, confidence);
     let mut per_controller = Map::new();
     for (name, s) in &summaries {
         per_controller.insert(name.clone(), serde_json::to_value(s)?);
@@ -341,6 +369,7 @@ pub fn merge(dirs: &[PathBuf], out: &Path, figures: bool) -> Result<()> {
         "scenario": first.scenario_name,
         "runs": first.runs,
         "master_seed": first.master_seed,
+        "confidence": confidence,
         "controllers": Value::Object(per_controller),
         "provenance": prov,
     });
@@ -350,6 +379,17 @@ pub fn merge(dirs: &[PathBuf], out: &Path, figures: bool) -> Result<()> {
         let title = format!("{} runs of {}", first.runs, first.scenario_name);
         write_ise_boxplots(&title, &first.controllers, &summaries, &completed, &dir.path().join("montecarlo-ise"))?;
     }
+    let md = format!(
+        "Monte Carlo: {} × {} runs of {} (master seed {}), merged from {} shards; every run's row is in [runs.csv](runs.csv).\n\n{}\n",
+        first.controllers.len(),
+        first.runs,
+        first.scenario_name,
+        first.master_seed,
+        shards.len(),
+        tables(&summaries, confidence)
+    );
+    let html = crate::html::report(dir.path(), &format!("ftsmc merge {}", first.scenario_name), &md)?;
+    dir.write("report.html", html.as_bytes())?;
     dir.commit()?;
 
     println!(
@@ -360,9 +400,9 @@ pub fn merge(dirs: &[PathBuf], out: &Path, figures: bool) -> Result<()> {
         first.master_seed,
         shards.len()
     );
-    println!("{}", mc_table(&summaries));
+    println!("{}", tables(&summaries, confidence));
     println!(
-        "\nwrote {}/ (runs.csv, summary.json, scenario.toml{})",
+        "\nwrote {}/ (runs.csv, summary.json, scenario.toml, report.html{})",
         folder.display(),
         if figures { ", montecarlo-ise.{svg,png}" } else { "" }
     );

@@ -5,7 +5,7 @@ use std::path::Path;
 use std::time::Instant;
 
 use anyhow::{Context, Result};
-use ftsmc_sim::batch::montecarlo::{run_batch, summarize, BatchOptions, ControllerSummary, McRun, MonteCarloSpec};
+use ftsmc_sim::batch::montecarlo::{run_batch, summarize_at, BatchOptions, ControllerSummary, McRun, MonteCarloSpec};
 use ftsmc_sim::batch::runs_table::runs_table;
 use ftsmc_sim::batch::shard::Shard;
 use ftsmc_sim::registry::label;
@@ -50,19 +50,12 @@ pub fn mc_table(summaries: &[(String, ControllerSummary)]) -> String {
             |st| format!("{} [{}, {}]", num(st.median), num(st.p5), num(st.p95)),
         )
     };
-    let mut a = Table::new([
-        "controller",
-        "success",
-        "diverged",
-        "ISE z median [p5, p95]",
-        "worst ISE z",
-        "ISE ψ median [p5, p95]",
-    ]);
+    let mut a =
+        Table::new(["controller", "diverged", "ISE z median [p5, p95]", "worst ISE z", "ISE ψ median [p5, p95]"]);
     let mut b = Table::new(["controller", "ISE x median [p5, p95]", "ISE y median [p5, p95]"]);
     for (name, s) in summaries {
         a.row(vec![
             label(name).to_string(),
-            format!("{:.1} %", 100.0 * s.success_rate),
             if s.crashed > 0 { format!("{} (+{} crashed)", s.diverged, s.crashed) } else { s.diverged.to_string() },
             stat_cell(s, "ise_z"),
             s.metrics.get("ise_z").map_or_else(|| stat_cell(s, "ise_z"), |st| num(st.worst)),
@@ -70,25 +63,51 @@ pub fn mc_table(summaries: &[(String, ControllerSummary)]) -> String {
         ]);
         b.row(vec![label(name).to_string(), stat_cell(s, "ise_x"), stat_cell(s, "ise_y")]);
     }
-    let mut md = String::from("ISE ∫e² dt over the completed runs (m²·s; ψ rad²·s):\n\n");
+    let mut md = String::from(
+        "ISE ∫e² dt over the completed runs (m²·s; ψ rad²·s): median and the 5th and 95th percentiles of the runs (their spread, not an interval):\n\n",
+    );
     md.push_str(&a.render());
     md.push('\n');
     md.push_str(&b.render());
     md
 }
 
+/// Every table of a batch, as printed and in report.md: the headline
+/// (success and RMS position error with their intervals at `confidence`),
+/// then the paper's ISE ([`mc_table`]).
+pub fn tables(summaries: &[(String, ControllerSummary)], confidence: f64) -> String {
+    let rows: Vec<(String, ftsmc_sim::batch::verdicts::Intervals)> =
+        summaries.iter().map(|(n, s)| (n.clone(), s.intervals.clone())).collect();
+    format!(
+        "Headline: success and RMS position error √(rms_x² + rms_y² + rms_z²). {}\n\n{}\n{}",
+        crate::intervals::level_note(confidence),
+        crate::intervals::interval_table(&rows).render(),
+        mc_table(summaries)
+    )
+}
+
+/// How `ftsmc montecarlo` flies a batch (its flags).
+#[derive(Clone, Copy, Debug)]
+pub struct Options {
+    /// Runs of the whole batch (each flown by every controller).
+    pub runs: u64,
+    /// Fly only this shard's block of the runs.
+    pub shard: Option<Shard>,
+    /// Worker threads (default: all cores).
+    pub threads: Option<usize>,
+    /// Flights each thread flies side by side.
+    pub lanes: usize,
+    /// Confidence level of every interval.
+    pub confidence: f64,
+    /// Write the box-plot figure.
+    pub figures: bool,
+}
+
 /// Run a batch of `scenario` (its `controllers`, master seed `seed`) and
 /// write its outputs to `out/<name>/`; with `shard` = K/N only that shard's
 /// block of runs, to `out/<name>-shard-K-of-N/` (see [`crate::merge`]).
-pub fn run(
-    scenario: &Scenario,
-    runs: u64,
-    shard: Option<Shard>,
-    threads: Option<usize>,
-    lanes: usize,
-    out: &Path,
-    figures: bool,
-) -> Result<()> {
+pub fn run(scenario: &Scenario, options: &Options, out: &Path) -> Result<()> {
+    let Options { runs, shard, threads, lanes, confidence, figures } = *options;
     let controllers = &scenario.controllers;
     let seed = scenario.seed;
     let indices = shard.unwrap_or(Shard::WHOLE).range(runs)?;
@@ -131,11 +150,12 @@ pub fn run(
     let period = scenario.control_period();
     let steps: u64 = rows.iter().map(|r| (r.metrics.duration / period).round() as u64).sum();
 
-    dir.write("runs.csv", &runs_csv(&rows)?)?;
+    let csv = runs_csv(&rows)?;
+    dir.write("runs.csv", &csv)?;
     // The resolved scenario, with the master seed and the controllers flown:
     // `ftsmc montecarlo <out>/<name>/scenario.toml --runs N` repeats the batch.
     let file = dir.write_scenario("scenario.toml", scenario, "scenario.toml")?;
-    let summaries = summarize(&rows, controllers);
+    let summaries = summarize_at(&rows, controllers, confidence);
     let mut per_controller = Map::new();
     for (name, s) in &summaries {
         per_controller.insert(name.clone(), serde_json::to_value(s)?);
@@ -144,11 +164,14 @@ pub fn run(
         "scenario": scenario.name,
         "runs": runs,
         "master_seed": seed,
+        "confidence": confidence,
         "controllers": Value::Object(per_controller),
         "provenance": provenance(&[file]),
     });
     if let Some(shard) = shard {
         summary["shard"] = shard_json(shard, &indices);
+        // `ftsmc merge` checks the rows against it.
+        summary["shard"]["runs_csv_sha256"] = json!(crate::output::sha256_hex(&csv));
     }
     dir.write("summary.json", serde_json::to_string_pretty(&summary)?.as_bytes())?;
 
@@ -164,6 +187,14 @@ pub fn run(
             .collect();
         write_ise_boxplots(&title, controllers, &summaries, &completed, &dir.path().join("montecarlo-ise"))?;
     }
+    let md = format!(
+        "Monte Carlo: {} × {runs} runs of {} (master seed {seed}); every run's row is in [runs.csv](runs.csv).\n\n{}\n",
+        controllers.len(),
+        scenario.name,
+        tables(&summaries, confidence)
+    );
+    let html = crate::html::report(dir.path(), &format!("ftsmc montecarlo {}", scenario.name), &md)?;
+    dir.write("report.html", html.as_bytes())?;
     dir.commit()?;
 
     let what = match shard {
@@ -171,9 +202,9 @@ pub fn run(
         None => format!("{runs} runs"),
     };
     println!("Monte Carlo: {} × {what} of {} (seed {seed})\n", controllers.len(), scenario.name);
-    println!("{}", mc_table(&summaries));
+    println!("{}", tables(&summaries, confidence));
     println!(
-        "\n{} flights, {:.2} M control steps in {elapsed:.2} s ({:.0} flights/s{}; {lanes} lane{} per thread, {}); wrote {}/ (runs.csv, summary.json, scenario.toml{})",
+        "\n{} flights, {:.2} M control steps in {elapsed:.2} s ({:.0} flights/s{}; {lanes} lane{} per thread, {}); wrote {}/ (runs.csv, summary.json, scenario.toml, report.html{})",
         rows.len(),
         steps as f64 / 1e6,
         rows.len() as f64 / elapsed.max(1e-9),
@@ -205,10 +236,10 @@ pub fn write_ise_boxplots(
                 groups: controllers
                     .iter()
                     .map(|c| BoxGroup {
-                        label: format!(
-                            "{} ({:.0} % ok)",
-                            label(c),
-                            100.0 * summaries.iter().find(|(n, _)| n == c).map_or(0.0, |(_, s)| s.success_rate)
+                        // Counts, not a rate: the rate's interval is in the tables.
+                        label: summaries.iter().find(|(n, _)| n == c).map_or_else(
+                            || label(c).to_string(),
+                            |(_, s)| format!("{} ({}/{} ok)", label(c), s.intervals.successes, s.intervals.runs),
                         ),
                         values: completed
                             .iter()

@@ -2,11 +2,15 @@
 //! rasterised by resvg (crate::raster), so the two always agree. The only
 //! font is the embedded DejaVu Sans. Legends sit above the panels, outside
 //! the data; legend samples are dashed and marked like their lines; tick
-//! labels use an offset/power of ten on tiny ranges (crate::ticks);
-//! references are drawn beneath the data; a chattering signal is drawn as
-//! its min/max band per pixel column with its mean line; a series with no
+//! labels use an offset/power of ten on tiny ranges (crate::ticks), and
+//! the panels of one figure share their x tick count; references are drawn
+//! dashed *on top of* the data, so they stay visible; a chattering signal
+//! is drawn as the min–max envelope of the signal per pixel column (a
+//! filled band with its edges, named so in the legend); independent
+//! samples (`Series::points`) are points, not a line; a series with no
 //! drawable point has no legend entry; a run that stopped early ends in a ×
-//! with the reason.
+//! and its legend entry says why and when ("diverged (tilt) at 6.49 s"),
+//! so no note is written over the data.
 //!
 //! Two styles ([`Style`]): `screen` (readable at 100 %, text ≥ 14 px) and
 //! `paper` (3.5 in or 7 in wide, text ≥ 8 pt, PNG at 300 dpi, SVG in pt).
@@ -143,8 +147,11 @@ pub struct Series {
     /// Dashed (references, bounds) or solid.
     pub dashed: bool,
     /// Why the line stops early ("diverged (tilt) at 1.22 s"), if it does:
-    /// its last point gets a × marker with this text.
+    /// its last point gets a × marker and its legend entry this text.
     pub end: Option<String>,
+    /// Independent samples (e.g. tuning candidates): a point per value, no
+    /// line joining them.
+    pub points: bool,
 }
 
 /// One subplot.
@@ -260,10 +267,41 @@ struct Entry {
     color: Rgb,
     dashed: bool,
     marker: bool,
+    /// The sample is a filled band (a chattering signal's min–max envelope).
+    band: bool,
+    /// The sample is a point without a line.
+    points: bool,
 }
 
+/// Legend suffix of a chattering signal drawn as its envelope.
+pub const BAND_NOTE: &str = " (min–max per pixel)";
+
 fn has_markers(s: &Series) -> bool {
-    !s.dashed && s.xs.iter().zip(&s.ys).filter(|(x, y)| x.is_finite() && y.is_finite()).count() <= MARKER_POINTS
+    s.points
+        || (!s.dashed
+            && s.xs.iter().zip(&s.ys).filter(|(x, y)| x.is_finite() && y.is_finite()).count() <= MARKER_POINTS)
+}
+
+/// The legend text of `s`: its label, the band note if it is drawn as a
+/// band, and why it stopped early.
+fn entry_label(s: &Series, band: bool) -> String {
+    let mut label = s.label.clone();
+    if band {
+        label.push_str(BAND_NOTE);
+    }
+    if let Some(end) = &s.end {
+        label.push_str(" — ");
+        label.push_str(end);
+    }
+    label
+}
+
+/// Whether `s` is drawn as a band on `panel` (see [`chatters`]).
+fn banded(s: &Series, panel: &Panel) -> bool {
+    match range(panel.series.iter().flat_map(|s| s.ys.iter().copied()), panel.log_y) {
+        Some((y0, y1)) => !s.points && chatters(s, panel, (y1 - y0) * 0.004),
+        None => false,
+    }
 }
 
 /// True when at least one point of `s` can be drawn on `panel`'s axes.
@@ -278,10 +316,15 @@ fn drawable(s: &Series, panel: &Panel) -> bool {
 fn entries_of<'a>(series: impl Iterator<Item = (&'a Series, &'a Panel)>) -> Vec<Entry> {
     let mut out: Vec<Entry> = Vec::new();
     for (s, panel) in series {
-        if s.label.is_empty() || out.iter().any(|e| e.label == s.label) || !drawable(s, panel) {
+        if s.label.is_empty() || !drawable(s, panel) {
             continue;
         }
-        out.push(Entry { label: s.label.clone(), color: s.color, dashed: s.dashed, marker: has_markers(s) });
+        let band = banded(s, panel);
+        let label = entry_label(s, band);
+        if out.iter().any(|e| e.label == label) {
+            continue;
+        }
+        out.push(Entry { label, color: s.color, dashed: s.dashed, marker: has_markers(s), band, points: s.points });
     }
     out
 }
@@ -321,7 +364,16 @@ fn draw_legend(svg: &mut Svg, entries: &[Entry], x: f64, y: f64, width: f64, lk:
             let e = &entries[i];
             let stroke =
                 Stroke { color: e.color, width: lk.line * 1.15, dash: e.dashed.then_some(lk.dash), opacity: 1.0 };
-            svg.line(cx, cy, cx + sample_len(lk), cy, &stroke);
+            if e.band {
+                let h = lk.legend * 0.7;
+                svg.group("legend band");
+                svg.rect(cx, cy - h / 2.0, sample_len(lk), h, Some((e.color, BAND_OPACITY)), None);
+                svg.line(cx, cy - h / 2.0, cx + sample_len(lk), cy - h / 2.0, &Stroke::solid(e.color, lk.thin));
+                svg.line(cx, cy + h / 2.0, cx + sample_len(lk), cy + h / 2.0, &Stroke::solid(e.color, lk.thin));
+                svg.end_group();
+            } else if !e.points {
+                svg.line(cx, cy, cx + sample_len(lk), cy, &stroke);
+            }
             if e.marker {
                 svg.circle(cx + sample_len(lk) / 2.0, cy, lk.marker * 1.1, e.color, None);
             }
@@ -333,11 +385,26 @@ fn draw_legend(svg: &mut Svg, entries: &[Entry], x: f64, y: f64, width: f64, lk:
     h
 }
 
+/// The title's font size: the style's, smaller if the title would not fit
+/// in `width` (never clipped at the figure's edges).
+fn title_size(title: &str, width: f64, lk: &Look) -> f64 {
+    let room = width - 2.0 * lk.pad;
+    let w = text_width(title, lk.title);
+    if w <= room {
+        lk.title
+    } else {
+        lk.title * room / w
+    }
+}
+
+/// Fill opacity of a chattering signal's envelope.
+const BAND_OPACITY: f64 = 0.45;
+
 fn draw_title(svg: &mut Svg, title: &str, width: f64, lk: &Look) -> f64 {
     if lk.title <= 0.0 || title.is_empty() {
         return lk.pad * 0.5;
     }
-    let f = Font { bold: false, ..Font::new(lk.title, Anchor::Middle) };
+    let f = Font { bold: false, ..Font::new(title_size(title, width, lk), Anchor::Middle) };
     svg.text(width / 2.0, lk.title * 0.95, title, &f);
     lk.title * 1.8
 }
@@ -518,8 +585,10 @@ fn frame(
     let left = lk.pad * 0.5 + ylab + ytw + lk.tick_len + lk.tick * 0.35;
     let right = lk.pad * 1.8;
     let pw = w - left - right;
+    // The x tick count follows the panel's width, not what its y labels
+    // leave of it, so the panels of one figure share their x ticks.
     let xt = match x_range {
-        Some((lo, hi, log)) => axis_ticks(lo, hi, log, ((pw / (lk.tick * 5.0)) as usize).clamp(3, 8)),
+        Some((lo, hi, log)) => axis_ticks(lo, hi, log, (((w - lk.pad * 6.0) / (lk.tick * 5.0)) as usize).clamp(3, 8)),
         None => Ticks { values: vec![], labels: vec![], note: None, minor: vec![] },
     };
     Frame { x: x + left, y: y + top, w: pw, h: h - top - bottom, xt, yt }
@@ -540,21 +609,24 @@ fn draw_panel(svg: &mut Svg, rect: (f64, f64, f64, f64), panel: &Panel, lk: &Loo
     let ay = Axis { lo: y0, hi: y1, log: panel.log_y, a: f.y + f.h, b: f.y };
     draw_grid(svg, &f, Some(&ax), &ay, lk);
     let clip = svg.clip_rect(f.x, f.y, f.w, f.h);
-    // References (dashed) beneath everything, then chattering signals as
-    // min/max bands per pixel column with their mean (the most agitated at
-    // the bottom), then the other lines, then the end markers on top.
-    let noisy: Vec<bool> = panel.series.iter().map(|s| chatters(s, panel, (y1 - y0) * 0.004)).collect();
+    // Chattering signals first, as their min–max envelope per pixel column
+    // (the most agitated at the bottom), then the other lines, then the
+    // references (dashed) on top so they stay visible, then the end markers.
+    let noisy: Vec<bool> = panel.series.iter().map(|s| !s.points && chatters(s, panel, (y1 - y0) * 0.004)).collect();
     let mut order: Vec<(usize, f64)> = panel
         .series
         .iter()
         .enumerate()
         .map(|(i, s)| {
             let rank = if s.dashed {
-                f64::MIN
+                f64::MAX
+            } else if s.points {
+                // Set-points and samples above the lines they sit on.
+                1.0
             } else if noisy[i] {
                 -variation(&s.ys)
             } else {
-                f64::MAX
+                0.0
             };
             (i, rank)
         })
@@ -564,9 +636,11 @@ fn draw_panel(svg: &mut Svg, rect: (f64, f64, f64, f64), panel: &Panel, lk: &Loo
     for &(i, _) in &order {
         let s = &panel.series[i];
         if noisy[i] {
-            // A chattering reference (the attitude command of a chattering
-            // outer loop) gets a fainter band and its mean dashed.
-            let (opacity, dash) = if s.dashed { (0.15, Some(lk.dash)) } else { (0.3, None) };
+            // The envelope is the signal: a filled band with its two edges
+            // drawn (no mean line, which would understate the swing). A
+            // chattering reference (the attitude command of a chattering
+            // outer loop) gets a fainter band and dashed edges.
+            let (opacity, dash) = if s.dashed { (0.2, Some(lk.dash)) } else { (BAND_OPACITY, None) };
             svg.group(if s.dashed { "reference band" } else { "band" });
             for seg in segments(s, panel.log_x, panel.log_y) {
                 let pts: Vec<(f64, f64)> = seg.iter().map(|&(x, y)| (ax.map(x), ay.map(y))).collect();
@@ -574,18 +648,29 @@ fn draw_panel(svg: &mut Svg, rect: (f64, f64, f64, f64), panel: &Panel, lk: &Loo
                 let mut outline: Vec<(f64, f64)> = cols.iter().map(|c| (c.0, c.1)).collect();
                 outline.extend(cols.iter().rev().map(|c| (c.0, c.2)));
                 svg.polygon(&outline, s.color, opacity, Some(&clip));
-                let mean: Vec<(f64, f64)> = cols.iter().map(|c| (c.0, c.3)).collect();
-                svg.polyline(&mean, &Stroke { dash, ..Stroke::solid(s.color, lk.line) }, Some(&clip));
+                let edge = Stroke { dash, ..Stroke::solid(s.color, lk.thin) };
+                let top: Vec<(f64, f64)> = cols.iter().map(|c| (c.0, c.1)).collect();
+                let bottom: Vec<(f64, f64)> = cols.iter().map(|c| (c.0, c.2)).collect();
+                svg.polyline(&top, &edge, Some(&clip));
+                svg.polyline(&bottom, &edge, Some(&clip));
             }
             svg.end_group();
             continue;
         }
-        svg.group(if s.dashed { "reference" } else { "data" });
+        svg.group(if s.dashed {
+            "reference"
+        } else if s.points {
+            "points"
+        } else {
+            "data"
+        });
         let stroke = Stroke { color: s.color, width: lk.line, dash: s.dashed.then_some(lk.dash), opacity: 1.0 };
         let markers = has_markers(s);
         for seg in segments(s, panel.log_x, panel.log_y) {
             let pts: Vec<(f64, f64)> = seg.iter().map(|&(x, y)| (ax.map(x), ay.map(y))).collect();
-            svg.polyline(&pts, &stroke, Some(&clip));
+            if !s.points {
+                svg.polyline(&pts, &stroke, Some(&clip));
+            }
             if markers {
                 for &(px, py) in &pts {
                     svg.circle(px, py, lk.marker, s.color, Some(&clip));
@@ -596,8 +681,8 @@ fn draw_panel(svg: &mut Svg, rect: (f64, f64, f64, f64), panel: &Panel, lk: &Loo
     }
     for s in panel.series.iter().filter(|s| s.end.is_some()) {
         let last = segments(s, panel.log_x, panel.log_y).last().and_then(|seg| seg.last().copied());
-        if let (Some(note), Some((x, y))) = (&s.end, last) {
-            draw_end_marker(svg, &f, (ax.map(x), ay.map(y)), note, s.color, lk);
+        if let (Some(_), Some((x, y))) = (&s.end, last) {
+            draw_end_marker(svg, (ax.map(x), ay.map(y)), s.color, lk);
         }
     }
     draw_axes(svg, &f, Some(&ax), &ay, lk);
@@ -635,24 +720,14 @@ fn pixel_columns(pts: &[(f64, f64)], width: f64) -> Vec<(f64, f64, f64, f64)> {
     out
 }
 
-/// A × at `at` (drawing coordinates) in `color`, with `note` beside it,
-/// kept inside the plot.
-fn draw_end_marker(svg: &mut Svg, f: &Frame, at: (f64, f64), note: &str, color: Rgb, lk: &Look) {
+/// A × at `at` (drawing coordinates) in `color`; why and when the run
+/// stopped is in its legend entry ([`entry_label`]), not over the data.
+fn draw_end_marker(svg: &mut Svg, at: (f64, f64), color: Rgb, lk: &Look) {
     svg.group("end");
     let r = lk.marker * 1.8;
     let stroke = Stroke::solid(color, lk.line * 1.3);
     svg.line(at.0 - r, at.1 - r, at.0 + r, at.1 + r, &stroke);
     svg.line(at.0 - r, at.1 + r, at.0 + r, at.1 - r, &stroke);
-    let size = lk.tick * 0.9;
-    let tw = text_width(note, size);
-    let right = at.0 + r * 1.5 + tw <= f.x + f.w;
-    let x = if right { at.0 + r * 1.5 } else { (at.0 - r * 1.5).max(f.x + tw) };
-    // Below the marker in the upper half of the plot, above it in the lower half.
-    let y = if at.1 < f.y + f.h / 2.0 { at.1 + r * 1.5 + size } else { at.1 - r * 1.5 };
-    let y = y.clamp(f.y + size * 1.1, f.y + f.h - size * 0.4);
-    let font =
-        Font { color, valign: VAlign::Baseline, ..Font::new(size, if right { Anchor::Start } else { Anchor::End }) };
-    svg.text(x, y, note, &font);
     svg.end_group();
 }
 
@@ -746,7 +821,14 @@ pub fn write_3d(title: &str, series: &[Series3], stem: &Path) -> Result<Vec<Path
     let entries: Vec<Entry> = series
         .iter()
         .filter(|s| s.points.iter().any(|p| p.iter().all(|v| v.is_finite())))
-        .map(|s| Entry { label: s.label.clone(), color: s.color, dashed: s.dashed, marker: false })
+        .map(|s| Entry {
+            label: s.label.clone(),
+            color: s.color,
+            dashed: s.dashed,
+            marker: false,
+            band: false,
+            points: false,
+        })
         .collect();
     let (_, legend_h) = legend_rows(&entries, inner, &lk);
     let title_h = if lk.title > 0.0 && !title.is_empty() { lk.title * 1.8 } else { lk.pad * 0.5 };
@@ -761,8 +843,21 @@ pub fn write_3d(title: &str, series: &[Series3], stem: &Path) -> Result<Vec<Path
     let ranges = [axis(0), axis(1), axis(2)];
     // Fewer ticks on a small box: the edges are foreshortened.
     let box_w = inner - 2.0 * (lk.tick * 5.5 + lk.label * 1.5);
-    let target = ((box_w / (lk.tick * 6.0)) as usize).clamp(3, 5);
-    let ticks: Vec<Ticks> = ranges.iter().map(|&(lo, hi)| axis_ticks(lo, hi, false, target)).collect();
+    let target = ((box_w / (lk.tick * 6.0)) as usize).clamp(4, 6);
+    // At least three labelled ticks on every axis (a short z range would
+    // otherwise get two).
+    let ticks: Vec<Ticks> = ranges
+        .iter()
+        .map(|&(lo, hi)| {
+            let mut t = axis_ticks(lo, hi, false, target);
+            let mut more = target;
+            while t.values.len() < 3 && more < 12 {
+                more += 2;
+                t = axis_ticks(lo, hi, false, more);
+            }
+            t
+        })
+        .collect();
     // Orthographic view: yaw about the vertical axis, then pitch.
     let (yaw, pitch) = (0.7f64, 0.45f64);
     let norm = |k: usize, v: f64| 2.0 * (v - ranges[k].0) / (ranges[k].1 - ranges[k].0) - 1.0;
@@ -862,17 +957,32 @@ pub fn write_3d(title: &str, series: &[Series3], stem: &Path) -> Result<Vec<Path
     edge_label(&mut svg, 0, &|v| [v, -1.0, -1.0], (sn * 0.6, 0.8), "x (m)");
     edge_label(&mut svg, 1, &|v| [-1.0, v, -1.0], (-c * 0.9, 0.45), "y (m)");
     edge_label(&mut svg, 2, &|v| [-1.0, 1.0, v], (-1.0, 0.0), "z (m)");
-    // References (dashed) beneath, flights on top.
-    let ordered = series.iter().filter(|s| s.dashed).chain(series.iter().filter(|s| !s.dashed));
-    for s in ordered {
-        svg.group(if s.dashed { "reference" } else { "data" });
+    let finite = |s: &Series3| -> Vec<[f64; 3]> {
         let pts: Vec<[f64; 3]> = s.points.iter().copied().filter(|p| p.iter().all(|v| v.is_finite())).collect();
         let step = pts.len().div_ceil(MAX_POINTS).max(1);
-        let px: Vec<(f64, f64)> =
-            pts.iter().step_by(step).map(|p| to_px([norm(0, p[0]), norm(1, p[1]), norm(2, p[2])])).collect();
+        pts.into_iter().step_by(step).map(|p| [norm(0, p[0]), norm(1, p[1]), norm(2, p[2])]).collect()
+    };
+    // Depth cue: every path's shadow on the floor (z at its lowest), faint.
+    svg.group("shadow");
+    for s in series {
+        let px: Vec<(f64, f64)> = finite(s).into_iter().map(|n| to_px([n[0], n[1], -1.0])).collect();
+        let stroke = Stroke { color: s.color, width: lk.thin, dash: s.dashed.then_some(lk.dash), opacity: 0.35 };
+        svg.polyline(&px, &stroke, None);
+    }
+    svg.end_group();
+    // Flights first, then the references dashed on top over a white halo,
+    // so a reference under a flight stays visible.
+    let ordered = series.iter().filter(|s| !s.dashed).chain(series.iter().filter(|s| s.dashed));
+    for s in ordered {
+        svg.group(if s.dashed { "reference" } else { "data" });
+        let px: Vec<(f64, f64)> = finite(s).into_iter().map(to_px).collect();
+        if s.dashed {
+            let halo = Stroke { color: Rgb(255, 255, 255), width: lk.line * 2.2, dash: None, opacity: 0.7 };
+            svg.polyline(&px, &halo, None);
+        }
         let stroke = Stroke {
             color: s.color,
-            width: if s.dashed { lk.line * 0.9 } else { lk.line },
+            width: if s.dashed { lk.line * 1.1 } else { lk.line },
             dash: s.dashed.then_some(lk.dash),
             opacity: 1.0,
         };
@@ -890,7 +1000,7 @@ fn percentile(sorted: &[f64], q: f64) -> f64 {
 }
 
 /// Word wrap of `s` to `width` at `size`: whole if it fits, else a
-/// parenthesised tail ("(100 % ok)") on its own line, then greedy by words.
+/// parenthesised tail ("(1000/1000 ok)") on its own line, then greedy by words.
 fn wrap(s: &str, width: f64, size: f64) -> Vec<String> {
     if text_width(s, size) <= width {
         return vec![s.to_string()];
@@ -967,7 +1077,27 @@ fn draw_box_panel(svg: &mut Svg, rect: (f64, f64, f64, f64), panel: &BoxPanel, l
         draw_panel_title(svg, &f, &panel.title, None, lk);
         return;
     };
+    // The axis is widened until a tick lies beyond every box and whisker at
+    // both ends, so no box rises above the highest tick label.
+    let drawn = stats.iter().flatten().flat_map(|s| s.iter().copied()).filter(|v| v.is_finite());
+    let (dlo, dhi) = drawn.fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| (l.min(v), h.max(v)));
+    let (mut y0, mut y1) = (y0, y1);
     let mut f = frame(rect, &panel.title, &panel.y_label, None, (y0, y1, panel.log_y), lines, lk);
+    for _ in 0..40 {
+        let top = f.yt.values.last().is_some_and(|&v| v >= dhi);
+        let bottom = f.yt.values.first().is_some_and(|&v| v <= dlo);
+        if top && bottom {
+            break;
+        }
+        let span = y1 - y0;
+        if !top {
+            y1 = if panel.log_y { (y1 * 1.15).min(f64::MAX) } else { (y1 + 0.05 * span).min(f64::MAX) };
+        }
+        if !bottom {
+            y0 = if panel.log_y { (y0 / 1.15).max(f64::MIN_POSITIVE) } else { (y0 - 0.05 * span).max(-f64::MAX) };
+        }
+        f = frame(rect, &panel.title, &panel.y_label, None, (y0, y1, panel.log_y), lines, lk);
+    }
     // x label row is not used by box plots: give it to the plot.
     f.h += lk.label * 1.5;
     let ay = Axis { lo: y0, hi: y1, log: panel.log_y, a: f.y + f.h, b: f.y };
@@ -1020,6 +1150,7 @@ mod tests {
                     y_label: "x (m)".into(),
                     series: vec![
                         Series {
+                            points: false,
                             label: "a".into(),
                             xs: t.clone(),
                             ys: t.iter().map(|v| ftsmc_core::math::sin(*v)).collect(),
@@ -1028,6 +1159,7 @@ mod tests {
                             end: None,
                         },
                         Series {
+                            points: false,
                             label: "nan".into(),
                             xs: t.clone(),
                             ys: t.iter().map(|v| if *v > 5.0 && *v < 6.0 { f64::NAN } else { 1.0 }).collect(),
@@ -1122,6 +1254,7 @@ mod tests {
         let mut ys = vec![0.0; n];
         ys[54_321] = 10.0;
         let s = Series {
+            points: false,
             label: String::new(),
             xs: (0..n).map(|i| i as f64).collect(),
             ys,
@@ -1133,6 +1266,59 @@ mod tests {
         let pts: usize = seg.iter().map(Vec::len).sum();
         assert!(pts <= MAX_POINTS + 2, "{pts}");
         assert!(seg.iter().flatten().any(|p| p.1 == 10.0));
+    }
+
+    #[test]
+    fn long_titles_shrink_to_fit_the_figure() {
+        // beyond/realistic-breeze-1-montecarlo: a long title was cut on both sides.
+        let lk = look();
+        let title =
+            "10 runs of realistic-breeze-1: ISE of the completed runs per controller, box q1–q3, whiskers p5–p95";
+        let size = title_size(title, lk.narrow, &lk);
+        assert!(size < lk.title && text_width(title, size) <= lk.narrow - 2.0 * lk.pad, "{size}");
+        assert_eq!(title_size("short", lk.narrow, &lk), lk.title);
+    }
+
+    #[test]
+    fn box_plot_axes_end_at_ticks_beyond_the_boxes() {
+        // The tutorial's montecarlo-ise.png: a box rose above the highest tick label.
+        for (log, values) in [(true, vec![0.25, 0.3, 0.4, 0.9, 1.6]), (false, vec![0.31, 0.5, 0.62, 7.1, 7.4])] {
+            let tmp = tmp_dir("bracket");
+            let files = write_boxplots(
+                "t",
+                &[BoxPanel {
+                    title: "ISE".into(),
+                    y_label: "ISE".into(),
+                    groups: vec![BoxGroup {
+                        label: "a".into(),
+                        values: values.clone(),
+                        color: controller_color("pid"),
+                    }],
+                    log_y: log,
+                }],
+                1,
+                &tmp.path().join("box"),
+            )
+            .unwrap();
+            let svg = std::fs::read_to_string(&files[0]).unwrap();
+            let ticks: Vec<f64> = svg
+                .split(r#"text-anchor="end">"#)
+                .skip(1)
+                .filter_map(|t| t[..t.find('<').unwrap()].replace('−', "-").parse::<f64>().ok())
+                .collect();
+            let (lo, hi) = ticks.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &v| (l.min(v), h.max(v)));
+            assert!(hi >= 1.6_f64.min(values[4]) && hi >= values[4] && lo <= values[0], "log {log}: ticks {ticks:?}");
+        }
+    }
+
+    #[test]
+    fn panels_of_one_figure_share_their_x_ticks() {
+        // fig1 and fig4: the y labels' width changed each panel's x tick count.
+        let lk = look();
+        let rect = (0.0, 0.0, 470.0, 330.0);
+        let narrow_y = frame(rect, "a", "φ (rad)", Some((0.0, 20.0, false)), (0.0, 1.0, false), 1, &lk);
+        let wide_y = frame(rect, "b", "φ (rad)", Some((0.0, 20.0, false)), (-123456.7, 98765.4, false), 1, &lk);
+        assert_eq!(narrow_y.xt.values, wide_y.xt.values);
     }
 
     #[test]

@@ -500,11 +500,10 @@ pub fn reproduce(out: &Path, figures: bool, realistic_runs: u64) -> Result<()> {
         crate::figures::scenario_1(&s1_main, &fig_dir)?;
         crate::figures::scenario_2(&s2_main, find(&runs, &s2.name, "ftaftsmc-no-mass"), &fig_dir)?;
     }
-    dir.write("report.md", report.as_bytes())?;
     // The paper's part is printed as soon as it is known (the beyond part,
     // with its Monte Carlo, takes minutes); the files are written whole at
     // the end, with the beyond part, and listed after the commit.
-    println!("{report}");
+    crate::console::print_now(&report);
     // Beyond the paper: its own files under `beyond/` (and `figures/beyond/`),
     // so everything above stays exactly what the paper part wrote before.
     let beyond_started = Instant::now();
@@ -512,15 +511,35 @@ pub fn reproduce(out: &Path, figures: bool, realistic_runs: u64) -> Result<()> {
     let beyond_elapsed = beyond_started.elapsed().as_secs_f64();
     // The committed tuned gains beside the defaults, on held-out draws (not re-tuned).
     let tuned = crate::tuned::write(&dir, realistic_runs.min(crate::tuned::DEFAULT_TUNED_RUNS))?;
+    // report.md: every table printed (the paper's part, then beyond it),
+    // with links to the beyond part's own files; report.html: the same
+    // with every figure, the provenance and the 3-D replay.
+    let mut full = report.clone();
+    full.push_str("\n# Beyond the paper\n\n");
+    full.push_str(
+        "The beyond part's own files: [beyond/report.md](beyond/report.md) (this section alone), \
+         [beyond/realism.csv](beyond/realism.csv), [beyond/realism.json](beyond/realism.json)",
+    );
+    if tuned.is_some() {
+        full.push_str(", [beyond/tuned.md](beyond/tuned.md)");
+    }
+    full.push_str(".\n\n");
+    full.push_str(&beyond.report);
+    if let Some(tuned) = &tuned {
+        full.push_str("\n## Tuned gains against default gains (held-out draws)\n\n");
+        full.push_str(tuned);
+    }
+    dir.write("report.md", full.as_bytes())?;
+    let html = crate::html::report(dir.path(), "ftsmc reproduce: the paper's scenarios and beyond", &full)?;
+    dir.write("report.html", html.as_bytes())?;
     dir.commit()?;
     let o = out.display();
     println!(
-        "wrote {o}/summary.json, {o}/report.md, per-run CSV and scenario.toml under {o}/<scenario>/{}; {} flights in {:.2} s",
+        "wrote {o}/summary.json, {o}/report.md, {o}/report.html, per-run CSV and scenario.toml under {o}/<scenario>/{}; {} flights in {:.2} s",
         if figures { format!(", figures under {o}/figures/") } else { String::new() },
         runs.len(),
         elapsed
     );
-    println!("\n{}", beyond.report);
     println!(
         "wrote {o}/beyond/report.md, realism.csv, realism.json{}, per-run CSV and scenario.toml under {o}/beyond/<scenario>/{}; {} flights in {:.2} s",
         if realistic_runs > 0 { ", ladder-runs/<rung>.csv" } else { "" },
@@ -553,8 +572,8 @@ pub const DEFAULT_REALISTIC_RUNS: u64 = 10;
 pub const BEYOND_SCENARIOS: [(&str, &str); 4] = [
     ("paper-scenario-1.toml", ftsmc_sim::scenario::PAPER_SCENARIO_1),
     ("paper-scenario-2.toml", ftsmc_sim::scenario::PAPER_SCENARIO_2),
-    ("realistic-scenario-1.toml", ftsmc_sim::scenario::REALISTIC_SCENARIO_1),
-    ("realistic-scenario-2.toml", ftsmc_sim::scenario::REALISTIC_SCENARIO_2),
+    ("realistic-moderate-1.toml", ftsmc_sim::scenario::ladder::REALISTIC_MODERATE_1),
+    ("realistic-moderate-2.toml", ftsmc_sim::scenario::ladder::REALISTIC_MODERATE_2),
 ];
 
 /// What [`beyond_the_paper`] produced.
@@ -571,16 +590,18 @@ fn exit_time(run: &RunOutput) -> Option<f64> {
         ftsmc_sim::run::ExitStatus::Completed => None,
         ftsmc_sim::run::ExitStatus::Diverged { time, .. }
         | ftsmc_sim::run::ExitStatus::Crashed { time, .. }
+        | ftsmc_sim::run::ExitStatus::Grounded { time, .. }
         | ftsmc_sim::run::ExitStatus::Interrupted { time } => Some(time),
     }
 }
 
-/// `completed`, `diverged` or `crashed`.
+/// `completed`, `diverged`, `crashed`, `landed` or `interrupted`.
 fn exit_kind(run: &RunOutput) -> &'static str {
     match run.exit {
         ftsmc_sim::run::ExitStatus::Completed => "completed",
         ftsmc_sim::run::ExitStatus::Diverged { .. } => "diverged",
         ftsmc_sim::run::ExitStatus::Crashed { .. } => "crashed",
+        ftsmc_sim::run::ExitStatus::Grounded { .. } => "landed",
         ftsmc_sim::run::ExitStatus::Interrupted { .. } => "interrupted",
     }
 }
@@ -647,7 +668,7 @@ pub fn beyond_the_paper(dir: &ResultDir, figures: bool, mc_runs: u64) -> Result<
     );
     let _ = writeln!(
         md,
-        "The paper's three controllers beside the two practitioners fly — PID (the PX4 cascade, PX4's gains rescaled to the vehicle) and SE(3) (Lee, Leok & McClamroch 2010; docs/controllers.md) — on the paper's two scenarios and on realistic versions of them: the paper's references, disturbances and gains on an AscTec Hummingbird rigid body (RotorS parameters: 0.716 kg, rotors 0–838 rad/s, motor lag 12.5/25 ms), measured by motion capture and an MPU-6000 IMU (200 Hz, 6 ms latency), in moderate Dryden turbulence, taking off from the ground (scenarios/realistic-scenario-{{1,2}}.toml; every value's source is cited there).\n"
+        "The paper's three controllers beside the two practitioners fly — PID (the PX4 cascade, PX4's gains rescaled to the vehicle) and SE(3) (Lee, Leok & McClamroch 2010; docs/controllers.md) — on the paper's two scenarios and on realistic versions of them: the paper's references, disturbances and gains on an AscTec Hummingbird rigid body (RotorS parameters: 0.716 kg, rotors 0–838 rad/s, motor lag 12.5/25 ms), measured by motion capture and an MPU-6000 IMU (200 Hz, 6 ms latency), in moderate Dryden turbulence, taking off from the ground (scenarios/realistic-moderate-{{1,2}}.toml, the moderate rung of the wind ladder; every value's source is cited there).\n"
     );
     let mut outcome = Table::new([
         "scenario",
@@ -817,6 +838,8 @@ pub fn beyond_the_paper(dir: &ResultDir, figures: bool, mc_runs: u64) -> Result<
         md.push_str(n);
         md.push('\n');
     }
+    // Printed as soon as they are known; the ladder below takes longest.
+    crate::console::print_now(&format!("\n{md}"));
     let mut flights = runs.len();
 
     let mut json_mc = Value::Null;
@@ -825,6 +848,7 @@ pub fn beyond_the_paper(dir: &ResultDir, figures: bool, mc_runs: u64) -> Result<
         // `mc_runs` Monte Carlo runs per rung and controller.
         let l = crate::ladder::ladder(dir, mc_runs, BEYOND_MC_CONTROLLERS, figures)?;
         md.push_str(&l.markdown);
+        crate::console::print_now(&l.markdown);
         flights += l.flights;
         json_mc = l.json;
     }
@@ -873,10 +897,12 @@ pub fn run_scenario(scenario: &Scenario, out: &Path, figures: bool) -> Result<()
     if figures {
         crate::figures::generic(&refs, &dir.path().join("figures"))?;
     }
+    let html = crate::html::report(dir.path(), &format!("ftsmc run {}", scenario.name), &table)?;
+    dir.write("report.html", html.as_bytes())?;
     dir.commit()?;
     println!("{table}");
     println!(
-        "wrote {}/ (CSV per controller, scenario.toml, summary.json{}); {} flight{} in {flight_seconds:.3} s",
+        "wrote {}/ (CSV per controller, scenario.toml, summary.json, report.html{}); {} flight{} in {flight_seconds:.3} s",
         out.join(&scenario.name).display(),
         if figures { ", figures/" } else { "" },
         runs.len(),

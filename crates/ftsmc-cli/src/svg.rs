@@ -113,9 +113,7 @@ fn n(v: f64) -> String {
     }
 }
 
-fn escape(s: &str) -> String {
-    s.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;").replace('"', "&quot;")
-}
+use ftsmc_sim::escape::xml_text as escape;
 
 struct Metrics {
     units_per_em: f64,

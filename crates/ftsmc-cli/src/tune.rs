@@ -5,23 +5,71 @@
 //! convergence figure `<controller>.convergence.{svg,png}`. Every file is
 //! named after the controller and owned by the command `tune-<controller>`
 //! (its manifest), so tuning a second controller into the same folder
-//! keeps the first one's results.
+//! keeps the first one's results. With several controllers (`-c a,b` or
+//! `-c all`) each is tuned on the same budget and seed, then all tuned
+//! gain sets are compared on the same held-out draws (paired: run `i` is
+//! one draw for all of them) with the intervals and Holm-corrected paired
+//! verdicts of `ftsmc compare` (`ftsmc_sim::batch::verdicts`), written to
+//! `comparison.md` and `comparison.json` (owner `tune-comparison`).
 
 use std::path::Path;
 use std::time::Instant;
 
 use anyhow::{Context, Result};
+use ftsmc_sim::batch::verdicts::{intervals, pairwise, Intervals, Outcomes};
 use ftsmc_sim::scenario::Scenario;
-use ftsmc_sim::tune::{tune, tuned_toml, FlightStats, TuneOptions, TuneResult};
+use ftsmc_sim::stats::rate::wilson;
+use ftsmc_sim::tune::{tune, tuned_toml, Flight, FlightStats, TuneOptions, TuneResult};
 use indicatif::{ProgressBar, ProgressStyle};
 use serde_json::json;
 
-use crate::console::{num, stats_cells, Table};
+use crate::console::{num, Table};
+use crate::intervals::{interval_table, level_note, metre_cell, rate_cell, verdict_table};
 use crate::output::{provenance, ResultDir};
-use crate::plot::{controller_color, write_figure, Figure, Panel, Series};
+use crate::plot::{controller_color, write_figure, Figure, Panel, Rgb, Series};
 
 /// Default training-flight budget of `ftsmc tune`.
 pub const DEFAULT_BUDGET: u64 = 2000;
+
+/// `-c`'s controllers: `all` (every registered controller), or a
+/// comma-separated list (duplicates dropped, order kept).
+pub fn controller_list(arg: &str) -> Vec<String> {
+    if arg.trim() == "all" {
+        return ftsmc_sim::registry::CONTROLLERS.iter().map(|(n, _)| n.to_string()).collect();
+    }
+    let mut out: Vec<String> = Vec::new();
+    for c in arg.split(',').map(str::trim).filter(|c| !c.is_empty()) {
+        if !out.iter().any(|o| o == c) {
+            out.push(c.to_string());
+        }
+    }
+    out
+}
+
+/// What every tune of one `ftsmc tune` command shares.
+pub struct Request<'a> {
+    /// Training-flight budget per controller.
+    pub budget: u64,
+    /// Seed (`None`: the scenario's).
+    pub seed: Option<u64>,
+    /// Worker threads (`None`: all cores).
+    pub threads: Option<usize>,
+    /// Parent folder of the results.
+    pub out: &'a Path,
+    /// Write the convergence figures.
+    pub figures: bool,
+    /// Confidence level of every interval and verdict.
+    pub confidence: f64,
+}
+
+/// The held-out flights as [`Outcomes`] (run order kept: the pairing).
+pub fn outcomes(flights: &[Flight]) -> Outcomes {
+    let mut o = Outcomes::default();
+    for f in flights {
+        o.push(f.success, f.completed, f.crashed, f.rms);
+    }
+    o
+}
 
 /// The result-folder owner of `ftsmc tune -c <controller>`: one manifest per
 /// controller, so tunes of different controllers into one folder each keep
@@ -33,7 +81,8 @@ pub fn owner(controller: &str) -> String {
 /// `<controller>.history.csv`: one row per evaluated candidate (generation 0 is the start).
 pub fn history_csv(r: &TuneResult) -> Result<Vec<u8>> {
     let mut w = csv::Writer::from_writer(Vec::new());
-    let mut head: Vec<String> = ["generation", "candidate", "flights", "cost"].iter().map(|s| s.to_string()).collect();
+    let mut head: Vec<String> =
+        ["generation", "restart", "candidate", "flights", "cost"].iter().map(|s| s.to_string()).collect();
     head.extend(r.space.dims.iter().map(|d| d.name.clone()));
     head.extend(
         [
@@ -58,8 +107,13 @@ pub fn history_csv(r: &TuneResult) -> Result<Vec<u8>> {
     w.write_record(&head)?;
     for h in &r.history {
         let s = &h.stats;
-        let mut row =
-            vec![h.generation.to_string(), h.candidate.to_string(), h.flights.to_string(), h.cost.to_string()];
+        let mut row = vec![
+            h.generation.to_string(),
+            h.restart.to_string(),
+            h.candidate.to_string(),
+            h.flights.to_string(),
+            h.cost.to_string(),
+        ];
         row.extend(h.values.iter().map(|v| v.to_string()));
         row.extend(
             [s.runs, s.success, s.completed, s.crashed, s.diverged, s.envelope_failures].iter().map(|v| v.to_string()),
@@ -75,8 +129,12 @@ pub fn history_csv(r: &TuneResult) -> Result<Vec<u8>> {
     w.into_inner().map_err(|e| anyhow::anyhow!("csv: {e}"))
 }
 
-/// The start-vs-tuned table of training and held-out statistics.
-pub fn comparison_table(r: &TuneResult) -> String {
+/// The start-vs-tuned table of training, race and held-out statistics:
+/// success with its Wilson interval, the RMS position error median with
+/// its order-statistic interval (held-out; the training and race rows keep
+/// no per-run values, and 4 training runs cannot bound a median at 95 %
+/// anyway), at `confidence`.
+pub fn comparison_table(r: &TuneResult, confidence: f64) -> String {
     let mut t = Table::new([
         "gains, draws",
         "success",
@@ -88,39 +146,161 @@ pub fn comparison_table(r: &TuneResult) -> String {
         "torque act. (N·m/s)",
         "saturated",
     ]);
-    let mut row = |name: &str, s: &FlightStats| {
-        t.row([name.to_string()].into_iter().chain(stats_cells(s)).collect());
+    let mut row = |name: &str, s: &FlightStats, held: Option<&Intervals>| {
+        let success = wilson(s.success as u64, s.runs as u64, confidence)
+            .map_or_else(|_| "—".to_string(), |i| format!("{}/{} {}", s.success, s.runs, rate_cell(&i)));
+        let median = match held {
+            Some(i) => metre_cell(i.rms_median.as_ref()),
+            None => num(s.rms_median),
+        };
+        t.row(vec![
+            name.to_string(),
+            success,
+            s.completed.to_string(),
+            s.crashed.to_string(),
+            median,
+            num(s.rms_p95),
+            num(s.thrust_activity),
+            num(s.torque_activity),
+            num(s.saturated),
+        ]);
     };
-    row("start, training", &r.training.start);
-    row("tuned, training", &r.training.tuned);
-    if let Some(h) = &r.held_out {
-        row("start, held-out", &h.start);
-        row("tuned, held-out", &h.tuned);
+    row("start, training", &r.training.start, None);
+    row("tuned, training", &r.training.tuned, None);
+    if let (Some(s0), Some(w)) = (r.race.first(), r.best_raced()) {
+        row("start, re-flown", &s0.stats, None);
+        row("tuned, re-flown", &w.stats, None);
     }
-    t.render()
+    if let Some(h) = &r.held_out {
+        let iv = held_intervals(r, confidence);
+        row("start, held-out", &h.start, iv.as_ref().map(|i| &i[0]));
+        row("tuned, held-out", &h.tuned, iv.as_ref().map(|i| &i[1]));
+    }
+    format!(
+        "{}
+{}
+(training: {} draws per candidate; re-flown: the race's {} fresh training draws; held-out: {} draws the search never saw)",
+        level_note(confidence),
+        t.render(),
+        r.training_indices.len(),
+        r.race_indices.len(),
+        r.held_out_indices.len()
+    )
 }
 
-/// Run `ftsmc tune` and write its result folder `out/<scenario name>/`.
-#[allow(clippy::too_many_arguments)]
-pub fn run(
-    scenario: &Scenario,
-    scenario_arg: &str,
-    controller: &str,
-    budget: u64,
-    seed: u64,
-    threads: Option<usize>,
-    out: &Path,
-    figures: bool,
-) -> Result<()> {
-    let folder = out.join(&scenario.name);
-    let dir = ResultDir::begin(&folder, &owner(controller))?;
+/// Intervals of the start's and the tuned gains' held-out flights.
+pub fn held_intervals(r: &TuneResult, confidence: f64) -> Option<[Intervals; 2]> {
+    let [a, b] = r.held_out_runs.as_ref()?;
+    Some([intervals(&outcomes(a), confidence).ok()?, intervals(&outcomes(b), confidence).ok()?])
+}
+
+/// Each generation's share of failed candidates (invalid gains, or a
+/// diverged or crashed training flight), in percent, and where the search
+/// restarted (`|` after a generation).
+pub fn failure_line(r: &TuneResult) -> String {
+    let mut out = String::new();
+    for g in &r.generations {
+        out.push_str(&format!("{:.0}", 100.0 * g.failed as f64 / g.population.max(1) as f64));
+        out.push_str(if g.restarted.is_some() { " | " } else { " " });
+    }
+    out.trim_end().to_string()
+}
+
+/// Run `ftsmc tune` for each of `controllers` (equal budgets, one seed)
+/// and write `out/<scenario name>/`; with more than one, compare the tuned
+/// gain sets on their common held-out draws.
+pub fn run(scenario: &Scenario, scenario_arg: &str, controllers: &[String], req: &Request<'_>) -> Result<()> {
     let mut builder = rayon::ThreadPoolBuilder::new();
-    if let Some(t) = threads {
+    if let Some(t) = req.threads {
         builder = builder.num_threads(t);
     }
     let pool = builder.build().context("cannot start the thread pool")?;
+    let seed = req.seed.unwrap_or(scenario.seed);
+    let started = Instant::now();
+    let mut results = Vec::new();
+    for controller in controllers {
+        results.push(tune_one(scenario, scenario_arg, controller, seed, req, &pool)?);
+        if controllers.len() > 1 {
+            println!();
+        }
+    }
+    if controllers.len() > 1 {
+        let folder = req.out.join(&scenario.name);
+        let dir = ResultDir::begin(&folder, "tune-comparison")?;
+        let (md, json) = comparison(scenario, &results, req.budget, seed, req.confidence)?;
+        dir.write("comparison.md", md.as_bytes())?;
+        dir.write("comparison.json", serde_json::to_string_pretty(&json)?.as_bytes())?;
+        dir.commit()?;
+        println!("{md}");
+        println!(
+            "{} controllers tuned on {} in {:.1} s wall; wrote {}/comparison.{{md,json}}",
+            controllers.len(),
+            scenario.name,
+            started.elapsed().as_secs_f64(),
+            folder.display()
+        );
+    }
+    Ok(())
+}
+
+/// The equal-budget comparison of the tuned gain sets on their common
+/// held-out draws: intervals per controller and the paired verdicts of
+/// every pair (Markdown, and the same as JSON).
+pub fn comparison(
+    scenario: &Scenario,
+    results: &[TuneResult],
+    budget: u64,
+    seed: u64,
+    confidence: f64,
+) -> Result<(String, serde_json::Value)> {
+    let mut named = Vec::new();
+    for r in results {
+        let Some([_, tuned]) = &r.held_out_runs else {
+            anyhow::bail!("`tune.validation_runs` = 0: no held-out draws to compare the tuned controllers on");
+        };
+        named.push((r.controller.clone(), outcomes(tuned)));
+    }
+    let rows: Vec<(String, Intervals)> = named
+        .iter()
+        .map(|(n, o)| Ok((n.clone(), intervals(o, confidence)?)))
+        .collect::<Result<_, ftsmc_sim::stats::StatsError>>()?;
+    let refs: Vec<(String, &Outcomes)> = named.iter().map(|(n, o)| (n.clone(), o)).collect();
+    let verdicts = pairwise(&refs, confidence)?;
+    let runs = named.first().map_or(0, |(_, o)| o.runs());
+    let md = format!(
+        "Tuned on {} with a budget of {budget} training flights each (seed {seed}), judged on the same {runs} held-out draws (paired).\n\n{}\n\n{}\n\nPaired verdicts (McNemar on success, Wilcoxon signed-rank on RMS position error; Holm over all {} tests):\n\n{}\n",
+        scenario.name,
+        level_note(confidence),
+        interval_table(&rows).render(),
+        verdicts.len(),
+        verdict_table(&verdicts).render()
+    );
+    let json = json!({
+        "scenario": scenario.name,
+        "budget": budget,
+        "seed": seed,
+        "confidence": confidence,
+        "held_out_runs": runs,
+        "controllers": rows.iter().map(|(n, i)| json!({"controller": n, "improved": results.iter().find(|r| &r.controller == n).map(|r| r.improved), "held_out": i})).collect::<Vec<_>>(),
+        "verdicts": verdicts,
+    });
+    Ok((md, json))
+}
+
+/// Tune one controller and write its files into `out/<scenario name>/`.
+fn tune_one(
+    scenario: &Scenario,
+    scenario_arg: &str,
+    controller: &str,
+    seed: u64,
+    req: &Request<'_>,
+    pool: &rayon::ThreadPool,
+) -> Result<TuneResult> {
+    let (budget, confidence, figures) = (req.budget, req.confidence, req.figures);
+    let folder = req.out.join(&scenario.name);
+    let dir = ResultDir::begin(&folder, &owner(controller))?;
     let settings = scenario.tune.clone().unwrap_or_default();
-    let total = budget + 2 * settings.validation_runs;
+    let total = budget.saturating_add(2 * settings.validation_runs);
     let bar = ProgressBar::new(total);
     bar.set_style(
         ProgressStyle::with_template(
@@ -130,13 +310,18 @@ pub fn run(
     );
     let options = TuneOptions { controller: controller.to_string(), budget, seed };
     let started = Instant::now();
+    let cpu_before = crate::cpu::process_cpu_seconds();
     let result = pool.install(|| tune(scenario, &options, &|n| bar.inc(n))).map_err(anyhow::Error::msg)?;
     bar.finish_and_clear();
     let elapsed = started.elapsed().as_secs_f64();
-    let training_seconds = elapsed; // whole command; training share printed below
+    let cpu = match (cpu_before, crate::cpu::process_cpu_seconds()) {
+        (Some(a), Some(b)) => Some(b - a),
+        _ => None,
+    };
 
-    let args: Vec<String> = std::env::args().skip(1).collect();
-    let command = format!("ftsmc {}", args.join(" "));
+    // As shell words: a path with a newline stays one line (and reads back).
+    let args: Vec<String> = std::env::args_os().skip(1).map(|a| a.to_string_lossy().into_owned()).collect();
+    let command = ftsmc_sim::escape::command_line(&[&["ftsmc".to_string()], args.as_slice()].concat());
     // A file input is extended by its absolute path; a built-in by its name.
     let extends = if Path::new(scenario_arg).exists() {
         std::fs::canonicalize(scenario_arg)
@@ -155,21 +340,38 @@ pub fn run(
     let best = result.best();
     let params: serde_json::Map<String, serde_json::Value> =
         result.space.dims.iter().zip(&best.values).map(|(d, v)| (d.name.clone(), json!(v))).collect();
+    let flights = result.training_flights + result.race_flights + result.held_out_flights;
+    let rate = |s: &FlightStats| wilson(s.success as u64, s.runs as u64, confidence).ok();
+    let held = held_intervals(&result, confidence);
     let summary = json!({
         "scenario": scenario.name,
         "controller": controller,
         "budget": budget,
         "seed": seed,
+        "confidence": confidence,
+        "improved": result.improved,
         "training_flights": result.training_flights,
+        "race_flights": result.race_flights,
         "held_out_flights": result.held_out_flights,
         "seconds": elapsed,
-        "flights_per_second": (result.training_flights + result.held_out_flights) as f64 / elapsed.max(1e-9),
+        "cpu_seconds": cpu,
+        "flights_per_second": flights as f64 / elapsed.max(1e-9),
+        "flights_per_cpu_second": cpu.map(|c| flights as f64 / c.max(1e-9)),
         "settings": result.settings,
-        "best": { "generation": best.generation, "candidate": best.candidate, "cost": best.cost, "parameters": params },
+        "best": { "generation": best.generation, "candidate": best.candidate, "restart": best.restart, "cost": best.cost, "parameters": params },
         "start_cost": result.history[0].cost,
+        "generations": result.generations,
+        "race": result.race,
         "training": result.training,
+        "training_success": { "start": rate(&result.training.start), "tuned": rate(&result.training.tuned) },
+        "race_success": {
+            "start": result.race.first().and_then(|r| rate(&r.stats)),
+            "tuned": result.best_raced().and_then(|r| rate(&r.stats)),
+        },
         "held_out": result.held_out,
-        "training_run_indices": result.training_indices,
+        "held_out_intervals": held.as_ref().map(|[a, b]| json!({ "start": a, "tuned": b })),
+        "training_run_indices": [result.training_indices.first(), result.training_indices.last()],
+        "race_run_indices": [result.race_indices.first(), result.race_indices.last()],
         "held_out_run_indices": [result.held_out_indices.first(), result.held_out_indices.last()],
         "provenance": provenance(&[file]),
     });
@@ -179,6 +381,15 @@ pub fn run(
         // last one for svg/png, which must not eat `.convergence`.
         write_convergence(&result, &dir.path().join(format!("{controller}.convergence.svg")))?;
     }
+    // One page per tuned controller: the folder is shared by the tunes of
+    // every controller of the scenario.
+    let md = format!(
+        "Tuned {controller} on {} (budget {budget} flights, seed {seed}); the gains: [{tuned_name}]({tuned_name}).\n\n{}\n",
+        scenario.name,
+        comparison_table(&result, confidence)
+    );
+    let html = crate::html::report(dir.path(), &format!("ftsmc tune {controller} on {}", scenario.name), &md)?;
+    dir.write(format!("{controller}.report.html"), html.as_bytes())?;
     dir.commit()?;
 
     println!(
@@ -186,21 +397,41 @@ pub fn run(
         scenario.name,
         result.space.dims.len()
     );
-    println!("{}", comparison_table(&result));
-    println!("\nbest (generation {}, cost {:.4}; start {:.4}):", best.generation, best.cost, result.history[0].cost);
+    println!("{}", comparison_table(&result, confidence));
+    println!(
+        "\nfailed candidates per generation (%, `|` = restart): {}",
+        if result.generations.is_empty() { "no generation flown".to_string() } else { failure_line(&result) }
+    );
+    println!(
+        "\nchosen (generation {}, training cost {:.4}; start {:.4}{}):",
+        best.generation,
+        best.cost,
+        result.history[0].cost,
+        match (result.best_raced(), result.race.first()) {
+            (Some(w), Some(s0)) => format!("; race cost {:.4}, start {:.4}", w.cost, s0.cost),
+            _ => String::new(),
+        }
+    );
     for (d, v) in result.space.dims.iter().zip(&best.values) {
         println!("  {:<24} {}", d.name, num(*v));
     }
-    let flights = result.training_flights + result.held_out_flights;
     println!(
-        "\n{flights} flights ({} training, {} held-out) in {training_seconds:.1} s ({:.0} flights/s); wrote {}/ ({tuned_name}, {history_name}, {controller}.summary.json, {scenario_name}{})",
+        "\n{flights} flights ({} training, {} re-flown in the race, {} held-out) in {elapsed:.1} s ({:.0} flights/s{}); wrote {}/ ({tuned_name}, {history_name}, {controller}.summary.json, {scenario_name}, {controller}.report.html{})",
         result.training_flights,
+        result.race_flights,
         result.held_out_flights,
         flights as f64 / elapsed.max(1e-9),
+        cpu.map_or(String::new(), |c| format!(", {:.0} per CPU-second", flights as f64 / c.max(1e-9))),
         folder.display(),
         if figures { format!(", {controller}.convergence.{{svg,png}}") } else { String::new() }
     );
-    Ok(())
+    if !result.improved {
+        eprintln!(
+            "warning: {controller} on {}: the search found nothing better than the start (the scenario's own gains, written back unchanged; `improved: false`). Try a larger --budget (now {budget}) or a smaller `[tune] sigma`.",
+            scenario.name
+        );
+    }
+    Ok(result)
 }
 
 /// Cost of every candidate and the best so far against training flights.
@@ -221,8 +452,17 @@ fn write_convergence(r: &TuneResult, stem: &Path) -> Result<()> {
         x_label: "training flights".into(),
         y_label: "cost, log scale".into(),
         series: vec![
-            Series { label: "best so far".into(), xs: xs.clone(), ys: best_so_far, color, dashed: false, end: None },
-            Series { label: "candidate".into(), xs, ys: costs, color, dashed: true, end: None },
+            // Each candidate is an independent sample: a point, not a line.
+            Series {
+                points: true,
+                label: "candidate".into(),
+                xs: xs.clone(),
+                ys: costs,
+                color: Rgb(127, 127, 127),
+                dashed: false,
+                end: None,
+            },
+            Series { points: false, label: "best so far".into(), xs, ys: best_so_far, color, dashed: false, end: None },
         ],
         log_x: false,
         log_y: true,

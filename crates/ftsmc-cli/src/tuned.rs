@@ -4,12 +4,16 @@
 //! equal-budget comparison table of docs/tuning.md. Nothing is re-tuned.
 
 use anyhow::{Context, Result};
+use ftsmc_sim::batch::verdicts::{intervals, metric_label, pairwise, Outcomes};
 use ftsmc_sim::registry::label;
 use ftsmc_sim::scenario::Scenario;
-use ftsmc_sim::tune::{judge, FlightStats};
+use ftsmc_sim::stats::paired::PairedMetric;
+use ftsmc_sim::tune::{judge_flights, Flight, FlightStats};
 use rayon::prelude::*;
 
-use crate::console::{stats_cells, Table};
+use crate::console::{num, Table};
+use crate::intervals::{effect_cell, level_note, metre_cell, p_cell, rate_cell};
+use crate::tune::outcomes;
 
 /// Held-out flights per gain set in `reproduce` (capped by `--realistic-runs`).
 pub const DEFAULT_TUNED_RUNS: u64 = 200;
@@ -82,6 +86,12 @@ pub struct Row {
     pub default: FlightStats,
     /// Tuned gains on the same draws.
     pub tuned: FlightStats,
+    /// The default gains' held-out flights, in run order (the pairing).
+    pub default_runs: Vec<Flight>,
+    /// The tuned gains' held-out flights, in run order.
+    pub tuned_runs: Vec<Flight>,
+    /// The tuned file holds the default gains (its search kept the start).
+    pub kept_defaults: bool,
 }
 
 /// Fly every committed tuned file and its controller's default gains on
@@ -97,19 +107,99 @@ pub fn fly(runs: u64) -> Result<Vec<Row>> {
             let path = format!("scenarios/tuned/{scenario}-{controller}.toml");
             let tuned = Scenario::from_toml_str(text, &path)?;
             let seed = base.seed;
-            let default = judge(&base, controller, seed, TRAINING_RUNS, runs, &|_| {}).map_err(anyhow::Error::msg)?;
-            let tuned = judge(&tuned, controller, seed, TRAINING_RUNS, runs, &|_| {}).map_err(anyhow::Error::msg)?;
-            Ok(Row { scenario: scenario.to_string(), controller: controller.to_string(), default, tuned })
+            let fly = |s: &Scenario| {
+                judge_flights(s, controller, seed, TRAINING_RUNS, runs, &|_| {}).map_err(anyhow::Error::msg)
+            };
+            let (default_runs, tuned_runs) = (fly(&base)?, fly(&tuned)?);
+            Ok(Row {
+                scenario: scenario.to_string(),
+                controller: controller.to_string(),
+                default: FlightStats::of(&default_runs, base.duration),
+                tuned: FlightStats::of(&tuned_runs, tuned.duration),
+                default_runs,
+                tuned_runs,
+                kept_defaults: holds_defaults(text),
+            })
         })
         .collect()
 }
 
-/// The comparison table (Markdown), one per scenario, within 120 columns.
-pub fn table(rows: &[Row]) -> String {
+/// The cells of one gain set: success with its Wilson interval, completed,
+/// crashed, RMS position error median with its order-statistic interval,
+/// p95, activities, saturated fraction.
+fn cells(s: &FlightStats, runs: &[Flight], confidence: f64) -> Vec<String> {
+    let iv = intervals(&outcomes(runs), confidence).ok();
+    let success = iv.as_ref().map_or_else(
+        || format!("{}/{}", s.success, s.runs),
+        |i| format!("{}/{} {}", s.success, s.runs, rate_cell(&i.success_rate)),
+    );
+    let median = iv.as_ref().map_or_else(|| num(s.rms_median), |i| metre_cell(i.rms_median.as_ref()));
+    vec![
+        success,
+        s.completed.to_string(),
+        s.crashed.to_string(),
+        median,
+        num(s.rms_p95),
+        num(s.thrust_activity),
+        num(s.torque_activity),
+        num(s.saturated),
+    ]
+}
+
+/// Tuned FTAFTSMC against the best other tuned controller of `scenario`
+/// (most held-out successes, then lowest median RMS position error):
+/// McNemar on success and Wilcoxon on RMS position error over the paired
+/// held-out draws, Holm over the two tests. `None` without FTAFTSMC or
+/// another controller.
+pub fn ftaftsmc_verdict(rows: &[Row], scenario: &str, confidence: f64) -> Option<String> {
+    let of = |c: &str| rows.iter().find(|r| r.scenario == scenario && r.controller == c);
+    let ours = of("ftaftsmc")?;
+    let key = |r: &&Row| (r.tuned.success, std::cmp::Reverse(ordered(r.tuned.rms_median)));
+    let best = rows.iter().filter(|r| r.scenario == scenario && r.controller != "ftaftsmc").max_by_key(key)?;
+    let (a, b) = (outcomes(&ours.tuned_runs), outcomes(&best.tuned_runs));
+    let names = [("tuned ".to_string() + label("ftaftsmc"), &a), ("tuned ".to_string() + label(&best.controller), &b)];
+    let refs: Vec<(String, &Outcomes)> = names.iter().map(|(n, o)| (n.clone(), *o)).collect();
+    let v = pairwise(&refs, confidence).ok()?;
+    let part = |m: PairedMetric| {
+        v.iter().find(|p| p.test.metric == m).map(|p| {
+            format!(
+                "{} {} (p = {}, Holm {}): {}",
+                metric_label(m),
+                effect_cell(p),
+                p_cell(p.test.p),
+                p_cell(p.p_holm),
+                p.sentence()
+            )
+        })
+    };
+    Some(format!(
+        "Tuned FTAFTSMC against the best other tuned controller ({}), paired on the {} held-out draws, effect FTAFTSMC − {}: {}; {}.",
+        label(&best.controller),
+        a.runs(),
+        label(&best.controller),
+        part(PairedMetric::Success)?,
+        part(PairedMetric::Error)?
+    ))
+}
+
+/// A total order key for a median (NaN last).
+fn ordered(x: f64) -> u64 {
+    if x.is_finite() {
+        x.max(0.0).to_bits()
+    } else {
+        u64::MAX
+    }
+}
+
+/// The comparison table (Markdown), one per scenario, with intervals at
+/// `confidence` and the verdict of tuned FTAFTSMC against the best other.
+pub fn table(rows: &[Row], confidence: f64) -> String {
     let mut out = String::from(
         "Default and tuned gains on held-out draws (RMS position error in m, over the completed runs; U1 act. = thrust \
-         activity, N/s; τ act. = torque activity, N·m/s; sat. = median saturated fraction of control periods):\n",
+         activity, N/s; τ act. = torque activity, N·m/s; sat. = median saturated fraction of control periods). ",
     );
+    out.push_str(&level_note(confidence));
+    out.push('\n');
     let mut scenarios: Vec<&str> = rows.iter().map(|r| r.scenario.as_str()).collect();
     scenarios.dedup();
     for scenario in scenarios {
@@ -125,15 +215,37 @@ pub fn table(rows: &[Row]) -> String {
             "τ act.",
             "sat.",
         ]);
+        let mut kept = false;
         for r in rows.iter().filter(|r| r.scenario == scenario) {
-            for (gains, s) in [("default", &r.default), ("tuned", &r.tuned)] {
-                t.row([r.controller.clone(), gains.to_string()].into_iter().chain(stats_cells(s)).collect());
+            let same = r.kept_defaults;
+            kept |= same;
+            let tuned = if same { "tuned (= default)" } else { "tuned" };
+            for (gains, s, runs) in [("default", &r.default, &r.default_runs), (tuned, &r.tuned, &r.tuned_runs)] {
+                t.row(
+                    [r.controller.clone(), gains.to_string()].into_iter().chain(cells(s, runs, confidence)).collect(),
+                );
             }
         }
         out.push_str(&format!("\n{scenario} ({}):\n\n", label_list(rows, scenario)));
         out.push_str(&t.render());
+        if kept {
+            out.push_str(
+                "\n(= default): the search found nothing better than the default gains, so the tuned file holds \
+                 them and its row repeats the default row. `—`: no run completed, so no RMS error.\n",
+            );
+        }
+        if let Some(v) = ftaftsmc_verdict(rows, scenario, confidence) {
+            out.push_str(&format!("\n{v}\n"));
+        }
     }
     out
+}
+
+/// True when a tuned file's header says its search kept the start
+/// (`# Improved: false`; files of the first tuner: `# Best: generation 0,
+/// candidate 0,`).
+fn holds_defaults(text: &str) -> bool {
+    text.contains("# Improved: false") || text.contains("# Best: generation 0, candidate 0,")
 }
 
 /// The controllers' labels of `scenario`'s rows, comma-separated.
@@ -149,16 +261,63 @@ pub fn write(dir: &crate::output::ResultDir, runs: u64) -> Result<Option<String>
         return Ok(None);
     }
     let rows = fly(runs)?;
+    let confidence = ftsmc_sim::stats::DEFAULT_CONFIDENCE;
     let mut md = String::from("# Tuned gains against default gains (held-out draws)\n\n");
     md.push_str("The files are `scenarios/tuned/<scenario>-<controller>.toml` (each records the `ftsmc tune` command that made it; nothing is re-tuned here). docs/tuning.md explains the method.\n\n");
-    md.push_str(&table(&rows));
+    md.push_str(&table(&rows, confidence));
     dir.write("beyond/tuned.md", md.as_bytes())?;
-    Ok(Some(table(&rows)))
+    Ok(Some(table(&rows, confidence)))
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_tuned_row_equal_to_its_default_says_so_and_nan_reads_as_a_dash() {
+        let stats = |rms: f64| FlightStats {
+            runs: 4,
+            success: 4,
+            completed: 4,
+            crashed: 0,
+            diverged: 0,
+            envelope_failures: 0,
+            rms_median: rms,
+            rms_p90: rms,
+            rms_p95: rms,
+            thrust_activity: 1.0,
+            torque_activity: 0.1,
+            saturated: 0.0,
+            divergence_score: 0.0,
+        };
+        let rows = vec![
+            Row {
+                scenario: "realistic-light-2".into(),
+                controller: "tsm-sta".into(),
+                default: stats(1.0),
+                tuned: stats(1.0),
+                default_runs: Vec::new(),
+                tuned_runs: Vec::new(),
+                kept_defaults: true,
+            },
+            Row {
+                scenario: "realistic-light-2".into(),
+                controller: "pid".into(),
+                default: stats(f64::NAN),
+                tuned: stats(0.5),
+                default_runs: Vec::new(),
+                tuned_runs: Vec::new(),
+                kept_defaults: false,
+            },
+        ];
+        let md = table(&rows, 0.95);
+        assert!(
+            md.contains("tuned (= default)") && md.contains("(= default): the search found nothing better"),
+            "{md}"
+        );
+        assert_eq!(md.matches("tuned (= default)").count(), 1, "{md}");
+        assert!(!md.contains("NaN") && md.contains("| —"), "{md}");
+    }
 
     #[test]
     fn every_committed_tuned_file_loads_and_changes_only_its_controller() {
@@ -171,7 +330,7 @@ mod tests {
             let base = Scenario::from_toml_str(base, file).unwrap();
             // A search that found nothing better than the defaults writes
             // them back (and says so); every other file changes the gains.
-            if text.contains("# Best: generation 0, candidate 0,") {
+            if holds_defaults(text) {
                 assert_eq!(tuned.gains, base.gains, "{scenario}/{controller}: the start is the best, yet gains differ");
             } else {
                 assert_ne!(tuned.gains, base.gains, "{scenario}/{controller}: nothing tuned");

@@ -53,6 +53,7 @@ fn reproduce_from_any_directory_writes_table_json_and_csv() {
         assert_eq!(run["exit"], "completed");
         assert!(summary["scenarios"]["paper-scenario-2"][c]["iae"]["z"].is_number());
     }
+    readme_sentences_match(&summary["table3"]);
     let csv = std::fs::read_to_string(dir.join("res/paper-scenario-1/ftaftsmc.csv")).unwrap();
     assert!(csv.starts_with("t,x,y,z,phi,theta,psi"));
     assert!(csv.lines().count() > 1000);
@@ -201,8 +202,11 @@ fn montecarlo_marks_diverged_rows_and_leaves_after_t_metrics_empty() {
     let out = ftsmc(&["montecarlo", "s.toml", "--runs", "2", "--out", "mc", "--no-figures"], dir);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let stdout = String::from_utf8_lossy(&out.stdout);
-    let row = stdout.lines().find(|l| l.starts_with("| FTAFTSMC")).unwrap();
-    assert!(row.contains("— (all 2 diverged)"), "{row}");
+    // The headline table (with intervals) first, then the ISE table.
+    let rows: Vec<&str> = stdout.lines().filter(|l| l.starts_with("| FTAFTSMC")).collect();
+    assert_eq!(rows.len(), 3, "{stdout}");
+    assert!(rows[0].contains("| 0.0 % [") && rows[0].contains("| — "), "{}", rows[0]);
+    assert!(rows[1].contains("— (all 2 diverged)"), "{}", rows[1]);
     let csv = std::fs::read_to_string(dir.join("mc/paper-scenario-1/runs.csv")).unwrap();
     let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
     let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
@@ -278,6 +282,32 @@ fn a_realistic_run_reports_success_and_rotor_demand() {
     assert!(stdout.lines().all(|l| l.chars().count() <= 120), "a line is wider than 120 columns");
 }
 
+/// The README's comparative sentences about the paper's scenario 1 say
+/// what `reproduce` computes (its Table 3 record `t3`): "FTAFTSMC has the
+/// lowest ISE on x, y, z and ψ", "its z ISE is N % below both baselines",
+/// and the ours/paper ratios of every Table 3 cell.
+fn readme_sentences_match(t3: &serde_json::Value) {
+    let readme = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../../README.md")).unwrap();
+    let text = readme.split_whitespace().collect::<Vec<_>>().join(" ");
+    let ise = |axis: &str, c: &str| t3[axis]["ours"][c].as_f64().unwrap_or_else(|| panic!("{axis} {c}: {t3}"));
+    let paper = |axis: &str, c: &str| t3[axis]["paper"][c].as_f64().unwrap();
+    assert!(text.contains("FTAFTSMC has the lowest ISE on x, y, z and ψ in scenario 1"), "README sentence moved");
+    for axis in ["x", "y", "z", "psi"] {
+        let f = ise(axis, "ftaftsmc");
+        assert!(f < ise(axis, "ranftsmc") && f < ise(axis, "tsm-sta"), "README: lowest {axis} ISE, reproduce: {t3}");
+    }
+    let below = 100.0 * (1.0 - ise("z", "ftaftsmc") / ise("z", "ranftsmc").min(ise("z", "tsm-sta")));
+    assert!(
+        text.contains(&format!("its z ISE is {below:.0} % below both baselines")),
+        "README's z reduction, reproduce: {below:.2} %"
+    );
+    for (c, shown) in [("ranftsmc", "RANFTSMC"), ("tsm-sta", "TSM-STA"), ("ftaftsmc", "FTAFTSMC")] {
+        let r = |axis: &str| ise(axis, c) / paper(axis, c);
+        let sentence = format!("{shown} x {:.1}, y {:.1}, z {:.1}, ψ {:.1}", r("x"), r("y"), r("z"), r("psi"));
+        assert!(text.contains(&sentence), "README's Table 3 ratios: reproduce gives `{sentence}`");
+    }
+}
+
 #[test]
 fn reproduce_prints_the_papers_part_before_the_beyond_part_starts() {
     // One pipe for stdout and stderr keeps their order: Table 3 and the
@@ -301,4 +331,75 @@ fn reproduce_prints_the_papers_part_before_the_beyond_part_starts() {
     let monte_carlo = at("the wind ladder, 2 runs");
     assert!(table3 < beyond_starts && verdict < beyond_starts, "paper part after the beyond part started:\n{text}");
     assert!(verdict < monte_carlo, "{text}");
+}
+
+/// `--set KEY=VALUE` changes the scenario as Python's `with_overrides`
+/// does, and the written scenario.toml records it: flying that file again
+/// is the same scenario.
+#[test]
+fn set_changes_the_scenario_and_the_written_file_records_it() {
+    let tmp = scratch("set");
+    let dir = tmp.path();
+    let out = ftsmc(
+        &[
+            "run",
+            "realistic-calm-1",
+            "--set",
+            "vehicle.preset=crazyflie-2",
+            "--set",
+            "duration=2.0",
+            "-c",
+            "se3",
+            "--no-figures",
+            "--out",
+            "out",
+        ],
+        dir,
+    );
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let written = dir.join("out/realistic-calm-1/scenario.toml");
+    let text = std::fs::read_to_string(&written).unwrap();
+    assert!(text.contains("preset = \"crazyflie-2\""), "{text}");
+    let again = ftsmc_sim::Scenario::from_file(&written).unwrap();
+    let (file, calm) = ftsmc_sim::scenario::resolve::built_in("realistic-calm-1").unwrap();
+    let calm = ftsmc_sim::Scenario::from_toml_str(calm, file).unwrap();
+    let sets = [
+        ("vehicle.preset".to_string(), toml::Value::String("crazyflie-2".into())),
+        ("duration".to_string(), toml::Value::Float(2.0)),
+    ];
+    let mut expected = calm.with_overrides(&sets).unwrap().scenario;
+    expected.controllers = vec!["se3".into()];
+    assert_eq!(again, expected);
+    assert_eq!(again.plant.mass, 0.03);
+    // A malformed --set is one clear line.
+    let bad = ftsmc(&["run", "paper-scenario-1", "--set", "duration", "--out", "out"], dir);
+    let err = String::from_utf8_lossy(&bad.stderr);
+    assert!(!bad.status.success() && err.contains("KEY=VALUE"), "{err}");
+}
+
+#[test]
+fn px4_export_then_import_writes_a_pid_section_that_flies() {
+    let tmp = scratch("px4");
+    let dir = tmp.path();
+    let out = ftsmc(&["px4", "export", "realistic-scenario-1", "-o", "hb.params"], dir);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let params = std::fs::read_to_string(dir.join("hb.params")).unwrap();
+    assert!(params.contains("1\t1\tMC_ROLLRATE_P\t0.15\t9\n"), "{params}");
+    // Never over an existing file.
+    let again = ftsmc(&["px4", "export", "realistic-scenario-1", "-o", "hb.params"], dir);
+    assert!(!again.status.success() && String::from_utf8_lossy(&again.stderr).contains("never overwritten"));
+    let out = ftsmc(&["px4", "import", "hb.params", "--scenario", "realistic-scenario-1", "-o", "pid.toml"], dir);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    // The section appended to a scenario loads: `ftsmc px4 export` of it gives the same file body.
+    let pid = std::fs::read_to_string(dir.join("pid.toml")).unwrap();
+    std::fs::write(dir.join("s.toml"), format!("extends = \"realistic-scenario-1\"\n{pid}")).unwrap();
+    let out = ftsmc(&["px4", "export", "s.toml"], dir);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let body = |t: &str| t.lines().filter(|l| !l.starts_with('#')).map(str::to_owned).collect::<Vec<_>>();
+    assert_eq!(body(&String::from_utf8_lossy(&out.stdout)), body(&params));
+    // A bad line: one error line naming file, line and parameter.
+    std::fs::write(dir.join("bad.params"), "1\t1\tMC_YAW_P\tx\t9\n").unwrap();
+    let out = ftsmc(&["px4", "import", "bad.params", "--scenario", "realistic-scenario-1"], dir);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success() && err.contains("bad.params, line 1") && err.contains("MC_YAW_P"), "{err}");
 }

@@ -121,30 +121,49 @@ fn reproduce_writes_every_figure_as_matching_svg_and_png() {
 }
 
 #[test]
-fn references_are_drawn_beneath_the_data() {
-    // fig6 and fig9: a dashed reference drawn last hid FTAFTSMC, which tracks it closely.
+fn references_are_drawn_on_top_of_the_data() {
+    // fig6 and fig9 hid the reference under the FTAFTSMC line, which tracks
+    // it closely: references are drawn last (dashed, black) in every panel.
     for name in ["fig6-position-scenario2", "fig4-position-scenario1", "fig1-attitude-scenario1"] {
         let svg = read(&reproduced().join("figures").join(name).with_extension("svg"));
         for (k, panel) in panels(&svg).into_iter().enumerate() {
-            let (Some(last_ref), Some(first_data)) = (
-                panel.rfind(r#"<g class="reference"#),
-                [panel.find(r#"<g class="data">"#), panel.find(r#"<g class="band">"#)].into_iter().flatten().min(),
+            let (Some(first_ref), Some(last_data)) = (
+                panel.find(r#"<g class="reference"#),
+                [panel.rfind(r#"<g class="data">"#), panel.rfind(r#"<g class="band">"#)].into_iter().flatten().max(),
             ) else {
                 continue;
             };
-            assert!(last_ref < first_data, "{name}, panel {k}: a reference is drawn over the data");
+            assert!(first_ref > last_data, "{name}, panel {k}: data is drawn over a reference");
         }
     }
     let fig9 = read(&reproduced().join("figures/fig9-trajectory-3d-scenario2.svg"));
-    let last_ref = fig9.rfind(r#"<g class="reference">"#).expect("fig9 draws the reference");
-    let first_data = fig9.find(r#"<g class="data">"#).expect("fig9 draws the flights");
-    assert!(last_ref < first_data, "fig9: the reference is drawn over the flights");
+    let first_ref = fig9.find(r#"<g class="reference">"#).expect("fig9 draws the reference");
+    let last_data = fig9.rfind(r#"<g class="data">"#).expect("fig9 draws the flights");
+    assert!(first_ref > last_data, "fig9: a flight is drawn over the reference");
 }
 
 #[test]
-fn chattering_is_drawn_as_a_band_per_pixel_column_with_its_mean() {
+fn fig9_has_depth_cues_and_enough_ticks() {
+    // fig9 had two z ticks and nothing to tell near from far.
+    let svg = read(&reproduced().join("figures/fig9-trajectory-3d-scenario2.svg"));
+    let shadow = svg.split(r#"<g class="shadow">"#).nth(1).expect("floor shadows");
+    assert!(shadow[..shadow.find("</g>").unwrap()].matches("<path").count() >= 4, "a shadow per path");
+    // Tick labels: numbers drawn as text with a tick mark; at least 3 per axis.
+    let numbers = svg
+        .split("<text")
+        .skip(1)
+        .filter(|t| {
+            let inner = &t[t.find('>').unwrap() + 1..t.find("</text>").unwrap()];
+            inner.replace('−', "-").parse::<f64>().is_ok()
+        })
+        .count();
+    assert!(numbers >= 9, "{numbers} tick labels on three axes");
+}
+
+#[test]
+fn chattering_is_drawn_as_its_envelope_named_in_the_legend() {
     // fig1 and fig2: FTAFTSMC's and RANFTSMC's attitude limit cycle and torques
-    // chatter; drawn as lines they filled the panel as solid bands.
+    // chatter. A mean line understated the swing; the envelope is the signal.
     for name in ["fig1-attitude-scenario1", "fig2-controls-scenario1"] {
         let svg = read(&reproduced().join("figures").join(name).with_extension("svg"));
         let ((width, _), _) = svg_size(&svg);
@@ -152,12 +171,16 @@ fn chattering_is_drawn_as_a_band_per_pixel_column_with_its_mean() {
             svg.split(r#"<g class="band">"#).skip(1).map(|g| &g[..g.find("</g>").unwrap()]).collect();
         assert!(!bands.is_empty(), "{name}: no chattering band");
         for band in bands {
-            // A filled min/max outline and a mean line, each at most one
+            // A filled min/max band and its two edges, each at most one
             // vertex per pixel column and side: not 20 000 points of noise.
-            assert!(band.contains("fill-opacity") && band.contains("stroke-width"), "{name}: {band:.200}");
+            assert!(band.contains("fill-opacity=\"0.45\""), "{name}: the band is not faint: {band:.200}");
+            let segments = band.split("fill-opacity").count() - 1;
+            assert_eq!(band.matches("stroke-width").count(), 2 * segments, "{name}: two edges per band, no mean");
             let vertices = band.matches('L').count();
-            assert!(vertices as f64 <= 3.0 * width, "{name}: {vertices} vertices on a {width} wide figure");
+            assert!(vertices as f64 <= 4.0 * width, "{name}: {vertices} vertices on a {width} wide figure");
         }
+        assert!(svg.contains("(min–max per pixel)</text>"), "{name}: the legend names the band");
+        assert!(svg.contains(r#"<g class="legend band">"#), "{name}: the legend sample is a band");
     }
 }
 
@@ -179,13 +202,41 @@ fn no_legend_entry_without_a_drawn_series() {
 }
 
 #[test]
-fn fig4_has_an_error_panel_per_axis() {
-    let svg = read(&reproduced().join("figures/fig4-position-scenario1.svg"));
-    for axis in ["x", "y", "z"] {
-        assert!(svg.contains(&format!(">{axis} error<")), "fig4: no {axis} error panel");
-        assert!(svg.contains(&format!("{axis} − {axis}ref (m)")), "fig4: {axis} error label");
+fn fig4_and_fig6_have_an_error_panel_per_axis() {
+    // fig6 hid the reference under the FTAFTSMC line: the error row shows it.
+    for (name, count) in [("fig4-position-scenario1", 9), ("fig6-position-scenario2", 6)] {
+        let svg = read(&reproduced().join("figures").join(name).with_extension("svg"));
+        for axis in ["x", "y", "z"] {
+            assert!(svg.contains(&format!(">{axis} error<")), "{name}: no {axis} error panel");
+            assert!(svg.contains(&format!("{axis} − {axis}ref (m)")), "{name}: {axis} error label");
+        }
+        assert_eq!(panels(&svg).len(), count, "{name}: panels");
     }
-    assert_eq!(panels(&svg).len(), 6, "three position panels and three error panels");
+}
+
+#[test]
+fn fig1_and_fig4_zoom_on_the_first_seconds() {
+    // All the action is in the first 2-3 s of a 20 s axis: a second row shows them.
+    for name in ["fig1-attitude-scenario1", "fig4-position-scenario1"] {
+        let svg = read(&reproduced().join("figures").join(name).with_extension("svg"));
+        let ps = panels(&svg);
+        let zoomed: Vec<&&str> = ps.iter().filter(|p| p.contains(", first 3 s<")).collect();
+        assert_eq!(zoomed.len(), 3, "{name}: a zoomed panel per axis");
+        for p in zoomed {
+            // Its x tick labels stay within the first 3 s.
+            let ticks: Vec<f64> = p
+                .split("text-anchor=\"middle\">")
+                .skip(1)
+                .filter_map(|t| t[..t.find('<').unwrap()].parse::<f64>().ok())
+                .collect();
+            assert!(!ticks.is_empty() && ticks.iter().all(|&t| t <= 3.0), "{name}: zoomed ticks {ticks:?}");
+        }
+        // The full-length panels share their x ticks.
+        let first_ticks = |p: &str| -> Vec<f64> {
+            p.split("text-anchor=\"middle\">").skip(1).filter_map(|t| t[..t.find('<').unwrap()].parse().ok()).collect()
+        };
+        assert_eq!(first_ticks(ps[0]), first_ticks(ps[1]), "{name}: the panels' x ticks differ");
+    }
 }
 
 #[test]
@@ -200,13 +251,43 @@ fn reproduce_draws_a_box_per_controller_of_its_monte_carlo() {
 }
 
 #[test]
-fn a_run_that_stops_early_ends_in_a_marker_with_its_reason() {
-    // FTAFTSMC flips over at 1.22 s on the rigid body; its line used to just stop.
+fn a_run_that_stops_early_ends_in_a_marker_with_its_reason_in_the_legend() {
+    // FTAFTSMC flips over at 1.22 s on the rigid body; its line used to just
+    // stop, and then its note was written over the other lines.
     let svg = read(&flipped().join("position.svg"));
     let ends: Vec<&str> = svg.split(r#"<g class="end">"#).skip(1).collect();
     assert_eq!(ends.len(), 3, "one marker per position panel (FTAFTSMC only)");
     for e in ends {
-        assert!(e[..e.find("</g>").unwrap()].contains("diverged (tilt) at 1.22 s"), "{e:.300}");
+        assert!(!e[..e.find("</g>").unwrap()].contains("<text"), "no note over the data: {e:.300}");
+    }
+    let legend = &svg[..svg.find("<clipPath").unwrap()];
+    assert!(legend.contains("FTAFTSMC — diverged (tilt) at 1.22 s</text>"), "the legend says why and when");
+}
+
+#[test]
+fn rotor_speeds_come_apart_and_their_notes_sit_in_titles() {
+    // realistic-moderate-2-rotors: four traces overplotted and
+    // "diverged (tilt) at 6.49 s" sat over them.
+    let svg = read(&reproduced().join("figures/beyond/realistic-moderate-2-rotors.svg"));
+    assert!(!svg.contains(r#"<g class="end">"#), "no note or marker over the rotor traces");
+    assert_eq!(svg.matches(": ωᵢ − mean of the four<").count(), 5, "a spread panel per controller");
+    assert!(svg.contains("FTAFTSMC — "), "the panel title says how the run ended");
+}
+
+#[test]
+fn monte_carlo_titles_are_not_clipped() {
+    // realistic-breeze-1-montecarlo: the title was cut on both sides. Its
+    // band of the PNG has no ink in the outermost pixel columns.
+    let stem = reproduced().join("figures/beyond/realistic-breeze-1-montecarlo");
+    let svg = read(&stem.with_extension("svg"));
+    let size: f64 = svg.split("font-size=\"").nth(1).unwrap().split('"').next().unwrap().parse().unwrap();
+    let pix = Pixmap::load_png(stem.with_extension("png")).unwrap();
+    let band = (size * 1.6) as u32;
+    for y in 0..band {
+        for x in [0, 1, 2, pix.width() - 3, pix.width() - 2, pix.width() - 1] {
+            let p = pix.pixel(x, y).unwrap();
+            assert!(p.red() > 240 && p.green() > 240 && p.blue() > 240, "ink at ({x}, {y}): the title is clipped");
+        }
     }
 }
 
@@ -216,9 +297,14 @@ fn ftsmc_run_draws_the_x_y_path() {
     check_pair(&stem);
     let svg = read(&stem.with_extension("svg"));
     assert!(svg.contains(">x (m)<") && svg.contains(">y (m)<"), "axes are x and y in metres");
-    for label in ["reference", "RANFTSMC", "TSM-STA", "FTAFTSMC"] {
+    for label in ["RANFTSMC", "TSM-STA", "FTAFTSMC"] {
         assert!(svg.contains(label), "{label} in the path figure");
     }
+    // Scenario 1's reference steps: its set-points are drawn as points (a
+    // dashed "reference" drew next to nothing), above the flights.
+    assert!(svg.contains("reference set-points</text>"), "the legend names the set-points");
+    let points = svg.rfind(r#"<g class="points">"#).expect("set-points drawn");
+    assert!(points > svg.rfind(r#"<g class="data">"#).unwrap(), "set-points above the paths");
     assert!(svg.contains(r#"<g class="end">"#), "the flipped run's path ends in a marker");
 }
 

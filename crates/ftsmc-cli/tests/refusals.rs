@@ -1,6 +1,7 @@
 //! Every hostile or nonsensical request is refused before any work: under a
-//! time limit, with a non-zero exit code, a one-line `error:` message naming
-//! the key or limit, and nothing written under `--out`.
+//! time limit, with a non-zero exit code, a one-line `error:` message of at
+//! most 300 characters naming the key or limit, and nothing written under
+//! `--out`.
 
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
@@ -52,7 +53,9 @@ fn refused(test: &str, args: &[&str], scenario: Option<&str>, expected: &[&str])
     assert_eq!(status.code(), Some(1), "{test}: an error exit, not a crash/abort; stderr: {err}");
     let lines: Vec<&str> = err.lines().collect();
     assert_eq!(lines.len(), 1, "{test}: one line on stderr:\n{err}");
-    assert!(lines[0].starts_with("error: ") && lines[0].len() < 600, "{test}: {err}");
+    // The documented bound on a message's first line: 300 characters.
+    let message = lines[0].strip_prefix("error: ").unwrap_or_else(|| panic!("{test}: not an error line: {err}"));
+    assert!(message.chars().count() <= 300, "{test}: {} characters: {err}", message.chars().count());
     for e in expected {
         assert!(lines[0].contains(e), "{test}: `{e}` missing from: {err}");
     }
@@ -307,11 +310,80 @@ fn a_seed_of_2_pow_64_minus_1_writes_a_scenario_that_runs_again() {
 
 #[test]
 fn an_inf_limit_never_overflows() {
-    // The check is off, but 5 × u64::MAX magnitudes cannot be counted: an error, not a panic.
+    // The check is off, but 5 × u64::MAX magnitudes are above the hard bound: an error, not a panic.
     refused(
         "inf-per-decade",
         &["fixed-time", "-c", "pid", "--per-decade", "18446744073709551615", "--limit", "max_sweep_points=inf"],
         None,
-        &["--per-decade 18446744073709551615", "do not fit in memory"],
+        &["hard bound", "max_sweep_points", "9.223372036854776e19"],
     );
+}
+
+// ---- limits off: the hard bounds still hold --------------------------------
+
+/// Every limit switched off on the command line.
+const LIMITS_OFF: [&str; 14] = [
+    "--limit",
+    "max_steps=inf",
+    "--limit",
+    "max_samples=inf",
+    "--limit",
+    "max_output_bytes=inf",
+    "--limit",
+    "max_flights=inf",
+    "--limit",
+    "max_sweep_points=inf",
+    "--limit",
+    "max_threads=inf",
+    "--limit",
+    "max_scenario_bytes=inf",
+];
+
+/// `args` with every limit off: refused by a hard bound of `key`.
+fn refused_with_limits_off(test: &str, args: &[&str], scenario: Option<&str>, key: &str) {
+    let all: Vec<&str> = args.iter().copied().chain(LIMITS_OFF).collect();
+    refused(test, &all, scenario, &["hard bound", key, "even with"]);
+}
+
+#[test]
+fn limits_off_matrix() {
+    let mc = ["montecarlo", "paper-scenario-2", "--runs"];
+    let runs_max = [&mc[..], &["18446744073709551615"]].concat();
+    refused_with_limits_off("off-runs-max", &runs_max, None, "max_flights");
+    let runs_1e12 = [&mc[..], &["1000000000000"]].concat();
+    refused_with_limits_off("off-runs-1e12", &runs_1e12, None, "max_flights");
+    let threads = [&mc[..], &["2", "--threads", "100000"]].concat();
+    refused_with_limits_off("off-threads", &threads, None, "max_threads");
+    refused_with_limits_off("off-per-decade", &["fixed-time", "--per-decade", "100000000"], None, "max_sweep_points");
+    let endless = "name = \"t\"\nduration = 1e300\n";
+    refused_with_limits_off("off-duration", &["run", "s.toml"], Some(endless), "max_steps");
+    // 10¹¹ steps (under the step bound) recording every one: 10¹¹ rows do
+    // not fit in any memory.
+    let rows = "name = \"t\"\nduration = 1e7\n[simulation]\ncontrol_rate = 1e4\nrecord_rate = 1e4\n";
+    refused_with_limits_off("off-rows", &["run", "s.toml"], Some(rows), "max_samples");
+    let tune = ["tune", "paper-scenario-2", "-c", "pid", "--budget", "18446744073709551615"];
+    refused_with_limits_off("off-tune-budget", &tune, None, "max_flights");
+}
+
+#[test]
+fn twenty_thousand_gusts_are_priced() {
+    // 20,000 gusts on a 10-minute flight: each is evaluated every step, like
+    // a sine term, so the flight costs like 10⁸ × 626 steps.
+    let gust = "{start=1,duration=1,amplitude=[1,0,0]},";
+    let text = format!("name = \"t\"\nduration = 600.0\n[wind]\ngusts = [{}]\n", gust.repeat(20_000));
+    refused("gusts", &["run", "s.toml"], Some(&text), &["max_steps", "terms"]);
+}
+
+#[test]
+fn clap_names_the_flag_of_a_negative_number() {
+    let tmp = scratch("negative-budget");
+    for (args, flag) in [
+        (&["tune", "paper-scenario-1", "-c", "pid", "--budget", "-1"][..], "--budget"),
+        (&["montecarlo", "paper-scenario-1", "--runs", "-5"][..], "--runs"),
+        (&["montecarlo", "paper-scenario-1", "--threads", "-2"][..], "--threads"),
+    ] {
+        let out = Command::new(env!("CARGO_BIN_EXE_ftsmc")).args(args).current_dir(tmp.path()).output().unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success() && err.lines().next().unwrap_or("").contains(flag), "{args:?}: {err}");
+    }
 }

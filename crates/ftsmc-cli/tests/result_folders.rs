@@ -33,7 +33,9 @@ fn stale_files_of_an_older_run_are_gone_and_the_users_files_stay() {
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     // The first run's tsm-sta.csv is gone (the run wrote it); junk.csv is the user's.
     let expected: BTreeSet<String> =
-        [".ftsmc-run.manifest", "ftaftsmc.csv", "junk.csv", "scenario.toml", "summary.json"].map(String::from).into();
+        [".ftsmc-run.manifest", "ftaftsmc.csv", "junk.csv", "report.html", "scenario.toml", "summary.json"]
+            .map(String::from)
+            .into();
     assert_eq!(names(&folder), expected);
     assert_eq!(std::fs::read_to_string(folder.join("junk.csv")).unwrap(), "t,x\n0,1\n");
     assert_eq!(names(&dir.join("res")), ["paper-scenario-1".to_string()].into(), "no staging or old folder left");
@@ -53,8 +55,8 @@ fn commands_sharing_an_out_keep_each_others_results() {
     );
     assert!(mc.status.success(), "{}", String::from_utf8_lossy(&mc.stderr));
     let err = String::from_utf8_lossy(&mc.stderr);
-    // Both write summary.json and scenario.toml: the user is told.
-    assert!(err.contains("replaced scenario.toml, summary.json") && err.contains("ftsmc run"), "{err}");
+    // Both write report.html, summary.json and scenario.toml: the user is told.
+    assert!(err.contains("replaced report.html, scenario.toml, summary.json") && err.contains("ftsmc run"), "{err}");
     assert_eq!(std::fs::read(folder.join("ftaftsmc.csv")).unwrap(), run_csv, "the run's CSV is kept");
     assert!(folder.join("runs.csv").is_file());
     // A user's file in the reproduce folder survives `run` and `reproduce`.
@@ -147,6 +149,7 @@ fn concurrent_runs_into_one_folder_leave_one_whole_result() {
         expected.insert(".ftsmc-run.manifest".into());
         expected.insert("summary.json".into());
         expected.insert("scenario.toml".into());
+        expected.insert("report.html".into());
         assert_eq!(names(&folder), expected, "round {round}: the files must be exactly those of one run");
         assert!(
             controllers == ["ftaftsmc".to_string()].into()
@@ -155,4 +158,80 @@ fn concurrent_runs_into_one_folder_leave_one_whole_result() {
         );
         assert_eq!(names(&dir.join("res")), ["paper-scenario-1".to_string()].into(), "round {round}");
     }
+}
+
+/// Run `args` (in `dir`) twice, `folder` being its result folder and
+/// `manifest` its manifest there; between the runs, two files of the user's
+/// are named in the manifest by hand (one plain, one with a forged size and
+/// SHA-256). The second run keeps both, says so on stderr, and exits 0.
+fn a_hand_edited_manifest_deletes_nothing(dir: &Path, args: &[&str], folder: &str, manifest: &str) {
+    let run = |what: &str| {
+        let out = ftsmc(args, dir);
+        assert!(out.status.success(), "{what} {args:?}: {}", String::from_utf8_lossy(&out.stderr));
+        String::from_utf8_lossy(&out.stderr).into_owned()
+    };
+    run("first");
+    let folder = dir.join(folder);
+    let manifest = folder.join(manifest);
+    assert!(manifest.is_file(), "{} missing", manifest.display());
+    std::fs::write(folder.join("mine.txt"), "mine").unwrap();
+    std::fs::write(folder.join("paper.md"), "my paper").unwrap();
+    let mut text = std::fs::read_to_string(&manifest).unwrap();
+    text.push_str("mine.txt\n");
+    text.push_str("e3b0c44298fc1c149afbf4c8996fb92427ae41e4649b934ca495991b7852b855 0 paper.md\n");
+    std::fs::write(&manifest, text).unwrap();
+    let err = run("second");
+    assert_eq!(std::fs::read_to_string(folder.join("mine.txt")).unwrap(), "mine", "{args:?}");
+    assert_eq!(std::fs::read_to_string(folder.join("paper.md")).unwrap(), "my paper", "{args:?}");
+    assert!(err.contains("note: kept") && err.contains("mine.txt") && err.contains("paper.md"), "{args:?}: {err}");
+    // The new manifest lists neither.
+    let text = std::fs::read_to_string(&manifest).unwrap();
+    assert!(!text.contains("mine.txt") && !text.contains("paper.md"), "{text}");
+}
+
+#[test]
+fn a_hand_edited_manifest_of_run_deletes_nothing() {
+    let tmp = scratch("tamper-run");
+    let args = ["run", "paper-scenario-1", "-c", "pid", "--out", "o", "--no-figures"];
+    a_hand_edited_manifest_deletes_nothing(tmp.path(), &args, "o/paper-scenario-1", ".ftsmc-run.manifest");
+}
+
+#[test]
+fn a_hand_edited_manifest_of_montecarlo_deletes_nothing() {
+    let tmp = scratch("tamper-mc");
+    let args = ["montecarlo", "paper-scenario-2", "--runs", "2", "-c", "pid", "--out", "o", "--no-figures"];
+    a_hand_edited_manifest_deletes_nothing(tmp.path(), &args, "o/paper-scenario-2", ".ftsmc-montecarlo.manifest");
+}
+
+#[test]
+fn a_hand_edited_manifest_of_fixed_time_deletes_nothing() {
+    let tmp = scratch("tamper-ft");
+    let args = ["fixed-time", "--controllers", "ftaftsmc", "--per-decade", "1", "--out", "o"];
+    a_hand_edited_manifest_deletes_nothing(tmp.path(), &args, "o/paper-scenario-1", ".ftsmc-fixed-time.manifest");
+}
+
+#[test]
+fn a_hand_edited_manifest_of_tune_deletes_nothing() {
+    let tmp = scratch("tamper-tune");
+    let tiny = "extends = \"realistic-scenario-2\"\nname = \"tiny-tune\"\nduration = 1.0\n\n[tune]\nruns = 1\nvalidation_runs = 1\npopulation = 4\n";
+    std::fs::write(tmp.path().join("tiny.toml"), tiny).unwrap();
+    let args = ["tune", "tiny.toml", "-c", "pid", "--budget", "5", "--out", "o", "--no-figures"];
+    a_hand_edited_manifest_deletes_nothing(tmp.path(), &args, "o/tiny-tune", ".ftsmc-tune-pid.manifest");
+}
+
+#[test]
+fn a_hand_edited_manifest_of_merge_deletes_nothing() {
+    let tmp = scratch("tamper-merge");
+    let shard = ["montecarlo", "paper-scenario-2", "--runs", "2", "-c", "pid", "--shard", "1/1", "--out", "s"];
+    let out = ftsmc(&[&shard[..], &["--no-figures"]].concat(), tmp.path());
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let args = ["merge", "s/paper-scenario-2-shard-1-of-1", "--out", "o", "--no-figures"];
+    a_hand_edited_manifest_deletes_nothing(tmp.path(), &args, "o/paper-scenario-2", ".ftsmc-montecarlo.manifest");
+}
+
+#[test]
+fn a_hand_edited_manifest_of_reproduce_deletes_nothing() {
+    let tmp = scratch("tamper-reproduce");
+    let args = ["reproduce", "--out", "o", "--no-figures", "--realistic-runs", "0"];
+    a_hand_edited_manifest_deletes_nothing(tmp.path(), &args, "o", ".ftsmc-reproduce.manifest");
 }

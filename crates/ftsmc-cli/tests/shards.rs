@@ -180,3 +180,83 @@ fn bad_shard_values_are_refused_before_any_flight() {
         assert!(!d.join("out").exists());
     }
 }
+
+/// A copy of shard 3 in `<campaign>/tamper/<name>` for one test to edit.
+fn shard_copy(name: &str) -> (PathBuf, String) {
+    let d = campaign();
+    let to = d.join("tamper").join(name);
+    std::fs::create_dir_all(&to).unwrap();
+    for f in ["summary.json", "scenario.toml", "runs.csv"] {
+        std::fs::copy(d.join(shard(3)).join(f), to.join(f)).unwrap();
+    }
+    (to, format!("tamper/{name}"))
+}
+
+/// `runs.csv` of `dir` with `column` of the first completed row set to `value`.
+fn edit_completed_cell(dir: &Path, column: &str, value: &str) -> String {
+    let text = String::from_utf8(read(dir.join("runs.csv"))).unwrap();
+    let mut lines: Vec<String> = text.lines().map(String::from).collect();
+    let header: Vec<&str> = lines[0].split(',').collect();
+    let at = header.iter().position(|c| *c == column).unwrap();
+    let completed = header.iter().position(|c| *c == "completed").unwrap();
+    let row = (1..lines.len()).find(|&i| lines[i].split(',').nth(completed) == Some("true")).expect("a completed run");
+    let mut cells: Vec<String> = lines[row].split(',').map(String::from).collect();
+    assert_ne!(cells[at], value);
+    cells[at] = value.to_string();
+    lines[row] = cells.join(",");
+    let edited = lines.join("\n") + "\n";
+    std::fs::write(dir.join("runs.csv"), &edited).unwrap();
+    edited
+}
+
+#[test]
+fn merge_refuses_edited_rows_non_finite_metrics_and_inputs_that_are_not_regular_files() {
+    let d = campaign();
+    let merge = |arg: &str| refused(&["merge", &shard(1), &shard(2), arg, "--out", "refused-tamper"], d);
+
+    // One ISE value edited: the rows no longer have the recorded SHA-256.
+    let (dir, arg) = shard_copy("ise");
+    edit_completed_cell(&dir, "ise_z", "0.001");
+    let err = merge(&arg);
+    assert!(err.contains(&arg) && err.contains("runs.csv has sha256") && err.contains("summary.json records"), "{err}");
+
+    // A NaN in a completed row, the digest forged to match: refused by value.
+    let (dir, arg) = shard_copy("nan");
+    let edited = edit_completed_cell(&dir, "ise_x", "NaN");
+    let mut summary = json(dir.join("summary.json"));
+    summary["shard"]["runs_csv_sha256"] = Value::String(sha256_hex(edited.as_bytes()));
+    std::fs::write(dir.join("summary.json"), serde_json::to_string_pretty(&summary).unwrap()).unwrap();
+    let err = merge(&arg);
+    assert!(err.contains(&arg) && err.contains("`ise_x`") && err.contains("NaN") && err.contains("completed"), "{err}");
+
+    // Inputs that are not regular files, or too large, are refused without
+    // being read: a FIFO (opening it would wait for a writer), a device
+    // that never ends, a sparse file over the size limit.
+    #[cfg(unix)]
+    {
+        let (dir, arg) = shard_copy("fifo");
+        std::fs::remove_file(dir.join("runs.csv")).unwrap();
+        let path = std::ffi::CString::new(dir.join("runs.csv").to_str().unwrap()).unwrap();
+        // SAFETY: a valid NUL-terminated path; mkfifo only creates a file.
+        assert_eq!(unsafe { libc::mkfifo(path.as_ptr(), 0o600) }, 0);
+        let err = merge(&arg);
+        assert!(err.contains(&arg) && err.contains("runs.csv") && err.contains("not a regular file"), "{err}");
+
+        let (dir, arg) = shard_copy("zero");
+        std::fs::remove_file(dir.join("summary.json")).unwrap();
+        std::os::unix::fs::symlink("/dev/zero", dir.join("summary.json")).unwrap();
+        let err = merge(&arg);
+        assert!(err.contains(&arg) && err.contains("summary.json") && err.contains("not a regular file"), "{err}");
+    }
+    let (dir, arg) = shard_copy("huge");
+    std::fs::File::options().write(true).open(dir.join("runs.csv")).unwrap().set_len((1 << 30) + 1).unwrap();
+    let err = merge(&arg);
+    assert!(err.contains(&arg) && err.contains("larger than the limit of 1073741824 bytes"), "{err}");
+    assert!(!d.join("refused-tamper").exists());
+}
+
+/// SHA-256 as lowercase hex.
+fn sha256_hex(data: &[u8]) -> String {
+    use sha2::Digest as _;
+    sha2::Sha256::digest(data).iter().map(|b| format!("{b:02x}")).collect()
+}

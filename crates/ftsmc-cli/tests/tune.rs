@@ -71,16 +71,25 @@ fn two_controllers_tuned_into_one_folder_keep_both_results() {
         for f in ["tuned.toml", "history.csv", "summary.json", "scenario.toml"] {
             assert!(folder.join(format!("{c}.{f}")).is_file(), "{c}.{f} missing after tuning pid then se3");
         }
+        // `<sha256> <size> <path>` per file.
         let manifest = std::fs::read_to_string(folder.join(format!(".ftsmc-tune-{c}.manifest"))).unwrap();
-        assert!(manifest.lines().any(|l| l == format!("{c}.tuned.toml")), "{c}'s manifest: {manifest}");
-        assert!(
-            manifest.lines().all(|l| l.starts_with(&format!("{c}.")) || l.starts_with(".ftsmc-")),
-            "{c} owns only its files: {manifest}"
-        );
+        let listed: Vec<&str> = manifest.lines().map(|l| l.splitn(3, ' ').nth(2).unwrap_or("")).collect();
+        assert!(listed.contains(&format!("{c}.tuned.toml").as_str()), "{c}'s manifest: {manifest}");
+        assert!(listed.iter().all(|l| l.starts_with(&format!("{c}."))), "{c} owns only its files: {manifest}");
     }
     // PID's figure survives SE(3)'s tune without figures.
     assert!(folder.join("pid.convergence.svg").is_file() && folder.join("pid.convergence.png").is_file());
     assert!(!folder.join("se3.convergence.svg").exists());
+    // Candidates are independent samples: points, with the best so far as
+    // the one line (a dashed line through them read as a time series).
+    let convergence = std::fs::read_to_string(folder.join("pid.convergence.svg")).unwrap();
+    assert!(convergence.contains(r#"<g class="points">"#) && !convergence.contains("stroke-dasharray"));
+    assert!(convergence.contains(">best so far</text>") && convergence.contains(">candidate</text>"));
+    // Each tune writes its own page of the shared folder.
+    for c in ["pid", "se3"] {
+        let page = std::fs::read_to_string(folder.join(format!("{c}.report.html"))).unwrap();
+        assert!(page.contains(&format!("{c}.tuned.toml")) && page.contains("<table>"), "{c}.report.html");
+    }
 
     // Each tuned file is a scenario of its own controller that extends the input.
     let pid = std::fs::read_to_string(folder.join("pid.tuned.toml")).unwrap();
@@ -116,4 +125,132 @@ fn one_and_two_threads_give_the_same_tuned_file() {
     let h1 = std::fs::read(dir.join("one/tiny-tune/ftaftsmc.history.csv")).unwrap();
     let h2 = std::fs::read(dir.join("two/tiny-tune/ftaftsmc.history.csv")).unwrap();
     assert_eq!(h1, h2, "history.csv differs between 1 and 2 threads");
+}
+
+/// A scenario path with a newline cannot add a key to the tuned file: the
+/// command line is recorded as one comment line, the path as an escaped
+/// TOML string, and flying the tuned file keeps the input's seed.
+#[test]
+fn a_path_with_a_newline_cannot_inject_a_key_into_the_tuned_file() {
+    let tmp = scratch("inject");
+    let dir = tmp.path();
+    let evil = "x\nseed = 4242\n#.toml";
+    std::fs::copy(dir.join("tiny.toml"), dir.join(evil)).unwrap();
+    ok(&["tune", evil, "-c", "pid", "--budget", "10", "--threads", "1", "--out", "ti", "--no-figures"], dir);
+    let tuned_path = dir.join("ti/tiny-tune/pid.tuned.toml");
+    let text = std::fs::read_to_string(&tuned_path).unwrap();
+    let made_by: Vec<&str> = text.lines().filter(|l| l.starts_with("# Made by:")).collect();
+    assert_eq!(
+        made_by,
+        ["# Made by: ftsmc tune $'x\\nseed = 4242\\n#.toml' -c pid --budget 10 --threads 1 --out ti --no-figures"]
+    );
+    let table: toml::Table = toml::from_str(&text).unwrap();
+    assert!(!table.contains_key("seed"), "{text}");
+    assert!(table["extends"].as_str().unwrap().ends_with(evil), "{text}");
+    // Flying it: the seed is the input's, not 4242.
+    ok(&["run", "ti/tiny-tune/pid.tuned.toml", "--out", "flown", "--no-figures"], dir);
+    let flown = std::fs::read_to_string(dir.join("flown/tiny-tune-pid-tuned/scenario.toml")).unwrap();
+    let flown: toml::Table = toml::from_str(&flown).unwrap();
+    let input = std::fs::read_to_string(dir.join("ti/tiny-tune/pid.scenario.toml")).unwrap();
+    let input: toml::Table = toml::from_str(&input).unwrap();
+    assert_ne!(flown["seed"].as_integer(), Some(4242));
+    assert_eq!(flown["seed"], input["seed"]);
+}
+
+#[test]
+fn tune_refuses_seed_duration_and_unknown_extra_keys() {
+    let d = scratch("tune-extra-keys");
+    for key in ["seed", "duration", "no_such_key"] {
+        let text = format!("{TINY}\n[[tune.extra]]\nkey = \"{key}\"\nlow = 1.0\nhigh = 100.0\n");
+        std::fs::write(d.path().join("extra.toml"), text).unwrap();
+        let out = ftsmc(&["tune", "extra.toml", "-c", "pid", "--budget", "5", "--out", "o"], d.path());
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{key}: accepted");
+        assert!(err.contains("extra.toml") && err.contains(&format!("\"{key}\"")), "{key}: {err}");
+        assert!(!d.path().join("o").join("tiny-tune").exists(), "{key}: a result folder was written");
+    }
+}
+
+/// The paper's plant with a tilt limit the start barely keeps (0.25 rad)
+/// and TSM-STA's gains searched over factors 10⁻³ … 10³ with steps as wide
+/// as that range: the one generation a budget of 7 flights pays for
+/// diverges, so the tune finds nothing better than the start.
+const CLIFF: &str = r#"extends = "paper-scenario-1"
+name = "cliff"
+duration = 4.0
+
+[simulation]
+max_tilt = 0.25
+
+[tune]
+runs = 1
+validation_runs = 2
+population = 6
+sigma = 1.0
+
+[tune.bounds]
+time_xy = [0.001, 1000.0]
+time_z = [0.001, 1000.0]
+time_roll_pitch = [0.001, 1000.0]
+time_yaw = [0.001, 1000.0]
+k1_position = [0.001, 1000.0]
+k2_position = [0.001, 1000.0]
+k1_attitude = [0.001, 1000.0]
+k2_attitude = [0.001, 1000.0]
+command_filter = [0.001, 1000.0]
+"#;
+
+#[test]
+fn a_tiny_budget_that_finds_nothing_warns_and_records_improved_false() {
+    let d = scratch("tune-nothing");
+    std::fs::write(d.path().join("cliff.toml"), CLIFF).unwrap();
+    let out = ftsmc(
+        &["tune", "cliff.toml", "-c", "tsm-sta", "--budget", "7", "--seed", "4", "--out", "o", "--no-figures"],
+        d.path(),
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    assert!(err.contains("found nothing better than the start") && err.contains("--budget"), "{err}");
+    let folder = d.path().join("o/cliff");
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(folder.join("tsm-sta.summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["improved"], false, "{summary}");
+    // The flights actually flown (a candidate with invalid gains is charged but not flown).
+    let flown = summary["training_flights"].as_u64().unwrap();
+    assert!((1..=7).contains(&flown) && summary["race_flights"] == 0, "{summary}");
+    let tuned = std::fs::read_to_string(folder.join("tsm-sta.tuned.toml")).unwrap();
+    assert!(tuned.contains("# Improved: false"), "{tuned}");
+    // The start's gains, unchanged: no gain key below the header.
+    assert!(!tuned.lines().any(|l| l.starts_with("[tsm")), "{tuned}");
+}
+
+#[test]
+fn tune_all_is_identical_with_one_and_two_threads() {
+    let tmp = scratch("tune-all");
+    let dir = tmp.path();
+    for (threads, out) in [("1", "one"), ("2", "two")] {
+        let args = ["tune", "tiny.toml", "-c", "all", "--budget", BUDGET, "--threads", threads, "--out", out];
+        let o = ftsmc(&[&args[..], &["--no-figures"]].concat(), dir);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let stdout = String::from_utf8_lossy(&o.stdout);
+        assert!(stdout.contains("Paired verdicts") && stdout.contains("p (Holm)"), "{stdout}");
+    }
+    let read = |p: &str| std::fs::read_to_string(dir.join(p)).unwrap_or_else(|e| panic!("{p}: {e}"));
+    assert_eq!(read("one/tiny-tune/comparison.md"), read("two/tiny-tune/comparison.md"));
+    assert_eq!(read("one/tiny-tune/comparison.json"), read("two/tiny-tune/comparison.json"));
+    let md = read("one/tiny-tune/comparison.md");
+    let json: serde_json::Value = serde_json::from_str(&read("one/tiny-tune/comparison.json")).unwrap();
+    let names: Vec<&str> =
+        json["controllers"].as_array().unwrap().iter().map(|c| c["controller"].as_str().unwrap()).collect();
+    let expected: Vec<&str> = ftsmc_sim::registry::CONTROLLERS.iter().map(|(n, _)| *n).collect();
+    assert_eq!(names, expected);
+    // Every pair on both metrics, on the same held-out draws.
+    assert_eq!(json["verdicts"].as_array().unwrap().len(), names.len() * (names.len() - 1));
+    assert!(md.contains("same 3 held-out draws"), "{md}");
+    for c in &names {
+        assert_eq!(
+            tuned_without_command(&dir.join(format!("one/tiny-tune/{c}.tuned.toml"))),
+            tuned_without_command(&dir.join(format!("two/tiny-tune/{c}.tuned.toml")))
+        );
+    }
 }

@@ -163,6 +163,12 @@ pub fn montecarlo_columns<'py>(
 ) -> PyResult<(Vec<String>, Vec<Bound<'py, PyAny>>)> {
     let mut scenario = scenario.inner.clone();
     let names = controllers.unwrap_or_else(|| scenario.controllers.clone());
+    if names.is_empty() {
+        return Err(value_error(format!(
+            "controllers = [] is invalid (expected at least one controller name; known: {})",
+            ftsmc_sim::registry::CONTROLLERS.iter().map(|(n, _)| *n).collect::<Vec<_>>().join(", ")
+        )));
+    }
     for name in &names {
         ftsmc_sim::registry::check_name(name)
             .map_err(|known| value_error(format!("unknown controller `{name}` (known: {known})")))?;
@@ -185,7 +191,9 @@ pub fn montecarlo_columns<'py>(
     scenario.seed = seed.unwrap_or(scenario.seed);
     scenario.controllers = names;
     let spec = scenario.montecarlo.clone().unwrap_or_default();
-    let total = (end - start) * scenario.controllers.len() as u64 * ftsmc_sim::run::planned_steps(&scenario);
+    let total = (end - start)
+        .saturating_mul(scenario.controllers.len() as u64)
+        .saturating_mul(ftsmc_sim::run::planned_steps(&scenario));
 
     let rows = crate::progress::with_progress(py, total, progress.as_ref(), move |cancel, tick| {
         let mut builder = rayon::ThreadPoolBuilder::new();

@@ -19,6 +19,18 @@ use crate::scenario::Scenario;
 use crate::value_error;
 
 /// N environments (docs/python.md, "Gymnasium environments").
+/// Price `num_envs` environments of `scenario` before anything is
+/// allocated for them ([`ftsmc_sim::limits::check_envs`]): `ValueError`
+/// naming `num_envs`, the limit and the bound.
+#[pyfunction]
+pub fn gym_check_envs(scenario: PyRef<'_, Scenario>, num_envs: u64) -> PyResult<()> {
+    if num_envs < 1 {
+        return Err(value_error(format!("`num_envs` = {num_envs} is invalid (expected at least 1 environment)")));
+    }
+    ftsmc_sim::limits::check_envs(&scenario.inner.limits, num_envs as f64)
+        .map_err(|e| value_error(format!("`num_envs` = {num_envs}: {e}")))
+}
+
 #[pyclass(module = "ftsmc._ftsmc", name = "GymBatch", frozen)]
 pub struct GymBatch {
     batch: Mutex<Batch>,
@@ -84,7 +96,8 @@ impl GymBatch {
     /// (the equations and defaults: docs/python.md).
     #[new]
     #[pyo3(signature = (scenario, seeds, task="track", target=None, action="ctbr", observe="sensors",
-        agent_rate=100.0, max_episode_time=None, reward=None, rate_gain=None, max_rate=None, randomize=false))]
+        agent_rate=100.0, max_episode_time=None, reward=None, rate_gain=None, max_rate=None, randomize=false,
+        hover_radius=None))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
@@ -100,6 +113,7 @@ impl GymBatch {
         rate_gain: Option<Vec<f64>>,
         max_rate: Option<Vec<f64>>,
         randomize: bool,
+        hover_radius: Option<f64>,
     ) -> PyResult<Self> {
         if seeds.is_empty() {
             return Err(value_error("`num_envs` = 0 is invalid (expected at least 1 environment)"));
@@ -143,7 +157,21 @@ impl GymBatch {
             randomize,
         };
         let path = scenario.inner.name.clone();
-        let spec = GymSpec::new(scenario.inner.clone(), &path, settings).map_err(value_error)?;
+        let mut flown = scenario.inner.clone();
+        // A hover episode ends (terminated, "diverged (position error)")
+        // once the vehicle is more than `hover_radius` m from the target
+        // along any axis: the scenario's own divergence limit, tightened.
+        match (hover_radius, matches!(settings.task, Task::Hover { .. })) {
+            (Some(r), true) if r.is_finite() && r > 0.0 => {
+                flown.simulation.max_position_error = flown.simulation.max_position_error.min(r)
+            }
+            (Some(r), true) => {
+                return Err(value_error(format!("`hover_radius` = {r} is invalid (expected a finite distance > 0, m)")))
+            }
+            (Some(_), false) => return Err(value_error("`hover_radius` is only for task = \"hover\"")),
+            (None, _) => {}
+        }
+        let spec = GymSpec::new(flown, &path, settings).map_err(value_error)?;
         spec.scenario.check_cost(1).map_err(|e| value_error(crate::scenario::chain_message(&e)))?;
         let scale = ActionScale::of(&spec.scenario);
         let mass = spec.scenario.plant.mass;
@@ -207,6 +235,19 @@ impl GymBatch {
         PyArray1::from_slice(py, self.lock().done())
     }
 
+    /// The true pose of environment `i`, for drawing it: `(position (m),
+    /// Z-Y-X Euler angles φ, θ, ψ (rad), reference position (m))`, world
+    /// frame z up.
+    #[allow(clippy::type_complexity)]
+    fn pose(&self, i: usize) -> PyResult<([f64; 3], [f64; 3], [f64; 3])> {
+        let mut batch = self.lock();
+        if i >= batch.len() {
+            return Err(value_error(format!("environment {i} of {} does not exist", batch.len())));
+        }
+        let p = batch.pose(i);
+        Ok((p.position, p.attitude, p.reference))
+    }
+
     /// The seed of each environment's current episode.
     fn seeds<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<u64>> {
         let batch = self.lock();
@@ -224,6 +265,13 @@ impl GymBatch {
     #[getter]
     fn episode_time(&self) -> f64 {
         self.lock().spec().scenario.duration
+    }
+
+    /// The divergence limit on each axis of the position error, m
+    /// (`simulation.max_position_error`, tightened by `hover_radius`).
+    #[getter]
+    fn max_position_error(&self) -> f64 {
+        self.lock().spec().scenario.simulation.max_position_error
     }
 
     /// Thrust at a₀ = 1 (action "ctbr"), N.

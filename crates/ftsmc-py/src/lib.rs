@@ -11,12 +11,15 @@
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 
+mod compare;
 mod controller;
+mod falsify;
 mod flight;
 mod gym;
 mod kinematics;
 mod progress;
 mod scenario;
+mod stats;
 mod tune;
 
 /// A `ValueError` carrying `message` (the text the CLI prints after `error: `).
@@ -34,12 +37,22 @@ fn _ftsmc(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(flight::simulate_native, m)?)?;
     m.add_function(wrap_pyfunction!(flight::simulate_python, m)?)?;
     m.add_function(wrap_pyfunction!(flight::montecarlo_columns, m)?)?;
+    m.add_function(wrap_pyfunction!(gym::gym_check_envs, m)?)?;
     m.add_function(wrap_pyfunction!(tune::tune_native, m)?)?;
+    m.add_function(wrap_pyfunction!(falsify::falsify_native, m)?)?;
+    m.add_function(wrap_pyfunction!(falsify::failure_probability_native, m)?)?;
     m.add_function(wrap_pyfunction!(tune::tune_evaluate, m)?)?;
     m.add_function(wrap_pyfunction!(kinematics::kinematics_euler_from_quaternion, m)?)?;
     m.add_function(wrap_pyfunction!(kinematics::kinematics_quaternion_from_euler, m)?)?;
     m.add_function(wrap_pyfunction!(kinematics::kinematics_euler_rates, m)?)?;
     m.add_function(wrap_pyfunction!(kinematics::kinematics_body_rates, m)?)?;
+    m.add_function(wrap_pyfunction!(compare::compare_native, m)?)?;
+    m.add_function(wrap_pyfunction!(compare::stats_intervals, m)?)?;
+    m.add_function(wrap_pyfunction!(stats::stats_wilson, m)?)?;
+    m.add_function(wrap_pyfunction!(stats::stats_clopper_pearson, m)?)?;
+    m.add_function(wrap_pyfunction!(stats::stats_binomial_quantile, m)?)?;
+    m.add_function(wrap_pyfunction!(stats::stats_mcnemar_exact, m)?)?;
+    m.add_function(wrap_pyfunction!(stats::stats_wilcoxon, m)?)?;
     m.add_function(wrap_pyfunction!(controller_names, m)?)?;
     m.add_function(wrap_pyfunction!(controller_label, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;

@@ -85,6 +85,9 @@ impl Scenario {
     #[staticmethod]
     #[pyo3(signature = (text, path = "<string>"))]
     fn from_toml(py: Python<'_>, text: &str, path: &str) -> PyResult<Self> {
+        // The CLI's size limit on a scenario file, before the text is parsed.
+        ftsmc_sim::limits::check_file_size(&ftsmc_sim::limits::Limits::default(), text.len() as u64)
+            .map_err(|e| value_error(format!("{}: {e}", ftsmc_sim::scenario::show_str(path))))?;
         let loaded = ftsmc_sim::Scenario::from_toml_str_with_warnings(text, path, &[])
             .map_err(|e| value_error(chain_message(&e)))?;
         warn_all(py, loaded)
@@ -102,36 +105,23 @@ impl Scenario {
     /// created), loaded again. Values: bool, int, float, str, lists and
     /// dicts of them (a dict is a TOML table, e.g. a whole signal).
     fn with_overrides(&self, py: Python<'_>, overrides: &Bound<'_, PyDict>) -> PyResult<Self> {
-        let text = scenario_toml(&self.inner).map_err(value_error)?;
-        let mut table: toml::Table = toml::from_str(&text).map_err(|e| value_error(e.to_string()))?;
-        // Gain sections still at their vehicle-derived defaults (`pid`,
-        // `se3`) are dropped, so that they follow an overridden `[plant]` or
-        // rotor limit as a scenario file without them would.
-        for key in self.inner.gains.keys_at_defaults(&self.inner.nominal_vehicle()) {
-            table.remove(key);
-        }
-        let mut keys = Vec::new();
+        let mut sets = Vec::new();
         let mut budget = MAX_OVERRIDE_VALUES;
         for (key, value) in overrides.iter() {
             let key: String = key.extract().map_err(|_| value_error("override keys must be strings"))?;
             // Error messages quote at most the first characters of a key.
-            let key = if key.chars().count() > MAX_KEY_CHARS {
+            if key.chars().count() > MAX_KEY_CHARS {
                 return Err(value_error(format!(
                     "override `{}…`: a dotted key is at most {MAX_KEY_CHARS} characters and {MAX_KEY_PARTS} parts",
                     key.chars().take(40).collect::<String>()
                 )));
-            } else {
-                key
-            };
+            }
             let value =
                 to_toml_value(&value, &mut budget).map_err(|m| value_error(format!("override `{key}`: {m}")))?;
-            set_dotted(&mut table, &key, value).map_err(|m| value_error(format!("override `{key}`: {m}")))?;
-            keys.push(key);
+            sets.push((key, value));
         }
-        let text = toml::to_string(&table).map_err(|e| value_error(e.to_string()))?;
-        let shown = format!("{} with overrides {}", self.inner.name, keys.join(", "));
-        let loaded = ftsmc_sim::Scenario::from_toml_str_with_warnings(&text, &shown, &[])
-            .map_err(|e| value_error(chain_message(&e)))?;
+        // The simulator's one implementation, also behind the CLI's `--set`.
+        let loaded = self.inner.with_overrides(&sets).map_err(|e| value_error(chain_message(&e)))?;
         warn_all(py, loaded)
     }
 
@@ -195,10 +185,7 @@ impl Scenario {
 pub const MAX_OVERRIDE_DEPTH: usize = 32;
 /// Most values (dict entries, list items, scalars) in all overrides of one call.
 pub const MAX_OVERRIDE_VALUES: usize = 1_000_000;
-/// Longest dotted override key, characters, and most parts in it.
-pub const MAX_KEY_CHARS: usize = 256;
-/// Most parts of a dotted override key.
-pub const MAX_KEY_PARTS: usize = 16;
+pub use ftsmc_sim::scenario::overrides::{MAX_KEY_CHARS, MAX_KEY_PARTS};
 
 /// [`to_toml_value`] within [`MAX_OVERRIDE_DEPTH`] and a budget of
 /// [`MAX_OVERRIDE_VALUES`] values, so that a self-referencing or hugely
@@ -261,29 +248,4 @@ fn to_toml_value_at(value: &Bound<'_, PyAny>, depth: usize, budget: &mut usize) 
     Err(format!(
         "a value of type {type_name} cannot be written to a scenario (use bool, int, float, str, list or dict)"
     ))
-}
-
-/// Set `table[a][b][c] = value` for `key = "a.b.c"`, creating missing
-/// tables; an existing non-table on the way is an error naming it.
-fn set_dotted(table: &mut toml::Table, key: &str, value: toml::Value) -> Result<(), String> {
-    if key.chars().count() > MAX_KEY_CHARS || key.split('.').count() > MAX_KEY_PARTS {
-        return Err(format!("a dotted key is at most {MAX_KEY_CHARS} characters and {MAX_KEY_PARTS} parts"));
-    }
-    let parts: Vec<&str> = key.split('.').collect();
-    if parts.iter().any(|p| p.is_empty()) {
-        return Err("empty key part (expected dotted keys such as `payload.mass`)".into());
-    }
-    let (last, path) = parts.split_last().expect("split gives at least one part");
-    let mut here = table;
-    for (i, part) in path.iter().enumerate() {
-        let entry = here.entry(part.to_string()).or_insert_with(|| toml::Value::Table(toml::Table::new()));
-        here = match entry {
-            toml::Value::Table(t) => t,
-            other => {
-                return Err(format!("`{}` is a {}, not a table", parts[..=i].join("."), other.type_str()));
-            }
-        };
-    }
-    here.insert(last.to_string(), value);
-    Ok(())
 }

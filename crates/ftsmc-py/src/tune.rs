@@ -64,8 +64,12 @@ pub fn tune_evaluate(
         })
         .collect::<PyResult<_>>()?;
     if let Some(s) = scenarios.first() {
-        ftsmc_sim::limits::check_batch(&s.flight_size(), (scenarios.len() * indices.len()) as u64, 1)
-            .map_err(|e| value_error(chain_message(&e)))?;
+        ftsmc_sim::limits::check_batch(
+            &s.flight_size(),
+            (scenarios.len() as u64).saturating_mul(indices.len() as u64),
+            1,
+        )
+        .map_err(|e| value_error(chain_message(&e)))?;
     }
     let stats = py.detach(move || {
         let pool = rayon::ThreadPoolBuilder::new()
@@ -104,7 +108,7 @@ pub fn tune_native(
         return Err(value_error("threads must be at least 1"));
     }
     let settings = base.tune.clone().unwrap_or_default();
-    ftsmc_sim::limits::check_batch(&base.flight_size(), budget + 2 * settings.validation_runs, 1)
+    ftsmc_sim::limits::check_batch(&base.flight_size(), budget.saturating_add(2 * settings.validation_runs), 1)
         .map_err(|e| value_error(chain_message(&e)))?;
     if let Some(n) = threads {
         ftsmc_sim::limits::check_threads(&base.limits, n).map_err(|e| value_error(chain_message(&e)))?;
@@ -132,11 +136,15 @@ pub fn tune_native(
         "controller": result.controller,
         "parameters": names,
         "best": result.best(),
+        "improved": result.improved,
         "start_cost": result.history[0].cost,
         "training": result.training,
         "held_out": result.held_out,
         "training_flights": result.training_flights,
+        "race_flights": result.race_flights,
         "held_out_flights": result.held_out_flights,
+        "generations": result.generations,
+        "race": result.race,
         "history": result.history,
     });
     let json = serde_json::to_string(&summary).map_err(value_error)?;

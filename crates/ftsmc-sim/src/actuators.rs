@@ -21,6 +21,7 @@ use ftsmc_core::model::{Command, QuadrotorParams};
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
+use crate::desaturation::SequentialDesaturation;
 use crate::gauss::standard_normal;
 
 /// ChaCha stream of the motor-speed noise generator. The run loop's drag
@@ -58,7 +59,8 @@ pub struct MotorNoise {
 }
 
 /// How the mixer gives up authority when the rotors saturate
-/// (`[actuators] mixer = "thrust-first" | "px4" | "px4-airmode" | "clamp"`).
+/// (`[actuators] mixer = "thrust-first" | "px4" | "px4-exact" |
+/// "px4-exact-airmode" | "clamp"`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, Serialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum MixerKind {
@@ -67,16 +69,24 @@ pub enum MixerKind {
     /// scenarios written before the PX4 mixer keep their results.
     #[default]
     ThrustFirst,
-    /// PX4's multicopter allocation with airmode off (`MC_AIRMODE` = 0, its
-    /// default; `ControlAllocationSequentialDesaturation`): roll and pitch
-    /// are kept by **lowering** the collective thrust (never raising it);
-    /// roll/pitch are scaled down only when no thrust at or below the
-    /// command fits them; yaw is added last and scaled to fit.
+    /// PX4's own allocation with airmode off (`MC_AIRMODE` = 0, its
+    /// default), step for step as `ControlAllocationSequentialDesaturation`
+    /// does it ([`crate::desaturation`]): thrust only lowered, roll then
+    /// pitch desaturated each on its own (the tilting torque may turn),
+    /// thrust lowered by up to 0.15 of its range for yaw, then every rotor
+    /// clipped. Needs a finite `max_rotor_speed`.
     Px4,
-    /// PX4 with airmode for roll and pitch (`MC_AIRMODE` = 1): as
-    /// [`MixerKind::Px4`], but the collective thrust may also be raised
-    /// (at low throttle) to keep roll/pitch authority.
-    Px4Airmode,
+    /// PX4's priorities solved exactly (ftsmc's own allocation, not PX4's
+    /// algorithm): roll and pitch are kept by **lowering** the collective
+    /// thrust (never raising it); roll/pitch are scaled down together (their
+    /// direction kept) only when no thrust at or below the command fits
+    /// them; yaw is added last and scaled to fit; no rotor is left clipped.
+    Px4Exact,
+    /// As [`MixerKind::Px4Exact`], but the collective thrust may also be
+    /// raised (at low throttle) to keep roll/pitch authority, PX4's
+    /// `MC_AIRMODE` = 1 priorities solved exactly. Also read as `"px4-airmode"`.
+    #[serde(alias = "px4-airmode")]
+    Px4ExactAirmode,
     /// Paper Eq. 2 inverted and each rotor speed clamped to `[ω_min, ω_max]`
     /// on its own (thrust and torques change together; [`Mixer::mix_clamped`]).
     /// The rotors reach the clamped speeds at once: no lag, no noise. What the
@@ -189,6 +199,14 @@ impl ActuatorParams {
                 NoiseScale::Absolute => closed("noise.std", noise.std, 0.0, 1e6, "0 <= std <= 1e6 rad/s")?,
                 NoiseScale::Relative => closed("noise.std", noise.std, 0.0, 10.0, "0 <= std <= 10 (fraction)")?,
             }
+        }
+        if self.mixer == MixerKind::Px4 && !self.max_rotor_speed.is_finite() {
+            return Err(GainError {
+                field: "mixer",
+                value: self.max_rotor_speed,
+                expected:
+                    "mixer = \"px4\" with a finite max_rotor_speed (PX4's motor setpoints are fractions of full thrust)",
+            });
         }
         if self.mixer == MixerKind::Clamp {
             if self.time_constant_up != 0.0 || self.time_constant_down != 0.0 {
@@ -449,10 +467,12 @@ pub struct MixerOutput {
 /// Turns thrust and torques into rotor speeds under the rotor limits.
 ///
 /// Which authority gives way first is [`MixerKind`] (`[actuators] mixer`);
-/// the default, thrust first, is described here. With `"px4"` step 1 and 2
-/// become PX4's: the collective thrust is lowered (never raised; with
-/// `"px4-airmode"` also raised) as far as needed to keep roll and pitch, and
-/// roll/pitch are scaled only when no such thrust exists; yaw stays last.
+/// the default, thrust first, is described here. `"px4"` is PX4's own
+/// sequential desaturation ([`crate::desaturation`]). With `"px4-exact"`
+/// step 1 and 2 follow PX4's priorities solved exactly: the collective thrust
+/// is lowered (never raised; with `"px4-exact-airmode"` also raised) as far
+/// as needed to keep roll and pitch, and roll/pitch are scaled only when no
+/// such thrust exists; yaw stays last.
 ///
 /// With `u = [U1, u2, u3, u4]` (N, N·m) and the allocation `u = A w`
 /// (`w_i = ω_i²`), the squared speeds are `w = A⁻¹ u`. When every `w_i` lies
@@ -490,6 +510,8 @@ pub struct Mixer {
     w_max: f64,
     thrust_range: [f64; 2],
     kind: MixerKind,
+    /// PX4's allocation, for [`MixerKind::Px4`].
+    px4: Option<SequentialDesaturation>,
 }
 
 /// Inverse of a 4×4 matrix by Gauss–Jordan elimination with partial
@@ -573,7 +595,8 @@ impl Mixer {
             });
         }
         let columns = core::array::from_fn(|k| core::array::from_fn(|i| inverse[i][k]));
-        Ok(Self { allocation, inverse, columns, w_min, w_max, thrust_range, kind: actuators.mixer })
+        let px4 = (actuators.mixer == MixerKind::Px4).then(|| SequentialDesaturation::new(&inverse, w_min, w_max));
+        Ok(Self { allocation, inverse, columns, w_min, w_max, thrust_range, kind: actuators.mixer, px4 })
     }
 
     /// The mixer of paper Eq. 2 ([`paper_allocation_matrix`]).
@@ -619,8 +642,8 @@ impl Mixer {
         s.max(0.0)
     }
 
-    /// The PX4 desaturation of roll/pitch by the collective thrust
-    /// ([`MixerKind::Px4`]): the largest roll/pitch scale `s ∈ [0, 1]` for
+    /// The exact desaturation of roll/pitch by the collective thrust
+    /// ([`MixerKind::Px4Exact`]): the largest roll/pitch scale `s ∈ [0, 1]` for
     /// which some collective thrust `T` puts every rotor in range, with
     /// `T <= requested` unless `raise` (airmode), then the feasible `T`
     /// nearest `requested`. With `w_i = c_i T + s r_i` (`c = A⁻¹ e₁`, `r` the
@@ -687,6 +710,14 @@ impl Mixer {
             Command { thrust: finite(command.thrust), torque: command.torque.map(finite) }
         };
         let u = [commanded.thrust, commanded.torque[0], commanded.torque[1], commanded.torque[2]];
+        if let Some(px4) = &self.px4 {
+            let a = px4.allocate(&u);
+            let w = a.setpoints.map(|ai| ai * self.w_max);
+            let rotor_speeds = w.map(|wi| wi.clamp(self.w_min, self.w_max).sqrt());
+            let applied = if a.changed { self.forces(&w) } else { commanded };
+            let saturated = !all_finite || a.changed;
+            return MixerOutput { commanded, applied, rotor_speeds, saturated };
+        }
         let w = self.squared(&u);
         let speeds = |w: &[f64; 4]| w.map(|wi| wi.clamp(self.w_min, self.w_max).sqrt());
         // Every rotor tested (no early exit): the same answer, without branches.
@@ -701,9 +732,11 @@ impl Mixer {
         };
         let requested = commanded.thrust.clamp(self.thrust_range[0], self.thrust_range[1]);
         let (thrust, s_rp) = match self.kind {
-            MixerKind::ThrustFirst | MixerKind::Clamp => (requested, self.max_scale(&column(0, requested), &rp)),
-            MixerKind::Px4 => self.keep_roll_pitch(requested, &rp, false),
-            MixerKind::Px4Airmode => self.keep_roll_pitch(requested, &rp, true),
+            MixerKind::ThrustFirst | MixerKind::Clamp | MixerKind::Px4 => {
+                (requested, self.max_scale(&column(0, requested), &rp))
+            }
+            MixerKind::Px4Exact => self.keep_roll_pitch(requested, &rp, false),
+            MixerKind::Px4ExactAirmode => self.keep_roll_pitch(requested, &rp, true),
         };
         let base = column(0, thrust);
         let base: [f64; 4] = core::array::from_fn(|i| base[i] + s_rp * rp[i]);

@@ -11,7 +11,10 @@
 //! floor or below, never above (checked by `tests/layout.rs`):
 //!
 //! ```text
-//! floor 7  tune/                `ftsmc tune`: parameter space, cost, CMA-ES, held-out validation
+//! floor 7  falsify/             worst cases and rare failures (docs/falsification.md)
+//!            search.rs          CMA-ES with IPOP restarts and uniform random search over the [falsify] box
+//!            rare.rs            P(margin < 0) by cross-entropy importance sampling, and plain Monte Carlo
+//!          tune/                `ftsmc tune`: parameter space, cost, CMA-ES, held-out validation
 //!            cmaes.rs           ask/tell CMA-ES
 //!            cost.rs            flight statistics and the tuning cost
 //!            space.rs           declared + [tune] parameters, normalised coordinates, tuned TOML diff
@@ -35,16 +38,19 @@
 //!            recording.rs       Recording, recording_columns, CSV numbers
 //! floor 3  scenario/            the file format; composes every part's parameters; validation
 //!            validate.rs        range checks, names, array lengths, cost limits
-//!            resolve.rs         extends chains, deep merge, --set overrides, unit-slip warnings
+//!            resolve.rs         extends chains, deep merge, vehicle and wind presets, unit-slip warnings
+//!            overrides.rs       dotted-key overrides: --set KEY=VALUE and Python's with_overrides
 //!            distributions.rs   Dist, MonteCarloSpec, SAMPLED_COLUMNS, run_seed, per-run sampling
 //!            ladder.rs          the wind ladder's built-in scenarios realistic-<level>-<n>
 //!            tune_section.rs    `[tune]`: parameter set and cost weights of `ftsmc tune`
+//!            falsify_section.rs `[falsify]`: bounded search space with nominal distributions, applied to a scenario
 //!            deprecated.rs      old spellings ([actual_plant], [vehicle.rigid_body], max_tilt) moved to the new keys
 //! floor 2  vehicle/             truth models
 //!            paper.rs           Eq. 1 (the paper's plant) and the generic rk4_step
 //!            rigid_body.rs      Newton–Euler rigid body with quaternion attitude
 //!            math.rs            small vector/quaternion helpers
 //!            section.rs         `[vehicle]`: the truth model and every true parameter, one key set
+//!            presets.rs         named real vehicles (`[vehicle] preset`), their sourced files in vehicles/
 //!          actuators.rs         motor limits, lag, noise; mixer under saturation
 //!          environment/         plant-side variations, built from their own sections
 //!            disturbance.rs     DisturbanceSignals
@@ -54,6 +60,7 @@
 //!            wind.rs            mean wind, 1−cos gusts, Dryden turbulence (`[wind]`)
 //!            phasors.rs         the environment's sinusoid terms on the loop's grid, four at a time
 //!          envelope.rs          success envelope and its verdict (`[envelope]`)
+//!          margin.rs            signed robustness margin to the envelope (STL robustness)
 //!          metrics.rs           ISE, IAE, ITAE, settling, chattering, online
 //!          sensors.rs           measured state: noise, bias, sample rate, latency (`[sensors]`)
 //!          controllers/         each controller declared once: name, label, gain section, constructor
@@ -66,6 +73,7 @@
 //!            per_lane.rs        any one-flight controller on lanes (one controller per lane)
 //!            on_isa.rs          a controller's updates on the instruction set picked at run time
 //! floor 1  axes.rs              AxisSet and other per-axis containers
+//!          desaturation.rs      PX4's sequential-desaturation allocation (airmode off)
 //!          signal/              time signals with analytic derivatives
 //!            waypoints.rs       quintic waypoint splines
 //!          limits.rs            cost limits and their arithmetic
@@ -74,6 +82,7 @@
 //!          noise.rs             NoiseStream: a noise source's ChaCha generator read a block ahead
 //! floor 0  rng.rs               the ChaCha8 generator of a seed on a stream: every draw starts there
 //!          gauss.rs             normal and log-normal draws (ziggurat) on the libm crate's exp and ln
+//!          stats/               intervals (rates, quantiles, means), paired tests, Holm, sequential looks
 //! ```
 #![warn(missing_docs)]
 
@@ -82,12 +91,16 @@ pub mod analysis;
 pub mod axes;
 pub mod batch;
 pub mod controllers;
+pub mod desaturation;
 pub mod envelope;
 pub mod environment;
+pub mod escape;
+pub mod falsify;
 pub mod gauss;
 pub mod gym;
 pub mod isa;
 pub mod limits;
+pub mod margin;
 pub mod metrics;
 pub mod noise;
 pub mod registry;
@@ -96,6 +109,7 @@ pub mod run;
 pub mod scenario;
 pub mod sensors;
 pub mod signal;
+pub mod stats;
 pub mod text;
 pub mod tune;
 pub mod vehicle;

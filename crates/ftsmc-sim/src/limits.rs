@@ -17,6 +17,18 @@
 //!
 //! All amounts are computed in `f64`, so no request — however large — can
 //! overflow while being priced.
+//!
+//! # Hard bounds
+//!
+//! A limit set to `inf` switches its check off, not the bounds of the
+//! machine: [`hard_bound`] holds whatever the limits say. The steps of one
+//! flight stay below [`HARD_MAX_STEPS`]; what a command holds in memory
+//! (recorded rows, the rows and CSV text of a batch, the text of a scenario
+//! file) stays below the machine's memory ([`memory_bytes`]); worker threads
+//! stay below [`hard_max_threads`] (a multiple of the cores); a fixed-time
+//! sweep below [`HARD_MAX_SWEEP_POINTS`] magnitudes. A request above a hard
+//! bound is refused like one above a limit, with a message saying that no
+//! limit raises it (split the work instead: `--shard`, shorter flights).
 
 use ftsmc_core::law::MAX_ESTIMATES;
 use serde::{Deserialize, Serialize};
@@ -93,6 +105,69 @@ impl Default for Limits {
     }
 }
 
+/// Most RK4 steps of one flight whatever `max_steps` says (weighted by the
+/// signal terms like `max_steps`): 10¹² steps, about two weeks of one core;
+/// also keeps every step count far inside `u64`.
+pub const HARD_MAX_STEPS: f64 = 1e12;
+
+/// Most magnitudes of one fixed-time sweep whatever `max_sweep_points` says
+/// (each is a flight of every channel; 10⁶ is days of work).
+pub const HARD_MAX_SWEEP_POINTS: f64 = 1e6;
+
+/// Memory a Monte Carlo batch holds per flight until it is written: the
+/// row (sampled values, metrics, statistics) and its `runs.csv` text, bytes.
+pub const HELD_BYTES_PER_FLIGHT: f64 = 2048.0;
+
+/// Bytes per recorded value held in memory (`f64`).
+const BYTES_PER_HELD_VALUE: f64 = 8.0;
+
+/// Memory assumed when the machine's cannot be read: 8 GiB.
+const FALLBACK_MEMORY_BYTES: f64 = 8.0 * 1024.0 * 1024.0 * 1024.0;
+
+/// The machine's physical memory, bytes (`MemTotal` of `/proc/meminfo`;
+/// 8 GiB where it cannot be read): the ceiling of everything a command
+/// reserves or holds, whatever the limits.
+pub fn memory_bytes() -> f64 {
+    static MEMORY: std::sync::OnceLock<f64> = std::sync::OnceLock::new();
+    *MEMORY.get_or_init(|| {
+        let kib = std::fs::read_to_string("/proc/meminfo").ok().and_then(|text| {
+            let line = text.lines().find(|l| l.starts_with("MemTotal:"))?;
+            line.split_whitespace().nth(1)?.parse::<f64>().ok()
+        });
+        kib.map_or(FALLBACK_MEMORY_BYTES, |k| k * 1024.0)
+    })
+}
+
+/// Most worker threads whatever `max_threads` says: 64 × the available
+/// cores, at least 1024 (above the default limit, far below what makes
+/// spawning them hang).
+pub fn hard_max_threads() -> f64 {
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    (64 * cores).max(1024) as f64
+}
+
+/// The hard bound of limit `key` and why it holds: what no `[limits]` or
+/// `--limit` raises (see the module docs). `max_flights` is bounded by the
+/// memory a batch holds ([`HELD_BYTES_PER_FLIGHT`] per flight),
+/// `max_samples` by the memory of a recording (every column an `f64`),
+/// `max_output_bytes` and `max_scenario_bytes` by the memory the text is
+/// built in.
+pub fn hard_bound(key: &str) -> (f64, &'static str) {
+    let memory = memory_bytes();
+    match key {
+        "max_steps" => (HARD_MAX_STEPS, "two weeks of one core"),
+        "max_samples" => {
+            (memory / (MAX_RECORDING_COLUMNS as f64 * BYTES_PER_HELD_VALUE), "rows held in this machine's memory")
+        }
+        "max_output_bytes" => (memory, "this machine's memory: results are built in it"),
+        "max_flights" => (memory / HELD_BYTES_PER_FLIGHT, "rows held in this machine's memory"),
+        "max_sweep_points" => (HARD_MAX_SWEEP_POINTS, "each is a flight per channel"),
+        "max_threads" => (hard_max_threads(), "64 × the cores, at least 1024"),
+        "max_scenario_bytes" => (memory / 16.0, "read and parsed in memory"),
+        _ => (f64::INFINITY, ""),
+    }
+}
+
 /// A request above a limit.
 #[derive(Clone, Debug, PartialEq)]
 pub struct LimitError {
@@ -104,15 +179,28 @@ pub struct LimitError {
     pub requested: f64,
     /// The limit in force.
     pub allowed: f64,
+    /// Refused by the [`hard_bound`] of the key (which no limit raises),
+    /// with its reason; `None` for the limit itself.
+    pub hard: Option<&'static str>,
 }
 
 impl core::fmt::Display for LimitError {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         let key = self.key;
+        if let Some(why) = self.hard {
+            return write!(
+                f,
+                "refused: {} = {} exceeds the hard bound {} of {key} ({why}), which holds even with {key} = inf; \
+                 split the work (--shard K/N, fewer runs, shorter flights)",
+                self.what,
+                crate::text::show(self.requested),
+                crate::text::show(self.allowed),
+            );
+        }
         write!(
             f,
-            "refused before running: {} = {} exceeds the limit {key} = {}; to allow it, raise the limit with \
-             `[limits] {key} = <n>` in the scenario or `--limit {key}=<n>` on the command line",
+            "refused before running: {} = {} exceeds the limit {key} = {}; to allow it, raise it with \
+             `[limits] {key} = <n>` in the scenario or `--limit {key}=<n>`",
             self.what,
             crate::text::show(self.requested),
             crate::text::show(self.allowed),
@@ -195,10 +283,15 @@ impl Limits {
     /// `Err` when `requested > limit` (or is NaN).
     pub fn ensure(&self, key: &'static str, what: impl Into<String>, requested: f64) -> Result<(), LimitError> {
         let allowed = self.named().into_iter().find(|(k, _)| *k == key).map_or(0.0, |(_, v)| v);
-        if requested <= allowed {
+        // NaN is refused too: it is not `<=` anything.
+        if requested.partial_cmp(&allowed).is_none_or(|o| o == core::cmp::Ordering::Greater) {
+            return Err(LimitError { key, what: what.into(), requested, allowed, hard: None });
+        }
+        let (bound, why) = hard_bound(key);
+        if requested <= bound {
             Ok(())
         } else {
-            Err(LimitError { key, what: what.into(), requested, allowed })
+            Err(LimitError { key, what: what.into(), requested, allowed: bound, hard: Some(why) })
         }
     }
 }
@@ -311,6 +404,30 @@ pub fn check_batch(scenario: &FlightSize<'_>, runs: u64, n_controllers: usize) -
         ),
         steps * (1.0 + sim.signal_cost / TERMS_PER_STEP),
     )
+}
+
+/// Memory one Gymnasium environment holds (its flight lane: vehicle,
+/// controller, sensors, wind filters, observation), bytes: an upper estimate.
+pub const BYTES_PER_ENV: f64 = 64.0 * 1024.0;
+
+/// Price `num_envs` Gymnasium environments flown side by side: as flights
+/// against `max_flights`, and their memory ([`BYTES_PER_ENV`] each) against
+/// the machine's ([`memory_bytes`]) whatever the limits.
+pub fn check_envs(limits: &Limits, num_envs: f64) -> Result<(), LimitError> {
+    let what = "environments flown side by side (num_envs)";
+    limits.ensure("max_flights", what, num_envs)?;
+    let fits = memory_bytes() / BYTES_PER_ENV;
+    if num_envs <= fits {
+        Ok(())
+    } else {
+        Err(LimitError {
+            key: "max_flights",
+            what: what.to_string(),
+            requested: num_envs,
+            allowed: fits.floor(),
+            hard: Some("64 KiB each in this machine's memory"),
+        })
+    }
 }
 
 /// Number of magnitudes of a fixed-time sweep over `decades` decades with

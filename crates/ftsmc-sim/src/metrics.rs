@@ -77,6 +77,29 @@ pub struct Metrics {
 }
 
 impl Metrics {
+    /// The first metric that is not finite (`"ise_z"`, `"chattering_thrust"`,
+    /// …), if any: a completed flight never reports one — its exit becomes
+    /// [`crate::run::Divergence::NonFiniteMetric`] instead.
+    pub fn first_non_finite(&self) -> Option<String> {
+        let axes = [("ise", &self.ise), ("iae", &self.iae), ("itae", &self.itae), ("rms", &self.rms)];
+        for (metric, set) in axes.into_iter().chain(self.ise_window.as_ref().map(|w| ("ise_window", w))) {
+            if let Some((axis, _)) = set.named().into_iter().find(|(_, v)| !v.is_finite()) {
+                return Some(format!("{metric}_{axis}"));
+            }
+        }
+        for (axis, v) in self.max_error_after.named() {
+            if v.is_some_and(|v| !v.is_finite()) {
+                return Some(format!("max_error_after_{axis}"));
+            }
+        }
+        for (metric, set) in [("control_energy", &self.control_energy), ("chattering", &self.chattering)] {
+            if let Some((k, _)) = set.to_array().into_iter().enumerate().find(|(_, v)| !v.is_finite()) {
+                return Some(format!("{metric}_{}", SignalSet::<f64>::NAMES[k]));
+            }
+        }
+        None
+    }
+
     /// The time span `[0, t_end]` (s) the integral metrics cover.
     pub fn covered(&self) -> [f64; 2] {
         [0.0, self.duration]

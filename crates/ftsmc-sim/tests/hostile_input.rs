@@ -78,7 +78,12 @@ fn megahertz_recording_is_refused_by_rows_and_bytes() {
     assert!(msg.contains("max_steps"), "{msg}");
     let msg = parse(&format!("{sim}[limits]\nmax_steps = 1e12\n")).map(|_| ()).unwrap_err().to_string();
     assert!(msg.contains("max_samples"), "{msg}");
+    // 10⁹ rows are above the hard bound of memory whatever max_samples says …
     let msg = parse(&format!("{sim}[limits]\nmax_steps = 1e12\nmax_samples = 1e12\n")).map(|_| ()).unwrap_err();
+    assert!(msg.to_string().contains("hard bound") && msg.to_string().contains("max_samples"), "{msg}");
+    // … and 10⁶ rows of three controllers' CSV are above max_output_bytes.
+    let kilohertz = sim.replace("record_rate = 1e6", "record_rate = 1e3");
+    let msg = parse(&format!("{kilohertz}[limits]\nmax_steps = 1e12\nmax_samples = 1e12\n")).map(|_| ()).unwrap_err();
     assert!(msg.to_string().contains("max_output_bytes"), "{msg}");
 }
 
@@ -285,7 +290,7 @@ fn monte_carlo_draws_stay_in_the_physical_ranges() {
     let msg = refused("[montecarlo]\npayload_mass = { dist = \"uniform\", low = 0.0, high = 0.5 }\n");
     assert!(msg.contains("`montecarlo.payload_mass`") && msg.contains("[payload]"), "{msg}");
     // Clamped distributions inside the ranges are fine, and so is the shipped envelope.
-    accepted(&format!("{MC}mass = {{ dist = \"normal\", mean = 0.74, std = 0.1, low = 0.3 }}\n"));
+    accepted(&format!("{MC}mass = {{ dist = \"normal\", mean = 0.74, std = 0.1, low = 0.3, high = 1.2 }}\n"));
     Scenario::from_toml_str(PAPER_SCENARIO_2, "paper-scenario-2.toml").unwrap();
 }
 
@@ -331,9 +336,10 @@ fn monte_carlo_draws_outside_the_rigid_bodys_range_are_refused_at_load() {
     )
     .unwrap_err();
     assert!(msg.contains("`montecarlo.mass`") && msg.contains("mass = 1.0000003e6"), "{msg}");
-    // The same draws on the paper plant are legal: the range is the rigid body's.
+    // Draws the rigid body refuses for its own range are legal on the paper
+    // plant (within a factor 3 of its 0.74 kg, the band of every vehicle).
     Scenario::from_toml_str(
-        "extends = \"paper-scenario-1\"\nname = \"t\"\n[montecarlo]\nmass = { dist = \"uniform\", low = 1e-9, high = 1.0 }\n",
+        "extends = \"paper-scenario-1\"\nname = \"t\"\n[montecarlo]\nmass = { dist = \"uniform\", low = 0.3, high = 2.0 }\n",
         "paper.toml",
     )
     .unwrap();
@@ -447,8 +453,14 @@ const NO_LIMITS: &str = "[limits]\nmax_steps = inf\nmax_samples = inf\nmax_outpu
 fn an_inf_limit_lifts_the_check_without_overflow_and_the_run_can_be_cancelled() {
     use ftsmc_sim::{registry, ExitStatus, RunOptions};
     use std::sync::atomic::{AtomicBool, Ordering};
-    // 1e300 s at 1 kHz: u64::MAX steps and rows; refused by default, accepted with `inf`.
-    let huge = "extends = \"paper-scenario-1\"\nname = \"t\"\nduration = 1e300\n";
+    // 1e300 s at 1 kHz: refused by default, and with `inf` by the hard bound on steps.
+    let endless = "extends = \"paper-scenario-1\"\nname = \"t\"\nduration = 1e300\n";
+    let msg = Scenario::from_toml_str(endless, "inf.toml").unwrap_err().to_string();
+    assert!(msg.contains("max_steps"), "{msg}");
+    let msg = Scenario::from_toml_str(&format!("{endless}{NO_LIMITS}"), "inf.toml").unwrap_err().to_string();
+    assert!(msg.contains("max_steps") && msg.contains("hard bound"), "{msg}");
+    // 1e7 s (1e10 steps, 1e6 rows at 0.1 Hz): refused by default, accepted with `inf`.
+    let huge = "extends = \"paper-scenario-1\"\nname = \"t\"\nduration = 1e7\n[simulation]\nrecord_rate = 0.1\n";
     let msg = Scenario::from_toml_str(huge, "inf.toml").unwrap_err().to_string();
     assert!(msg.contains("max_steps"), "{msg}");
     let text = format!("{huge}{NO_LIMITS}");
@@ -507,4 +519,58 @@ fn signal_terms_are_priced_into_the_step_limit() {
     Scenario::from_toml_str("name = \"t\"\nduration = 1000.0\n", "t.toml").unwrap();
     accepted(&many);
     long("[limits]\nmax_steps = inf\n").unwrap();
+}
+
+/// A scenario on the ground (`z0 = 0`, ground at 0) whose `[montecarlo]`
+/// draws `dist` as the initial position offset.
+fn on_the_ground(dist: &str) -> String {
+    format!("extends = \"realistic-calm-1\"\nname = \"drawn\"\n\n[montecarlo]\ninitial_position_offset = {dist}\n")
+}
+
+#[test]
+fn draws_below_the_ground_are_refused_like_a_file() {
+    // A single file starting below the ground is refused …
+    let below = "extends = \"realistic-calm-1\"\nname = \"below\"\n\n[initial_state]\nposition = [0.0, 0.0, -0.5]\n";
+    assert!(Scenario::from_toml_str(below, "below.toml").is_err());
+    // … and so is a draw that could start there: the key, its range and the bound.
+    let err = Scenario::from_toml_str(&on_the_ground("{ dist = \"uniform\", low = -1.0, high = 1.0 }"), "mc.toml")
+        .unwrap_err()
+        .to_string();
+    for part in ["mc.toml", "montecarlo.initial_position_offset", "draws in [-1, 1]", "ground.height = 0", "z = 0 + -1"]
+    {
+        assert!(err.contains(part), "`{part}` missing from: {err}");
+    }
+    assert!(err.lines().next().unwrap().len() <= 300, "{err}");
+    // An unbounded normal reaches below the ground too: refused, unless clamped.
+    let normal = on_the_ground("{ dist = \"normal\", mean = 0.5, std = 0.1 }");
+    assert!(Scenario::from_toml_str(&normal, "mc.toml").unwrap_err().to_string().contains("initial_position_offset"));
+    let clamped = on_the_ground("{ dist = \"normal\", mean = 0.5, std = 0.1, low = 0.0 }");
+    Scenario::from_toml_str(&clamped, "mc.toml").unwrap();
+    Scenario::from_toml_str(&on_the_ground("{ dist = \"uniform\", low = 0.0, high = 1.0 }"), "mc.toml").unwrap();
+}
+
+#[test]
+fn disturbance_factors_that_overflow_are_refused() {
+    let text = "extends = \"paper-scenario-1\"\nname = \"big\"\n\n[disturbance.x]\nterms = [{ type = \"sine\", amplitude = 10.0, omega = 1.0 }]\n\n[montecarlo]\ndisturbance_amplitude = { dist = \"uniform\", low = 1.0, high = 1e308 }\n";
+    let err = Scenario::from_toml_str(text, "big.toml").unwrap_err().to_string();
+    assert!(err.contains("montecarlo.disturbance_amplitude") && err.contains("1e308"), "{err}");
+}
+
+#[test]
+fn a_completed_flight_never_reports_an_infinite_metric() {
+    use ftsmc_sim::{registry, run::Divergence, ExitStatus, RunOptions};
+    // 1e200 m above its reference with the divergence check moved out of
+    // the way: the state stays finite for the two control periods, but
+    // e² = 1e400 overflows ISE z.
+    let text = "extends = \"paper-scenario-1\"\nname = \"far\"\nduration = 0.002\n\n[simulation]\nmax_position_error = 1e300\n\n[initial_state]\nposition = [0.0, 0.0, 1e200]\n";
+    let s = Scenario::from_toml_str(text, "far.toml").unwrap();
+    let out = registry::run("pid", &s, RunOptions::default()).unwrap();
+    assert!(!out.exit.is_completed(), "completed with ISE z = {}", out.metrics.ise.z);
+    match out.exit {
+        ExitStatus::Diverged { divergence: Divergence::NonFiniteMetric, time } => {
+            assert!(time > 0.0 && out.exit.to_string().contains("metric"), "{}", out.exit);
+        }
+        other => panic!("expected a metric overflow, got {other}"),
+    }
+    assert!(!out.success() && out.metrics.first_non_finite().as_deref() == Some("ise_z"));
 }

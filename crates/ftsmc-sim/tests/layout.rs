@@ -16,10 +16,13 @@ use source::{module_of, paths_after, rust_files, without_comments};
 const FLOORS: &[(&str, u32)] = &[
     ("gauss", 0),
     ("rng", 0),
+    ("stats", 0),
     ("text", 1),
+    ("escape", 1),
     ("axes", 1),
     ("limits", 1),
     ("isa", 1),
+    ("desaturation", 1),
     ("signal", 1),
     ("noise", 1),
     ("vehicle", 2),
@@ -27,6 +30,7 @@ const FLOORS: &[(&str, u32)] = &[
     ("environment", 2),
     ("metrics", 2),
     ("envelope", 2),
+    ("margin", 2),
     ("sensors", 2),
     ("controllers", 2),
     ("scenario", 3),
@@ -36,6 +40,7 @@ const FLOORS: &[(&str, u32)] = &[
     ("batch", 6),
     ("gym", 6),
     ("tune", 7),
+    ("falsify", 7),
     // The crate root only re-exports.
     ("", 8),
 ];

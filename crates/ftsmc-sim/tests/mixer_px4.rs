@@ -1,4 +1,5 @@
-//! The PX4-style mixer (`[actuators] mixer = "px4" | "px4-airmode"`) beside
+//! The exact PX4-priority mixer (`[actuators] mixer = "px4-exact" |
+//! "px4-exact-airmode"`) beside
 //! the thrust-first one: near full throttle PX4 keeps roll and pitch and
 //! lowers the collective thrust; it never raises it unless in airmode; yaw
 //! gives way last; what the rotors deliver is what `applied` says.
@@ -23,7 +24,7 @@ fn close(a: f64, b: f64) -> bool {
 
 #[test]
 fn a_feasible_command_is_applied_unchanged_by_every_mixer() {
-    for kind in [MixerKind::ThrustFirst, MixerKind::Px4, MixerKind::Px4Airmode] {
+    for kind in [MixerKind::ThrustFirst, MixerKind::Px4Exact, MixerKind::Px4ExactAirmode] {
         let (m, t_max) = mixer(kind);
         let c = Command { thrust: 0.5 * t_max, torque: [0.05, -0.03, 0.002] };
         let out = m.mix(&c);
@@ -40,7 +41,7 @@ fn near_full_throttle_px4_keeps_roll_and_lowers_thrust_thrust_first_the_opposite
     assert!(out.saturated);
     assert!(close(out.applied.thrust, 0.95 * t_max));
     assert!(out.applied.torque[0] < 0.4 * 0.5, "thrust first cuts roll: {:?}", out.applied);
-    for kind in [MixerKind::Px4, MixerKind::Px4Airmode] {
+    for kind in [MixerKind::Px4Exact, MixerKind::Px4ExactAirmode] {
         let (m, _) = mixer(kind);
         let out = m.mix(&c(t_max));
         assert!(out.saturated, "{kind:?}");
@@ -55,13 +56,13 @@ fn near_full_throttle_px4_keeps_roll_and_lowers_thrust_thrust_first_the_opposite
 
 #[test]
 fn without_airmode_px4_never_raises_thrust_with_airmode_it_does() {
-    let (m, t_max) = mixer(MixerKind::Px4);
+    let (m, t_max) = mixer(MixerKind::Px4Exact);
     // Low throttle, large roll: one rotor would need a negative ω².
     let c = Command { thrust: 0.05 * t_max, torque: [0.4, 0.0, 0.0] };
     let out = m.mix(&c);
     assert!(out.applied.thrust <= c.thrust + 1e-12, "{:?}", out.applied);
     assert!(out.applied.torque[0] < 0.4, "roll scaled instead: {:?}", out.applied);
-    let (air, _) = mixer(MixerKind::Px4Airmode);
+    let (air, _) = mixer(MixerKind::Px4ExactAirmode);
     let out = air.mix(&c);
     assert!(out.applied.thrust > c.thrust, "airmode raises thrust: {:?}", out.applied);
     assert!(close(out.applied.torque[0], 0.4), "{:?}", out.applied);
@@ -71,7 +72,7 @@ fn without_airmode_px4_never_raises_thrust_with_airmode_it_does() {
 
 #[test]
 fn yaw_gives_way_last_and_roll_pitch_only_when_no_thrust_fits_them() {
-    let (m, t_max) = mixer(MixerKind::Px4);
+    let (m, t_max) = mixer(MixerKind::Px4Exact);
     // Half throttle, moderate roll, impossible yaw: roll kept, yaw scaled.
     let c = Command { thrust: 0.5 * t_max, torque: [0.2, 0.1, 1.0] };
     let out = m.mix(&c);
@@ -90,6 +91,14 @@ fn yaw_gives_way_last_and_roll_pitch_only_when_no_thrust_fits_them() {
 fn the_mixer_key_parses_and_defaults_to_thrust_first() {
     let a: ActuatorParams = toml::from_str("max_rotor_speed = 838.0\nmixer = \"px4\"").unwrap();
     assert_eq!(a.mixer, MixerKind::Px4);
+    let a: ActuatorParams = toml::from_str("max_rotor_speed = 838.0\nmixer = \"px4-exact\"").unwrap();
+    assert_eq!(a.mixer, MixerKind::Px4Exact);
+    // The exact airmode allocation's earlier name still loads.
+    let a: ActuatorParams = toml::from_str("max_rotor_speed = 838.0\nmixer = \"px4-airmode\"").unwrap();
+    assert_eq!(a.mixer, MixerKind::Px4ExactAirmode);
+    // PX4's setpoints are fractions of full thrust: an unbounded rotor is refused.
+    let a: ActuatorParams = toml::from_str("mixer = \"px4\"").unwrap();
+    assert!(a.check().unwrap_err().to_string().contains("finite max_rotor_speed"));
     let a: ActuatorParams = toml::from_str("max_rotor_speed = 838.0").unwrap();
     assert_eq!(a.mixer, MixerKind::ThrustFirst);
     assert!(toml::from_str::<ActuatorParams>("mixer = \"betaflight\"").is_err());

@@ -190,7 +190,7 @@ fn pid_anti_windup_bounds_the_overshoot_after_rotor_saturation() {
     let text = format!(
         "duration = 25.0\n[reference]\nx = {{ terms = [{{ type = \"step\", time = 0.0, height = {step} }}] }}\n\
          y = {{ terms = [{{ type = \"step\", time = 0.0, height = {step} }}] }}\n\
-         [actuators]\nmin_rotor_speed = 0.0\nmax_rotor_speed = 282.0\ntime_constant_up = 0.035\ntime_constant_down = 0.05\nmixer = \"px4\"\n\
+         [actuators]\nmin_rotor_speed = 0.0\nmax_rotor_speed = 282.0\ntime_constant_up = 0.035\ntime_constant_down = 0.05\nmixer = \"px4-exact\"\n\
          [ground]\nenabled = true\nheight = 0.0\nmax_touchdown_speed = 1.0\n"
     );
     let mut s = scenario(&text);

@@ -72,7 +72,51 @@ fn a_slow_touchdown_rests_on_the_ground() {
         "duration = 4.0\n[simulation]\nmax_position_error = 1e3\n[initial_state]\nposition = [0.0, 0.0, 0.5]\n[ground]\nenabled = true\n[vehicle]\nmodel = \"rigid-body\"\n",
     );
     let run = fly(&s, 0.95 * 0.74 * G);
+    // It touches down near t = √(2 · 0.5 / 0.49) = 1.43 s and rests there:
+    // more than max_ground_time (1 s) on the ground after take-off (it
+    // started in the air) ends the flight as landed, with its times.
+    let ExitStatus::Grounded { time, since } = run.exit else { panic!("{}", run.exit) };
+    assert!((since - 1.43).abs() < 0.05, "{since}");
+    assert!((time - since - 1.0).abs() < 2e-3, "{time} {since}");
+    assert!(!run.success() && run.exit.is_crashed() && run.exit.to_string().starts_with("landed"));
+    // A longer allowance lets it sit out the flight.
+    let s = scenario(
+        "duration = 4.0\n[simulation]\nmax_position_error = 1e3\n[initial_state]\nposition = [0.0, 0.0, 0.5]\n[ground]\nenabled = true\nmax_ground_time = 10.0\n[vehicle]\nmodel = \"rigid-body\"\n",
+    );
+    assert!(fly(&s, 0.95 * 0.74 * G).exit.is_completed());
+}
+
+#[test]
+fn friction_holds_a_tilted_vehicle_on_the_ground_and_a_frictionless_one_slides() {
+    // Rolled 0.3 rad on the ground with half its weight in thrust and no
+    // torque: the sideways push 0.5 m g sin 0.3 = 0.15 m g is below
+    // μ (m g − 0.5 m g cos 0.3) = 0.26 m g, so Coulomb friction holds it.
+    let base = "duration = 2.0\n[simulation]\nmax_position_error = 1e3\n[initial_state]\nattitude = [0.3, 0.0, 0.0]\n\
+                [vehicle]\nmodel = \"rigid-body\"\n[ground]\nenabled = true\n";
+    let held = scenario(base);
+    let options = RunOptions { record: true, ..Default::default() };
+    let run = simulate(&held, &mut Constant::new(0.5 * 0.74 * G), options);
     assert!(run.exit.is_completed(), "{}", run.exit);
+    let y = run.recording.column("y");
+    assert!(y.iter().all(|v| *v == 0.0), "slid to y = {:?}", y.last());
+    let slippery = scenario(&format!("{base}friction = 0.0\n"));
+    let run = simulate(&slippery, &mut Constant::new(0.5 * 0.74 * G), options);
+    assert!(run.recording.column("y").last().unwrap().abs() > 0.5, "{:?}", run.recording.column("y").last());
+}
+
+#[test]
+fn ranftsmc_in_realistic_scenario_1_no_longer_slides_away_on_the_ground_and_is_classified() {
+    // It came down at about 1.5 s and, before the ground held and the time
+    // on it was counted, sat at z = 0 until 17 s while x ran out to 30 m,
+    // counted as completed.
+    let (file, text) = ftsmc_sim::scenario::resolve::built_in("realistic-scenario-1").unwrap();
+    let s = Scenario::from_toml_str(text, file).unwrap();
+    let run = registry::run("ranftsmc", &s, RunOptions { record: true, ..Default::default() }).unwrap();
+    let ExitStatus::Grounded { time, since } = run.exit else { panic!("{}", run.exit) };
+    assert!(since < 4.0 && (time - since - 1.0).abs() < 2e-3, "{since} {time}");
+    assert!(!run.success());
+    let x = run.recording.column("x");
+    assert!(x.iter().all(|v| v.abs() < 8.0), "x reached {:?}", x.iter().fold(0.0_f64, |m, v| m.max(v.abs())));
 }
 
 #[test]

@@ -208,3 +208,173 @@ fn the_tuned_toml_round_trips_the_parameter_map() {
         assert!(body.iter().all(|l| l.starts_with(&format!("[{controller}")) || l.starts_with("[cascade")), "{body:?}");
     }
 }
+
+/// A scenario text with one `[[tune.extra]]` of `key` (any range).
+fn with_extra(key: &str) -> String {
+    format!(
+        "extends = \"paper-scenario-1\"\nname = \"extra\"\n\n[tune]\nruns = 1\n\n[[tune.extra]]\nkey = \"{key}\"\nlow = 1.0\nhigh = 100.0\n"
+    )
+}
+
+#[test]
+fn tune_extra_refuses_anything_but_a_declared_gain() {
+    // The seed, the duration, a rate, a vehicle limit of the pid section,
+    // an unknown key and a structural one: refused when the file is loaded,
+    // the message naming the file and the key.
+    for key in ["seed", "duration", "simulation.control_rate", "pid.thrust_max", "no.such.key", "controllers"] {
+        let err = Scenario::from_toml_str(&with_extra(key), "my-tune.toml").expect_err(key).to_string();
+        assert!(err.starts_with("my-tune.toml:") && err.contains(&format!("\"{key}\"")), "{key}: {err}");
+        assert!(err.contains("tune.extra[0].key") && err.lines().next().unwrap().len() <= 300, "{err}");
+    }
+    // Gains of a controller's own section and the command filter load.
+    for key in ["pid.rate_p.0", "ftaftsmc.x.lambda", "cascade.command_filter.damping"] {
+        Scenario::from_toml_str(&with_extra(key), "my-tune.toml").unwrap_or_else(|e| panic!("{key}: {e}"));
+    }
+}
+
+#[test]
+fn tune_refuses_a_key_of_another_controller_and_never_spins() {
+    let base = Scenario::from_toml_str(&with_extra("ftaftsmc.x.lambda"), "t.toml").unwrap();
+    let options = TuneOptions { controller: "pid".into(), budget: 5, seed: 1 };
+    // A gain of another controller: refused by the search (before any flight).
+    let err = tune(&base, &options, &|_| {}).unwrap_err();
+    assert!(err.contains("ftaftsmc.x.lambda") && err.contains("pid"), "{err}");
+    // Keys set past the loader (as a program may): refused the same way.
+    for key in ["seed", "duration"] {
+        let mut s = base.clone();
+        s.tune.as_mut().unwrap().extra[0].key = key.into();
+        let err = tune(&s, &options, &|_| {}).unwrap_err();
+        assert!(err.contains(&format!("\"{key}\"")), "{key}: {err}");
+    }
+}
+
+#[test]
+fn a_search_whose_candidates_are_all_invalid_ends_within_its_budget() {
+    // Every candidate sets the z velocity D gain negative (invalid), so none
+    // flies; the budget still counts them, and the search ends after the
+    // generations the budget pays for, handing back the start.
+    let text = "extends = \"paper-scenario-1\"\nname = \"invalid\"\nduration = 0.05\n\n[tune]\nruns = 1\nvalidation_runs = 0\npopulation = 2\nparameters = []\n\n[[tune.extra]]\nkey = \"pid.velocity_d.2\"\nlow = -2.0\nhigh = -1.0\nlog = false\n";
+    let base = Scenario::from_toml_str(text, "invalid.toml").unwrap();
+    let options = TuneOptions { controller: "pid".into(), budget: 7, seed: 3 };
+    let r = tune(&base, &options, &|_| {}).unwrap();
+    // Start (1 flight) + 3 generations of 2 candidates (2 flights charged each).
+    assert_eq!(r.history.iter().map(|e| e.generation).max(), Some(3));
+    assert!(r.history[1..].iter().all(|e| e.error.is_some()), "{:?}", r.history);
+    assert_eq!((r.training_flights, r.best), (1, 0));
+    assert_eq!(r.tuned.gains.pid, base.gains.pid);
+}
+
+/// A start on a cliff: the paper's plant (no random draws, short flights)
+/// with a tight tilt limit (0.25 rad; the start peaks at 0.14) and every
+/// declared parameter of `controller` searched over factors 10⁻³ … 10³.
+/// A step of a fixed fraction of that range (`sigma = 0.3`: ×60 at one
+/// standard deviation) makes almost every candidate diverge; the tuner
+/// must still hand back better gains than the start.
+fn cliff(controller: &str, sigma: Option<f64>) -> Scenario {
+    let mut s = Scenario::from_toml_str(ftsmc_sim::scenario::PAPER_SCENARIO_1, "paper-scenario-1.toml").unwrap();
+    s.name = "cliff".into();
+    s.duration = 4.0;
+    s.simulation.max_tilt = 0.25;
+    let bounds = ftsmc_sim::controllers::tunable::parameters(controller)
+        .unwrap()
+        .iter()
+        .map(|p| (p.name.to_string(), [1e-3, 1e3]))
+        .collect();
+    s.tune = Some(TuneSection {
+        runs: 1,
+        validation_runs: 2,
+        population: Some(6),
+        race: 1,
+        race_runs: 2,
+        sigma,
+        bounds,
+        ..TuneSection::default()
+    });
+    s
+}
+
+#[test]
+fn a_tune_whose_start_sits_on_a_cliff_recovers_and_improves() {
+    let options = TuneOptions { controller: "tsm-sta".into(), budget: 80, seed: 4 };
+    // The step of the first tuner: most of the first generations diverge,
+    // and the search restarts from the start with a smaller step.
+    let old_step = tune(&cliff("tsm-sta", Some(0.3)), &options, &|_| {}).unwrap();
+    let first = &old_step.generations[0];
+    assert!(first.failed * 3 >= 2 * first.population, "{:?}", old_step.generations);
+    assert!(
+        old_step.generations.iter().any(|g| g.restarted == Some(ftsmc_sim::tune::RestartReason::NoProgress)),
+        "{:?}",
+        old_step.generations
+    );
+    // The default step (×1.4) and the restart policy: better gains, on the
+    // training draws, in the race and on the held-out draws.
+    for r in [&old_step, &tune(&cliff("tsm-sta", None), &options, &|_| {}).unwrap()] {
+        assert!(r.improved, "{:?}", r.generations);
+        assert!(r.best().cost < r.history[0].cost);
+        let h = r.held_out.unwrap();
+        assert_eq!(h.tuned.completed, h.tuned.runs);
+        assert!(h.tuned.cost(&r.settings) < h.start.cost(&r.settings), "{h:?}");
+        assert!(r.training_flights + r.race_flights <= options.budget);
+    }
+}
+
+#[test]
+fn a_tiny_budget_that_finds_nothing_says_so() {
+    // One generation of steps as wide as the whole range (sigma = 1): every
+    // candidate diverges, so the start is handed back, marked as such.
+    let s = cliff("tsm-sta", Some(1.0));
+    let options = TuneOptions { controller: "tsm-sta".into(), budget: 7, seed: 4 };
+    let r = tune(&s, &options, &|_| {}).unwrap();
+    assert_eq!(r.generations.len(), 1);
+    assert!(!r.improved && r.best == 0, "{:?}", r.history);
+    assert_eq!(r.tuned.gains, r.start.gains);
+    let text = tuned_toml(&r, "paper-scenario-1", "test").unwrap();
+    assert!(text.contains("# Improved: false") && text.contains("larger --budget"), "{text}");
+}
+
+#[test]
+fn the_budget_is_honoured_and_every_flight_is_counted() {
+    let s = cliff("tsm-sta", None);
+    for budget in [7u64, 13, 20, 41, 80] {
+        let flown = std::sync::atomic::AtomicU64::new(0);
+        let options = TuneOptions { controller: "tsm-sta".into(), budget, seed: 9 };
+        let r = tune(&s, &options, &|n| {
+            flown.fetch_add(n, std::sync::atomic::Ordering::Relaxed);
+        })
+        .unwrap();
+        let spent = r.training_flights + r.race_flights;
+        assert!(spent <= budget, "budget {budget}: {spent} flown");
+        // Within one generation of the budget (6 candidates × 1 run), unless
+        // a tenth of the budget was kept for a race that had fewer contenders.
+        assert!(budget - spent < 6 + 4 * 2, "budget {budget}: only {spent} flown");
+        assert_eq!(flown.into_inner(), spent + r.held_out_flights, "budget {budget}");
+    }
+}
+
+#[test]
+fn training_race_and_held_out_draws_never_meet_a_default_monte_carlo() {
+    use ftsmc_sim::batch::montecarlo::run_seed;
+    use ftsmc_sim::tune::{race_indices, HELD_OUT_OFFSET, RACE_OFFSET, TRAINING_OFFSET};
+    // The tuned file keeps its scenario's seed, which is the tune's seed by
+    // default: its own Monte Carlo flies run indices 0, 1, … of that seed.
+    let (s, r) = tiny("pid", 1);
+    let tuned = tuned_toml(&r, "realistic-scenario-2", "test").unwrap();
+    assert!(!tuned.lines().any(|l| l.starts_with("seed")), "the tuned file keeps the scenario's seed");
+    assert_eq!(r.options.seed, 5);
+    let mut tune_draws: Vec<u64> = r.training_indices.clone();
+    tune_draws.extend(&r.race_indices);
+    tune_draws.extend(&r.held_out_indices);
+    assert!(tune_draws.iter().all(|&i| i >= HELD_OUT_OFFSET), "{tune_draws:?}");
+    for master in [r.options.seed, s.seed, 0, 1, 42, u64::MAX] {
+        let montecarlo: std::collections::HashSet<u64> = (0..20_000).map(|i| run_seed(master, i)).collect();
+        for master_tune in [r.options.seed, master] {
+            for &i in &tune_draws {
+                assert!(!montecarlo.contains(&run_seed(master_tune, i)), "seed {master}: run {i} re-flown");
+            }
+        }
+    }
+    // The three sets of the tune are disjoint too.
+    assert!(training_indices(1000).iter().all(|&i| (TRAINING_OFFSET..RACE_OFFSET).contains(&i)));
+    assert!(race_indices(1000).iter().all(|&i| i >= RACE_OFFSET));
+    assert!(held_out_indices(5, 1000, 1000).iter().all(|&i| (HELD_OUT_OFFSET..TRAINING_OFFSET).contains(&i)));
+}

@@ -31,6 +31,8 @@ pub struct McRun {
     pub success: bool,
     /// Tilt, saturation and rotor statistics of the flight (observed, not recorded).
     pub stats: crate::run::FlightStats,
+    /// Robustness margin to the envelope ([`crate::margin`]).
+    pub margin: Option<crate::margin::Margin>,
 }
 
 /// How a batch is flown ([`run_batch`]): which runs, from which master
@@ -146,6 +148,7 @@ pub fn run_batch(
                         success: out_run.success(),
                         metrics: out_run.metrics,
                         stats: out_run.stats,
+                        margin: out_run.margin,
                     });
                 }
             }
@@ -264,6 +267,9 @@ pub struct ControllerSummary {
     /// Statistics of every metric over the completed runs (settling times:
     /// over the runs that settled).
     pub metrics: std::collections::BTreeMap<String, Stats>,
+    /// The rates and the RMS position error with their intervals
+    /// ([`crate::batch::verdicts::intervals`]).
+    pub intervals: crate::batch::verdicts::Intervals,
 }
 
 /// What [`summarize`] reads of one row of a batch: its controller, how it
@@ -298,14 +304,31 @@ impl From<&McRun> for RowOutcome {
 }
 
 /// Summaries per controller, in the order the controllers were given.
+/// Intervals at [`crate::stats::DEFAULT_CONFIDENCE`].
 pub fn summarize(rows: &[McRun], controllers: &[String]) -> Vec<(String, ControllerSummary)> {
+    summarize_at(rows, controllers, crate::stats::DEFAULT_CONFIDENCE)
+}
+
+/// [`summarize`] with intervals at `confidence`, which the caller checks
+/// ([`crate::stats::check_confidence`]; a level outside (0, 1) gives the
+/// intervals at 0.95, and the level recorded with them says so).
+pub fn summarize_at(rows: &[McRun], controllers: &[String], confidence: f64) -> Vec<(String, ControllerSummary)> {
     let outcomes: Vec<RowOutcome> = rows.iter().map(RowOutcome::from).collect();
-    summarize_outcomes(&outcomes, controllers)
+    summarize_outcomes_at(&outcomes, controllers, confidence)
 }
 
 /// [`summarize`] over [`RowOutcome`]s (the rows of a batch, or of the
 /// merged shards of a campaign).
 pub fn summarize_outcomes(rows: &[RowOutcome], controllers: &[String]) -> Vec<(String, ControllerSummary)> {
+    summarize_outcomes_at(rows, controllers, crate::stats::DEFAULT_CONFIDENCE)
+}
+
+/// [`summarize_outcomes`] with intervals at `confidence`.
+pub fn summarize_outcomes_at(
+    rows: &[RowOutcome],
+    controllers: &[String],
+    confidence: f64,
+) -> Vec<(String, ControllerSummary)> {
     controllers
         .iter()
         .map(|name| {
@@ -328,8 +351,23 @@ pub fn summarize_outcomes(rows: &[RowOutcome], controllers: &[String]) -> Vec<(S
             let envelope_failures = completed.iter().filter(|r| !r.success).count();
             let rate = |n: usize| if runs > 0 { n as f64 / runs as f64 } else { 0.0 };
             let (success_rate, completed_rate) = (rate(successes), rate(completed.len()));
-            let summary =
-                ControllerSummary { runs, diverged, crashed, envelope_failures, success_rate, completed_rate, metrics };
+            let mut outcomes = crate::batch::verdicts::Outcomes::default();
+            for r in &mine {
+                let rms = crate::batch::verdicts::rms_position_error_flat(&r.metrics);
+                outcomes.push(r.success, r.completed, r.crashed, rms);
+            }
+            let intervals = crate::batch::verdicts::intervals(&outcomes, confidence)
+                .unwrap_or_else(|_| crate::batch::verdicts::intervals(&outcomes, 0.95).expect("0.95 is a valid level"));
+            let summary = ControllerSummary {
+                runs,
+                diverged,
+                crashed,
+                envelope_failures,
+                success_rate,
+                completed_rate,
+                metrics,
+                intervals,
+            };
             (name.clone(), summary)
         })
         .collect()

@@ -46,11 +46,18 @@ impl Column {
 /// `rotor_speed_mean` (rad/s).
 pub const STATS_COLUMNS: [&str; 4] = ["peak_tilt", "saturated_periods", "rotor_speed_max", "rotor_speed_mean"];
 
+/// The robustness-margin columns ([`crate::margin::Margin`]), after
+/// `crashed`: `margin` (1), `margin_position` (m), `margin_tilt` (rad),
+/// `ground_clearance` (m), `margin_binds` (text), `margin_at` (s); empty
+/// where the flight has no margin.
+pub const MARGIN_COLUMNS: [&str; 6] =
+    ["margin", "margin_position", "margin_tilt", "ground_clearance", "margin_binds", "margin_at"];
+
 /// `runs.csv` as named columns of equal length, in run order (see
 /// docs/outputs.md): `run`, `seed`, `controller`, `exit`, `diverged_at`, the
 /// sampled values ([`SAMPLED_COLUMNS`]), every metric of
 /// [`crate::metrics::Metrics::flat`], the flight statistics ([`STATS_COLUMNS`]),
-/// `completed`, `success`, `crashed`.
+/// `completed`, `success`, `crashed`, the margin ([`MARGIN_COLUMNS`]).
 /// The integral metrics of a diverged row cover `[0, duration]` (its
 /// `duration`-covered span) and `completed` says whether that is the whole
 /// scenario.
@@ -82,6 +89,7 @@ pub fn runs_table(rows: &[McRun]) -> RunsTable {
     names.extend(metric_names.iter().cloned());
     names.extend(STATS_COLUMNS.map(String::from));
     names.extend(["completed", "success", "crashed"].map(String::from));
+    names.extend(MARGIN_COLUMNS.map(String::from));
 
     let mut columns = vec![
         Column::Integer(rows.iter().map(|r| r.index).collect()),
@@ -92,7 +100,10 @@ pub fn runs_table(rows: &[McRun]) -> RunsTable {
             rows.iter()
                 .map(|r| match r.exit {
                     ExitStatus::Diverged { time, .. } => Some(time),
-                    ExitStatus::Completed | ExitStatus::Crashed { .. } | ExitStatus::Interrupted { .. } => None,
+                    ExitStatus::Completed
+                    | ExitStatus::Crashed { .. }
+                    | ExitStatus::Grounded { .. }
+                    | ExitStatus::Interrupted { .. } => None,
                 })
                 .collect(),
         ),
@@ -123,5 +134,16 @@ pub fn runs_table(rows: &[McRun]) -> RunsTable {
     columns.push(Column::Boolean(rows.iter().map(|r| r.exit.is_completed()).collect()));
     columns.push(Column::Boolean(rows.iter().map(|r| r.success).collect()));
     columns.push(Column::Boolean(rows.iter().map(|r| r.exit.is_crashed()).collect()));
+    let margin = |f: &dyn Fn(&crate::margin::Margin) -> Option<f64>| {
+        Column::Number(rows.iter().map(|r| r.margin.as_ref().and_then(f)).collect())
+    };
+    columns.push(margin(&|m| Some(m.value)));
+    columns.push(margin(&|m| m.position));
+    columns.push(margin(&|m| m.tilt));
+    columns.push(margin(&|m| m.ground_clearance));
+    columns.push(Column::Text(
+        rows.iter().map(|r| r.margin.map_or(String::new(), |m| m.binds.as_str().to_string())).collect(),
+    ));
+    columns.push(margin(&|m| Some(m.at)));
     RunsTable { names, columns, rows: rows.len() }
 }

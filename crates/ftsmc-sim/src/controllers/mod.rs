@@ -83,6 +83,7 @@ pub mod ftaftsmc;
 pub mod on_isa;
 pub mod per_lane;
 pub mod pid;
+pub mod px4_params;
 pub mod ranftsmc;
 pub mod se3;
 pub mod tsm_sta;
@@ -199,6 +200,12 @@ pub trait GainSection:
     /// elements (`[f64; N]` of `ftsmc-core` structs), as (dotted path below
     /// the section, length); their lengths are checked on the TOML tree.
     const CORE_ARRAYS: &'static [(&'static str, usize)] = &[];
+    /// Keys below the section that are the vehicle's limits, not gains
+    /// (thrust, tilt and rate caps, …), as dotted paths below the section:
+    /// `ftsmc tune` never changes them and `[[tune.extra]]` refuses them
+    /// (`tunable::check_extra_key`). Every other numeric key of the
+    /// section is a tunable gain.
+    const LIMITS: &'static [&'static str] = &[];
     /// The built-in gains of the paper's vehicle.
     fn defaults() -> Self;
     /// The built-in gains for a scenario flying `vehicle`: what a scenario
@@ -402,6 +409,11 @@ macro_rules! declare_controllers {
             pub fn defaults_for(vehicle: &NominalVehicle) -> Self {
                 Self { $( $field: <$section as GainSection>::defaults_for(vehicle), )+ }
             }
+
+            /// Every section's key with its [`GainSection::LIMITS`] (keys that
+            /// `ftsmc tune` may not change), in list order.
+            pub const LIMITS: &'static [(&'static str, &'static [&'static str])] =
+                &[ $( (<$section as GainSection>::KEY, <$section as GainSection>::LIMITS) ),+ ];
 
             /// Every section's [`GainSection::CORE_ARRAYS`], as (dotted path
             /// from the scenario root, length).

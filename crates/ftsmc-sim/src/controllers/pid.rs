@@ -22,6 +22,18 @@ impl GainSection for PidGains {
         ("rate_ff", 3),
         ("rate_integral_limit", 3),
     ];
+    const LIMITS: &'static [&'static str] = &[
+        "max_velocity_xy",
+        "max_velocity_up",
+        "max_velocity_down",
+        "max_demanded_tilt",
+        "hover_thrust",
+        "thrust_min",
+        "thrust_max",
+        "thrust_xy_margin",
+        "max_rate",
+        "rate_integral_limit",
+    ];
 
     /// The paper vehicle's: [`GainSection::defaults_for`] the default
     /// `[plant]` with unlimited rotors.

@@ -11,6 +11,7 @@ impl GainSection for Se3Gains {
     const KEY: &'static str = "se3";
     const CORE_ARRAYS: &'static [(&'static str, usize)] =
         &[("position", 3), ("velocity", 3), ("attitude", 3), ("angular_rate", 3)];
+    const LIMITS: &'static [&'static str] = &["max_demanded_tilt", "min_thrust", "max_thrust"];
 
     /// The paper vehicle's: [`GainSection::defaults_for`] the default
     /// `[plant]` with unlimited rotors.

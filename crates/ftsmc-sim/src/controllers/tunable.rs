@@ -17,7 +17,13 @@
 //! column), one line of documentation, bounds on the factor and the
 //! function that applies it (`apply(target, factor)` multiplies the gains
 //! it stands for). A user adds a one-off parameter without code through
-//! `[[tune.extra]]` (any numeric key, absolute values).
+//! `[[tune.extra]]` (absolute values): any gain of the tuned controller's
+//! own section except the section's declared limits
+//! ([`super::GainSection::LIMITS`]), and the command filter's
+//! `natural_frequency` and `damping` for a controller that declares the
+//! `command_filter` parameter ([`check_extra_key`]). Nothing else — the
+//! seed, the duration, rates, the vehicle, structural keys — is tunable:
+//! the search must not change what it is judged on.
 
 pub use super::tune_param::{TuneParam, TuneTarget, COMMAND_FILTER};
 
@@ -34,4 +40,54 @@ pub fn parameters(name: &str) -> Result<Vec<TuneParam>, String> {
         "se3" => super::se3::tune_parameters(),
         _ => Vec::new(),
     })
+}
+
+/// The `[cascade]` keys `[[tune.extra]]` may search, for a controller that
+/// declares the [`COMMAND_FILTER`] parameter.
+pub const CASCADE_GAINS: [&str; 2] = ["cascade.command_filter.natural_frequency", "cascade.command_filter.damping"];
+
+/// Whether `[[tune.extra]]` may search the dotted `key` for controller
+/// `name`: a key below the controller's own gain section (`pid.rate_p.0`,
+/// `ftaftsmc.x.lambda`) that is not one of the section's limits, or one of
+/// [`CASCADE_GAINS`] for a controller that uses the command filter.
+/// `Err` says why not (the caller names the key and where it was given).
+/// Whether the key holds a number is checked on the scenario.
+pub fn check_extra_key(name: &str, key: &str) -> Result<(), String> {
+    let declared = super::DECLARED
+        .iter()
+        .find(|d| d.name == name)
+        .ok_or_else(|| format!("unknown controller `{name}` (known: {})", super::known_names()))?;
+    let uses_filter = parameters(name)?.iter().any(|p| p.name == COMMAND_FILTER.name);
+    if CASCADE_GAINS.contains(&key) {
+        return if uses_filter { Ok(()) } else { Err(format!("{name} has no command filter")) };
+    }
+    let section = declared.section;
+    let below = key.strip_prefix(section).and_then(|rest| rest.strip_prefix('.'));
+    let Some(below) = below.filter(|b| !b.is_empty()) else {
+        let filter = if uses_filter { " and cascade.command_filter.{natural_frequency,damping}" } else { "" };
+        return Err(format!("not a gain of {name}: its tunable keys are the numbers of [{section}]{filter}"));
+    };
+    let limits = super::GainSections::LIMITS.iter().find(|(k, _)| *k == section).map_or(&[][..], |(_, l)| *l);
+    if let Some(limit) = limits.iter().find(|l| below == **l || below.starts_with(&format!("{l}."))) {
+        return Err(format!("`{section}.{limit}` is a limit of the vehicle, not a gain of {name}"));
+    }
+    Ok(())
+}
+
+/// Whether some declared controller may search `key` with `[[tune.extra]]`
+/// ([`check_extra_key`]): how a scenario file's `[tune]` is checked when it
+/// is loaded, before the tuned controller is known. `Err` says why not.
+pub fn check_extra_key_any(key: &str) -> Result<(), String> {
+    if super::DECLARED.iter().any(|d| check_extra_key(d.name, key).is_ok()) {
+        return Ok(());
+    }
+    let first = key.split('.').next().unwrap_or("");
+    // A key in a gain section: the reason its controllers give.
+    if let Some(d) = super::DECLARED.iter().find(|d| d.section == first) {
+        return check_extra_key(d.name, key);
+    }
+    Err(format!(
+        "not a controller gain: the tunable keys are the numbers of [{}] and cascade.command_filter.{{natural_frequency,damping}}",
+        super::GainSections::KEYS.join("], [")
+    ))
 }

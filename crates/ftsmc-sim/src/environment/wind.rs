@@ -302,6 +302,11 @@ fn is_zero(v: &f64) -> bool {
     *v == 0.0
 }
 
+/// The `[wind]` keys a `preset` owns: a file that sets `preset` replaces
+/// what a base file gave them unless it sets them too (the mean wind's
+/// `speed`, its vector `mean`, and the `turbulence`).
+pub const PRESET_OWNED_KEYS: [&str; 3] = ["speed", "mean", "turbulence"];
+
 /// Wind parameters (`[wind]`): mean wind, gusts and turbulence; every part
 /// optional, the default is still air.
 ///

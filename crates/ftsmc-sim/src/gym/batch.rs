@@ -5,7 +5,7 @@
 
 use rayon::prelude::*;
 
-use super::lane::{Env, EnvStep};
+use super::lane::{Env, EnvStep, Pose};
 use super::{GymSpec, ACTION_LEN, OBSERVATION_LEN};
 
 /// Lanes from this many on are stepped on rayon's pool (each lane is
@@ -84,6 +84,11 @@ impl Batch {
     /// Seed of lane `i`'s current episode.
     pub fn seed(&self, i: usize) -> u64 {
         self.lanes[i].seed()
+    }
+
+    /// The true pose of lane `i`'s vehicle (for drawing it).
+    pub fn pose(&mut self, i: usize) -> Pose {
+        self.lanes[i].pose()
     }
 
     /// Lanes whose episode ended at the last step (reset at the next).

@@ -22,6 +22,17 @@ pub struct EnvStep {
     pub reason: Option<String>,
 }
 
+/// The true pose of an environment's vehicle ([`Env::pose`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Pose {
+    /// Position, m (world frame, z up).
+    pub position: [f64; 3],
+    /// Z-Y-X Euler angles (φ, θ, ψ), rad (paper Eq. 1).
+    pub attitude: [f64; 3],
+    /// Reference position, m.
+    pub reference: [f64; 3],
+}
+
 /// One environment: its current episode.
 pub struct Env {
     /// The episode's flight; it owns its scenario and the agent.
@@ -101,6 +112,14 @@ impl Env {
             Observe::Truth => *f.truth_state(),
         };
         observation(&state, f.reference()).map(|v| if v.is_finite() { v } else { 0.0 })
+    }
+
+    /// The true pose now, for drawing: position (m, world frame z up),
+    /// Z-Y-X Euler angles (φ, θ, ψ, rad) and the reference position (m).
+    pub fn pose(&mut self) -> Pose {
+        let f = &self.flight;
+        let truth = *f.truth_state();
+        Pose { position: truth.position, attitude: truth.attitude, reference: f.reference().position }
     }
 
     /// Fly one environment step with `action` held; the reward is scored

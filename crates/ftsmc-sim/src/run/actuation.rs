@@ -135,7 +135,7 @@ impl ActuatorStage {
             MixerKind::Clamp => {
                 ActuatorStage::Clamp { min: act.min_rotor_speed, max: act.max_rotor_speed, mixer: (!paper).then(mixer) }
             }
-            MixerKind::ThrustFirst | MixerKind::Px4 | MixerKind::Px4Airmode => {
+            MixerKind::ThrustFirst | MixerKind::Px4 | MixerKind::Px4Exact | MixerKind::Px4ExactAirmode => {
                 let motors = Motors::new(&act, [hover; 4]);
                 let decay = DecayCache::new(&motors, h);
                 ActuatorStage::Rotors { mixer: mixer(), motors, rng: motor_noise_rng(scenario.seed), decay }

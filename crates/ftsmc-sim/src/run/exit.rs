@@ -31,6 +31,10 @@ pub enum Divergence {
         /// Inertia scale asked for (1 + ΔI/I), dimensionless.
         inertia_scale: f64,
     },
+    /// The flight reached its end with a finite state, but a metric (an
+    /// error or control integral) overflowed to ±∞ or NaN: the flight is
+    /// not reported completed ([`crate::metrics::Metrics::first_non_finite`]).
+    NonFiniteMetric,
 }
 
 /// How a run ended.
@@ -53,6 +57,14 @@ pub enum ExitStatus {
         /// Downward speed at touchdown, m/s.
         impact_speed: f64,
     },
+    /// Rested on the ground (`[ground]`) for longer than
+    /// `max_ground_time` after take-off: landed where it should fly.
+    Grounded {
+        /// Simulated time at which the flight was stopped, s.
+        time: f64,
+        /// When the vehicle came to rest on the ground, s.
+        since: f64,
+    },
     /// Stopped at `time` (s) on request ([`crate::run::RunOptions::cancel`], e.g. Ctrl-C).
     Interrupted {
         /// Simulated time at which the run stopped, s.
@@ -70,13 +82,18 @@ impl ExitStatus {
     pub fn diverged_at(&self) -> Option<f64> {
         match self {
             ExitStatus::Diverged { time, .. } => Some(*time),
-            ExitStatus::Completed | ExitStatus::Crashed { .. } | ExitStatus::Interrupted { .. } => None,
+            ExitStatus::Completed
+            | ExitStatus::Crashed { .. }
+            | ExitStatus::Grounded { .. }
+            | ExitStatus::Interrupted { .. } => None,
         }
     }
 
-    /// True for [`ExitStatus::Crashed`].
+    /// True for a flight that ended on the ground: [`ExitStatus::Crashed`]
+    /// (too fast) and [`ExitStatus::Grounded`] (stayed there); the
+    /// `crashed` column of `runs.csv`.
     pub fn is_crashed(&self) -> bool {
-        matches!(self, ExitStatus::Crashed { .. })
+        matches!(self, ExitStatus::Crashed { .. } | ExitStatus::Grounded { .. })
     }
 
     /// Short form for table cells: `completed`, `diverged at 0.64 s` or `crashed at 1.23 s`.
@@ -85,6 +102,7 @@ impl ExitStatus {
             ExitStatus::Completed => "completed".into(),
             ExitStatus::Diverged { time, .. } => format!("diverged at {time:.2} s"),
             ExitStatus::Crashed { time, .. } => format!("crashed at {time:.2} s"),
+            ExitStatus::Grounded { since, .. } => format!("landed at {since:.2} s"),
             ExitStatus::Interrupted { time } => format!("interrupted at {time:.2} s"),
         }
     }
@@ -100,6 +118,9 @@ impl core::fmt::Display for ExitStatus {
                 Divergence::PositionError { error } => {
                     write!(f, "diverged: position error {error:.3} m at t = {time:.3} s")
                 }
+                Divergence::NonFiniteMetric => {
+                    write!(f, "diverged: a metric (error or control integral) overflowed by t = {time:.3} s")
+                }
                 Divergence::RigidBodyOutOfRange { mass, inertia_scale } => write!(
                     f,
                     "stopped: rigid body out of its valid range (mass {mass} kg, inertia x {inertia_scale}) at t = {time:.3} s"
@@ -108,6 +129,11 @@ impl core::fmt::Display for ExitStatus {
             ExitStatus::Crashed { time, impact_speed } => {
                 write!(f, "crashed: hit the ground at {impact_speed:.1} m/s at t = {time:.3} s")
             }
+            ExitStatus::Grounded { time, since } => write!(
+                f,
+                "landed: on the ground since t = {since:.3} s after take-off, stopped at t = {time:.3} s ([ground] \
+                 max_ground_time)"
+            ),
             ExitStatus::Interrupted { time } => write!(f, "interrupted at t = {time:.3} s"),
         }
     }
@@ -142,4 +168,18 @@ pub(super) fn check_divergence(scenario: &Scenario, state: &QuadState, reference
         }
     }
     None
+}
+
+impl ExitStatus {
+    /// How the flight ended, for its robustness margin ([`crate::margin`]):
+    /// a stopped flight counts as completed over what it flew.
+    pub fn margin_end(&self) -> crate::margin::End {
+        use crate::margin::End;
+        match *self {
+            ExitStatus::Completed | ExitStatus::Interrupted { .. } => End::Completed,
+            // Grounded counts as crashed, as in runs.csv's `crashed` column.
+            ExitStatus::Crashed { time, .. } | ExitStatus::Grounded { time, .. } => End::Crashed(time),
+            ExitStatus::Diverged { time, .. } => End::Diverged(time),
+        }
+    }
 }

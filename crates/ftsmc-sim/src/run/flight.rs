@@ -48,7 +48,7 @@ use ftsmc_core::measured::{BodyAttitude, Measurement};
 use ftsmc_core::model::{Command, QuadState, QuadrotorParams, Reference};
 
 use crate::envelope::Tracker;
-use crate::environment::ground::GroundSettings;
+use crate::environment::ground::{Contact, GroundContact, GroundSettings};
 use crate::environment::wind::Wind;
 use crate::environment::{Environment, TimeVarying};
 use crate::metrics::MetricsAccumulator;
@@ -118,6 +118,8 @@ struct Observers<'o> {
     recorder: Recorder,
     stats: FlightStats,
     envelope: Tracker,
+    /// The robustness margin to the envelope ([`crate::margin`]).
+    margin: crate::margin::MarginTracker,
     user: Vec<&'o mut (dyn Observer + Send)>,
 }
 
@@ -145,6 +147,7 @@ impl Observers<'_> {
     #[cfg_attr(not(debug_assertions), inline(always))]
     fn boundary(&mut self, t: f64, truth: &QuadState, reference: &Reference) {
         self.envelope.boundary(t, truth, reference);
+        self.margin.update(t, &truth.position, &reference.position, &truth.attitude);
         self.stats.boundary(t, truth, reference);
         for o in &mut self.user {
             o.boundary(t, truth, reference);
@@ -184,12 +187,15 @@ struct LaneFlight<'o> {
     telemetry: Telemetry,
     wind: Option<Wind>,
     ground: Option<GroundSettings>,
+    /// The flight's ground-contact history (take-off, time on the ground).
+    contact: GroundContact,
     tv_now: TimeVarying,
     /// The next substep boundary's plant variation (set before the truth
     /// integrates the lanes).
     tv_next: TimeVarying,
     wind_now: Option<[f64; 3]>,
-    z_prev: f64,
+    /// Position at the start of the substep (ground contact only).
+    p_prev: [f64; 3],
     reference_grid: ReferenceGrid,
     /// The reference at the lane's current period boundary (the lane's copy
     /// of [`Flight`]'s reference, read by the observers and the checks).
@@ -247,6 +253,10 @@ impl<'o> LaneFlight<'o> {
             recorder,
             stats: FlightStats::default(),
             envelope: Tracker::new(scenario.envelope),
+            margin: crate::margin::MarginTracker::new(
+                scenario.envelope,
+                scenario.ground.filter(|g| g.enabled).map(|g| g.height),
+            ),
             user: Vec::new(),
         };
         let lane = Self {
@@ -267,10 +277,11 @@ impl<'o> LaneFlight<'o> {
             telemetry: Telemetry::default(),
             wind,
             ground: scenario.ground.filter(|g| g.enabled),
+            contact: GroundContact::default(),
             tv_now,
             tv_next: tv_now,
             wind_now: None,
-            z_prev: 0.0,
+            p_prev: [0.0; 3],
             reference_grid,
             reference,
             observers,
@@ -392,7 +403,7 @@ impl<'o> LaneFlight<'o> {
     }
 
     /// Stage 5a: before substep `j`, the wind held over it, the plant
-    /// variation at its end and (for the ground contact) the height at its
+    /// variation at its end and (for the ground contact) the position at its
     /// start, lane `i` of `truth`.
     #[cfg_attr(not(debug_assertions), inline(always))]
     fn begin_substep<R: Real>(&mut self, i: usize, j: u32, truth: &dyn TruthModel<R>) {
@@ -403,7 +414,7 @@ impl<'o> LaneFlight<'o> {
             self.tv_next = self.env.time_varying_on_grid(m, t0 + self.h);
         }
         if self.ground.is_some() {
-            self.z_prev = truth.vertical(i).0;
+            self.p_prev = truth.translation(i).0;
         }
     }
 
@@ -430,13 +441,18 @@ impl<'o> LaneFlight<'o> {
             return;
         }
         if let Some(g) = &self.ground {
-            let (mut z, mut vz) = truth.vertical(i);
-            let contact = g.contact(self.z_prev, &mut z, &mut vz);
-            truth.set_vertical(i, z, vz);
-            if let Some((fraction, impact_speed)) = contact {
-                let t0 = self.t + j as f64 * self.h;
+            let (mut p, mut v) = truth.translation(i);
+            let t0 = self.t + j as f64 * self.h;
+            let contact = g.contact(&mut self.contact, t0 + self.h, &self.p_prev, &mut p, &mut v);
+            truth.set_translation(i, &p, &v);
+            if let Some(contact) = contact {
                 self.set_step(self.k + 1);
-                self.exit = Some(ExitStatus::Crashed { time: t0 + fraction * self.h, impact_speed });
+                self.exit = Some(match contact {
+                    Contact::Crashed { fraction, impact_speed } => {
+                        ExitStatus::Crashed { time: t0 + fraction * self.h, impact_speed }
+                    }
+                    Contact::Grounded { since } => ExitStatus::Grounded { time: t0 + self.h, since },
+                });
                 return;
             }
         }
@@ -480,10 +496,15 @@ impl<'o> LaneFlight<'o> {
     /// The outcome of this lane's flight (a flight stopped early reports
     /// `Completed` over the steps flown).
     fn output(self, controller: &str, options: &RunOptions<'_>) -> RunOutput {
-        let exit = self.exit.unwrap_or(ExitStatus::Completed);
+        let mut exit = self.exit.unwrap_or(ExitStatus::Completed);
         options.flight_done(self.steps, self.k);
-        let Observers { metrics, recorder, stats, envelope, .. } = self.observers;
+        let Observers { metrics, recorder, stats, envelope, margin, .. } = self.observers;
         let mut metrics = metrics.finish();
+        // A completed flight's metrics are finite: one that overflowed
+        // (an error of 1e160 m squared and integrated) is not completed.
+        if exit.is_completed() && metrics.first_non_finite().is_some() {
+            exit = ExitStatus::Diverged { divergence: Divergence::NonFiniteMetric, time: metrics.duration };
+        }
         if self.rotor_metrics {
             let (peak, fraction) = stats.rotor_metrics(self.k, self.unobserved);
             metrics.peak_rotor_speed_demand = Some(peak);
@@ -493,6 +514,7 @@ impl<'o> LaneFlight<'o> {
             controller: controller.to_string(),
             scenario: self.scenario.name.clone(),
             envelope: envelope.verdict((!exit.is_completed()).then(|| exit.to_string())),
+            margin: margin.finish(exit.margin_end(), self.scenario.duration),
             exit,
             metrics,
             recording: recorder.recording,

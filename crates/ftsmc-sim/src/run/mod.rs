@@ -48,6 +48,10 @@ pub struct RunOutput {
     pub steps: u64,
     /// The success envelope's verdict (`None`: the scenario has no `[envelope]`).
     pub envelope: Option<crate::envelope::Verdict>,
+    /// The robustness margin to the envelope ([`crate::margin`]; `None`:
+    /// a completed flight of a scenario whose envelope limits neither
+    /// position nor tilt).
+    pub margin: Option<crate::margin::Margin>,
     /// Tilt, saturation and rotor statistics ([`FlightStats`]).
     pub stats: FlightStats,
 }

@@ -11,7 +11,8 @@ use super::RunOutput;
 /// [`crate::metrics::Metrics`], `exit` (text), `exit_status` (tagged),
 /// `steps`, `covered` (`[0, t_end]`, s: the span the integral metrics
 /// cover), `completed`, and with an `[envelope]` also `success` and
-/// `envelope_violation`.
+/// `envelope_violation`, and `margin` when the flight has one
+/// ([`crate::margin::Margin`]).
 pub fn run_json(run: &RunOutput) -> Value {
     let mut obj = match serde_json::to_value(&run.metrics) {
         Ok(Value::Object(m)) => m,
@@ -28,6 +29,9 @@ pub fn run_json(run: &RunOutput) -> Value {
     if let Some(v) = &run.envelope {
         obj.insert("success".into(), json!(v.success));
         obj.insert("envelope_violation".into(), json!(v.violation));
+    }
+    if let Some(m) = &run.margin {
+        obj.insert("margin".into(), serde_json::to_value(m).unwrap_or(Value::Null));
     }
     Value::Object(obj)
 }

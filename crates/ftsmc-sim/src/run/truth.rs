@@ -112,11 +112,11 @@ pub(crate) trait TruthModel<R: Real = f64> {
     }
     /// Integrate one substep: `s[i]` is lane `i`'s (`s.len() >= R::LANES`).
     fn substep(&mut self, s: &[Substep<'_>]);
-    /// Height `z` (m) and vertical velocity `ż` (m/s) of lane `lane`, for
+    /// Position (m) and world-frame velocity (m/s) of lane `lane`, for
     /// ground contact.
-    fn vertical(&self, lane: usize) -> (f64, f64);
-    /// Overwrite lane `lane`'s `z` (m) and `ż` (m/s) (ground contact).
-    fn set_vertical(&mut self, lane: usize, z: f64, vz: f64);
+    fn translation(&self, lane: usize) -> ([f64; 3], [f64; 3]);
+    /// Overwrite lane `lane`'s position (m) and velocity (m/s) (ground contact).
+    fn set_translation(&mut self, lane: usize, p: &[f64; 3], v: &[f64; 3]);
     /// Start a new flight of `scenario` in lane `lane`: its vehicle and its
     /// initial state, the other lanes untouched. On error the lane is
     /// unchanged.
@@ -320,14 +320,20 @@ impl<R: Real> TruthModel<R> for PaperTruth<R> {
     }
 
     #[inline]
-    fn vertical(&self, lane: usize) -> (f64, f64) {
-        (self.0[2].get_lane(lane), self.0[8].get_lane(lane))
+    fn translation(&self, lane: usize) -> ([f64; 3], [f64; 3]) {
+        let x = &self.0;
+        (
+            [x[0].get_lane(lane), x[1].get_lane(lane), x[2].get_lane(lane)],
+            [x[6].get_lane(lane), x[7].get_lane(lane), x[8].get_lane(lane)],
+        )
     }
 
     #[inline]
-    fn set_vertical(&mut self, lane: usize, z: f64, vz: f64) {
-        self.0[2].put_lane(lane, z);
-        self.0[8].put_lane(lane, vz);
+    fn set_translation(&mut self, lane: usize, p: &[f64; 3], v: &[f64; 3]) {
+        for i in 0..3 {
+            self.0[i].put_lane(lane, p[i]);
+            self.0[6 + i].put_lane(lane, v[i]);
+        }
     }
 
     fn start_lane(&mut self, lane: usize, scenario: &Scenario) -> Result<(), LaneStart> {
@@ -508,14 +514,20 @@ impl<R: Real> TruthModel<R> for RigidTruth<R> {
     }
 
     #[inline]
-    fn vertical(&self, lane: usize) -> (f64, f64) {
-        (self.x[2].get_lane(lane), self.x[5].get_lane(lane))
+    fn translation(&self, lane: usize) -> ([f64; 3], [f64; 3]) {
+        let x = &self.x;
+        (
+            [x[0].get_lane(lane), x[1].get_lane(lane), x[2].get_lane(lane)],
+            [x[3].get_lane(lane), x[4].get_lane(lane), x[5].get_lane(lane)],
+        )
     }
 
     #[inline]
-    fn set_vertical(&mut self, lane: usize, z: f64, vz: f64) {
-        self.x[2].put_lane(lane, z);
-        self.x[5].put_lane(lane, vz);
+    fn set_translation(&mut self, lane: usize, p: &[f64; 3], v: &[f64; 3]) {
+        for i in 0..3 {
+            self.x[i].put_lane(lane, p[i]);
+            self.x[3 + i].put_lane(lane, v[i]);
+        }
     }
 
     fn start_lane(&mut self, lane: usize, scenario: &Scenario) -> Result<(), LaneStart> {
@@ -569,11 +581,11 @@ impl<R: Real, T: TruthModel<R>> TruthModel<R> for OnIsa<T> {
             || inner.substep(s),
         );
     }
-    fn vertical(&self, lane: usize) -> (f64, f64) {
-        self.inner.vertical(lane)
+    fn translation(&self, lane: usize) -> ([f64; 3], [f64; 3]) {
+        self.inner.translation(lane)
     }
-    fn set_vertical(&mut self, lane: usize, z: f64, vz: f64) {
-        self.inner.set_vertical(lane, z, vz);
+    fn set_translation(&mut self, lane: usize, p: &[f64; 3], v: &[f64; 3]) {
+        self.inner.set_translation(lane, p, v);
     }
     fn start_lane(&mut self, lane: usize, scenario: &Scenario) -> Result<(), LaneStart> {
         self.inner.start_lane(lane, scenario)
@@ -759,15 +771,15 @@ mod lane_tests {
         assert_eq!(bits(lanes.quad_state().get_lane(i)), bits(scalar.quad_state()), "lane {i} {at}");
         let body = |b: Option<BodyAttitude>| b.map(|b| (b.quaternion.map(to_bits), b.body_rates.map(to_bits)));
         assert_eq!(body(lanes.body_attitude().map(|b| b.get_lane(i))), body(scalar.body_attitude()), "lane {i} {at}");
-        let v = |(z, vz): (f64, f64)| (to_bits(z), to_bits(vz));
-        assert_eq!(v(lanes.vertical(i)), v(scalar.vertical(0)), "lane {i} {at}");
+        let v = |(p, v): ([f64; 3], [f64; 3])| (p.map(to_bits), v.map(to_bits));
+        assert_eq!(v(lanes.translation(i)), v(scalar.translation(0)), "lane {i} {at}");
     }
 
     /// Fly `periods` control periods of `R::LANES` flights of one model in
     /// lanes and one by one, comparing every lane after every substep.
     /// Lanes cycle through [`scenarios`]; every lane's commands are random,
     /// with saturating ones now and then; the lanes below ground are
-    /// clamped (`set_vertical`); lane 2 starts a new flight a third of the
+    /// clamped (`set_translation`); lane 2 starts a new flight a third of the
     /// way (`start_lane`); lane 3 gets a NaN command and disturbance late; even lanes see
     /// their mass and inertia change (`begin_period`), once out of range.
     /// Returns the number of substeps flown and how many lanes went
@@ -870,12 +882,13 @@ mod lane_tests {
                 }
                 drop(subs);
                 for (i, scalar) in scalars.iter_mut().enumerate() {
-                    let (z, vz) = scalar.vertical(0);
-                    if z < 0.0 {
-                        // A ground at z = 0.
-                        let vz = if vz < 0.0 { 0.0 } else { vz };
-                        scalar.set_vertical(0, 0.0, vz);
-                        model.set_vertical(i, 0.0, vz);
+                    let (mut p, mut v) = scalar.translation(0);
+                    if p[2] < 0.0 {
+                        // A ground at z = 0 (frictionless here).
+                        p[2] = 0.0;
+                        v[2] = v[2].max(0.0);
+                        scalar.set_translation(0, &p, &v);
+                        model.set_translation(i, &p, &v);
                     }
                     assert_lane(&*model, i, &**scalar, &format!("period {period} substep {j}"));
                 }

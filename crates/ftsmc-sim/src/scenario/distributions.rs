@@ -195,7 +195,42 @@ pub struct MonteCarloSpec {
     /// Offset added to each initial Euler angle, rad (one draw per axis).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub initial_attitude_offset: Option<Dist>,
+    /// Factor on the true mass (the vehicle's own, before any payload):
+    /// the relative form of `mass`, which follows the vehicle. A file writes
+    /// it as `mass = { dist = "uniform", rel = [0.9, 1.1] }` (or directly);
+    /// not together with `mass`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mass_factor: Option<Dist>,
+    /// Factor on the scenario's `payload.mass`: the relative form of
+    /// `payload_mass` (`payload_mass = { dist = "uniform", rel = [a, b] }`);
+    /// not together with `payload_mass`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub payload_mass_factor: Option<Dist>,
 }
+
+/// `dist` of a factor as the distribution of `value × factor` (`value > 0`):
+/// bounds, mean and standard deviation scaled, a log-normal's `mu` shifted
+/// by `ln value`.
+fn scaled(dist: &Dist, value: f64) -> Dist {
+    let opt = |v: Option<f64>| v.map(|v| v * value);
+    match *dist {
+        Dist::Uniform { low, high } => Dist::Uniform { low: low * value, high: high * value },
+        Dist::Normal { mean, std, low, high } => {
+            Dist::Normal { mean: mean * value, std: std * value, low: opt(low), high: opt(high) }
+        }
+        Dist::LogNormal { mu, sigma, low, high } => {
+            Dist::LogNormal { mu: mu + ftsmc_core::math::ln(value), sigma, low: opt(low), high: opt(high) }
+        }
+    }
+}
+
+/// A draw whose every value lies within `[value / BAND, value × BAND]` of the
+/// vehicle's own value is plausible; one reaching beyond is refused (a
+/// draw meant for another vehicle, or a unit slip).
+pub const PLAUSIBLE_BAND: f64 = 3.0;
+/// A draw reaching beyond `[value / WARN_BAND, value × WARN_BAND]` (but
+/// plausible) gets a warning.
+pub const WARN_BAND: f64 = 1.5;
 
 /// Names of the sampled columns in `runs.csv`, in order.
 pub const SAMPLED_COLUMNS: [&str; 12] = [
@@ -221,7 +256,107 @@ impl MonteCarloSpec {
                 d.check().map_err(|(f, v, e)| (format!("montecarlo.{name}.{f}"), v, e))?;
             }
         }
+        for (name, d, absolute) in [
+            ("mass_factor", &self.mass_factor, &self.mass),
+            ("payload_mass_factor", &self.payload_mass_factor, &self.payload_mass),
+        ] {
+            if let Some(d) = d {
+                d.check().map_err(|(f, v, e)| (format!("montecarlo.{name}.{f}"), v, e))?;
+                if d.support().0 <= 0.0 {
+                    return Err((
+                        format!("montecarlo.{name}"),
+                        d.support().0,
+                        "factors > 0 (give the distribution a `low` > 0)",
+                    ));
+                }
+                if absolute.is_some() {
+                    return Err((
+                        format!("montecarlo.{name}"),
+                        d.support().0,
+                        "either the relative draw or the absolute one, not both",
+                    ));
+                }
+            }
+        }
         Ok(())
+    }
+
+    /// This spec with the relative draws (`mass_factor`,
+    /// `payload_mass_factor`) turned into the absolute ones they mean on
+    /// `base` (its true mass, its `payload.mass`); the flights and the
+    /// range checks use this form.
+    pub fn absolute(&self, base: &Scenario) -> MonteCarloSpec {
+        let mut out = self.clone();
+        if let Some(d) = out.mass_factor.take() {
+            out.mass = Some(scaled(&d, base.true_vehicle().mass));
+        }
+        if let Some(d) = out.payload_mass_factor.take() {
+            if let Some(p) = &base.payload {
+                out.payload_mass = Some(scaled(&d, p.mass));
+            }
+        }
+        out
+    }
+
+    /// The absolute mass and payload draws against the vehicle's own mass
+    /// `m` (before payload): `Err` for a draw reaching beyond
+    /// `[m / PLAUSIBLE_BAND, m × PLAUSIBLE_BAND]` (payload: above
+    /// `m × PLAUSIBLE_BAND`), `Ok(warnings)` for one beyond [`WARN_BAND`];
+    /// each `(key, draws, why)`.
+    #[allow(clippy::type_complexity)]
+    pub fn vehicle_band(&self, base: &Scenario) -> Result<Vec<(String, String, String)>, (String, String, String)> {
+        use crate::text::show;
+        let m = base.true_vehicle().mass;
+        let mut warnings = Vec::new();
+        let range = |(lo, hi): (f64, f64)| format!("draws in [{}, {}] kg", show(lo), show(hi));
+        let (which, vehicle) = (base.true_mass().1, base.vehicle.preset.map(|p| format!(" (preset {})", p.name())));
+        let vehicle = vehicle.unwrap_or_default();
+        if let Some(d) = &self.mass {
+            let (lo, hi) = d.support();
+            if lo < m / PLAUSIBLE_BAND || hi > m * PLAUSIBLE_BAND {
+                return Err((
+                    "montecarlo.mass".into(),
+                    range((lo, hi)),
+                    format!(
+                        "masses within [{}, {}] kg, a factor {PLAUSIBLE_BAND} of the vehicle's {which} = {} kg{vehicle} (a draw for another vehicle? write it relative: mass = {{ dist = \"uniform\", rel = [0.9, 1.1] }})",
+                        show(m / PLAUSIBLE_BAND),
+                        show(m * PLAUSIBLE_BAND),
+                        show(m)
+                    ),
+                ));
+            }
+            if lo < m / WARN_BAND || hi > m * WARN_BAND {
+                warnings.push((
+                    "montecarlo.mass".into(),
+                    range((lo, hi)),
+                    format!(
+                        "far from the vehicle's {which} = {} kg{vehicle} (more than a factor {WARN_BAND})",
+                        show(m)
+                    ),
+                ));
+            }
+        }
+        if let Some(d) = &self.payload_mass {
+            let (_, hi) = d.support();
+            if hi > m * PLAUSIBLE_BAND {
+                return Err((
+                    "montecarlo.payload_mass".into(),
+                    range(d.support()),
+                    format!(
+                        "payloads up to {PLAUSIBLE_BAND} × the vehicle's {which} = {} kg{vehicle} (a draw for another vehicle? write it relative: payload_mass = {{ dist = \"uniform\", rel = [a, b] }})",
+                        show(m)
+                    ),
+                ));
+            }
+            if hi > m * WARN_BAND {
+                warnings.push((
+                    "montecarlo.payload_mass".into(),
+                    range(d.support()),
+                    format!("payloads above {WARN_BAND} × the vehicle's {which} = {} kg{vehicle}", show(m)),
+                ));
+            }
+        }
+        Ok(warnings)
     }
 
     /// [`MonteCarloSpec::check`], then every draw against the physical range
@@ -232,6 +367,14 @@ impl MonteCarloSpec {
     /// initial roll and pitch inside `simulation.max_tilt`.
     /// `Err((key, value, expected))`; the key names the distribution.
     pub fn check_against(&self, base: &Scenario) -> Result<(), (String, String, String)> {
+        self.check().map_err(|(k, v, e)| (k, crate::text::show(v), e.to_string()))?;
+        let absolute = self.absolute(base);
+        absolute.check_against_absolute(base)?;
+        absolute.vehicle_band(base).map(|_| ())
+    }
+
+    /// [`MonteCarloSpec::check_against`] of the absolute form.
+    fn check_against_absolute(&self, base: &Scenario) -> Result<(), (String, String, String)> {
         use crate::text::show;
         // After `check`, every support is finite (never NaN), so plain comparisons suffice.
         self.check().map_err(|(k, v, e)| (k, show(v), e.to_string()))?;
@@ -342,6 +485,47 @@ impl MonteCarloSpec {
             if base.initial_state.position.iter().any(|p| !((p + lo).is_finite() && (p + hi).is_finite())) {
                 return err("initial_position_offset", d, "offsets giving a finite initial position".into());
             }
+            // A single file must start at or above the ground; so must every draw.
+            if let Some(g) = base.ground.as_ref().filter(|g| g.enabled) {
+                let z0 = base.initial_state.position[2];
+                if z0 + lo < g.height {
+                    return err(
+                        "initial_position_offset",
+                        d,
+                        format!(
+                            "offsets keeping the start at or above ground.height = {} (the lowest draw starts at z = {} + {} = {})",
+                            show(g.height),
+                            show(z0),
+                            show(lo),
+                            show(z0 + lo)
+                        ),
+                    );
+                }
+            }
+        }
+        // Scaled disturbances are held to a file's range: finite values.
+        if let Some(d) = &self.disturbance_amplitude {
+            let (lo, hi) = d.support();
+            for factor in [lo, hi] {
+                let mut scaled = base.disturbance.clone();
+                for signal in
+                    [&mut scaled.x, &mut scaled.y, &mut scaled.z, &mut scaled.phi, &mut scaled.theta, &mut scaled.psi]
+                {
+                    signal.for_each_leaf_term_mut(&mut |term| scale_term(term, factor));
+                }
+                for (axis, signal) in scaled.named() {
+                    if let Err((key, value, expected)) = signal.check() {
+                        return err(
+                            "disturbance_amplitude",
+                            d,
+                            format!(
+                                "factors keeping every disturbance in range (factor {} gives disturbance.{axis}.{key} = {value}; expected {expected})",
+                                show(factor)
+                            ),
+                        );
+                    }
+                }
+            }
         }
         if let Some(d) = &self.initial_attitude_offset {
             let (lo, hi) = d.support();
@@ -379,6 +563,9 @@ impl MonteCarloSpec {
     /// generator serves parameter `k`, so adding a parameter never changes
     /// the draws of the others.
     pub fn sample(&self, base: &Scenario, master: u64, index: u64) -> (Scenario, u64, [f64; 12]) {
+        if self.mass_factor.is_some() || self.payload_mass_factor.is_some() {
+            return self.absolute(base).sample(base, master, index);
+        }
         let seed = run_seed(master, index);
         let stream = |k: u64| chacha_stream(seed, 100 + k);
         let mut s = base.clone();
@@ -404,11 +591,9 @@ impl MonteCarloSpec {
             &mut s.disturbance.psi,
         ] {
             signal.for_each_leaf_term_mut(&mut |term| {
+                scale_term(term, amplitude);
                 match term {
-                    Term::Constant { value } => *value *= amplitude,
-                    Term::Step { height, .. } => *height *= amplitude,
-                    Term::Sine { amplitude: a, phase, .. } | Term::Cosine { amplitude: a, phase, .. } => {
-                        *a *= amplitude;
+                    Term::Sine { phase, .. } | Term::Cosine { phase, .. } => {
                         if let Some(d) = &self.disturbance_phase {
                             let extra = d.sample(&mut phase_rng);
                             if n_phase == 0 {
@@ -418,9 +603,7 @@ impl MonteCarloSpec {
                             *phase += extra;
                         }
                     }
-                    Term::Polynomial { coefficients } => coefficients.iter_mut().for_each(|c| *c *= amplitude),
-                    Term::Waypoints(w) => w.scale(amplitude),
-                    Term::Piecewise { .. } => {} // never a leaf
+                    _ => {}
                 }
             });
         }
@@ -452,6 +635,20 @@ impl MonteCarloSpec {
             init.attitude[2],
         ];
         (s, seed, sampled)
+    }
+}
+
+/// Multiply a disturbance term's size by the drawn `amplitude` factor
+/// (`disturbance_amplitude`): constants, step heights, sine and cosine
+/// amplitudes, polynomial coefficients and waypoint values.
+fn scale_term(term: &mut Term, amplitude: f64) {
+    match term {
+        Term::Constant { value } => *value *= amplitude,
+        Term::Step { height, .. } => *height *= amplitude,
+        Term::Sine { amplitude: a, .. } | Term::Cosine { amplitude: a, .. } => *a *= amplitude,
+        Term::Polynomial { coefficients } => coefficients.iter_mut().for_each(|c| *c *= amplitude),
+        Term::Waypoints(w) => w.scale(amplitude),
+        Term::Piecewise { .. } => {} // never a leaf
     }
 }
 

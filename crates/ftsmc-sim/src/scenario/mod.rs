@@ -12,7 +12,9 @@ use serde::{Deserialize, Serialize};
 
 mod deprecated;
 pub mod distributions;
+pub mod falsify_section;
 pub mod ladder;
+pub mod overrides;
 pub mod resolve;
 pub mod seed;
 pub mod tune_section;
@@ -236,7 +238,9 @@ pub fn read_scenario_text(path: &Path, limits: &Limits) -> Result<String, Scenar
         let kind = if meta.is_dir() { "a directory" } else { "not a regular file (a device, FIFO or socket)" };
         ScenarioError::File { path: shown.clone(), message: format!("{kind}; a scenario must be a regular file") }
     };
-    let max = limits.max_scenario_bytes.min(u64::MAX as f64) as u64;
+    // The limit, and with it switched off (`inf`) its hard bound.
+    let max =
+        limits.max_scenario_bytes.min(crate::limits::hard_bound("max_scenario_bytes").0).min(u64::MAX as f64) as u64;
     let too_big = |bytes: u64| ScenarioError::Limit {
         path: shown.clone(),
         limit: crate::limits::check_file_size(limits, bytes).expect_err("over the limit"),
@@ -353,6 +357,10 @@ pub struct Scenario {
     /// by every other command).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub tune: Option<tune_section::TuneSection>,
+    /// The search space of `ftsmc falsify` and `ftsmc failure-probability`
+    /// (`[falsify]`; ignored by every other command).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub falsify: Option<falsify_section::FalsifySection>,
 }
 
 fn is_default_limits(l: &Limits) -> bool {
@@ -501,7 +509,11 @@ impl Scenario {
             signal_cost: {
                 let r = &self.reference;
                 let signals = [&r.x, &r.y, &r.z, &r.psi].into_iter().chain(self.disturbance.named().map(|(_, s)| s));
-                signals.chain(self.inertia_variation.as_ref()).map(crate::signal::Signal::evaluation_cost).sum()
+                let terms: f64 =
+                    signals.chain(self.inertia_variation.as_ref()).map(crate::signal::Signal::evaluation_cost).sum();
+                // Every discrete gust is evaluated at every substep (a
+                // 1 − cosine: priced like a sine term).
+                terms + self.wind.as_ref().map_or(0.0, |w| w.gusts.len() as f64)
             },
             limits: &self.limits,
         }

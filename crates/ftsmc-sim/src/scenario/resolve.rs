@@ -29,7 +29,7 @@ use std::path::{Path, PathBuf};
 
 use serde::Deserialize;
 
-use crate::controllers::{GainSections, SectionParseError};
+use crate::controllers::{GainSections, NominalVehicle, SectionParseError};
 use crate::limits::Limits;
 use crate::scenario::{read_scenario_text, Scenario, ScenarioError, BUILT_IN_SCENARIOS};
 use crate::signal::{Signal, Term};
@@ -69,6 +69,9 @@ struct Layer {
     shown: String,
     text: String,
     table: toml::Table,
+    /// The directory relative paths in the file resolve against (`None`: a
+    /// built-in scenario; the working directory).
+    dir: Option<PathBuf>,
 }
 
 /// The built-in scenario called `name` (`paper-scenario-1`, with or without
@@ -224,6 +227,19 @@ impl Chain {
         }
     }
 
+    /// An error at dotted `path` of layer `i` (before it is merged).
+    fn parse_error_in(&self, i: usize, path: &str, message: &str) -> ScenarioError {
+        let layer = &self.layers[i];
+        let message = match locate(&layer.text, path) {
+            Some((line, column)) => {
+                let source = layer.text.lines().nth(line - 1).unwrap_or("").trim();
+                format!("TOML parse error at line {line}, column {column} (`{}`): {message}", show_str(source))
+            }
+            None => message.to_string(),
+        };
+        ScenarioError::Parse { path: self.shown(i), message }
+    }
+
     /// An error at dotted `path`: the file that wrote it, with line and
     /// column when the key is found in its text.
     fn parse_error(&self, path: &str, message: &str) -> ScenarioError {
@@ -240,8 +256,19 @@ impl Chain {
     }
 }
 
+/// Whether the first layer of a chain was read from a file or given as text.
+#[derive(Clone, Copy)]
+enum SourceKind {
+    File,
+    Text,
+}
+
 /// Load the chain starting at `source`.
 fn load_chain(source: Source<'_>, limits: &Limits) -> Result<Chain, ScenarioError> {
+    let source_kind = match source {
+        Source::File(_) => SourceKind::File,
+        Source::Text { .. } => SourceKind::Text,
+    };
     let (mut shown, mut text, mut dir, mut id) = match source {
         Source::File(path) => {
             let text = read_scenario_text(path, limits)?;
@@ -261,6 +288,12 @@ fn load_chain(source: Source<'_>, limits: &Limits) -> Result<Chain, ScenarioErro
             // A file reached through `extends` may be anything (a system
             // file): name it and the position, never quote its content.
             message: match layers.last() {
+                // A file whose name does not end in `.toml` may be anything
+                // (`/etc/passwd`): never quote its content either.
+                None if !shown.ends_with(".toml") && matches!(source_kind, SourceKind::File) => format!(
+                    "not a scenario file: {} (content not shown: the name does not end in .toml)",
+                    crate::text::parse_position(&text, &e)
+                ),
                 None => crate::text::parse_message(&text, &e),
                 Some(by) => format!(
                     "not a scenario file (`extends` target of {}): {} (content not shown)",
@@ -271,7 +304,7 @@ fn load_chain(source: Source<'_>, limits: &Limits) -> Result<Chain, ScenarioErro
         })?;
         let extends = table.remove("extends");
         ids.push(id);
-        layers.push(Layer { shown: shown.clone(), text, table });
+        layers.push(Layer { shown: shown.clone(), text, table, dir: dir.clone() });
         let Some(extends) = extends else { break };
         let toml::Value::String(target) = extends else {
             return Err(ScenarioError::Parse {
@@ -333,6 +366,129 @@ fn load_chain(source: Source<'_>, limits: &Limits) -> Result<Chain, ScenarioErro
     Ok(Chain { layers, origin: BTreeMap::new() })
 }
 
+/// The Monte Carlo draws with a relative form: `(absolute key, relative key)`.
+const RELATIVE_DRAWS: [(&str, &str); 2] = [("mass", "mass_factor"), ("payload_mass", "payload_mass_factor")];
+
+/// One file's relative Monte Carlo draws: `mass = { dist = "uniform", rel =
+/// [a, b] }` is `mass_factor = { dist = "uniform", low = a, high = b }` (and
+/// so for `payload_mass`). Within one file the absolute and the relative
+/// key are exclusive; a file that sets either replaces what a base file
+/// gave the other (the two are one draw: see the merge).
+fn relative_draws(layer: &mut toml::Table) -> Result<(), (String, String)> {
+    let Some(toml::Value::Table(mc)) = layer.get_mut("montecarlo") else { return Ok(()) };
+    for (absolute, relative) in RELATIVE_DRAWS {
+        let Some(toml::Value::Table(d)) = mc.get(absolute) else { continue };
+        let Some(rel) = d.get("rel") else { continue };
+        let key = format!("montecarlo.{absolute}.rel");
+        let pair = rel.as_array().filter(|a| a.len() == 2).and_then(|a| {
+            let f = |v: &toml::Value| v.as_float().or_else(|| v.as_integer().map(|i| i as f64));
+            Some([f(&a[0])?, f(&a[1])?])
+        });
+        let Some([low, high]) = pair else {
+            return Err((
+                key,
+                format!(
+                    "`rel` = {} is invalid (expected two factors [low, high] of the vehicle's value)",
+                    show_str(&rel.to_string())
+                ),
+            ));
+        };
+        if d.get("dist").and_then(|v| v.as_str()) != Some("uniform") || d.len() != 2 {
+            return Err((key, format!("`rel` goes with dist = \"uniform\" and no other key (write `{absolute} = {{ dist = \"uniform\", rel = [{}, {}] }}`, or `{relative}` for another distribution of the factor)", show(low), show(high))));
+        }
+        if mc.contains_key(relative) {
+            return Err((key, format!("`{absolute}` with `rel` is `{relative}`: not both in one file")));
+        }
+        let mut factor = toml::Table::new();
+        factor.insert("dist".into(), toml::Value::String("uniform".into()));
+        factor.insert("low".into(), toml::Value::Float(low));
+        factor.insert("high".into(), toml::Value::Float(high));
+        mc.remove(absolute);
+        mc.insert(relative.into(), toml::Value::Table(factor));
+    }
+    Ok(())
+}
+
+/// Before a file is merged: its absolute or relative draw of a quantity
+/// ([`RELATIVE_DRAWS`]) replaces the base files' draw of the other form.
+fn release_other_draw_form(merged: &mut toml::Table, layer: &toml::Table, origin: &mut BTreeMap<String, usize>) {
+    let Some(toml::Value::Table(mc)) = layer.get("montecarlo") else { return };
+    let Some(toml::Value::Table(base)) = merged.get_mut("montecarlo") else { return };
+    for (absolute, relative) in RELATIVE_DRAWS {
+        for (set, other) in [(absolute, relative), (relative, absolute)] {
+            if mc.contains_key(set) && base.remove(other).is_some() {
+                let path = format!("montecarlo.{other}");
+                origin.retain(|k, _| k != &path && !k.starts_with(&format!("{path}.")));
+            }
+        }
+    }
+}
+
+/// A file that sets `[wind] preset` owns the preset's keys
+/// ([`crate::environment::wind::PRESET_OWNED_KEYS`]): the values a base
+/// file gave them are dropped unless this file sets them too, so a child's
+/// `preset = "calm"` is still air whatever the parent's speed or turbulence.
+fn release_wind_preset_keys(merged: &mut toml::Table, layer: &toml::Table, origin: &mut BTreeMap<String, usize>) {
+    let Some(toml::Value::Table(wind)) = layer.get("wind") else { return };
+    if !wind.contains_key("preset") {
+        return;
+    }
+    if let Some(toml::Value::Table(base)) = merged.get_mut("wind") {
+        for key in crate::environment::wind::PRESET_OWNED_KEYS {
+            if !wind.contains_key(key) && base.remove(key).is_some() {
+                let path = format!("wind.{key}");
+                origin.retain(|k, _| k != &path && !k.starts_with(&format!("{path}.")));
+            }
+        }
+    }
+}
+
+/// The vehicle preset `vehicle.preset` names, if any
+/// ([`crate::vehicle::presets`]), as a layer just below the file that names
+/// it: it fills every `[plant]`, `[vehicle]` and `[actuators]` key it has,
+/// except those written by that file or a file extending it (`origin`
+/// index at most the naming file's); the values of its base files are
+/// replaced, so a child that names another vehicle gets that vehicle's
+/// nominal model, true vehicle and rotors. With `model = "paper"` written
+/// at or above the naming file, the rigid-body-only keys are left out.
+/// A filled key is recorded as written by the naming file. `Err(message)`
+/// for a name that is not a preset.
+fn apply_vehicle_preset(merged: &mut toml::Table, origin: &mut BTreeMap<String, usize>) -> Result<(), String> {
+    use crate::vehicle::presets::{VehiclePreset, PRESET_SECTIONS, RIGID_BODY_ONLY_KEYS};
+    let Some(name) = merged.get("vehicle").and_then(|v| v.get("preset")) else { return Ok(()) };
+    let preset = match name.as_str().and_then(VehiclePreset::from_name) {
+        Some(p) => p,
+        None => {
+            return Err(format!(
+                "`preset` = {} is not a vehicle preset (known: {})",
+                show_str(&name.to_string()),
+                VehiclePreset::names_joined()
+            ))
+        }
+    };
+    let naming = origin.get("vehicle.preset").copied().unwrap_or(0);
+    let kept = |origin: &BTreeMap<String, usize>, path: &str| origin.get(path).is_some_and(|&i| i <= naming);
+    let paper = merged.get("vehicle").and_then(|v| v.get("model")).and_then(|m| m.as_str()) == Some("paper")
+        && kept(origin, "vehicle.model");
+    let mut table = preset.table();
+    for section in PRESET_SECTIONS {
+        let Some(toml::Value::Table(values)) = table.remove(section) else { continue };
+        let target = merged.entry(section).or_insert_with(|| toml::Value::Table(toml::Table::new()));
+        let Some(target) = target.as_table_mut() else { continue };
+        for (key, value) in values {
+            let path = format!("{section}.{key}");
+            let skipped =
+                section == "vehicle" && paper && (RIGID_BODY_ONLY_KEYS.contains(&key.as_str()) || key == "model");
+            if !kept(origin, &path) && !skipped {
+                origin.retain(|k, _| !k.starts_with(&format!("{path}.")));
+                origin.insert(path, naming);
+                target.insert(key, value);
+            }
+        }
+    }
+    Ok(())
+}
+
 /// The key path (`in `a.b``) of a deserialization error, plus the unknown
 /// field's name when the error is about one.
 fn error_path(e: &toml::de::Error) -> String {
@@ -380,10 +536,15 @@ pub fn load(source: Source<'_>, overrides: &[String]) -> Result<Loaded, Scenario
 
     let mut merged = defaults();
     let layers: Vec<toml::Table> = chain.layers.iter().map(|l| l.table.clone()).collect();
-    for (i, table) in layers.into_iter().enumerate().rev() {
+    for (i, mut table) in layers.into_iter().enumerate().rev() {
+        relative_draws(&mut table).map_err(|(key, message)| chain.parse_error_in(i, &key, &message))?;
+        release_wind_preset_keys(&mut merged, &table, &mut chain.origin);
+        release_other_draw_form(&mut merged, &table, &mut chain.origin);
         merge(&mut merged, table, "", i, &mut chain.origin);
     }
 
+    apply_vehicle_preset(&mut merged, &mut chain.origin)
+        .map_err(|message| chain.parse_error("vehicle.preset", &message))?;
     crate::scenario::check_core_array_lengths(&merged).map_err(|(path, message)| chain.parse_error(&path, &message))?;
     // Renamed keys (`max_tilt` of the controllers' demand limits) move to
     // their new names before the typed parse, each with a warning.
@@ -444,6 +605,7 @@ pub fn load(source: Source<'_>, overrides: &[String]) -> Result<Loaded, Scenario
         super::deprecated::convert(&mut scenario, old_actual, old_rigid, &old).map_err(|(key, value, expected)| {
             ScenarioError::Invalid { path: chain.shown(chain.writer(&key)), key, value, expected }
         })?;
+    import_px4_params(&mut gain_tables, &scenario.nominal_vehicle(), &chain)?;
     scenario.gains = GainSections::take_from(&mut gain_tables, &scenario.nominal_vehicle()).map_err(
         |SectionParseError { section, error }| {
             let inner = error_path(&error);
@@ -465,6 +627,35 @@ pub fn load(source: Source<'_>, overrides: &[String]) -> Result<Loaded, Scenario
         .map(|w| format!("{}: `{}` = {}: {}", chain.shown(chain.writer(&w.key)), w.key, w.value, w.message))
         .collect();
     Ok(Loaded { scenario, files: chain.layers.iter().map(|l| l.shown.clone()).collect(), warnings })
+}
+
+/// `[pid] px4_params = "FILE.params"`: the PX4 gains of a QGroundControl
+/// parameter file (path relative to the file that sets the key), converted
+/// for `vehicle` ([`crate::controllers::px4_params`]), become the `[pid]`
+/// table; keys the `[pid]` tables of the chain set beside it replace the
+/// imported values.
+fn import_px4_params(
+    gain_tables: &mut toml::Table,
+    vehicle: &NominalVehicle,
+    chain: &Chain,
+) -> Result<(), ScenarioError> {
+    use crate::controllers::px4_params;
+    const KEY: &str = "pid.px4_params";
+    let Some(toml::Value::Table(pid)) = gain_tables.get_mut("pid") else { return Ok(()) };
+    let Some(value) = pid.remove("px4_params") else { return Ok(()) };
+    let toml::Value::String(file) = value else {
+        return Err(chain.parse_error(KEY, "expected a string: the path of a QGroundControl .params file"));
+    };
+    let dir = chain.layers[chain.writer(KEY)].dir.clone().unwrap_or_default();
+    let gains = px4_params::read_qgc(&dir.join(&file))
+        .and_then(|params| px4_params::gains_from_params(&params, vehicle))
+        .map_err(|e| chain.parse_error(KEY, &e.to_string()))?;
+    let mut table = toml::Table::try_from(gains).map_err(|e| chain.parse_error(KEY, &e.to_string()))?;
+    for (key, value) in std::mem::take(pid) {
+        table.insert(key, value);
+    }
+    *pid = table;
+    Ok(())
 }
 
 /// A likely unit slip: valid, but probably not what was meant.
@@ -510,7 +701,8 @@ fn angle_levels(signal: &Signal, prefix: &str, out: &mut Vec<(String, f64)>) {
 /// Warnings for deprecated keys (`simulation.max_rotor_speed`, naming the
 /// key that replaces it) and for values that are valid but look like unit slips: angles
 /// beyond 2π (degrees for radians), a payload above 10× the vehicle's
-/// mass (grams, or a typo), windows that start after the end of the run.
+/// mass (grams, or a typo), Monte Carlo mass or payload draws far from the
+/// vehicle's mass, windows that start after the end of the run.
 pub fn unit_slip_warnings(s: &Scenario) -> Vec<Warning> {
     let mut out = Vec::new();
     let mut warn = |key: String, value: String, message: String| out.push(Warning { key, value, message });
@@ -554,6 +746,12 @@ pub fn unit_slip_warnings(s: &Scenario) -> Vec<Warning> {
                 format!("{} s", show(p.start)),
                 format!("after the end of the run (duration = {} s): the payload never acts", show(s.duration)),
             );
+        }
+    }
+    if let Some(mc) = &s.montecarlo {
+        // Refused beyond the plausible band (validation); far draws warn.
+        for (key, value, message) in mc.absolute(s).vehicle_band(s).unwrap_or_default() {
+            warn(key, value, message);
         }
     }
     let after_end = |start: f64| start > s.duration;

@@ -3,8 +3,9 @@
 //!
 //! The parameters themselves are declared with each controller
 //! (`crate::controllers::tunable`); this section narrows that set
-//! (`parameters`), moves bounds (`bounds`), adds any numeric gain key
-//! (`[[tune.extra]]`) and holds the cost weights. docs/tuning.md explains
+//! (`parameters`), moves bounds (`bounds`), adds gains of the controller's
+//! own section (`[[tune.extra]]`, checked by
+//! `crate::controllers::tunable::check_extra_key`) and holds the cost weights. docs/tuning.md explains
 //! the cost; docs/scenarios.md lists every key.
 
 use std::collections::BTreeMap;
@@ -12,7 +13,7 @@ use std::collections::BTreeMap;
 use ftsmc_core::law::GainError;
 use serde::{Deserialize, Serialize};
 
-/// One extra tuned value: any numeric key of the scenario, by its dotted
+/// One extra tuned value: a gain of the tuned controller, by its dotted
 /// path (`ftaftsmc.x.lambda`, `pid.rate_p.0` for element 0 of an array,
 /// `cascade.command_filter.damping`), searched between `low` and `high`
 /// starting from the value the scenario gives it.
@@ -47,7 +48,7 @@ pub struct TuneSection {
     /// on the scenario's own gains, like the declared ones).
     #[serde(skip_serializing_if = "BTreeMap::is_empty")]
     pub bounds: BTreeMap<String, [f64; 2]>,
-    /// Extra parameters: any numeric key, absolute values.
+    /// Extra parameters: gains of the controller's own section, absolute values.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub extra: Vec<ExtraParameter>,
     /// Training flights per candidate (the same Monte Carlo draws for every
@@ -57,8 +58,19 @@ pub struct TuneSection {
     /// search never used). Default 200.
     pub validation_runs: u64,
     /// Initial CMA-ES step, as a fraction of each parameter's search range
-    /// (log range for log parameters). Default 0.3.
-    pub sigma: f64,
+    /// (log range for log parameters). Default (absent): one standard
+    /// deviation is a factor of ×1.4 on a log parameter (every declared
+    /// gain factor, `[[tune.extra]]` with `log = true`) and a tenth of the
+    /// range on a linear one (`log = false`); see
+    /// `crate::tune::space::DEFAULT_LOG_STEP`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sigma: Option<f64>,
+    /// Candidates of the search re-flown on fresh training draws before the
+    /// winner is chosen (racing; the start is always re-flown beside them).
+    /// Default 3; 0 chooses on the training draws alone.
+    pub race: u64,
+    /// Fresh training draws each raced candidate flies. Default 16.
+    pub race_runs: u64,
     /// CMA-ES population λ (default `4 + ⌊3 ln n⌋` for n parameters).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub population: Option<u64>,
@@ -91,7 +103,9 @@ impl Default for TuneSection {
             extra: Vec::new(),
             runs: 4,
             validation_runs: 200,
-            sigma: 0.3,
+            sigma: None,
+            race: 3,
+            race_runs: 16,
             population: None,
             divergence: 1000.0,
             envelope: 10.0,
@@ -105,7 +119,8 @@ impl Default for TuneSection {
 
 impl TuneSection {
     /// Range checks: weights finite and ≥ 0, `1 <= runs <= 1e6`,
-    /// `validation_runs <= 1e6`, `0 < sigma <= 1`, `2 <= population <= 1000`,
+    /// `validation_runs <= 1e6`, `0 < sigma <= 1`, `race <= 100`,
+    /// `1 <= race_runs <= 1e6` when racing, `2 <= population <= 1000`,
     /// bounds and extra ranges finite with `low < high` (and `low > 0` on a
     /// log scale). `Err((dotted key below [tune], error))`.
     pub fn check(&self) -> Result<(), (String, GainError)> {
@@ -130,8 +145,16 @@ impl TuneSection {
         if self.validation_runs > 1_000_000 {
             return err("validation_runs", self.validation_runs as f64, "0 <= validation_runs <= 1e6");
         }
-        if !(self.sigma > 0.0 && self.sigma <= 1.0) {
-            return err("sigma", self.sigma, "0 < sigma <= 1 (a fraction of each parameter's range)");
+        if let Some(sigma) = self.sigma {
+            if !(sigma > 0.0 && sigma <= 1.0) {
+                return err("sigma", sigma, "0 < sigma <= 1 (a fraction of each parameter's range)");
+            }
+        }
+        if self.race > 100 {
+            return err("race", self.race as f64, "0 <= race <= 100");
+        }
+        if self.race > 0 && !(1..=1_000_000).contains(&self.race_runs) {
+            return err("race_runs", self.race_runs as f64, "1 <= race_runs <= 1e6");
         }
         if let Some(p) = self.population {
             if !(2..=1000).contains(&p) {

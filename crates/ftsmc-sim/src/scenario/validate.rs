@@ -224,6 +224,23 @@ impl Scenario {
         check_realism(self).map_err(|(prefix, e)| gain(&prefix, e))?;
         if let Some(t) = &self.tune {
             t.check().map_err(|(key, e)| invalid(format!("tune.{key}"), show(e.value), e.expected))?;
+            // Only gains are tunable: never the seed, the duration or anything
+            // else the search is judged on.
+            for (i, e) in t.extra.iter().enumerate() {
+                crate::controllers::tunable::check_extra_key_any(&e.key).map_err(|why| {
+                    invalid(
+                        format!("tune.extra[{i}].key"),
+                        format!("\"{}\"", show_str(&e.key)),
+                        &format!("a tunable gain; {why}"),
+                    )
+                })?;
+            }
+        }
+        if let Some(f) = &self.falsify {
+            f.check().and_then(|()| f.check_against(self, path)).map_err(|(key, message)| ScenarioError::Parse {
+                path: path.to_string(),
+                message: format!("`{key}`: {message}"),
+            })?;
         }
         // The rigid body flies the payload too: its mass with the payload
         // must stay in the rigid body's valid range.

@@ -109,6 +109,14 @@ impl Cmaes {
         self.sigma
     }
 
+    /// The largest standard deviation of the search distribution along a
+    /// principal axis, `σ · max(D)` (in the caller's coordinates): how far
+    /// the next candidates may still move. A restart policy watches it for
+    /// a collapsed step.
+    pub fn max_std(&self) -> f64 {
+        self.sigma * self.d.iter().copied().fold(0.0, f64::max)
+    }
+
     /// λ new candidates `m + σ B D z`, `z ~ N(0, I)`.
     pub fn ask(&mut self) -> Vec<Vec<f64>> {
         let n = self.n;

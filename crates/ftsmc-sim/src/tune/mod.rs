@@ -4,18 +4,25 @@
 //! ([`space`], `crate::controllers::tunable`), scored by a cost built from
 //! the statistics of a handful of Monte Carlo flights per candidate
 //! ([`cost`]). Every candidate flies the same draws (common random
-//! numbers: run indices `0..runs` of the scenario's `[montecarlo]`, seeded
-//! by the tune's seed), each generation's flights in parallel on the
-//! current rayon pool. The start (the scenario's own gains) is flown first,
-//! so the result is never worse than it on the training draws. The result
-//! and the start are then judged on a fresh Monte Carlo whose run indices
-//! start at [`HELD_OUT_OFFSET`] and whose seeds are checked against the
-//! training seeds ([`held_out_indices`]): the search never sees them.
+//! numbers: run indices [`training_indices`] of the scenario's
+//! `[montecarlo]`, seeded by the tune's seed), each generation's flights in
+//! parallel on the current rayon pool. The start (the scenario's own gains)
+//! is flown first. The initial step is a factor ×1.4 per parameter
+//! ([`space::DEFAULT_LOG_STEP`]); the search restarts when it makes no
+//! progress or converges (the policy is on `tune_inner`). Before choosing,
+//! the start and the best few candidates are re-flown on fresh training
+//! draws ([`race_indices`], racing), so the winner is not the one the
+//! training draws flattered most; if the start wins, the result says so
+//! ([`TuneResult::improved`]). The result and the start are then judged
+//! on a fresh Monte Carlo whose run indices start at [`HELD_OUT_OFFSET`]:
+//! the search never sees them. Training, race and held-out run indices
+//! lie far above any index `montecarlo` flies, so the tuned file's own
+//! Monte Carlo never re-flies one of them.
 //!
-//! Determinism: candidates are drawn on the calling thread from one
-//! ChaCha8 stream seeded by the tune's seed, flights are collected in
-//! order, costs computed in order: the same scenario, controller, budget
-//! and seed give the same history and result whatever the thread count.
+//! Determinism: candidates are drawn on the calling thread from ChaCha8
+//! streams seeded by the tune's seed, flights are collected in order,
+//! costs computed in order: the same scenario, controller, budget and seed
+//! give the same history and result whatever the thread count.
 
 pub mod cmaes;
 pub mod cost;
@@ -25,18 +32,35 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use crate::batch::montecarlo::{run_seed, MonteCarloSpec, DEFAULT_LANES};
+use crate::escape::toml_comment;
 use crate::run::RunOptions;
 use crate::scenario::tune_section::TuneSection;
 use crate::scenario::Scenario;
 pub use cost::{Flight, FlightStats};
 pub use space::{Dim, Space};
 
-/// First run index of the held-out Monte Carlo (training uses `0..runs`).
+/// First run index of the held-out Monte Carlo.
 pub const HELD_OUT_OFFSET: u64 = 1 << 40;
 
-/// Run indices of the training flights: `0..runs`.
+/// First run index of the training flights. Far above any run index a
+/// Monte Carlo flies (`montecarlo`, `merge`, `compare` number their runs
+/// from 0; 2⁴¹ ≈ 2.2 × 10¹² runs, against a default limit of 10⁶), so the tuned file's own Monte Carlo, with
+/// the default seed or any other, never re-flies a training draw: a run's
+/// draws are keyed by the master seed *and* its index.
+pub const TRAINING_OFFSET: u64 = 1 << 41;
+
+/// First run index of the racing flights (fresh training draws on which
+/// the best candidates are re-flown before the winner is chosen).
+pub const RACE_OFFSET: u64 = 1 << 42;
+
+/// Run indices of the training flights: `TRAINING_OFFSET..TRAINING_OFFSET + runs`.
 pub fn training_indices(runs: u64) -> Vec<u64> {
-    (0..runs).collect()
+    (TRAINING_OFFSET..TRAINING_OFFSET.saturating_add(runs)).collect()
+}
+
+/// Run indices of the racing flights: `RACE_OFFSET..RACE_OFFSET + runs`.
+pub fn race_indices(runs: u64) -> Vec<u64> {
+    (RACE_OFFSET..RACE_OFFSET.saturating_add(runs)).collect()
 }
 
 /// Run indices of `runs` held-out flights: from [`HELD_OUT_OFFSET`] on,
@@ -54,7 +78,7 @@ pub fn held_out_indices(master: u64, training_runs: u64, runs: u64) -> Vec<u64> 
 pub struct TuneOptions {
     /// Registry name of the controller.
     pub controller: String,
-    /// Training flights the search may fly (the start's included).
+    /// Training flights the search may fly (the start's and the race's included).
     pub budget: u64,
     /// Seed of the search (CMA-ES stream) and of the Monte Carlo draws.
     pub seed: u64,
@@ -63,13 +87,13 @@ pub struct TuneOptions {
 /// One evaluated candidate (a row of `history.csv`).
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Evaluated {
-    /// Generation (0: the start point).
+    /// Generation (0: the start point), counted across restarts.
     pub generation: u64,
     /// Index in its generation.
     pub candidate: usize,
     /// Parameter values, in [`Space::dims`] order.
     pub values: Vec<f64>,
-    /// Cost (with the bound penalty added when the CMA-ES point lay outside the box).
+    /// Cost on the training draws.
     pub cost: f64,
     /// Statistics of its training flights.
     pub stats: FlightStats,
@@ -77,6 +101,62 @@ pub struct Evaluated {
     pub flights: u64,
     /// Why it could not fly (invalid gains), if so.
     pub error: Option<String>,
+    /// The CMA-ES run it belongs to (0: the first; each restart adds 1).
+    pub restart: u64,
+}
+
+impl Evaluated {
+    /// Invalid gains, or at least one training flight diverged or crashed.
+    pub fn failed(&self) -> bool {
+        self.error.is_some() || self.stats.completed < self.stats.runs
+    }
+}
+
+/// Why the search restarted (see [`tune`]'s restart policy).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum RestartReason {
+    /// No candidate of the run beat the cost it started from within
+    /// [`NO_PROGRESS_GENERATIONS`] generations: the step is too large for
+    /// the landscape here (a cliff). Restart from the best so far with
+    /// half the step.
+    NoProgress,
+    /// The step collapsed ([`COLLAPSED_STEP`]): a local optimum. Restart
+    /// from the best so far with the initial step and twice the population.
+    Collapsed,
+    /// The run's best did not improve for [`STALL_GENERATIONS`]
+    /// generations: a plateau or a local optimum. Restart as for `Collapsed`.
+    Stalled,
+}
+
+/// One generation's summary: how the search went.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Generation {
+    /// Generation number (from 1).
+    pub generation: u64,
+    /// CMA-ES run (restart) it belongs to.
+    pub restart: u64,
+    /// Population λ.
+    pub population: usize,
+    /// Step σ · max(D) at which it was drawn (step units: 1 = the initial step).
+    pub step: f64,
+    /// Candidates with invalid gains or a diverged or crashed training flight.
+    pub failed: usize,
+    /// Best training cost so far (the start's included).
+    pub best_cost: f64,
+    /// Set when the search restarted after this generation.
+    pub restarted: Option<RestartReason>,
+}
+
+/// One raced candidate: re-flown on fresh training draws.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Raced {
+    /// Index in the history (0: the start).
+    pub index: usize,
+    /// Cost on the race draws.
+    pub cost: f64,
+    /// Statistics of its race flights.
+    pub stats: FlightStats,
 }
 
 /// Training and held-out statistics of the start and the tuned gains.
@@ -101,8 +181,15 @@ pub struct TuneResult {
     pub options: TuneOptions,
     /// Every evaluated candidate, in order.
     pub history: Vec<Evaluated>,
-    /// Index of the best candidate in `history`.
+    /// Every generation's summary, in order.
+    pub generations: Vec<Generation>,
+    /// The raced candidates (the start first), empty without a race.
+    pub race: Vec<Raced>,
+    /// Index of the chosen candidate in `history` (0: the start).
     pub best: usize,
+    /// False when the chosen gains are the start's: the search found nothing
+    /// better (on the training draws, or in the race).
+    pub improved: bool,
     /// The scenario flown at the start (the input, `controllers = [controller]`).
     pub start: Scenario,
     /// The scenario with the best parameters applied.
@@ -111,20 +198,32 @@ pub struct TuneResult {
     pub training: Comparison,
     /// Held-out statistics (`None` with `validation_runs = 0`).
     pub held_out: Option<Comparison>,
+    /// The held-out flights themselves (start, tuned), in run order, when
+    /// the tune was flown locally ([`tune`]); `None` through an evaluator.
+    pub held_out_runs: Option<[Vec<Flight>; 2]>,
     /// Run indices of the training flights.
     pub training_indices: Vec<u64>,
+    /// Run indices of the racing flights.
+    pub race_indices: Vec<u64>,
     /// Run indices of the held-out flights.
     pub held_out_indices: Vec<u64>,
-    /// Training flights flown.
+    /// Training flights flown by the search (the start's included).
     pub training_flights: u64,
+    /// Training flights flown by the race.
+    pub race_flights: u64,
     /// Held-out flights flown (start and tuned).
     pub held_out_flights: u64,
 }
 
 impl TuneResult {
-    /// The best candidate.
+    /// The chosen candidate.
     pub fn best(&self) -> &Evaluated {
         &self.history[self.best]
+    }
+
+    /// The chosen candidate's race entry, if it was raced.
+    pub fn best_raced(&self) -> Option<&Raced> {
+        self.race.iter().find(|r| r.index == self.best)
     }
 }
 
@@ -161,6 +260,22 @@ fn fly(
     Ok(flights.chunks(indices.len().max(1)).map(|c| c.to_vec()).collect())
 }
 
+/// The flights of `controller` flown on each of `scenarios` with the Monte
+/// Carlo draws `indices` of the first scenario's `[montecarlo]` spec,
+/// seeded by `master` (what [`evaluate`] summarises), one list per
+/// scenario, in run order.
+pub fn flights(
+    scenarios: &[Scenario],
+    controller: &str,
+    master: u64,
+    indices: &[u64],
+    progress: &(dyn Fn(u64) + Sync),
+) -> Result<Vec<Vec<Flight>>, String> {
+    let Some(first) = scenarios.first() else { return Ok(Vec::new()) };
+    let spec = first.montecarlo.clone().unwrap_or_default();
+    fly(scenarios, &spec, indices, master, controller, progress)
+}
+
 /// The statistics of `controller` flown on each of `scenarios` with the
 /// Monte Carlo draws `indices` of the scenario's own `[montecarlo]` spec,
 /// seeded by `master`, all flights in parallel (the current rayon pool):
@@ -174,9 +289,7 @@ pub fn evaluate(
     indices: &[u64],
     progress: &(dyn Fn(u64) + Sync),
 ) -> Result<Vec<FlightStats>, String> {
-    let Some(first) = scenarios.first() else { return Ok(Vec::new()) };
-    let spec = first.montecarlo.clone().unwrap_or_default();
-    let flown = fly(scenarios, &spec, indices, master, controller, progress)?;
+    let flown = flights(scenarios, controller, master, indices, progress)?;
     Ok(flown.iter().zip(scenarios).map(|(f, s)| FlightStats::of(f, s.duration)).collect())
 }
 
@@ -185,17 +298,61 @@ pub fn evaluate(
 /// with the tune's controller and seed).
 pub type Evaluator<'a> = dyn Fn(&[Scenario], &[u64]) -> Result<Vec<FlightStats>, String> + Sync + 'a;
 
+/// Where the held-out flights are flown when the flights themselves are
+/// wanted (as [`flights`] with the tune's controller and seed).
+pub type Flyer<'a> = dyn Fn(&[Scenario], &[u64]) -> Result<Vec<Vec<Flight>>, String> + Sync + 'a;
+
+/// Generations without a candidate better than the run's starting cost
+/// before a [`RestartReason::NoProgress`] restart.
+pub const NO_PROGRESS_GENERATIONS: u64 = 3;
+
+/// Generations without improvement of the run's best before a
+/// [`RestartReason::Stalled`] restart.
+pub const STALL_GENERATIONS: u64 = 12;
+
+/// `σ · max(D)` (in step units) below which the step has collapsed
+/// ([`RestartReason::Collapsed`]): candidates then differ by less than
+/// 1 % of a factor ×1.4.
+pub const COLLAPSED_STEP: f64 = 0.03;
+
+/// Smallest initial step of a run after [`RestartReason::NoProgress`]
+/// restarts (step units).
+pub const MIN_RESTART_STEP: f64 = 0.125;
+
 /// Tune `options.controller` on `base` (see the module docs). `progress`
-/// receives every flight flown (training and held-out).
+/// receives every flight flown (training, race and held-out).
 pub fn tune(base: &Scenario, options: &TuneOptions, progress: &(dyn Fn(u64) + Sync)) -> Result<TuneResult, String> {
     let local = |s: &[Scenario], i: &[u64]| evaluate(s, &options.controller, options.seed, i, progress);
-    tune_with(base, options, &local)
+    let flyer = |s: &[Scenario], i: &[u64]| flights(s, &options.controller, options.seed, i, progress);
+    tune_inner(base, options, &local, Some(&flyer))
 }
 
 /// [`tune`] with the flights flown by `evaluator` (e.g. a Dask cluster);
 /// the same result as [`tune`] as long as the evaluator returns what
-/// [`evaluate`] would.
+/// [`evaluate`] would (without the held-out flights themselves).
 pub fn tune_with(base: &Scenario, options: &TuneOptions, evaluator: &Evaluator<'_>) -> Result<TuneResult, String> {
+    tune_inner(base, options, evaluator, None)
+}
+
+/// The CMA-ES search with restarts, then the race, then the held-out judgement.
+///
+/// Restart policy (IPOP-style, after Auger & Hansen, "A Restart CMA
+/// Evolution Strategy With Increasing Population Size", CEC 2005): each
+/// run starts from the best point so far. When no candidate of a run beats
+/// the cost it started from within [`NO_PROGRESS_GENERATIONS`] generations
+/// (the step is too large: the start sits near a cliff), the next run
+/// halves the initial step (down to [`MIN_RESTART_STEP`]) and keeps the
+/// population. When the step collapses ([`COLLAPSED_STEP`]) or the run's
+/// best stalls for [`STALL_GENERATIONS`] generations (a local optimum of a
+/// multimodal landscape), the next run takes the initial step again and
+/// twice the population. Each run draws from its own ChaCha8 stream
+/// (`run_seed(seed, restart)`).
+fn tune_inner(
+    base: &Scenario,
+    options: &TuneOptions,
+    evaluator: &Evaluator<'_>,
+    flyer: Option<&Flyer<'_>>,
+) -> Result<TuneResult, String> {
     crate::registry::check_name(&options.controller)
         .map_err(|known| format!("unknown controller `{}` (known: {known})", options.controller))?;
     let settings = base.tune.clone().unwrap_or_default();
@@ -207,83 +364,203 @@ pub fn tune_with(base: &Scenario, options: &TuneOptions, evaluator: &Evaluator<'
     let train = training_indices(runs);
     let duration = start.duration;
     let n = space.dims.len();
-    let mut es =
-        cmaes::Cmaes::new(space.start_unit(), settings.sigma, settings.population.map(|p| p as usize), options.seed);
-    let lambda = es.population() as u64;
-    if options.budget < runs * (1 + lambda) {
+    let default_lambda =
+        settings.population.map(|p| p as usize).unwrap_or(cmaes::Cmaes::new(vec![0.0; n], 1.0, None, 0).population());
+    let lambda0 = default_lambda as u64;
+    if options.budget < runs * (1 + lambda0) {
         return Err(format!(
-            "--budget {} is too small: the start and one generation of {lambda} candidates need {} flights ({runs} per candidate, `tune.runs`)",
+            "--budget {} is too small: the start and one generation of {lambda0} candidates need {} flights ({runs} per candidate, `tune.runs`)",
             options.budget,
-            runs * (1 + lambda)
+            runs * (1 + lambda0)
         ));
     }
+    // The race: the start and up to `race` candidates, on at most a tenth of
+    // the budget (none on a budget too small for one race flight each).
+    let contenders = 1 + settings.race;
+    let race_runs = if settings.race == 0 { 0 } else { settings.race_runs.min(options.budget / 10 / contenders) };
+    let search_budget = options.budget - contenders * race_runs;
 
     let mut history = Vec::new();
+    let mut generations = Vec::new();
+    // `flights`: training flights flown. `charged`: the budget spent, every
+    // candidate charged its `runs` flights whether it flew or was refused
+    // (invalid gains), so the loop ends within the budget whatever the
+    // candidates are.
     let mut flights = 0u64;
-    // Generation 0: the start.
     let start_values = space.start_values();
     let start_stats = one(evaluator(std::slice::from_ref(&start), &train)?, 1)?[0];
     flights += runs;
+    let mut charged = runs;
+    let start_cost = start_stats.cost(&settings);
     history.push(Evaluated {
         generation: 0,
         candidate: 0,
         values: start_values,
-        cost: start_stats.cost(&settings),
+        cost: start_cost,
         stats: start_stats,
         flights,
         error: None,
+        restart: 0,
     });
+    // Best so far: its index and its point in step coordinates.
+    let mut best = (0usize, vec![0.0; n]);
+    let mut restart = 0u64;
+    let mut run_step = 1.0f64;
+    let mut lambda = default_lambda;
     let mut generation = 0u64;
-    while flights + lambda * runs <= options.budget {
-        generation += 1;
-        let points = es.ask();
-        let values: Vec<Vec<f64>> = points.iter().map(|u| space.values(u)).collect();
-        let built: Vec<Result<Scenario, String>> = values.iter().map(|v| space.apply(&start, v)).collect();
-        let ok: Vec<Scenario> = built.iter().filter_map(|b| b.as_ref().ok().cloned()).collect();
-        let flown = one(evaluator(&ok, &train)?, ok.len())?;
-        let mut flown = flown.into_iter();
-        let mut costs = Vec::with_capacity(points.len());
-        for (k, (point, b)) in points.iter().zip(&built).enumerate() {
-            let outside: f64 = point.iter().map(|u| (u - u.clamp(0.0, 1.0)).powi(2)).sum();
-            let penalty = 10.0 * outside;
-            let (stats, cost, error) = match b {
-                Ok(_) => {
-                    let st = flown.next().expect("one statistics per built candidate (checked)");
-                    flights += runs;
-                    (st, st.cost(&settings) + penalty, None)
+    'runs: loop {
+        let mut es = cmaes::Cmaes::new(best.1.clone(), run_step, Some(lambda), run_seed(options.seed, restart));
+        let run_start_cost = history[best.0].cost;
+        let mut run_best = f64::INFINITY;
+        let mut run_generations = 0u64;
+        let mut since_better = 0u64;
+        loop {
+            if charged + lambda as u64 * runs > search_budget {
+                break 'runs;
+            }
+            generation += 1;
+            run_generations += 1;
+            charged += lambda as u64 * runs;
+            let step = es.max_std();
+            let points = es.ask();
+            let values: Vec<Vec<f64>> = points.iter().map(|x| space.values_at_step(x)).collect();
+            let built: Vec<Result<Scenario, String>> = values.iter().map(|v| space.apply(&start, v)).collect();
+            let ok: Vec<Scenario> = built.iter().filter_map(|b| b.as_ref().ok().cloned()).collect();
+            let flown = one(evaluator(&ok, &train)?, ok.len())?;
+            let mut flown = flown.into_iter();
+            let mut costs = Vec::with_capacity(points.len());
+            let first = history.len();
+            for (k, b) in built.iter().enumerate() {
+                let (stats, cost, error) = match b {
+                    Ok(_) => {
+                        let st = flown.next().expect("one statistics per built candidate (checked)");
+                        flights += runs;
+                        (st, st.cost(&settings), None)
+                    }
+                    Err(e) => {
+                        let st = FlightStats::of(&[], duration);
+                        (st, settings.divergence * 2.0 + 1.0, Some(e.clone()))
+                    }
+                };
+                costs.push(cost);
+                history.push(Evaluated {
+                    generation,
+                    candidate: k,
+                    values: values[k].clone(),
+                    cost,
+                    stats,
+                    flights,
+                    error,
+                    restart,
+                });
+            }
+            es.tell(&points, &costs);
+            debug_assert_eq!(es.mean().len(), n);
+            // Bookkeeping: the best so far (ties keep the earlier), the run's.
+            let mut improved_run = false;
+            for (k, c) in costs.iter().enumerate() {
+                if *c < history[best.0].cost {
+                    best = (first + k, points[k].clone());
                 }
-                Err(e) => {
-                    let st = FlightStats::of(&[], duration);
-                    (st, settings.divergence * 2.0 + 1.0 + penalty, Some(e.clone()))
+                if *c < run_best {
+                    run_best = *c;
+                    improved_run = true;
                 }
+            }
+            since_better = if improved_run { 0 } else { since_better + 1 };
+            let failed = history[first..].iter().filter(|e| e.failed()).count();
+            let reason = if run_best >= run_start_cost && run_generations >= NO_PROGRESS_GENERATIONS {
+                Some(RestartReason::NoProgress)
+            } else if es.max_std() < COLLAPSED_STEP {
+                Some(RestartReason::Collapsed)
+            } else if since_better >= STALL_GENERATIONS {
+                Some(RestartReason::Stalled)
+            } else {
+                None
             };
-            costs.push(cost);
-            history.push(Evaluated {
+            generations.push(Generation {
                 generation,
-                candidate: k,
-                values: values[k].clone(),
-                cost,
-                stats,
-                flights,
-                error,
+                restart,
+                population: lambda,
+                step,
+                failed,
+                best_cost: history[best.0].cost,
+                restarted: reason,
             });
+            if let Some(r) = reason {
+                restart += 1;
+                match r {
+                    RestartReason::NoProgress => run_step = (run_step * 0.5).max(MIN_RESTART_STEP),
+                    RestartReason::Collapsed | RestartReason::Stalled => {
+                        run_step = 1.0;
+                        lambda = (lambda * 2).min(1000);
+                        // A population the remaining budget cannot fly once
+                        // would end the search: keep the largest that fits.
+                        let left = search_budget.saturating_sub(charged) / runs.max(1);
+                        if (lambda as u64) > left && left >= default_lambda as u64 {
+                            lambda = left as usize;
+                        }
+                    }
+                }
+                continue 'runs;
+            }
         }
-        es.tell(&points, &costs);
-        debug_assert_eq!(es.mean().len(), n);
     }
-    let best = (0..history.len())
-        .min_by(|&a, &b| history[a].cost.total_cmp(&history[b].cost).then(a.cmp(&b)))
-        .expect("the start is always evaluated");
-    let mut tuned = space.apply(&start, &history[best].values)?;
+    // The race: the start and the best `race` distinct valid candidates
+    // that beat it on the training draws, re-flown on fresh draws; the
+    // lowest race cost wins (ties: the start, then training order).
+    let mut ranked: Vec<usize> =
+        (1..history.len()).filter(|&i| history[i].error.is_none() && history[i].cost < history[0].cost).collect();
+    ranked.sort_by(|&a, &b| history[a].cost.total_cmp(&history[b].cost).then(a.cmp(&b)));
+    let mut chosen: Vec<usize> = Vec::new();
+    for i in ranked {
+        if chosen.len() as u64 >= settings.race {
+            break;
+        }
+        if !chosen.iter().any(|&j| history[j].values == history[i].values) {
+            chosen.push(i);
+        }
+    }
+    let race_idx = race_indices(race_runs);
+    let mut race = Vec::new();
+    let mut race_flights = 0u64;
+    let pick = if chosen.is_empty() {
+        0
+    } else if race_runs == 0 {
+        chosen[0]
+    } else {
+        let mut contenders = vec![0usize];
+        contenders.extend(&chosen);
+        let scenarios: Vec<Scenario> = contenders
+            .iter()
+            .map(|&i| if i == 0 { Ok(start.clone()) } else { space.apply(&start, &history[i].values) })
+            .collect::<Result<_, _>>()?;
+        let stats = one(evaluator(&scenarios, &race_idx)?, scenarios.len())?;
+        race_flights = race_runs * scenarios.len() as u64;
+        for (&index, st) in contenders.iter().zip(stats) {
+            race.push(Raced { index, cost: st.cost(&settings), stats: st });
+        }
+        race.iter().min_by(|a, b| a.cost.total_cmp(&b.cost)).map_or(0, |r| r.index)
+    };
+    let improved = pick != 0;
+    // The start is flown as given (an extra key's start may have been
+    // clamped into its range, which the scenario itself is not).
+    let mut tuned = if pick == 0 { start.clone() } else { space.apply(&start, &history[pick].values)? };
     tuned.controllers = vec![options.controller.clone()];
-    let training = Comparison { start: history[0].stats, tuned: history[best].stats };
+    let training = Comparison { start: history[0].stats, tuned: history[pick].stats };
     let held = held_out_indices(options.seed, runs, settings.validation_runs);
-    let (held_out, held_out_flights) = if held.is_empty() {
-        (None, 0)
+    let (held_out, held_out_runs, held_out_flights) = if held.is_empty() {
+        (None, None, 0)
+    } else if let Some(fly) = flyer {
+        let both = fly(&[start.clone(), tuned.clone()], &held)?;
+        let [a, b]: [Vec<Flight>; 2] =
+            both.try_into().map_err(|_| "the flyer returned a wrong number of flight lists".to_string())?;
+        let c = Comparison { start: FlightStats::of(&a, start.duration), tuned: FlightStats::of(&b, tuned.duration) };
+        (Some(c), Some([a, b]), 2 * held.len() as u64)
     } else {
         let both = one(evaluator(&[start.clone(), tuned.clone()], &held)?, 2)?;
         let c = Comparison { start: both[0], tuned: both[1] };
-        (Some(c), 2 * held.len() as u64)
+        (Some(c), None, 2 * held.len() as u64)
     };
     Ok(TuneResult {
         controller: options.controller.clone(),
@@ -291,14 +568,20 @@ pub fn tune_with(base: &Scenario, options: &TuneOptions, evaluator: &Evaluator<'
         settings,
         options: options.clone(),
         history,
-        best,
+        generations,
+        race,
+        best: pick,
+        improved,
         start,
         tuned,
         training,
         held_out,
+        held_out_runs,
         training_indices: train,
+        race_indices: race_idx,
         held_out_indices: held,
         training_flights: flights,
+        race_flights,
         held_out_flights,
     })
 }
@@ -324,19 +607,35 @@ pub fn judge(
     runs: u64,
     progress: &(dyn Fn(u64) + Sync),
 ) -> Result<FlightStats, String> {
+    let flights = judge_flights(scenario, controller, master, training_runs, runs, progress)?;
+    Ok(FlightStats::of(&flights, scenario.duration))
+}
+
+/// The flights [`judge`] summarises, in run order: every gain set judged
+/// with the same `master`, `training_runs` and `runs` flies the same
+/// draws, so run `i` of two of them is a matched pair.
+pub fn judge_flights(
+    scenario: &Scenario,
+    controller: &str,
+    master: u64,
+    training_runs: u64,
+    runs: u64,
+    progress: &(dyn Fn(u64) + Sync),
+) -> Result<Vec<Flight>, String> {
     crate::registry::check_name(controller)
         .map_err(|known| format!("unknown controller `{controller}` (known: {known})"))?;
     let spec = scenario.montecarlo.clone().unwrap_or_default();
     let held = held_out_indices(master, training_runs, runs);
-    let flights = fly(std::slice::from_ref(scenario), &spec, &held, master, controller, progress)?;
-    Ok(FlightStats::of(&flights[0], scenario.duration))
+    let mut flights = fly(std::slice::from_ref(scenario), &spec, &held, master, controller, progress)?;
+    Ok(flights.pop().unwrap_or_default())
 }
 
 /// The tuned scenario file: `extends = "<extends>"`, a new name
 /// (`<scenario>-<controller>-tuned`), `controllers = [controller]` and only
 /// the keys the tune changed, after comment lines recording the command,
 /// the cost weights, budget, seed, parameters and the training and held-out
-/// statistics.
+/// statistics. User text in the comments (`command`, names) is escaped
+/// ([`toml_comment`]): it cannot end a comment line and add a key.
 pub fn tuned_toml(result: &TuneResult, extends: &str, command: &str) -> Result<String, String> {
     let base = space::scenario_table(&result.start)?;
     let tuned = space::scenario_table(&result.tuned)?;
@@ -351,35 +650,76 @@ pub fn tuned_toml(result: &TuneResult, extends: &str, command: &str) -> Result<S
     };
     line(format!(
         "# {} tuned on {} by `ftsmc tune` (ftsmc {}).",
-        result.controller,
-        result.start.name,
+        toml_comment(&result.controller),
+        toml_comment(&result.start.name),
         env!("CARGO_PKG_VERSION")
     ));
-    line(format!("# Made by: {command}"));
+    line(format!("# Made by: {}", toml_comment(command)));
     line(format!(
-        "# Budget {} training flights ({} flown, {} per candidate, same draws for all), seed {}, {} held-out flights per gain set.",
-        result.options.budget, result.training_flights, s.runs, result.options.seed, result.held_out_indices.len()
+        "# Budget {} training flights ({} flown: {} by the search, {} per candidate, same draws for all; {} by the race), seed {}, {} held-out flights per gain set.",
+        result.options.budget,
+        result.training_flights + result.race_flights,
+        result.training_flights,
+        s.runs,
+        result.race_flights,
+        result.options.seed,
+        result.held_out_indices.len()
     ));
     line(format!(
         "# Cost: divergence {} × mean(2 − t/T) + envelope {} × failures/runs + rms {} × p90 RMS [m] + thrust_activity {} × median [N/s] + torque_activity {} × median [N·m/s] + saturated {} × median fraction.",
         s.divergence, s.envelope, s.rms, s.thrust_activity, s.torque_activity, s.saturated
     ));
     line(format!(
-        "# Best: generation {}, candidate {}, cost {:.6} (start {:.6}).",
-        b.generation, b.candidate, b.cost, result.history[0].cost
+        "# Search: {} generations, {} restarts; race of {} gain sets on {} fresh training draws each.",
+        result.generations.len(),
+        result.generations.iter().filter(|g| g.restarted.is_some()).count(),
+        result.race.len(),
+        result.race_indices.len()
     ));
+    line(format!(
+        "# Chosen: generation {}, candidate {}, training cost {:.6} (start {:.6}){}.",
+        b.generation,
+        b.candidate,
+        b.cost,
+        result.history[0].cost,
+        match (result.best_raced(), result.race.first()) {
+            (Some(w), Some(s0)) => format!("; race cost {:.6} (start {:.6})", w.cost, s0.cost),
+            _ => String::new(),
+        }
+    ));
+    line(format!("# Improved: {}", result.improved));
+    if !result.improved {
+        line(
+            "# The search found nothing better than the start: these are the scenario's own gains (try a larger --budget or `[tune] sigma`)."
+                .to_string(),
+        );
+    }
     for (d, v) in result.space.dims.iter().zip(&b.values) {
-        line(format!("#   {} = {} (searched {} … {}{})", d.name, v, d.low, d.high, if d.log { ", log" } else { "" }));
+        line(format!(
+            "#   {} = {} (searched {} … {}{})",
+            toml_comment(&d.name),
+            v,
+            d.low,
+            d.high,
+            if d.log { ", log" } else { "" }
+        ));
     }
     let describe = |name: &str, st: &FlightStats| {
+        let w = crate::stats::rate::wilson(st.success as u64, st.runs as u64, crate::stats::DEFAULT_CONFIDENCE)
+            .map_or_else(|_| "—".to_string(), |i| format!("[{:.1}, {:.1}] %", 100.0 * i.lo, 100.0 * i.hi));
         format!(
-            "#   {name}: success {}/{}, completed {}, crashed {}, RMS median {:.4} m, p95 {:.4} m, thrust activity {:.1} N/s, torque activity {:.2} N·m/s, saturated {:.4}",
+            "#   {name}: success {}/{} (95 % Wilson {w}), completed {}, crashed {}, RMS median {:.4} m, p95 {:.4} m, thrust activity {:.1} N/s, torque activity {:.2} N·m/s, saturated {:.4}",
             st.success, st.runs, st.completed, st.crashed, st.rms_median, st.rms_p95, st.thrust_activity, st.torque_activity, st.saturated
         )
     };
     line("# Training draws:".to_string());
     line(describe("start", &result.training.start));
     line(describe("tuned", &result.training.tuned));
+    if let (Some(s0), Some(w)) = (result.race.first(), result.best_raced()) {
+        line(format!("# Race draws ({} fresh training draws):", result.race_indices.len()));
+        line(describe("start", &s0.stats));
+        line(describe("tuned", &w.stats));
+    }
     if let Some(h) = &result.held_out {
         line("# Held-out draws:".to_string());
         line(describe("start", &h.start));

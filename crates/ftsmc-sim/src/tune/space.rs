@@ -1,6 +1,17 @@
 //! The search space of a tune: the controller's declared parameters
 //! (`crate::controllers::tunable`) narrowed or extended by `[tune]`, their
 //! normalised coordinates for CMA-ES, and how a point becomes a scenario.
+//!
+//! The search runs in *step coordinates*: dimension d's coordinate is
+//! `(t(v) − t(start)) / step_d`, with `t = ln` on a log dimension and the
+//! identity on a linear one, so the start is the origin and one unit is the
+//! dimension's initial one-standard-deviation step ([`Dim::step`]). Bounds
+//! are kept by a transformation, not by clipping: `t(v)` is reflected back
+//! into `[t(low), t(high)]` as often as needed ([`reflect`], the mirror
+//! boundary handling of Hansen, "The CMA Evolution Strategy: A Tutorial",
+//! 2016, Appendix B.3), so every point of the plane maps to a point inside
+//! the box, points inside map to themselves, and no two candidates are
+//! piled onto a bound.
 
 use crate::controllers::tunable::{parameters, TuneParam, TuneTarget};
 use crate::scenario::tune_section::TuneSection;
@@ -30,6 +41,38 @@ pub struct Dim {
     pub start: f64,
     /// What it changes.
     pub kind: DimKind,
+    /// Initial one-standard-deviation step, in `ln` units on a log
+    /// dimension (`ln 1.4`: a factor ×1.4, [`DEFAULT_LOG_STEP`]) and in the
+    /// value's units on a linear one (a tenth of the range,
+    /// [`DEFAULT_LINEAR_STEP`]); with `[tune] sigma`, that fraction of the
+    /// (log) range.
+    pub step: f64,
+}
+
+/// Default initial step of a log dimension (every declared gain factor, a
+/// `[[tune.extra]]` with `log = true`): `ln 1.4`, so one standard deviation
+/// multiplies the gain by 1.4 or divides it by 1.4. A step of a fixed
+/// fraction of the range instead (0.3 of `ln(20/0.05)`) is a factor ×6,
+/// which on a scenario whose defaults sit near a stability limit crashes
+/// almost every candidate of the first generations.
+pub const DEFAULT_LOG_STEP: f64 = 0.336_472_236_621_212_9; // ln 1.4
+
+/// Default initial step of a linear dimension (`log = false`), as a
+/// fraction of its range.
+pub const DEFAULT_LINEAR_STEP: f64 = 0.1;
+
+/// `x` reflected into `[lo, hi]` (mirror boundary handling): the identity
+/// inside, a triangle wave of period `2 (hi − lo)` outside.
+pub fn reflect(x: f64, lo: f64, hi: f64) -> f64 {
+    let w = hi - lo;
+    if w.is_nan() || w <= 0.0 || !x.is_finite() {
+        return x.clamp(lo, hi.max(lo));
+    }
+    if (lo..=hi).contains(&x) {
+        return x;
+    }
+    let z = (x - lo).rem_euclid(2.0 * w);
+    lo + if z > w { 2.0 * w - z } else { z }
 }
 
 impl Dim {
@@ -47,6 +90,26 @@ impl Dim {
         } else {
             self.low + u * (self.high - self.low)
         }
+    }
+
+    fn t(&self, v: f64) -> f64 {
+        if self.log {
+            ftsmc_core::math::ln(v)
+        } else {
+            v
+        }
+    }
+
+    /// The value at step coordinate `x` (see the module docs).
+    pub fn value_at_step(&self, x: f64) -> f64 {
+        let y = reflect(self.t(self.start) + x * self.step, self.t(self.low), self.t(self.high));
+        let v = if self.log { ftsmc_core::math::exp(y) } else { y };
+        v.clamp(self.low, self.high)
+    }
+
+    /// The step coordinate of value `v` (inside the bounds).
+    pub fn step_of(&self, v: f64) -> f64 {
+        (self.t(v) - self.t(self.start)) / self.step
     }
 }
 
@@ -86,15 +149,26 @@ impl Space {
             .into_iter()
             .map(|p| {
                 let [low, high] = section.bounds.get(p.name).copied().unwrap_or([p.low, p.high]);
-                Dim { name: p.name.to_string(), low, high, log: true, start: 1.0, kind: DimKind::Declared(p) }
+                let step = step(true, low, high, section.sigma);
+                Dim { name: p.name.to_string(), low, high, log: true, start: 1.0, kind: DimKind::Declared(p), step }
             })
             .collect();
         if !section.extra.is_empty() {
             let table = scenario_table(base)?;
             for (i, e) in section.extra.iter().enumerate() {
-                let v = get_number(&table, &e.key).ok_or_else(|| {
-                    format!("`tune.extra[{i}].key` = \"{}\": not a numeric key of the scenario", e.key)
-                })?;
+                let shown = crate::text::show_str(&e.key);
+                crate::controllers::tunable::check_extra_key(controller, &e.key)
+                    .map_err(|why| format!("{}: `tune.extra[{i}].key` = \"{shown}\": {why}", base.name))?;
+                // A gain is a real number: an integer key (a count) is not searched.
+                let v = match walk(&table, &e.key) {
+                    Some(toml::Value::Float(f)) => *f,
+                    _ => {
+                        return Err(format!(
+                            "{}: `tune.extra[{i}].key` = \"{shown}\": not a real-valued gain of the scenario",
+                            base.name
+                        ))
+                    }
+                };
                 dims.push(Dim {
                     name: e.key.clone(),
                     low: e.low,
@@ -102,6 +176,7 @@ impl Space {
                     log: e.log,
                     start: v.clamp(e.low, e.high),
                     kind: DimKind::Key(e.key.clone()),
+                    step: step(e.log, e.low, e.high, section.sigma),
                 });
             }
         }
@@ -129,6 +204,11 @@ impl Space {
     /// Parameter values of a normalised point (clamped into the bounds).
     pub fn values(&self, unit: &[f64]) -> Vec<f64> {
         self.dims.iter().zip(unit).map(|(d, u)| d.value_at(*u)).collect()
+    }
+
+    /// Parameter values of a point in step coordinates (the module docs).
+    pub fn values_at_step(&self, x: &[f64]) -> Vec<f64> {
+        self.dims.iter().zip(x).map(|(d, v)| d.value_at_step(*v)).collect()
     }
 
     /// The start values (1 for factors, the scenario's for keys).
@@ -170,6 +250,16 @@ impl Space {
             .check()
             .map_err(|e| format!("`cascade.{}` = {} is invalid (expected {})", e.field, e.value, e.expected))?;
         Ok(s)
+    }
+}
+
+/// Initial step of a dimension (see [`Dim::step`]).
+fn step(log: bool, low: f64, high: f64, sigma: Option<f64>) -> f64 {
+    let range = if log { ftsmc_core::math::ln(high / low) } else { high - low };
+    match sigma {
+        Some(f) => f * range,
+        None if log => DEFAULT_LOG_STEP,
+        None => DEFAULT_LINEAR_STEP * range,
     }
 }
 

@@ -9,6 +9,8 @@
 //!   with conversions to the Euler [`ftsmc_core::model::QuadState`] the
 //!   paper's controllers expect.
 //!
+//! - [`presets`] — named real vehicles with sourced parameters
+//!   (`[vehicle] preset`).
 //! - [`section`] — `[vehicle]`: which model flies and the true vehicle's
 //!   parameters, one key set for both models.
 //!
@@ -17,6 +19,7 @@
 
 mod math;
 pub mod paper;
+pub mod presets;
 pub mod rigid_body;
 pub mod section;
 
@@ -26,4 +29,5 @@ pub use rigid_body::{
     RigidBodyParams, RigidBodyState, Spin, Wrench,
 };
 
+pub use presets::VehiclePreset;
 pub use section::{Inertia, VehicleModel, VehicleSettings};

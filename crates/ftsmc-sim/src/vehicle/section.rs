@@ -97,6 +97,11 @@ impl Inertia {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct VehicleSettings {
+    /// The named vehicle whose sourced parameters fill every `[plant]`,
+    /// `[vehicle]` and `[actuators]` key no file sets
+    /// ([`super::presets::VehiclePreset`]; default none).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub preset: Option<super::presets::VehiclePreset>,
     /// Truth model (default `paper`).
     #[serde(default)]
     pub model: VehicleModel,

@@ -1,0 +1,228 @@
+//! `ftsmc compare SCENARIO -c A,B,…`: built-in controllers and gain files
+//! flown on one scenario's vehicle, wind and draws, with every number's
+//! interval, every pair's verdict (McNemar on success, Wilcoxon on RMS
+//! position error, Holm over all), a verdict matrix and a forest plot.
+//! `--until-decided` flies batches until every pair is decided, spending
+//! `α` over the looks (`ftsmc_sim::batch::compare`, docs/statistics.md).
+//!
+//! Writes `OUT/<scenario>/`: `runs.csv`, `summary.json`, `report.md`,
+//! `report.html`, `scenario.toml` and `forest.svg` / `forest.png`.
+
+use std::fmt::Write as _;
+use std::path::Path;
+use std::time::Instant;
+
+use anyhow::{anyhow, bail, Context, Result};
+use ftsmc_sim::batch::compare::{compare, Comparison, Contestant, Plan};
+use ftsmc_sim::batch::montecarlo::MonteCarloSpec;
+use ftsmc_sim::run::planned_steps;
+use ftsmc_sim::scenario::Scenario;
+use serde_json::{json, Map, Value};
+
+use crate::console::steps_bar;
+use crate::forest::{write_forest, ForestPanel};
+use crate::intervals::{interval_table, level_note, verdict_matrix, verdict_table};
+use crate::output::{provenance, ResultDir};
+
+/// What `ftsmc compare` was asked.
+pub struct Request<'a> {
+    /// The scenario the contestants fly.
+    pub scenario: &'a Scenario,
+    /// Contestants as given (`pid`, `tuned/pid.tuned.toml`, …).
+    pub contestants: &'a [String],
+    /// Runs per contestant, or the sequential plan.
+    pub plan: Plan,
+    /// Confidence level of every interval and verdict.
+    pub confidence: f64,
+    /// Fly a file's gains even if it was made for another vehicle.
+    pub allow_other_vehicle: bool,
+    /// Worker threads (default: all cores).
+    pub threads: Option<usize>,
+    /// Flights side by side per thread.
+    pub lanes: usize,
+    /// Parent output folder.
+    pub out: &'a Path,
+    /// Write the forest plot.
+    pub figures: bool,
+    /// `--limit` overrides for the files loaded as contestants.
+    pub limits: &'a [String],
+}
+
+/// Turn each `-c` entry into a [`Contestant`]: a built-in controller, or a
+/// file's controller section (refused: unknown names, duplicates, a file
+/// for another vehicle without `--allow-other-vehicle`).
+pub fn contestants(req: &Request<'_>) -> Result<Vec<Contestant>> {
+    let mut out: Vec<Contestant> = Vec::new();
+    for c in req.contestants {
+        let contestant = if ftsmc_sim::registry::check_name(c).is_ok() {
+            Contestant::built_in(req.scenario, c)
+        } else {
+            let path = Path::new(c);
+            if !path.exists() {
+                let known = ftsmc_sim::registry::check_name("").err().unwrap_or_default();
+                bail!("unknown contestant `{c}`: neither a controller (known: {known}) nor an existing file");
+            }
+            let loaded = Scenario::load_with_warnings(path, req.limits)?;
+            for w in &loaded.warnings {
+                eprintln!("warning: {w}");
+            }
+            let name = path.file_name().map_or_else(|| c.clone(), |f| f.to_string_lossy().into_owned());
+            Contestant::from_file(req.scenario, &name, &loaded.scenario, req.allow_other_vehicle)
+                .map_err(|e| anyhow!("{e}"))?
+        };
+        if out.iter().any(|o| o.name == contestant.name) {
+            bail!("contestant `{}` is given twice", contestant.name);
+        }
+        out.push(contestant);
+    }
+    if out.len() < 2 {
+        bail!("-c {}: a comparison needs at least two contestants", req.contestants.join(","));
+    }
+    Ok(out)
+}
+
+/// Run the comparison and write its folder.
+pub fn run(req: &Request<'_>) -> Result<()> {
+    let scenario = req.scenario;
+    let list = contestants(req)?;
+    let max_runs = match req.plan {
+        Plan::Fixed { runs } => runs,
+        Plan::UntilDecided { max_runs, .. } => max_runs,
+    };
+    ftsmc_sim::limits::check_batch(&scenario.flight_size(), max_runs, list.len())?;
+    let folder = req.out.join(&scenario.name);
+    let dir = ResultDir::begin(&folder, "compare")?;
+    let spec = scenario.montecarlo.clone().unwrap_or_else(|| {
+        eprintln!("note: {} has no [montecarlo] section; runs differ only in their seeds (drag noise)", scenario.name);
+        MonteCarloSpec::default()
+    });
+    let mut builder = rayon::ThreadPoolBuilder::new();
+    if let Some(t) = req.threads {
+        builder = builder.num_threads(t);
+    }
+    let pool = builder.build().context("cannot start the thread pool")?;
+    let flights = max_runs.saturating_mul(list.len() as u64);
+    let bar = steps_bar(flights.saturating_mul(planned_steps(scenario)), flights);
+    let started = Instant::now();
+    let result = pool
+        .install(|| compare(&list, &spec, scenario.seed, req.plan, req.confidence, req.lanes, &|n| bar.inc(n)))
+        .map_err(|e| anyhow!("{e}"))?;
+    bar.finish_and_clear();
+    let elapsed = started.elapsed().as_secs_f64();
+
+    dir.write("runs.csv", &crate::montecarlo::runs_csv(&result.rows)?)?;
+    let file = dir.write_scenario("scenario.toml", scenario, "scenario.toml")?;
+    let names: Vec<String> = list.iter().map(|c| c.name.clone()).collect();
+    let report = report_md(scenario, &names, &result);
+    dir.write("report.md", report.as_bytes())?;
+    let summary = summary_json(scenario, &list, &result, provenance(&[file]));
+    dir.write("summary.json", serde_json::to_string_pretty(&summary)?.as_bytes())?;
+    if req.figures {
+        let panel =
+            |label: &str, f: &dyn Fn(&ftsmc_sim::batch::verdicts::Intervals) -> Option<ftsmc_sim::stats::Interval>| {
+                ForestPanel {
+                    label: label.to_string(),
+                    rows: list
+                        .iter()
+                        .zip(&result.intervals)
+                        .map(|(c, (_, i))| (crate::intervals::display_name(&c.name), c.controller.clone(), f(i)))
+                        .collect(),
+                }
+            };
+        let panels = [
+            panel("success rate (%)", &|i| Some(i.success_rate.scaled(100.0))),
+            panel("median RMS position error (m)", &|i| i.rms_median),
+            panel("mean RMS position error (m)", &|i| i.rms_mean),
+        ];
+        let title = format!(
+            "{} runs of {} per contestant, {:.0} % intervals",
+            result.runs,
+            scenario.name,
+            100.0 * result.confidence
+        );
+        write_forest(&title, &panels, &dir.path().join("forest"))?;
+    }
+    let html = crate::html::report(dir.path(), &format!("ftsmc compare {}", scenario.name), &report)?;
+    dir.write("report.html", html.as_bytes())?;
+    dir.commit()?;
+    println!("{report}");
+    println!(
+        "{} flights in {elapsed:.1} s; wrote {}/ (runs.csv, summary.json, report.md, report.html, scenario.toml{})",
+        result.rows.len(),
+        folder.display(),
+        if req.figures { ", forest.svg/.png" } else { "" }
+    );
+    Ok(())
+}
+
+/// The Markdown report (also printed).
+pub fn report_md(scenario: &Scenario, names: &[String], r: &Comparison) -> String {
+    let mut md = String::new();
+    let _ =
+        writeln!(md, "# Comparison on {} ({} runs per contestant, seed {})\n", scenario.name, r.runs, scenario.seed);
+    let _ = writeln!(
+        md,
+        "Every contestant flies the same {} draws (vehicle, wind, noise, initial state of run i), so each run is a \
+         matched pair. RMS position error √(rms_x² + rms_y² + rms_z²) over the completed runs.\n",
+        r.runs
+    );
+    let _ = writeln!(md, "{}\n\n{}", level_note(r.confidence), interval_table(&r.intervals).render());
+    let _ = writeln!(
+        md,
+        "Paired verdicts: success by McNemar's exact test (effect p_A − p_B, percentage points), RMS position error \
+         by the Wilcoxon signed-rank test (effect: median of A − B over the pairs where both completed); Holm's \
+         correction over all {} tests, family-wise error at most {:.0} %.",
+        r.verdicts.len(),
+        100.0 * (1.0 - r.confidence)
+    );
+    if let Plan::UntilDecided { batch, max_runs } = r.plan {
+        let looks: Vec<String> = r
+            .looks
+            .iter()
+            .map(|l| format!("{} runs (α spent {:.2e}, {} pairs decided)", l.runs, l.alpha_spent, l.pairs_decided))
+            .collect();
+        let _ = writeln!(
+            md,
+            "Sequential (--until-decided, batches of {batch}, at most {max_runs} runs): a verdict counts only if a \
+             look rejected it at that look's share of α (O'Brien–Fleming-type Lan–DeMets spending over the planned \
+             looks, Holm within each look; p-values below are of the final look, uncorrected for the looks). Looks: {}.",
+            looks.join("; ")
+        );
+    }
+    let _ = writeln!(md, "\n{}", verdict_table(&r.verdicts).render());
+    let _ = writeln!(
+        md,
+        "Verdict matrix (row A against column B; `A`: the row is better, `B`: the column, `=`: no difference shown):\n\n{}",
+        verdict_matrix(names, &r.verdicts).render()
+    );
+    if !r.all_decided {
+        let _ = writeln!(
+            md,
+            "Not every pair is decided with {} runs: more runs (`--runs`, or `--until-decided --max-runs M`) may \
+             decide them, or their difference is too small to matter.",
+            r.runs
+        );
+    }
+    md
+}
+
+/// `summary.json`: the plan, the confidence level, each contestant's
+/// intervals, every verdict and the looks.
+pub fn summary_json(scenario: &Scenario, list: &[Contestant], r: &Comparison, provenance: Value) -> Value {
+    let mut contestants = Map::new();
+    for (c, (_, i)) in list.iter().zip(&r.intervals) {
+        contestants.insert(c.name.clone(), json!({"controller": c.controller, "intervals": i}));
+    }
+    json!({
+        "scenario": scenario.name,
+        "master_seed": scenario.seed,
+        "confidence": r.confidence,
+        "plan": r.plan,
+        "runs": r.runs,
+        "contestants": Value::Object(contestants),
+        "verdicts": r.verdicts,
+        "looks": r.looks,
+        "all_decided": r.all_decided,
+        "provenance": provenance,
+    })
+}

@@ -1,0 +1,158 @@
+//! Tables of intervals and paired verdicts, shared by `ftsmc montecarlo`,
+//! `compare` and `reproduce`: every number that comes from random draws is
+//! printed with its interval (`estimate [lo, hi]`, `∞` where the runs
+//! cannot bound it), and the confidence level is stated above the table.
+
+use ftsmc_sim::batch::verdicts::{metric_label, Intervals, PairVerdict};
+use ftsmc_sim::registry::label;
+use ftsmc_sim::stats::paired::PairedMetric;
+use ftsmc_sim::stats::Interval;
+
+use crate::console::Table;
+
+/// `label` of a registered controller, else the name as given (a file).
+pub fn display_name(name: &str) -> String {
+    if ftsmc_sim::registry::check_name(name).is_ok() {
+        label(name).to_string()
+    } else {
+        name.to_string()
+    }
+}
+
+/// A rate as `90.0 % [83.1, 94.2]`.
+pub fn rate_cell(i: &Interval) -> String {
+    let p = i.scaled(100.0);
+    if p.estimate.is_nan() {
+        return "—".into();
+    }
+    format!("{:.1} % [{:.1}, {:.1}]", p.estimate, p.lo, p.hi)
+}
+
+/// A value in metres as `0.123 [0.110, 0.135]`, `—` if absent.
+pub fn metre_cell(i: Option<&Interval>) -> String {
+    i.map_or_else(|| "—".into(), |i| i.display(3))
+}
+
+/// One row per contestant: runs, success (Wilson), completed, RMS position
+/// error median / p95 (order statistics), mean (t).
+pub fn interval_table(rows: &[(String, Intervals)]) -> Table {
+    let mut t =
+        Table::new(["contestant", "runs", "success", "completed", "RMS pos. err. median (m)", "p95 (m)", "mean (m)"]);
+    for (name, i) in rows {
+        t.row(vec![
+            display_name(name),
+            i.runs.to_string(),
+            rate_cell(&i.success_rate),
+            rate_cell(&i.completed_rate),
+            metre_cell(i.rms_median.as_ref()),
+            metre_cell(i.rms_p95.as_ref()),
+            metre_cell(i.rms_mean.as_ref()),
+        ]);
+    }
+    t
+}
+
+/// The effect of a paired test: `p_A − p_B` in percentage points, or the
+/// median RMS difference `A − B` in metres, with its interval.
+pub fn effect_cell(v: &PairVerdict) -> String {
+    match v.test.metric {
+        PairedMetric::Success => {
+            let e = v.test.effect.scaled(100.0);
+            format!("{:+.1} pp [{:+.1}, {:+.1}]", e.estimate, e.lo, e.hi)
+        }
+        PairedMetric::Error => {
+            let e = v.test.effect;
+            if e.estimate.is_nan() {
+                "—".into()
+            } else {
+                format!("{:+.4} m [{:+.4}, {:+.4}]", e.estimate, e.lo, e.hi)
+            }
+        }
+    }
+}
+
+/// A p-value: 3 significant digits, `< 1e-12` below.
+pub fn p_cell(p: f64) -> String {
+    if p < 1e-12 {
+        "< 1e-12".into()
+    } else if p < 0.001 {
+        format!("{p:.1e}")
+    } else {
+        format!("{p:.3}")
+    }
+}
+
+/// One row per pair and metric: A, B, metric, effect (A − B) with its
+/// interval, p, Holm-adjusted p, verdict.
+pub fn verdict_table(verdicts: &[PairVerdict]) -> Table {
+    let mut t = Table::new(["A", "B", "metric", "effect A − B [interval]", "pairs", "p", "p (Holm)", "verdict"]);
+    for v in verdicts {
+        t.row(vec![
+            display_name(&v.a),
+            display_name(&v.b),
+            metric_label(v.test.metric).to_string(),
+            effect_cell(v),
+            v.test.pairs.to_string(),
+            p_cell(v.test.p),
+            p_cell(v.p_holm),
+            match v.verdict {
+                ftsmc_sim::stats::paired::Verdict::NoDifference => "no difference shown".into(),
+                ftsmc_sim::stats::paired::Verdict::ABetter => format!("{} better", display_name(&v.a)),
+                ftsmc_sim::stats::paired::Verdict::BBetter => format!("{} better", display_name(&v.b)),
+            },
+        ]);
+    }
+    t
+}
+
+/// The pairwise verdict matrix: row A, column B, the verdict on RMS
+/// position error and on success (`A` = the row is better, `B` = the
+/// column, `=` no difference shown), e.g. `RMS A · succ =`.
+pub fn verdict_matrix(names: &[String], verdicts: &[PairVerdict]) -> Table {
+    let mut header = vec![String::from("A \\ B")];
+    header.extend(names.iter().map(|n| display_name(n)));
+    let mut t = Table::new(header);
+    let mark = |v: &PairVerdict, flip: bool| match (v.verdict, flip) {
+        (ftsmc_sim::stats::paired::Verdict::NoDifference, _) => "=",
+        (ftsmc_sim::stats::paired::Verdict::ABetter, false) | (ftsmc_sim::stats::paired::Verdict::BBetter, true) => "A",
+        _ => "B",
+    };
+    for a in names {
+        let mut row = vec![display_name(a)];
+        for b in names {
+            if a == b {
+                row.push("·".into());
+                continue;
+            }
+            let find = |m: PairedMetric| {
+                verdicts.iter().find_map(|v| {
+                    if v.test.metric != m {
+                        None
+                    } else if &v.a == a && &v.b == b {
+                        Some(mark(v, false))
+                    } else if &v.a == b && &v.b == a {
+                        Some(mark(v, true))
+                    } else {
+                        None
+                    }
+                })
+            };
+            row.push(format!(
+                "RMS {} · succ {}",
+                find(PairedMetric::Error).unwrap_or("?"),
+                find(PairedMetric::Success).unwrap_or("?")
+            ));
+        }
+        t.row(row);
+    }
+    t
+}
+
+/// The sentence above every table of intervals.
+pub fn level_note(confidence: f64) -> String {
+    format!(
+        "{:.0} % intervals: rates Wilson score; median and p95 distribution-free order statistics (∞: too few runs \
+         to bound); mean Student t (docs/statistics.md).",
+        100.0 * confidence
+    )
+}

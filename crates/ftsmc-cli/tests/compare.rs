@@ -1,0 +1,67 @@
+//! `ftsmc compare`: contestants are controllers or files; a file made for
+//! another vehicle is refused (naming the keys) before any flight unless
+//! `--allow-other-vehicle`; a short comparison writes its folder with
+//! intervals and verdicts.
+
+use std::path::Path;
+use std::process::Command;
+
+mod common;
+use common::scratch;
+
+fn ftsmc(args: &[&str], cwd: &Path) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_ftsmc")).args(args).current_dir(cwd).output().expect("binary runs")
+}
+
+fn repo() -> std::path::PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+#[test]
+fn unknown_contestants_and_other_vehicles_are_refused_before_flying() {
+    let tmp = scratch("refuse");
+    let out = ftsmc(&["compare", "realistic-calm-1", "-c", "pid,no-such-thing", "--out", "o"], tmp.path());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(err.contains("unknown contestant `no-such-thing`") && err.contains("pid"), "{err}");
+
+    // Gains tuned for the paper's plant, offered to the realistic vehicle.
+    let file = repo().join("scenarios/tuned/paper-scenario-1-pid.toml");
+    let file = file.to_str().unwrap();
+    let out = ftsmc(&["compare", "realistic-calm-1", "-c", &format!("se3,{file}"), "--out", "o"], tmp.path());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(err.contains("vehicle differs") && err.contains("--allow-other-vehicle"), "{err}");
+    assert!(err.contains("vehicle.") || err.contains("plant.") || err.contains("actuators"), "{err}");
+    assert!(!tmp.path().join("o").exists(), "nothing written for a refused comparison");
+}
+
+#[test]
+fn a_short_comparison_writes_intervals_and_verdicts() {
+    let tmp = scratch("short");
+    let out = ftsmc(
+        &["compare", "paper-scenario-1", "-c", "pid,se3", "--runs", "3", "--confidence", "0.9", "--out", "o"],
+        tmp.path(),
+    );
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let dir = tmp.path().join("o/paper-scenario-1");
+    for f in ["runs.csv", "summary.json", "report.md", "report.html", "scenario.toml", "forest.svg", "forest.png"] {
+        assert!(dir.join(f).exists(), "{f} missing");
+    }
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(s["confidence"], 0.9);
+    assert_eq!(s["verdicts"].as_array().unwrap().len(), 2);
+    for c in s["contestants"].as_object().unwrap().values() {
+        let r = &c["intervals"]["success_rate"];
+        let (lo, e, hi) = (r["lo"].as_f64().unwrap(), r["estimate"].as_f64().unwrap(), r["hi"].as_f64().unwrap());
+        assert!(lo <= e && e <= hi, "{r}");
+    }
+    let report = std::fs::read_to_string(dir.join("report.md")).unwrap();
+    assert!(report.contains("90 % intervals") && report.contains("Verdict matrix"), "{report}");
+    // The page holds the same tables and the forest plot, and links the data.
+    let page = std::fs::read_to_string(dir.join("report.html")).unwrap();
+    for part in ["Verdict matrix", "<table>", "<svg", "href=\"runs.csv\"", "href=\"summary.json\""] {
+        assert!(page.contains(part), "report.html lacks {part}");
+    }
+}

@@ -1,0 +1,210 @@
+//! Vehicle presets (`[vehicle] preset`): each sourced vehicle loads, fills
+//! the controllers' model, the true vehicle and the rotors; hovers with the
+//! default PID and SE(3) in still air; and flies the wind ladder's calm
+//! rung. Settings follow the vehicle: relative Monte Carlo draws, a refused
+//! inherited absolute draw, a wind preset that owns its keys, and `--set`
+//! (`Scenario::with_overrides`).
+
+use ftsmc_sim::batch::montecarlo::{run_batch, summarize, BatchOptions};
+use ftsmc_sim::registry;
+use ftsmc_sim::run::RunOptions;
+use ftsmc_sim::scenario::Scenario;
+use ftsmc_sim::vehicle::VehiclePreset;
+
+fn load(text: &str) -> Result<Scenario, String> {
+    Scenario::from_toml_str(text, "t.toml").map_err(|e| e.to_string())
+}
+
+fn set(s: &Scenario, pairs: &[(&str, toml::Value)]) -> Result<Scenario, String> {
+    let pairs: Vec<(String, toml::Value)> = pairs.iter().map(|(k, v)| (k.to_string(), v.clone())).collect();
+    s.with_overrides(&pairs).map(|l| l.scenario).map_err(|e| e.to_string())
+}
+
+fn built_in(name: &str) -> Scenario {
+    let (file, text) = ftsmc_sim::scenario::resolve::built_in(name).unwrap();
+    Scenario::from_toml_str(text, file).unwrap()
+}
+
+#[test]
+fn each_preset_sets_the_plant_the_true_vehicle_and_the_rotors_from_its_file() {
+    for preset in VehiclePreset::ALL {
+        let table = preset.table();
+        let s = load(&format!("name = \"p\"\nduration = 1.0\n[vehicle]\npreset = \"{}\"\n", preset.name())).unwrap();
+        let plant = table["plant"].as_table().unwrap();
+        let vehicle = table["vehicle"].as_table().unwrap();
+        let act = table["actuators"].as_table().unwrap();
+        let f = |t: &toml::Table, k: &str| t[k].as_float().unwrap();
+        assert_eq!(s.plant.mass, f(plant, "mass"), "{preset:?}");
+        assert_eq!(s.plant.lift_coefficient, f(plant, "lift_coefficient"), "{preset:?}");
+        assert_eq!(s.vehicle.mass, Some(f(vehicle, "mass")), "{preset:?}");
+        assert_eq!(s.vehicle.thrust_coefficient, Some(f(vehicle, "thrust_coefficient")), "{preset:?}");
+        let a = s.actuators.unwrap();
+        assert_eq!(a.max_rotor_speed, f(act, "max_rotor_speed"), "{preset:?}");
+        assert_eq!(a.time_constant_up, f(act, "time_constant_up"), "{preset:?}");
+        assert!(!preset.description().is_empty());
+        // The nominal model and the truth agree key by key.
+        assert_eq!(s.plant.mass, s.rigid_body_params().mass);
+        assert_eq!(s.plant.inertia, s.true_vehicle().inertia);
+    }
+    let e = load("name = \"p\"\nduration = 1.0\n[vehicle]\npreset = \"bebop\"\n").unwrap_err();
+    assert!(e.contains("t.toml") && e.contains("bebop") && e.contains("crazyflie-2"), "{e}");
+}
+
+#[test]
+fn a_key_written_beside_the_preset_wins_a_base_files_key_does_not() {
+    let s = load("name = \"p\"\nduration = 1.0\n[vehicle]\npreset = \"crazyflie-2\"\nmass = 0.035\n").unwrap();
+    assert_eq!(s.vehicle.mass, Some(0.035));
+    assert_eq!(s.plant.mass, 0.03, "the nominal model stays the preset's");
+    // realistic-calm-1 names the Hummingbird over paper-scenario-1's [plant].
+    let calm = built_in("realistic-calm-1");
+    assert_eq!(calm.vehicle.preset, Some(VehiclePreset::Hummingbird));
+    assert_eq!((calm.plant.mass, calm.plant.arm_length), (0.716, 0.17));
+    assert_eq!(calm.actuators.unwrap().max_rotor_speed, 838.0);
+}
+
+/// Hover from the ground to 1 m and hold it: the default PID and SE(3)
+/// gains of each preset (built for its nominal model) fly it in still air.
+#[test]
+fn each_preset_hovers_with_the_default_pid_and_se3_in_still_air() {
+    for preset in VehiclePreset::ALL {
+        let text = format!(
+            "name = \"hover\"\nduration = 8.0\ncontrollers = [\"pid\", \"se3\"]\n\
+             [vehicle]\npreset = \"{}\"\n[actuators]\nmixer = \"px4\"\n\
+             [ground]\nenabled = true\n\
+             [reference]\nz = {{ terms = [{{ type = \"constant\", value = 1.0 }}] }}\n",
+            preset.name()
+        );
+        let s = load(&text).unwrap();
+        for c in ["pid", "se3"] {
+            let out = registry::run(c, &s, RunOptions::default()).unwrap();
+            assert!(out.exit.is_completed(), "{preset:?} {c}: {}", out.exit);
+            // After 5 s (simulation.steady_state_after), within 5 cm on every axis.
+            let m = &out.metrics.max_error_after;
+            for (axis, e) in [("x", m.x), ("y", m.y), ("z", m.z)] {
+                let e = e.unwrap();
+                assert!(e < 0.05, "{preset:?} {c}: {axis} error {e} m after 5 s");
+            }
+        }
+    }
+}
+
+/// The calm rung of scenario 1 flown by each preset (`--set
+/// vehicle.preset=…`): the default SE(3) succeeds in at least 95 % of 40
+/// Monte Carlo runs (relative mass draws, sampled inertia and drag).
+#[test]
+fn each_preset_flies_its_calm_rung() {
+    let calm = built_in("realistic-calm-1");
+    for preset in VehiclePreset::ALL {
+        let s = set(&calm, &[("vehicle.preset", toml::Value::String(preset.name().into()))]).unwrap();
+        assert_eq!(s.vehicle.preset, Some(preset));
+        let spec = s.montecarlo.clone().unwrap();
+        let controllers = vec!["se3".to_string()];
+        let rows = run_batch(&s, &spec, &controllers, BatchOptions::new(40, s.seed)).unwrap();
+        let summary = summarize(&rows, &controllers);
+        let rate = summary[0].1.success_rate;
+        eprintln!("{}: se3 success {:.1} % of 40", preset.name(), 100.0 * rate);
+        assert!(rate >= 0.95, "{preset:?}: SE(3) success {rate} on realistic-calm-1");
+        // The relative mass draw follows the vehicle.
+        let m = s.true_vehicle().mass;
+        assert!(rows.iter().all(|r| (r.sampled[0] - m).abs() <= 0.1 * m * (1.0 + 1e-12)), "{preset:?}");
+    }
+    // Scenario 2's absolute payload (up to 0.2 kg) is refused on a 30 g vehicle.
+    let e = set(&built_in("realistic-calm-2"), &[("vehicle.preset", "crazyflie-2".into())]).unwrap_err();
+    assert!(e.contains("montecarlo.payload_mass"), "{e}");
+}
+
+/// The file of the report that started this: a Crazyflie described by
+/// extending the Hummingbird's calm rung and setting its mass. The ladder's
+/// relative draw follows it; an absolute Hummingbird draw inherited from a
+/// base file is refused naming the key and that file.
+#[test]
+fn a_crazyflie_from_the_hummingbird_file_draws_relative_masses_or_is_refused() {
+    let dir = tempfile::Builder::new().prefix("ftsmc-presets-").tempdir().unwrap();
+    let child = dir.path().join("cf.toml");
+    std::fs::write(&child, "extends = \"realistic-calm-1\"\nname = \"cf\"\n[vehicle]\nmass = 0.027\n").unwrap();
+    let s = Scenario::from_file(&child).unwrap();
+    let spec = s.montecarlo.clone().unwrap().absolute(&s);
+    let (lo, hi) = spec.mass.unwrap().support();
+    assert!((lo - 0.9 * 0.027).abs() < 1e-15 && (hi - 1.1 * 0.027).abs() < 1e-15, "[{lo}, {hi}]");
+    // A base with the old absolute draw.
+    let base = dir.path().join("hb.toml");
+    std::fs::write(
+        &base,
+        "extends = \"realistic-calm-1\"\nname = \"hb\"\n[montecarlo]\nmass = { dist = \"uniform\", low = 0.6444, high = 0.7876 }\n",
+    )
+    .unwrap();
+    std::fs::write(&child, "extends = \"hb.toml\"\nname = \"cf\"\n[vehicle]\npreset = \"crazyflie-2\"\n").unwrap();
+    let e = Scenario::from_file(&child).unwrap_err().to_string();
+    assert!(e.contains("montecarlo.mass") && e.contains("hb.toml") && e.contains("0.03 kg"), "{e}");
+    assert!(e.lines().next().unwrap().chars().count() <= 300 + 200, "{e}");
+    // The child replaces the draw: accepted.
+    std::fs::write(
+        &child,
+        "extends = \"hb.toml\"\nname = \"cf\"\n[vehicle]\npreset = \"crazyflie-2\"\n[montecarlo]\nmass = { dist = \"uniform\", rel = [0.8, 1.2] }\n",
+    )
+    .unwrap();
+    let s = Scenario::from_file(&child).unwrap();
+    assert!(s.montecarlo.as_ref().unwrap().mass.is_none(), "the relative draw replaced the absolute one");
+}
+
+#[test]
+fn a_draw_far_from_the_vehicle_warns() {
+    let text = "extends = \"realistic-calm-1\"\nname = \"w\"\n[montecarlo]\nmass = { dist = \"uniform\", low = 0.3, high = 0.8 }\n";
+    let loaded = Scenario::from_toml_str_with_warnings(text, "w.toml", &[]).unwrap();
+    assert!(
+        loaded.warnings.iter().any(|w| w.contains("montecarlo.mass") && w.contains("far from")),
+        "{:?}",
+        loaded.warnings
+    );
+}
+
+/// A child's wind preset replaces the parent's wind: speed and turbulence
+/// go unless the child sets them; the written scenario says so.
+#[test]
+fn a_wind_preset_in_a_child_replaces_the_parents_wind() {
+    let dir = tempfile::Builder::new().prefix("ftsmc-presets-").tempdir().unwrap();
+    let windy = dir.path().join("windy.toml");
+    std::fs::write(
+        &windy,
+        "extends = \"realistic-calm-1\"\nname = \"windy\"\n[wind]\npreset = \"light\"\nspeed = 3.0\n\
+         turbulence = { intensity = { w20 = 7.7 }, altitude = 5.0 }\n",
+    )
+    .unwrap();
+    let calm = dir.path().join("calm.toml");
+    std::fs::write(&calm, "extends = \"windy.toml\"\nname = \"calm\"\n[wind]\npreset = \"calm\"\n").unwrap();
+    let s = Scenario::from_file(&calm).unwrap();
+    let w = s.wind.clone().unwrap();
+    assert_eq!(w.speed, None);
+    assert!(w.turbulence.is_none());
+    assert_eq!(w.resolved().mean, [0.0; 3]);
+    let text = s.to_toml().unwrap();
+    let wind = text.split("\n[wind]\n").nth(1).unwrap().split("\n[").next().unwrap();
+    assert!(wind.contains("preset = \"calm\"") && !wind.contains("speed") && !wind.contains("turbulence"), "{wind}");
+    // A child that keeps a key sets it too.
+    std::fs::write(&calm, "extends = \"windy.toml\"\nname = \"calm\"\n[wind]\npreset = \"calm\"\nspeed = 1.0\n")
+        .unwrap();
+    assert_eq!(Scenario::from_file(&calm).unwrap().wind.unwrap().speed, Some(1.0));
+    // And through the overrides.
+    let windy = Scenario::from_file(&windy).unwrap();
+    let s = set(&windy, &[("wind.preset", toml::Value::String("calm".into()))]).unwrap();
+    assert_eq!(s.wind.as_ref().unwrap().speed, None);
+}
+
+/// `--set` is `with_overrides`: the same keys and values give the same
+/// scenario, and the CLI's KEY=VALUE reads as the TOML value.
+#[test]
+fn set_arguments_are_with_overrides() {
+    use ftsmc_sim::scenario::overrides::parse_set;
+    let calm = built_in("realistic-calm-1");
+    let args = ["vehicle.preset=px4-x500", "wind.preset=breeze", "payload.mass=0.2", "seed=9", "controllers=[\"se3\"]"];
+    let parsed: Vec<(String, toml::Value)> = args.iter().map(|a| parse_set(a).unwrap()).collect();
+    assert_eq!(parsed[0].1, toml::Value::String("px4-x500".into()));
+    assert_eq!(parsed[2].1, toml::Value::Float(0.2));
+    assert_eq!(parsed[3].1, toml::Value::Integer(9));
+    let a = calm.with_overrides(&parsed[..2]).unwrap().scenario;
+    let b = set(&calm, &[("vehicle.preset", "px4-x500".into()), ("wind.preset", "breeze".into())]).unwrap();
+    assert_eq!(a, b);
+    assert_eq!(a.to_toml().unwrap(), b.to_toml().unwrap());
+    assert_eq!(a.plant.mass, 2.0643);
+    assert!(parse_set("no-equals-sign").is_err());
+}
