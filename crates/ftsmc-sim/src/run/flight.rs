@@ -870,7 +870,13 @@ impl<'o, C: Controller<R>, R: Real> Flights<'o, C, R> {
             for (i, lane) in self.lanes.iter_mut().enumerate() {
                 lane.begin_substep(i, j, &*self.truth);
             }
-            let gathered: [Substep<'_>; MAX_LANES] = core::array::from_fn(|i| self.lanes[i.min(n - 1)].substep(j));
+            // Each flying lane's substep built once; the slots past the
+            // lanes hold copies of the first (never read).
+            let first = self.lanes[0].substep(j);
+            let mut gathered = [first; MAX_LANES];
+            for (slot, lane) in gathered.iter_mut().zip(&self.lanes).skip(1) {
+                *slot = lane.substep(j);
+            }
             self.truth.substep(&gathered[..n]);
             for (i, lane) in self.lanes.iter_mut().enumerate() {
                 lane.end_substep(i, j, &mut *self.truth);
