@@ -236,12 +236,6 @@ impl Scenario {
                 })?;
             }
         }
-        if let Some(f) = &self.falsify {
-            f.check().and_then(|()| f.check_against(self, path)).map_err(|(key, message)| ScenarioError::Parse {
-                path: path.to_string(),
-                message: format!("`{key}`: {message}"),
-            })?;
-        }
         // The rigid body flies the payload too: its mass with the payload
         // must stay in the rigid body's valid range.
         if let (crate::vehicle::VehicleModel::RigidBody, Some(p)) = (self.vehicle.model, &self.payload) {
@@ -269,6 +263,15 @@ impl Scenario {
         }
         self.check_cost(self.controllers.len())
             .map_err(|limit| ScenarioError::Limit { path: path.to_string(), limit })?;
+        // Last: the search space is checked against a scenario that is valid
+        // itself, so an error of the scenario is never reported as one of
+        // `[falsify]`.
+        if let Some(f) = &self.falsify {
+            f.check().and_then(|()| f.check_against(self, path)).map_err(|(key, message)| ScenarioError::Parse {
+                path: path.to_string(),
+                message: format!("`{key}`: {message}"),
+            })?;
+        }
         Ok(())
     }
 
