@@ -7,7 +7,7 @@
 use std::fmt::Write as _;
 
 use anyhow::{anyhow, Result};
-use ftsmc_sim::batch::montecarlo::{run_batch, McRun};
+use ftsmc_sim::batch::montecarlo::{run_batch, BatchOptions, McRun};
 use ftsmc_sim::registry::label;
 use ftsmc_sim::run::{planned_steps, Divergence, ExitStatus};
 use ftsmc_sim::scenario::ladder::LADDER;
@@ -195,7 +195,13 @@ pub fn ladder(dir: &ResultDir, runs: u64, controllers: &[&str], figures: bool) -
     let mut verdict_lines: Vec<String> = Vec::new();
     for s in &scenarios {
         let spec = s.montecarlo.clone().unwrap_or_default();
-        let rows = run_batch(s, &spec, &names, runs, s.seed, &|n| bar.inc(n)).map_err(|e| anyhow!(e))?;
+        let rows = run_batch(
+            s,
+            &spec,
+            &names,
+            BatchOptions { progress: Some(&|n| bar.inc(n)), ..BatchOptions::new(runs, s.seed) },
+        )
+        .map_err(|e| anyhow!(e))?;
         flights += rows.len();
         dir.write(format!("beyond/ladder-runs/{}.csv", s.name), &crate::montecarlo::runs_csv(&rows)?)?;
         if figures {

@@ -139,7 +139,7 @@ enum Command {
         /// Worker threads (default: all cores). Results do not depend on it.
         #[arg(long, allow_negative_numbers = true)]
         threads: Option<usize>,
-        /// Flights each thread flies side by side in vector lanes: 1, 2, 4 or 8. Results do not depend on it.
+        /// Flights each thread flies side by side in vector lanes: 1 or 4. Results do not depend on it.
         #[arg(long, allow_negative_numbers = true, default_value_t = ftsmc_sim::batch::montecarlo::DEFAULT_LANES)]
         lanes: usize,
         /// Controller(s) to fly (repeat or comma-separate); default: the scenario's `controllers` list.

@@ -5,7 +5,7 @@ use std::path::Path;
 use std::time::Instant;
 
 use anyhow::{Context, Result};
-use ftsmc_sim::batch::montecarlo::{run_batch_lanes, summarize_at, ControllerSummary, McRun, MonteCarloSpec};
+use ftsmc_sim::batch::montecarlo::{run_batch, summarize_at, BatchOptions, ControllerSummary, McRun, MonteCarloSpec};
 use ftsmc_sim::batch::runs_table::runs_table;
 use ftsmc_sim::batch::shard::Shard;
 use ftsmc_sim::registry::label;
@@ -128,7 +128,20 @@ pub fn run(scenario: &Scenario, options: &Options, out: &Path) -> Result<()> {
     let started = Instant::now();
     let cpu_started = crate::cpu::process_cpu_seconds();
     let rows = pool
-        .install(|| run_batch_lanes(scenario, &spec, controllers, indices.clone(), seed, &|n| bar.inc(n), None, lanes))
+        .install(|| {
+            run_batch(
+                scenario,
+                &spec,
+                controllers,
+                BatchOptions {
+                    runs: indices.clone(),
+                    master_seed: seed,
+                    lanes,
+                    progress: Some(&|n| bar.inc(n)),
+                    cancel: None,
+                },
+            )
+        })
         .map_err(|known| anyhow::anyhow!("unknown controller (known: {known})"))?;
     bar.finish_and_clear();
     let elapsed = started.elapsed().as_secs_f64();

@@ -19,7 +19,7 @@ use anyhow::{Context, Result};
 use ftsmc_sim::batch::verdicts::{intervals, pairwise, Intervals, Outcomes};
 use ftsmc_sim::scenario::Scenario;
 use ftsmc_sim::stats::rate::wilson;
-use ftsmc_sim::tune::{tune, tuned_toml, Flight, FlightStats, TuneOptions, TuneResult};
+use ftsmc_sim::tune::{tune, tuned_toml, FlightOutcome, OutcomeStats, TuneOptions, TuneResult};
 use indicatif::{ProgressBar, ProgressStyle};
 use serde_json::json;
 
@@ -63,7 +63,7 @@ pub struct Request<'a> {
 }
 
 /// The held-out flights as [`Outcomes`] (run order kept: the pairing).
-pub fn outcomes(flights: &[Flight]) -> Outcomes {
+pub fn outcomes(flights: &[FlightOutcome]) -> Outcomes {
     let mut o = Outcomes::default();
     for f in flights {
         o.push(f.success, f.completed, f.crashed, f.rms);
@@ -146,7 +146,7 @@ pub fn comparison_table(r: &TuneResult, confidence: f64) -> String {
         "torque act. (N·m/s)",
         "saturated",
     ]);
-    let mut row = |name: &str, s: &FlightStats, held: Option<&Intervals>| {
+    let mut row = |name: &str, s: &OutcomeStats, held: Option<&Intervals>| {
         let success = wilson(s.success as u64, s.runs as u64, confidence)
             .map_or_else(|_| "—".to_string(), |i| format!("{}/{} {}", s.success, s.runs, rate_cell(&i)));
         let median = match held {
@@ -341,7 +341,7 @@ fn tune_one(
     let params: serde_json::Map<String, serde_json::Value> =
         result.space.dims.iter().zip(&best.values).map(|(d, v)| (d.name.clone(), json!(v))).collect();
     let flights = result.training_flights + result.race_flights + result.held_out_flights;
-    let rate = |s: &FlightStats| wilson(s.success as u64, s.runs as u64, confidence).ok();
+    let rate = |s: &OutcomeStats| wilson(s.success as u64, s.runs as u64, confidence).ok();
     let held = held_intervals(&result, confidence);
     let summary = json!({
         "scenario": scenario.name,

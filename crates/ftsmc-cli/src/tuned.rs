@@ -8,7 +8,7 @@ use ftsmc_sim::batch::verdicts::{intervals, metric_label, pairwise, Outcomes};
 use ftsmc_sim::registry::label;
 use ftsmc_sim::scenario::Scenario;
 use ftsmc_sim::stats::paired::PairedMetric;
-use ftsmc_sim::tune::{judge_flights, Flight, FlightStats};
+use ftsmc_sim::tune::{judge_flights, FlightOutcome, OutcomeStats};
 use rayon::prelude::*;
 
 use crate::console::{num, Table};
@@ -83,13 +83,13 @@ pub struct Row {
     /// Controller name.
     pub controller: String,
     /// Default gains on the held-out draws.
-    pub default: FlightStats,
+    pub default: OutcomeStats,
     /// Tuned gains on the same draws.
-    pub tuned: FlightStats,
+    pub tuned: OutcomeStats,
     /// The default gains' held-out flights, in run order (the pairing).
-    pub default_runs: Vec<Flight>,
+    pub default_runs: Vec<FlightOutcome>,
     /// The tuned gains' held-out flights, in run order.
-    pub tuned_runs: Vec<Flight>,
+    pub tuned_runs: Vec<FlightOutcome>,
     /// The tuned file holds the default gains (its search kept the start).
     pub kept_defaults: bool,
 }
@@ -114,8 +114,8 @@ pub fn fly(runs: u64) -> Result<Vec<Row>> {
             Ok(Row {
                 scenario: scenario.to_string(),
                 controller: controller.to_string(),
-                default: FlightStats::of(&default_runs, base.duration),
-                tuned: FlightStats::of(&tuned_runs, tuned.duration),
+                default: OutcomeStats::of(&default_runs, base.duration),
+                tuned: OutcomeStats::of(&tuned_runs, tuned.duration),
                 default_runs,
                 tuned_runs,
                 kept_defaults: holds_defaults(text),
@@ -127,7 +127,7 @@ pub fn fly(runs: u64) -> Result<Vec<Row>> {
 /// The cells of one gain set: success with its Wilson interval, completed,
 /// crashed, RMS position error median with its order-statistic interval,
 /// p95, activities, saturated fraction.
-fn cells(s: &FlightStats, runs: &[Flight], confidence: f64) -> Vec<String> {
+fn cells(s: &OutcomeStats, runs: &[FlightOutcome], confidence: f64) -> Vec<String> {
     let iv = intervals(&outcomes(runs), confidence).ok();
     let success = iv.as_ref().map_or_else(
         || format!("{}/{}", s.success, s.runs),
@@ -275,7 +275,7 @@ mod tests {
 
     #[test]
     fn a_tuned_row_equal_to_its_default_says_so_and_nan_reads_as_a_dash() {
-        let stats = |rms: f64| FlightStats {
+        let stats = |rms: f64| OutcomeStats {
             runs: 4,
             success: 4,
             completed: 4,

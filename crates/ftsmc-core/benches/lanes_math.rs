@@ -4,8 +4,7 @@
 //! `cargo bench -p ftsmc-core --bench lanes_math`).
 //!
 //! Each benchmark evaluates one function on the same 64 arguments (in the
-//! range the controllers use: `|x| < 3`, positive for `ln`, `|x| < 1` for
-//! `asin`/`acos`): `scalar` calls `libm` once per argument, `lanes4` /
+//! range the controllers use: `|x| < 3`, positive for `ln`): `scalar` calls `libm` once per argument, `lanes4` /
 //! `lanes8` call the kernel on 16 / 8 vectors. Throughput is in elements,
 //! so the rates compare per element.
 //!
@@ -13,8 +12,8 @@
 //! inside a `#[target_feature(enable = "avx2,fma")]` function, where the
 //! kernels are inlined as they are in the dispatched run loop: `scalar`
 //! (libm per element) against `lanes4` (the kernel on 4 lanes). These
-//! cells inform `ftsmc_core::lanes::KERNEL_LANES` and `EXP_KERNEL_LANES`
-//! (which the Monte Carlo then decides: see their docs).
+//! cells inform `ftsmc_core::lanes::EXP_KERNEL_LANES` (which the Monte
+//! Carlo then decides: see its docs).
 
 use std::hint::black_box;
 
@@ -74,36 +73,6 @@ fn bench1(
 fn kernels(c: &mut Criterion) {
     bench1(c, "exp", args(-3.0, 3.0), libm::exp, lm::exp::<4>, lm::exp::<8>);
     bench1(c, "ln", args(1e-3, 3.0), libm::log, lm::ln::<4>, lm::ln::<8>);
-    bench1(c, "atan", args(-3.0, 3.0), libm::atan, lm::atan::<4>, lm::atan::<8>);
-    bench1(
-        c,
-        "atan2",
-        args(-2.0, 3.0),
-        |x| libm::atan2(x * 0.7 - 0.4, x),
-        |x| lm::atan2(x.map(|v| v * 0.7 - 0.4), x),
-        |x| lm::atan2(x.map(|v| v * 0.7 - 0.4), x),
-    );
-    bench1(c, "asin", args(-0.999, 0.999), libm::asin, lm::asin::<4>, lm::asin::<8>);
-    bench1(c, "acos", args(-0.999, 0.999), libm::acos, lm::acos::<4>, lm::acos::<8>);
-    bench1(c, "sin", args(-3.0, 3.0), libm::sin, lm::sin::<4>, lm::sin::<8>);
-    bench1(c, "cos", args(-3.0, 3.0), libm::cos, lm::cos::<4>, lm::cos::<8>);
-    bench1(
-        c,
-        "sin_cos",
-        args(-3.0, 3.0),
-        |x| {
-            let (s, c) = libm::sincos(x);
-            s + c
-        },
-        |x| {
-            let (s, c) = lm::sin_cos::<4>(x);
-            core::array::from_fn(|i| s[i] + c[i])
-        },
-        |x| {
-            let (s, c) = lm::sin_cos::<8>(x);
-            core::array::from_fn(|i| s[i] + c[i])
-        },
-    );
 }
 
 /// `scalar` and `lanes4` loops over 64 arguments compiled for AVX2 + FMA.
@@ -138,23 +107,7 @@ macro_rules! avx2_pair {
 mod avx2 {
     use super::*;
     avx2_pair!(exp, libm::exp, lm::exp::<4>);
-    avx2_pair!(atan2, |x: f64| libm::atan2(x * 0.7 - 0.4, x), |x: [f64; 4]| lm::atan2(x.map(|v| v * 0.7 - 0.4), x));
-    avx2_pair!(asin, libm::asin, lm::asin::<4>);
-    avx2_pair!(acos, libm::acos, lm::acos::<4>);
-    avx2_pair!(atan, libm::atan, lm::atan::<4>);
-    avx2_pair!(sin, libm::sin, lm::sin::<4>);
-    avx2_pair!(cos, libm::cos, lm::cos::<4>);
-    avx2_pair!(
-        sin_cos,
-        |x: f64| {
-            let (s, c) = libm::sincos(x);
-            s + c
-        },
-        |x: [f64; 4]| -> [f64; 4] {
-            let (s, c) = lm::sin_cos::<4>(x);
-            core::array::from_fn(|i| s[i] + c[i])
-        }
-    );
+    avx2_pair!(ln, libm::log, lm::ln::<4>);
 
     /// One `avx2/<name>` group: scalar against lanes4.
     fn pair(
@@ -178,13 +131,7 @@ mod avx2 {
         }
         // SAFETY (each `unsafe` below): AVX2 and FMA were detected just above.
         pair(c, "exp", args(-3.0, 3.0), |x| unsafe { exp::scalar(x) }, |x| unsafe { exp::lanes4(x) });
-        pair(c, "atan", args(-3.0, 3.0), |x| unsafe { atan::scalar(x) }, |x| unsafe { atan::lanes4(x) });
-        pair(c, "atan2", args(-2.0, 3.0), |x| unsafe { atan2::scalar(x) }, |x| unsafe { atan2::lanes4(x) });
-        pair(c, "asin", args(-0.999, 0.999), |x| unsafe { asin::scalar(x) }, |x| unsafe { asin::lanes4(x) });
-        pair(c, "acos", args(-0.999, 0.999), |x| unsafe { acos::scalar(x) }, |x| unsafe { acos::lanes4(x) });
-        pair(c, "sin", args(-3.0, 3.0), |x| unsafe { sin::scalar(x) }, |x| unsafe { sin::lanes4(x) });
-        pair(c, "cos", args(-3.0, 3.0), |x| unsafe { cos::scalar(x) }, |x| unsafe { cos::lanes4(x) });
-        pair(c, "sin_cos", args(-3.0, 3.0), |x| unsafe { sin_cos::scalar(x) }, |x| unsafe { sin_cos::lanes4(x) });
+        pair(c, "ln", args(1e-3, 3.0), |x| unsafe { ln::scalar(x) }, |x| unsafe { ln::lanes4(x) });
     }
 }
 

@@ -302,7 +302,7 @@ fn sgn<R: Real>(x: R) -> R {
 /// `sig²(x) = |x|² sign(x)`, the bits of [`crate::math::sig`]`(x, 2.0)`.
 #[cfg_attr(not(debug_assertions), inline(always))]
 fn sig2<R: Real>(x: R) -> R {
-    Power::Two.abs(x) * sgn(x)
+    Power::Two.pow_abs(x) * sgn(x)
 }
 
 /// `Y(e) = 1 / (ℵ1 + (1 − ℵ1) exp(−ℵ2 |e|^ℵ3))` and its time derivative
@@ -317,7 +317,7 @@ fn gain_shaping_c<R: Real>(g: &FtaftsmcGains, c: &Constants, e: R, e_dot: R) -> 
     if g.aleph1 == 1.0 {
         return (R::splat(1.0), R::splat(0.0));
     }
-    let decay = (c.aleph3.abs(e) * -g.aleph2).exp();
+    let decay = (c.aleph3.pow_abs(e) * -g.aleph2).exp();
     let den = decay * (1.0 - g.aleph1) + g.aleph1;
     let y = R::splat(1.0) / den;
     // When |e|^ℵ3 overflows, decay is 0 and |e|^(ℵ3−1) may be ∞: the limit
@@ -335,7 +335,7 @@ fn gain_shaping_c<R: Real>(g: &FtaftsmcGains, c: &Constants, e: R, e_dot: R) -> 
                 #[cfg_attr(not(debug_assertions), inline(always))]
                 || pow_abs_minus_one(e, g.aleph3),
                 #[cfg_attr(not(debug_assertions), inline(always))]
-                || c.aleph3_minus_one.abs(e),
+                || c.aleph3_minus_one.pow_abs(e),
             )
         },
     );
@@ -370,7 +370,7 @@ fn nonsingular_term_c<R: Real>(g: &FtaftsmcGains, c: &Constants, e: R, e_dot: R)
         ae.gt(R::splat(g.epsilon)),
         #[cfg_attr(not(debug_assertions), inline(always))]
         || {
-            let pow_p = c.p.abs(e);
+            let pow_p = c.p.pow_abs(e);
             (pow_p * sgn(e), e_dot * g.p * pow_p / ae)
         },
         #[cfg_attr(not(debug_assertions), inline(always))]
@@ -394,7 +394,7 @@ pub fn sliding_surface_with<R: Real>(g: &FtaftsmcGains, kappa: [f64; 2], e: R, e
 fn sliding_surface_c<R: Real>(g: &FtaftsmcGains, c: &Constants, e: R, e_dot: R) -> SurfaceTerms<R> {
     let (y, y_dot) = gain_shaping_c(g, c, e, e_dot);
     let (s_delta, s_delta_dot) = nonsingular_term_c(g, c, e, e_dot);
-    let pow_q = c.q.abs(e);
+    let pow_q = c.q.pow_abs(e);
     // λ sig^q(e) + γ S_Δ + η e
     let shape = pow_q * g.lambda * sgn(e) + s_delta * g.gamma + e * g.eta;
     // d/dt of the same bracket: λ q |e|^(q−1) ė + γ Ṡ_Δ + η ė
@@ -420,7 +420,7 @@ pub fn reaching_law<R: Real>(g: &FtaftsmcGains, s: R, delta_hat: R) -> R {
 #[cfg_attr(not(debug_assertions), inline(always))]
 fn reaching_law_c<R: Real>(g: &FtaftsmcGains, c: &Constants, s: R, delta_hat: R) -> R {
     // |S|^q2 and |S|^p2 share ln|S| when both are general powers.
-    let (pow_q2, pow_p2) = Power::abs_pair(c.q2, c.p2, s);
+    let (pow_q2, pow_p2) = Power::pow_abs_pair(c.q2, c.p2, s);
     let sign_s = sgn(s);
     -(saturate_power(pow_q2) * g.lambda2 * sign_s
         + (pow_p2 * sign_s) * g.gamma2

@@ -615,44 +615,27 @@ impl<const N: usize> Real for Lanes<N> {
     fn map2(self, o: Self, f: impl Fn(f64, f64) -> f64) -> Self {
         Self(lanes_of(|i| f(self.0[i], o.0[i])))
     }
-    // The kernels of `lanes_math` give the bits of the scalar functions
-    // on every lane, so which one runs is a matter of speed only
-    // ([`KERNEL_LANES`], [`EXP_KERNEL_LANES`]).
-    /// [`crate::lanes_math::sin`] (8 lanes and more) or
-    /// [`crate::elementary::sin`] per lane: the same bits.
+    // `exp` and `ln` have lane kernels (`lanes_math`, the same bits as
+    // the scalar functions); the others are the scalar function per lane.
+    /// [`crate::elementary::sin`] per lane.
     #[cfg_attr(not(debug_assertions), inline(always))]
     fn sin(self) -> Self {
-        if N >= KERNEL_LANES {
-            Self(crate::lanes_math::sin(self.0))
-        } else {
-            self.map(crate::elementary::sin)
-        }
+        self.map(crate::elementary::sin)
     }
-    /// [`crate::lanes_math::cos`] (8 lanes and more) or
-    /// [`crate::elementary::cos`] per lane: the same bits.
+    /// [`crate::elementary::cos`] per lane.
     #[cfg_attr(not(debug_assertions), inline(always))]
     fn cos(self) -> Self {
-        if N >= KERNEL_LANES {
-            Self(crate::lanes_math::cos(self.0))
-        } else {
-            self.map(crate::elementary::cos)
-        }
+        self.map(crate::elementary::cos)
     }
-    /// [`crate::lanes_math::sin_cos`] (8 lanes and more) or
-    /// [`crate::elementary::sin_cos`] per lane: the same bits.
+    /// [`crate::elementary::sin_cos`] per lane.
     #[cfg_attr(not(debug_assertions), inline(always))]
     fn sin_cos(self) -> (Self, Self) {
-        if N >= KERNEL_LANES {
-            let (s, c) = crate::lanes_math::sin_cos(self.0);
-            (Self(s), Self(c))
-        } else {
-            let mut s = self;
-            let mut c = self;
-            for i in 0..N {
-                (s.0[i], c.0[i]) = crate::elementary::sin_cos(self.0[i]);
-            }
-            (s, c)
+        let mut s = self;
+        let mut c = self;
+        for i in 0..N {
+            (s.0[i], c.0[i]) = crate::elementary::sin_cos(self.0[i]);
         }
+        (s, c)
     }
     /// [`crate::lanes_math::exp`] (4 lanes and more) or
     /// [`crate::elementary::exp`] per lane: the same bits.
@@ -669,68 +652,31 @@ impl<const N: usize> Real for Lanes<N> {
     fn ln(self) -> Self {
         Self(crate::lanes_math::ln(self.0))
     }
-    /// [`crate::lanes_math::asin`] (8 lanes and more) or
-    /// [`crate::elementary::asin`] per lane: the same bits.
+    /// [`crate::elementary::asin`] per lane.
     #[cfg_attr(not(debug_assertions), inline(always))]
     fn asin(self) -> Self {
-        if N >= KERNEL_LANES {
-            Self(crate::lanes_math::asin(self.0))
-        } else {
-            self.map(crate::elementary::asin)
-        }
+        self.map(crate::elementary::asin)
     }
-    /// [`crate::lanes_math::acos`] (8 lanes and more) or
-    /// [`crate::elementary::acos`] per lane: the same bits.
+    /// [`crate::elementary::acos`] per lane.
     #[cfg_attr(not(debug_assertions), inline(always))]
     fn acos(self) -> Self {
-        if N >= KERNEL_LANES {
-            Self(crate::lanes_math::acos(self.0))
-        } else {
-            self.map(crate::elementary::acos)
-        }
+        self.map(crate::elementary::acos)
     }
-    /// [`crate::lanes_math::atan`] (8 lanes and more) or
-    /// [`crate::elementary::atan`] per lane: the same bits.
+    /// [`crate::elementary::atan`] per lane.
     #[cfg_attr(not(debug_assertions), inline(always))]
     fn atan(self) -> Self {
-        if N >= KERNEL_LANES {
-            Self(crate::lanes_math::atan(self.0))
-        } else {
-            self.map(crate::elementary::atan)
-        }
+        self.map(crate::elementary::atan)
     }
-    /// [`crate::lanes_math::atan2`] (8 lanes and more) or
-    /// [`crate::elementary::atan2`] per lane: the same bits.
+    /// [`crate::elementary::atan2`] per lane.
     #[cfg_attr(not(debug_assertions), inline(always))]
     fn atan2(self, x: Self) -> Self {
-        if N >= KERNEL_LANES {
-            Self(crate::lanes_math::atan2(self.0, x.0))
-        } else {
-            self.map2(x, crate::elementary::atan2)
-        }
+        self.map2(x, crate::elementary::atan2)
     }
 }
 
-/// Lane count from which `Lanes` computes `sin`, `cos`, `sin_cos`, `asin`,
-/// `acos`, `atan` and `atan2` with the kernels of [`crate::lanes_math`]
-/// instead of the scalar function lane by lane (`ln` always uses its
-/// kernel, `exp` from [`EXP_KERNEL_LANES`]). Either way each lane has the
-/// scalar function's bits: this is a matter of speed only, and the Monte
-/// Carlo decides it, not the kernels' own benchmark. Inside an AVX2 + FMA
-/// function on 4 lanes the kernels of `asin`, `sin_cos` and `cos` take
-/// 0.74, 0.70 and 0.81 × the time of four scalar calls on independent
-/// arguments (`cargo bench -p ftsmc-core --bench lanes_math -- avx2/`),
-/// `atan`, `atan2` and `acos` 1.12, 1.06 and 2.07 ×. Yet with `sin`, `cos`,
-/// `sin_cos` and `asin` on kernels from 4 lanes every Monte Carlo cell
-/// measured flew fewer or as many steps per CPU-second as with `exp`
-/// alone (one thread, 48 runs, same run: realistic-scenario-2 PID 2.23–2.26
-/// against 2.28–2.30 M, paper-scenario-2 SE(3) 3.64 against 3.75–3.81 M):
-/// in a flight the scalar functions' branches are predicted and their
-/// calls overlap.
-pub const KERNEL_LANES: usize = 8;
-
 /// Lane count from which `Lanes::exp` uses [`crate::lanes_math::exp`]:
-/// 0.57 × the time of four scalar calls in the benchmark above, and the
+/// 0.57 × the time of four scalar calls (`cargo bench -p ftsmc-core --bench
+/// lanes_math`), and the
 /// controllers whose fractional powers are `exp(a ln|x|)` fly faster with
 /// it (paper-scenario-2 FTAFTSMC on 4 lanes: 2.86–2.89 M steps per
 /// CPU-second against 2.76–2.79 M with the other kernels as well).

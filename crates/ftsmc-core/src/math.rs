@@ -34,10 +34,10 @@
 /// (`exp(−∞) = 0`, `exp(∞) = ∞`), `0^a = ∞` and `∞^a = 0` for `a < 0`.
 ///
 /// A law that raises to the same exponent every period chooses the path
-/// once with [`Power::new`]; this function is `Power::new(a).abs(x)`.
+/// once with [`Power::new`]; this function is `Power::new(a).pow_abs(x)`.
 #[cfg_attr(not(debug_assertions), inline(always))]
 pub fn pow_abs<R: Real>(x: R, a: f64) -> R {
-    Power::new(a).abs(x)
+    Power::new(a).pow_abs(x)
 }
 
 /// An exponent `a` with the evaluation path of [`pow_abs`] chosen once
@@ -89,7 +89,7 @@ impl Power {
 
     /// `|x|^a` (same bits as [`pow_abs`]), per lane for lanes.
     #[cfg_attr(not(debug_assertions), inline(always))]
-    pub fn abs<R: Real>(self, x: R) -> R {
+    pub fn pow_abs<R: Real>(self, x: R) -> R {
         let ax = x.abs();
         match self {
             Self::One => ax,
@@ -106,23 +106,17 @@ impl Power {
         }
     }
 
-    /// `min(|x|^a, POWER_LIMIT)` (same bits as [`pow_abs_sat`]).
-    #[cfg_attr(not(debug_assertions), inline(always))]
-    pub fn abs_sat<R: Real>(self, x: R) -> R {
-        saturate_power(self.abs(x))
-    }
-
     /// `(|x|^a, |x|^b)` for two exponents of the same base: for two
     /// [`Power::General`] exponents `ln|x|` is taken once (the same bits
-    /// as two [`Power::abs`] calls, one logarithm fewer).
+    /// as two [`Power::pow_abs`] calls, one logarithm fewer).
     #[cfg_attr(not(debug_assertions), inline(always))]
-    pub fn abs_pair<R: Real>(a: Self, b: Self, x: R) -> (R, R) {
+    pub fn pow_abs_pair<R: Real>(a: Self, b: Self, x: R) -> (R, R) {
         match (a, b) {
             (Self::General(ea), Self::General(eb)) => {
                 let l = x.abs().ln();
                 ((l * ea).exp(), (l * eb).exp())
             }
-            _ => (a.abs(x), b.abs(x)),
+            _ => (a.pow_abs(x), b.pow_abs(x)),
         }
     }
 }

@@ -2,7 +2,7 @@
 //! released, or a Python controller), and Monte Carlo batches whose rows
 //! are `runs.csv`'s.
 
-use ftsmc_sim::batch::montecarlo::run_batch_range;
+use ftsmc_sim::batch::montecarlo::{run_batch, BatchOptions};
 use ftsmc_sim::batch::runs_table::{runs_table, Column};
 use ftsmc_sim::run::{RunOptions, RunOutput};
 use numpy::PyArray1;
@@ -202,8 +202,18 @@ pub fn montecarlo_columns<'py>(
         }
         let pool = builder.build().map_err(|e| format!("cannot start the thread pool: {e}"))?;
         pool.install(|| {
-            run_batch_range(&scenario, &spec, &scenario.controllers, start..end, scenario.seed, tick, Some(cancel))
-                .map_err(|known| format!("unknown controller (known: {known})"))
+            run_batch(
+                &scenario,
+                &spec,
+                &scenario.controllers,
+                BatchOptions {
+                    runs: start..end,
+                    progress: Some(tick),
+                    cancel: Some(cancel),
+                    ..BatchOptions::new(0, scenario.seed)
+                },
+            )
+            .map_err(|known| format!("unknown controller (known: {known})"))
         })
     })?;
     let table = runs_table(&rows.map_err(value_error)?);

@@ -3,20 +3,20 @@
 
 use pyo3::prelude::*;
 
-use ftsmc_sim::tune::FlightStats;
+use ftsmc_sim::tune::OutcomeStats;
 
 use crate::scenario::{chain_message, scenario_toml, Scenario};
 use crate::value_error;
 
 /// `evaluator(tomls, indices)` (Python, e.g. [`tune_evaluate`] as Dask
 /// tasks): the statistics of each candidate scenario (sent as TOML text) on
-/// the Monte Carlo run `indices`, as lists of [`FlightStats::VALUES`]
+/// the Monte Carlo run `indices`, as lists of [`OutcomeStats::VALUES`]
 /// numbers. Its exceptions become the tune's error.
 fn call_evaluator(
     f: &Py<PyAny>,
     scenarios: &[ftsmc_sim::Scenario],
     indices: &[u64],
-) -> Result<Vec<FlightStats>, String> {
+) -> Result<Vec<OutcomeStats>, String> {
     let texts: Vec<String> = scenarios.iter().map(scenario_toml).collect::<Result<_, _>>()?;
     let values: Vec<Vec<f64>> = Python::attach(|py| {
         f.call1(py, (texts, indices.to_vec()))
@@ -26,8 +26,8 @@ fn call_evaluator(
     values
         .iter()
         .map(|v| {
-            FlightStats::from_values(v).ok_or_else(|| {
-                format!("the tune's evaluator returned {} numbers, not {} statistics", v.len(), FlightStats::VALUES)
+            OutcomeStats::from_values(v).ok_or_else(|| {
+                format!("the tune's evaluator returned {} numbers, not {} statistics", v.len(), OutcomeStats::VALUES)
             })
         })
         .collect()
@@ -38,7 +38,7 @@ fn call_evaluator(
 /// `tomls` (resolved TOML text) with the Monte Carlo draws `indices` of
 /// master seed `master`, on `threads` workers (default 1), the GIL
 /// released. Returns each scenario's statistics as
-/// [`FlightStats::VALUES`] numbers (`FlightStats::to_values`): a pure
+/// [`OutcomeStats::VALUES`] numbers (`OutcomeStats::to_values`): a pure
 /// function of its arguments, so a retried task gives the same numbers.
 #[pyfunction]
 #[pyo3(signature = (tomls, controller, master, indices, threads=None))]

@@ -13,7 +13,7 @@
 use std::hint::black_box;
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
-use ftsmc_sim::batch::montecarlo::{run_batch_lanes, McRun, DEFAULT_LANES};
+use ftsmc_sim::batch::montecarlo::{run_batch, BatchOptions, McRun, DEFAULT_LANES};
 use ftsmc_sim::registry::CONTROLLERS;
 use ftsmc_sim::scenario::{Scenario, PAPER_SCENARIO_2, REALISTIC_SCENARIO_2};
 
@@ -26,7 +26,7 @@ const DURATION: f64 = 10.0;
 fn batch(pool: &rayon::ThreadPool, s: &Scenario, controller: &str, lanes: usize) -> Vec<McRun> {
     let spec = s.montecarlo.clone().unwrap_or_default();
     let controllers = [controller.to_string()];
-    pool.install(|| run_batch_lanes(s, &spec, &controllers, 0..RUNS, s.seed, &|_| {}, None, lanes))
+    pool.install(|| run_batch(s, &spec, &controllers, BatchOptions { lanes, ..BatchOptions::new(RUNS, s.seed) }))
         .expect("the built-in scenario flies")
 }
 

@@ -489,12 +489,17 @@ fn an_inf_limit_lifts_the_check_without_overflow_and_the_run_can_be_cancelled() 
 
 #[test]
 fn a_cancelled_batch_stops_and_returns_no_partial_rows() {
-    use ftsmc_sim::batch::montecarlo::{run_batch_cancellable, MonteCarloSpec, INTERRUPTED};
+    use ftsmc_sim::batch::montecarlo::{run_batch, BatchOptions, MonteCarloSpec, INTERRUPTED};
     use std::sync::atomic::AtomicBool;
     let s = Scenario::from_toml_str(PAPER_SCENARIO_2, "paper-scenario-2.toml").unwrap();
     let cancel = AtomicBool::new(true);
     let started = std::time::Instant::now();
-    let r = run_batch_cancellable(&s, &MonteCarloSpec::default(), &["pid".into()], 100_000, 1, &|_| {}, Some(&cancel));
+    let r = run_batch(
+        &s,
+        &MonteCarloSpec::default(),
+        &["pid".into()],
+        BatchOptions { cancel: Some(&cancel), ..BatchOptions::new(100_000, 1) },
+    );
     assert_eq!(r.unwrap_err(), INTERRUPTED);
     assert!(started.elapsed() < Duration::from_secs(5), "{:?}", started.elapsed());
 }

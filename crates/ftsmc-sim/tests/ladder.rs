@@ -9,7 +9,7 @@
 //! -c pid,se3,ftaftsmc` (docs/results.md, "The wind ladder").
 
 use ftsmc_sim::actuators::MixerKind;
-use ftsmc_sim::batch::montecarlo::run_batch;
+use ftsmc_sim::batch::montecarlo::{run_batch, BatchOptions};
 use ftsmc_sim::environment::wind::WindPreset;
 use ftsmc_sim::scenario::distributions::Dist;
 use ftsmc_sim::scenario::ladder::{LADDER, LEVELS};
@@ -83,7 +83,7 @@ fn successes(scenario: &str, controllers: &[&str], runs: u64) -> Vec<usize> {
     let s = load(scenario);
     let spec = s.montecarlo.clone().unwrap_or_default();
     let names: Vec<String> = controllers.iter().map(|c| (*c).to_string()).collect();
-    let rows = run_batch(&s, &spec, &names, runs, s.seed, &|_| {}).unwrap();
+    let rows = run_batch(&s, &spec, &names, BatchOptions::new(runs, s.seed)).unwrap();
     names.iter().map(|n| rows.iter().filter(|r| &r.controller == n && r.success).count()).collect()
 }
 

@@ -3,7 +3,7 @@
 //! lands in, and whatever the thread count — for every built-in controller
 //! on both truth models, and when lanes start new runs as flights end early.
 
-use ftsmc_sim::batch::montecarlo::{run_batch_lanes, MonteCarloSpec, LANE_COUNTS};
+use ftsmc_sim::batch::montecarlo::{run_batch, BatchOptions, MonteCarloSpec, LANE_COUNTS};
 use ftsmc_sim::registry::CONTROLLERS;
 use ftsmc_sim::scenario::{Scenario, PAPER_SCENARIO_1, PAPER_SCENARIO_2, REALISTIC_SCENARIO_2};
 
@@ -30,7 +30,7 @@ fn rows(
 ) -> Vec<String> {
     let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
     let rows = pool
-        .install(|| run_batch_lanes(s, spec, controllers, 0..runs, s.seed, &|_| {}, None, lanes))
+        .install(|| run_batch(s, spec, controllers, BatchOptions { lanes, ..BatchOptions::new(runs, s.seed) }))
         .expect("batch flies");
     rows.iter()
         .map(|r| {
@@ -73,7 +73,7 @@ fn lanes_start_new_runs_as_flights_end_early() {
     let alone = rows(&s, &spec, &controllers, 7, 1, 1);
     let ended_early = alone.iter().filter(|r| r.starts_with("ended-early")).count();
     assert!(ended_early > 1 && ended_early < alone.len(), "{ended_early} of {} ended early", alone.len());
-    for lanes in [2, 4, 8] {
+    for lanes in LANE_COUNTS.into_iter().filter(|&l| l > 1) {
         assert_eq!(rows(&s, &spec, &controllers, 7, lanes, 1), alone, "{lanes} lanes");
     }
 }
@@ -81,9 +81,14 @@ fn lanes_start_new_runs_as_flights_end_early() {
 #[test]
 fn an_unknown_lane_count_is_refused() {
     let s = builtin("paper-scenario-1", 1.0);
-    let err = run_batch_lanes(&s, &MonteCarloSpec::default(), &["pid".into()], 0..1, 1, &|_| {}, None, 3)
-        .expect_err("3 lanes");
-    assert!(err.contains("lanes = 3") && err.contains("[1, 2, 4, 8]"), "{err}");
+    let err = run_batch(
+        &s,
+        &MonteCarloSpec::default(),
+        &["pid".into()],
+        BatchOptions { lanes: 3, ..BatchOptions::new(1, 1) },
+    )
+    .expect_err("3 lanes");
+    assert!(err.contains("lanes = 3") && err.contains("[1, 4]"), "{err}");
 }
 
 #[test]
@@ -99,8 +104,9 @@ fn flights_stopped_at_a_tick_the_observers_do_not_see_give_the_same_rows_on_any_
     let spec = s.montecarlo.clone().unwrap_or_default();
     let controllers = vec!["pid".to_string()];
     let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
-    let batch =
-        pool.install(|| run_batch_lanes(&s, &spec, &controllers, 0..5, s.seed, &|_| {}, None, 4)).expect("batch flies");
+    let batch = pool
+        .install(|| run_batch(&s, &spec, &controllers, BatchOptions { lanes: 4, ..BatchOptions::new(5, s.seed) }))
+        .expect("batch flies");
     for r in &batch {
         assert!(r.exit.to_string().contains("rigid body out of its valid range"), "{}", r.exit);
         let peak = r.metrics.peak_rotor_speed_demand.expect("realistic flights report it");

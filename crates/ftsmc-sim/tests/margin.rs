@@ -2,7 +2,7 @@
 //! completed flight fails its envelope, below −1 for a crash or a
 //! divergence, and in `runs.csv`.
 
-use ftsmc_sim::batch::montecarlo::run_batch;
+use ftsmc_sim::batch::montecarlo::{run_batch, BatchOptions};
 use ftsmc_sim::batch::runs_table::{runs_table, MARGIN_COLUMNS};
 use ftsmc_sim::margin::Binding;
 use ftsmc_sim::registry;
@@ -69,7 +69,7 @@ fn a_crash_or_divergence_is_below_minus_one_and_earlier_is_lower() {
 #[test]
 fn runs_csv_has_the_margin_after_the_existing_columns() {
     let s = scenario("[envelope]\nsettle_after = 1.0\nmax_position_error = 0.1\n[montecarlo]\ninitial_position_offset = { dist = \"uniform\", low = -0.5, high = 0.5 }\n");
-    let rows = run_batch(&s, s.montecarlo.as_ref().unwrap(), &["pid".to_string()], 4, 7, &|_| {}).unwrap();
+    let rows = run_batch(&s, s.montecarlo.as_ref().unwrap(), &["pid".to_string()], BatchOptions::new(4, 7)).unwrap();
     let table = runs_table(&rows);
     let at = table.names.iter().position(|n| n == "crashed").unwrap();
     assert_eq!(&table.names[at + 1..], &MARGIN_COLUMNS.map(String::from));

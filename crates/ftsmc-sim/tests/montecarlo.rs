@@ -1,6 +1,6 @@
 //! Monte Carlo batches: deterministic across thread counts; divergence is a row.
 
-use ftsmc_sim::batch::montecarlo::{run_batch, Dist, MonteCarloSpec};
+use ftsmc_sim::batch::montecarlo::{run_batch, BatchOptions, Dist, MonteCarloSpec};
 use ftsmc_sim::scenario::{Scenario, PAPER_SCENARIO_2};
 
 fn short_scenario() -> Scenario {
@@ -12,7 +12,7 @@ fn short_scenario() -> Scenario {
 fn batch(threads: usize, spec: &MonteCarloSpec, s: &Scenario) -> Vec<String> {
     let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
     let controllers = vec!["ftaftsmc".to_string(), "ranftsmc".to_string()];
-    let rows = pool.install(|| run_batch(s, spec, &controllers, 6, 42, &|_| {})).unwrap();
+    let rows = pool.install(|| run_batch(s, spec, &controllers, BatchOptions::new(6, 42))).unwrap();
     rows.iter()
         .map(|r| format!("{} {} {} {:?} {:?} {}", r.index, r.seed, r.controller, r.sampled, r.metrics.flat(), r.exit))
         .collect()
@@ -39,7 +39,7 @@ fn a_diverging_run_is_reported_not_fatal() {
         ..MonteCarloSpec::default()
     };
     let controllers = vec!["ftaftsmc".to_string()];
-    let rows = run_batch(&s, &spec, &controllers, 8, 3, &|_| {}).unwrap();
+    let rows = run_batch(&s, &spec, &controllers, BatchOptions::new(8, 3)).unwrap();
     assert_eq!(rows.len(), 8, "every run is a row");
     let diverged = rows.iter().filter(|r| !r.exit.is_completed()).count();
     assert!(diverged >= 1, "the batch must contain a diverged run");

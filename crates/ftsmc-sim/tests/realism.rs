@@ -3,7 +3,7 @@
 
 use ftsmc_core::cascade::{Controller, Telemetry};
 use ftsmc_core::model::{Command, QuadState, Reference};
-use ftsmc_sim::batch::montecarlo::{run_batch, summarize, Dist, MonteCarloSpec};
+use ftsmc_sim::batch::montecarlo::{run_batch, summarize, BatchOptions, Dist, MonteCarloSpec};
 use ftsmc_sim::registry;
 use ftsmc_sim::scenario::Scenario;
 use ftsmc_sim::ExitStatus;
@@ -177,7 +177,7 @@ fn a_monte_carlo_with_crashes_completes_and_counts_them() {
     let spec =
         MonteCarloSpec { payload_mass: Some(Dist::Uniform { low: 0.0, high: 8.0 }), ..MonteCarloSpec::default() };
     let controllers = vec!["ranftsmc".to_string()];
-    let rows = run_batch(&s, &spec, &controllers, 8, 5, &|_| {}).unwrap();
+    let rows = run_batch(&s, &spec, &controllers, BatchOptions::new(8, 5)).unwrap();
     assert_eq!(rows.len(), 8, "every run is a row");
     let crashed = rows.iter().filter(|r| r.exit.is_crashed()).count();
     assert!(crashed >= 1, "{:?}", rows.iter().map(|r| r.exit.to_string()).collect::<Vec<_>>());

@@ -8,7 +8,7 @@
 //! tips over within about 3 s, so each run is short); RANFTSMC and TSM-STA,
 //! which fly much longer, 200 each. 1000 × 3 full runs take about 100 s.
 
-use ftsmc_sim::batch::montecarlo::{run_batch, summarize, ControllerSummary, McRun};
+use ftsmc_sim::batch::montecarlo::{run_batch, summarize, BatchOptions, ControllerSummary, McRun};
 use ftsmc_sim::scenario::{Scenario, REALISTIC_SCENARIO_2};
 
 fn scenario() -> Scenario {
@@ -17,7 +17,7 @@ fn scenario() -> Scenario {
 
 fn batch(s: &Scenario, controller: &str, runs: u64) -> Vec<McRun> {
     let spec = s.montecarlo.clone().expect("realistic scenario 2 has a [montecarlo] section");
-    run_batch(s, &spec, &[controller.to_string()], runs, s.seed, &|_| {}).unwrap()
+    run_batch(s, &spec, &[controller.to_string()], BatchOptions::new(runs, s.seed)).unwrap()
 }
 
 /// The summary's counts add up to the runs, and agree with the rows.
@@ -64,7 +64,7 @@ fn realistic_monte_carlo_rates_do_not_depend_on_the_thread_count() {
     let controllers: Vec<String> = ["ranftsmc", "tsm-sta", "ftaftsmc"].map(String::from).to_vec();
     let fly = |threads: usize| {
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-        let rows = pool.install(|| run_batch(&s, &spec, &controllers, 6, s.seed, &|_| {})).unwrap();
+        let rows = pool.install(|| run_batch(&s, &spec, &controllers, BatchOptions::new(6, s.seed))).unwrap();
         let lines: Vec<String> = rows
             .iter()
             .map(|r| format!("{} {} {} {} {:?}", r.index, r.controller, r.exit, r.success, r.metrics.flat()))

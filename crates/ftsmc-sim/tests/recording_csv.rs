@@ -124,7 +124,7 @@ fn each_controller_writes_its_named_estimates_and_the_rotor_side_columns() {
 
         // Without a rotor-speed limit the applied command is the commanded
         // one, and the rotor speeds produce it.
-        let p = s.true_plant();
+        let p = s.true_vehicle();
         for i in (0..rec.len()).step_by(37) {
             let col = |n: &str| rec.column(n)[i];
             for n in ["thrust", "roll_torque", "pitch_torque", "yaw_torque"] {

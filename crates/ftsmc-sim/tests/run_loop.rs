@@ -107,7 +107,7 @@ fn a_flight_stepped_by_hand_is_the_simulated_flight_and_observers_see_every_tick
 
         let mut c2 = registry::build("pid", &s).unwrap();
         let mut counter = Counter::default();
-        let mut flight = Flight::new(&s, c2.as_mut(), RunOptions::default());
+        let mut flight = Flight::new(s.clone(), c2.as_mut(), RunOptions::default());
         flight.observe_with(&mut counter);
         let mut steps = 0;
         while flight.step() == StepOutcome::Flying {

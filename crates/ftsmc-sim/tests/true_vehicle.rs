@@ -84,7 +84,7 @@ fn every_actual_plant_key_loads_with_a_warning_and_flies_like_the_new_spelling()
         );
         // The old meaning: the table replaced [plant] whole.
         let table: QuadrotorParams = toml::from_str(&format!("{old_key} = {value}")).unwrap();
-        assert_eq!(old.scenario.true_plant(), table, "{old_key}");
+        assert_eq!(old.scenario.true_vehicle(), table, "{old_key}");
         assert_eq!(old.scenario.plant.mass, 0.7, "the controllers' model stays [plant]");
         // The new spelling: the key, and the paper's value of every other key.
         let mut new_text = format!("[vehicle]\n{new_key} = {value}\n");
@@ -147,7 +147,7 @@ fn every_rigid_body_key_loads_with_a_warning_and_flies_like_the_new_spelling() {
 fn a_complete_old_table_converts_key_for_key() {
     let old = loaded("[actual_plant]\nmass = 0.8\ngravity = 9.7\ninertia = [4e-3, 4.1e-3, 8e-3]\n");
     assert_eq!(old.scenario.vehicle.mass, Some(0.8));
-    assert_eq!(old.scenario.true_plant().gravity, 9.7);
+    assert_eq!(old.scenario.true_vehicle().gravity, 9.7);
     // rotor_inertia etc. were missing: the paper's, written out.
     assert_eq!(old.scenario.vehicle.rotor_inertia, Some(2.8385e-5));
     assert_eq!(old.scenario.vehicle.model, VehicleModel::Paper);
@@ -231,14 +231,14 @@ fn a_key_only_the_other_model_flies_is_refused_naming_file_key_value_and_model()
 fn missing_vehicle_keys_are_the_plants() {
     let s = loaded("[vehicle]\nmass = 0.8\n").scenario;
     let plant = s.plant;
-    assert_eq!(s.true_plant(), QuadrotorParams { mass: 0.8, ..plant });
+    assert_eq!(s.true_vehicle(), QuadrotorParams { mass: 0.8, ..plant });
     let s = loaded("[vehicle]\nmodel = \"rigid-body\"\nmass = 0.8\nrotor_drag_z = 2e-4\n").scenario;
     let mut rb = RigidBodyParams::from_paper(&QuadrotorParams { mass: 0.8, ..plant });
     rb.rotor_drag_z = 2e-4;
     assert_eq!(s.rigid_body_params(), rb);
     // No [vehicle] key: the true vehicle is [plant].
     let s = loaded("").scenario;
-    assert_eq!(s.true_plant(), s.plant);
+    assert_eq!(s.true_vehicle(), s.plant);
 }
 
 #[test]
@@ -320,7 +320,7 @@ fn monte_carlo_draws_act_on_the_true_vehicle_as_before() {
     )
     .scenario;
     let spec = s.montecarlo.clone().unwrap();
-    let base = s.true_plant();
+    let base = s.true_vehicle();
     for index in 0..4 {
         let (flown, _, sampled) = spec.sample(&s, s.seed, index);
         let (mass, fi, fd) = (sampled[0], sampled[2], sampled[3]);
@@ -331,7 +331,7 @@ fn monte_carlo_draws_act_on_the_true_vehicle_as_before() {
             drag_rotational: base.drag_rotational.map(|k| k * fd),
             ..base
         };
-        assert_eq!(flown.true_plant(), expected, "run {index}");
+        assert_eq!(flown.true_vehicle(), expected, "run {index}");
         assert_eq!(flown.plant, s.plant, "the controllers' model is never drawn");
         assert!(flown.validate("mc.toml").is_ok());
     }

@@ -8,7 +8,7 @@ use ftsmc_core::tsm_sta::{TsmStaAxis, TsmStaGains};
 use ftsmc_sim::controllers::{ftaftsmc, ranftsmc, tsm_sta};
 use ftsmc_sim::scenario::tune_section::TuneSection;
 use ftsmc_sim::tune::{
-    evaluate, held_out_indices, judge, training_indices, tune, tune_with, tuned_toml, FlightStats, TuneOptions,
+    evaluate, held_out_indices, judge, training_indices, tune, tune_with, tuned_toml, OutcomeStats, TuneOptions,
 };
 use ftsmc_sim::Scenario;
 
@@ -136,7 +136,7 @@ fn a_tune_evaluated_in_batches_through_toml_equals_the_local_tune() {
     let (s, local) = tiny("tsm-sta", 2);
     let options = TuneOptions { controller: "tsm-sta".into(), budget: 2 * (1 + 4 * 3), seed: 5 };
     let calls = std::sync::atomic::AtomicUsize::new(0);
-    let remote = |scenarios: &[Scenario], indices: &[u64]| -> Result<Vec<FlightStats>, String> {
+    let remote = |scenarios: &[Scenario], indices: &[u64]| -> Result<Vec<OutcomeStats>, String> {
         calls.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
         let mut out = Vec::new();
         for batch in scenarios.chunks(3) {
@@ -145,7 +145,7 @@ fn a_tune_evaluated_in_batches_through_toml_equals_the_local_tune() {
                 texts.iter().map(|t| Scenario::from_toml_str(t, "sent.toml").unwrap()).collect();
             let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
             let stats = pool.install(|| evaluate(&rebuilt, "tsm-sta", 5, indices, &|_| {}))?;
-            out.extend(stats.iter().map(|st| FlightStats::from_values(&st.to_values()).unwrap()));
+            out.extend(stats.iter().map(|st| OutcomeStats::from_values(&st.to_values()).unwrap()));
         }
         Ok(out)
     };
@@ -155,9 +155,9 @@ fn a_tune_evaluated_in_batches_through_toml_equals_the_local_tune() {
     assert_eq!(r.tuned, local.tuned);
     assert_eq!(format!("{:?}", r.held_out), format!("{:?}", local.held_out));
     // A wrong count from the evaluator is an error, not a silently shorter history.
-    let short = |_: &[Scenario], _: &[u64]| -> Result<Vec<FlightStats>, String> { Ok(Vec::new()) };
+    let short = |_: &[Scenario], _: &[u64]| -> Result<Vec<OutcomeStats>, String> { Ok(Vec::new()) };
     assert!(tune_with(&s, &options, &short).unwrap_err().contains("returned 0 statistics for 1"));
-    assert!(FlightStats::from_values(&[1.5; FlightStats::VALUES]).is_none());
+    assert!(OutcomeStats::from_values(&[1.5; OutcomeStats::VALUES]).is_none());
 }
 
 #[test]

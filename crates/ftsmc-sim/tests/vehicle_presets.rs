@@ -5,7 +5,7 @@
 //! inherited absolute draw, a wind preset that owns its keys, and `--set`
 //! (`Scenario::with_overrides`).
 
-use ftsmc_sim::batch::montecarlo::{run_batch, summarize};
+use ftsmc_sim::batch::montecarlo::{run_batch, summarize, BatchOptions};
 use ftsmc_sim::registry;
 use ftsmc_sim::run::RunOptions;
 use ftsmc_sim::scenario::Scenario;
@@ -44,7 +44,7 @@ fn each_preset_sets_the_plant_the_true_vehicle_and_the_rotors_from_its_file() {
         assert!(!preset.description().is_empty());
         // The nominal model and the truth agree key by key.
         assert_eq!(s.plant.mass, s.rigid_body_params().mass);
-        assert_eq!(s.plant.inertia, s.true_plant().inertia);
+        assert_eq!(s.plant.inertia, s.true_vehicle().inertia);
     }
     let e = load("name = \"p\"\nduration = 1.0\n[vehicle]\npreset = \"bebop\"\n").unwrap_err();
     assert!(e.contains("t.toml") && e.contains("bebop") && e.contains("crazyflie-2"), "{e}");
@@ -99,13 +99,13 @@ fn each_preset_flies_its_calm_rung() {
         assert_eq!(s.vehicle.preset, Some(preset));
         let spec = s.montecarlo.clone().unwrap();
         let controllers = vec!["se3".to_string()];
-        let rows = run_batch(&s, &spec, &controllers, 40, s.seed, &|_| {}).unwrap();
+        let rows = run_batch(&s, &spec, &controllers, BatchOptions::new(40, s.seed)).unwrap();
         let summary = summarize(&rows, &controllers);
         let rate = summary[0].1.success_rate;
         eprintln!("{}: se3 success {:.1} % of 40", preset.name(), 100.0 * rate);
         assert!(rate >= 0.95, "{preset:?}: SE(3) success {rate} on realistic-calm-1");
         // The relative mass draw follows the vehicle.
-        let m = s.true_plant().mass;
+        let m = s.true_vehicle().mass;
         assert!(rows.iter().all(|r| (r.sampled[0] - m).abs() <= 0.1 * m * (1.0 + 1e-12)), "{preset:?}");
     }
     // Scenario 2's absolute payload (up to 0.2 kg) is refused on a 30 g vehicle.

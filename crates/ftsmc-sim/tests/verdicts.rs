@@ -2,7 +2,7 @@
 //! flies run `i`'s draws (vehicle, wind, noise seed, initial state), and
 //! adding or reordering contestants does not move them.
 
-use ftsmc_sim::batch::montecarlo::{run_batch, summarize};
+use ftsmc_sim::batch::montecarlo::{run_batch, summarize, BatchOptions};
 use ftsmc_sim::batch::verdicts::{intervals, pairwise, Outcomes};
 use ftsmc_sim::scenario::ladder::LADDER;
 use ftsmc_sim::scenario::Scenario;
@@ -19,8 +19,8 @@ fn controllers_in_one_batch_fly_the_same_draws() {
     let s = breeze();
     let spec = s.montecarlo.clone().unwrap();
     let names = |v: &[&str]| v.iter().map(|n| n.to_string()).collect::<Vec<_>>();
-    let both = run_batch(&s, &spec, &names(&["pid", "se3"]), 6, s.seed, &|_| {}).unwrap();
-    let alone = run_batch(&s, &spec, &names(&["se3"]), 6, s.seed, &|_| {}).unwrap();
+    let both = run_batch(&s, &spec, &names(&["pid", "se3"]), BatchOptions::new(6, s.seed)).unwrap();
+    let alone = run_batch(&s, &spec, &names(&["se3"]), BatchOptions::new(6, s.seed)).unwrap();
     for i in 0..6u64 {
         let rows: Vec<_> = both.iter().filter(|r| r.index == i).collect();
         assert_eq!(rows.len(), 2);

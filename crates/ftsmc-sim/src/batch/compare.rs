@@ -13,7 +13,7 @@
 
 use serde::Serialize;
 
-use super::montecarlo::{run_batch_lanes, McRun, MonteCarloSpec};
+use super::montecarlo::{run_batch, BatchOptions, McRun, MonteCarloSpec};
 use super::verdicts::{intervals, pair_tests, pairwise, rms_position_error, Intervals, Outcomes, PairVerdict};
 use crate::scenario::Scenario;
 use crate::stats::paired::Verdict;
@@ -182,16 +182,9 @@ pub fn compare(
     let mut rows: Vec<Vec<McRun>> = vec![Vec::new(); contestants.len()];
     let fly = |rows: &mut Vec<Vec<McRun>>, range: std::ops::Range<u64>| -> Result<(), String> {
         for (c, mine) in contestants.iter().zip(rows.iter_mut()) {
-            let flown = run_batch_lanes(
-                &c.scenario,
-                spec,
-                std::slice::from_ref(&c.controller),
-                range.clone(),
-                seed,
-                progress,
-                None,
-                lanes,
-            )?;
+            let options =
+                BatchOptions { runs: range.clone(), master_seed: seed, lanes, progress: Some(progress), cancel: None };
+            let flown = run_batch(&c.scenario, spec, std::slice::from_ref(&c.controller), options)?;
             mine.extend(flown.into_iter().map(|mut r| {
                 r.controller = c.name.clone();
                 r

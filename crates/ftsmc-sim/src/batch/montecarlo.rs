@@ -35,60 +35,51 @@ pub struct McRun {
     pub margin: Option<crate::margin::Margin>,
 }
 
-/// Fly `runs` randomised copies of `base` with each controller, in parallel
-/// on the current rayon pool. `progress` receives control steps flown, from
-/// inside each flight ([`RunOptions::progress`]); a batch adds up to
-/// `runs × controllers × planned_steps(base)`.
-/// The output order is (run index, controller) whatever the thread count.
-pub fn run_batch(
-    base: &Scenario,
-    spec: &MonteCarloSpec,
-    controllers: &[String],
-    runs: u64,
-    master_seed: u64,
-    progress: &(dyn Fn(u64) + Sync),
-) -> Result<Vec<McRun>, String> {
-    run_batch_cancellable(base, spec, controllers, runs, master_seed, progress, None)
+/// How a batch is flown ([`run_batch`]): which runs, from which master
+/// seed, how many flights side by side, with what progress report and
+/// cancellation. `BatchOptions::new(runs, master_seed)` flies runs
+/// `0..runs` on [`DEFAULT_LANES`] lanes; set the other fields with struct
+/// update syntax.
+#[derive(Clone)]
+pub struct BatchOptions<'a> {
+    /// The run indices flown (a shard of a campaign:
+    /// [`crate::batch::shard::Shard::range`]). Run `i` draws from
+    /// [`run_seed`]`(master_seed, i)` alone, so its rows are bit-identical
+    /// to those of run `i` in the whole batch.
+    pub runs: std::ops::Range<u64>,
+    /// The master seed of the runs' draws.
+    pub master_seed: u64,
+    /// Flights each thread flies side by side, one of [`LANE_COUNTS`]
+    /// (1 flies each flight alone). The rows do not depend on it.
+    pub lanes: usize,
+    /// Receives control steps flown, from inside each flight
+    /// ([`RunOptions::progress`]); a batch adds up to
+    /// `runs × controllers × planned_steps(base)`.
+    pub progress: Option<&'a (dyn Fn(u64) + Sync)>,
+    /// When set: no new flight starts, flights under way stop within
+    /// [`crate::run::PROGRESS_EVERY`] steps, and the batch returns
+    /// `Err(INTERRUPTED)` (no partial rows).
+    pub cancel: Option<&'a std::sync::atomic::AtomicBool>,
 }
 
-/// Message of a batch stopped through its cancellation flag.
+impl BatchOptions<'_> {
+    /// Runs `0..runs` from `master_seed` on [`DEFAULT_LANES`] lanes, no
+    /// progress report, no cancellation.
+    pub fn new(runs: u64, master_seed: u64) -> Self {
+        Self { runs: 0..runs, master_seed, lanes: DEFAULT_LANES, progress: None, cancel: None }
+    }
+}
+
+/// Message of a batch stopped through its cancellation flag
+/// ([`BatchOptions::cancel`]).
 pub const INTERRUPTED: &str = "interrupted";
 
-/// [`run_batch`] that stops when `cancel` is set: no new flight starts,
-/// flights under way stop within [`crate::run::PROGRESS_EVERY`] steps, and
-/// the batch returns `Err(INTERRUPTED)` (no partial rows).
-pub fn run_batch_cancellable(
-    base: &Scenario,
-    spec: &MonteCarloSpec,
-    controllers: &[String],
-    runs: u64,
-    master_seed: u64,
-    progress: &(dyn Fn(u64) + Sync),
-    cancel: Option<&std::sync::atomic::AtomicBool>,
-) -> Result<Vec<McRun>, String> {
-    run_batch_range(base, spec, controllers, 0..runs, master_seed, progress, cancel)
-}
-
-/// [`run_batch_cancellable`] for the runs with index in `indices` only (a
-/// shard of a campaign, [`crate::batch::shard::Shard::range`]). Run `i`
-/// draws from [`run_seed`]`(master_seed, i)` alone, so its rows are
-/// bit-identical to those of run `i` in the whole batch; the output order is
-/// (run index, controller). Flown [`DEFAULT_LANES`] flights side by side
-/// ([`run_batch_lanes`]).
-pub fn run_batch_range(
-    base: &Scenario,
-    spec: &MonteCarloSpec,
-    controllers: &[String],
-    indices: std::ops::Range<u64>,
-    master_seed: u64,
-    progress: &(dyn Fn(u64) + Sync),
-    cancel: Option<&std::sync::atomic::AtomicBool>,
-) -> Result<Vec<McRun>, String> {
-    run_batch_lanes(base, spec, controllers, indices, master_seed, progress, cancel, DEFAULT_LANES)
-}
-
-/// The lane counts a batch can fly side by side ([`run_batch_lanes`]).
-pub const LANE_COUNTS: [usize; 4] = [1, 2, 4, 8];
+/// The lane counts a batch can fly side by side ([`BatchOptions::lanes`]):
+/// one flight alone, or four (one AVX2 register of `f64`). Two lanes flew
+/// fewer steps per CPU-second than four on every Monte Carlo cell measured,
+/// and eight fewer than four on all but one (docs/results.md), so neither
+/// width is built.
+pub const LANE_COUNTS: [usize; 2] = [1, 4];
 
 /// Flights a batch flies side by side unless told otherwise: four `f64`
 /// lanes, one AVX2 register.
@@ -107,29 +98,26 @@ fn runs_per_task(runs: usize, lanes: usize) -> usize {
     share.clamp(lanes.max(1), RUNS_PER_TASK.max(lanes))
 }
 
-/// [`run_batch_range`] flying `lanes` flights side by side
-/// ([`crate::run::Flight::new_lanes`]; one of [`LANE_COUNTS`], 1 flies each
-/// flight alone): a lane whose flight ends starts the next run. Every row
-/// has exactly the bits it has whatever `lanes`, the lane it lands in and
-/// the thread count.
-#[allow(clippy::too_many_arguments)]
-pub fn run_batch_lanes(
+/// Fly the runs of `options` (randomised copies of `base` drawn from
+/// `spec`) with each controller, in parallel on the current rayon pool,
+/// `options.lanes` flights side by side ([`crate::run::Flights::new_lanes`]):
+/// a lane whose flight ends starts the next run. The output order is (run
+/// index, controller), and every row has exactly the bits it has whatever
+/// the lane count, the lane it lands in and the thread count.
+pub fn run_batch(
     base: &Scenario,
     spec: &MonteCarloSpec,
     controllers: &[String],
-    indices: std::ops::Range<u64>,
-    master_seed: u64,
-    progress: &(dyn Fn(u64) + Sync),
-    cancel: Option<&std::sync::atomic::AtomicBool>,
-    lanes: usize,
+    options: BatchOptions<'_>,
 ) -> Result<Vec<McRun>, String> {
+    let BatchOptions { runs: indices, master_seed, lanes, progress, cancel } = options;
     for name in controllers {
         crate::registry::check_name(name)?;
     }
     if !LANE_COUNTS.contains(&lanes) {
         return Err(format!("lanes = {lanes}: expected one of {LANE_COUNTS:?}"));
     }
-    let options = RunOptions { record: false, progress: Some(progress), cancel };
+    let options = RunOptions { record: false, progress, cancel };
     let indices: Vec<u64> = indices.collect();
     let rows: Vec<Vec<McRun>> = indices
         .par_chunks(runs_per_task(indices.len(), lanes))
@@ -184,26 +172,23 @@ pub fn fly(name: &str, scenarios: &[&Scenario], lanes: usize, options: RunOption
     let one = |s: &&Scenario| crate::registry::run(name, s, options).expect("controller names checked above");
     let together = scenarios.iter().all(|s| crate::registry::lane_compatible(scenarios[0], s));
     match lanes {
-        2 if together => fly_lanes::<2>(name, scenarios, options),
         4 if together => fly_lanes::<4>(name, scenarios, options),
-        8 if together => fly_lanes::<8>(name, scenarios, options),
         _ => scenarios.iter().map(one).collect(),
     }
 }
 
 /// [`fly`] on `N` lanes: each lane flies the next run when its flight ends.
 fn fly_lanes<const N: usize>(name: &str, scenarios: &[&Scenario], options: RunOptions<'_>) -> Vec<RunOutput> {
-    use crate::run::Flight;
+    use crate::run::Flights;
     use ftsmc_core::cascade::Controller;
     use ftsmc_core::lanes::Lanes;
     let n = scenarios.len();
     if n == 0 {
         return Vec::new();
     }
-    let mut controller = crate::registry::build_lanes::<N>(name, scenarios[0]).expect("controller names checked above");
-    let first: Vec<&Scenario> = (0..N).map(|i| scenarios[i.min(n - 1)]).collect();
-    let mut flight =
-        Flight::<dyn Controller<Lanes<N>> + Send, Lanes<N>>::new_lanes(&first, controller.as_mut(), options);
+    let controller = crate::registry::build_lanes::<N>(name, scenarios[0]).expect("controller names checked above");
+    let first: Vec<std::sync::Arc<Scenario>> = (0..N).map(|i| (*scenarios[i.min(n - 1)]).clone().into()).collect();
+    let mut flight = Flights::<Box<dyn Controller<Lanes<N>> + Send>, Lanes<N>>::new_lanes(first, controller, options);
     // The run each lane flies (`None`: idle).
     let mut run_of: [Option<usize>; N] = core::array::from_fn(|i| (i < n).then_some(i));
     for (i, run) in run_of.iter().enumerate() {
@@ -224,7 +209,7 @@ fn fly_lanes<const N: usize>(name: &str, scenarios: &[&Scenario], options: RunOp
             out[run] = Some(output);
             *slot = None;
             if next < n {
-                flight.start_lane(i, scenarios[next]);
+                flight.start_lane(i, (*scenarios[next]).clone());
                 *slot = Some(next);
                 next += 1;
             }

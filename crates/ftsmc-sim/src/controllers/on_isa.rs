@@ -1,6 +1,7 @@
 //! A controller whose updates run on a chosen instruction set
-//! ([`crate::isa`]): the lane kernels of the built-in controllers compiled
-//! for AVX2 + FMA when the CPU has them, the same bits either way.
+//! ([`crate::isa::run_on`], the one dispatch): the lane kernels of the
+//! built-in controllers compiled for AVX2 + FMA when the CPU has them, the
+//! same bits either way.
 
 use ftsmc_core::cascade::{Controller, Telemetry};
 use ftsmc_core::lanes::Real;
@@ -8,7 +9,7 @@ use ftsmc_core::law::MAX_ESTIMATES;
 use ftsmc_core::measured::Measurement;
 use ftsmc_core::model::{Command, QuadState, Reference};
 
-use crate::isa::Isa;
+use crate::isa::{run_on, Isa};
 
 /// `inner` with its [`Controller::update`] and
 /// [`Controller::update_measured`] run on `isa`.
@@ -30,21 +31,21 @@ impl<R: Real, C: Controller<R>> Controller<R> for OnIsa<C> {
     }
 
     fn update(&mut self, state: &QuadState<R>, reference: &Reference<R>, dt: f64) -> Command<R> {
-        match self.isa {
-            #[cfg(target_arch = "x86_64")]
-            // SAFETY: `Isa::Avx2Fma` is only detected on a CPU with AVX2 and FMA.
-            Isa::Avx2Fma => unsafe { update_avx2(&mut self.inner, state, reference, dt) },
-            _ => self.inner.update(state, reference, dt),
-        }
+        let inner = &mut self.inner;
+        run_on(
+            self.isa,
+            #[cfg_attr(not(debug_assertions), inline(always))]
+            || inner.update(state, reference, dt),
+        )
     }
 
     fn update_measured(&mut self, measured: &Measurement<R>, reference: &Reference<R>, dt: f64) -> Command<R> {
-        match self.isa {
-            #[cfg(target_arch = "x86_64")]
-            // SAFETY: `Isa::Avx2Fma` is only detected on a CPU with AVX2 and FMA.
-            Isa::Avx2Fma => unsafe { update_measured_avx2(&mut self.inner, measured, reference, dt) },
-            _ => self.inner.update_measured(measured, reference, dt),
-        }
+        let inner = &mut self.inner;
+        run_on(
+            self.isa,
+            #[cfg_attr(not(debug_assertions), inline(always))]
+            || inner.update_measured(measured, reference, dt),
+        )
     }
 
     fn uses_body_attitude(&self) -> bool {
@@ -74,35 +75,4 @@ impl<R: Real, C: Controller<R>> Controller<R> for OnIsa<C> {
     fn actuator_feedback(&mut self, saturated: R::Mask) {
         self.inner.actuator_feedback(saturated);
     }
-}
-
-/// [`Controller::update`] compiled with AVX2 and FMA: the lane kernels mark
-/// their update `#[cfg_attr(not(debug_assertions), inline(always))]`, so its whole body is compiled here.
-///
-/// # Safety
-/// The CPU must have AVX2 and FMA.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,fma")]
-unsafe fn update_avx2<R: Real, C: Controller<R>>(
-    c: &mut C,
-    state: &QuadState<R>,
-    reference: &Reference<R>,
-    dt: f64,
-) -> Command<R> {
-    c.update(state, reference, dt)
-}
-
-/// [`Controller::update_measured`] compiled with AVX2 and FMA ([`update_avx2`]).
-///
-/// # Safety
-/// The CPU must have AVX2 and FMA.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,fma")]
-unsafe fn update_measured_avx2<R: Real, C: Controller<R>>(
-    c: &mut C,
-    measured: &Measurement<R>,
-    reference: &Reference<R>,
-    dt: f64,
-) -> Command<R> {
-    c.update_measured(measured, reference, dt)
 }

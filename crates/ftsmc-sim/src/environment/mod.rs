@@ -42,13 +42,23 @@ pub struct EnvironmentParams<'a> {
 
 /// Plant-side variations of a scenario evaluated in time: payload, inertia
 /// variation, drag noise and disturbances. The controller never sees these.
-pub struct Environment<'a> {
-    params: EnvironmentParams<'a>,
+pub struct Environment {
+    params: Sections,
     /// One noise stream per drag coefficient, read a block ahead
     /// ([`NoiseStream`]: the generator's own draws, fewer instructions each).
     drag_rngs: Option<[NoiseStream; 6]>,
     drag_factor: [f64; 6],
     grid: Option<Grid>,
+}
+
+/// The environment's sections, owned (copied from [`EnvironmentParams`]
+/// once per flight), so a flight owns what it samples.
+struct Sections {
+    plant: QuadrotorParams,
+    payload: Option<Payload>,
+    inertia_variation: Option<Signal>,
+    drag_noise: Option<DragNoise>,
+    disturbance: DisturbanceSignals,
 }
 
 /// The environment's signals prepared for the run loop's time grid
@@ -65,13 +75,20 @@ struct Grid {
     bank: Option<phasors::PhasorBank>,
 }
 
-impl<'a> Environment<'a> {
+impl Environment {
     /// Drag noise streams are derived from `params.seed`: stream `k` for
     /// coefficient `k` (K_f1x, K_f1y, K_f1z, K_f2x, K_f2y, K_f2z).
-    pub fn new(params: EnvironmentParams<'a>) -> Self {
+    pub fn new(params: EnvironmentParams<'_>) -> Self {
         let drag_rngs = params
             .drag_noise
             .map(|_| core::array::from_fn(|k| NoiseStream::new(chacha_stream(params.seed, 1 + k as u64))));
+        let params = Sections {
+            plant: params.plant,
+            payload: params.payload.copied(),
+            inertia_variation: params.inertia_variation.cloned(),
+            drag_noise: params.drag_noise,
+            disturbance: params.disturbance.clone(),
+        };
         Self { params, drag_rngs, drag_factor: [1.0; 6], grid: None }
     }
 
@@ -81,16 +98,18 @@ impl<'a> Environment<'a> {
     /// ([`crate::signal::grid`]), equal to [`Environment::time_varying`]'s
     /// to rounding.
     pub fn on_grid(mut self, step: f64) -> Self {
-        let d = self.params.disturbance;
+        let d = &self.params.disturbance;
         let g = |s: &Signal| GridSignal::new(s, step);
         let disturbance = [g(&d.x), g(&d.y), g(&d.z), g(&d.phi), g(&d.theta), g(&d.psi)];
-        let inertia_variation = self.params.inertia_variation.map(g);
+        let inertia_variation = self.params.inertia_variation.as_ref().map(g);
         let mut windows = disturbance.iter().chain(&inertia_variation).map(GridSignal::window);
         let first = windows.next().flatten();
         let same = |w: Option<[f64; 2]>| w.map(|w| w.map(f64::to_bits)) == first.map(|w| w.map(f64::to_bits));
         let shared_window = windows.all(same).then_some(first);
-        let signals: Vec<&Signal> =
-            [&d.x, &d.y, &d.z, &d.phi, &d.theta, &d.psi].into_iter().chain(self.params.inertia_variation).collect();
+        let signals: Vec<&Signal> = [&d.x, &d.y, &d.z, &d.phi, &d.theta, &d.psi]
+            .into_iter()
+            .chain(self.params.inertia_variation.as_ref())
+            .collect();
         let bank = phasors::PhasorBank::new(&signals, step);
         self.grid = Some(Grid { disturbance, inertia_variation, shared_window, bank });
         self

@@ -154,12 +154,12 @@ impl PhasorBank {
         let n = (m % BLOCK) as usize;
         let count = self.groups.len();
         let rows = &self.table[n * count..(n + 1) * count];
-        match self.isa {
-            #[cfg(target_arch = "x86_64")]
-            // SAFETY: `Isa::Avx2Fma` is only detected on a CPU with AVX2 and FMA.
-            crate::isa::Isa::Avx2Fma => unsafe { terms_avx2(&self.groups, rows, t, &mut self.values) },
-            _ => terms(&self.groups, rows, t, &mut self.values),
-        }
+        let (groups, values) = (&self.groups, &mut self.values);
+        crate::isa::run_on(
+            self.isa,
+            #[cfg_attr(not(debug_assertions), inline(always))]
+            || terms(groups, rows, t, values),
+        );
         for ((start, range), o) in self.signals.iter().zip(out.iter_mut()) {
             let mut sum = *start;
             for v in &self.values[range.clone()] {
@@ -183,17 +183,6 @@ fn terms(groups: &[Group], rows: &[Row], t: f64, values: &mut [f64]) {
             out[k] = term_value(g.amplitude[k], g.omega[k], g.phase[k], g.anchor[k], rotation, row, t);
         }
     }
-}
-
-/// [`terms`] compiled with AVX2 and FMA enabled (no operation is fused:
-/// the same bits).
-///
-/// # Safety
-/// The CPU must have AVX2 and FMA.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,fma")]
-unsafe fn terms_avx2(groups: &[Group], rows: &[Row], t: f64, values: &mut [f64]) {
-    terms(groups, rows, t, values);
 }
 
 #[cfg(test)]

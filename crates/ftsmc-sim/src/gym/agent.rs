@@ -33,7 +33,7 @@ impl ActionScale {
         let limit = Some(actuators.max_rotor_speed)
             .filter(|w| w.is_finite())
             .or(scenario.simulation.max_rotor_speed.filter(|w| w.is_finite()));
-        let truth = scenario.true_plant();
+        let truth = scenario.true_vehicle();
         let (mass, gravity) = match scenario.vehicle.model {
             crate::vehicle::VehicleModel::Paper => (truth.mass, truth.gravity),
             crate::vehicle::VehicleModel::RigidBody => {

@@ -5,7 +5,7 @@
 
 use rayon::prelude::*;
 
-use super::lane::{Lane, LaneStep, Pose};
+use super::lane::{Env, EnvStep, Pose};
 use super::{GymSpec, ACTION_LEN, OBSERVATION_LEN};
 
 /// Lanes from this many on are stepped on rayon's pool (each lane is
@@ -48,13 +48,13 @@ impl StepResult {
 /// N environments of one [`GymSpec`].
 pub struct Batch {
     spec: GymSpec,
-    lanes: Vec<Lane>,
+    lanes: Vec<Env>,
     done: Vec<bool>,
 }
 
 struct Out {
     observation: [f64; OBSERVATION_LEN],
-    step: LaneStep,
+    step: EnvStep,
     time: f64,
     reset: bool,
 }
@@ -62,7 +62,7 @@ struct Out {
 impl Batch {
     /// `seeds.len()` lanes, lane `i` starting an episode seeded `seeds[i]`.
     pub fn new(spec: GymSpec, seeds: &[u64]) -> Self {
-        let lanes = seeds.iter().map(|&s| Lane::new(&spec, s)).collect();
+        let lanes = seeds.iter().map(|&s| Env::new(&spec, s)).collect();
         Self { done: vec![false; seeds.len()], spec, lanes }
     }
 
@@ -98,7 +98,7 @@ impl Batch {
 
     fn each<F>(&mut self, f: F) -> Vec<Out>
     where
-        F: Fn(usize, &GymSpec, &mut Lane, bool) -> Out + Sync,
+        F: Fn(usize, &GymSpec, &mut Env, bool) -> Out + Sync,
     {
         let spec = &self.spec;
         let done = &self.done;
@@ -128,7 +128,7 @@ impl Batch {
     pub fn reset(&mut self, seeds: &[u64], into: &mut StepResult) {
         assert_eq!(seeds.len(), self.lanes.len(), "one seed per lane");
         let outs = self.each(|i, spec, lane, _| {
-            *lane = Lane::new(spec, seeds[i]);
+            *lane = Env::new(spec, seeds[i]);
             Out { observation: lane.observe(), step: idle(), time: 0.0, reset: true }
         });
         self.write(outs, into);
@@ -142,7 +142,7 @@ impl Batch {
         assert_eq!(reset_seeds.len(), self.lanes.len(), "one reset seed per lane");
         let outs = self.each(|i, spec, lane, done| {
             if done {
-                *lane = Lane::new(spec, reset_seeds[i]);
+                *lane = Env::new(spec, reset_seeds[i]);
                 return Out { observation: lane.observe(), step: idle(), time: 0.0, reset: true };
             }
             let mut a = [0.0; ACTION_LEN];
@@ -154,6 +154,6 @@ impl Batch {
     }
 }
 
-fn idle() -> LaneStep {
-    LaneStep { reward: 0.0, terminated: false, truncated: false, reason: None }
+fn idle() -> EnvStep {
+    EnvStep { reward: 0.0, terminated: false, truncated: false, reason: None }
 }

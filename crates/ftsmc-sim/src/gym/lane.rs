@@ -4,65 +4,14 @@
 use ftsmc_core::model::{QuadState, Reference};
 
 use crate::run::{ExitStatus, Flight, RunOptions, StepOutcome};
-use crate::scenario::Scenario;
 use crate::vehicle::rigid_body::euler_rates_to_body_rates;
 
 use super::agent::Agent;
 use super::{GymSpec, Observe, ACTION_LEN, OBSERVATION_LEN};
 
-/// A flight together with the scenario and agent it borrows.
-///
-/// `Flight<'s, C>` borrows its scenario and controller for `'s`; a lane
-/// must hold all three (a Python object outlives any borrow), so the two
-/// are boxed, leaked into raw pointers, lent to the flight as `'static`,
-/// and reclaimed in `Drop` after the flight is gone. Sound because:
-/// the boxes never move or change while the flight lives (the scenario is
-/// only read; the agent is only reached through the flight,
-/// [`Flight::controller_mut`]); the flight is dropped first; and nothing
-/// else ever sees the `'static` references.
-struct OwnedFlight {
-    flight: Option<Flight<'static, Agent>>,
-    scenario: *mut Scenario,
-    agent: *mut Agent,
-}
-
-// SAFETY: the flight holds no observers (`observe_with` is never called on
-// it), so everything it owns or borrows is `Send` (the scenario and the
-// agent are plain data, its truth model is `Send`); the raw pointers are
-// uniquely owned by this struct.
-unsafe impl Send for OwnedFlight {}
-
-impl OwnedFlight {
-    fn new(scenario: Scenario, agent: Agent) -> Self {
-        let scenario = Box::into_raw(Box::new(scenario));
-        let agent = Box::into_raw(Box::new(agent));
-        // SAFETY: both pointers come from `Box::into_raw` just above and
-        // stay valid until `drop`, which drops the flight first.
-        let (s, a): (&'static Scenario, &'static mut Agent) = unsafe { (&*scenario, &mut *agent) };
-        let flight = Flight::new(s, a, RunOptions { record: false, ..RunOptions::default() });
-        Self { flight: Some(flight), scenario, agent }
-    }
-
-    fn flight(&mut self) -> &mut Flight<'static, Agent> {
-        self.flight.as_mut().expect("the flight lives as long as its owner")
-    }
-}
-
-impl Drop for OwnedFlight {
-    fn drop(&mut self) {
-        self.flight = None;
-        // SAFETY: the flight, the only borrower, is gone; the pointers came
-        // from `Box::into_raw` and are reclaimed exactly once.
-        unsafe {
-            drop(Box::from_raw(self.agent));
-            drop(Box::from_raw(self.scenario));
-        }
-    }
-}
-
 /// What one environment step gave.
 #[derive(Clone, Debug, PartialEq)]
-pub struct LaneStep {
+pub struct EnvStep {
     /// Reward of the step.
     pub reward: f64,
     /// The episode ended by a crash or divergence.
@@ -73,7 +22,7 @@ pub struct LaneStep {
     pub reason: Option<String>,
 }
 
-/// The true pose of an environment's vehicle ([`Lane::pose`]).
+/// The true pose of an environment's vehicle ([`Env::pose`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Pose {
     /// Position, m (world frame, z up).
@@ -85,8 +34,9 @@ pub struct Pose {
 }
 
 /// One environment: its current episode.
-pub struct Lane {
-    flight: OwnedFlight,
+pub struct Env {
+    /// The episode's flight; it owns its scenario and the agent.
+    flight: Flight<'static, Agent>,
     observe: Observe,
     periods: u64,
     /// Control period, s.
@@ -130,13 +80,13 @@ pub fn observation(state: &QuadState, reference: &Reference) -> [f64; OBSERVATIO
     o
 }
 
-impl Lane {
+impl Env {
     /// A new episode of `spec` seeded `seed`.
     pub fn new(spec: &GymSpec, seed: u64) -> Self {
         let scenario = spec.episode_scenario(seed);
         let agent = Agent::new(&scenario, spec.action, spec.rate_loop);
         let dt = scenario.control_period();
-        let flight = OwnedFlight::new(scenario, agent);
+        let flight = Flight::new(scenario, agent, RunOptions { record: false, ..RunOptions::default() });
         Self { flight, observe: spec.observe, periods: spec.periods_per_step, dt, seed }
     }
 
@@ -146,9 +96,9 @@ impl Lane {
     }
 
     /// Time flown in this episode, s.
-    pub fn time(&mut self) -> f64 {
+    pub fn time(&self) -> f64 {
         let dt = self.dt;
-        self.flight.flight().steps_flown() as f64 * dt
+        self.flight.steps_flown() as f64 * dt
     }
 
     /// The observation now (the measurement the next control tick gets,
@@ -156,7 +106,7 @@ impl Lane {
     /// after a divergence ended the episode) reads 0.
     pub fn observe(&mut self) -> [f64; OBSERVATION_LEN] {
         let observe = self.observe;
-        let f = self.flight.flight();
+        let f = &mut self.flight;
         let state = match observe {
             Observe::Sensors => f.measurement(),
             Observe::Truth => *f.truth_state(),
@@ -167,16 +117,16 @@ impl Lane {
     /// The true pose now, for drawing: position (m, world frame z up),
     /// Z-Y-X Euler angles (φ, θ, ψ, rad) and the reference position (m).
     pub fn pose(&mut self) -> Pose {
-        let f = self.flight.flight();
+        let f = &self.flight;
         let truth = *f.truth_state();
         Pose { position: truth.position, attitude: truth.attitude, reference: f.reference().position }
     }
 
     /// Fly one environment step with `action` held; the reward is scored
     /// with `spec`'s weights on the truth at the end of the step.
-    pub fn step(&mut self, spec: &GymSpec, action: [f64; ACTION_LEN]) -> LaneStep {
+    pub fn step(&mut self, spec: &GymSpec, action: [f64; ACTION_LEN]) -> EnvStep {
         let periods = self.periods;
-        let f = self.flight.flight();
+        let f = &mut self.flight;
         f.controller_mut().set_action(action);
         let applied = f.controller_mut().action();
         let mut outcome = StepOutcome::Flying;
@@ -213,6 +163,6 @@ impl Lane {
             // A non-finite truth ends the flight (divergence): keep the reward finite.
             reward = -w.crash;
         }
-        LaneStep { reward, terminated, truncated, reason }
+        EnvStep { reward, terminated, truncated, reason }
     }
 }

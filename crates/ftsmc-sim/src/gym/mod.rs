@@ -52,7 +52,7 @@ mod batch;
 mod lane;
 
 pub use batch::{Batch, StepResult};
-pub use lane::{observation, Lane, LaneStep, Pose};
+pub use lane::{observation, Env, EnvStep, Pose};
 
 use crate::scenario::Scenario;
 use crate::signal::Signal;

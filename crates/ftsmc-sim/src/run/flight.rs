@@ -2,35 +2,44 @@
 //! builds one and steps it to the end; anything that needs to drive a
 //! flight tick by tick (an external agent, a batch of lanes) uses it directly.
 //!
-//! # One control tick ([`Flight::step`])
+//! # One control tick ([`Flight::step`]): a short pipeline
 //!
-//! 1. **Sensors**: the controller is given the measurement of the truth's
-//!    Euler state (`[sensors]`; the truth itself with perfect sensors).
+//! ```text
+//! measure each lane → controller.update (on R) → actuate and observe each lane
+//!   → substeps: each lane begins, truth.substep (on R), each lane ends → boundary
+//! ```
+//!
+//! 1. **Measure** ([`LaneFlight::measure`]): the sensors' reading of the truth
+//!    (`[sensors]`; the truth itself with perfect sensors).
 //! 2. **Controller** on its own clock: one update per control period
 //!    `dt = 1 / simulation.control_rate`, its command held over the period.
-//! 3. **Environment**: the period's drag noise; the true plant of the tick.
-//! 4. **Actuator stage** ([`super::actuation`]): ideal, per-rotor clamp, or
-//!    mixer + lagged noisy motors; its saturation flag goes back to the
+//! 3. **Actuate** ([`LaneFlight::actuate`]): the period's drag noise, then the
+//!    actuator stage ([`super::actuation`]: ideal, per-rotor clamp, or
+//!    mixer + lagged noisy motors); its saturation flag goes back to the
 //!    controller (`actuator_feedback`).
-//! 5. **Observers** ([`super::observer`]) see the whole tick: metrics,
-//!    recording, flight statistics (and the envelope at the period boundaries).
-//! 6. **Truth model** integrated over the period by `simulation.substeps`
-//!    RK4 substeps (`run/truth.rs`), with the wind sampled once per
-//!    substep and the ground checked after each.
-//! 7. The next reference; divergence checks.
+//! 4. **Observe** ([`LaneFlight::observe`]): the flight's one observer list
+//!    (metrics, recorder, statistics, envelope, the user's observers) sees
+//!    the whole tick ([`Tick`]).
+//! 5. **Substeps**: the truth model integrates the period by
+//!    `simulation.substeps` RK4 substeps (`run/truth.rs`); before each,
+//!    every lane samples its wind and plant variation
+//!    ([`LaneFlight::begin_substep`]), after each it checks the ground and moves
+//!    its motors on ([`LaneFlight::end_substep`]).
+//! 6. **Boundary**: the next reference, the observers, the divergence checks.
 //!
 //! # Lanes
 //!
 //! A flight's numbers may be `f64` (one flight, [`Flight::new`]) or lanes
-//! of `N` flights side by side ([`Flight::new_lanes`], `R = Lanes<N>`,
-//! [`ftsmc_core::lanes`]). The controller and the truth model compute on
-//! the lanes at once; what is cheap or random (sensors, environment,
-//! actuator stage, wind, observers) runs flight by flight on the same
-//! one-flight code. Each lane is an independent flight with its own
-//! scenario, clock and exit: lane `i` has exactly the bits the same flight
-//! has alone, whatever `N` and whatever lane it lands in, and a batch
-//! starts the next flight in a lane whose flight ended
-//! ([`Flight::start_lane`]).
+//! of `N` flights side by side ([`Flights::new_lanes`], `R = Lanes<N>`,
+//! [`ftsmc_core::lanes`]). Only the controller's update and the truth's
+//! substep compute on the lanes; every other stage is a method of
+//! [`LaneFlight`], one flight's code whatever `N`, fed lane `i`'s numbers. Each
+//! lane is an independent flight with its own scenario, clock, observers
+//! and exit: lane `i` has exactly the bits the same flight has alone,
+//! whatever `N` and whatever lane it lands in, and a batch starts the next
+//! flight in a lane whose flight ended ([`Flights::start_lane`]).
+
+use std::sync::Arc;
 
 use ftsmc_core::allocation::{residual_speed, rotor_speeds};
 use ftsmc_core::cascade::{Controller, Telemetry};
@@ -100,10 +109,57 @@ fn reports_rotor_metrics(scenario: &Scenario) -> bool {
         || scenario.wind.is_some()
 }
 
-/// Everything of one flight that is not in lanes: its scenario, clock,
-/// environment, sensors, actuator stage, wind, observers and exit.
-struct Lane<'s> {
-    scenario: &'s Scenario,
+/// Every observer of one flight, in the order they see a tick: the
+/// metrics, the recorder (recording only when the run asks for it,
+/// [`RunOptions::record`]), the statistics, the envelope (at the period
+/// boundaries) and the user's observers ([`Flight::observe_with`]).
+struct Observers<'o> {
+    metrics: MetricsAccumulator,
+    recorder: Recorder,
+    stats: FlightStats,
+    envelope: Tracker,
+    /// The robustness margin to the envelope ([`crate::margin`]).
+    margin: crate::margin::MarginTracker,
+    user: Vec<&'o mut (dyn Observer + Send)>,
+}
+
+impl Observers<'_> {
+    /// Some observer reads [`Tick::telemetry`] at tick `k`
+    /// ([`Observer::reads_telemetry`]): only then is the lane's telemetry
+    /// gathered from the controller's lanes.
+    #[cfg_attr(not(debug_assertions), inline(always))]
+    fn read_telemetry(&self, k: u64) -> bool {
+        self.recorder.reads_telemetry(k) || self.user.iter().any(|o| o.reads_telemetry(k))
+    }
+
+    /// Every observer sees `tick`.
+    #[cfg_attr(not(debug_assertions), inline(always))]
+    fn tick(&mut self, tick: &Tick<'_>) {
+        self.metrics.tick(tick);
+        self.recorder.tick(tick);
+        self.stats.tick(tick);
+        for o in &mut self.user {
+            o.tick(tick);
+        }
+    }
+
+    /// Every observer sees the truth at the period boundary `t` (s).
+    #[cfg_attr(not(debug_assertions), inline(always))]
+    fn boundary(&mut self, t: f64, truth: &QuadState, reference: &Reference) {
+        self.envelope.boundary(t, truth, reference);
+        self.margin.update(t, &truth.position, &reference.position, &truth.attitude);
+        self.stats.boundary(t, truth, reference);
+        for o in &mut self.user {
+            o.boundary(t, truth, reference);
+        }
+    }
+}
+
+/// One flight of a [`Flight`] (one lane): its scenario, clock,
+/// environment, sensors, actuator stage, wind, observers and exit, and the
+/// stages of a tick that run flight by flight ([`Flight::step`]).
+struct LaneFlight<'o> {
+    scenario: Arc<Scenario>,
     dt: f64,
     h: f64,
     substeps: u32,
@@ -111,20 +167,31 @@ struct Lane<'s> {
     k: u64,
     /// The time of the period boundary `k`, `k as f64 · dt` (s), converted
     /// once per period (every reader takes these bits); set with `k` by
-    /// [`Lane::set_step`].
+    /// [`LaneFlight::set_step`].
     t: f64,
-    env: Environment<'s>,
+    env: Environment,
     actuators: ActuatorStage,
     demand_params: QuadrotorParams,
     base_plant: QuadrotorParams,
     sensors: Option<Sensors>,
+    /// The measurement of the coming tick, when it was taken ahead of the
+    /// step ([`Flight::measurement`]).
+    measured_ahead: Option<Measurement>,
+    /// The truth's Euler state at the lane's period boundary (its copy of
+    /// lane `i` of [`Flights`]'s boundary state).
+    state: QuadState,
+    /// What the controller was given this tick ([`LaneFlight::measure`]).
+    measured: QuadState,
+    /// The controller's telemetry of this lane, gathered from the lanes at
+    /// the ticks some observer reads it ([`Observers::read_telemetry`]).
+    telemetry: Telemetry,
     wind: Option<Wind>,
     ground: Option<GroundSettings>,
     /// The flight's ground-contact history (take-off, time on the ground).
     contact: GroundContact,
     tv_now: TimeVarying,
-    /// The next substep boundary's plant variation, wind and height (set
-    /// before the truth integrates the lanes).
+    /// The next substep boundary's plant variation (set before the truth
+    /// integrates the lanes).
     tv_next: TimeVarying,
     wind_now: Option<[f64; 3]>,
     /// Position at the start of the substep (ground contact only).
@@ -133,22 +200,19 @@ struct Lane<'s> {
     /// The reference at the lane's current period boundary (the lane's copy
     /// of [`Flight`]'s reference, read by the observers and the checks).
     reference: Reference,
-    metrics: MetricsAccumulator,
-    recorder: Recorder,
-    envelope: Tracker,
-    margin: crate::margin::MarginTracker,
-    stats: FlightStats,
-    legacy_rotor_metrics: bool,
+    observers: Observers<'o>,
+    /// The scenario reports the two rotor metrics of
+    /// [`crate::metrics::Metrics`] ([`reports_rotor_metrics`]).
+    rotor_metrics: bool,
     /// The last delivered period was not observed (the flight ended at its
-    /// tick): the two rotor metrics of [`crate::metrics::Metrics`] count it,
-    /// the statistics do not.
-    unobserved_period: bool,
-    /// This period's delivery (the truth reads its drive during the substeps),
-    /// its unlimited rotor-speed demand and the true plant of the period
-    /// (formed only where it is read: one flight's observers, or an actuator
-    /// stage that reads it, [`ActuatorStage::reads_plant`]).
+    /// tick): its saturation and demand, which the rotor metrics count.
+    unobserved: Option<(bool, [f64; 4])>,
+    /// This period's delivery (the truth reads its drive during the
+    /// substeps) and its unlimited rotor-speed demand.
     delivered: Delivered,
     demand: [f64; 4],
+    /// The true plant of the period (formed only for an actuator stage that
+    /// reads it, [`ActuatorStage::reads_plant`]).
     plant_now: QuadrotorParams,
     omega_bar: f64,
     /// The lane completed a period at this step (its boundary is observed).
@@ -156,10 +220,11 @@ struct Lane<'s> {
     exit: Option<ExitStatus>,
 }
 
-impl<'s> Lane<'s> {
+impl<'o> LaneFlight<'o> {
     /// The flight of `scenario` at `t = 0` (its actuator stage built from
     /// the truth model's allocation) and its reference at `t = 0`.
-    fn new(scenario: &'s Scenario, recorder: Recorder) -> (Self, Reference) {
+    fn new(owned: Arc<Scenario>, recorder: Recorder) -> (Self, Reference) {
+        let scenario = &*owned;
         let sim = &scenario.simulation;
         let dt = scenario.control_period();
         let steps = super::planned_steps(scenario);
@@ -182,8 +247,19 @@ impl<'s> Lane<'s> {
         let tv_now = env.time_varying_on_grid(0, 0.0);
         let mut reference_grid = ReferenceGrid::new(scenario, dt);
         let reference = reference_grid.at(0, 0.0);
+        let base_plant = scenario.true_vehicle();
+        let observers = Observers {
+            metrics,
+            recorder,
+            stats: FlightStats::default(),
+            envelope: Tracker::new(scenario.envelope),
+            margin: crate::margin::MarginTracker::new(
+                scenario.envelope,
+                scenario.ground.filter(|g| g.enabled).map(|g| g.height),
+            ),
+            user: Vec::new(),
+        };
         let lane = Self {
-            scenario,
             dt,
             h,
             substeps: sim.substeps,
@@ -193,8 +269,12 @@ impl<'s> Lane<'s> {
             env,
             actuators,
             demand_params,
-            base_plant: scenario.true_plant(),
+            base_plant,
             sensors,
+            measured_ahead: None,
+            state: QuadState::default(),
+            measured: QuadState::default(),
+            telemetry: Telemetry::default(),
             wind,
             ground: scenario.ground.filter(|g| g.enabled),
             contact: GroundContact::default(),
@@ -204,22 +284,16 @@ impl<'s> Lane<'s> {
             p_prev: [0.0; 3],
             reference_grid,
             reference,
-            metrics,
-            recorder,
-            envelope: Tracker::new(scenario.envelope),
-            margin: crate::margin::MarginTracker::new(
-                scenario.envelope,
-                scenario.ground.filter(|g| g.enabled).map(|g| g.height),
-            ),
-            stats: FlightStats::default(),
-            legacy_rotor_metrics: reports_rotor_metrics(scenario),
-            unobserved_period: false,
+            observers,
+            rotor_metrics: reports_rotor_metrics(scenario),
+            unobserved: None,
             delivered: Delivered::none(),
             demand: [0.0; 4],
-            plant_now: scenario.true_plant(),
+            plant_now: base_plant,
             omega_bar: 0.0,
             at_boundary: false,
             exit: None,
+            scenario: owned,
         };
         (lane, reference)
     }
@@ -236,6 +310,114 @@ impl<'s> Lane<'s> {
         self.t = k as f64 * self.dt;
     }
 
+    /// Stage 1: the sensors' reading of the truth at the lane's boundary
+    /// (its Euler state and, for a full-state controller, `body`; the
+    /// truth itself with perfect sensors, or once the flight is over), or
+    /// the reading taken ahead ([`Flight::measurement`]).
+    #[cfg_attr(not(debug_assertions), inline(always))]
+    fn measure(&mut self, body: Option<BodyAttitude>) -> Measurement {
+        let m = match self.measured_ahead.take() {
+            Some(ahead) => ahead,
+            None => {
+                let truth = Measurement { euler: self.state, body };
+                match self.sensors.as_mut() {
+                    Some(s) if self.exit.is_none() => s.measure_full(&truth),
+                    _ => truth,
+                }
+            }
+        };
+        self.measured = m.euler;
+        m
+    }
+
+    /// Stage 3: the period's drag noise, then the actuator stage delivers
+    /// `command`; true when it saturated.
+    #[cfg_attr(not(debug_assertions), inline(always))]
+    fn actuate(&mut self, command: &Command) -> bool {
+        self.env.next_period();
+        if self.actuators.reads_plant() {
+            // Computed in place (no copies of the plant and the delivery).
+            self.plant_now = self.env.params_with(&self.tv_now);
+        }
+        self.actuators.deliver_into(command, &self.plant_now, &mut self.delivered);
+        let delivered = &self.delivered;
+        self.demand = delivered.demand.unwrap_or_else(|| rotor_speeds(&self.demand_params, command, f64::INFINITY));
+        delivered.saturated
+    }
+
+    /// Stage 4: the observers see the tick (lane `i` of the controller's
+    /// `telemetry`, gathered only when an observer reads it), unless the
+    /// truth could not begin the period (`begun`) or the applied command is
+    /// not finite: then the flight diverged at this tick.
+    #[cfg_attr(not(debug_assertions), inline(always))]
+    fn observe<R: Real>(
+        &mut self,
+        begun: Result<(), Divergence>,
+        command: &Command,
+        telemetry: &Telemetry<R>,
+        i: usize,
+    ) {
+        let t = self.t;
+        let delivered = &self.delivered;
+        let applied = delivered.applied;
+        let u = [applied.thrust, applied.torque[0], applied.torque[1], applied.torque[2]];
+        let divergence = match begun {
+            Err(divergence) => Some(divergence),
+            Ok(()) if !u.iter().all(|v| v.is_finite()) => Some(Divergence::NonFinite),
+            Ok(()) => None,
+        };
+        if let Some(divergence) = divergence {
+            self.exit = Some(ExitStatus::Diverged { divergence, time: t });
+            self.unobserved = Some((delivered.saturated, self.demand));
+            return;
+        }
+        if self.observers.read_telemetry(self.k) {
+            self.telemetry = telemetry.get_lane(i);
+        }
+        let attitude_reference =
+            [telemetry.attitude_reference[0].get_lane(i), telemetry.attitude_reference[1].get_lane(i)];
+        let x = self.state.to_array();
+        let reference = &self.reference;
+        let tick = Tick {
+            k: self.k,
+            t,
+            state: x,
+            measured: &self.measured,
+            reference,
+            telemetry: &self.telemetry,
+            errors: tracking_errors(&x, reference, attitude_reference),
+            command,
+            applied: u,
+            omega: delivered.omega,
+            omega_bar: residual_speed(&delivered.omega),
+            demand: self.demand,
+            saturated: delivered.saturated,
+            nominal_mass: self.scenario.plant.mass,
+            // The true plant's mass and inertia of the period (`params_with` copies them).
+            mass: self.tv_now.mass,
+            inertia: self.tv_now.inertia,
+            disturbance: self.tv_now.disturbance,
+        };
+        self.observers.tick(&tick);
+        self.omega_bar = residual_speed(&delivered.target);
+    }
+
+    /// Stage 5a: before substep `j`, the wind held over it, the plant
+    /// variation at its end and (for the ground contact) the position at its
+    /// start, lane `i` of `truth`.
+    #[cfg_attr(not(debug_assertions), inline(always))]
+    fn begin_substep<R: Real>(&mut self, i: usize, j: u32, truth: &dyn TruthModel<R>) {
+        if self.flying() {
+            let t0 = self.t + j as f64 * self.h;
+            self.wind_now = self.wind.as_mut().map(|w| w.step(t0));
+            let m = self.k * u64::from(self.substeps) + u64::from(j) + 1;
+            self.tv_next = self.env.time_varying_on_grid(m, t0 + self.h);
+        }
+        if self.ground.is_some() {
+            self.p_prev = truth.translation(i).0;
+        }
+    }
+
     /// Substep `j` of the current period as the truth model takes it.
     #[inline]
     fn substep(&self, j: u32) -> Substep<'_> {
@@ -250,12 +432,64 @@ impl<'s> Lane<'s> {
         }
     }
 
-    /// The sensor stage's reading of `truth` (the truth itself with perfect sensors).
-    #[inline]
-    fn measure(&mut self, truth: &Measurement) -> Measurement {
-        match self.sensors.as_mut() {
-            Some(s) => s.measure_full(truth),
-            None => *truth,
+    /// Stage 5b: after substep `j`, the ground contact of lane `i` of
+    /// `truth` (a crash ends the flight), the motors' lag, the plant
+    /// variation moved on.
+    #[cfg_attr(not(debug_assertions), inline(always))]
+    fn end_substep<R: Real>(&mut self, i: usize, j: u32, truth: &mut dyn TruthModel<R>) {
+        if !self.flying() {
+            return;
+        }
+        if let Some(g) = &self.ground {
+            let (mut p, mut v) = truth.translation(i);
+            let t0 = self.t + j as f64 * self.h;
+            let contact = g.contact(&mut self.contact, t0 + self.h, &self.p_prev, &mut p, &mut v);
+            truth.set_translation(i, &p, &v);
+            if let Some(contact) = contact {
+                self.set_step(self.k + 1);
+                self.exit = Some(match contact {
+                    Contact::Crashed { fraction, impact_speed } => {
+                        ExitStatus::Crashed { time: t0 + fraction * self.h, impact_speed }
+                    }
+                    Contact::Grounded { since } => ExitStatus::Grounded { time: t0 + self.h, since },
+                });
+                return;
+            }
+        }
+        self.actuators.advance(&self.delivered.target);
+        self.tv_now = self.tv_next;
+    }
+
+    /// Stage 6: the flight reaches its next period boundary; false when it
+    /// is over (before, or now: interrupted).
+    #[cfg_attr(not(debug_assertions), inline(always))]
+    fn next_boundary(&mut self, options: &RunOptions<'_>) -> bool {
+        self.at_boundary = false;
+        if !self.flying() {
+            return false;
+        }
+        self.set_step(self.k + 1);
+        if options.step_done(self.k) {
+            self.exit = Some(ExitStatus::Interrupted { time: self.t });
+            return false;
+        }
+        true
+    }
+
+    /// The observers (and, with `check`, the divergence checks, skipped
+    /// when `sound`: [`Flights::sound_lanes`], and the planned end) see the
+    /// truth `s` at the lane's period boundary.
+    fn boundary(&mut self, s: &QuadState, check: bool, sound: bool) {
+        self.state = *s;
+        let (t, r) = (self.t, &self.reference);
+        self.observers.boundary(t, s, r);
+        if check {
+            let divergence = if sound { None } else { check_divergence(&self.scenario, s, r) };
+            if let Some(divergence) = divergence {
+                self.exit = Some(ExitStatus::Diverged { divergence, time: t });
+            } else if self.k >= self.steps {
+                self.exit = Some(ExitStatus::Completed);
+            }
         }
     }
 
@@ -264,58 +498,29 @@ impl<'s> Lane<'s> {
     fn output(self, controller: &str, options: &RunOptions<'_>) -> RunOutput {
         let mut exit = self.exit.unwrap_or(ExitStatus::Completed);
         options.flight_done(self.steps, self.k);
-        let mut metrics = self.metrics.finish();
+        let Observers { metrics, recorder, stats, envelope, margin, .. } = self.observers;
+        let mut metrics = metrics.finish();
         // A completed flight's metrics are finite: one that overflowed
         // (an error of 1e160 m squared and integrated) is not completed.
         if exit.is_completed() && metrics.first_non_finite().is_some() {
             exit = ExitStatus::Diverged { divergence: Divergence::NonFiniteMetric, time: metrics.duration };
         }
-        if self.legacy_rotor_metrics {
-            // Every delivered period: the observed ones (the statistics'
-            // running maximum and count, the same operations in the same
-            // order), then the one the flight ended at, if unobserved.
-            let (mut peak_demand, mut saturated_periods) =
-                (self.stats.peak_rotor_speed_demand, self.stats.saturated_periods);
-            if self.unobserved_period {
-                peak_demand = self.demand.iter().fold(peak_demand, |m, &w| if w.is_finite() { m.max(w) } else { m });
-                saturated_periods += u64::from(self.delivered.saturated);
-            }
-            metrics.peak_rotor_speed_demand = Some(peak_demand);
-            metrics.saturation_fraction = Some(if self.k > 0 { saturated_periods as f64 / self.k as f64 } else { 0.0 });
+        if self.rotor_metrics {
+            let (peak, fraction) = stats.rotor_metrics(self.k, self.unobserved);
+            metrics.peak_rotor_speed_demand = Some(peak);
+            metrics.saturation_fraction = Some(fraction);
         }
         RunOutput {
             controller: controller.to_string(),
             scenario: self.scenario.name.clone(),
-            envelope: self.envelope.verdict((!exit.is_completed()).then(|| exit.to_string())),
-            margin: self.margin.finish(exit.margin_end(), self.scenario.duration),
+            envelope: envelope.verdict((!exit.is_completed()).then(|| exit.to_string())),
+            margin: margin.finish(exit.margin_end(), self.scenario.duration),
             exit,
             metrics,
-            recording: self.recorder.recording,
+            recording: recorder.recording,
             steps: self.k,
-            stats: self.stats,
+            stats,
         }
-    }
-}
-
-/// An emptied vector of substeps with another lifetime, its allocation
-/// kept (the in-place collect of an empty vector of a type of the same
-/// layout reuses the buffer).
-fn recycle<'a, 'b>(mut v: Vec<Substep<'a>>) -> Vec<Substep<'b>> {
-    v.clear();
-    v.into_iter().map(|_| unreachable!("emptied")).collect()
-}
-
-/// Lane `i` of `x` as its one-flight form: `x` itself when it is already
-/// one flight (`R = f64`: no copy), else lane `i` copied into `slot`.
-#[cfg_attr(not(debug_assertions), inline(always))]
-fn lane_ref<'a, T>(x: &'a T, i: usize, slot: &'a mut Option<T::Scalar>) -> &'a T::Scalar
-where
-    T: Lanewise + 'static,
-    T::Scalar: 'static,
-{
-    match (x as &dyn core::any::Any).downcast_ref::<T::Scalar>() {
-        Some(one) => one,
-        None => slot.insert(x.get_lane(i)),
     }
 }
 
@@ -329,11 +534,23 @@ fn refusal(scenario: &Scenario, why: LaneStart) -> Divergence {
     }
 }
 
-/// One flight of a controller through a scenario (or, with lanes, `N`
-/// flights side by side), advanced one control period at a time.
-pub struct Flight<'s, C: Controller<R> + ?Sized, R: Real = f64> {
-    controller: &'s mut C,
-    options: RunOptions<'s>,
+/// Most flights a [`Flights`] flies side by side (`Lanes<4>`, the widest
+/// lane count a batch flies, `batch::montecarlo::LANE_COUNTS`).
+const MAX_LANES: usize = 4;
+
+/// One flight of a controller through a scenario: [`Flights`] of one
+/// `f64` lane. [`Flight::new`] builds it; it steps, reads and finishes one
+/// flight.
+pub type Flight<'o, C> = Flights<'o, C, f64>;
+
+/// `R::LANES` flights of one controller side by side (`R = Lanes<N>`;
+/// [`Flight`] for one), advanced one control period at a time. The
+/// flights own their scenarios and the controller (`C` may itself be a
+/// `&mut` or a `Box` of a controller); `'o` is the lifetime of the
+/// progress callback, the cancellation flag and the user's observers.
+pub struct Flights<'o, C: Controller<R>, R: Real> {
+    controller: C,
+    options: RunOptions<'o>,
     truth: Box<dyn TruthModel<R> + Send>,
     /// The truth's Euler state at the current period boundary (converted once per period).
     state: QuadState<R>,
@@ -342,23 +559,14 @@ pub struct Flight<'s, C: Controller<R> + ?Sized, R: Real = f64> {
     /// The controller flies [`Measurement::body`] (`Controller::uses_body_attitude`).
     wants_body: bool,
     reference: Reference<R>,
-    lanes: Vec<Lane<'s>>,
-    observers: Vec<&'s mut dyn Observer>,
-    /// The measurement of the coming tick when it was taken ahead of
-    /// [`Flight::step`] by [`Flight::measurement`] (one flight only).
-    measured_ahead: Option<QuadState>,
-    /// Its body attitude (full-state controllers only).
-    body_ahead: Option<BodyAttitude>,
-    /// The allocation the lanes' substeps are gathered in (kept between
-    /// substeps; empty in between).
-    substeps: Vec<Substep<'static>>,
+    lanes: Vec<LaneFlight<'o>>,
     /// Per lane, an earlier lane flying the same reference on the same
     /// control grid ([`reference_twins`]): when both reach a boundary at
     /// the same step, its reference is copied, not evaluated again.
     reference_twin: Vec<Option<usize>>,
     /// Per lane, `simulation.max_tilt` (rad) and
     /// `simulation.max_position_error` (m), NaN where not finite (no
-    /// comparison with NaN holds: [`Flight::sound_lanes`] then leaves the
+    /// comparison with NaN holds: [`Flights::sound_lanes`] then leaves the
     /// lane to the ordered checks).
     limits: [R; 2],
 }
@@ -368,29 +576,29 @@ pub struct Flight<'s, C: Controller<R> + ?Sized, R: Real = f64> {
 /// is a function of the step and its time alone, so both lanes' references
 /// at one step are the same bits. `Debug` spells every number of a
 /// validated signal (all finite) exactly, `-0.0` included, so equal texts
-/// are equal signals.
-fn reference_twins(lanes: &[Lane<'_>]) -> Vec<Option<usize>> {
+/// are equal signals (`PartialEq` would take `-0.0` for `0.0`).
+fn reference_twins(lanes: &[LaneFlight<'_>]) -> Vec<Option<usize>> {
     let keys: Vec<String> = lanes.iter().map(|lane| format!("{:?}", lane.scenario.reference)).collect();
     (0..lanes.len())
         .map(|i| (0..i).find(|&j| lanes[j].dt.to_bits() == lanes[i].dt.to_bits() && keys[j] == keys[i]))
         .collect()
 }
 
-impl<'s, C: Controller + ?Sized> Flight<'s, C, f64> {
+impl<'o, C: Controller> Flights<'o, C, f64> {
     /// A flight of `controller` through `scenario` at `t = 0` (the scenario
     /// validated: `Scenario::validate`).
-    pub fn new(scenario: &'s Scenario, controller: &'s mut C, options: RunOptions<'s>) -> Self {
-        Self::new_lanes(&[scenario], controller, options)
+    pub fn new(scenario: impl Into<Arc<Scenario>>, controller: C, options: RunOptions<'o>) -> Self {
+        Self::new_lanes(vec![scenario.into()], controller, options)
     }
 
     /// Add an observer of every tick and period boundary from now on; it
     /// first sees the boundary the flight is at (`t = 0` for a new flight).
-    pub fn observe_with(&mut self, observer: &'s mut dyn Observer) {
-        if self.lanes[0].flying() {
-            let t = self.lanes[0].t;
-            observer.boundary(t, &self.state, &self.reference);
+    pub fn observe_with(&mut self, observer: &'o mut (dyn Observer + Send)) {
+        let lane = &mut self.lanes[0];
+        if lane.flying() {
+            observer.boundary(lane.t, &self.state, &self.reference);
         }
-        self.observers.push(observer);
+        lane.observers.user.push(observer);
     }
 
     /// The measurement the controller will be given at the coming tick
@@ -399,13 +607,16 @@ impl<'s, C: Controller + ?Sized> Flight<'s, C, f64> {
     /// loop sees exactly what the controller stage sees. The sensors are
     /// read once per tick however often this is called.
     pub fn measurement(&mut self) -> QuadState {
-        if let Some(m) = self.measured_ahead {
-            return m;
+        let lane = &mut self.lanes[0];
+        if let Some(m) = lane.measured_ahead {
+            return m.euler;
         }
         let truth = Measurement { euler: self.state, body: self.body };
-        let m = self.lanes[0].measure(&truth);
-        self.measured_ahead = Some(m.euler);
-        self.body_ahead = m.body;
+        let m = match lane.sensors.as_mut() {
+            Some(s) => s.measure_full(&truth),
+            None => truth,
+        };
+        lane.measured_ahead = Some(m);
         m.euler
     }
 
@@ -449,18 +660,19 @@ impl<'s, C: Controller + ?Sized> Flight<'s, C, f64> {
     }
 }
 
-impl<'s, C: Controller<R> + ?Sized, R: Real> Flight<'s, C, R> {
+impl<'o, C: Controller<R>, R: Real> Flights<'o, C, R> {
     /// `R::LANES` flights of `controller` side by side, lane `i` flying
     /// `scenarios[i]` from `t = 0` (validated scenarios of one base: the
     /// same vehicle model, control rate and substeps; [`Flight::new`] for
-    /// one flight). Recording and observers are for one flight only.
+    /// one flight). User observers are for one flight only.
     ///
     /// # Panics
-    /// If `scenarios` does not hold `R::LANES` scenarios.
-    pub fn new_lanes(scenarios: &[&'s Scenario], controller: &'s mut C, options: RunOptions<'s>) -> Self {
+    /// If `scenarios` does not hold `R::LANES` scenarios, or more than 8.
+    pub fn new_lanes(scenarios: Vec<Arc<Scenario>>, controller: C, options: RunOptions<'o>) -> Self {
         assert_eq!(scenarios.len(), R::LANES, "one scenario per lane");
+        assert!(R::LANES <= MAX_LANES, "at most {MAX_LANES} lanes");
         let wants_body = controller.uses_body_attitude();
-        let first = scenarios[0];
+        let first = &*scenarios[0];
         let mut truth = truth_lanes::<R>(first).unwrap_or_else(|_| {
             // The first flight's rigid body is out of range: the paper plant
             // at the same initial state stands in (that flight stops at t = 0).
@@ -471,10 +683,10 @@ impl<'s, C: Controller<R> + ?Sized, R: Real> Flight<'s, C, R> {
         let mut reference = Reference::<R>::default();
         let mut lanes = Vec::with_capacity(R::LANES);
         let mut refused = Vec::new();
-        for (i, &scenario) in scenarios.iter().enumerate() {
+        for (i, scenario) in scenarios.iter().enumerate() {
             let steps = super::planned_steps(scenario);
-            let recorder = Recorder::new(scenario, options.record && R::LANES == 1, steps, &*controller);
-            let (mut lane, r) = Lane::new(scenario, recorder);
+            let recorder = Recorder::new(scenario, options.record, steps, &controller);
+            let (mut lane, r) = LaneFlight::new(scenario.clone(), recorder);
             if let Err(why) = truth.start_lane(i, scenario) {
                 lane.exit = Some(ExitStatus::Diverged { divergence: refusal(scenario, why), time: 0.0 });
                 refused.push(i);
@@ -497,17 +709,13 @@ impl<'s, C: Controller<R> + ?Sized, R: Real> Flight<'s, C, R> {
             wants_body,
             reference,
             lanes,
-            observers: Vec::new(),
-            measured_ahead: None,
-            body_ahead: None,
-            substeps: Vec::new(),
             reference_twin: Vec::new(),
             limits: [R::splat(f64::NAN); 2],
         };
         flight.reference_twin = reference_twins(&flight.lanes);
         for i in 0..R::LANES {
             flight.set_limits(i);
-            flight.lane_boundary(i, 0.0, false, false);
+            flight.lanes[i].boundary(&flight.state.get_lane(i), false, false);
         }
         flight
     }
@@ -515,14 +723,15 @@ impl<'s, C: Controller<R> + ?Sized, R: Real> Flight<'s, C, R> {
     /// Start a new flight of `scenario` in lane `lane` (its flight ended, or
     /// it idles): the lane's truth, controller states, environment, sensors,
     /// actuators and observers start afresh at `t = 0`. `scenario` must be of
-    /// the same base as the others ([`Flight::new_lanes`]).
-    pub fn start_lane(&mut self, lane: usize, scenario: &'s Scenario) {
-        let steps = super::planned_steps(scenario);
-        let recorder = Recorder::new(scenario, false, steps, &*self.controller);
-        let (mut fresh, r) = Lane::new(scenario, recorder);
-        let started = self.truth.start_lane(lane, scenario);
+    /// the same base as the others ([`Flights::new_lanes`]).
+    pub fn start_lane(&mut self, lane: usize, scenario: impl Into<Arc<Scenario>>) {
+        let scenario: Arc<Scenario> = scenario.into();
+        let steps = super::planned_steps(&scenario);
+        let recorder = Recorder::new(&scenario, self.options.record, steps, &self.controller);
+        let (mut fresh, r) = LaneFlight::new(scenario.clone(), recorder);
+        let started = self.truth.start_lane(lane, &scenario);
         if let Err(why) = started {
-            fresh.exit = Some(ExitStatus::Diverged { divergence: refusal(scenario, why), time: 0.0 });
+            fresh.exit = Some(ExitStatus::Diverged { divergence: refusal(&scenario, why), time: 0.0 });
         }
         self.controller.reset_lane(lane);
         self.reference.put_lane(lane, r);
@@ -534,15 +743,15 @@ impl<'s, C: Controller<R> + ?Sized, R: Real> Flight<'s, C, R> {
             // A flight that cannot start is seen at its initial state.
             self.state.put_lane(lane, scenario.initial_state.state());
         }
-        self.lane_boundary(lane, 0.0, false, false);
+        self.lanes[lane].boundary(&self.state.get_lane(lane), false, false);
     }
 
     /// The outcome of lane `lane`'s flight so far, its lane left as it is
-    /// (to be restarted with [`Flight::start_lane`] or left idle).
+    /// (to be restarted with [`Flights::start_lane`] or left idle).
     pub fn lane_output(&mut self, lane: usize) -> RunOutput {
-        let scenario = self.lanes[lane].scenario;
-        let recorder = Recorder::new(scenario, false, 0, &*self.controller);
-        let (mut idle, _) = Lane::new(scenario, recorder);
+        let scenario = self.lanes[lane].scenario.clone();
+        let recorder = Recorder::new(&scenario, false, 0, &self.controller);
+        let (mut idle, _) = LaneFlight::new(scenario, recorder);
         idle.exit = Some(ExitStatus::Completed);
         idle.set_step(idle.steps);
         let done = core::mem::replace(&mut self.lanes[lane], idle);
@@ -568,7 +777,7 @@ impl<'s, C: Controller<R> + ?Sized, R: Real> Flight<'s, C, R> {
     /// The controller being flown (e.g. to hand an external agent's
     /// command to it between two steps).
     pub fn controller_mut(&mut self) -> &mut C {
-        self.controller
+        &mut self.controller
     }
 
     /// Read lane `lane`'s truth into the boundary state (after its truth changed).
@@ -587,7 +796,7 @@ impl<'s, C: Controller<R> + ?Sized, R: Real> Flight<'s, C, R> {
     /// Lanes whose boundary state certainly passes [`check_divergence`]:
     /// `|φ|` and `|θ|` at most `simulation.max_tilt`, every position error
     /// at most `simulation.max_position_error` (both finite:
-    /// [`Flight::limits`]; then these five components are finite too) and
+    /// [`Flights::limits`]; then these five components are finite too) and
     /// the seven other components finite, tested on every lane at once
     /// (comparisons and `x − x` sums only: no number of the flight changes).
     /// Any other lane takes the ordered checks.
@@ -611,7 +820,7 @@ impl<'s, C: Controller<R> + ?Sized, R: Real> Flight<'s, C, R> {
         sound
     }
 
-    /// Lane `lane`'s entries of [`Flight::limits`] for its scenario.
+    /// LaneFlight `lane`'s entries of [`Flights::limits`] for its scenario.
     fn set_limits(&mut self, lane: usize) {
         let sim = &self.lanes[lane].scenario.simulation;
         let finite = |v: f64| if v.is_finite() { v } else { f64::NAN };
@@ -619,258 +828,79 @@ impl<'s, C: Controller<R> + ?Sized, R: Real> Flight<'s, C, R> {
         self.limits[1].put_lane(lane, finite(sim.max_position_error));
     }
 
-    /// Lane `i`'s envelope, statistics (and, one flight, the observers) see
-    /// the truth at the period boundary `t` (s); with `check`, the
-    /// divergence checks (skipped when `sound`: [`Flight::sound_lanes`])
-    /// and the planned end follow on the same state.
-    fn lane_boundary(&mut self, i: usize, t: f64, check: bool, sound: bool) {
-        let mut s_slot = None;
-        let s = lane_ref(&self.state, i, &mut s_slot);
-        let lane = &mut self.lanes[i];
-        let r = &lane.reference;
-        lane.envelope.boundary(t, s, r);
-        lane.margin.update(t, &s.position, &r.position, &s.attitude);
-        lane.stats.boundary(t, s, r);
-        if R::LANES == 1 {
-            for o in &mut self.observers {
-                o.boundary(t, s, r);
-            }
-        }
-        if check {
-            let divergence = if sound { None } else { check_divergence(lane.scenario, s, r) };
-            if let Some(divergence) = divergence {
-                lane.exit = Some(ExitStatus::Diverged { divergence, time: t });
-            } else if lane.k >= lane.steps {
-                lane.exit = Some(ExitStatus::Completed);
-            }
-        }
-    }
-
     /// Fly one control period of every flying lane (module docs);
     /// [`StepOutcome::Done`] once every lane's flight is over (and on every
-    /// later call).
+    /// later call). Only the controller's update and the truth's substeps
+    /// compute on the lanes; every other stage is a method of [`LaneFlight`],
+    /// flight by flight.
     pub fn step(&mut self) -> StepOutcome {
-        let n = R::LANES;
         // Lanes at their planned end complete before anything is computed.
-        for lane in &mut self.lanes {
-            if lane.flying() && lane.k >= lane.steps {
-                lane.exit = Some(ExitStatus::Completed);
-            }
+        for lane in self.lanes.iter_mut().filter(|lane| lane.flying() && lane.k >= lane.steps) {
+            lane.exit = Some(ExitStatus::Completed);
         }
-        if !self.lanes.iter().any(Lane::flying) {
+        if !self.lanes.iter().any(LaneFlight::flying) {
             return StepOutcome::Done;
         }
-
-        // 1–2. Sensors (lane by lane), controller (on the lanes).
+        // 1. Measure each lane; 2. the controller on the lanes.
         let mut measured = Measurement::<R>::default();
-        let command = if self.wants_body {
-            for i in 0..n {
-                let reading = match (i, self.measured_ahead.take()) {
-                    (0, Some(euler)) => Measurement { euler, body: self.body_ahead.take() },
-                    _ => {
-                        let truth = Measurement {
-                            euler: self.state.get_lane(i),
-                            body: self.body.as_ref().map(|b| b.get_lane(i)),
-                        };
-                        if self.lanes[i].flying() {
-                            self.lanes[i].measure(&truth)
-                        } else {
-                            truth
-                        }
-                    }
-                };
-                measured.put_lane(i, reading);
-            }
-            self.controller.update_measured(&measured, &self.reference, self.lanes[0].dt)
-        } else {
-            for i in 0..n {
-                let reading = match (i, self.measured_ahead.take()) {
-                    (0, Some(m)) => m,
-                    _ => {
-                        let state = self.state.get_lane(i);
-                        let lane = &mut self.lanes[i];
-                        match lane.sensors.as_mut() {
-                            Some(s) if lane.exit.is_none() => s.measure(&state),
-                            _ => state,
-                        }
-                    }
-                };
-                measured.euler.put_lane(i, reading);
-            }
-            self.controller.update(&measured.euler, &self.reference, self.lanes[0].dt)
-        };
-
-        // 3–4. Environment and actuator stage, lane by lane.
-        let mut saturated = R::Mask::splat(false);
         for (i, lane) in self.lanes.iter_mut().enumerate() {
-            if !lane.flying() {
-                continue;
-            }
-            let command_i: Command = command.get_lane(i);
-            lane.env.next_period();
-            // Computed in place (no copies of the plant and the delivery),
-            // the plant only where it is read.
-            if n == 1 || lane.actuators.reads_plant() {
-                lane.plant_now = lane.env.params_with(&lane.tv_now);
-            }
-            lane.actuators.deliver_into(&command_i, &lane.plant_now, &mut lane.delivered);
-            let delivered = &lane.delivered;
-            let demand =
-                delivered.demand.unwrap_or_else(|| rotor_speeds(&lane.demand_params, &command_i, f64::INFINITY));
-            saturated.put_lane(i, delivered.saturated);
-            lane.demand = demand;
+            measured.put_lane(i, lane.measure(self.body.as_ref().map(|b| b.get_lane(i))));
+        }
+        let dt = self.lanes[0].dt;
+        let command = if self.wants_body {
+            self.controller.update_measured(&measured, &self.reference, dt)
+        } else {
+            self.controller.update(&measured.euler, &self.reference, dt)
+        };
+        // 3. Actuate each lane; the saturation goes back to the controller.
+        let mut saturated = R::Mask::splat(false);
+        for (i, lane) in self.lanes.iter_mut().enumerate().filter(|(_, lane)| lane.flying()) {
+            saturated.put_lane(i, lane.actuate(&command.get_lane(i)));
         }
         self.controller.actuator_feedback(saturated);
-
-        // The truth's plant of the period; a finite applied command; the observers.
+        // 4. Each lane's truth begins the period; its observers see the tick.
         let telemetry = self.controller.telemetry();
-        for i in 0..n {
-            let lane = &mut self.lanes[i];
-            if !lane.flying() {
-                continue;
-            }
-            let t = lane.t;
-            if let Err(divergence) = self.truth.begin_period(i, &lane.tv_now, &lane.base_plant) {
-                lane.exit = Some(ExitStatus::Diverged { divergence, time: t });
-                lane.unobserved_period = true;
-                continue;
-            }
-            let delivered = &lane.delivered;
-            let applied = delivered.applied;
-            let u = [applied.thrust, applied.torque[0], applied.torque[1], applied.torque[2]];
-            if !(u.iter().all(|v| v.is_finite())) {
-                lane.exit = Some(ExitStatus::Diverged { divergence: Divergence::NonFinite, time: t });
-                lane.unobserved_period = true;
-                continue;
-            }
-            let reference = &lane.reference;
-            if n == 1 {
-                // One flight: the whole tick (the values themselves, no
-                // copies) for the recorder and every observer.
-                let (mut s_slot, mut t_slot, mut m_slot, mut c_slot) = (None, None, None, None);
-                let x = lane_ref(&self.state, i, &mut s_slot).to_array();
-                let telemetry_i: &Telemetry = lane_ref(telemetry, i, &mut t_slot);
-                let measured_i = lane_ref(&measured.euler, i, &mut m_slot);
-                let command_i: &Command = lane_ref(&command, i, &mut c_slot);
-                let tick = Tick {
-                    k: lane.k,
-                    t,
-                    state: x,
-                    measured: measured_i,
-                    reference,
-                    telemetry: telemetry_i,
-                    errors: tracking_errors(&x, reference, telemetry_i),
-                    command: command_i,
-                    applied: u,
-                    omega: delivered.omega,
-                    omega_bar: residual_speed(&delivered.omega),
-                    demand: lane.demand,
-                    saturated: delivered.saturated,
-                    nominal_mass: lane.scenario.plant.mass,
-                    mass: lane.plant_now.mass,
-                    inertia: lane.plant_now.inertia,
-                    disturbance: lane.tv_now.disturbance,
-                };
-                lane.metrics.tick(&tick);
-                lane.recorder.tick(&tick);
-                lane.stats.tick(&tick);
-                for o in &mut self.observers {
-                    o.tick(&tick);
-                }
-            } else {
-                // Lanes: no recording and no observers (`Flight::new_lanes`);
-                // the metrics and the statistics read the tracking errors
-                // (`tracking_errors`, the same operations on lane i's numbers),
-                // the applied command and the rotor speeds alone.
-                let (position, attitude) = (&self.state.position, &self.state.attitude);
-                let attitude_reference = &telemetry.attitude_reference;
-                let errors = [
-                    position[0].get_lane(i) - reference.position[0],
-                    position[1].get_lane(i) - reference.position[1],
-                    position[2].get_lane(i) - reference.position[2],
-                    attitude[0].get_lane(i) - attitude_reference[0].get_lane(i),
-                    attitude[1].get_lane(i) - attitude_reference[1].get_lane(i),
-                    attitude[2].get_lane(i) - reference.yaw,
-                ];
-                lane.metrics.observe(t, &errors, &u);
-                lane.stats.observe_period(delivered.saturated, &lane.demand, &delivered.omega);
-            }
-            lane.omega_bar = residual_speed(&delivered.target);
+        for (i, lane) in self.lanes.iter_mut().enumerate().filter(|(_, lane)| lane.flying()) {
+            let begun = self.truth.begin_period(i, &lane.tv_now, &lane.base_plant);
+            lane.observe(begun, &command.get_lane(i), telemetry, i);
         }
-
-        // 6. The truth over the period: every lane's substep at once.
-        let substeps = self.lanes[0].substeps;
-        for j in 0..substeps {
-            for lane in &mut self.lanes {
-                let t0 = lane.t + j as f64 * lane.h;
-                if lane.flying() {
-                    lane.wind_now = lane.wind.as_mut().map(|w| w.step(t0));
-                    lane.tv_next =
-                        lane.env.time_varying_on_grid(lane.k * u64::from(substeps) + u64::from(j) + 1, t0 + lane.h);
-                }
-            }
-            for i in 0..n {
-                // Only the ground contact reads it.
-                if self.lanes[i].ground.is_some() {
-                    self.lanes[i].p_prev = self.truth.translation(i).0;
-                }
-            }
-            {
-                let lanes = &self.lanes;
-                if n == 1 {
-                    self.truth.substep(core::slice::from_ref(&lanes[0].substep(j)));
-                } else {
-                    // The same allocation every substep (recycled: empty in between).
-                    let mut gathered: Vec<Substep<'_>> = recycle(core::mem::take(&mut self.substeps));
-                    gathered.extend(lanes.iter().map(|lane| lane.substep(j)));
-                    self.truth.substep(&gathered);
-                    self.substeps = recycle(gathered);
-                }
-            }
+        // 5. The substeps: each lane begins, the truth integrates the lanes, each lane ends.
+        let n = self.lanes.len();
+        for j in 0..self.lanes[0].substeps {
             for (i, lane) in self.lanes.iter_mut().enumerate() {
-                if !lane.flying() {
-                    continue;
-                }
-                if let Some(g) = &lane.ground {
-                    let (mut p, mut v) = self.truth.translation(i);
-                    let t0 = lane.t + j as f64 * lane.h;
-                    let contact = g.contact(&mut lane.contact, t0 + lane.h, &lane.p_prev, &mut p, &mut v);
-                    self.truth.set_translation(i, &p, &v);
-                    if let Some(contact) = contact {
-                        lane.set_step(lane.k + 1);
-                        lane.exit = Some(match contact {
-                            Contact::Crashed { fraction, impact_speed } => {
-                                ExitStatus::Crashed { time: t0 + fraction * lane.h, impact_speed }
-                            }
-                            Contact::Grounded { since } => ExitStatus::Grounded { time: t0 + lane.h, since },
-                        });
-                        continue;
-                    }
-                }
-                lane.actuators.advance(&lane.delivered.target);
-                lane.tv_now = lane.tv_next;
+                lane.begin_substep(i, j, &*self.truth);
+            }
+            // Each flying lane's substep built once; the slots past the
+            // lanes hold copies of the first (never read).
+            let first = self.lanes[0].substep(j);
+            let mut gathered = [first; MAX_LANES];
+            for (slot, lane) in gathered.iter_mut().zip(&self.lanes).skip(1) {
+                *slot = lane.substep(j);
+            }
+            self.truth.substep(&gathered[..n]);
+            for (i, lane) in self.lanes.iter_mut().enumerate() {
+                lane.end_substep(i, j, &mut *self.truth);
             }
         }
+        // 6. The next period boundary: reference, observers, divergence checks.
+        self.boundary()
+    }
 
-        // 7. The next reference and boundary; divergence checks.
-        for i in 0..n {
+    /// Stage 6 of [`Flight::step`]: every flying lane at its next period
+    /// boundary, its reference (copied from a twin at the same boundary,
+    /// [`reference_twins`]), the truth's state, the observers and the checks.
+    fn boundary(&mut self) -> StepOutcome {
+        for i in 0..self.lanes.len() {
             let (earlier, rest) = self.lanes.split_at_mut(i);
             let lane = &mut rest[0];
-            lane.at_boundary = false;
-            if !lane.flying() {
+            if !lane.next_boundary(&self.options) {
                 continue;
             }
-            lane.set_step(lane.k + 1);
-            let (k, t) = (lane.k, lane.t);
-            if self.options.step_done(k) {
-                lane.exit = Some(ExitStatus::Interrupted { time: t });
-                continue;
-            }
-            // A twin at the same boundary has this very reference already.
+            let k = lane.k;
             let twin = self.reference_twin[i].map(|j| &earlier[j]).filter(|twin| twin.at_boundary && twin.k == k);
             lane.reference = match twin {
                 Some(twin) => twin.reference,
-                None => lane.reference_grid.at(k, t),
+                None => lane.reference_grid.at(k, lane.t),
             };
             self.reference.put_lane(i, lane.reference);
             lane.at_boundary = true;
@@ -881,13 +911,10 @@ impl<'s, C: Controller<R> + ?Sized, R: Real> Flight<'s, C, R> {
             self.truth.body_attitude_into(&mut self.body);
         }
         let sound = self.sound_lanes();
-        for i in 0..n {
-            if self.lanes[i].at_boundary {
-                let t_next = self.lanes[i].t;
-                self.lane_boundary(i, t_next, true, sound.get_lane(i));
-            }
+        for (i, lane) in self.lanes.iter_mut().enumerate().filter(|(_, lane)| lane.at_boundary) {
+            lane.boundary(&self.state.get_lane(i), true, sound.get_lane(i));
         }
-        if self.lanes.iter().any(Lane::flying) {
+        if self.lanes.iter().any(LaneFlight::flying) {
             StepOutcome::Flying
         } else {
             StepOutcome::Done

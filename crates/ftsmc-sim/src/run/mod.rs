@@ -10,7 +10,7 @@
 //! A run that diverges is an outcome ([`ExitStatus::Diverged`] with the
 //! reason and time), never a panic.
 
-use ftsmc_core::cascade::{Controller, Telemetry};
+use ftsmc_core::cascade::Controller;
 use ftsmc_core::model::Reference;
 
 use crate::metrics::Metrics;
@@ -26,7 +26,7 @@ mod truth;
 
 pub use actuation::actuators;
 pub use exit::{Divergence, ExitStatus};
-pub use flight::{Flight, StepOutcome};
+pub use flight::{Flight, Flights, StepOutcome};
 pub use observer::{FlightStats, Observer, Tick};
 pub use recording::{push_number, recording_columns, Recording, MAX_RECORDING_COLUMNS};
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -152,20 +152,20 @@ pub fn planned_steps(scenario: &Scenario) -> u64 {
 
 /// Tracking errors `[e_x, e_y, e_z, e_φ, e_θ, e_ψ]` the metrics integrate:
 /// position against the reference, roll and pitch against the attitude
-/// reference the controller tracks (its telemetry), yaw against ψ_d.
-/// `state` is `[x, y, z, φ, θ, ψ, …]`.
-pub(crate) fn tracking_errors(state: &[f64; 12], reference: &Reference, telemetry: &Telemetry) -> [f64; 6] {
+/// reference the controller tracks (`attitude_reference`: its telemetry's
+/// `[φ_d, θ_d]`), yaw against ψ_d. `state` is `[x, y, z, φ, θ, ψ, …]`.
+pub(crate) fn tracking_errors(state: &[f64; 12], reference: &Reference, attitude_reference: [f64; 2]) -> [f64; 6] {
     [
         state[0] - reference.position[0],
         state[1] - reference.position[1],
         state[2] - reference.position[2],
-        state[3] - telemetry.attitude_reference[0],
-        state[4] - telemetry.attitude_reference[1],
+        state[3] - attitude_reference[0],
+        state[4] - attitude_reference[1],
         state[5] - reference.yaw,
     ]
 }
 
 /// Fly `controller` through `scenario` ([`Flight`] stepped to the end).
 pub fn simulate(scenario: &Scenario, controller: &mut dyn Controller, options: RunOptions<'_>) -> RunOutput {
-    Flight::new(scenario, controller, options).run()
+    Flight::new(scenario.clone(), controller, options).run()
 }

@@ -25,7 +25,9 @@ pub struct Tick<'a> {
     pub measured: &'a QuadState,
     /// Reference of this tick.
     pub reference: &'a Reference,
-    /// The controller's telemetry after this tick's update.
+    /// The controller's telemetry after this tick's update (for an
+    /// observer whose [`Observer::reads_telemetry`] is true at this tick;
+    /// the others must not read it).
     pub telemetry: &'a Telemetry,
     /// Tracking errors `[e_x, e_y, e_z, e_φ, e_θ, e_ψ]` of the truth: the
     /// truth minus the reference, φ and θ against the controller's attitude
@@ -62,12 +64,24 @@ pub trait Observer {
     fn boundary(&mut self, t: f64, truth: &QuadState, reference: &Reference) {
         let _ = (t, truth, reference);
     }
+    /// True when this observer reads [`Tick::telemetry`] at control step
+    /// `k` (the default). A flight gathers a lane's telemetry from the
+    /// controller's lanes only at the ticks some observer of it reads it;
+    /// an observer that says false here must not read that field.
+    fn reads_telemetry(&self, k: u64) -> bool {
+        let _ = k;
+        true
+    }
 }
 
 impl Observer for MetricsAccumulator {
     #[inline]
     fn tick(&mut self, tick: &Tick<'_>) {
         self.observe(tick.t, &tick.errors, &tick.applied);
+    }
+    #[inline]
+    fn reads_telemetry(&self, _: u64) -> bool {
+        false
     }
 }
 
@@ -77,6 +91,10 @@ impl Observer for Tracker {
     #[inline]
     fn boundary(&mut self, t: f64, truth: &QuadState, reference: &Reference) {
         self.observe(t, &truth.position, &reference.position, &truth.attitude);
+    }
+    #[inline]
+    fn reads_telemetry(&self, _: u64) -> bool {
+        false
     }
 }
 
@@ -100,13 +118,19 @@ pub struct FlightStats {
 }
 
 impl FlightStats {
-    /// Fraction of the observed periods in which the actuator stage saturated (0 with none).
-    pub fn saturation_fraction(&self) -> f64 {
-        if self.periods > 0 {
-            self.saturated_periods as f64 / self.periods as f64
-        } else {
-            0.0
+    /// The two rotor metrics of [`crate::metrics::Metrics`] of a flight of
+    /// `steps` delivered control periods: the peak unlimited rotor-speed
+    /// demand (rad/s) and the saturation fraction, the saturated periods
+    /// over `steps` (0 with none). `unobserved` is the saturation and
+    /// demand of a last period that was delivered but not observed (the
+    /// flight diverged at its tick), counted too.
+    pub fn rotor_metrics(&self, steps: u64, unobserved: Option<(bool, [f64; 4])>) -> (f64, f64) {
+        let (mut peak, mut saturated) = (self.peak_rotor_speed_demand, self.saturated_periods);
+        if let Some((last_saturated, demand)) = unobserved {
+            peak = demand.iter().fold(peak, |m, &w| if w.is_finite() { m.max(w) } else { m });
+            saturated += u64::from(last_saturated);
         }
+        (peak, if steps > 0 { saturated as f64 / steps as f64 } else { 0.0 })
     }
 }
 
@@ -143,5 +167,9 @@ impl Observer for FlightStats {
         if tilt > self.peak_tilt {
             self.peak_tilt = tilt;
         }
+    }
+    #[inline]
+    fn reads_telemetry(&self, _: u64) -> bool {
+        false
     }
 }

@@ -289,6 +289,11 @@ impl Observer for Recorder {
             self.push(tick);
         }
     }
+    /// Only the recorded ticks.
+    #[inline]
+    fn reads_telemetry(&self, k: u64) -> bool {
+        self.due(k)
+    }
 }
 
 /// One row of a [`Recording`] being assembled on the stack.

@@ -34,11 +34,10 @@
 //! body ([`TruthModel::quad_state`]) is computed on the lanes too.
 
 use ftsmc_core::allocation::{forces_from_squared_speeds, residual_speed};
-use ftsmc_core::lanes::{branch, Lanewise, Mask, Real};
+use ftsmc_core::lanes::{Lanewise, Real};
 use ftsmc_core::measured::BodyAttitude;
 use ftsmc_core::model::{Command, QuadState, QuadrotorParams};
 
-use crate::actuators::NoiseScale;
 use crate::environment::Environment;
 use crate::environment::TimeVarying;
 use crate::scenario::Scenario;
@@ -50,6 +49,7 @@ use super::actuation::Drive;
 use super::Divergence;
 
 /// One RK4 substep `[t0, t0 + h]` as the loop hands it to a truth model.
+#[derive(Clone, Copy)]
 pub(crate) struct Substep<'a> {
     /// Start time, s.
     pub t0: f64,
@@ -62,7 +62,7 @@ pub(crate) struct Substep<'a> {
     /// See `a`.
     pub b: &'a TimeVarying,
     /// The environment (drag noise of the period).
-    pub env: &'a Environment<'a>,
+    pub env: &'a Environment,
     /// The rotors.
     pub drive: Drive<'a>,
     /// Wind held over the substep, world frame, m/s (`None`: still air, no `[wind]`).
@@ -360,156 +360,18 @@ trait FromLanes: Lanewise + Default {
 
 impl<T: Lanewise + Default> FromLanes for T {}
 
-/// Every lane's rotors over one substep ([`Drive`]) gathered into lanes
-/// once, so that the speeds at an RK4 stage time ([`LaneRotors::after`])
-/// are a few lane operations: lane `i` is `Drive::speeds_after` of lane
-/// `i`'s drive, bit for bit. A held drive is a lagged one reached at once
-/// (`target` its speeds, no lag, no noise).
-struct LaneRotors<R: Real> {
-    /// Commanded speeds clamped to the limits (held: the speeds), rad/s.
-    target: [R; 4],
-    /// `ω − ω_cmd` at the substep start, rad/s.
-    gap: [R; 4],
-    /// The rotor lags (its time constant is nonzero).
-    lagged: [R::Mask; 4],
-    /// The rotor spins up (its lag, if any, has the spin-up time constant; else spin-down).
-    up: [R::Mask; 4],
-    /// Absolute noise: `ω + σ z`, clamped.
-    absolute: R::Mask,
-    /// Relative noise: `ω (1 + σ z)`, clamped.
-    relative: R::Mask,
-    /// `σ z` (absolute) or `1 + σ z` (relative) per rotor.
-    noise: [R; 4],
-    /// `ω_min`, rad/s.
-    lo: R,
-    /// `ω_max`, rad/s.
-    hi: R,
-    /// Some lane's rotors lag (the decay factors are looked up).
-    any_lagged: bool,
-}
-
-impl<R: Real> Default for LaneRotors<R> {
-    /// No lane gathered yet: every lane held at zero speed.
-    #[cfg_attr(not(debug_assertions), inline(always))]
-    fn default() -> Self {
-        let no = <R::Mask as Mask>::splat(false);
-        Self {
-            target: [R::default(); 4],
-            gap: [R::default(); 4],
-            lagged: [no; 4],
-            up: [no; 4],
-            absolute: no,
-            relative: no,
-            noise: [R::default(); 4],
-            lo: R::default(),
-            hi: R::default(),
-            any_lagged: false,
-        }
-    }
-}
-
-impl<R: Real> LaneRotors<R> {
-    /// The rotors of every lane's substep (`self` as
-    /// [`LaneRotors::default`] made it).
-    #[cfg_attr(not(debug_assertions), inline(always))]
-    fn gather(&mut self, s: &[Substep<'_>]) {
-        if R::LANES == 1 {
-            // One flight: `after` takes the drive's own speeds.
-            return;
-        }
-        let r = self;
-        for (i, s) in s.iter().enumerate() {
-            match s.drive {
-                Drive::Held { speeds, .. } => r.target.put_lane(i, *speeds),
-                Drive::Lagged { held, .. } => {
-                    r.any_lagged = true;
-                    r.target.put_lane(i, held.target);
-                    r.gap.put_lane(i, held.gap);
-                    for k in 0..4 {
-                        r.lagged[k].put_lane(i, held.lagged[k]);
-                        r.up[k].put_lane(i, held.up[k]);
-                    }
-                    match held.noise {
-                        None => {}
-                        Some((NoiseScale::Absolute, add)) => {
-                            r.absolute.put_lane(i, true);
-                            r.noise.put_lane(i, add);
-                        }
-                        Some((NoiseScale::Relative, mul)) => {
-                            r.relative.put_lane(i, true);
-                            r.noise.put_lane(i, mul);
-                        }
-                    }
-                    r.lo.put_lane(i, held.limits[0]);
-                    r.hi.put_lane(i, held.limits[1]);
-                }
-            }
-        }
-    }
-
-    /// Rotor speeds `dt` (lane `i`: lane `i`'s stage time minus its
-    /// substep start, s) into the substep, rad/s: `HeldCommand::speeds` of
-    /// the decay factors `DecayCache::get` looks up for each lagged lane,
-    /// `target + gap · e` then the noise and `f64::clamp` to the limits.
-    #[cfg_attr(not(debug_assertions), inline(always))]
-    fn after(&self, s: &[Substep<'_>], dt: R) -> [R; 4] {
-        if R::LANES == 1 {
-            // One flight: the scalar code itself (the lane operations of
-            // `f64` would only add selects).
-            let mut w = [R::default(); 4];
-            w.put_lane(0, s[0].drive.speeds_after(dt.get_lane(0)));
-            return w;
-        }
-        let (mut e_up, mut e_down) = (R::splat(1.0), R::splat(1.0));
-        if self.any_lagged {
-            for (i, s) in s.iter().enumerate() {
-                if let Drive::Lagged { motors, decay, .. } = s.drive {
-                    let [u, d] = decay.get(motors, dt.get_lane(i));
-                    e_up.put_lane(i, u);
-                    e_down.put_lane(i, d);
-                }
-            }
-        }
-        let mut w = self.target;
-        for k in 0..4 {
-            let e = R::select(self.up[k], e_up, e_down);
-            w[k] = R::select(self.lagged[k], self.target[k] + self.gap[k] * e, self.target[k]);
-        }
-        let w = branch(
-            self.absolute,
-            #[cfg_attr(not(debug_assertions), inline(always))]
-            || {
-                let mut v = w;
-                for k in 0..4 {
-                    v[k] = clamp(w[k] + self.noise[k], self.lo, self.hi);
-                }
-                v
-            },
-            #[cfg_attr(not(debug_assertions), inline(always))]
-            || w,
-        );
-        branch(
-            self.relative,
-            #[cfg_attr(not(debug_assertions), inline(always))]
-            || {
-                let mut v = w;
-                for k in 0..4 {
-                    v[k] = clamp(w[k] * self.noise[k], self.lo, self.hi);
-                }
-                v
-            },
-            #[cfg_attr(not(debug_assertions), inline(always))]
-            || w,
-        )
-    }
-}
-
-/// `f64::clamp` lane by lane: below `lo` is `lo`, then above `hi` is `hi`
-/// (NaN stays NaN).
+/// Every lane's rotor speeds `dt` (lane `i`: lane `i`'s stage time minus
+/// its substep start, s) into the substep, rad/s: lane `i` is
+/// [`Drive::speeds_after`] of lane `i`'s drive (the one motor-lag code,
+/// per lane: a lane kernel of it saved less than the 10 % a lane kernel must
+/// earn, docs/results.md).
 #[cfg_attr(not(debug_assertions), inline(always))]
-fn clamp<R: Real>(v: R, lo: R, hi: R) -> R {
-    let v = R::select(v.lt(lo), lo, v);
-    R::select(v.gt(hi), hi, v)
+fn rotor_speeds_after<R: Real>(s: &[Substep<'_>], dt: R) -> [R; 4] {
+    let mut w = [R::default(); 4];
+    for (i, s) in s.iter().enumerate() {
+        w.put_lane(i, s.drive.speeds_after(dt.get_lane(i)));
+    }
+    w
 }
 
 /// One flight's rigid-body bookkeeping beside its lane of the body.
@@ -621,8 +483,6 @@ impl<R: Real> TruthModel<R> for RigidTruth<R> {
         for k in 0..6 {
             d_gap[k] = d_b[k] - d_a[k];
         }
-        let mut rotors = LaneRotors::<R>::default();
-        rotors.gather(s);
         // Closures in argument position, forced inline: the whole step then
         // compiles inside the dispatched kernel (`OnIsa`), none of it left
         // behind in a baseline-ISA function.
@@ -638,7 +498,7 @@ impl<R: Real> TruthModel<R> for RigidTruth<R> {
                     d[k] = d_a[k] + w * d_gap[k];
                 }
                 body.prepare(&RigidBodyInput {
-                    rotor_speeds: rotors.after(s, tau - t0),
+                    rotor_speeds: rotor_speeds_after(s, tau - t0),
                     wind,
                     force: [mass * d[0], mass * d[1], mass * d[2]],
                     torque: body.inertia_times([d[3], d[4], d[5]]),
@@ -700,12 +560,12 @@ impl<R: Real, T: TruthModel<R>> TruthModel<R> for OnIsa<T> {
         self.inner.body_attitude()
     }
     fn quad_state_into(&self, out: &mut QuadState<R>) {
-        match self.isa {
-            #[cfg(target_arch = "x86_64")]
-            // SAFETY: `Isa::Avx2Fma` is only detected on a CPU with AVX2 and FMA.
-            crate::isa::Isa::Avx2Fma => unsafe { quad_state_avx2(&self.inner, out) },
-            _ => self.inner.quad_state_into(out),
-        }
+        let inner = &self.inner;
+        crate::isa::run_on(
+            self.isa,
+            #[cfg_attr(not(debug_assertions), inline(always))]
+            || inner.quad_state_into(out),
+        );
     }
     fn body_attitude_into(&self, out: &mut Option<BodyAttitude<R>>) {
         self.inner.body_attitude_into(out);
@@ -714,12 +574,12 @@ impl<R: Real, T: TruthModel<R>> TruthModel<R> for OnIsa<T> {
         self.inner.begin_period(lane, tv, base)
     }
     fn substep(&mut self, s: &[Substep<'_>]) {
-        match self.isa {
-            #[cfg(target_arch = "x86_64")]
-            // SAFETY: `Isa::Avx2Fma` is only detected on a CPU with AVX2 and FMA.
-            crate::isa::Isa::Avx2Fma => unsafe { substep_avx2(&mut self.inner, s) },
-            _ => self.inner.substep(s),
-        }
+        let inner = &mut self.inner;
+        crate::isa::run_on(
+            self.isa,
+            #[cfg_attr(not(debug_assertions), inline(always))]
+            || inner.substep(s),
+        );
     }
     fn translation(&self, lane: usize) -> ([f64; 3], [f64; 3]) {
         self.inner.translation(lane)
@@ -730,29 +590,6 @@ impl<R: Real, T: TruthModel<R>> TruthModel<R> for OnIsa<T> {
     fn start_lane(&mut self, lane: usize, scenario: &Scenario) -> Result<(), LaneStart> {
         self.inner.start_lane(lane, scenario)
     }
-}
-
-/// [`TruthModel::substep`] compiled with AVX2 and FMA (the models mark it
-/// and their kernels `#[cfg_attr(not(debug_assertions), inline(always))]`, so the whole RK4 is compiled here).
-///
-/// # Safety
-/// The CPU must have AVX2 and FMA.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,fma")]
-unsafe fn substep_avx2<R: Real, T: TruthModel<R>>(truth: &mut T, s: &[Substep<'_>]) {
-    truth.substep(s);
-}
-
-/// [`TruthModel::quad_state_into`] compiled with AVX2 and FMA (the Euler
-/// conversion of the lanes, written into `out`; `atan2` and `asin` stay
-/// calls to the one maths library, per lane).
-///
-/// # Safety
-/// The CPU must have AVX2 and FMA.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,fma")]
-unsafe fn quad_state_avx2<R: Real, T: TruthModel<R>>(truth: &T, out: &mut QuadState<R>) {
-    truth.quad_state_into(out);
 }
 
 /// What a flight's truth model brings to the loop ([`truth_of`]).
@@ -773,7 +610,7 @@ pub(crate) struct TruthSetup {
 /// [`truth_lanes`]).
 pub(crate) fn truth_of(scenario: &Scenario) -> TruthSetup {
     let (allocation, demand) = scenario.truth_allocation();
-    let p = scenario.true_plant();
+    let p = scenario.true_vehicle();
     let paper_hover = (p.mass * p.gravity / (4.0 * p.lift_coefficient)).sqrt();
     let (hover, invalid) = match scenario.vehicle.model {
         VehicleModel::Paper => (paper_hover, None),
@@ -806,7 +643,7 @@ mod lane_tests {
     //! inputs, substep by substep.
 
     use super::*;
-    use crate::actuators::MixerKind;
+    use crate::actuators::{MixerKind, NoiseScale};
     use crate::environment::wind::Wind;
     use crate::run::actuation::{ActuatorStage, Delivered};
     use crate::scenario::ladder::{REALISTIC_CALM_2, REALISTIC_MODERATE_2};
@@ -885,9 +722,9 @@ mod lane_tests {
     /// One flight's surroundings, as `Flight` sets them up, and its
     /// one-flight truth model (apart: the substeps borrow the former while
     /// the latter integrates).
-    struct Lane<'s> {
+    struct ScalarFlight<'s> {
         scenario: &'s Scenario,
-        env: Environment<'s>,
+        env: Environment,
         actuators: ActuatorStage,
         wind: Option<Wind>,
         tv_now: TimeVarying,
@@ -896,7 +733,7 @@ mod lane_tests {
         k: u64,
     }
 
-    impl<'s> Lane<'s> {
+    impl<'s> ScalarFlight<'s> {
         fn new(scenario: &'s Scenario) -> (Self, Box<dyn TruthModel + Send>) {
             let h = scenario.control_period() / scenario.simulation.substeps as f64;
             let setup = truth_of(scenario);
@@ -909,7 +746,7 @@ mod lane_tests {
             let mut env = Environment::new(env_params).on_grid(h);
             let wind = scenario.wind.clone().and_then(|w| Wind::new(w, h, scenario.seed).ok());
             let tv_now = env.time_varying_on_grid(0, 0.0);
-            let lane = Self { scenario, env, actuators, wind, tv_now, base_plant: scenario.true_plant(), h, k: 0 };
+            let lane = Self { scenario, env, actuators, wind, tv_now, base_plant: scenario.true_vehicle(), h, k: 0 };
             (lane, truth_lanes::<f64>(scenario).expect("valid"))
         }
 
@@ -954,8 +791,8 @@ mod lane_tests {
     /// [`fly`] with the lanes cycling through `pool`.
     fn fly_pool<R: Real>(pool: Vec<Scenario>, rigid: bool, periods: u64) -> (u64, usize) {
         let n = R::LANES;
-        let (mut lanes, mut scalars): (Vec<Lane<'_>>, Vec<Box<dyn TruthModel + Send>>) =
-            (0..n).map(|i| Lane::new(&pool[i % pool.len()])).unzip();
+        let (mut lanes, mut scalars): (Vec<ScalarFlight<'_>>, Vec<Box<dyn TruthModel + Send>>) =
+            (0..n).map(|i| ScalarFlight::new(&pool[i % pool.len()])).unzip();
         let mut model = truth_lanes::<R>(&pool[0]).unwrap();
         for (i, lane) in lanes.iter().enumerate() {
             model.start_lane(i, lane.scenario).unwrap();
@@ -970,7 +807,7 @@ mod lane_tests {
         let mut substeps = 0;
         for period in 0..periods {
             if period == periods / 3 {
-                let (lane, scalar) = Lane::new(&pool[3 % pool.len()]);
+                let (lane, scalar) = ScalarFlight::new(&pool[3 % pool.len()]);
                 let r = 2 % n;
                 lanes[r] = lane;
                 scalars[r] = scalar;

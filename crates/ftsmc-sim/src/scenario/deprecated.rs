@@ -291,7 +291,7 @@ pub(crate) fn convert(
         }
         // The paper-form view of the true vehicle (recorded true mass and
         // inertia, the payload's base) was [plant]'s; it is now the rigid body's.
-        let now = s.vehicle.true_plant(&plant);
+        let now = s.vehicle.true_vehicle(&plant);
         if now.mass.to_bits() != plant.mass.to_bits()
             || now.inertia.map(f64::to_bits) != plant.inertia.map(f64::to_bits)
         {

@@ -288,7 +288,7 @@ impl MonteCarloSpec {
     pub fn absolute(&self, base: &Scenario) -> MonteCarloSpec {
         let mut out = self.clone();
         if let Some(d) = out.mass_factor.take() {
-            out.mass = Some(scaled(&d, base.true_plant().mass));
+            out.mass = Some(scaled(&d, base.true_vehicle().mass));
         }
         if let Some(d) = out.payload_mass_factor.take() {
             if let Some(p) = &base.payload {
@@ -306,7 +306,7 @@ impl MonteCarloSpec {
     #[allow(clippy::type_complexity)]
     pub fn vehicle_band(&self, base: &Scenario) -> Result<Vec<(String, String, String)>, (String, String, String)> {
         use crate::text::show;
-        let m = base.true_plant().mass;
+        let m = base.true_vehicle().mass;
         let mut warnings = Vec::new();
         let range = |(lo, hi): (f64, f64)| format!("draws in [{}, {}] kg", show(lo), show(hi));
         let (which, vehicle) = (base.true_mass().1, base.vehicle.preset.map(|p| format!(" (preset {})", p.name())));
@@ -381,7 +381,7 @@ impl MonteCarloSpec {
         let range = |(lo, hi): (f64, f64)| format!("draws in [{}, {}]", show(lo), show(hi));
         let err =
             |name: &str, d: &Dist, expected: String| Err((format!("montecarlo.{name}"), range(d.support()), expected));
-        let truth = base.true_plant();
+        let truth = base.true_vehicle();
         let mut mass_low = truth.mass;
         if let Some(d) = &self.mass {
             let (lo, _) = d.support();
@@ -577,7 +577,7 @@ impl MonteCarloSpec {
         let inertia_factor = self.inertia_factor.map_or(1.0, |d| d.sample(&mut stream(2)));
         let drag_factor = self.drag_factor.map_or(1.0, |d| d.sample(&mut stream(3)));
         draw_true_vehicle(&mut s.vehicle, &base.plant, mass, inertia_factor, drag_factor);
-        let truth = s.true_plant();
+        let truth = s.true_vehicle();
         let amplitude = self.disturbance_amplitude.map_or(1.0, |d| d.sample(&mut stream(4)));
         let mut phase_rng = stream(5);
         let mut first_phase = 0.0;

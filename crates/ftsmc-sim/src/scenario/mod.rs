@@ -369,9 +369,9 @@ fn is_default_limits(l: &Limits) -> bool {
 
 impl Scenario {
     /// The true vehicle in paper form (Eq. 1's parameters): `[plant]` with
-    /// the keys `[vehicle]` gives ([`crate::vehicle::VehicleSettings::true_plant`]).
-    pub fn true_plant(&self) -> QuadrotorParams {
-        self.vehicle.true_plant(&self.plant)
+    /// the keys `[vehicle]` gives ([`crate::vehicle::VehicleSettings::true_vehicle`]).
+    pub fn true_vehicle(&self) -> QuadrotorParams {
+        self.vehicle.true_vehicle(&self.plant)
     }
 
     /// The true mass before any payload, kg, and the key it comes from
@@ -402,7 +402,7 @@ impl Scenario {
     /// Allocation matrix of the truth model and the paper-form parameters used
     /// for the unsaturated rotor-speed demand.
     pub fn truth_allocation(&self) -> ([[f64; 4]; 4], QuadrotorParams) {
-        let base = self.true_plant();
+        let base = self.true_vehicle();
         match self.vehicle.model {
             crate::vehicle::VehicleModel::Paper => (crate::actuators::paper_allocation_matrix(&base), base),
             crate::vehicle::VehicleModel::RigidBody => {
@@ -523,7 +523,7 @@ impl Scenario {
     /// variation, drag noise, disturbances, seed) for [`crate::environment::Environment`].
     pub fn environment(&self) -> EnvironmentParams<'_> {
         EnvironmentParams {
-            plant: self.true_plant(),
+            plant: self.true_vehicle(),
             payload: self.payload.as_ref(),
             inertia_variation: self.inertia_variation.as_ref(),
             drag_noise: self.drag_noise,

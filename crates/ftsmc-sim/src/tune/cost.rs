@@ -8,7 +8,7 @@ use crate::scenario::tune_section::TuneSection;
 
 /// What the cost and the comparison table need from one flight.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Flight {
+pub struct FlightOutcome {
     /// Completed the scenario (no divergence, no crash).
     pub completed: bool,
     /// Hit the ground too fast (`[ground]`).
@@ -27,7 +27,7 @@ pub struct Flight {
     pub saturated: f64,
 }
 
-impl Flight {
+impl FlightOutcome {
     /// From a run's output.
     pub fn of(run: &RunOutput) -> Self {
         let m = &run.metrics;
@@ -49,7 +49,7 @@ impl Flight {
 /// held-out Monte Carlo). Error and activity statistics are over the
 /// completed flights (`NaN` when none completed).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
-pub struct FlightStats {
+pub struct OutcomeStats {
     /// Flights.
     pub runs: usize,
     /// Completed and inside the envelope.
@@ -79,8 +79,8 @@ pub struct FlightStats {
     pub divergence_score: f64,
 }
 
-impl FlightStats {
-    /// Number of values of [`FlightStats::to_values`].
+impl OutcomeStats {
+    /// Number of values of [`OutcomeStats::to_values`].
     pub const VALUES: usize = 13;
 
     /// The statistics as numbers in field order (counts exact as `f64`):
@@ -103,8 +103,8 @@ impl FlightStats {
         ]
     }
 
-    /// The inverse of [`FlightStats::to_values`]; `None` when `v` is not
-    /// [`FlightStats::VALUES`] numbers with non-negative integer counts.
+    /// The inverse of [`OutcomeStats::to_values`]; `None` when `v` is not
+    /// [`OutcomeStats::VALUES`] numbers with non-negative integer counts.
     pub fn from_values(v: &[f64]) -> Option<Self> {
         if v.len() != Self::VALUES {
             return None;
@@ -138,11 +138,11 @@ fn percentile(values: &[f64], q: f64) -> f64 {
     v[((q * v.len() as f64).ceil() as usize).clamp(1, v.len()) - 1]
 }
 
-impl FlightStats {
+impl OutcomeStats {
     /// Statistics of `flights` of a scenario lasting `duration` s.
-    pub fn of(flights: &[Flight], duration: f64) -> Self {
-        let done: Vec<&Flight> = flights.iter().filter(|f| f.completed).collect();
-        let median = |g: fn(&Flight) -> f64| {
+    pub fn of(flights: &[FlightOutcome], duration: f64) -> Self {
+        let done: Vec<&FlightOutcome> = flights.iter().filter(|f| f.completed).collect();
+        let median = |g: fn(&FlightOutcome) -> f64| {
             stats(&done.iter().map(|f| g(f)).collect::<Vec<_>>()).map_or(f64::NAN, |s| s.median)
         };
         let rms: Vec<f64> = done.iter().map(|f| f.rms).collect();

@@ -36,7 +36,7 @@ use crate::escape::toml_comment;
 use crate::run::RunOptions;
 use crate::scenario::tune_section::TuneSection;
 use crate::scenario::Scenario;
-pub use cost::{Flight, FlightStats};
+pub use cost::{FlightOutcome, OutcomeStats};
 pub use space::{Dim, Space};
 
 /// First run index of the held-out Monte Carlo.
@@ -96,7 +96,7 @@ pub struct Evaluated {
     /// Cost on the training draws.
     pub cost: f64,
     /// Statistics of its training flights.
-    pub stats: FlightStats,
+    pub stats: OutcomeStats,
     /// Training flights flown so far, this candidate's included.
     pub flights: u64,
     /// Why it could not fly (invalid gains), if so.
@@ -156,16 +156,16 @@ pub struct Raced {
     /// Cost on the race draws.
     pub cost: f64,
     /// Statistics of its race flights.
-    pub stats: FlightStats,
+    pub stats: OutcomeStats,
 }
 
 /// Training and held-out statistics of the start and the tuned gains.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct Comparison {
     /// The scenario's own gains (the start).
-    pub start: FlightStats,
+    pub start: OutcomeStats,
     /// The tuned gains.
-    pub tuned: FlightStats,
+    pub tuned: OutcomeStats,
 }
 
 /// The outcome of [`tune`].
@@ -200,7 +200,7 @@ pub struct TuneResult {
     pub held_out: Option<Comparison>,
     /// The held-out flights themselves (start, tuned), in run order, when
     /// the tune was flown locally ([`tune`]); `None` through an evaluator.
-    pub held_out_runs: Option<[Vec<Flight>; 2]>,
+    pub held_out_runs: Option<[Vec<FlightOutcome>; 2]>,
     /// Run indices of the training flights.
     pub training_indices: Vec<u64>,
     /// Run indices of the racing flights.
@@ -238,14 +238,14 @@ fn fly(
     master: u64,
     controller: &str,
     progress: &(dyn Fn(u64) + Sync),
-) -> Result<Vec<Vec<Flight>>, String> {
+) -> Result<Vec<Vec<FlightOutcome>>, String> {
     crate::registry::check_name(controller)?;
     // Work items: a scenario and a run of its indices, a few lanes' worth each.
     let per_task = DEFAULT_LANES * 2;
     let tasks: Vec<(usize, &[u64])> =
         (0..scenarios.len()).flat_map(|k| indices.chunks(per_task.max(1)).map(move |c| (k, c))).collect();
     let options = RunOptions { record: false, ..Default::default() };
-    let flown: Vec<Vec<Flight>> = tasks
+    let flown: Vec<Vec<FlightOutcome>> = tasks
         .par_iter()
         .map(|&(k, chunk)| {
             let sampled: Vec<Scenario> =
@@ -253,10 +253,10 @@ fn fly(
             let refs: Vec<&Scenario> = sampled.iter().collect();
             let outs = crate::batch::montecarlo::fly(controller, &refs, DEFAULT_LANES, options);
             progress(outs.len() as u64);
-            outs.iter().map(Flight::of).collect()
+            outs.iter().map(FlightOutcome::of).collect()
         })
         .collect();
-    let flights: Vec<Flight> = flown.into_iter().flatten().collect();
+    let flights: Vec<FlightOutcome> = flown.into_iter().flatten().collect();
     Ok(flights.chunks(indices.len().max(1)).map(|c| c.to_vec()).collect())
 }
 
@@ -270,7 +270,7 @@ pub fn flights(
     master: u64,
     indices: &[u64],
     progress: &(dyn Fn(u64) + Sync),
-) -> Result<Vec<Vec<Flight>>, String> {
+) -> Result<Vec<Vec<FlightOutcome>>, String> {
     let Some(first) = scenarios.first() else { return Ok(Vec::new()) };
     let spec = first.montecarlo.clone().unwrap_or_default();
     fly(scenarios, &spec, indices, master, controller, progress)
@@ -288,19 +288,19 @@ pub fn evaluate(
     master: u64,
     indices: &[u64],
     progress: &(dyn Fn(u64) + Sync),
-) -> Result<Vec<FlightStats>, String> {
+) -> Result<Vec<OutcomeStats>, String> {
     let flown = flights(scenarios, controller, master, indices, progress)?;
-    Ok(flown.iter().zip(scenarios).map(|(f, s)| FlightStats::of(f, s.duration)).collect())
+    Ok(flown.iter().zip(scenarios).map(|(f, s)| OutcomeStats::of(f, s.duration)).collect())
 }
 
 /// Where a tune's flights are flown: given candidate scenarios and the
-/// Monte Carlo run indices, the [`FlightStats`] of each (as [`evaluate`]
+/// Monte Carlo run indices, the [`OutcomeStats`] of each (as [`evaluate`]
 /// with the tune's controller and seed).
-pub type Evaluator<'a> = dyn Fn(&[Scenario], &[u64]) -> Result<Vec<FlightStats>, String> + Sync + 'a;
+pub type Evaluator<'a> = dyn Fn(&[Scenario], &[u64]) -> Result<Vec<OutcomeStats>, String> + Sync + 'a;
 
 /// Where the held-out flights are flown when the flights themselves are
 /// wanted (as [`flights`] with the tune's controller and seed).
-pub type Flyer<'a> = dyn Fn(&[Scenario], &[u64]) -> Result<Vec<Vec<Flight>>, String> + Sync + 'a;
+pub type Flyer<'a> = dyn Fn(&[Scenario], &[u64]) -> Result<Vec<Vec<FlightOutcome>>, String> + Sync + 'a;
 
 /// Generations without a candidate better than the run's starting cost
 /// before a [`RestartReason::NoProgress`] restart.
@@ -438,7 +438,7 @@ fn tune_inner(
                         (st, st.cost(&settings), None)
                     }
                     Err(e) => {
-                        let st = FlightStats::of(&[], duration);
+                        let st = OutcomeStats::of(&[], duration);
                         (st, settings.divergence * 2.0 + 1.0, Some(e.clone()))
                     }
                 };
@@ -553,9 +553,9 @@ fn tune_inner(
         (None, None, 0)
     } else if let Some(fly) = flyer {
         let both = fly(&[start.clone(), tuned.clone()], &held)?;
-        let [a, b]: [Vec<Flight>; 2] =
+        let [a, b]: [Vec<FlightOutcome>; 2] =
             both.try_into().map_err(|_| "the flyer returned a wrong number of flight lists".to_string())?;
-        let c = Comparison { start: FlightStats::of(&a, start.duration), tuned: FlightStats::of(&b, tuned.duration) };
+        let c = Comparison { start: OutcomeStats::of(&a, start.duration), tuned: OutcomeStats::of(&b, tuned.duration) };
         (Some(c), Some([a, b]), 2 * held.len() as u64)
     } else {
         let both = one(evaluator(&[start.clone(), tuned.clone()], &held)?, 2)?;
@@ -587,7 +587,7 @@ fn tune_inner(
 }
 
 /// `stats` when it holds `n` entries, else the evaluator's error.
-fn one(stats: Vec<FlightStats>, n: usize) -> Result<Vec<FlightStats>, String> {
+fn one(stats: Vec<OutcomeStats>, n: usize) -> Result<Vec<OutcomeStats>, String> {
     if stats.len() == n {
         Ok(stats)
     } else {
@@ -606,9 +606,9 @@ pub fn judge(
     training_runs: u64,
     runs: u64,
     progress: &(dyn Fn(u64) + Sync),
-) -> Result<FlightStats, String> {
+) -> Result<OutcomeStats, String> {
     let flights = judge_flights(scenario, controller, master, training_runs, runs, progress)?;
-    Ok(FlightStats::of(&flights, scenario.duration))
+    Ok(OutcomeStats::of(&flights, scenario.duration))
 }
 
 /// The flights [`judge`] summarises, in run order: every gain set judged
@@ -621,7 +621,7 @@ pub fn judge_flights(
     training_runs: u64,
     runs: u64,
     progress: &(dyn Fn(u64) + Sync),
-) -> Result<Vec<Flight>, String> {
+) -> Result<Vec<FlightOutcome>, String> {
     crate::registry::check_name(controller)
         .map_err(|known| format!("unknown controller `{controller}` (known: {known})"))?;
     let spec = scenario.montecarlo.clone().unwrap_or_default();
@@ -704,7 +704,7 @@ pub fn tuned_toml(result: &TuneResult, extends: &str, command: &str) -> Result<S
             if d.log { ", log" } else { "" }
         ));
     }
-    let describe = |name: &str, st: &FlightStats| {
+    let describe = |name: &str, st: &OutcomeStats| {
         let w = crate::stats::rate::wilson(st.success as u64, st.runs as u64, crate::stats::DEFAULT_CONFIDENCE)
             .map_or_else(|_| "—".to_string(), |i| format!("[{:.1}, {:.1}] %", 100.0 * i.lo, 100.0 * i.hi));
         format!(

@@ -231,7 +231,7 @@ impl VehicleSettings {
     /// every given key of `[vehicle]` in place (the inertia's diagonal). On
     /// the rigid body this is the paper-form view of the same vehicle (mass,
     /// inertia diagonal, coefficients), its linear drags `plant`'s (unused).
-    pub fn true_plant(&self, plant: &QuadrotorParams) -> QuadrotorParams {
+    pub fn true_vehicle(&self, plant: &QuadrotorParams) -> QuadrotorParams {
         QuadrotorParams {
             mass: self.mass.unwrap_or(plant.mass),
             gravity: self.gravity.unwrap_or(plant.gravity),
@@ -246,10 +246,10 @@ impl VehicleSettings {
     }
 
     /// The rigid-body parameters of the true vehicle:
-    /// [`RigidBodyParams::from_paper`] of [`VehicleSettings::true_plant`],
+    /// [`RigidBodyParams::from_paper`] of [`VehicleSettings::true_vehicle`],
     /// with the full inertia matrix and the rigid-body-only keys given.
     pub fn rigid_body(&self, plant: &QuadrotorParams) -> RigidBodyParams {
-        let mut rb = RigidBodyParams::from_paper(&self.true_plant(plant));
+        let mut rb = RigidBodyParams::from_paper(&self.true_vehicle(plant));
         if let Some(i) = self.inertia {
             rb.inertia = i.matrix();
         }
@@ -314,7 +314,7 @@ impl VehicleSettings {
 
     /// Range-check the true vehicle the model flies (after
     /// [`VehicleSettings::check_model_keys`]): [`QuadrotorParams::check`] of
-    /// [`VehicleSettings::true_plant`] on Eq. 1, [`RigidBodyParams::check`] of
+    /// [`VehicleSettings::true_vehicle`] on Eq. 1, [`RigidBodyParams::check`] of
     /// [`VehicleSettings::rigid_body`] on the rigid body. `Err((dotted key,
     /// error))`: `vehicle.<key>` when the key is given, else the `plant.<field>`
     /// the value came from (the rigid body's range can be narrower than
@@ -343,7 +343,7 @@ impl VehicleSettings {
             (prefix, GainError { field: field_name, ..e })
         };
         match self.model {
-            VehicleModel::Paper => self.true_plant(plant).check().map_err(|e| err(e.field, e)),
+            VehicleModel::Paper => self.true_vehicle(plant).check().map_err(|e| err(e.field, e)),
             VehicleModel::RigidBody => self.rigid_body(plant).check().map_err(|e| err(e.field, e)),
         }
     }
