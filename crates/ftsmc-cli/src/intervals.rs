@@ -148,11 +148,18 @@ pub fn verdict_matrix(names: &[String], verdicts: &[PairVerdict]) -> Table {
     t
 }
 
+/// A confidence level as a percentage with no more digits than it needs
+/// (0.95 → "95", 0.995 → "99.5", 0.999 → "99.9").
+pub fn level_percent(confidence: f64) -> String {
+    let s = format!("{:.4}", 100.0 * confidence);
+    s.trim_end_matches('0').trim_end_matches('.').to_string()
+}
+
 /// The sentence above every table of intervals.
 pub fn level_note(confidence: f64) -> String {
     format!(
-        "{:.0} % intervals: rates Wilson score; median and p95 distribution-free order statistics (∞: too few runs \
+        "{} % intervals: rates Wilson score; median and p95 distribution-free order statistics (∞: too few runs \
          to bound); mean Student t (docs/statistics.md).",
-        100.0 * confidence
+        level_percent(confidence)
     )
 }

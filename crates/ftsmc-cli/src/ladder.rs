@@ -65,7 +65,7 @@ struct Cell {
     outcomes: ftsmc_sim::batch::verdicts::Outcomes,
 }
 
-fn cell(rows: &[&McRun]) -> Cell {
+fn cell(rows: &[&McRun], conf: f64) -> Cell {
     let done: Vec<&&McRun> = rows.iter().filter(|r| r.exit.is_completed()).collect();
     let rms = sorted(
         done.iter()
@@ -135,7 +135,6 @@ fn cell(rows: &[&McRun]) -> Cell {
             ftsmc_sim::batch::verdicts::rms_position_error(&r.metrics),
         );
     }
-    let conf = ftsmc_sim::stats::DEFAULT_CONFIDENCE;
     let success_interval =
         ftsmc_sim::stats::rate::wilson(success as u64, rows.len() as u64, conf).expect("counts and level are valid");
     let rms_median_interval = ftsmc_sim::stats::order::quantile_interval(&rms, 0.5, conf).ok().flatten();
@@ -165,7 +164,7 @@ fn opt(v: Option<f64>, digits: usize) -> String {
 /// `controllers` and write `beyond/ladder-runs/<scenario>.csv`; return the
 /// table (Markdown) and its JSON. With `figures`, one box plot per rung
 /// ([`crate::figures::montecarlo`]) under `figures/beyond/`.
-pub fn ladder(dir: &ResultDir, runs: u64, controllers: &[&str], figures: bool) -> Result<Ladder> {
+pub fn ladder(dir: &ResultDir, runs: u64, controllers: &[&str], figures: bool, confidence: f64) -> Result<Ladder> {
     let names: Vec<String> = controllers.iter().map(|c| (*c).to_string()).collect();
     let scenarios: Vec<Scenario> = LADDER
         .iter()
@@ -218,8 +217,8 @@ pub fn ladder(dir: &ResultDir, runs: u64, controllers: &[&str], figures: bool) -
         }
         let mut per = Map::new();
         let cells: Vec<Cell> =
-            names.iter().map(|name| cell(&rows.iter().filter(|r| &r.controller == name).collect::<Vec<_>>())).collect();
-        verdict_lines.push(rung_verdict(&s.name, &names, &cells));
+            names.iter().map(|name| cell(&rows.iter().filter(|r| &r.controller == name).collect::<Vec<_>>(), confidence)).collect();
+        verdict_lines.push(rung_verdict(&s.name, &names, &cells, confidence));
         for (name, c) in names.iter().zip(&cells) {
             table.row(vec![
                 s.name.clone(),
@@ -239,7 +238,7 @@ pub fn ladder(dir: &ResultDir, runs: u64, controllers: &[&str], figures: bool) -
                        "diverged": c.diverged, "median_rms_position_error": c.rms_median,
                        "p95_rms_position_error": c.rms_p95, "median_saturation_fraction": c.saturated,
                        "median_thrust_activity": c.thrust_activity, "median_torque_activity": c.torque_activity,
-                       "why_not": c.why, "confidence": ftsmc_sim::stats::DEFAULT_CONFIDENCE,
+                       "why_not": c.why, "confidence": confidence,
                        "success_rate_interval": c.success_interval,
                        "median_rms_position_error_interval": c.rms_median_interval}),
             );
@@ -272,20 +271,21 @@ pub fn ladder(dir: &ResultDir, runs: u64, controllers: &[&str], figures: bool) -
     );
     let _ = writeln!(
         md,
-        "Success with its 95 % Wilson interval, the median RMS position error with its distribution-free 95 % \
-         interval. Rung by rung, the two controllers with the lowest median RMS position error, paired on the same \
+        "Success with its {level} % Wilson interval, the median RMS position error with its distribution-free \
+         {level} % interval. Rung by rung, the two controllers with the lowest median RMS position error, paired on the same \
          draws (Wilcoxon signed-rank on RMS position error, McNemar's exact test on success, Holm over both; \
-         docs/statistics.md); `no difference shown` is where {runs} runs cannot decide:\n"
+         docs/statistics.md); `no difference shown` is where {runs} runs cannot decide:\n",
+        level = crate::intervals::level_percent(confidence)
     );
     for line in &verdict_lines {
         let _ = writeln!(md, "- {line}");
     }
-    Ok(Ladder { markdown: md, json: json!({"runs": runs, "rungs": rungs, "verdicts": verdict_lines}), flights })
+    Ok(Ladder { markdown: md, json: json!({"runs": runs, "confidence": confidence, "rungs": rungs, "verdicts": verdict_lines}), flights })
 }
 
 /// The verdict line of one rung: the two controllers with the lowest
 /// median RMS position error, paired.
-fn rung_verdict(rung: &str, names: &[String], cells: &[Cell]) -> String {
+fn rung_verdict(rung: &str, names: &[String], cells: &[Cell], confidence: f64) -> String {
     let mut order: Vec<usize> = (0..names.len()).filter(|&i| cells[i].rms_median.is_some()).collect();
     order.sort_by(|&a, &b| {
         cells[a].rms_median.unwrap_or(f64::INFINITY).total_cmp(&cells[b].rms_median.unwrap_or(f64::INFINITY))
@@ -294,7 +294,7 @@ fn rung_verdict(rung: &str, names: &[String], cells: &[Cell]) -> String {
         return format!("{rung}: fewer than two controllers completed a run");
     };
     let pair = [(names[a].clone(), &cells[a].outcomes), (names[b].clone(), &cells[b].outcomes)];
-    match ftsmc_sim::batch::verdicts::pairwise(&pair, ftsmc_sim::stats::DEFAULT_CONFIDENCE) {
+    match ftsmc_sim::batch::verdicts::pairwise(&pair, confidence) {
         Ok(v) => {
             let parts: Vec<String> = v
                 .iter()

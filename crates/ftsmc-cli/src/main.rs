@@ -80,6 +80,9 @@ enum Command {
         /// Raise a cost limit of the realistic Monte Carlo, e.g. `--limit max_flights=1e7` (repeatable; see docs/scenarios.md).
         #[arg(long = "limit", value_name = "KEY=VALUE")]
         limit: Vec<String>,
+        /// Confidence level of the ladder's and tuned table's intervals and verdicts (family-wise error 1 − confidence).
+        #[arg(long, default_value_t = ftsmc_sim::stats::DEFAULT_CONFIDENCE)]
+        confidence: f64,
     },
     /// Run one scenario file with its controllers (or those given); write CSV, summary.json and comparison figures.
     Run {
@@ -456,9 +459,10 @@ fn main() -> std::process::ExitCode {
 
 fn run(cli: Cli) -> Result<()> {
     match cli.command {
-        Command::Reproduce { out, no_figures, realistic_runs, limit } => {
+        Command::Reproduce { out, no_figures, realistic_runs, limit, confidence } => {
+            ftsmc_sim::stats::check_confidence(confidence).map_err(|e| anyhow::anyhow!("--confidence: {e}"))?;
             reproduce::price_realistic_runs(realistic_runs, &limit)?;
-            reproduce::reproduce(&out, !no_figures, realistic_runs)
+            reproduce::reproduce(&out, !no_figures, realistic_runs, confidence)
         }
         Command::Run { scenario, controllers, out, no_figures, limit, set } => {
             let mut scenario = load_scenario_with_limits(&scenario, &limit, &set)?;

@@ -369,7 +369,7 @@ pub fn limit_cycle_table(runs: &[&RunOutput], from: f64) -> String {
 /// `ftsmc reproduce`: the paper's results, then "Beyond the paper"
 /// ([`beyond_the_paper`], with `realistic_runs` Monte Carlo runs of
 /// realistic scenario 2 per controller; 0 skips the Monte Carlo).
-pub fn reproduce(out: &Path, figures: bool, realistic_runs: u64) -> Result<()> {
+pub fn reproduce(out: &Path, figures: bool, realistic_runs: u64, confidence: f64) -> Result<()> {
     let started = Instant::now();
     let scenarios = Scenario::paper_scenarios();
     let (s1, s2) = (&scenarios[0], &scenarios[1]);
@@ -507,10 +507,10 @@ pub fn reproduce(out: &Path, figures: bool, realistic_runs: u64) -> Result<()> {
     // Beyond the paper: its own files under `beyond/` (and `figures/beyond/`),
     // so everything above stays exactly what the paper part wrote before.
     let beyond_started = Instant::now();
-    let beyond = beyond_the_paper(&dir, figures, realistic_runs)?;
+    let beyond = beyond_the_paper(&dir, figures, realistic_runs, confidence)?;
     let beyond_elapsed = beyond_started.elapsed().as_secs_f64();
     // The committed tuned gains beside the defaults, on held-out draws (not re-tuned).
-    let tuned = crate::tuned::write(&dir, realistic_runs.min(crate::tuned::DEFAULT_TUNED_RUNS))?;
+    let tuned = crate::tuned::write(&dir, realistic_runs.min(crate::tuned::DEFAULT_TUNED_RUNS), confidence)?;
     // report.md: every table printed (the paper's part, then beyond it),
     // with links to the beyond part's own files; report.html: the same
     // with every figure, the provenance and the 3-D replay.
@@ -631,7 +631,7 @@ pub fn price_realistic_runs(runs: u64, limit_overrides: &[String]) -> Result<()>
 /// `beyond/ladder-runs/<rung>.csv` (when `mc_runs > 0`), per-run CSV and the
 /// resolved `scenario.toml` under `beyond/<scenario>/`, and with `figures`
 /// `figures/beyond/<scenario>-{position,rotors}.{svg,png}`.
-pub fn beyond_the_paper(dir: &ResultDir, figures: bool, mc_runs: u64) -> Result<Beyond> {
+pub fn beyond_the_paper(dir: &ResultDir, figures: bool, mc_runs: u64, confidence: f64) -> Result<Beyond> {
     let scenarios: Vec<Scenario> = BEYOND_SCENARIOS
         .iter()
         .map(|(file, text)| Scenario::from_toml_str(text, file).map_err(anyhow::Error::from))
@@ -846,7 +846,7 @@ pub fn beyond_the_paper(dir: &ResultDir, figures: bool, mc_runs: u64) -> Result<
     if mc_runs > 0 {
         // The wind ladder (crate::ladder): every rung realistic-<level>-<n>,
         // `mc_runs` Monte Carlo runs per rung and controller.
-        let l = crate::ladder::ladder(dir, mc_runs, BEYOND_MC_CONTROLLERS, figures)?;
+        let l = crate::ladder::ladder(dir, mc_runs, BEYOND_MC_CONTROLLERS, figures, confidence)?;
         md.push_str(&l.markdown);
         crate::console::print_now(&l.markdown);
         flights += l.flights;

@@ -256,12 +256,11 @@ fn label_list(rows: &[Row], scenario: &str) -> String {
 /// `reproduce`'s tuned-gains section: fly the table with `runs` held-out
 /// draws per gain set and write `beyond/tuned.md`; `None` (nothing flown)
 /// when `runs` is 0 (`--realistic-runs 0`).
-pub fn write(dir: &crate::output::ResultDir, runs: u64) -> Result<Option<String>> {
+pub fn write(dir: &crate::output::ResultDir, runs: u64, confidence: f64) -> Result<Option<String>> {
     if runs == 0 {
         return Ok(None);
     }
     let rows = fly(runs)?;
-    let confidence = ftsmc_sim::stats::DEFAULT_CONFIDENCE;
     let mut md = String::from("# Tuned gains against default gains (held-out draws)\n\n");
     md.push_str("The files are `scenarios/tuned/<scenario>-<controller>.toml` (each records the `ftsmc tune` command that made it; nothing is re-tuned here). docs/tuning.md explains the method.\n\n");
     md.push_str(&table(&rows, confidence));

@@ -38,10 +38,14 @@ fn no_files_with_suffix(dir: &Path, suffix: &str) -> bool {
 fn reproduce_from_any_directory_writes_table_json_and_csv() {
     let tmp = scratch("reproduce");
     let dir = tmp.path();
-    let out = ftsmc(&["reproduce", "--out", "res", "--no-figures", "--realistic-runs", "4"], dir);
+    let args = ["reproduce", "--out", "res", "--no-figures", "--realistic-runs", "4", "--confidence", "0.9"];
+    let out = ftsmc(&args, dir);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(stdout.contains("Table 3") && stdout.contains("0.2674"), "{stdout}");
+    // --confidence reaches the ladder and the tuned table (text and JSON).
+    assert!(stdout.contains("Success with its 90 % Wilson interval"), "{stdout}");
+    assert!(stdout.contains("90 % intervals: rates Wilson score") && !stdout.contains("95 % interval"), "{stdout}");
     assert!(stdout.contains("Headline") && (stdout.contains("**confirmed**") || stdout.contains("**not confirmed**")));
     let summary: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.join("res/summary.json")).unwrap()).unwrap();

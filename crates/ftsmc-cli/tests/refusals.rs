@@ -256,6 +256,7 @@ fn reproduce_realistic_runs_are_priced() {
         None,
         &["max_output_bytes"],
     );
+    refused("reproduce-confidence", &["reproduce", "--no-figures", "--confidence", "1.5"], None, &["--confidence", "1.5"]);
 }
 
 #[test]
