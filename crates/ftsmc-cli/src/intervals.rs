@@ -71,10 +71,10 @@ pub fn effect_cell(v: &PairVerdict) -> String {
     }
 }
 
-/// A p-value: 3 significant digits, `< 1e-12` below.
+/// A p-value: 3 significant digits, `below 1e-12` under it (no `<`: the cell is printed as Markdown).
 pub fn p_cell(p: f64) -> String {
     if p < 1e-12 {
-        "< 1e-12".into()
+        "below 1e-12".into()
     } else if p < 0.001 {
         format!("{p:.1e}")
     } else {
@@ -109,7 +109,7 @@ pub fn verdict_table(verdicts: &[PairVerdict]) -> Table {
 /// position error and on success (`A` = the row is better, `B` = the
 /// column, `=` no difference shown), e.g. `RMS A · succ =`.
 pub fn verdict_matrix(names: &[String], verdicts: &[PairVerdict]) -> Table {
-    let mut header = vec![String::from("A \\ B")];
+    let mut header = vec![String::from("row A vs column B")];
     header.extend(names.iter().map(|n| display_name(n)));
     let mut t = Table::new(header);
     let mark = |v: &PairVerdict, flip: bool| match (v.verdict, flip) {

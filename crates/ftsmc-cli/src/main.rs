@@ -25,6 +25,7 @@ mod svg;
 mod ticks;
 mod tune;
 mod tuned;
+mod worst_case;
 #[cfg(test)]
 mod writers_fuzz;
 
@@ -83,6 +84,10 @@ enum Command {
         /// Confidence level of the ladder's and tuned table's intervals and verdicts (family-wise error 1 − confidence).
         #[arg(long, default_value_t = ftsmc_sim::stats::DEFAULT_CONFIDENCE)]
         confidence: f64,
+        /// Flights per falsification and per failure-probability estimate in the worst-case table
+        /// (two rungs × every controller × default and tuned gains; 0: no table; docs/falsification.md).
+        #[arg(long, default_value_t = 0)]
+        worst_case_budget: u64,
     },
     /// Run one scenario file with its controllers (or those given); write CSV, summary.json and comparison figures.
     Run {
@@ -459,10 +464,17 @@ fn main() -> std::process::ExitCode {
 
 fn run(cli: Cli) -> Result<()> {
     match cli.command {
-        Command::Reproduce { out, no_figures, realistic_runs, limit, confidence } => {
+        Command::Reproduce { out, no_figures, realistic_runs, limit, confidence, worst_case_budget } => {
             ftsmc_sim::stats::check_confidence(confidence).map_err(|e| anyhow::anyhow!("--confidence: {e}"))?;
             reproduce::price_realistic_runs(realistic_runs, &limit)?;
-            reproduce::reproduce(&out, !no_figures, realistic_runs, confidence)
+            if worst_case_budget > 0 {
+                anyhow::ensure!(
+                    worst_case_budget >= 20,
+                    "--worst-case-budget {worst_case_budget}: cross-entropy sampling needs at least 20 flights (0: no table)"
+                );
+                falsify::check_budget(worst_case_budget).map_err(|e| anyhow::anyhow!("--worst-case-budget: {e}"))?;
+            }
+            reproduce::reproduce(&out, !no_figures, realistic_runs, confidence, worst_case_budget)
         }
         Command::Run { scenario, controllers, out, no_figures, limit, set } => {
             let mut scenario = load_scenario_with_limits(&scenario, &limit, &set)?;

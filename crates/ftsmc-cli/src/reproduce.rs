@@ -369,7 +369,7 @@ pub fn limit_cycle_table(runs: &[&RunOutput], from: f64) -> String {
 /// `ftsmc reproduce`: the paper's results, then "Beyond the paper"
 /// ([`beyond_the_paper`], with `realistic_runs` Monte Carlo runs of
 /// realistic scenario 2 per controller; 0 skips the Monte Carlo).
-pub fn reproduce(out: &Path, figures: bool, realistic_runs: u64, confidence: f64) -> Result<()> {
+pub fn reproduce(out: &Path, figures: bool, realistic_runs: u64, confidence: f64, worst_case_budget: u64) -> Result<()> {
     let started = Instant::now();
     let scenarios = Scenario::paper_scenarios();
     let (s1, s2) = (&scenarios[0], &scenarios[1]);
@@ -511,6 +511,11 @@ pub fn reproduce(out: &Path, figures: bool, realistic_runs: u64, confidence: f64
     let beyond_elapsed = beyond_started.elapsed().as_secs_f64();
     // The committed tuned gains beside the defaults, on held-out draws (not re-tuned).
     let tuned = crate::tuned::write(&dir, realistic_runs.min(crate::tuned::DEFAULT_TUNED_RUNS), confidence)?;
+    // Worst cases and failure probabilities on two rungs (--worst-case-budget; off by default).
+    let worst = crate::worst_case::write(&dir, worst_case_budget, BEYOND_MC_CONTROLLERS, confidence, figures)?;
+    if let Some(md) = &worst {
+        crate::console::print_now(md);
+    }
     // report.md: every table printed (the paper's part, then beyond it),
     // with links to the beyond part's own files; report.html: the same
     // with every figure, the provenance and the 3-D replay.
@@ -523,11 +528,18 @@ pub fn reproduce(out: &Path, figures: bool, realistic_runs: u64, confidence: f64
     if tuned.is_some() {
         full.push_str(", [beyond/tuned.md](beyond/tuned.md)");
     }
+    if worst.is_some() {
+        full.push_str(", [beyond/worst-case.md](beyond/worst-case.md), [beyond/worst-case.json](beyond/worst-case.json)");
+    }
     full.push_str(".\n\n");
     full.push_str(&beyond.report);
     if let Some(tuned) = &tuned {
         full.push_str("\n## Tuned gains against default gains (held-out draws)\n\n");
         full.push_str(tuned);
+    }
+    if let Some(worst) = &worst {
+        full.push_str("\n## Worst cases and failure probabilities\n");
+        full.push_str(worst);
     }
     dir.write("report.md", full.as_bytes())?;
     let html = crate::html::report(dir.path(), "ftsmc reproduce: the paper's scenarios and beyond", &full)?;
