@@ -24,6 +24,10 @@ pub enum VehiclePreset {
     /// PX4's reference X500, PX4's Gazebo model (`vehicles/px4-x500.toml`).
     #[serde(rename = "px4-x500")]
     Px4X500,
+    /// UZH RPG's Agilicious 5-inch racer, Flightmare's identified set
+    /// (Foehn et al. 2022; `vehicles/agilicious.toml`).
+    #[serde(rename = "agilicious")]
+    Agilicious,
 }
 
 /// The sections a preset fills.
@@ -36,7 +40,8 @@ pub const RIGID_BODY_ONLY_KEYS: [&str; 6] =
 
 impl VehiclePreset {
     /// Every preset, in the order `ftsmc list` shows them.
-    pub const ALL: [VehiclePreset; 3] = [VehiclePreset::Hummingbird, VehiclePreset::Crazyflie2, VehiclePreset::Px4X500];
+    pub const ALL: [VehiclePreset; 4] =
+        [VehiclePreset::Hummingbird, VehiclePreset::Crazyflie2, VehiclePreset::Px4X500, VehiclePreset::Agilicious];
 
     /// The name a scenario file writes.
     pub fn name(self) -> &'static str {
@@ -44,6 +49,7 @@ impl VehiclePreset {
             VehiclePreset::Hummingbird => "hummingbird",
             VehiclePreset::Crazyflie2 => "crazyflie-2",
             VehiclePreset::Px4X500 => "px4-x500",
+            VehiclePreset::Agilicious => "agilicious",
         }
     }
 
@@ -63,6 +69,7 @@ impl VehiclePreset {
             VehiclePreset::Hummingbird => include_str!("../../../../vehicles/hummingbird.toml"),
             VehiclePreset::Crazyflie2 => include_str!("../../../../vehicles/crazyflie-2.toml"),
             VehiclePreset::Px4X500 => include_str!("../../../../vehicles/px4-x500.toml"),
+            VehiclePreset::Agilicious => include_str!("../../../../vehicles/agilicious.toml"),
         }
     }
 
