@@ -53,9 +53,12 @@ def _cli_runs(path: Path) -> pd.DataFrame:
     # pandas reads integers as int64 where they fit; ftsmc gives uint64.
     for column in ("run", "seed", "saturated_periods"):
         frame[column] = frame[column].astype(np.uint64)
-    # A text column with empty cells (margin_binds where no envelope limits
-    # the flight): ftsmc gives None there, as for an empty number NaN.
-    frame["margin_binds"] = pd.Series([None if pd.isna(v) else v for v in frame["margin_binds"]], dtype=object)
+    # Text columns: ftsmc gives Python objects (str, None for an empty cell
+    # such as margin_binds where no envelope limits the flight), whatever
+    # string dtype this pandas's read_csv infers (object before pandas 3,
+    # `str` from 3.0 on).
+    for column in ("controller", "exit", "margin_binds"):
+        frame[column] = pd.Series([None if pd.isna(v) else v for v in frame[column]], dtype=object)
     return frame
 
 
