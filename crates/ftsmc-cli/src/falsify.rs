@@ -329,12 +329,12 @@ pub fn run_failure_probability(
     dir.write(format!("{controller}.failure-probability.json"), serde_json::to_string_pretty(&summary)?.as_bytes())?;
     dir.commit()?;
     let pct = confidence * 100.0;
-    println!(
-        "P(margin < 0) of {controller} on {} (cross-entropy importance sampling, {} flights, {} levels):",
-        scenario.name,
-        e.flights,
-        e.levels.len()
-    );
+    let method = if e.levels.is_empty() {
+        format!("not rare: plain Monte Carlo at the nominal law, {} flights", e.flights)
+    } else {
+        format!("cross-entropy importance sampling, {} flights, {} levels", e.flights, e.levels.len())
+    };
+    println!("P(margin < 0) of {controller} on {} ({method}):", scenario.name);
     println!(
         "  p = {:.3e}  [{:.3e}, {:.3e}] ({pct:.0} %), {} failing of {} final flights, effective sample size {:.0}",
         e.p, e.lo, e.hi, e.failures, e.final_flights, e.ess

@@ -147,6 +147,35 @@ fn cross_entropy_covers_a_known_rare_probability_with_far_fewer_flights() {
     assert!(saved[0] >= 10.0, "fewest flights saved: {}x", saved[0]);
 }
 
+/// A failure that is not rare (`p = 0.3`): the first level, at the nominal
+/// law, already fails in more than ρ of its draws, so the estimator flies
+/// the whole budget at the nominal law (weights 1, no level) and gives the
+/// Wilson interval; it covers the truth at about the stated level.
+#[test]
+fn a_failure_that_is_not_rare_is_estimated_by_plain_monte_carlo_over_the_whole_budget() {
+    let beta = ftsmc_sim::stats::normal_quantile(0.7);
+    let p = ftsmc_sim::stats::normal_sf(beta);
+    let tail = Tail(beta);
+    let (mut covered, mut plain) = (0, 0);
+    for seed in 0..50 {
+        let e = cross_entropy(&tail, 400, seed, 0.95);
+        // The switch is itself a draw: with 20 flights in the first level,
+        // fewer than 2 failures (its 10 % quantile above 0) has probability
+        // 0.8 %, and then the levels go on as for a rare failure.
+        if e.levels.is_empty() {
+            plain += 1;
+            assert!(e.flights == 400 && e.final_flights == 400, "{e:?}");
+            assert_eq!(e.ess, e.failures as f64, "weights are 1");
+            let w = ftsmc_sim::stats::rate::wilson(e.failures, 400, 0.95).unwrap();
+            assert_eq!((e.lo, e.hi), (w.lo, w.hi));
+        }
+        covered += usize::from(e.lo <= p && p <= e.hi);
+    }
+    println!("p = 0.3: plain Monte Carlo in {plain}/50 seeds, covered in {covered}/50");
+    assert!(plain >= 45, "plain in {plain} of 50");
+    assert!(covered >= 45, "covered in {covered} of 50");
+}
+
 #[test]
 fn the_worst_case_replays_bit_for_bit_and_the_search_is_the_same_on_any_thread_count() {
     let s = load(&short(""));

@@ -24,7 +24,11 @@
 //! Gaussian family; σ smoothed by [`SMOOTHING`] and kept above
 //! [`SIGMA_FLOOR`]); stop when `γ = 0`, after [`MAX_LEVELS`] or when the
 //! levels have used half the budget. A level is `budget/20` flights (at
-//! least 10). **Estimate**: the remaining flights (at least
+//! least 10). **Not rare**: when already the first level (drawn from the
+//! nominal law) has `γ = 0` — at least `ρ` of its draws fail — importance
+//! sampling has nothing to gain over plain Monte Carlo, and the whole
+//! budget is flown at the nominal law and pooled (Wilson score interval, no
+//! level recorded). **Estimate**: the remaining flights (at least
 //! half the budget) from the last `q`; only they enter
 //!
 //! ```text
@@ -149,6 +153,13 @@ pub fn cross_entropy(objective: &dyn RareObjective, budget: u64, seed: u64, conf
         sorted.sort_by(f64::total_cmp);
         let k = ((RHO * per_level as f64).ceil() as usize).clamp(1, sorted.len()) - 1;
         let gamma = sorted[k].max(0.0);
+        if levels.is_empty() && gamma <= 0.0 {
+            // Not rare: at least ρ of the first level's draws, drawn from
+            // the nominal law, fail. Importance sampling cannot beat plain
+            // Monte Carlo there (its weights only add variance), so the
+            // whole budget is spent at the nominal law and pooled.
+            return not_rare(objective, margins, budget, seed, confidence);
+        }
         let elite: Vec<(&Vec<f64>, f64)> = z
             .iter()
             .zip(&margins)
@@ -186,6 +197,29 @@ pub fn cross_entropy(objective: &dyn RareObjective, budget: u64, seed: u64, conf
     estimate.flights = next + n;
     estimate.levels = levels;
     estimate
+}
+
+/// The estimate when the first level shows failure is not rare: its
+/// `first` margins (draws `0..`, nominal law) and the rest of the budget,
+/// draws from `first.len()` on at the nominal law (stream 2), pooled; the
+/// Wilson score interval, as [`plain`]. No level is recorded.
+fn not_rare(objective: &dyn RareObjective, first: Vec<f64>, budget: u64, seed: u64, confidence: f64) -> Estimate {
+    let d = objective.dim();
+    let done = first.len() as u64;
+    let rest = budget.saturating_sub(done);
+    let mut rng = chacha_stream(seed, 2);
+    let (mean, std) = (vec![0.0; d], vec![1.0; d]);
+    let z: Vec<Vec<f64>> = (0..rest).map(|_| draw(&mut rng, &mean, &std)).collect();
+    let mut margins = first;
+    margins.extend(objective.margins(done, &z));
+    let n = margins.len() as u64;
+    let mut e = summarise(&margins, &vec![1.0; margins.len()], confidence);
+    if let Ok(i) = crate::stats::rate::wilson(e.failures, n, confidence) {
+        e.lo = i.lo;
+        e.hi = i.hi;
+    }
+    e.flights = n;
+    e
 }
 
 /// Plain Monte Carlo of `P(margin < 0)`: `n` flights at the nominal law
