@@ -12,6 +12,7 @@ use ftsmc_sim::registry::label;
 use ftsmc_sim::run::{planned_steps, Divergence, ExitStatus};
 use ftsmc_sim::scenario::ladder::LADDER;
 use ftsmc_sim::scenario::Scenario;
+use rayon::prelude::*;
 use serde_json::{json, Map, Value};
 
 use crate::console::{steps_bar, Table};
@@ -192,6 +193,9 @@ pub fn ladder(dir: &ResultDir, runs: u64, controllers: &[&str], figures: bool, c
     let mut wind_table = Table::new(["rung", "mean wind (m/s)", "σ_u, σ_v, σ_w (m/s)", "u variance below 0.1 Hz"]);
     let mut rungs = Map::new();
     let mut verdict_lines: Vec<String> = Vec::new();
+    // Each rung's runs, kept for its box plot: the plots are drawn after the
+    // flights, in parallel (rasterising one takes about a second).
+    let mut flown: Vec<Vec<McRun>> = Vec::new();
     for s in &scenarios {
         let spec = s.montecarlo.clone().unwrap_or_default();
         let rows = run_batch(
@@ -203,9 +207,6 @@ pub fn ladder(dir: &ResultDir, runs: u64, controllers: &[&str], figures: bool, c
         .map_err(|e| anyhow!(e))?;
         flights += rows.len();
         dir.write(format!("beyond/ladder-runs/{}.csv", s.name), &crate::montecarlo::runs_csv(&rows)?)?;
-        if figures {
-            crate::figures::montecarlo(s, &rows, &names, &dir.path().join("figures").join("beyond"))?;
-        }
         let wind = s.wind.clone().unwrap_or_default().summary();
         if s.name.ends_with("-1") {
             wind_table.row(vec![
@@ -250,6 +251,16 @@ pub fn ladder(dir: &ResultDir, runs: u64, controllers: &[&str], figures: bool, c
                             "u_share_below_0_1_hz": wind.u_share_below_0_1_hz},
                    "controllers": per}),
         );
+        if figures {
+            flown.push(rows);
+        }
+    }
+    if figures {
+        let folder = dir.path().join("figures").join("beyond");
+        scenarios
+            .par_iter()
+            .zip(flown.par_iter())
+            .try_for_each(|(s, rows)| crate::figures::montecarlo(s, rows, &names, &folder).map(|_| ()))?;
     }
     bar.finish_and_clear();
     let mut md = String::new();

@@ -117,6 +117,7 @@ pub fn write(
         "first violation (flight)",
         "violating flights",
         p_header.as_str(),
+        "estimator",
         "ESS",
     ]);
     let mut json_cells = Vec::new();
@@ -131,6 +132,7 @@ pub fn write(
             c.first_violation.map_or_else(|| "none".into(), |f| f.to_string()),
             format!("{}/{budget}", c.violations),
             format!("{:.2e} [{:.2e}, {:.2e}]", e.p, e.lo, e.hi),
+            if e.levels.is_empty() { "plain (not rare)".into() } else { format!("CE, {} levels", e.levels.len()) },
             format!("{:.0}", e.ess),
         ]);
         let file = format!("beyond/worst-case/{}-{}-{}.toml", c.rung, c.controller, c.gains);
@@ -147,7 +149,7 @@ pub fn write(
         m.insert(
             "failure_probability".into(),
             json!({"p": e.p, "lo": e.lo, "hi": e.hi, "confidence": e.confidence, "flights": e.flights,
-                   "effective_sample_size": e.ess, "failures": e.failures}),
+                   "levels": e.levels.len(), "effective_sample_size": e.ess, "failures": e.failures}),
         );
         json_cells.push(Value::Object(m));
     }
@@ -160,8 +162,10 @@ pub fn write(
          box (mean wind, one 1−cosine gust), starting from the nominal point, with the rung's turbulence seed held \
          fixed; P(fail), the probability that the margin is negative under the rung's own draws (its Monte Carlo \
          draws of mass, inertia, drag and turbulence, the box's values at their nominal distributions), is \
-         estimated by cross-entropy importance sampling, with its {level} % interval and the effective sample size \
-         (ESS) of its failing draws (docs/falsification.md). A search that \
+         estimated by cross-entropy importance sampling (CE; plain Monte Carlo when a tenth of the first level's \
+         nominal draws already fail), with its {level} % interval and the effective sample size (ESS) of its \
+         failing draws: with an ESS of a few the interval rests on a few weights and is not to be trusted \
+         (docs/falsification.md). A search that \
          finds no violation proves nothing. Each worst case is a file under `beyond/worst-case/`: `ftsmc run` of it \
          gives the margin shown.\n\n{}",
         table.render()
