@@ -84,6 +84,10 @@ enum Command {
         /// Confidence level of the ladder's and tuned table's intervals and verdicts (family-wise error 1 − confidence).
         #[arg(long, default_value_t = ftsmc_sim::stats::DEFAULT_CONFIDENCE)]
         confidence: f64,
+        /// Held-out draws per gain set in the table of the committed tuned gains against the defaults
+        /// (`scenarios/tuned/`; 0: no table; docs/tuning.md's table uses 200).
+        #[arg(long, default_value_t = 0)]
+        tuned_runs: u64,
         /// Flights per falsification and per failure-probability estimate in the worst-case table
         /// (two rungs × every controller × default and tuned gains; 0: no table; docs/falsification.md).
         #[arg(long, default_value_t = 0)]
@@ -464,9 +468,12 @@ fn main() -> std::process::ExitCode {
 
 fn run(cli: Cli) -> Result<()> {
     match cli.command {
-        Command::Reproduce { out, no_figures, realistic_runs, limit, confidence, worst_case_budget } => {
+        Command::Reproduce { out, no_figures, realistic_runs, limit, confidence, tuned_runs, worst_case_budget } => {
             ftsmc_sim::stats::check_confidence(confidence).map_err(|e| anyhow::anyhow!("--confidence: {e}"))?;
             reproduce::price_realistic_runs(realistic_runs, &limit)?;
+            // Two gain sets per tuned file, on the ladder's vehicles: priced as twice the runs per rung.
+            reproduce::price_realistic_runs(tuned_runs.saturating_mul(2), &limit)
+                .map_err(|e| anyhow::anyhow!("--tuned-runs {tuned_runs}: {e:#}"))?;
             if worst_case_budget > 0 {
                 anyhow::ensure!(
                     worst_case_budget >= 20,
@@ -474,7 +481,9 @@ fn run(cli: Cli) -> Result<()> {
                 );
                 falsify::check_budget(worst_case_budget).map_err(|e| anyhow::anyhow!("--worst-case-budget: {e}"))?;
             }
-            reproduce::reproduce(&out, !no_figures, realistic_runs, confidence, worst_case_budget)
+            let options =
+                reproduce::Options { figures: !no_figures, realistic_runs, tuned_runs, confidence, worst_case_budget };
+            reproduce::reproduce(&out, &options)
         }
         Command::Run { scenario, controllers, out, no_figures, limit, set } => {
             let mut scenario = load_scenario_with_limits(&scenario, &limit, &set)?;

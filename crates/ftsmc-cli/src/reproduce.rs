@@ -366,10 +366,28 @@ pub fn limit_cycle_table(runs: &[&RunOutput], from: f64) -> String {
     md
 }
 
+/// What `ftsmc reproduce` flies beyond the paper's part (its flags).
+#[derive(Clone, Copy, Debug)]
+pub struct Options {
+    /// Render figures.
+    pub figures: bool,
+    /// `--realistic-runs`: Monte Carlo runs per ladder rung and controller.
+    pub realistic_runs: u64,
+    /// `--tuned-runs`: held-out draws per gain set of the tuned table (0: none).
+    pub tuned_runs: u64,
+    /// `--confidence` of every interval and verdict beyond the paper.
+    pub confidence: f64,
+    /// `--worst-case-budget`: flights per search and estimate (0: no table).
+    pub worst_case_budget: u64,
+}
+
 /// `ftsmc reproduce`: the paper's results, then "Beyond the paper"
-/// ([`beyond_the_paper`], with `realistic_runs` Monte Carlo runs of
-/// realistic scenario 2 per controller; 0 skips the Monte Carlo).
-pub fn reproduce(out: &Path, figures: bool, realistic_runs: u64, confidence: f64, worst_case_budget: u64) -> Result<()> {
+/// ([`beyond_the_paper`]: the realistic scenarios and the wind ladder with
+/// `realistic_runs` Monte Carlo runs per rung and controller, 0 skips it),
+/// the tuned table (`tuned_runs` held-out draws, 0 skips it) and the
+/// worst-case table (`worst_case_budget`, 0 skips it).
+pub fn reproduce(out: &Path, options: &Options) -> Result<()> {
+    let Options { figures, realistic_runs, tuned_runs, confidence, worst_case_budget } = *options;
     let started = Instant::now();
     let scenarios = Scenario::paper_scenarios();
     let (s1, s2) = (&scenarios[0], &scenarios[1]);
@@ -510,7 +528,7 @@ pub fn reproduce(out: &Path, figures: bool, realistic_runs: u64, confidence: f64
     let beyond = beyond_the_paper(&dir, figures, realistic_runs, confidence)?;
     let beyond_elapsed = beyond_started.elapsed().as_secs_f64();
     // The committed tuned gains beside the defaults, on held-out draws (not re-tuned).
-    let tuned = crate::tuned::write(&dir, realistic_runs.min(crate::tuned::DEFAULT_TUNED_RUNS), confidence)?;
+    let tuned = crate::tuned::write(&dir, tuned_runs, confidence)?;
     // Worst cases and failure probabilities on two rungs (--worst-case-budget; off by default).
     let worst = crate::worst_case::write(&dir, worst_case_budget, BEYOND_MC_CONTROLLERS, confidence, figures)?;
     if let Some(md) = &worst {
@@ -561,6 +579,11 @@ pub fn reproduce(out: &Path, figures: bool, realistic_runs: u64, confidence: f64
     );
     if let Some(tuned) = tuned {
         println!("\n{tuned}\nwrote {o}/beyond/tuned.md");
+    } else {
+        println!(
+            "(the committed tuned gains against the defaults: `ftsmc reproduce --tuned-runs {}`, docs/tuning.md)",
+            crate::tuned::DEFAULT_TUNED_RUNS
+        );
     }
     Ok(())
 }

@@ -203,7 +203,7 @@ fn worst_gust_figure(rung: &str, cells: &[&Cell], folder: &std::path::Path) -> R
                 .collect();
             series.push(Series {
                 label: format!(
-                    "{} (margin {}, mean wind {mean:.1} m/s)",
+                    "{}, {gains} gains (margin {}, mean wind {mean:.1} m/s)",
                     ftsmc_sim::registry::label(&c.controller),
                     num(c.lowest)
                 ),
