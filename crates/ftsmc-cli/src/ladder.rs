@@ -217,8 +217,10 @@ pub fn ladder(dir: &ResultDir, runs: u64, controllers: &[&str], figures: bool, c
             ]);
         }
         let mut per = Map::new();
-        let cells: Vec<Cell> =
-            names.iter().map(|name| cell(&rows.iter().filter(|r| &r.controller == name).collect::<Vec<_>>(), confidence)).collect();
+        let cells: Vec<Cell> = names
+            .iter()
+            .map(|name| cell(&rows.iter().filter(|r| &r.controller == name).collect::<Vec<_>>(), confidence))
+            .collect();
         verdict_lines.push(rung_verdict(&s.name, &names, &cells, confidence));
         for (name, c) in names.iter().zip(&cells) {
             table.row(vec![
@@ -291,7 +293,11 @@ pub fn ladder(dir: &ResultDir, runs: u64, controllers: &[&str], figures: bool, c
     for line in &verdict_lines {
         let _ = writeln!(md, "- {line}");
     }
-    Ok(Ladder { markdown: md, json: json!({"runs": runs, "confidence": confidence, "rungs": rungs, "verdicts": verdict_lines}), flights })
+    Ok(Ladder {
+        markdown: md,
+        json: json!({"runs": runs, "confidence": confidence, "rungs": rungs, "verdicts": verdict_lines}),
+        flights,
+    })
 }
 
 /// The verdict line of one rung: the two controllers with the lowest

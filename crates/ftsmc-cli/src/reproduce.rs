@@ -547,7 +547,9 @@ pub fn reproduce(out: &Path, options: &Options) -> Result<()> {
         full.push_str(", [beyond/tuned.md](beyond/tuned.md)");
     }
     if worst.is_some() {
-        full.push_str(", [beyond/worst-case.md](beyond/worst-case.md), [beyond/worst-case.json](beyond/worst-case.json)");
+        full.push_str(
+            ", [beyond/worst-case.md](beyond/worst-case.md), [beyond/worst-case.json](beyond/worst-case.json)",
+        );
     }
     full.push_str(".\n\n");
     full.push_str(&beyond.report);

@@ -95,9 +95,7 @@ pub fn write(
         return Ok(None);
     }
     let total = RUNGS.len() * controllers.len() * 2;
-    eprintln!(
-        "beyond the paper: worst cases, {total} searches and failure probabilities of {budget} flights each …"
-    );
+    eprintln!("beyond the paper: worst cases, {total} searches and failure probabilities of {budget} flights each …");
     let mut cells = Vec::new();
     for rung in RUNGS {
         for controller in controllers {
@@ -191,14 +189,15 @@ fn worst_gust_figure(rung: &str, cells: &[&Cell], folder: &std::path::Path) -> R
         let mut series = Vec::new();
         for c in cells.iter().filter(|c| c.gains == gains) {
             let wind = c.worst.wind.clone().unwrap_or_default().resolved();
-            let mean = wind.mean[0].hypot(wind.mean[1]);
+            let mean = (wind.mean[0] * wind.mean[0] + wind.mean[1] * wind.mean[1]).sqrt();
             let n = 1001;
             let xs: Vec<f64> = (0..n).map(|k| c.worst.duration * k as f64 / (n - 1) as f64).collect();
             let ys = xs
                 .iter()
                 .map(|&t| {
                     let w = wind.deterministic(t);
-                    (w[0] - wind.mean[0]).hypot(w[1] - wind.mean[1])
+                    let (gx, gy) = (w[0] - wind.mean[0], w[1] - wind.mean[1]);
+                    (gx * gx + gy * gy).sqrt()
                 })
                 .collect();
             series.push(Series {

@@ -38,8 +38,18 @@ fn no_files_with_suffix(dir: &Path, suffix: &str) -> bool {
 fn reproduce_from_any_directory_writes_table_json_and_csv() {
     let tmp = scratch("reproduce");
     let dir = tmp.path();
-    let args =
-        ["reproduce", "--out", "res", "--no-figures", "--realistic-runs", "4", "--tuned-runs", "4", "--confidence", "0.9"];
+    let args = [
+        "reproduce",
+        "--out",
+        "res",
+        "--no-figures",
+        "--realistic-runs",
+        "4",
+        "--tuned-runs",
+        "4",
+        "--confidence",
+        "0.9",
+    ];
     let out = ftsmc(&args, dir);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let stdout = String::from_utf8_lossy(&out.stdout);

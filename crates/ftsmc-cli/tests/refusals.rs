@@ -256,8 +256,18 @@ fn reproduce_realistic_runs_are_priced() {
         None,
         &["max_output_bytes"],
     );
-    refused("reproduce-confidence", &["reproduce", "--no-figures", "--confidence", "1.5"], None, &["--confidence", "1.5"]);
-    refused("reproduce-worst-case", &["reproduce", "--no-figures", "--worst-case-budget", "5"], None, &["--worst-case-budget 5", "20"]);
+    refused(
+        "reproduce-confidence",
+        &["reproduce", "--no-figures", "--confidence", "1.5"],
+        None,
+        &["--confidence", "1.5"],
+    );
+    refused(
+        "reproduce-worst-case",
+        &["reproduce", "--no-figures", "--worst-case-budget", "5"],
+        None,
+        &["--worst-case-budget 5", "20"],
+    );
 }
 
 #[test]
