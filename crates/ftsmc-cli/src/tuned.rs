@@ -15,7 +15,7 @@ use crate::console::{num, Table};
 use crate::intervals::{effect_cell, level_note, metre_cell, p_cell, rate_cell};
 use crate::tune::outcomes;
 
-/// Held-out flights per gain set in `reproduce` (capped by `--realistic-runs`).
+/// Held-out flights per gain set of docs/tuning.md's table (`reproduce --tuned-runs 200`; the default run flies none).
 pub const DEFAULT_TUNED_RUNS: u64 = 200;
 
 /// The training flights per candidate the committed files were tuned with
