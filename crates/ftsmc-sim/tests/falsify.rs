@@ -211,7 +211,10 @@ fn failure_probability_agrees_with_plain_monte_carlo_on_a_real_scenario() {
     let rp = RareProblem { problem: Problem::new(&s, "se3").unwrap(), master: s.seed };
     let ce = cross_entropy(&rp, 2000, s.seed, 0.95);
     let mc = ftsmc_sim::falsify::rare::plain(&rp, 8000, s.seed, 0.95);
-    println!("cross-entropy {:.3e} [{:.3e}, {:.3e}]; plain {:.3e} [{:.3e}, {:.3e}]", ce.p, ce.lo, ce.hi, mc.p, mc.lo, mc.hi);
+    println!(
+        "cross-entropy {:.3e} [{:.3e}, {:.3e}]; plain {:.3e} [{:.3e}, {:.3e}]",
+        ce.p, ce.lo, ce.hi, mc.p, mc.lo, mc.hi
+    );
     assert!((0.003..0.05).contains(&mc.p), "p ≈ 1e-2 expected, plain gave {}", mc.p);
     assert!(ce.lo <= mc.hi && mc.lo <= ce.hi, "the intervals do not overlap");
 }
