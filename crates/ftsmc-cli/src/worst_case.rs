@@ -3,8 +3,8 @@
 //! its committed tuned gains (`scenarios/tuned/`) is falsified
 //! (`ftsmc_sim::falsify::search::cmaes` over the rung's `[falsify]` box,
 //! N flights) and gets its failure probability under the rung's own draws
-//! (`ftsmc_sim::falsify::rare::cross_entropy`, N flights), at equal
-//! budgets. Writes `beyond/worst-case.md`, `beyond/worst-case.json`, each
+//! (`ftsmc_sim::falsify::rare::cross_entropy`, N flights; plain Monte
+//! Carlo when failure is not rare), at equal budgets. Writes `beyond/worst-case.md`, `beyond/worst-case.json`, each
 //! worst case as a replayable `beyond/worst-case/<rung>-<controller>-<gains>.toml`
 //! and, with figures, `figures/beyond/<rung>-worst-gust.{svg,png}`: the
 //! gust of each controller's worst case against time (default and tuned
