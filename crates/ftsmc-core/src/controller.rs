@@ -150,77 +150,56 @@ pub trait Controller<R: Real = f64> {
     }
 }
 
-/// Forwards every method to the controller behind the reference (a flight
-/// may borrow the controller it flies).
-impl<R: Real, C: Controller<R> + ?Sized> Controller<R> for &mut C {
-    fn name(&self) -> &'static str {
-        (**self).name()
-    }
-    #[cfg_attr(not(debug_assertions), inline(always))]
-    fn update(&mut self, state: &QuadState<R>, reference: &Reference<R>, dt: f64) -> Command<R> {
-        (**self).update(state, reference, dt)
-    }
-    #[cfg_attr(not(debug_assertions), inline(always))]
-    fn update_measured(&mut self, measured: &Measurement<R>, reference: &Reference<R>, dt: f64) -> Command<R> {
-        (**self).update_measured(measured, reference, dt)
-    }
-    fn uses_body_attitude(&self) -> bool {
-        (**self).uses_body_attitude()
-    }
-    fn telemetry(&self) -> &Telemetry<R> {
-        (**self).telemetry()
-    }
-    fn estimate_names(&self) -> [&'static str; MAX_ESTIMATES] {
-        (**self).estimate_names()
-    }
-    fn adapts_mass(&self) -> bool {
-        (**self).adapts_mass()
-    }
-    fn reset(&mut self) {
-        (**self).reset();
-    }
-    fn reset_lane(&mut self, lane: usize) {
-        (**self).reset_lane(lane);
-    }
-    fn actuator_feedback(&mut self, saturated: R::Mask) {
-        (**self).actuator_feedback(saturated);
-    }
+/// One `impl Controller<R>` that forwards every method to the controller
+/// behind a pointer (`&mut C`, `Box<C>`), so the two cannot drift apart.
+macro_rules! forward_controller {
+    ($(#[$attr:meta])* $ptr:ty) => {
+        $(#[$attr])*
+        impl<R: Real, C: Controller<R> + ?Sized> Controller<R> for $ptr {
+            fn name(&self) -> &'static str {
+                (**self).name()
+            }
+            #[cfg_attr(not(debug_assertions), inline(always))]
+            fn update(&mut self, state: &QuadState<R>, reference: &Reference<R>, dt: f64) -> Command<R> {
+                (**self).update(state, reference, dt)
+            }
+            #[cfg_attr(not(debug_assertions), inline(always))]
+            fn update_measured(&mut self, measured: &Measurement<R>, reference: &Reference<R>, dt: f64) -> Command<R> {
+                (**self).update_measured(measured, reference, dt)
+            }
+            fn uses_body_attitude(&self) -> bool {
+                (**self).uses_body_attitude()
+            }
+            fn telemetry(&self) -> &Telemetry<R> {
+                (**self).telemetry()
+            }
+            fn estimate_names(&self) -> [&'static str; MAX_ESTIMATES] {
+                (**self).estimate_names()
+            }
+            fn adapts_mass(&self) -> bool {
+                (**self).adapts_mass()
+            }
+            fn reset(&mut self) {
+                (**self).reset();
+            }
+            fn reset_lane(&mut self, lane: usize) {
+                (**self).reset_lane(lane);
+            }
+            fn actuator_feedback(&mut self, saturated: R::Mask) {
+                (**self).actuator_feedback(saturated);
+            }
+        }
+    };
 }
 
-/// Forwards every method to the boxed controller (a flight may own the
-/// controller it flies).
-#[cfg(feature = "std")]
-impl<R: Real, C: Controller<R> + ?Sized> Controller<R> for std::boxed::Box<C> {
-    fn name(&self) -> &'static str {
-        (**self).name()
-    }
-    #[cfg_attr(not(debug_assertions), inline(always))]
-    fn update(&mut self, state: &QuadState<R>, reference: &Reference<R>, dt: f64) -> Command<R> {
-        (**self).update(state, reference, dt)
-    }
-    #[cfg_attr(not(debug_assertions), inline(always))]
-    fn update_measured(&mut self, measured: &Measurement<R>, reference: &Reference<R>, dt: f64) -> Command<R> {
-        (**self).update_measured(measured, reference, dt)
-    }
-    fn uses_body_attitude(&self) -> bool {
-        (**self).uses_body_attitude()
-    }
-    fn telemetry(&self) -> &Telemetry<R> {
-        (**self).telemetry()
-    }
-    fn estimate_names(&self) -> [&'static str; MAX_ESTIMATES] {
-        (**self).estimate_names()
-    }
-    fn adapts_mass(&self) -> bool {
-        (**self).adapts_mass()
-    }
-    fn reset(&mut self) {
-        (**self).reset();
-    }
-    fn reset_lane(&mut self, lane: usize) {
-        (**self).reset_lane(lane);
-    }
-    fn actuator_feedback(&mut self, saturated: R::Mask) {
-        (**self).actuator_feedback(saturated);
-    }
-}
+forward_controller!(
+    /// Forwards every method to the controller behind the reference (a flight
+    /// may borrow the controller it flies).
+    &mut C
+);
+forward_controller!(
+    /// Forwards every method to the boxed controller (a flight may own the
+    /// controller it flies).
+    #[cfg(feature = "std")]
+    std::boxed::Box<C>
+);
