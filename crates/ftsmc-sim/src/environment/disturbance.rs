@@ -28,6 +28,11 @@ impl DisturbanceSignals {
         [self.x.value(t), self.y.value(t), self.z.value(t), self.phi.value(t), self.theta.value(t), self.psi.value(t)]
     }
 
+    /// `[D_x, D_y, D_z, D_φ, D_θ, D_ψ]` to change in place.
+    pub fn signals_mut(&mut self) -> [&mut Signal; 6] {
+        [&mut self.x, &mut self.y, &mut self.z, &mut self.phi, &mut self.theta, &mut self.psi]
+    }
+
     /// With their names.
     pub fn named(&self) -> [(&'static str, &Signal); 6] {
         [("x", &self.x), ("y", &self.y), ("z", &self.z), ("phi", &self.phi), ("theta", &self.theta), ("psi", &self.psi)]

@@ -582,14 +582,7 @@ impl MonteCarloSpec {
         let mut phase_rng = stream(5);
         let mut first_phase = 0.0;
         let mut n_phase = 0;
-        for signal in [
-            &mut s.disturbance.x,
-            &mut s.disturbance.y,
-            &mut s.disturbance.z,
-            &mut s.disturbance.phi,
-            &mut s.disturbance.theta,
-            &mut s.disturbance.psi,
-        ] {
+        for signal in s.disturbance.signals_mut() {
             signal.for_each_leaf_term_mut(&mut |term| {
                 scale_term(term, amplitude);
                 match term {

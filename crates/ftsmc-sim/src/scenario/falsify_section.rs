@@ -392,14 +392,7 @@ fn apply_partial(base: &Scenario, params: &[Param], x: &[Option<f64>]) -> Scenar
     let freq = get(Target::DisturbanceFrequency);
     let phase = get(Target::DisturbancePhase);
     if amp.is_some() || freq.is_some() || phase.is_some() {
-        for signal in [
-            &mut s.disturbance.x,
-            &mut s.disturbance.y,
-            &mut s.disturbance.z,
-            &mut s.disturbance.phi,
-            &mut s.disturbance.theta,
-            &mut s.disturbance.psi,
-        ] {
+        for signal in s.disturbance.signals_mut() {
             signal.for_each_leaf_term_mut(&mut |term| {
                 use crate::signal::Term;
                 if let Some(a) = amp {
