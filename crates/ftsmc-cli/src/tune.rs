@@ -28,6 +28,22 @@ use crate::intervals::{interval_table, level_note, metre_cell, rate_cell, verdic
 use crate::output::{provenance, ResultDir};
 use crate::plot::{controller_color, write_figure, Figure, Panel, Rgb, Series};
 
+/// The cells of one gain set's statistics after its `success` and RMS
+/// `median` cells (each already formatted with or without its interval):
+/// success, completed, crashed, median, p95, thrust and torque activity,
+/// saturated fraction. The tune's table and `reproduce`'s tuned table.
+pub fn stats_cells(s: &OutcomeStats, success: String, median: String) -> Vec<String> {
+    vec![
+        success,
+        s.completed.to_string(),
+        s.crashed.to_string(),
+        median,
+        num(s.rms_p95),
+        num(s.thrust_activity),
+        num(s.torque_activity),
+        num(s.saturated),
+    ]
+}
 /// Default training-flight budget of `ftsmc tune`.
 pub const DEFAULT_BUDGET: u64 = 2000;
 
@@ -153,17 +169,7 @@ pub fn comparison_table(r: &TuneResult, confidence: f64) -> String {
             Some(i) => metre_cell(i.rms_median.as_ref()),
             None => num(s.rms_median),
         };
-        t.row(vec![
-            name.to_string(),
-            success,
-            s.completed.to_string(),
-            s.crashed.to_string(),
-            median,
-            num(s.rms_p95),
-            num(s.thrust_activity),
-            num(s.torque_activity),
-            num(s.saturated),
-        ]);
+        t.row(std::iter::once(name.to_string()).chain(stats_cells(s, success, median)).collect());
     };
     row("start, training", &r.training.start, None);
     row("tuned, training", &r.training.tuned, None);

@@ -13,7 +13,7 @@ use rayon::prelude::*;
 
 use crate::console::{num, Table};
 use crate::intervals::{effect_cell, level_note, metre_cell, p_cell, rate_cell};
-use crate::tune::outcomes;
+use crate::tune::{outcomes, stats_cells};
 
 /// Held-out flights per gain set of docs/tuning.md's table (`reproduce --tuned-runs 200`; the default run flies none).
 pub const DEFAULT_TUNED_RUNS: u64 = 200;
@@ -134,16 +134,7 @@ fn cells(s: &OutcomeStats, runs: &[FlightOutcome], confidence: f64) -> Vec<Strin
         |i| format!("{}/{} {}", s.success, s.runs, rate_cell(&i.success_rate)),
     );
     let median = iv.as_ref().map_or_else(|| num(s.rms_median), |i| metre_cell(i.rms_median.as_ref()));
-    vec![
-        success,
-        s.completed.to_string(),
-        s.crashed.to_string(),
-        median,
-        num(s.rms_p95),
-        num(s.thrust_activity),
-        num(s.torque_activity),
-        num(s.saturated),
-    ]
+    stats_cells(s, success, median)
 }
 
 /// Tuned FTAFTSMC against the best other tuned controller of `scenario`
