@@ -6,14 +6,12 @@
 use std::path::Path;
 
 use ftsmc_sim::batch::compare::{compare, Contestant, Plan};
-use ftsmc_sim::batch::runs_table::{runs_table, Column};
 use ftsmc_sim::batch::verdicts::{intervals, Intervals, Outcomes, PairVerdict};
 use ftsmc_sim::stats::paired::PairedMetric;
 use ftsmc_sim::stats::Interval;
-use numpy::PyArray1;
 use pyo3::prelude::*;
-use pyo3::types::PyList;
 
+use crate::flight::runs_columns;
 use crate::scenario::{chain_message, Scenario};
 use crate::value_error;
 
@@ -150,20 +148,11 @@ pub fn compare_native<'py>(
         pool.install(|| compare(&list, &spec, base.seed, plan, confidence, lanes, tick))
     })?
     .map_err(value_error)?;
-    let table = runs_table(&result.rows);
-    let mut columns = Vec::with_capacity(table.columns.len());
-    for column in table.columns {
-        columns.push(match column {
-            Column::Integer(v) => PyArray1::from_vec(py, v).into_any(),
-            Column::Number(v) => PyArray1::from_iter(py, v.into_iter().map(|x| x.unwrap_or(f64::NAN))).into_any(),
-            Column::Boolean(v) => PyArray1::from_vec(py, v).into_any(),
-            Column::Text(v) => PyList::new(py, v.into_iter().map(|s| (!s.is_empty()).then_some(s)))?.into_any(),
-        });
-    }
+    let (column_names, columns) = runs_columns(py, &result.rows)?;
     let names = result.intervals.iter().map(|(n, _)| n.clone()).collect();
     let rows = result.intervals.iter().map(|(_, i)| interval_row(i)).collect();
     let verdicts = result.verdicts.iter().map(verdict_row).collect();
-    Ok(((table.names, columns), names, rows, verdicts, result.runs, result.all_decided))
+    Ok(((column_names, columns), names, rows, verdicts, result.runs, result.all_decided))
 }
 
 /// The interval row of one controller's runs (the numbers of `ftsmc

@@ -2,7 +2,7 @@
 //! released, or a Python controller), and Monte Carlo batches whose rows
 //! are `runs.csv`'s.
 
-use ftsmc_sim::batch::montecarlo::{run_batch, BatchOptions};
+use ftsmc_sim::batch::montecarlo::{run_batch, BatchOptions, McRun};
 use ftsmc_sim::batch::runs_table::{runs_table, Column};
 use ftsmc_sim::run::{RunOptions, RunOutput};
 use numpy::PyArray1;
@@ -216,7 +216,14 @@ pub fn montecarlo_columns<'py>(
             .map_err(|known| format!("unknown controller (known: {known})"))
         })
     })?;
-    let table = runs_table(&rows.map_err(value_error)?);
+    runs_columns(py, &rows.map_err(value_error)?)
+}
+
+/// The Monte Carlo rows as `runs.csv`'s columns for a DataFrame: numbers as
+/// NumPy arrays (an empty number NaN), text as a list of `str` or `None`
+/// for an empty cell. Shared by `montecarlo` and `compare`.
+pub(crate) fn runs_columns<'py>(py: Python<'py>, rows: &[McRun]) -> PyResult<(Vec<String>, Vec<Bound<'py, PyAny>>)> {
+    let table = runs_table(rows);
     let mut columns = Vec::with_capacity(table.columns.len());
     for column in table.columns {
         columns.push(match column {
