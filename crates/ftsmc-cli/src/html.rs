@@ -18,6 +18,8 @@
 //! is the whole of what a template engine would add.
 
 use std::fmt::Write as _;
+use std::fs::File;
+use std::io::{BufRead as _, BufReader};
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
@@ -232,46 +234,72 @@ fn inline_svg(svg: &str, prefix: &str) -> String {
 }
 
 /// One recorded flight for the replay: `t`, position, attitude, reference,
-/// decimated to at most [`REPLAY_POINTS`].
-fn replay_track(rel: &Path, text: &str) -> Option<String> {
-    let mut lines = text.lines();
-    let header: Vec<&str> = lines.next()?.split(',').map(str::trim).collect();
+/// decimated to at most [`REPLAY_POINTS`]; `None` for a CSV without those
+/// columns or with fewer than two rows. The file at `path` is streamed
+/// twice, counting its rows and then parsing only the picked ones: a 200 s
+/// flight at 100 Hz has 20,000 rows of ~50 numbers, and reading it whole
+/// and parsing every number cost more than writing it.
+fn replay_track(rel: &Path, path: &Path) -> std::io::Result<Option<String>> {
+    let open = || File::open(path).map(BufReader::new);
+    let eol = |l: &str| l.trim_end_matches(['\n', '\r']).len();
+    let mut reader = open()?;
+    let mut line = String::new();
+    reader.read_line(&mut line)?;
+    let header: Vec<&str> = line[..eol(&line)].split(',').map(str::trim).collect();
     let col = |name: &str| header.iter().position(|h| *h == name);
     let need = ["t", "x", "y", "z", "phi", "theta", "psi"];
-    let idx: Vec<usize> = need.iter().map(|n| col(n)).collect::<Option<_>>()?;
+    let Some(idx) = need.iter().map(|n| col(n)).collect::<Option<Vec<usize>>>() else {
+        return Ok(None);
+    };
     let refs: Option<Vec<usize>> = ["x_ref", "y_ref", "z_ref"].iter().map(|n| col(n)).collect();
-    let rows: Vec<Vec<f64>> =
-        lines.map(|l| l.split(',').map(|v| v.trim().parse::<f64>().unwrap_or(f64::NAN)).collect()).collect();
-    if rows.len() < 2 {
-        return None;
+    let mut buffer = String::new();
+    let mut n_rows = 0usize;
+    while reader.read_line(&mut buffer)? > 0 {
+        n_rows += 1;
+        buffer.clear();
     }
-    let step = rows.len().div_ceil(REPLAY_POINTS).max(1);
-    let mut picks: Vec<usize> = (0..rows.len()).step_by(step).collect();
-    if picks.last() != Some(&(rows.len() - 1)) {
-        picks.push(rows.len() - 1);
+    if n_rows < 2 {
+        return Ok(None);
+    }
+    let step = n_rows.div_ceil(REPLAY_POINTS).max(1);
+    let mut picks: Vec<usize> = (0..n_rows).step_by(step).collect();
+    if picks.last() != Some(&(n_rows - 1)) {
+        picks.push(n_rows - 1);
+    }
+    let mut reader = open()?;
+    reader.read_line(&mut buffer)?; // the header
+    let mut rows: Vec<Vec<f64>> = Vec::with_capacity(picks.len());
+    let mut next = picks.iter().peekable();
+    for r in 0..n_rows {
+        buffer.clear();
+        reader.read_line(&mut buffer)?;
+        if next.peek() == Some(&&r) {
+            next.next();
+            let text = &buffer[..eol(&buffer)];
+            rows.push(text.split(',').map(|v| v.trim().parse::<f64>().unwrap_or(f64::NAN)).collect());
+        }
     }
     let num = |v: f64| if v.is_finite() { format!("{}", (v * 1e4).round() / 1e4) } else { "null".to_string() };
     let series = |cols: &[usize]| -> String {
-        let items: Vec<String> = picks
+        let items: Vec<String> = rows
             .iter()
-            .map(|&r| {
-                let vals: Vec<String> =
-                    cols.iter().map(|&c| num(rows[r].get(c).copied().unwrap_or(f64::NAN))).collect();
+            .map(|row| {
+                let vals: Vec<String> = cols.iter().map(|&c| num(row.get(c).copied().unwrap_or(f64::NAN))).collect();
                 format!("[{}]", vals.join(","))
             })
             .collect();
         format!("[{}]", items.join(","))
     };
-    let t: Vec<String> = picks.iter().map(|&r| num(rows[r].get(idx[0]).copied().unwrap_or(f64::NAN))).collect();
+    let t: Vec<String> = rows.iter().map(|row| num(row.get(idx[0]).copied().unwrap_or(f64::NAN))).collect();
     let name = rel.with_extension("").to_string_lossy().replace('\\', "/");
-    Some(format!(
+    Ok(Some(format!(
         "{{\"name\":{},\"t\":[{}],\"p\":{},\"a\":{},\"r\":{}}}",
         serde_json::Value::String(name),
         t.join(","),
         series(&idx[1..4]),
         series(&idx[4..7]),
         refs.map_or("null".to_string(), |r| series(&r))
-    ))
+    )))
 }
 
 /// The provenance block of `summary.json`, if it has one.
@@ -296,8 +324,8 @@ pub fn report(root: &Path, title: &str, markdown_text: &str) -> Result<String> {
         if tracks.len() >= REPLAY_RUNS {
             break;
         }
-        let text = std::fs::read_to_string(root.join(rel)).with_context(|| format!("cannot read {}", rel.display()))?;
-        if let Some(track) = replay_track(rel, &text) {
+        let track = replay_track(rel, &root.join(rel)).with_context(|| format!("cannot read {}", rel.display()))?;
+        if let Some(track) = track {
             tracks.push(track);
         }
     }
@@ -433,6 +461,11 @@ mod tests {
         let parsed: serde_json::Value = serde_json::from_str(data).unwrap();
         let t = parsed[0]["t"].as_array().unwrap();
         assert!(t.len() <= REPLAY_POINTS + 1 && t.len() > 300, "{}", t.len());
+        // Every third row of the 1,000 (at most REPLAY_POINTS), the last one kept.
+        let times: Vec<f64> = t.iter().map(|v| v.as_f64().unwrap()).collect();
+        assert_eq!((times[0], times[1], *times.last().unwrap(), times.len()), (0.0, 0.03, 9.99, 334));
+        let x = parsed[0]["p"][1][0].as_f64().unwrap();
+        assert_eq!(x, (ftsmc_core::math::sin(0.03) * 1e4).round() / 1e4);
         assert!(page.contains("&quot;sha256&quot;: &quot;ab&quot;") && page.contains("<a href=\"summary.json\">"));
         assert!(!page.contains("src=\"http") && !page.contains("href=\"http"), "no external resources");
     }

@@ -6,7 +6,7 @@ use std::io::Write as _;
 use std::path::Path;
 
 use anyhow::{Context, Result};
-use ftsmc_sim::run::{Recording, RunOutput};
+use ftsmc_sim::run::RunOutput;
 use serde_json::{json, Map, Value};
 
 pub use crate::result_dir::{sha256_hex, ResultDir};
@@ -58,12 +58,6 @@ pub fn one_line(text: &str, max: usize) -> String {
         cut.push('…');
         cut
     }
-}
-
-/// The time series of a run as CSV text (header = column names; see
-/// [`Recording::write_csv`] and docs/outputs.md).
-pub fn recording_csv(rec: &Recording) -> Vec<u8> {
-    rec.to_csv()
 }
 
 /// Shortest round-trip decimal form, as in the time series (`0.3`, `1.0`,

@@ -14,7 +14,7 @@ use rayon::prelude::*;
 use serde_json::{json, Map, Value};
 
 use crate::console::{num, steps_bar, Table};
-use crate::output::{provenance, recording_csv, summary_json, ResultDir};
+use crate::output::{provenance, summary_json, ResultDir};
 
 /// Paper Table 3 (scenario 1 ISE): `(state, [RANFTSMC, TSM-STA, FTAFTSMC])`.
 pub const PAPER_TABLE_3: [(&str, [f64; 3]); 4] = [
@@ -65,7 +65,7 @@ fn write_runs(runs: &[RunOutput], dir: &ResultDir, flat: bool) -> Result<()> {
     for run in runs {
         let file = format!("{}.csv", run.controller);
         let rel = if flat { Path::new(&file).to_path_buf() } else { Path::new(&run.scenario).join(&file) };
-        dir.write(rel, &recording_csv(&run.recording))?;
+        dir.write_with(rel, |w| run.recording.write_csv(w))?;
     }
     Ok(())
 }
@@ -225,7 +225,7 @@ pub fn metrics_table(runs: &[Flown], title: &str) -> String {
     ]);
     let mut settling = Table::new(["controller", "settle x (s)", "settle y (s)", "settle z (s)", "settle ψ (s)"]);
     let mut control = Table::new(["controller", "exit", "chattering U1 (N/s)", "chattering u2 (N·m/s)"]);
-    // Realistic flights (issue 11): the envelope's verdict and what was asked of the rotors.
+    // Realistic flights: the envelope's verdict and what was asked of the rotors.
     let mut actuators = Table::new(["controller", "success", "peak ω demand (rad/s)", "saturated", "why not"]);
     let mut realistic = false;
     let mut notes = Vec::new();
@@ -686,10 +686,9 @@ pub fn beyond_the_paper(dir: &ResultDir, figures: bool, mc_runs: u64, confidence
     );
     let runs = fly(&jobs)?;
     for run in &runs {
-        dir.write(
-            Path::new("beyond").join(&run.scenario).join(format!("{}.csv", run.controller)),
-            &recording_csv(&run.recording),
-        )?;
+        dir.write_with(Path::new("beyond").join(&run.scenario).join(format!("{}.csv", run.controller)), |w| {
+            run.recording.write_csv(w)
+        })?;
     }
     let mut files = Vec::new();
     for s in &scenarios {

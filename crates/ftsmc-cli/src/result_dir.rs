@@ -36,6 +36,7 @@
 use std::collections::{BTreeMap, BTreeSet};
 use std::ffi::OsString;
 use std::fs::File;
+use std::io::Write;
 use std::path::{Component, Path, PathBuf};
 
 use anyhow::{bail, Context, Result};
@@ -344,7 +345,17 @@ impl ResultDir {
     /// Write `bytes` to `rel` (relative to the result folder), creating
     /// sub-folders as needed.
     pub fn write(&self, rel: impl AsRef<Path>, bytes: &[u8]) -> Result<()> {
-        write_file(&self.staging.join(rel), bytes)
+        write_file(&self.staging.join(rel), |f| f.write_all(bytes))
+    }
+
+    /// Write `rel` as `fill` streams it (a large time series is written
+    /// chunk by chunk, never held whole), creating sub-folders as needed.
+    pub fn write_with(
+        &self,
+        rel: impl AsRef<Path>,
+        fill: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
+    ) -> Result<()> {
+        write_file(&self.staging.join(rel), fill)
     }
 
     /// Put the result in place (see the module docs): afterwards `dest`
@@ -448,7 +459,7 @@ impl ResultDir {
         for (rel, (size, sha)) in &written {
             text.push_str(&format!("{sha} {size} {rel}\n"));
         }
-        write_file(&self.staging.join(&manifest_name), text.as_bytes())?;
+        write_file(&self.staging.join(&manifest_name), |f| f.write_all(text.as_bytes()))?;
         if let (Some(w), Some(s)) = (self.written.as_mut(), stamp(&self.staging.join(&manifest_name))) {
             w.insert(manifest_name.clone(), s);
         }
@@ -564,11 +575,16 @@ pub fn write_result(dest: &Path, owner: &str, files: &[(&str, &[u8])]) -> Result
 
 /// Write `bytes` to `path`, creating its parent folders; a partly written
 /// file (disk full) is removed before the error is returned.
-fn write_file(path: &Path, bytes: &[u8]) -> Result<()> {
+fn write_file(path: &Path, fill: impl FnOnce(&mut dyn Write) -> std::io::Result<()>) -> Result<()> {
     if let Some(parent) = path.parent() {
         std::fs::create_dir_all(parent).with_context(|| format!("cannot create directory {}", parent.display()))?;
     }
-    if let Err(e) = std::fs::write(path, bytes) {
+    let written = File::create(path).and_then(|file| {
+        let mut out = std::io::BufWriter::with_capacity(1 << 16, file);
+        fill(&mut out)?;
+        out.flush()
+    });
+    if let Err(e) = written {
         let _ = std::fs::remove_file(path);
         return Err(e).with_context(|| format!("cannot write {}", path.display()));
     }

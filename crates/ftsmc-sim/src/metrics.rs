@@ -140,7 +140,7 @@ impl Metrics {
         for (n, v) in SignalSet::<f64>::NAMES.iter().zip(self.chattering.to_array()) {
             out.push((format!("chattering_{n}"), v));
         }
-        // Realistic flights only (issue 11).
+        // Realistic flights only.
         if let Some(v) = self.peak_rotor_speed_demand {
             out.push(("peak_rotor_speed_demand".into(), v));
         }

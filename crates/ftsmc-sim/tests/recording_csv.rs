@@ -155,3 +155,43 @@ fn applied_inputs_differ_from_commanded_under_a_rotor_speed_limit() {
         assert!(rec.column(o).iter().all(|w| *w <= 300.0), "{o}");
     }
 }
+
+/// A writer that keeps the sizes of the writes it was handed, and fails
+/// once it holds more than `fail_after` bytes.
+struct Chunks {
+    bytes: Vec<u8>,
+    writes: Vec<usize>,
+    fail_after: usize,
+}
+
+impl std::io::Write for Chunks {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        if self.bytes.len() > self.fail_after {
+            return Err(std::io::Error::other("disk full"));
+        }
+        self.bytes.extend_from_slice(buf);
+        self.writes.push(buf.len());
+        Ok(buf.len())
+    }
+    fn flush(&mut self) -> std::io::Result<()> {
+        Ok(())
+    }
+}
+
+#[test]
+fn a_streamed_recording_is_the_same_bytes_in_chunks_and_a_write_error_is_returned() {
+    let run = registry::run("ftaftsmc", &short_scenario_2(), RunOptions::default()).unwrap();
+    let whole = run.recording.to_csv();
+    assert!(whole.len() > 3 * ftsmc_sim::run::CSV_CHUNK_BYTES, "{} bytes", whole.len());
+    let mut out = Chunks { bytes: Vec::new(), writes: Vec::new(), fail_after: usize::MAX };
+    run.recording.write_csv(&mut out).unwrap();
+    assert_eq!(out.bytes, whole);
+    // Handed on in chunks of about CSV_CHUNK_BYTES (never the whole file).
+    assert!(out.writes.len() >= 3, "{:?}", out.writes);
+    let largest = *out.writes.iter().max().unwrap();
+    assert!(largest < ftsmc_sim::run::CSV_CHUNK_BYTES + 4096, "{largest}");
+    // A failing writer: its error, not a panic or a silent short file.
+    let mut full = Chunks { bytes: Vec::new(), writes: Vec::new(), fail_after: 1000 };
+    let err = run.recording.write_csv(&mut full).unwrap_err();
+    assert_eq!(err.to_string(), "disk full");
+}

@@ -28,7 +28,7 @@ pub use actuation::actuators;
 pub use exit::{Divergence, ExitStatus};
 pub use flight::{Flight, Flights, StepOutcome};
 pub use observer::{FlightStats, Observer, Tick};
-pub use recording::{push_number, recording_columns, Recording, MAX_RECORDING_COLUMNS};
+pub use recording::{push_number, recording_columns, Recording, CSV_CHUNK_BYTES, MAX_RECORDING_COLUMNS};
 use std::sync::atomic::{AtomicBool, Ordering};
 
 /// Result of one flight.

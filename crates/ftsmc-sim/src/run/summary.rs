@@ -25,7 +25,7 @@ pub fn run_json(run: &RunOutput) -> Value {
     // chattering) cover: shorter than the scenario for a diverged run.
     obj.insert("covered".into(), json!(run.metrics.covered()));
     obj.insert("completed".into(), json!(run.exit.is_completed()));
-    // issue 11: only scenarios with an [envelope] say more than `completed`.
+    // Only scenarios with an [envelope] say more than `completed`.
     if let Some(v) = &run.envelope {
         obj.insert("success".into(), json!(v.success));
         obj.insert("envelope_violation".into(), json!(v.violation));

@@ -332,7 +332,7 @@ pub struct Scenario {
     /// Cost limits (see [`crate::limits`]); every key optional.
     #[serde(default, skip_serializing_if = "is_default_limits")]
     pub limits: Limits,
-    // --- issue 11: truth model, actuators, ground, success envelope ---
+    // --- truth model, actuators, ground, success envelope ---
     /// The true vehicle (`[vehicle]`): which truth model flies and every
     /// true parameter that differs from `[plant]` (default: the paper plant
     /// of Eq. 1 flying `[plant]`).
