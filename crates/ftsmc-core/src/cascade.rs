@@ -788,7 +788,7 @@ mod tests {
         paper_ftaftsmc(CascadeSettings::default()).laws
     }
 
-    /// Issue 9: a NaN `max_tilt` reached `f64::clamp(NaN, NaN)` in
+    /// Regression: a NaN `max_tilt` reached `f64::clamp(NaN, NaN)` in
     /// `Cascade::update` and panicked; `Cascade::new` now refuses it.
     #[test]
     fn new_rejects_a_nan_max_tilt_and_unchecked_does_not_panic() {
@@ -800,7 +800,7 @@ mod tests {
         c.update(&QuadState::default(), &reference, 1e-3);
     }
 
-    /// Issue 9: inverted `alpha_hat_bounds` reached `f64::clamp(lo, hi)` with
+    /// Regression: inverted `alpha_hat_bounds` reached `f64::clamp(lo, hi)` with
     /// `lo > hi` and panicked; `Cascade::new` now refuses them.
     #[test]
     fn new_rejects_inverted_alpha_hat_bounds_and_unchecked_does_not_panic() {
@@ -928,7 +928,7 @@ mod tests {
         CascadeSettings { attitude_derivatives: AttitudeDerivatives::Zero, thrust_limits, ..CascadeSettings::default() }
     }
 
-    /// Issue 11 item 6: the thrust bound acts on U1 before Remark 2, so the
+    /// Saturation remedy: the thrust bound acts on U1 before Remark 2, so the
     /// attitude demand is computed from the bounded thrust (and Eq. 44 still
     /// sees the unbounded u1).
     #[test]
@@ -1030,7 +1030,7 @@ mod tests {
         [c.thrust.to_bits(), c.torque[0].to_bits(), c.torque[1].to_bits(), c.torque[2].to_bits()]
     }
 
-    /// Issue 11 item 6, for one controller built by `make`:
+    /// Saturation remedies, for one controller built by `make`:
     /// - option on with `actuator_feedback(false)`, and option off with
     ///   `actuator_feedback(true)`, are bit-identical to the defaults;
     /// - option on after `actuator_feedback(true)`: the law states and α̂

@@ -794,7 +794,7 @@ mod tests {
         assert_relative_eq!(FtaftsmcGains::PAPER_XY.reaching_time_bound(), 1.0 / 0.6 + 0.625, epsilon = 1e-12);
     }
 
-    /// Issue 11 item 6: δ̂ is held while frozen, released it is Eq. 17 again.
+    /// Saturation remedy: δ̂ is held while frozen, released it is Eq. 17 again.
     #[test]
     fn freezing_holds_delta_hat_and_keeps_the_output() {
         use crate::law::testing::{check_freeze, warmed};

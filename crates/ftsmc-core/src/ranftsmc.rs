@@ -470,7 +470,7 @@ mod tests {
         assert!((hard(1e-6) - hard(-1e-6)).abs() > 0.9, "the default law switches");
     }
 
-    /// Issue 11 item 6: `â` is held while frozen, released it adapts again.
+    /// Saturation remedy: `â` is held while frozen, released it adapts again.
     #[test]
     fn freezing_holds_a_hat_and_keeps_the_output() {
         use crate::law::testing::{check_freeze, warmed};

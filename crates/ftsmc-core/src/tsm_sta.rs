@@ -442,7 +442,7 @@ mod tests {
         }
     }
 
-    /// Issue 11 item 6: ν (the super-twisting integral) is held while
+    /// Saturation remedy: ν (the super-twisting integral) is held while
     /// frozen, released it integrates again.
     #[test]
     fn freezing_holds_nu_and_keeps_the_output() {

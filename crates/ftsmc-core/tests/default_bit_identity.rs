@@ -1,4 +1,4 @@
-//! The saturation remedies of issue 11 (thrust bound, freezing the adaptive
+//! The saturation remedies (thrust bound, freezing the adaptive
 //! laws) are off by default and must leave the paper's cascade bit-identical.
 //! This test flies the three controllers with their published gains and the
 //! default `CascadeSettings` through a short, deterministic sequence of

@@ -1,4 +1,4 @@
-//! Property tests of issue 9 item 4, "a core that stays finite": for every
+//! Property tests of "a core that stays finite": for every
 //! gain set that passes `check()` and every finite input with magnitude from
 //! 1e-300 to 1e300 (log-uniform, random sign, plus exact 0), each law and the
 //! cascade return finite commands with finite adaptive states; a non-finite
@@ -11,7 +11,7 @@
 //! input gives a finite command again. PID gains at their subnormal lower
 //! edge (`yaw_weight`, `velocity_p`) give finite torques and integrators.
 //!
-//! Issue 11 (saturation remedies): the same holds with the adaptation frozen
+//! Saturation remedies: the same holds with the adaptation frozen
 //! ([`AxisLaw::set_adaptation_frozen`], `freeze_adaptation_on_saturation`
 //! with random actuator feedback) and with random thrust limits; frozen
 //! states do not move and the thrust stays inside its limits.

@@ -1,4 +1,4 @@
-//! Regression tests for the non-finite results of issue 9 ("a core that
+//! Regression tests for non-finite results ("a core that
 //! stays finite"). Each test reproduces one reported case and failed on the
 //! code before the fix; they use only API that existed before it.
 

@@ -11,8 +11,8 @@
 //! - `scenario-2/recording+legacy-csv`: the same rows through the writer
 //!   `ftsmc` used before (the `csv` crate, one `format!`ed `String` per number).
 //!
-//! The CSV overhead is `recording+csv / no-recording − 1` (issue 10 asks
-//! for at most 20 %).
+//! The CSV overhead is `recording+csv / no-recording − 1` (the aim is
+//! at most 20 %).
 
 use std::hint::black_box;
 

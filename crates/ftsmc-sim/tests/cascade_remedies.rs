@@ -1,4 +1,4 @@
-//! The saturation remedies of `ftsmc_core::cascade` (issue 11 item 6) in
+//! The saturation remedies of `ftsmc_core::cascade` in
 //! scenario files: the defaults serialise without the new keys (so nothing
 //! written today changes) and re-load equal; the keys load from a
 //! scenario's `[cascade]` table, and bad thrust limits are refused with an

@@ -1,4 +1,4 @@
-//! The practitioners' controllers (issue 13): `pid` (PX4 cascade) and `se3`
+//! The practitioners' controllers: `pid` (PX4 cascade) and `se3`
 //! (Lee et al. 2010), constructed directly and flown on paper scenario 1 and
 //! on the rigid-body truth model with realistic actuators.
 //!

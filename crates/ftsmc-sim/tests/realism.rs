@@ -1,4 +1,4 @@
-//! Issue 11 wiring: ground and crashes, the success envelope, Monte Carlo
+//! Realism wiring: ground and crashes, the success envelope, Monte Carlo
 //! with crashes, and the rigid-body loop against the paper loop.
 
 use ftsmc_core::cascade::{Controller, Telemetry};

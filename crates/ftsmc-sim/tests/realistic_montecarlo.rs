@@ -1,12 +1,14 @@
-//! Issue 12: the Monte Carlo of realistic scenario 2 (its `[montecarlo]`
+//! The Monte Carlo of realistic scenario 2 (its `[montecarlo]`
 //! section: per-run turbulence, sensor and motor noise, payload,
 //! disturbance amplitude and phase, initial attitude) completes, and every
 //! run is counted as exactly one of success, envelope failure, divergence
 //! or crash.
 //!
-//! Runtime (test profile, 2 shared cores): FTAFTSMC flies 1000 runs (it
-//! tips over within about 3 s, so each run is short); RANFTSMC and TSM-STA,
-//! which fly much longer, 200 each. 1000 × 3 full runs take about 100 s.
+//! Runtime (test profile, 2 shared cores): FTAFTSMC flies 300 runs (with
+//! its printed gains it tips over within about 3 s, so each run is short);
+//! RANFTSMC and TSM-STA, which fly much longer, 100 each. (It flew 1000
+//! and 200 each, the slowest test of CI at 59 s; the counts it checks add
+//! up or not whatever the number of runs.)
 
 use ftsmc_sim::batch::montecarlo::{run_batch, summarize, BatchOptions, ControllerSummary, McRun};
 use ftsmc_sim::scenario::{Scenario, REALISTIC_SCENARIO_2};
@@ -41,7 +43,7 @@ fn check_counts(rows: &[McRun], sm: &ControllerSummary, runs: u64) {
 #[test]
 fn monte_carlo_of_realistic_scenario_2_counts_every_run() {
     let s = scenario();
-    for (controller, runs) in [("ftaftsmc", 1000), ("ranftsmc", 200), ("tsm-sta", 200)] {
+    for (controller, runs) in [("ftaftsmc", 300), ("ranftsmc", 100), ("tsm-sta", 100)] {
         let rows = batch(&s, controller, runs);
         let summary = summarize(&rows, &[controller.to_string()]);
         let (_, sm) = &summary[0];
