@@ -147,6 +147,27 @@ pub fn ftaftsmc_verdict(rows: &[Row], scenario: &str, confidence: f64) -> Option
     let ours = of("ftaftsmc")?;
     let key = |r: &&Row| (r.tuned.success, std::cmp::Reverse(ordered(r.tuned.rms_median)));
     let best = rows.iter().filter(|r| r.scenario == scenario && r.controller != "ftaftsmc").max_by_key(key)?;
+    // A scenario without random draws flies one flight `runs` times: a
+    // paired test would count one comparison as many; its values instead.
+    let one_flight = |r: &[FlightOutcome]| {
+        r.windows(2).all(|w| w[0].rms.to_bits() == w[1].rms.to_bits() && w[0].success == w[1].success)
+    };
+    if one_flight(&ours.tuned_runs) && one_flight(&best.tuned_runs) {
+        let (x, y) = (ours.tuned_runs.first()?, best.tuned_runs.first()?);
+        let ok = |o: &FlightOutcome| if o.success { "succeeds" } else { "fails" };
+        return Some(format!(
+            "Tuned FTAFTSMC against the best other tuned controller ({}): no paired test, the held-out draws are one \
+             deterministic flight flown {} times; on it tuned FTAFTSMC {} with an RMS position error of {} m, tuned {} {} \
+             with {} m.",
+            label(&best.controller),
+            ours.tuned_runs.len(),
+            ok(x),
+            num(x.rms),
+            label(&best.controller),
+            ok(y),
+            num(y.rms)
+        ));
+    }
     let (a, b) = (outcomes(&ours.tuned_runs), outcomes(&best.tuned_runs));
     let names = [("tuned ".to_string() + label("ftaftsmc"), &a), ("tuned ".to_string() + label(&best.controller), &b)];
     let refs: Vec<(String, &Outcomes)> = names.iter().map(|(n, o)| (n.clone(), *o)).collect();
@@ -307,6 +328,42 @@ mod tests {
         );
         assert_eq!(md.matches("tuned (= default)").count(), 1, "{md}");
         assert!(!md.contains("NaN") && md.contains("| —"), "{md}");
+    }
+
+    #[test]
+    fn one_deterministic_flight_gets_its_values_and_random_draws_a_paired_test() {
+        let flight = |rms: f64, success: bool| FlightOutcome {
+            completed: true,
+            crashed: false,
+            success,
+            time: 10.0,
+            rms,
+            thrust_activity: 1.0,
+            torque_activity: 0.1,
+            saturated: 0.0,
+        };
+        let row = |controller: &str, runs: Vec<FlightOutcome>| {
+            let stats = OutcomeStats::of(&runs, 10.0);
+            Row {
+                scenario: "s".into(),
+                controller: controller.into(),
+                default: stats,
+                tuned: stats,
+                default_runs: runs.clone(),
+                tuned_runs: runs,
+                kept_defaults: false,
+            }
+        };
+        // The same flight 12 times each: values, no p-value.
+        let rows = vec![row("ftaftsmc", vec![flight(0.258, true); 12]), row("pid", vec![flight(0.202, true); 12])];
+        let v = ftaftsmc_verdict(&rows, "s", 0.95).unwrap();
+        assert!(v.contains("no paired test") && v.contains("0.258") && v.contains("0.202"), "{v}");
+        assert!(!v.contains("Holm"), "{v}");
+        // Draws that differ: McNemar and Wilcoxon with Holm.
+        let spread = |base: f64| (0..12).map(|i| flight(base + 0.01 * i as f64, i % 5 != 0)).collect();
+        let rows = vec![row("ftaftsmc", spread(0.4)), row("pid", spread(0.2))];
+        let v = ftaftsmc_verdict(&rows, "s", 0.95).unwrap();
+        assert!(v.contains("Holm") && !v.contains("no paired test"), "{v}");
     }
 
     #[test]
