@@ -573,8 +573,9 @@ pub fn write_result(dest: &Path, owner: &str, files: &[(&str, &[u8])]) -> Result
     dir.commit()
 }
 
-/// Write `bytes` to `path`, creating its parent folders; a partly written
-/// file (disk full) is removed before the error is returned.
+/// Write to `path` what `fill` streams into it (buffered), creating its
+/// parent folders; a partly written file (disk full, a failing `fill`) is
+/// removed before the error is returned.
 fn write_file(path: &Path, fill: impl FnOnce(&mut dyn Write) -> std::io::Result<()>) -> Result<()> {
     if let Some(parent) = path.parent() {
         std::fs::create_dir_all(parent).with_context(|| format!("cannot create directory {}", parent.display()))?;
