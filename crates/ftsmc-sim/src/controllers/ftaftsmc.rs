@@ -83,12 +83,7 @@ fn cascade_lanes<const N: usize>(
     ctx: &BuildContext,
 ) -> Option<Result<super::LaneController<N>, String>> {
     let laws = config.gains().to_array().map(FtaftsmcAxis::<Lanes<N>>::with_gains);
-    let built = Cascade::<_, Lanes<N>>::with_laws(ctx.cascade_config(mass_adaptation), laws);
-    Some(
-        built
-            .map(|c| Box::new(super::on_isa::OnIsa::detected(c)) as super::LaneController<N>)
-            .map_err(|e| e.to_string()),
-    )
+    super::generic::on_lanes(Cascade::<_, Lanes<N>>::with_laws(ctx.cascade_config(mass_adaptation), laws))
 }
 
 /// `ftaftsmc`: the paper's controller.

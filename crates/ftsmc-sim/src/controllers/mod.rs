@@ -28,11 +28,20 @@
 //!    struct that derives `Clone, Debug, PartialEq` and, under the core's
 //!    `serde` feature, `Deserialize, Serialize` with `deny_unknown_fields`,
 //!    and has a `check()` returning [`GainError`].
-//! 2. Add `src/controllers/NAME.rs` here: `impl GainSection` for its gain
-//!    struct (TOML `KEY`, `defaults()`, `check()`) and a unit struct with
-//!    `impl Declaration` (`NAME`, `LABEL`, `DESCRIPTION`, `type Section`,
-//!    `build`; `visit_axis_law` and `reaching_time_bound` only for per-axis
-//!    sliding laws).
+//! 2. Add `src/controllers/NAME.rs` here. A per-axis law flown in the
+//!    cascade (as RANFTSMC and TSM-STA) needs only
+//!    `impl generic::ChannelGains` for its gain struct (TOML key, name,
+//!    label, description, defaults, check, the law on any number type) and
+//!    `pub type NAME = generic::CascadeOf<Gains>;`. A full-state controller
+//!    (as PID and SE(3)) needs `impl GainSection` for its gain struct and
+//!    `impl generic::FullStateGains` (name, label, description, the
+//!    constructor on any number type), then
+//!    `pub type NAME = generic::FullState<Gains>;`. Anything else is a unit
+//!    struct with its own `impl Declaration` (`NAME`, `LABEL`,
+//!    `DESCRIPTION`, `type Section`, `build`; `build_lanes` for a lane
+//!    form; `visit_axis_law` and `reaching_time_bound` for per-axis
+//!    sliding laws), as FTAFTSMC, whose section also holds the mass
+//!    adaptation.
 //! 3. Add `pub mod NAME;` and one line to the list at the bottom of this
 //!    file: `field: NAME::Gains => [NAME::Controller],`.
 //!
@@ -46,20 +55,19 @@
 //! impl GainSection for ftsmc_core::pid::PidGains {
 //!     const KEY: &'static str = "pid";
 //!     fn defaults() -> Self { Self::default() }
-//!     // `self.check()` is the gain struct's own (inherent) check.
-//!     fn check(&self) -> Result<(), InvalidGain> { self.check().map_err(|e| InvalidGain::at("", e)) }
+//!     // `PidGains::check` is the gain struct's own (inherent) check.
+//!     fn check(&self) -> Result<(), InvalidGain> { PidGains::check(self).map_err(|e| InvalidGain::at("", e)) }
 //! }
-//! pub struct Pid;
-//! impl Declaration for Pid {
+//! impl FullStateGains for ftsmc_core::pid::PidGains {
 //!     const NAME: &'static str = "pid";
 //!     const LABEL: &'static str = "PID (PX4 cascade)";
 //!     const DESCRIPTION: &'static str = "PX4-style cascaded P/PID position, velocity, attitude and rate loops";
-//!     type Section = ftsmc_core::pid::PidGains;
-//!     fn build(gains: &Self::Section, ctx: &BuildContext) -> Result<BoxedController, String> {
-//!         let c = ftsmc_core::pid::Pid::new(*gains, ctx.plant, ctx.control_period).map_err(|e| e.to_string())?;
-//!         Ok(Box::new(c))
+//!     type On<R: Real> = ftsmc_core::pid::PidController<R>;
+//!     fn build<R: Real>(plant: QuadrotorParams, gains: Self) -> Result<Self::On<R>, GainError> {
+//!         ftsmc_core::pid::PidController::splat(plant, gains)
 //!     }
 //! }
+//! pub type Pid = FullState<ftsmc_core::pid::PidGains>;
 //! // the list:  pid: ftsmc_core::pid::PidGains => [pid::Pid],
 //! ```
 //!
@@ -80,6 +88,7 @@ use crate::axes::AxisSet;
 use crate::text::show;
 
 pub mod ftaftsmc;
+pub mod generic;
 pub mod on_isa;
 pub mod per_lane;
 pub mod pid;

@@ -2,7 +2,12 @@
 
 use ftsmc_core::pid::{PidController, PidGains};
 
-use super::{BoxedController, BuildContext, Declaration, GainSection, InvalidGain, NominalVehicle};
+use ftsmc_core::lanes::Real;
+use ftsmc_core::law::GainError;
+use ftsmc_core::model::QuadrotorParams;
+
+use super::generic::{FullState, FullStateGains};
+use super::{GainSection, InvalidGain, NominalVehicle};
 
 /// `[pid]`: PX4's default gains rescaled to the scenario's nominal `[plant]`
 /// and rotor limit ([`PidGains::for_vehicle_with_max_thrust`]); keys the
@@ -60,29 +65,17 @@ impl GainSection for PidGains {
 
 /// `pid`: P position → PID velocity → thrust and attitude (tilt limit,
 /// thrust priority) → P attitude quaternion error → PID body rates.
-pub struct Pid;
+pub type Pid = FullState<PidGains>;
 
-impl Declaration for Pid {
+impl FullStateGains for PidGains {
     const NAME: &'static str = "pid";
     const LABEL: &'static str = "PID (PX4 cascade)";
     const DESCRIPTION: &'static str =
         "PX4-style cascade: P position, PID velocity, P attitude (quaternion), PID body rates; PX4 gains rescaled";
-    type Section = PidGains;
+    type On<R: Real> = PidController<R>;
 
-    fn build(gains: &Self::Section, ctx: &BuildContext) -> Result<BoxedController, String> {
-        Ok(Box::new(PidController::new(ctx.plant, *gains).map_err(|e| e.to_string())?))
-    }
-
-    fn build_lanes<const N: usize>(
-        gains: &Self::Section,
-        ctx: &BuildContext,
-    ) -> Option<Result<super::LaneController<N>, String>> {
-        let built = PidController::<ftsmc_core::lanes::Lanes<N>>::splat(ctx.plant, *gains);
-        Some(
-            built
-                .map(|c| Box::new(super::on_isa::OnIsa::detected(c)) as super::LaneController<N>)
-                .map_err(|e| e.to_string()),
-        )
+    fn build<R: Real>(plant: QuadrotorParams, gains: Self) -> Result<PidController<R>, GainError> {
+        PidController::splat(plant, gains)
     }
 }
 

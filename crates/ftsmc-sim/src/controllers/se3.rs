@@ -3,7 +3,12 @@
 
 use ftsmc_core::se3::{Se3Controller, Se3Gains};
 
-use super::{BoxedController, BuildContext, Declaration, GainSection, InvalidGain, NominalVehicle};
+use ftsmc_core::lanes::Real;
+use ftsmc_core::law::GainError;
+use ftsmc_core::model::QuadrotorParams;
+
+use super::generic::{FullState, FullStateGains};
+use super::{GainSection, InvalidGain, NominalVehicle};
 
 /// `[se3]`: gains placed on the scenario's nominal `[plant]`
 /// ([`Se3Gains::for_vehicle`]); keys the table gives replace them one by one.
@@ -33,29 +38,17 @@ impl GainSection for Se3Gains {
 
 /// `se3`: force from position/velocity errors, rotation from the force
 /// direction and heading, moment from `e_R`, `e_Ω` and `Ω × JΩ`.
-pub struct Se3;
+pub type Se3 = FullState<Se3Gains>;
 
-impl Declaration for Se3 {
+impl FullStateGains for Se3Gains {
     const NAME: &'static str = "se3";
     const LABEL: &'static str = "SE(3) (Lee et al. 2010)";
     const DESCRIPTION: &'static str =
         "geometric tracking control on SE(3) (Lee, Leok & McClamroch 2010), gains by pole placement on the vehicle";
-    type Section = Se3Gains;
+    type On<R: Real> = Se3Controller<R>;
 
-    fn build(gains: &Self::Section, ctx: &BuildContext) -> Result<BoxedController, String> {
-        Ok(Box::new(Se3Controller::new(ctx.plant, *gains).map_err(|e| e.to_string())?))
-    }
-
-    fn build_lanes<const N: usize>(
-        gains: &Self::Section,
-        ctx: &BuildContext,
-    ) -> Option<Result<super::LaneController<N>, String>> {
-        let built = Se3Controller::<ftsmc_core::lanes::Lanes<N>>::splat(ctx.plant, *gains);
-        Some(
-            built
-                .map(|c| Box::new(super::on_isa::OnIsa::detected(c)) as super::LaneController<N>)
-                .map_err(|e| e.to_string()),
-        )
+    fn build<R: Real>(plant: QuadrotorParams, gains: Self) -> Result<Se3Controller<R>, GainError> {
+        Se3Controller::splat(plant, gains)
     }
 }
 
