@@ -49,10 +49,8 @@ pub fn fly(jobs: &[Job]) -> Result<Vec<RunOutput>> {
         .par_iter()
         .map(|job| {
             let options = RunOptions { progress: Some(&progress), ..Default::default() };
-            let mut run = registry::run(&job.controller, &job.scenario, options)
-                .map_err(|known| anyhow!("unknown controller `{}` (known: {known})", job.controller))?;
-            run.controller = job.key.clone();
-            Ok(run)
+            registry::run_as(&job.controller, &job.key, &job.scenario, options)
+                .map_err(|known| anyhow!("unknown controller `{}` (known: {known})", job.controller))
         })
         .collect();
     bar.finish_and_clear();

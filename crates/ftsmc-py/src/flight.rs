@@ -129,11 +129,10 @@ pub fn simulate_python(
 ) -> PyResult<RunData> {
     scenario.inner.check_cost(1).map_err(|e| value_error(chain_message(&e)))?;
     let mut flyer = PythonController::new(controller, state_cls, reference_cls);
-    let mut out = ftsmc_sim::run::simulate(&scenario.inner, &mut flyer, RunOptions::default());
+    let out = ftsmc_sim::run::Flight::new(scenario.inner.clone(), &mut flyer, RunOptions::default()).named(name).run();
     if let Some(err) = flyer.error.take() {
         return Err(err);
     }
-    out.controller = name;
     Ok(RunData { out })
 }
 

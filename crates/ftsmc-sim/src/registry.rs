@@ -60,10 +60,18 @@ pub fn lane_compatible(a: &Scenario, b: &Scenario) -> bool {
 /// Build controller `name` for `scenario` and fly it; the output's
 /// `controller` field is `name`.
 pub fn run(name: &str, scenario: &Scenario, options: crate::run::RunOptions) -> Result<crate::run::RunOutput, String> {
-    let mut controller = build(name, scenario)?;
-    let mut out = crate::run::simulate(scenario, controller.as_mut(), options);
-    out.controller = name.to_string();
-    Ok(out)
+    run_as(name, name, scenario, options)
+}
+
+/// [`run`], the output's `controller` field `label` (a variant's name).
+pub fn run_as(
+    name: &str,
+    label: &str,
+    scenario: &Scenario,
+    options: crate::run::RunOptions,
+) -> Result<crate::run::RunOutput, String> {
+    let controller = build(name, scenario)?;
+    Ok(crate::run::Flight::new(scenario.clone(), controller, options).named(label).run())
 }
 
 #[cfg(test)]

@@ -188,7 +188,8 @@ fn fly_lanes<const N: usize>(name: &str, scenarios: &[&Scenario], options: RunOp
     }
     let controller = crate::registry::build_lanes::<N>(name, scenarios[0]).expect("controller names checked above");
     let first: Vec<std::sync::Arc<Scenario>> = (0..N).map(|i| (*scenarios[i.min(n - 1)]).clone().into()).collect();
-    let mut flight = Flights::<Box<dyn Controller<Lanes<N>> + Send>, Lanes<N>>::new_lanes(first, controller, options);
+    let mut flight =
+        Flights::<Box<dyn Controller<Lanes<N>> + Send>, Lanes<N>>::new_lanes(first, controller, options).named(name);
     // The run each lane flies (`None`: idle).
     let mut run_of: [Option<usize>; N] = core::array::from_fn(|i| (i < n).then_some(i));
     for (i, run) in run_of.iter().enumerate() {
@@ -204,9 +205,7 @@ fn fly_lanes<const N: usize>(name: &str, scenarios: &[&Scenario], options: RunOp
             if flight.lane_flying(i) {
                 continue;
             }
-            let mut output = flight.lane_output(i);
-            output.controller = name.to_string();
-            out[run] = Some(output);
+            out[run] = Some(flight.lane_output(i));
             *slot = None;
             if next < n {
                 flight.start_lane(i, (*scenarios[next]).clone());

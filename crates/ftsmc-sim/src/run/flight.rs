@@ -550,6 +550,10 @@ pub type Flight<'o, C> = Flights<'o, C, f64>;
 /// progress callback, the cancellation flag and the user's observers.
 pub struct Flights<'o, C: Controller<R>, R: Real> {
     controller: C,
+    /// The name every output of these flights carries
+    /// ([`RunOutput::controller`]): the controller's own
+    /// [`Controller::name`] unless [`Flights::named`] gave another.
+    name: String,
     options: RunOptions<'o>,
     truth: Box<dyn TruthModel<R> + Send>,
     /// The truth's Euler state at the current period boundary (converted once per period).
@@ -654,9 +658,8 @@ impl<'o, C: Controller> Flights<'o, C, f64> {
     /// The outcome so far (a flight stopped early reports `Completed` over
     /// the steps flown).
     pub fn finish(mut self) -> RunOutput {
-        let name = self.controller.name();
         let lane = self.lanes.pop().expect("one lane");
-        lane.output(name, &self.options)
+        lane.output(&self.name, &self.options)
     }
 }
 
@@ -701,6 +704,7 @@ impl<'o, C: Controller<R>, R: Real> Flights<'o, C, R> {
         }
         let body = if wants_body { truth.body_attitude() } else { None };
         let mut flight = Self {
+            name: controller.name().to_string(),
             controller,
             options,
             truth,
@@ -718,6 +722,14 @@ impl<'o, C: Controller<R>, R: Real> Flights<'o, C, R> {
             flight.lanes[i].boundary(&flight.state.get_lane(i), false, false);
         }
         flight
+    }
+
+    /// The same flights, their outputs named `name` (a registry name, or a
+    /// variant's or a contestant's label) instead of the controller's own
+    /// [`Controller::name`].
+    pub fn named(mut self, name: impl Into<String>) -> Self {
+        self.name = name.into();
+        self
     }
 
     /// Start a new flight of `scenario` in lane `lane` (its flight ended, or
@@ -755,7 +767,7 @@ impl<'o, C: Controller<R>, R: Real> Flights<'o, C, R> {
         idle.exit = Some(ExitStatus::Completed);
         idle.set_step(idle.steps);
         let done = core::mem::replace(&mut self.lanes[lane], idle);
-        done.output(self.controller.name(), &self.options)
+        done.output(&self.name, &self.options)
     }
 
     /// Stop lane `lane` without an outcome: an idle lane of a batch with
