@@ -177,11 +177,17 @@ fn terms(groups: &[Group], rows: &[Row], t: f64, values: &mut [f64]) {
     for ((g, row), out) in groups.iter().zip(rows).zip(values.chunks_exact_mut(WIDTH)) {
         let [u, v, w, z] = &g.rotation;
         let [tau, s_n, c_n] = row;
+        // Into a local first: the closure that dispatches this
+        // ([`crate::isa::run_on`]) carries its slices without `noalias`, so
+        // a store straight into `out` could alias the next term's inputs
+        // and the four terms would not be computed side by side.
+        let mut four = [0.0; WIDTH];
         for k in 0..WIDTH {
             let rotation = [u[k], v[k], w[k], z[k]];
             let row = (tau[k], s_n[k], c_n[k]);
-            out[k] = term_value(g.amplitude[k], g.omega[k], g.phase[k], g.anchor[k], rotation, row, t);
+            four[k] = term_value(g.amplitude[k], g.omega[k], g.phase[k], g.anchor[k], rotation, row, t);
         }
+        out.copy_from_slice(&four);
     }
 }
 

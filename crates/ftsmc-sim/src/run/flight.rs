@@ -180,8 +180,9 @@ struct LaneFlight<'o> {
     /// The truth's Euler state at the lane's period boundary (its copy of
     /// lane `i` of [`Flights`]'s boundary state).
     state: QuadState,
-    /// What the controller was given this tick ([`LaneFlight::measure`]).
-    measured: QuadState,
+    /// What the controller was given this tick when it was not the truth
+    /// itself ([`LaneFlight::measure`]; `None`: it was `state`).
+    measured: Option<QuadState>,
     /// The controller's telemetry of this lane, gathered from the lanes at
     /// the ticks some observer reads it ([`Observers::read_telemetry`]).
     telemetry: Telemetry,
@@ -273,7 +274,7 @@ impl<'o> LaneFlight<'o> {
             sensors,
             measured_ahead: None,
             state: QuadState::default(),
-            measured: QuadState::default(),
+            measured: None,
             telemetry: Telemetry::default(),
             wind,
             ground: scenario.ground.filter(|g| g.enabled),
@@ -311,23 +312,28 @@ impl<'o> LaneFlight<'o> {
     }
 
     /// Stage 1: the sensors' reading of the truth at the lane's boundary
-    /// (its Euler state and, for a full-state controller, `body`; the
-    /// truth itself with perfect sensors, or once the flight is over), or
-    /// the reading taken ahead ([`Flight::measurement`]).
+    /// (its Euler state and, for a full-state controller, lane `i` of
+    /// `body`), or the reading taken ahead ([`Flight::measurement`]);
+    /// `None` when the controller is given the truth itself (perfect
+    /// sensors, or the flight is over): the caller's lanes already hold it.
     #[cfg_attr(not(debug_assertions), inline(always))]
-    fn measure(&mut self, body: Option<BodyAttitude>) -> Measurement {
-        let m = match self.measured_ahead.take() {
-            Some(ahead) => ahead,
-            None => {
-                let truth = Measurement { euler: self.state, body };
-                match self.sensors.as_mut() {
-                    Some(s) if self.exit.is_none() => s.measure_full(&truth),
-                    _ => truth,
-                }
+    fn measure<R: Real>(&mut self, body: Option<&BodyAttitude<R>>, i: usize) -> Option<Measurement> {
+        // (Matched in place: `take()` would copy the empty option out every tick.)
+        let m = match (self.measured_ahead, self.sensors.as_mut()) {
+            (Some(ahead), _) => {
+                self.measured_ahead = None;
+                ahead
+            }
+            (None, Some(s)) if self.exit.is_none() => {
+                s.measure_full(&Measurement { euler: self.state, body: body.map(|b| b.get_lane(i)) })
+            }
+            _ => {
+                self.measured = None;
+                return None;
             }
         };
-        self.measured = m.euler;
-        m
+        self.measured = Some(m.euler);
+        Some(m)
     }
 
     /// Stage 3: the period's drag noise, then the actuator stage delivers
@@ -382,7 +388,7 @@ impl<'o> LaneFlight<'o> {
             k: self.k,
             t,
             state: x,
-            measured: &self.measured,
+            measured: self.measured.as_ref().unwrap_or(&self.state),
             reference,
             telemetry: &self.telemetry,
             errors: tracking_errors(&x, reference, attitude_reference),
@@ -418,8 +424,9 @@ impl<'o> LaneFlight<'o> {
         }
     }
 
-    /// Substep `j` of the current period as the truth model takes it.
-    #[inline]
+    /// Substep `j` of the current period as the truth model takes it (built
+    /// in the caller's slot: inlined, or it is built and then copied).
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn substep(&self, j: u32) -> Substep<'_> {
         Substep {
             t0: self.t + j as f64 * self.h,
@@ -556,10 +563,10 @@ pub struct Flights<'o, C: Controller<R>, R: Real> {
     name: String,
     options: RunOptions<'o>,
     truth: Box<dyn TruthModel<R> + Send>,
-    /// The truth's Euler state at the current period boundary (converted once per period).
-    state: QuadState<R>,
-    /// The truth's quaternion and body rates at the same boundary, if it has them.
-    body: Option<BodyAttitude<R>>,
+    /// The truth at the current period boundary: its Euler state
+    /// (converted once per period) and its quaternion and body rates, if it
+    /// has them. What the controller is given with perfect sensors.
+    at: Measurement<R>,
     /// The controller flies [`Measurement::body`] (`Controller::uses_body_attitude`).
     wants_body: bool,
     reference: Reference<R>,
@@ -600,7 +607,7 @@ impl<'o, C: Controller> Flights<'o, C, f64> {
     pub fn observe_with(&mut self, observer: &'o mut (dyn Observer + Send)) {
         let lane = &mut self.lanes[0];
         if lane.flying() {
-            observer.boundary(lane.t, &self.state, &self.reference);
+            observer.boundary(lane.t, &self.at.euler, &self.reference);
         }
         lane.observers.user.push(observer);
     }
@@ -615,7 +622,7 @@ impl<'o, C: Controller> Flights<'o, C, f64> {
         if let Some(m) = lane.measured_ahead {
             return m.euler;
         }
-        let truth = Measurement { euler: self.state, body: self.body };
+        let truth = self.at;
         let m = match lane.sensors.as_mut() {
             Some(s) => s.measure_full(&truth),
             None => truth,
@@ -626,7 +633,7 @@ impl<'o, C: Controller> Flights<'o, C, f64> {
 
     /// The truth's Euler state at the current period boundary.
     pub fn truth_state(&self) -> &QuadState {
-        &self.state
+        &self.at.euler
     }
 
     /// The reference at the current period boundary.
@@ -708,8 +715,7 @@ impl<'o, C: Controller<R>, R: Real> Flights<'o, C, R> {
             controller,
             options,
             truth,
-            state,
-            body,
+            at: Measurement { euler: state, body },
             wants_body,
             reference,
             lanes,
@@ -719,7 +725,7 @@ impl<'o, C: Controller<R>, R: Real> Flights<'o, C, R> {
         flight.reference_twin = reference_twins(&flight.lanes);
         for i in 0..R::LANES {
             flight.set_limits(i);
-            flight.lanes[i].boundary(&flight.state.get_lane(i), false, false);
+            flight.lanes[i].boundary(&flight.at.euler.get_lane(i), false, false);
         }
         flight
     }
@@ -753,9 +759,9 @@ impl<'o, C: Controller<R>, R: Real> Flights<'o, C, R> {
         self.refresh_lane(lane);
         if started.is_err() {
             // A flight that cannot start is seen at its initial state.
-            self.state.put_lane(lane, scenario.initial_state.state());
+            self.at.euler.put_lane(lane, scenario.initial_state.state());
         }
-        self.lanes[lane].boundary(&self.state.get_lane(lane), false, false);
+        self.lanes[lane].boundary(&self.at.euler.get_lane(lane), false, false);
     }
 
     /// The outcome of lane `lane`'s flight so far, its lane left as it is
@@ -795,12 +801,12 @@ impl<'o, C: Controller<R>, R: Real> Flights<'o, C, R> {
     /// Read lane `lane`'s truth into the boundary state (after its truth changed).
     fn refresh_lane(&mut self, lane: usize) {
         let s = self.truth.quad_state();
-        self.state.put_lane(lane, s.get_lane(lane));
+        self.at.euler.put_lane(lane, s.get_lane(lane));
         if self.wants_body {
             if let Some(b) = self.truth.body_attitude() {
-                let mut body = self.body.unwrap_or_default();
+                let mut body = self.at.body.unwrap_or_default();
                 body.put_lane(lane, b.get_lane(lane));
-                self.body = Some(body);
+                self.at.body = Some(body);
             }
         }
     }
@@ -814,7 +820,7 @@ impl<'o, C: Controller<R>, R: Real> Flights<'o, C, R> {
     /// Any other lane takes the ordered checks.
     #[allow(clippy::eq_op)] // `x − x` on purpose: the finiteness test below
     fn sound_lanes(&self) -> R::Mask {
-        let (s, r) = (&self.state, &self.reference);
+        let (s, r) = (&self.at.euler, &self.reference);
         let zero = R::splat(0.0);
         // `x − x` is +0 for a finite `x` and NaN otherwise: the sum is 0
         // exactly when every component is finite.
@@ -853,14 +859,18 @@ impl<'o, C: Controller<R>, R: Real> Flights<'o, C, R> {
         if !self.lanes.iter().any(LaneFlight::flying) {
             return StepOutcome::Done;
         }
-        // 1. Measure each lane; 2. the controller on the lanes.
-        let mut measured = Measurement::<R>::default();
+        // 1. Measure each lane (from the truth's lanes: a lane given the
+        // truth itself leaves them as they are); 2. the controller on the lanes.
+        let mut sensed: Option<Measurement<R>> = None;
         for (i, lane) in self.lanes.iter_mut().enumerate() {
-            measured.put_lane(i, lane.measure(self.body.as_ref().map(|b| b.get_lane(i))));
+            if let Some(m) = lane.measure(self.at.body.as_ref(), i) {
+                sensed.get_or_insert(self.at).put_lane(i, m);
+            }
         }
+        let measured = sensed.as_ref().unwrap_or(&self.at);
         let dt = self.lanes[0].dt;
         let command = if self.wants_body {
-            self.controller.update_measured(&measured, &self.reference, dt)
+            self.controller.update_measured(measured, &self.reference, dt)
         } else {
             self.controller.update(&measured.euler, &self.reference, dt)
         };
@@ -882,13 +892,10 @@ impl<'o, C: Controller<R>, R: Real> Flights<'o, C, R> {
             for (i, lane) in self.lanes.iter_mut().enumerate() {
                 lane.begin_substep(i, j, &*self.truth);
             }
-            // Each flying lane's substep built once; the slots past the
-            // lanes hold copies of the first (never read).
-            let first = self.lanes[0].substep(j);
-            let mut gathered = [first; MAX_LANES];
-            for (slot, lane) in gathered.iter_mut().zip(&self.lanes).skip(1) {
-                *slot = lane.substep(j);
-            }
+            // Each lane's substep built in its slot (no copies); a slot past
+            // the lanes repeats the last lane's and is never read.
+            let lanes = &self.lanes;
+            let gathered: [Substep<'_>; MAX_LANES] = core::array::from_fn(|i| lanes[i.min(n - 1)].substep(j));
             self.truth.substep(&gathered[..n]);
             for (i, lane) in self.lanes.iter_mut().enumerate() {
                 lane.end_substep(i, j, &mut *self.truth);
@@ -918,13 +925,13 @@ impl<'o, C: Controller<R>, R: Real> Flights<'o, C, R> {
             lane.at_boundary = true;
         }
         // Written in place: the boundary state is not copied on the way.
-        self.truth.quad_state_into(&mut self.state);
+        self.truth.quad_state_into(&mut self.at.euler);
         if self.wants_body {
-            self.truth.body_attitude_into(&mut self.body);
+            self.truth.body_attitude_into(&mut self.at.body);
         }
         let sound = self.sound_lanes();
         for (i, lane) in self.lanes.iter_mut().enumerate().filter(|(_, lane)| lane.at_boundary) {
-            lane.boundary(&self.state.get_lane(i), true, sound.get_lane(i));
+            lane.boundary(&self.at.euler.get_lane(i), true, sound.get_lane(i));
         }
         if self.lanes.iter().any(LaneFlight::flying) {
             StepOutcome::Flying
