@@ -236,7 +236,8 @@ fn inline_svg(svg: &str, prefix: &str) -> String {
 /// One recorded flight for the replay: `t`, position, attitude, reference,
 /// decimated to at most [`REPLAY_POINTS`]; `None` for a CSV without those
 /// columns or with fewer than two rows. The file at `path` is streamed
-/// twice, counting its rows and then parsing only the picked ones: a 200 s
+/// twice, counting its line ends and then decoding and parsing only the
+/// picked rows: a 200 s
 /// flight at 100 Hz has 20,000 rows of ~50 numbers, and reading it whole
 /// and parsing every number cost more than writing it.
 fn replay_track(rel: &Path, path: &Path) -> std::io::Result<Option<String>> {
@@ -252,12 +253,20 @@ fn replay_track(rel: &Path, path: &Path) -> std::io::Result<Option<String>> {
         return Ok(None);
     };
     let refs: Option<Vec<usize>> = ["x_ref", "y_ref", "z_ref"].iter().map(|n| col(n)).collect();
-    let mut buffer = String::new();
-    let mut n_rows = 0usize;
-    while reader.read_line(&mut buffer)? > 0 {
-        n_rows += 1;
-        buffer.clear();
+    // The rows after the header, counted as line ends in the raw bytes (a
+    // last line without one counts too).
+    let (mut n_rows, mut last) = (0usize, b'\n');
+    loop {
+        let chunk = reader.fill_buf()?;
+        if chunk.is_empty() {
+            break;
+        }
+        n_rows += chunk.iter().filter(|&&b| b == b'\n').count();
+        last = chunk[chunk.len() - 1];
+        let used = chunk.len();
+        reader.consume(used);
     }
+    n_rows += usize::from(last != b'\n');
     if n_rows < 2 {
         return Ok(None);
     }
@@ -267,15 +276,18 @@ fn replay_track(rel: &Path, path: &Path) -> std::io::Result<Option<String>> {
         picks.push(n_rows - 1);
     }
     let mut reader = open()?;
-    reader.read_line(&mut buffer)?; // the header
+    let mut buffer = Vec::new();
+    reader.read_until(b'\n', &mut buffer)?; // the header
     let mut rows: Vec<Vec<f64>> = Vec::with_capacity(picks.len());
     let mut next = picks.iter().peekable();
     for r in 0..n_rows {
         buffer.clear();
-        reader.read_line(&mut buffer)?;
+        reader.read_until(b'\n', &mut buffer)?;
         if next.peek() == Some(&&r) {
             next.next();
-            let text = &buffer[..eol(&buffer)];
+            // Only the picked rows are decoded and parsed.
+            let line = String::from_utf8_lossy(&buffer);
+            let text = &line[..eol(&line)];
             rows.push(text.split(',').map(|v| v.trim().parse::<f64>().unwrap_or(f64::NAN)).collect());
         }
     }
@@ -435,6 +447,27 @@ mod tests {
         assert!(html.contains("<a href=\"beyond/report.md\">link</a>"), "{html}");
         assert!(html.contains("<th>a</th><th>b</th>") && html.contains("<td>1</td><td>—</td>"), "{html}");
         assert!(html.contains("<li>one</li>\n<li>two</li>"), "{html}");
+    }
+
+    /// Rows are counted by their line ends; a last row without one counts,
+    /// and a file of one row gives no replay.
+    #[test]
+    fn replay_counts_a_last_row_without_a_line_end() {
+        let dir = std::env::temp_dir().join(format!("ftsmc-replay-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let head = "t,x,y,z,phi,theta,psi\n";
+        let track = |body: &str| {
+            let path = dir.join("a.csv");
+            std::fs::write(&path, format!("{head}{body}")).unwrap();
+            replay_track(Path::new("a.csv"), &path).unwrap()
+        };
+        let two = track("0,1,2,3,0,0,0\n0.5,4,5,6,0,0,0").expect("two rows");
+        let one = track("0,1,2,3,0,0,0\n");
+        let three = track("0,1,2,3,0,0,0\n0.5,4,5,6,0,0,0\n1,7,8,9,0,0,0\n").expect("three rows");
+        std::fs::remove_dir_all(&dir).unwrap();
+        assert!(two.contains("\"t\":[0,0.5]") && two.contains("[4,5,6]"), "{two}");
+        assert!(one.is_none());
+        assert!(three.contains("\"t\":[0,0.5,1]"), "{three}");
     }
 
     #[test]

@@ -402,7 +402,7 @@ impl Motors {
 /// time constant applies and the noise term of each rotor, worked out once,
 /// so that the speeds at each RK4 stage time ([`HeldCommand::speeds`]) are
 /// one multiply-add and the noise away.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct HeldCommand {
     /// Commands clamped to `[ω_min, ω_max]`, rad/s.
     pub(crate) target: [f64; 4],

@@ -73,8 +73,8 @@ pub(crate) enum Drive<'a> {
         /// The lag's decay factors, cached per stage step ([`DecayCache`]).
         decay: &'a DecayCache,
         /// The commands and noise draws of the period, prepared for this
-        /// substep ([`Motors::held`]).
-        held: HeldCommand,
+        /// substep ([`ActuatorStage::held`]).
+        held: &'a HeldCommand,
     },
 }
 
@@ -199,13 +199,22 @@ impl ActuatorStage {
         matches!(self, ActuatorStage::Ideal | ActuatorStage::Clamp { mixer: None, .. })
     }
 
-    /// How the truth model sees the rotors over the next substep.
+    /// The lagged motors' command and noise over the next substep
+    /// ([`Motors::held`], from the motors at its start), into `held`; the
+    /// other stages hold their rotors and leave it as it is.
     #[inline]
-    pub(crate) fn drive<'a>(&'a self, delivered: &'a Delivered, omega_bar: f64) -> Drive<'a> {
+    pub(crate) fn held(&self, delivered: &Delivered, held: &mut HeldCommand) {
+        if let ActuatorStage::Rotors { motors, .. } = self {
+            *held = motors.held(&delivered.target, &delivered.noise);
+        }
+    }
+
+    /// How the truth model sees the rotors over the next substep (`held`:
+    /// what [`ActuatorStage::held`] prepared for it).
+    #[inline]
+    pub(crate) fn drive<'a>(&'a self, delivered: &'a Delivered, omega_bar: f64, held: &'a HeldCommand) -> Drive<'a> {
         match self {
-            ActuatorStage::Rotors { motors, decay, .. } => {
-                Drive::Lagged { motors, decay, held: motors.held(&delivered.target, &delivered.noise) }
-            }
+            ActuatorStage::Rotors { motors, decay, .. } => Drive::Lagged { motors, decay, held },
             _ => Drive::Held { applied: &delivered.applied, speeds: &delivered.target, omega_bar },
         }
     }

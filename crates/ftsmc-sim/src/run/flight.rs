@@ -211,6 +211,9 @@ struct LaneFlight<'o> {
     /// This period's delivery (the truth reads its drive during the
     /// substeps) and its unlimited rotor-speed demand.
     delivered: Delivered,
+    /// The lagged motors' command over the coming substep, prepared once
+    /// per substep ([`ActuatorStage::held`]).
+    held: crate::actuators::HeldCommand,
     demand: [f64; 4],
     /// The true plant of the period (formed only for an actuator stage that
     /// reads it, [`ActuatorStage::reads_plant`]).
@@ -289,6 +292,7 @@ impl<'o> LaneFlight<'o> {
             rotor_metrics: reports_rotor_metrics(scenario),
             unobserved: None,
             delivered: Delivered::none(),
+            held: Default::default(),
             demand: [0.0; 4],
             plant_now: base_plant,
             omega_bar: 0.0,
@@ -422,6 +426,7 @@ impl<'o> LaneFlight<'o> {
         if self.ground.is_some() {
             self.p_prev = truth.translation(i).0;
         }
+        self.actuators.held(&self.delivered, &mut self.held);
     }
 
     /// Substep `j` of the current period as the truth model takes it (built
@@ -434,7 +439,7 @@ impl<'o> LaneFlight<'o> {
             a: &self.tv_now,
             b: &self.tv_next,
             env: &self.env,
-            drive: self.actuators.drive(&self.delivered, self.omega_bar),
+            drive: self.actuators.drive(&self.delivered, self.omega_bar, &self.held),
             wind: self.wind_now,
         }
     }

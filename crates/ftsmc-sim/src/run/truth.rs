@@ -863,6 +863,15 @@ mod lane_tests {
                     winds.push(lane.wind.as_mut().map(|w| w.step(t0)));
                     next.push(lane.env.time_varying_on_grid(lane.k * u64::from(steps) + u64::from(j) + 1, t0 + lane.h));
                 }
+                let held: Vec<crate::actuators::HeldCommand> = lanes
+                    .iter()
+                    .enumerate()
+                    .map(|(i, lane)| {
+                        let mut held = Default::default();
+                        lane.actuators.held(&delivered[i], &mut held);
+                        held
+                    })
+                    .collect();
                 let subs: Vec<Substep<'_>> = lanes
                     .iter()
                     .enumerate()
@@ -872,7 +881,7 @@ mod lane_tests {
                         a: &lane.tv_now,
                         b: &next[i],
                         env: &lane.env,
-                        drive: lane.actuators.drive(&delivered[i], residual_speed(&delivered[i].target)),
+                        drive: lane.actuators.drive(&delivered[i], residual_speed(&delivered[i].target), &held[i]),
                         wind: winds[i],
                     })
                     .collect();
