@@ -10,6 +10,11 @@ import pytest
 import ftsmc
 
 
+# The start and two generations of 4 samples and their mean, the second
+# with the anchor beside them, 2 flights each.
+BUDGET = 2 * (1 + 5 + 6)
+
+
 def tiny() -> ftsmc.Scenario:
     return ftsmc.Scenario.builtin("realistic-scenario-2").with_overrides(
         {"duration": 1.5, "tune": {"runs": 2, "validation_runs": 3, "population": 4}}
@@ -18,11 +23,11 @@ def tiny() -> ftsmc.Scenario:
 
 def test_a_tiny_tune_is_the_same_on_one_and_two_threads(tmp_path: Path) -> None:
     s = tiny()
-    one = ftsmc.tune(s, "pid", budget=2 * 9, seed=3, threads=1, extends="base.toml")
-    two = ftsmc.tune(s, "pid", budget=2 * 9, seed=3, threads=2, extends="base.toml")
+    one = ftsmc.tune(s, "pid", budget=BUDGET, seed=3, threads=1, extends="base.toml")
+    two = ftsmc.tune(s, "pid", budget=BUDGET, seed=3, threads=2, extends="base.toml")
     assert one.toml == two.toml
     assert one.scenario == two.scenario
-    assert len(one.summary["history"]) == 1 + 2 * 4
+    assert len(one.summary["history"]) == 1 + 5 + 6
     assert one.summary["held_out"]["tuned"]["runs"] == 3
     # The tuned file extends the input and loads back to the tuned gains.
     (tmp_path / "base.toml").write_text(s.to_toml())
@@ -45,14 +50,14 @@ def test_a_tune_through_dask_equals_the_local_tune() -> None:
     import logging
 
     s = tiny()
-    local = ftsmc.tune(s, "tsm-sta", budget=2 * 9, seed=3, threads=1, extends="base.toml")
+    local = ftsmc.tune(s, "tsm-sta", budget=BUDGET, seed=3, threads=1, extends="base.toml")
     cluster = distributed.LocalCluster(
         n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None, silence_logs=logging.CRITICAL
     )
     client = distributed.Client(cluster)
     try:
-        remote = ftsmc.tune(s, "tsm-sta", budget=2 * 9, seed=3, extends="base.toml", client=client)
-        batched = ftsmc.tune(s, "tsm-sta", budget=2 * 9, seed=3, extends="base.toml", client=client, batch=3)
+        remote = ftsmc.tune(s, "tsm-sta", budget=BUDGET, seed=3, extends="base.toml", client=client)
+        batched = ftsmc.tune(s, "tsm-sta", budget=BUDGET, seed=3, extends="base.toml", client=client, batch=3)
     finally:
         client.close()
         cluster.close()
@@ -62,7 +67,7 @@ def test_a_tune_through_dask_equals_the_local_tune() -> None:
         # NaN statistics (no completed run) are None in the JSON: equal either way.
         assert r.summary == local.summary
     with pytest.raises(ValueError, match="batch"):
-        ftsmc.tune(s, "tsm-sta", budget=2 * 9, client=object(), batch=0)
+        ftsmc.tune(s, "tsm-sta", budget=BUDGET, client=object(), batch=0)
 
 
 def test_the_dask_objective_refuses_bad_input() -> None:

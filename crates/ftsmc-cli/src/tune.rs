@@ -98,7 +98,7 @@ pub fn owner(controller: &str) -> String {
 pub fn history_csv(r: &TuneResult) -> Result<Vec<u8>> {
     let mut w = csv::Writer::from_writer(Vec::new());
     let mut head: Vec<String> =
-        ["generation", "restart", "candidate", "flights", "cost"].iter().map(|s| s.to_string()).collect();
+        ["generation", "restart", "candidate", "role", "flights", "cost"].iter().map(|s| s.to_string()).collect();
     head.extend(r.space.dims.iter().map(|d| d.name.clone()));
     head.extend(
         [
@@ -127,6 +127,7 @@ pub fn history_csv(r: &TuneResult) -> Result<Vec<u8>> {
             h.generation.to_string(),
             h.restart.to_string(),
             h.candidate.to_string(),
+            h.role.name().to_string(),
             h.flights.to_string(),
             h.cost.to_string(),
         ];
@@ -173,9 +174,9 @@ pub fn comparison_table(r: &TuneResult, confidence: f64) -> String {
     };
     row("start, training", &r.training.start, None);
     row("tuned, training", &r.training.tuned, None);
-    if let (Some(s0), Some(w)) = (r.race.first(), r.best_raced()) {
-        row("start, re-flown", &s0.stats, None);
-        row("tuned, re-flown", &w.stats, None);
+    if let (Some(s0), Some(w)) = (r.race.first().and_then(|x| x.stats), r.best_raced().and_then(|x| x.stats)) {
+        row("start, re-flown", &s0, None);
+        row("tuned, re-flown", &w, None);
     }
     if let Some(h) = &r.held_out {
         let iv = held_intervals(r, confidence);
@@ -185,11 +186,11 @@ pub fn comparison_table(r: &TuneResult, confidence: f64) -> String {
     format!(
         "{}
 {}
-(training: {} draws per candidate; re-flown: the race's {} fresh training draws; held-out: {} draws the search never saw)",
+(training: {} draws per candidate, each generation its own; re-flown: the race's final, {} fresh training draws; held-out: {} draws the search never saw)",
         level_note(confidence),
         t.render(),
-        r.training_indices.len(),
-        r.race_indices.len(),
+        r.settings.runs,
+        r.race.first().and_then(|x| x.stats).map_or(0, |st| st.runs),
         r.held_out_indices.len()
     )
 }
@@ -371,8 +372,8 @@ fn tune_one(
         "training": result.training,
         "training_success": { "start": rate(&result.training.start), "tuned": rate(&result.training.tuned) },
         "race_success": {
-            "start": result.race.first().and_then(|r| rate(&r.stats)),
-            "tuned": result.best_raced().and_then(|r| rate(&r.stats)),
+            "start": result.race.first().and_then(|r| r.stats.as_ref()).and_then(rate),
+            "tuned": result.best_raced().and_then(|r| r.stats.as_ref()).and_then(rate),
         },
         "held_out": result.held_out,
         "held_out_intervals": held.as_ref().map(|[a, b]| json!({ "start": a, "tuned": b })),
@@ -409,12 +410,13 @@ fn tune_one(
         if result.generations.is_empty() { "no generation flown".to_string() } else { failure_line(&result) }
     );
     println!(
-        "\nchosen (generation {}, training cost {:.4}; start {:.4}{}):",
+        "\nchosen (generation {}, {}, training cost {:.4} on its generation's draws; start {:.4}{}):",
         best.generation,
+        best.role.name(),
         best.cost,
         result.history[0].cost,
-        match (result.best_raced(), result.race.first()) {
-            (Some(w), Some(s0)) => format!("; race cost {:.4}, start {:.4}", w.cost, s0.cost),
+        match (result.best_raced().and_then(|w| w.cost), result.race.first().and_then(|s0| s0.cost)) {
+            (Some(w), Some(s0)) => format!("; race final cost {w:.4}, start {s0:.4}"),
             _ => String::new(),
         }
     );
@@ -440,18 +442,16 @@ fn tune_one(
     Ok(result)
 }
 
-/// Cost of every candidate and the best so far against training flights.
+/// Cost of every candidate and of the search distribution's mean (each on
+/// its own generation's draws) against training flights.
 fn write_convergence(r: &TuneResult, stem: &Path) -> Result<()> {
+    use ftsmc_sim::tune::Role;
     let xs: Vec<f64> = r.history.iter().map(|h| h.flights as f64).collect();
     let costs: Vec<f64> = r.history.iter().map(|h| h.cost).collect();
-    let mut best = f64::INFINITY;
-    let best_so_far: Vec<f64> = costs
-        .iter()
-        .map(|c| {
-            best = best.min(*c);
-            best
-        })
-        .collect();
+    let means: Vec<&ftsmc_sim::tune::Evaluated> =
+        r.history.iter().filter(|h| matches!(h.role, Role::Start | Role::Mean)).collect();
+    let mean_xs: Vec<f64> = means.iter().map(|h| h.flights as f64).collect();
+    let mean_costs: Vec<f64> = means.iter().map(|h| h.cost).collect();
     let color = controller_color(&r.controller);
     let panel = Panel {
         title: format!("{} on {}", r.controller, r.start.name),
@@ -462,13 +462,21 @@ fn write_convergence(r: &TuneResult, stem: &Path) -> Result<()> {
             Series {
                 points: true,
                 label: "candidate".into(),
-                xs: xs.clone(),
+                xs,
                 ys: costs,
                 color: Rgb(127, 127, 127),
                 dashed: false,
                 end: None,
             },
-            Series { points: false, label: "best so far".into(), xs, ys: best_so_far, color, dashed: false, end: None },
+            Series {
+                points: false,
+                label: "mean of the search".into(),
+                xs: mean_xs,
+                ys: mean_costs,
+                color,
+                dashed: false,
+                end: None,
+            },
         ],
         log_x: false,
         log_y: true,

@@ -18,9 +18,11 @@ use crate::tune::{outcomes, stats_cells};
 /// Held-out flights per gain set of docs/tuning.md's table (`reproduce --tuned-runs 200`; the default run flies none).
 pub const DEFAULT_TUNED_RUNS: u64 = 200;
 
-/// The training flights per candidate the committed files were tuned with
-/// (`[tune] runs` default): the held-out indices skip their seeds.
-const TRAINING_RUNS: u64 = 4;
+/// The training flights per candidate of the start the committed files were
+/// tuned with (`[tune] runs` default): the held-out indices skip their seeds.
+fn training_runs() -> u64 {
+    ftsmc_sim::scenario::tune_section::TuneSection::default().runs
+}
 
 /// `(scenario, controller, tuned file text)` of every committed tuned file.
 pub const TUNED_FILES: &[(&str, &str, &str)] = &[
@@ -108,7 +110,7 @@ pub fn fly(runs: u64) -> Result<Vec<Row>> {
             let tuned = Scenario::from_toml_str(text, &path)?;
             let seed = base.seed;
             let fly = |s: &Scenario| {
-                judge_flights(s, controller, seed, TRAINING_RUNS, runs, &|_| {}).map_err(anyhow::Error::msg)
+                judge_flights(s, controller, seed, training_runs(), runs, &|_| {}).map_err(anyhow::Error::msg)
             };
             let (default_runs, tuned_runs) = (fly(&base)?, fly(&tuned)?);
             Ok(Row {
@@ -300,6 +302,7 @@ mod tests {
             torque_activity: 0.1,
             saturated: 0.0,
             divergence_score: 0.0,
+            margin_shortfall: 0.0,
         };
         let rows = vec![
             Row {
@@ -341,6 +344,7 @@ mod tests {
             thrust_activity: 1.0,
             torque_activity: 0.1,
             saturated: 0.0,
+            margin: None,
         };
         let row = |controller: &str, runs: Vec<FlightOutcome>| {
             let stats = OutcomeStats::of(&runs, 10.0);

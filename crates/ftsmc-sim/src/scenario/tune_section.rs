@@ -52,7 +52,7 @@ pub struct TuneSection {
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub extra: Vec<ExtraParameter>,
     /// Training flights per candidate (the same Monte Carlo draws for every
-    /// candidate: common random numbers). Default 4.
+    /// candidate: common random numbers). Default 8.
     pub runs: u64,
     /// Held-out flights that judge the start and the result (seeds the
     /// search never used). Default 200.
@@ -66,11 +66,18 @@ pub struct TuneSection {
     #[serde(skip_serializing_if = "Option::is_none")]
     pub sigma: Option<f64>,
     /// Candidates of the search re-flown on fresh training draws before the
-    /// winner is chosen (racing; the start is always re-flown beside them).
-    /// Default 3; 0 chooses on the training draws alone.
+    /// winner is chosen (racing; the start is always re-flown beside them):
+    /// the runs' final means and the generations' best samples. Default 8;
+    /// 0 takes the last generation's mean when it cost less on its draws
+    /// than the start on its own.
     pub race: u64,
-    /// Fresh training draws each raced candidate flies. Default 16.
+    /// Fresh training draws each raced candidate flies in the race's
+    /// screening. Default 8.
     pub race_runs: u64,
+    /// Further fresh training draws on which the start and the two best
+    /// screened candidates are judged: the lowest cost on these alone
+    /// wins. Default 32.
+    pub race_final_runs: u64,
     /// CMA-ES population λ (default `4 + ⌊3 ln n⌋` for n parameters).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub population: Option<u64>,
@@ -81,6 +88,11 @@ pub struct TuneSection {
     /// Cost per run that completed outside the `[envelope]`, averaged over
     /// the runs (default 10).
     pub envelope: f64,
+    /// Weight of the margin shortfall: the mean over the runs of how far
+    /// each fell short of a robustness margin of a quarter of its binding
+    /// `[envelope]` limit (`crate::tune::cost::MARGIN_TARGET`), per unit of
+    /// that fraction (default 4).
+    pub margin: f64,
     /// Weight of the 90th percentile of the completed runs' RMS position
     /// error `sqrt(rms_x² + rms_y² + rms_z²)`, per m (default 1).
     pub rms: f64,
@@ -101,14 +113,16 @@ impl Default for TuneSection {
             parameters: None,
             bounds: BTreeMap::new(),
             extra: Vec::new(),
-            runs: 4,
+            runs: 8,
             validation_runs: 200,
             sigma: None,
-            race: 3,
-            race_runs: 16,
+            race: 8,
+            race_runs: 8,
+            race_final_runs: 32,
             population: None,
             divergence: 1000.0,
             envelope: 10.0,
+            margin: 4.0,
             rms: 1.0,
             thrust_activity: 0.002,
             torque_activity: 0.005,
@@ -120,7 +134,7 @@ impl Default for TuneSection {
 impl TuneSection {
     /// Range checks: weights finite and ≥ 0, `1 <= runs <= 1e6`,
     /// `validation_runs <= 1e6`, `0 < sigma <= 1`, `race <= 100`,
-    /// `1 <= race_runs <= 1e6` when racing, `2 <= population <= 1000`,
+    /// `1 <= race_runs, race_final_runs <= 1e6` when racing, `2 <= population <= 1000`,
     /// bounds and extra ranges finite with `low < high` (and `low > 0` on a
     /// log scale). `Err((dotted key below [tune], error))`.
     pub fn check(&self) -> Result<(), (String, GainError)> {
@@ -130,6 +144,7 @@ impl TuneSection {
         for (key, w) in [
             ("divergence", self.divergence),
             ("envelope", self.envelope),
+            ("margin", self.margin),
             ("rms", self.rms),
             ("thrust_activity", self.thrust_activity),
             ("torque_activity", self.torque_activity),
@@ -155,6 +170,9 @@ impl TuneSection {
         }
         if self.race > 0 && !(1..=1_000_000).contains(&self.race_runs) {
             return err("race_runs", self.race_runs as f64, "1 <= race_runs <= 1e6");
+        }
+        if self.race > 0 && !(1..=1_000_000).contains(&self.race_final_runs) {
+            return err("race_final_runs", self.race_final_runs as f64, "1 <= race_final_runs <= 1e6");
         }
         if let Some(p) = self.population {
             if !(2..=1000).contains(&p) {

@@ -25,7 +25,16 @@ pub struct FlightOutcome {
     pub torque_activity: f64,
     /// Fraction of control periods with a saturated mixer (0 without rotor limits).
     pub saturated: f64,
+    /// The robustness margin to the `[envelope]` (`crate::margin`: a
+    /// fraction of the binding limit, `< 0` outside; at most −1 for a
+    /// crashed or diverged flight); `None` without one.
+    pub margin: Option<f64>,
 }
+
+/// The margin the cost asks of every flight ([`OutcomeStats::margin_shortfall`]):
+/// a quarter of the binding limit, e.g. a position error at most 0.375 m
+/// against a 0.5 m `max_position_error`.
+pub const MARGIN_TARGET: f64 = 0.25;
 
 impl FlightOutcome {
     /// From a run's output.
@@ -41,6 +50,7 @@ impl FlightOutcome {
             thrust_activity: c.thrust,
             torque_activity: c.roll_torque + c.pitch_torque + c.yaw_torque,
             saturated: m.saturation_fraction.unwrap_or(0.0),
+            margin: run.margin.as_ref().map(|m| m.value),
         }
     }
 }
@@ -77,11 +87,17 @@ pub struct OutcomeStats {
     /// Mean over all flights of `2 − t/T` for each diverged or crashed
     /// flight (0 for a completed one): the divergence term of the cost.
     pub divergence_score: f64,
+    /// Mean over all flights of `min(max(0, MARGIN_TARGET − margin), 1 +
+    /// MARGIN_TARGET)` ([`MARGIN_TARGET`], `crate::margin`; 0 for a flight
+    /// without a margin): how far the flights fell short of a safe margin,
+    /// a continuous signal of the envelope's failures and near-misses,
+    /// seen on far fewer draws than the failures themselves.
+    pub margin_shortfall: f64,
 }
 
 impl OutcomeStats {
     /// Number of values of [`OutcomeStats::to_values`].
-    pub const VALUES: usize = 13;
+    pub const VALUES: usize = 14;
 
     /// The statistics as numbers in field order (counts exact as `f64`):
     /// how a Dask task of `ftsmc.tune(..., client=...)` sends them back.
@@ -100,6 +116,7 @@ impl OutcomeStats {
             self.torque_activity,
             self.saturated,
             self.divergence_score,
+            self.margin_shortfall,
         ]
     }
 
@@ -124,6 +141,7 @@ impl OutcomeStats {
             torque_activity: v[10],
             saturated: v[11],
             divergence_score: v[12],
+            margin_shortfall: v[13],
         })
     }
 }
@@ -151,6 +169,8 @@ impl OutcomeStats {
         let success = flights.iter().filter(|f| f.success).count();
         let score: f64 =
             flights.iter().filter(|f| !f.completed).map(|f| 2.0 - (f.time / duration).clamp(0.0, 1.0)).sum::<f64>();
+        let shortfall: f64 =
+            flights.iter().filter_map(|f| f.margin).map(|m| (MARGIN_TARGET - m).clamp(0.0, 1.0 + MARGIN_TARGET)).sum();
         Self {
             runs,
             success,
@@ -165,13 +185,14 @@ impl OutcomeStats {
             torque_activity: median(|f| f.torque_activity),
             saturated: median(|f| f.saturated),
             divergence_score: if runs > 0 { score / runs as f64 } else { 0.0 },
+            margin_shortfall: if runs > 0 { shortfall / runs as f64 } else { 0.0 },
         }
     }
 
     /// The tuning cost (lower is better), with the weights `w` of `[tune]`:
     ///
     /// `divergence × mean(2 − t/T over diverged or crashed runs, 0 otherwise)
-    ///  + envelope × (envelope failures / runs)
+    ///  + envelope × (envelope failures / runs) + margin × margin shortfall
     ///  + rms × p90(RMS position error) + thrust_activity × median(thrust activity)
     ///  + torque_activity × median(torque activity) + saturated × median(saturated fraction)`,
     ///
@@ -182,6 +203,7 @@ impl OutcomeStats {
         let runs = self.runs.max(1) as f64;
         w.divergence * self.divergence_score
             + w.envelope * self.envelope_failures as f64 / runs
+            + w.margin * self.margin_shortfall
             + w.rms * or0(self.rms_p90)
             + w.thrust_activity * or0(self.thrust_activity)
             + w.torque_activity * or0(self.torque_activity)

@@ -89,8 +89,12 @@ pub struct TuneOptions {
 pub struct Evaluated {
     /// Generation (0: the start point), counted across restarts.
     pub generation: u64,
-    /// Index in its generation.
+    /// Index in its generation: the samples first, then the mean, then
+    /// the anchor.
     pub candidate: usize,
+    /// What it is: the start, a CMA-ES sample, the search distribution's
+    /// mean or the run's anchor.
+    pub role: Role,
     /// Parameter values, in [`Space::dims`] order.
     pub values: Vec<f64>,
     /// Cost on the training draws.
@@ -109,6 +113,37 @@ impl Evaluated {
     /// Invalid gains, or at least one training flight diverged or crashed.
     pub fn failed(&self) -> bool {
         self.error.is_some() || self.stats.completed < self.stats.runs
+    }
+}
+
+/// What an evaluated point is. Every generation flies, on its own fresh
+/// draws, the λ samples CMA-ES asked for, the distribution's mean (not
+/// told to CMA-ES: the search's current estimate of the best gains, the
+/// recommendation under noise, Hansen 2016, and a race contender) and,
+/// in a run's second and third generations, the run's start point (the
+/// anchor the no-progress test compares the samples with).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Role {
+    /// The scenario's own gains (generation 0).
+    Start,
+    /// A CMA-ES sample.
+    Sample,
+    /// The search distribution's mean.
+    Mean,
+    /// The run's start point, flown beside its next generations.
+    Anchor,
+}
+
+impl Role {
+    /// Its name in `history.csv` and `summary.json`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Role::Start => "start",
+            Role::Sample => "sample",
+            Role::Mean => "mean",
+            Role::Anchor => "anchor",
+        }
     }
 }
 
@@ -140,10 +175,12 @@ pub struct Generation {
     pub population: usize,
     /// Step σ · max(D) at which it was drawn (step units: 1 = the initial step).
     pub step: f64,
-    /// Candidates with invalid gains or a diverged or crashed training flight.
+    /// Samples with invalid gains or a diverged or crashed training flight.
     pub failed: usize,
-    /// Best training cost so far (the start's included).
+    /// The generation's lowest sample cost (on its own draws).
     pub best_cost: f64,
+    /// The cost of the distribution's mean on the same draws.
+    pub mean_cost: f64,
     /// Set when the search restarted after this generation.
     pub restarted: Option<RestartReason>,
 }
@@ -153,10 +190,14 @@ pub struct Generation {
 pub struct Raced {
     /// Index in the history (0: the start).
     pub index: usize,
-    /// Cost on the race draws.
-    pub cost: f64,
-    /// Statistics of its race flights.
-    pub stats: OutcomeStats,
+    /// Cost on the screening draws.
+    pub screen_cost: f64,
+    /// Statistics of its screening flights.
+    pub screen_stats: OutcomeStats,
+    /// Cost on the final draws (the start and the finalists only).
+    pub cost: Option<f64>,
+    /// Statistics of its final flights (the start and the finalists only).
+    pub stats: Option<OutcomeStats>,
 }
 
 /// Training and held-out statistics of the start and the tuned gains.
@@ -367,23 +408,22 @@ fn tune_inner(
     let default_lambda =
         settings.population.map(|p| p as usize).unwrap_or(cmaes::Cmaes::new(vec![0.0; n], 1.0, None, 0).population());
     let lambda0 = default_lambda as u64;
-    if options.budget < runs * (1 + lambda0) {
+    if options.budget < runs * (2 + lambda0) {
         return Err(format!(
-            "--budget {} is too small: the start and one generation of {lambda0} candidates need {} flights ({runs} per candidate, `tune.runs`)",
+            "--budget {} is too small: the start and one generation of {lambda0} candidates and their mean need {} flights ({runs} per candidate, `tune.runs`)",
             options.budget,
-            runs * (1 + lambda0)
+            runs * (2 + lambda0)
         ));
     }
-    // The race: the start and up to `race` candidates, on at most a tenth of
-    // the budget (none on a budget too small for one race flight each).
-    let contenders = 1 + settings.race;
-    let race_runs = if settings.race == 0 { 0 } else { settings.race_runs.min(options.budget / 10 / contenders) };
-    let search_budget = options.budget - contenders * race_runs;
+    // The race, on at most a tenth of the budget (`race_draws`).
+    let (screen_runs, final_runs) = race_draws(&settings, options.budget);
+    let finalists = settings.race.min(RACE_FINALISTS);
+    let search_budget = options.budget - (1 + settings.race) * screen_runs - (1 + finalists) * final_runs;
 
     let mut history = Vec::new();
     let mut generations = Vec::new();
     // `flights`: training flights flown. `charged`: the budget spent, every
-    // candidate charged its `runs` flights whether it flew or was refused
+    // entry charged its `runs` flights whether it flew or was refused
     // (invalid gains), so the loop ends within the budget whatever the
     // candidates are.
     let mut flights = 0u64;
@@ -391,42 +431,53 @@ fn tune_inner(
     let start_stats = one(evaluator(std::slice::from_ref(&start), &train)?, 1)?[0];
     flights += runs;
     let mut charged = runs;
-    let start_cost = start_stats.cost(&settings);
     history.push(Evaluated {
         generation: 0,
         candidate: 0,
+        role: Role::Start,
         values: start_values,
-        cost: start_cost,
+        cost: start_stats.cost(&settings),
         stats: start_stats,
         flights,
         error: None,
         restart: 0,
     });
-    // Best so far: its index and its point in step coordinates.
-    let mut best = (0usize, vec![0.0; n]);
+    // Where the next run starts (step coordinates), its initial step and population.
+    let mut origin = vec![0.0; n];
     let mut restart = 0u64;
     let mut run_step = 1.0f64;
     let mut lambda = default_lambda;
     let mut generation = 0u64;
     'runs: loop {
-        let mut es = cmaes::Cmaes::new(best.1.clone(), run_step, Some(lambda), run_seed(options.seed, restart));
-        let run_start_cost = history[best.0].cost;
-        let mut run_best = f64::INFINITY;
+        let mut es = cmaes::Cmaes::new(origin.clone(), run_step, Some(lambda), run_seed(options.seed, restart));
+        let anchor = origin.clone();
         let mut run_generations = 0u64;
-        let mut since_better = 0u64;
+        let mut progressed = false;
+        // Each generation's median cost, for the stall test.
+        let mut medians: Vec<f64> = Vec::new();
         loop {
-            if charged + lambda as u64 * runs > search_budget {
+            run_generations += 1;
+            // The anchor (the run's start) flies beside the first
+            // generations after the first, where the mean has moved from it.
+            let with_anchor = run_generations > 1 && run_generations <= NO_PROGRESS_GENERATIONS;
+            let entries = lambda as u64 + 1 + u64::from(with_anchor);
+            if charged + entries * runs > search_budget {
                 break 'runs;
             }
             generation += 1;
-            run_generations += 1;
-            charged += lambda as u64 * runs;
+            charged += entries * runs;
             let step = es.max_std();
-            let points = es.ask();
+            let mut points = es.ask();
+            let samples = points.len();
+            points.push(es.mean().to_vec());
+            if with_anchor {
+                points.push(anchor.clone());
+            }
+            let draws = generation_indices(generation, runs);
             let values: Vec<Vec<f64>> = points.iter().map(|x| space.values_at_step(x)).collect();
             let built: Vec<Result<Scenario, String>> = values.iter().map(|v| space.apply(&start, v)).collect();
             let ok: Vec<Scenario> = built.iter().filter_map(|b| b.as_ref().ok().cloned()).collect();
-            let flown = one(evaluator(&ok, &train)?, ok.len())?;
+            let flown = one(evaluator(&ok, &draws)?, ok.len())?;
             let mut flown = flown.into_iter();
             let mut costs = Vec::with_capacity(points.len());
             let first = history.len();
@@ -443,9 +494,15 @@ fn tune_inner(
                     }
                 };
                 costs.push(cost);
+                let role = match k {
+                    k if k < samples => Role::Sample,
+                    k if k == samples => Role::Mean,
+                    _ => Role::Anchor,
+                };
                 history.push(Evaluated {
                     generation,
                     candidate: k,
+                    role,
                     values: values[k].clone(),
                     cost,
                     stats,
@@ -454,49 +511,51 @@ fn tune_inner(
                     restart,
                 });
             }
-            es.tell(&points, &costs);
+            es.tell(&points[..samples], &costs[..samples]);
             debug_assert_eq!(es.mean().len(), n);
-            // Bookkeeping: the best so far (ties keep the earlier), the run's.
-            let mut improved_run = false;
-            for (k, c) in costs.iter().enumerate() {
-                if *c < history[best.0].cost {
-                    best = (first + k, points[k].clone());
-                }
-                if *c < run_best {
-                    run_best = *c;
-                    improved_run = true;
-                }
+            // Progress: a sample better than the run's start on the same
+            // draws (the mean in the run's first generation, the anchor in
+            // the next ones).
+            let reference = if run_generations == 1 { costs[samples] } else { *costs.last().unwrap_or(&f64::NAN) };
+            if run_generations <= NO_PROGRESS_GENERATIONS && costs[..samples].iter().any(|&c| c < reference) {
+                progressed = true;
             }
-            since_better = if improved_run { 0 } else { since_better + 1 };
-            let failed = history[first..].iter().filter(|e| e.failed()).count();
-            let reason = if run_best >= run_start_cost && run_generations >= NO_PROGRESS_GENERATIONS {
+            medians.push(median(&costs[..samples]));
+            let failed = history[first..first + samples].iter().filter(|e| e.failed()).count();
+            let reason = if !progressed && run_generations >= NO_PROGRESS_GENERATIONS {
                 Some(RestartReason::NoProgress)
             } else if es.max_std() < COLLAPSED_STEP {
                 Some(RestartReason::Collapsed)
-            } else if since_better >= STALL_GENERATIONS {
+            } else if stalled(&medians) {
                 Some(RestartReason::Stalled)
             } else {
                 None
             };
+            let best_cost = costs[..samples].iter().copied().fold(f64::INFINITY, f64::min);
             generations.push(Generation {
                 generation,
                 restart,
                 population: lambda,
                 step,
                 failed,
-                best_cost: history[best.0].cost,
+                best_cost,
+                mean_cost: costs[samples],
                 restarted: reason,
             });
             if let Some(r) = reason {
                 restart += 1;
                 match r {
-                    RestartReason::NoProgress => run_step = (run_step * 0.5).max(MIN_RESTART_STEP),
+                    RestartReason::NoProgress => {
+                        run_step = (run_step * 0.5).max(MIN_RESTART_STEP);
+                        origin = anchor;
+                    }
                     RestartReason::Collapsed | RestartReason::Stalled => {
                         run_step = 1.0;
+                        origin = es.mean().to_vec();
                         lambda = (lambda * 2).min(1000);
                         // A population the remaining budget cannot fly once
                         // would end the search: keep the largest that fits.
-                        let left = search_budget.saturating_sub(charged) / runs.max(1);
+                        let left = (search_budget.saturating_sub(charged) / runs.max(1)).saturating_sub(2);
                         if (lambda as u64) > left && left >= default_lambda as u64 {
                             lambda = left as usize;
                         }
@@ -506,42 +565,8 @@ fn tune_inner(
             }
         }
     }
-    // The race: the start and the best `race` distinct valid candidates
-    // that beat it on the training draws, re-flown on fresh draws; the
-    // lowest race cost wins (ties: the start, then training order).
-    let mut ranked: Vec<usize> =
-        (1..history.len()).filter(|&i| history[i].error.is_none() && history[i].cost < history[0].cost).collect();
-    ranked.sort_by(|&a, &b| history[a].cost.total_cmp(&history[b].cost).then(a.cmp(&b)));
-    let mut chosen: Vec<usize> = Vec::new();
-    for i in ranked {
-        if chosen.len() as u64 >= settings.race {
-            break;
-        }
-        if !chosen.iter().any(|&j| history[j].values == history[i].values) {
-            chosen.push(i);
-        }
-    }
-    let race_idx = race_indices(race_runs);
-    let mut race = Vec::new();
-    let mut race_flights = 0u64;
-    let pick = if chosen.is_empty() {
-        0
-    } else if race_runs == 0 {
-        chosen[0]
-    } else {
-        let mut contenders = vec![0usize];
-        contenders.extend(&chosen);
-        let scenarios: Vec<Scenario> = contenders
-            .iter()
-            .map(|&i| if i == 0 { Ok(start.clone()) } else { space.apply(&start, &history[i].values) })
-            .collect::<Result<_, _>>()?;
-        let stats = one(evaluator(&scenarios, &race_idx)?, scenarios.len())?;
-        race_flights = race_runs * scenarios.len() as u64;
-        for (&index, st) in contenders.iter().zip(stats) {
-            race.push(Raced { index, cost: st.cost(&settings), stats: st });
-        }
-        race.iter().min_by(|a, b| a.cost.total_cmp(&b.cost)).map_or(0, |r| r.index)
-    };
+    let (race, race_idx, race_flights, pick) =
+        run_race(&history, &space, &start, &settings, evaluator, screen_runs, final_runs)?;
     let improved = pick != 0;
     // The start is flown as given (an extra key's start may have been
     // clamped into its range, which the scenario itself is not).
@@ -577,7 +602,7 @@ fn tune_inner(
         training,
         held_out,
         held_out_runs,
-        training_indices: train,
+        training_indices: (TRAINING_OFFSET..TRAINING_OFFSET + (generation + 1) * runs).collect(),
         race_indices: race_idx,
         held_out_indices: held,
         training_flights: flights,
@@ -593,6 +618,165 @@ fn one(stats: Vec<OutcomeStats>, n: usize) -> Result<Vec<OutcomeStats>, String> 
     } else {
         Err(format!("the evaluator returned {} statistics for {n} candidates", stats.len()))
     }
+}
+
+/// Run indices of generation `generation`'s training flights:
+/// `TRAINING_OFFSET + generation · runs + (0..runs)` (generation 0 is the
+/// start's). Each generation flies fresh draws, common to all its entries.
+pub fn generation_indices(generation: u64, runs: u64) -> Vec<u64> {
+    let first = TRAINING_OFFSET.saturating_add(generation.saturating_mul(runs));
+    (first..first.saturating_add(runs)).collect()
+}
+
+/// Median of `costs` (NaN counted as +∞; +∞ when empty).
+fn median(costs: &[f64]) -> f64 {
+    let mut c: Vec<f64> = costs.iter().map(|&x| if x.is_nan() { f64::INFINITY } else { x }).collect();
+    c.sort_by(f64::total_cmp);
+    match c.len() {
+        0 => f64::INFINITY,
+        n if n % 2 == 1 => c[n / 2],
+        n => 0.5 * (c[n / 2 - 1] + c[n / 2]),
+    }
+}
+
+/// The stall test of a run: its generations' median costs (each on its
+/// own draws) over the last [`STALL_GENERATIONS`] generations are, in
+/// their median, no lower than over the [`STALL_GENERATIONS`] before them
+/// (after Hansen's `TolStagnation`, on medians because every generation
+/// flies other draws).
+fn stalled(medians: &[f64]) -> bool {
+    let w = STALL_GENERATIONS as usize;
+    let n = medians.len();
+    n >= 2 * w && median(&medians[n - w..]) >= median(&medians[n - 2 * w..n - w])
+}
+
+/// Screening and final draws of the race for a budget: `race_runs` and
+/// `race_final_runs`, halved together until the race (the start and
+/// `race` challengers screened, the start and [`RACE_FINALISTS`] in the
+/// final) fits in a tenth of the budget; `(0, 0)` (no race) when even one
+/// and four draws do not fit, or without challengers.
+pub fn race_draws(settings: &TuneSection, budget: u64) -> (u64, u64) {
+    if settings.race == 0 {
+        return (0, 0);
+    }
+    let finalists = settings.race.min(RACE_FINALISTS);
+    let cost = |s: u64, f: u64| (1 + settings.race) * s + (1 + finalists) * f;
+    let (mut s, mut f) = (settings.race_runs, settings.race_final_runs);
+    while cost(s, f) > budget / 10 {
+        if s <= 1 && f <= 1 {
+            return (0, 0);
+        }
+        s = s.div_ceil(2);
+        f = f.div_ceil(2);
+    }
+    (s, f)
+}
+
+/// Challengers that survive the race's screening into its final.
+pub const RACE_FINALISTS: u64 = 2;
+
+/// The race's challengers: the final search-distribution mean of each
+/// CMA-ES run, newest first (at most half the places, rounded down), then the best
+/// sample of each generation, newest first, until `race` distinct valid
+/// candidates (indices into `history`).
+fn race_pool(history: &[Evaluated], race: u64) -> Vec<usize> {
+    let race = race as usize;
+    let valid = |i: usize| history[i].error.is_none();
+    let mut means: Vec<usize> = Vec::new();
+    let mut last_restart = None;
+    for i in (1..history.len()).rev() {
+        if history[i].role == Role::Mean && last_restart != Some(history[i].restart) {
+            last_restart = Some(history[i].restart);
+            if valid(i) {
+                means.push(i);
+            }
+        }
+    }
+    let mut winners: Vec<usize> = Vec::new();
+    let mut g = u64::MAX;
+    for i in (1..history.len()).rev() {
+        let e = &history[i];
+        if e.role != Role::Sample || !valid(i) || e.generation == g {
+            continue;
+        }
+        g = e.generation;
+        let best = (1..history.len())
+            .filter(|&j| history[j].generation == g && history[j].role == Role::Sample && valid(j))
+            .min_by(|&a, &b| history[a].cost.total_cmp(&history[b].cost).then(a.cmp(&b)));
+        winners.extend(best);
+    }
+    let mut pool: Vec<usize> = Vec::new();
+    let push = |pool: &mut Vec<usize>, i: usize| {
+        if pool.len() < race && !pool.iter().any(|&j| history[j].values == history[i].values) {
+            pool.push(i);
+        }
+    };
+    for &i in means.iter().take(race / 2) {
+        push(&mut pool, i);
+    }
+    for &i in &winners {
+        push(&mut pool, i);
+    }
+    pool
+}
+
+/// The race: the start and the challengers of [`race_pool`] fly `screen`
+/// fresh draws; the start and the [`RACE_FINALISTS`] lowest-cost
+/// challengers then fly `last` further fresh draws, and the lowest cost on
+/// those alone wins (ties: the start, then screening order). Returns the
+/// raced entries (the start first), the race's run indices, its flights
+/// and the chosen history index (0: the start).
+fn run_race(
+    history: &[Evaluated],
+    space: &Space,
+    start: &Scenario,
+    settings: &TuneSection,
+    evaluator: &Evaluator<'_>,
+    screen: u64,
+    last: u64,
+) -> Result<(Vec<Raced>, Vec<u64>, u64, usize), String> {
+    let pool = race_pool(history, settings.race);
+    if screen == 0 {
+        // No race: the last mean, when it cost less on its draws than the
+        // start on its own.
+        let last = history.iter().rposition(|e| e.role == Role::Mean && e.error.is_none());
+        let pick = last.filter(|&i| history[i].cost < history[0].cost).unwrap_or(0);
+        return Ok((Vec::new(), Vec::new(), 0, pick));
+    }
+    if pool.is_empty() {
+        return Ok((Vec::new(), Vec::new(), 0, 0));
+    }
+    let scenario = |i: usize| if i == 0 { Ok(start.clone()) } else { space.apply(start, &history[i].values) };
+    let screen_idx = race_indices(screen);
+    let final_idx: Vec<u64> = (RACE_OFFSET + screen..RACE_OFFSET + screen + last).collect();
+    let mut contenders = vec![0usize];
+    contenders.extend(&pool);
+    let scenarios: Vec<Scenario> = contenders.iter().map(|&i| scenario(i)).collect::<Result<_, _>>()?;
+    let stats = one(evaluator(&scenarios, &screen_idx)?, scenarios.len())?;
+    let mut race: Vec<Raced> = contenders
+        .iter()
+        .zip(stats)
+        .map(|(&index, st)| Raced { index, screen_cost: st.cost(settings), screen_stats: st, cost: None, stats: None })
+        .collect();
+    let mut order: Vec<usize> = (1..race.len()).collect();
+    order.sort_by(|&a, &b| race[a].screen_cost.total_cmp(&race[b].screen_cost).then(a.cmp(&b)));
+    let mut finalists = vec![0usize];
+    finalists.extend(order.iter().take(RACE_FINALISTS as usize));
+    let scenarios: Vec<Scenario> = finalists.iter().map(|&k| scenario(race[k].index)).collect::<Result<_, _>>()?;
+    let stats = one(evaluator(&scenarios, &final_idx)?, scenarios.len())?;
+    for (&k, st) in finalists.iter().zip(stats) {
+        race[k].cost = Some(st.cost(settings));
+        race[k].stats = Some(st);
+    }
+    let flights = contenders.len() as u64 * screen + finalists.len() as u64 * last;
+    let winner = finalists
+        .iter()
+        .copied()
+        .min_by(|&a, &b| race[a].cost.unwrap_or(f64::INFINITY).total_cmp(&race[b].cost.unwrap_or(f64::INFINITY)))
+        .map_or(0, |k| race[k].index);
+    let mut indices = screen_idx;
+    indices.extend(final_idx);
+    Ok((race, indices, flights, winner))
 }
 
 /// Fly `scenario`'s controller `controller` on `runs` held-out draws of
@@ -656,7 +840,7 @@ pub fn tuned_toml(result: &TuneResult, extends: &str, command: &str) -> Result<S
     ));
     line(format!("# Made by: {}", toml_comment(command)));
     line(format!(
-        "# Budget {} training flights ({} flown: {} by the search, {} per candidate, same draws for all; {} by the race), seed {}, {} held-out flights per gain set.",
+        "# Budget {} training flights ({} flown: {} by the search, {} per candidate, fresh draws each generation, common to its candidates; {} by the race), seed {}, {} held-out flights per gain set.",
         result.options.budget,
         result.training_flights + result.race_flights,
         result.training_flights,
@@ -666,24 +850,28 @@ pub fn tuned_toml(result: &TuneResult, extends: &str, command: &str) -> Result<S
         result.held_out_indices.len()
     ));
     line(format!(
-        "# Cost: divergence {} × mean(2 − t/T) + envelope {} × failures/runs + rms {} × p90 RMS [m] + thrust_activity {} × median [N/s] + torque_activity {} × median [N·m/s] + saturated {} × median fraction.",
-        s.divergence, s.envelope, s.rms, s.thrust_activity, s.torque_activity, s.saturated
+        "# Cost: divergence {} × mean(2 − t/T) + envelope {} × failures/runs + margin {} × mean shortfall below {} + rms {} × p90 RMS [m] + thrust_activity {} × median [N/s] + torque_activity {} × median [N·m/s] + saturated {} × median fraction.",
+        s.divergence, s.envelope, s.margin, cost::MARGIN_TARGET, s.rms, s.thrust_activity, s.torque_activity, s.saturated
     ));
+    let restarts = result.generations.iter().filter(|g| g.restarted.is_some()).count();
     line(format!(
-        "# Search: {} generations, {} restarts; race of {} gain sets on {} fresh training draws each.",
+        "# Search: {} generations, {restarts} restart{}; race of {} gain sets on {} fresh training draws, the start and {} finalists on {} more.",
         result.generations.len(),
-        result.generations.iter().filter(|g| g.restarted.is_some()).count(),
+        if restarts == 1 { "" } else { "s" },
         result.race.len(),
-        result.race_indices.len()
+        result.race.first().map_or(0, |r| r.screen_stats.runs),
+        result.race.iter().filter(|r| r.cost.is_some()).count().saturating_sub(1),
+        result.race.first().and_then(|r| r.stats).map_or(0, |st| st.runs),
     ));
     line(format!(
-        "# Chosen: generation {}, candidate {}, training cost {:.6} (start {:.6}){}.",
+        "# Chosen: generation {}, candidate {} ({}), training cost {:.6} on its generation's draws (start {:.6} on its own){}.",
         b.generation,
         b.candidate,
+        b.role.name(),
         b.cost,
         result.history[0].cost,
-        match (result.best_raced(), result.race.first()) {
-            (Some(w), Some(s0)) => format!("; race cost {:.6} (start {:.6})", w.cost, s0.cost),
+        match (result.best_raced().and_then(|w| w.cost), result.race.first().and_then(|s0| s0.cost)) {
+            (Some(w), Some(s0)) => format!("; final race cost {w:.6} (start {s0:.6})"),
             _ => String::new(),
         }
     ));
@@ -715,10 +903,11 @@ pub fn tuned_toml(result: &TuneResult, extends: &str, command: &str) -> Result<S
     line("# Training draws:".to_string());
     line(describe("start", &result.training.start));
     line(describe("tuned", &result.training.tuned));
-    if let (Some(s0), Some(w)) = (result.race.first(), result.best_raced()) {
-        line(format!("# Race draws ({} fresh training draws):", result.race_indices.len()));
-        line(describe("start", &s0.stats));
-        line(describe("tuned", &w.stats));
+    if let (Some(s0), Some(w)) = (result.race.first().and_then(|r| r.stats), result.best_raced().and_then(|r| r.stats))
+    {
+        line(format!("# Race's final draws ({} fresh training draws):", s0.runs));
+        line(describe("start", &s0));
+        line(describe("tuned", &w));
     }
     if let Some(h) = &result.held_out {
         line("# Held-out draws:".to_string());
