@@ -590,13 +590,17 @@ pub struct Flights<'o, C: Controller<R>, R: Real> {
 /// Per lane, the first earlier lane whose scenario has the same reference
 /// signals, bit for bit, on the same control period: [`ReferenceGrid::at`]
 /// is a function of the step and its time alone, so both lanes' references
-/// at one step are the same bits. `Debug` spells every number of a
-/// validated signal (all finite) exactly, `-0.0` included, so equal texts
-/// are equal signals (`PartialEq` would take `-0.0` for `0.0`).
+/// at one step are the same bits. The signals are compared by
+/// [`ReferenceSignals::same_bits`](crate::scenario::ReferenceSignals::same_bits)
+/// (`PartialEq` would take `-0.0` for `0.0`).
 fn reference_twins(lanes: &[LaneFlight<'_>]) -> Vec<Option<usize>> {
-    let keys: Vec<String> = lanes.iter().map(|lane| format!("{:?}", lane.scenario.reference)).collect();
     (0..lanes.len())
-        .map(|i| (0..i).find(|&j| lanes[j].dt.to_bits() == lanes[i].dt.to_bits() && keys[j] == keys[i]))
+        .map(|i| {
+            let (lane, reference) = (&lanes[i], &lanes[i].scenario.reference);
+            (0..i).find(|&j| {
+                lanes[j].dt.to_bits() == lane.dt.to_bits() && lanes[j].scenario.reference.same_bits(reference)
+            })
+        })
         .collect()
 }
 
