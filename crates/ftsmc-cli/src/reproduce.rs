@@ -2,13 +2,13 @@
 //! progress bar, then write CSV, JSON, figures and the comparison tables.
 
 use std::fmt::Write as _;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::{anyhow, Context, Result};
 use ftsmc_core::cascade::AttitudeDerivatives;
 use ftsmc_sim::registry::{self, label};
-use ftsmc_sim::run::{planned_steps, reference_at, RunOptions, RunOutput};
+use ftsmc_sim::run::{planned_steps, reference_at, Recording, RunOptions, RunOutput};
 use ftsmc_sim::scenario::Scenario;
 use rayon::prelude::*;
 use serde_json::{json, Map, Value};
@@ -931,7 +931,10 @@ pub fn run_scenario(scenario: &Scenario, out: &Path, figures: bool) -> Result<()
     if figures {
         crate::figures::generic(&refs, &dir.path().join("figures"))?;
     }
-    let html = crate::html::report(dir.path(), &format!("ftsmc run {}", scenario.name), &table)?;
+    // The replay's rows from the recordings in memory, not the files just written.
+    let recorded: Vec<(PathBuf, &Recording)> =
+        runs.iter().map(|r| (PathBuf::from(format!("{}.csv", r.controller)), &r.recording)).collect();
+    let html = crate::html::report_with(dir.path(), &format!("ftsmc run {}", scenario.name), &table, &recorded)?;
     dir.write("report.html", html.as_bytes())?;
     dir.commit()?;
     println!("{table}");
