@@ -406,6 +406,49 @@ mod tests {
         }
     }
 
+    /// The CSV of `recording` spelled number by number with [`push_number`].
+    fn plain_csv(names: &[String], recording: &Recording) -> Vec<u8> {
+        let mut plain = names.join(",").into_bytes();
+        plain.push(b'\n');
+        for i in 0..recording.len() {
+            for (j, column) in recording.columns.iter().enumerate() {
+                if j > 0 {
+                    plain.push(b',');
+                }
+                push_number(&mut plain, column[i]);
+            }
+            plain.push(b'\n');
+        }
+        plain
+    }
+
+    proptest::proptest! {
+        /// Any numbers (every bit pattern, and repeats of a few values so
+        /// that texts are reused from the row above) give their plain spelling.
+        #[test]
+        fn csv_of_any_numbers_is_their_plain_spelling(
+            rows in proptest::collection::vec(
+                proptest::collection::vec(
+                    proptest::prop_oneof![
+                        proptest::num::f64::ANY,
+                        proptest::strategy::Just(-0.0),
+                        proptest::strategy::Just(1e16),
+                        proptest::strategy::Just(-2.2250738585072014e-308),
+                    ],
+                    3,
+                ),
+                0..300,
+            )
+        ) {
+            let names: Vec<String> = ["a", "b", "c"].iter().map(|n| n.to_string()).collect();
+            let mut recording = Recording::with_columns(names.clone());
+            for row in &rows {
+                recording.push_row(row);
+            }
+            proptest::prop_assert!(recording.to_csv() == plain_csv(&names, &recording));
+        }
+    }
+
     /// The CSV is the header and each row's numbers in [`push_number`]'s
     /// form, `,`-separated, `\n`-terminated: checked against that plain
     /// spelling on edge cases, random bit patterns, a constant column and
@@ -474,17 +517,7 @@ mod tests {
                 .collect();
             recording.push_row(&row);
         }
-        let mut plain = names.join(",").into_bytes();
-        plain.push(b'\n');
-        for i in 0..recording.len() {
-            for (j, column) in recording.columns.iter().enumerate() {
-                if j > 0 {
-                    plain.push(b',');
-                }
-                push_number(&mut plain, column[i]);
-            }
-            plain.push(b'\n');
-        }
+        let plain = plain_csv(&names, &recording);
         assert!(plain.len() > 3 * CSV_CHUNK_BYTES);
         assert!(recording.to_csv() == plain, "the CSV differs from its numbers' plain spelling");
         // An empty recording is its header alone; no columns, an empty line.
