@@ -10,7 +10,9 @@
 //!    in the staging folder: beside the new files it puts a *hard link* to
 //!    every entry of the current destination that is kept, and it writes the
 //!    manifest `.ftsmc-<owner>.manifest`, one line `<sha256> <size> <path>`
-//!    per file of the result. It then swaps the two folders in one step
+//!    per file of the result (hashed as [`ResultDir::write`] and
+//!    [`ResultDir::write_with`] wrote it; a file written by other means,
+//!    or changed since, is read back). It then swaps the two folders in one step
 //!    (Linux `renameat2(RENAME_EXCHANGE)`; elsewhere two renames).
 //! 3. The old folder, now at the staging name, loses what is provably ours
 //!    to delete: entries that are the same file as the new folder's (the
