@@ -529,7 +529,7 @@ impl<'o> LaneFlight<'o> {
             margin: margin.finish(exit.margin_end(), self.scenario.duration),
             exit,
             metrics,
-            recording: recorder.recording,
+            recording: recorder.finish(),
             steps: self.k,
             stats,
         }
@@ -704,7 +704,9 @@ impl<'o, C: Controller<R>, R: Real> Flights<'o, C, R> {
         let mut refused = Vec::new();
         for (i, scenario) in scenarios.iter().enumerate() {
             let steps = super::planned_steps(scenario);
-            let recorder = Recorder::new(scenario, options.record, steps, &controller);
+            // A stream carries one flight: only a single lane's first flight uses it.
+            let stream = options.stream.filter(|_| R::LANES == 1).cloned();
+            let recorder = Recorder::new(scenario, options.record, steps, &controller, stream);
             let (mut lane, r) = LaneFlight::new(scenario.clone(), recorder);
             if let Err(why) = truth.start_lane(i, scenario) {
                 lane.exit = Some(ExitStatus::Diverged { divergence: refusal(scenario, why), time: 0.0 });
@@ -754,7 +756,7 @@ impl<'o, C: Controller<R>, R: Real> Flights<'o, C, R> {
     pub fn start_lane(&mut self, lane: usize, scenario: impl Into<Arc<Scenario>>) {
         let scenario: Arc<Scenario> = scenario.into();
         let steps = super::planned_steps(&scenario);
-        let recorder = Recorder::new(&scenario, self.options.record, steps, &self.controller);
+        let recorder = Recorder::new(&scenario, self.options.record, steps, &self.controller, None);
         let (mut fresh, r) = LaneFlight::new(scenario.clone(), recorder);
         let started = self.truth.start_lane(lane, &scenario);
         if let Err(why) = started {
@@ -777,7 +779,7 @@ impl<'o, C: Controller<R>, R: Real> Flights<'o, C, R> {
     /// (to be restarted with [`Flights::start_lane`] or left idle).
     pub fn lane_output(&mut self, lane: usize) -> RunOutput {
         let scenario = self.lanes[lane].scenario.clone();
-        let recorder = Recorder::new(&scenario, false, 0, &self.controller);
+        let recorder = Recorder::new(&scenario, false, 0, &self.controller, None);
         let (mut idle, _) = LaneFlight::new(scenario, recorder);
         idle.exit = Some(ExitStatus::Completed);
         idle.set_step(idle.steps);

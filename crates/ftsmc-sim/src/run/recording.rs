@@ -6,6 +6,7 @@ use ftsmc_core::law::MAX_ESTIMATES;
 use crate::scenario::Scenario;
 
 use super::observer::{Observer, Tick};
+use super::stream::{Message, RowStream};
 
 pub use crate::limits::MAX_RECORDING_COLUMNS;
 
@@ -136,45 +137,10 @@ impl Recording {
     /// # Errors
     /// The first error of `out`.
     pub fn write_csv<W: std::io::Write + ?Sized>(&self, out: &mut W) -> std::io::Result<()> {
-        out.write_all(self.names.join(",").as_bytes())?;
-        out.write_all(b"\n")?;
-        // A row is at most 25 bytes per number (24 for the longest, one
-        // separator): one more row always fits after CSV_CHUNK_BYTES, and
-        // 24 bytes can be copied from anywhere in a row.
-        let mut chunk = vec![0u8; CSV_CHUNK_BYTES + 25 * self.columns.len() + 24];
-        let mut end = 0;
-        let mut buffer = zmij::Buffer::new();
-        // Per column, where its text of the previous row starts in `chunk`
-        // and its length (none at the first row and after a flush): a
-        // number with the bits of the one above it (constant columns,
-        // held values: about a sixth of a flight's numbers) is that text.
-        let mut above: Vec<Option<(usize, usize)>> = vec![None; self.columns.len()];
-        for i in 0..self.len() {
-            for (j, column) in self.columns.iter().enumerate() {
-                if j > 0 {
-                    chunk[end] = b',';
-                    end += 1;
-                }
-                let v = column[i];
-                let start = end;
-                end = match above[j] {
-                    Some((from, n)) if v.to_bits() == column[i - 1].to_bits() => {
-                        chunk.copy_within(from..from + 24, end);
-                        end + n
-                    }
-                    _ => put(&mut chunk, end, number_text(&mut buffer, v)),
-                };
-                above[j] = Some((start, end - start));
-            }
-            chunk[end] = b'\n';
-            end += 1;
-            if end >= CSV_CHUNK_BYTES {
-                out.write_all(&chunk[..end])?;
-                end = 0;
-                above.fill(None);
-            }
-        }
-        out.write_all(&chunk[..end])
+        write_header(&self.names, out)?;
+        let mut rows = CsvRows::new(self.columns.len());
+        rows.write(&self.columns, out)?;
+        rows.flush(out)
     }
 
     /// [`Recording::write_csv`] into a new buffer.
@@ -191,6 +157,93 @@ impl Recording {
 
 /// Bytes of CSV [`Recording::write_csv`] formats before handing them on.
 pub const CSV_CHUNK_BYTES: usize = 1 << 16;
+
+/// The CSV header line of [`Recording::write_csv`]: the column names,
+/// `,`-separated, `\n`-terminated (an empty line for no columns).
+pub(super) fn write_header<W: std::io::Write + ?Sized>(names: &[String], out: &mut W) -> std::io::Result<()> {
+    out.write_all(names.join(",").as_bytes())?;
+    out.write_all(b"\n")
+}
+
+/// The rows of [`Recording::write_csv`], formatted into one reused chunk
+/// of about [`CSV_CHUNK_BYTES`] that is handed on whenever it is full:
+/// rows may come in several batches ([`CsvRows::write`]; a recording
+/// streamed while it is flown, `run/stream.rs`), and the bytes are the same
+/// however they are split, each number being formatted alone.
+pub(super) struct CsvRows {
+    chunk: Vec<u8>,
+    end: usize,
+    buffer: zmij::Buffer,
+    /// Per column, where its text of the previous row starts in `chunk`
+    /// and its length (none at the first row of a batch and after a
+    /// flush): a number with the bits of the one above it (constant
+    /// columns, held values: about a sixth of a flight's numbers) is that text.
+    above: Vec<Option<(usize, usize)>>,
+}
+
+impl CsvRows {
+    /// A formatter of rows of `width` numbers.
+    pub(super) fn new(width: usize) -> Self {
+        // A row is at most 25 bytes per number (24 for the longest, one
+        // separator): one more row always fits after CSV_CHUNK_BYTES, and
+        // 24 bytes can be copied from anywhere in a row.
+        Self {
+            chunk: vec![0u8; CSV_CHUNK_BYTES + 25 * width + 24],
+            end: 0,
+            buffer: zmij::Buffer::new(),
+            above: vec![None; width],
+        }
+    }
+
+    /// Format every row of `columns` (all the same length, `width` of
+    /// them), handing each full chunk to `out`; the last, partly filled
+    /// chunk stays for the next batch or [`CsvRows::flush`].
+    pub(super) fn write<W: std::io::Write + ?Sized>(
+        &mut self,
+        columns: &[Vec<f64>],
+        out: &mut W,
+    ) -> std::io::Result<()> {
+        debug_assert_eq!(columns.len(), self.above.len());
+        let Self { chunk, end, buffer, above } = self;
+        // The row above is in another batch: nothing to reuse yet.
+        above.fill(None);
+        let rows = columns.first().map_or(0, Vec::len);
+        for i in 0..rows {
+            for (j, column) in columns.iter().enumerate() {
+                if j > 0 {
+                    chunk[*end] = b',';
+                    *end += 1;
+                }
+                let v = column[i];
+                let start = *end;
+                *end = match above[j] {
+                    Some((from, n)) if v.to_bits() == column[i - 1].to_bits() => {
+                        chunk.copy_within(from..from + 24, *end);
+                        *end + n
+                    }
+                    _ => put(chunk, *end, number_text(buffer, v)),
+                };
+                above[j] = Some((start, *end - start));
+            }
+            chunk[*end] = b'\n';
+            *end += 1;
+            if *end >= CSV_CHUNK_BYTES {
+                out.write_all(&chunk[..*end])?;
+                *end = 0;
+                above.fill(None);
+            }
+        }
+        Ok(())
+    }
+
+    /// Hand the rest of the chunk to `out`.
+    pub(super) fn flush<W: std::io::Write + ?Sized>(&mut self, out: &mut W) -> std::io::Result<()> {
+        out.write_all(&self.chunk[..self.end])?;
+        self.end = 0;
+        self.above.fill(None);
+        Ok(())
+    }
+}
 
 /// Append `v` to `out` in its shortest round-trip decimal form, parsing
 /// back to the same bits (`0.3`, `1.0`, `-2.5e-7`, `1.2e+16`: positional for
@@ -248,11 +301,17 @@ fn put(out: &mut [u8], at: usize, text: &[u8]) -> usize {
 
 /// The time series of one flight as it is flown (an [`Observer`] of the
 /// run loop): a [`Recording`] with its controller's columns,
-/// a row every `every` ticks (none with 0), assembled on the stack.
+/// a row every `every` ticks (none with 0), assembled on the stack; with
+/// a [`RowStream`], the rows are also handed over in chunks as they come
+/// (`run/stream.rs`).
 pub(super) struct Recorder {
     /// The rows recorded so far.
     pub recording: Recording,
     every: u64,
+    /// Where completed chunks of rows go, until the formatter stops.
+    stream: Option<RowStream>,
+    /// Rows handed to `stream` so far.
+    sent: usize,
     /// The estimate slots written (those with a name).
     named_slots: [usize; MAX_ESTIMATES],
     n_named: usize,
@@ -265,12 +324,14 @@ impl Recorder {
     /// Columns for `controller` flying `scenario` for `steps` control ticks:
     /// a row every `control_rate / record_rate` ticks when `record` is on and
     /// `record_rate > 0`, none otherwise (room for all of them is reserved
-    /// up front).
+    /// up front). With a `stream`, the header goes there now and the rows
+    /// in chunks as they are recorded.
     pub(super) fn new<R: ftsmc_core::lanes::Real, C: Controller<R> + ?Sized>(
         scenario: &Scenario,
         record: bool,
         steps: u64,
         controller: &C,
+        stream: Option<RowStream>,
     ) -> Self {
         let sim = &scenario.simulation;
         let every = if record && sim.record_rate > 0.0 {
@@ -303,7 +364,30 @@ impl Recorder {
                 n_named += 1;
             }
         }
-        Self { recording, every, named_slots, n_named, sliding, adapts_mass }
+        let stream = stream.filter(|s| s.send(Message::Header(recording.names.clone())));
+        Self { recording, every, stream, sent: 0, named_slots, n_named, sliding, adapts_mass }
+    }
+
+    /// Hand the rows recorded since the last chunk to the stream (if any).
+    fn send_rows(&mut self) {
+        let Some(stream) = &self.stream else { return };
+        let rows: Vec<Vec<f64>> = self.recording.columns.iter().map(|c| c[self.sent..].to_vec()).collect();
+        self.sent = self.recording.len();
+        if !stream.send(Message::Rows(rows)) {
+            // The formatter stopped (its writer failed): it reports why.
+            self.stream = None;
+        }
+    }
+
+    /// The recording, its last rows and end handed to the stream (if any).
+    pub(super) fn finish(mut self) -> Recording {
+        if self.recording.len() > self.sent {
+            self.send_rows();
+        }
+        if let Some(stream) = self.stream.take() {
+            stream.send(Message::End);
+        }
+        self.recording
     }
 
     /// True when tick `k` is recorded.
@@ -343,6 +427,9 @@ impl Recorder {
         row.extend(&tick.inertia);
         row.extend(&tick.disturbance);
         self.recording.push_row(row.as_slice());
+        if self.stream.as_ref().is_some_and(|s| self.recording.len() - self.sent >= s.chunk_rows()) {
+            self.send_rows();
+        }
     }
 }
 
@@ -523,6 +610,21 @@ mod tests {
         let plain = plain_csv(&names, &recording);
         assert!(plain.len() > 3 * CSV_CHUNK_BYTES);
         assert!(recording.to_csv() == plain, "the CSV differs from its numbers' plain spelling");
+        // The same bytes when the rows come in batches (a streamed
+        // recording), whatever their size: one row, a divisor of the
+        // rows, a size that leaves a remainder, more than the rows.
+        for batch in [1, 3_000, 7_001, 50_000] {
+            let mut out = Vec::new();
+            write_header(&recording.names, &mut out).unwrap();
+            let mut rows = CsvRows::new(recording.columns.len());
+            for first in (0..recording.len()).step_by(batch) {
+                let last = (first + batch).min(recording.len());
+                let part: Vec<Vec<f64>> = recording.columns.iter().map(|c| c[first..last].to_vec()).collect();
+                rows.write(&part, &mut out).unwrap();
+            }
+            rows.flush(&mut out).unwrap();
+            assert!(out == plain, "batches of {batch} rows: the CSV differs");
+        }
         // An empty recording is its header alone; no columns, an empty line.
         assert_eq!(Recording::with_columns(names).to_csv(), b"c0,c1,c2,c3,c4,c5,c6,c7,c8\n");
         assert_eq!(Recording::default().to_csv(), b"\n");
