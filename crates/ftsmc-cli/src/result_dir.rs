@@ -365,7 +365,7 @@ impl ResultDir {
     pub fn write_with(
         &self,
         rel: impl AsRef<Path>,
-        fill: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
+        fill: impl FnOnce(&mut (dyn Write + Send)) -> std::io::Result<()>,
     ) -> Result<()> {
         let path = self.staging.join(rel);
         let hashed = write_file(&path, fill)?;
@@ -608,7 +608,7 @@ pub fn write_result(dest: &Path, owner: &str, files: &[(&str, &[u8])]) -> Result
 /// file is not read back), with its modification time once written; a
 /// partly written file (disk full, a failing `fill`) is removed before the
 /// error is returned.
-fn write_file(path: &Path, fill: impl FnOnce(&mut dyn Write) -> std::io::Result<()>) -> Result<Hashed> {
+fn write_file(path: &Path, fill: impl FnOnce(&mut (dyn Write + Send)) -> std::io::Result<()>) -> Result<Hashed> {
     if let Some(parent) = path.parent() {
         std::fs::create_dir_all(parent).with_context(|| format!("cannot create directory {}", parent.display()))?;
     }
