@@ -29,9 +29,9 @@ pub use actuation::actuators;
 pub use exit::{Divergence, ExitStatus};
 pub use flight::{Flight, Flights, StepOutcome};
 pub use observer::{FlightStats, Observer, Tick};
-pub use recording::{push_number, recording_columns, Recording, CSV_CHUNK_BYTES, MAX_RECORDING_COLUMNS};
+pub use recording::{push_number, recording_columns, Recording, RowStream, CSV_CHUNK_BYTES, MAX_RECORDING_COLUMNS};
 use std::sync::atomic::{AtomicBool, Ordering};
-pub use stream::{stream_csv, RowStream, STREAM_CHUNK_ROWS};
+pub use stream::{stream_csv, STREAM_CHUNK_ROWS};
 
 /// Result of one flight.
 #[derive(Clone, Debug)]

@@ -1,14 +1,55 @@
 //! The recorded time series: [`Recording`] and its columns.
 
+use std::sync::mpsc::SyncSender;
+
 use ftsmc_core::cascade::Controller;
 use ftsmc_core::law::MAX_ESTIMATES;
 
 use crate::scenario::Scenario;
 
 use super::observer::{Observer, Tick};
-use super::stream::{Message, RowStream};
 
 pub use crate::limits::MAX_RECORDING_COLUMNS;
+
+/// What a recorder hands to the formatter thread, in order: the header,
+/// rows, and the end once every row was handed over.
+pub(super) enum Message {
+    /// The column names (none when the flight does not record).
+    Header(Vec<String>),
+    /// The next rows of the recording, column by column.
+    Rows(Vec<Vec<f64>>),
+    /// The flight ended and every row was handed over.
+    End,
+}
+
+/// The recorder's end of a recording streamed as CSV: put it in
+/// [`RunOptions::stream`](super::RunOptions::stream) of the one flight
+/// whose recording it writes ([`stream_csv`](super::stream_csv)); the
+/// recorder hands its rows over through it (`run/stream.rs` formats them).
+#[derive(Clone, Debug)]
+pub struct RowStream {
+    tx: SyncSender<Message>,
+    rows: usize,
+}
+
+impl RowStream {
+    /// The sending end of a stream of `rows`-row chunks ([`stream_csv`](super::stream_csv)).
+    pub(super) fn new(tx: SyncSender<Message>, rows: usize) -> Self {
+        Self { tx, rows }
+    }
+
+    /// Rows per chunk.
+    pub(super) fn chunk_rows(&self) -> usize {
+        self.rows
+    }
+
+    /// Hand `message` over (waiting while the channel is full). False
+    /// when the formatter thread stopped (its writer failed): nothing
+    /// more need be sent.
+    pub(super) fn send(&self, message: Message) -> bool {
+        self.tx.send(message).is_ok()
+    }
+}
 
 /// Column names of a [`Recording`], in order (docs/outputs.md explains each):
 /// `t`, the state, the references, the commanded and applied inputs, rotor
