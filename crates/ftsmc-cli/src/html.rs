@@ -24,6 +24,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
 use ftsmc_sim::escape::xml_text as escape;
+use ftsmc_sim::run::Recording;
 
 /// Points per flight in the replay at most (the recording is decimated evenly).
 const REPLAY_POINTS: usize = 400;
@@ -247,26 +248,18 @@ fn replay_track(rel: &Path, path: &Path) -> std::io::Result<Option<String>> {
     let mut line = String::new();
     reader.read_line(&mut line)?;
     let header: Vec<&str> = line[..eol(&line)].split(',').map(str::trim).collect();
-    let col = |name: &str| header.iter().position(|h| *h == name);
-    let need = ["t", "x", "y", "z", "phi", "theta", "psi"];
-    let Some(idx) = need.iter().map(|n| col(n)).collect::<Option<Vec<usize>>>() else {
+    let Some(columns) = ReplayColumns::find(&header) else {
         return Ok(None);
     };
-    let refs: Option<Vec<usize>> = ["x_ref", "y_ref", "z_ref"].iter().map(|n| col(n)).collect();
     // The rows after the header (a last one without a line end counts),
     // skipped over without being copied or decoded.
     let mut n_rows = 0usize;
     while reader.skip_until(b'\n')? > 0 {
         n_rows += 1;
     }
-    if n_rows < 2 {
+    let Some(picks) = replay_picks(n_rows) else {
         return Ok(None);
-    }
-    let step = n_rows.div_ceil(REPLAY_POINTS).max(1);
-    let mut picks: Vec<usize> = (0..n_rows).step_by(step).collect();
-    if picks.last() != Some(&(n_rows - 1)) {
-        picks.push(n_rows - 1);
-    }
+    };
     let mut reader = open()?;
     let mut buffer = Vec::new();
     reader.read_until(b'\n', &mut buffer)?; // the header
@@ -285,27 +278,84 @@ fn replay_track(rel: &Path, path: &Path) -> std::io::Result<Option<String>> {
         let text = &line[..eol(&line)];
         rows.push(text.split(',').map(|v| v.trim().parse::<f64>().unwrap_or(f64::NAN)).collect());
     }
-    let num = |v: f64| if v.is_finite() { format!("{}", (v * 1e4).round() / 1e4) } else { "null".to_string() };
-    let series = |cols: &[usize]| -> String {
-        let items: Vec<String> = rows
-            .iter()
-            .map(|row| {
-                let vals: Vec<String> = cols.iter().map(|&c| num(row.get(c).copied().unwrap_or(f64::NAN))).collect();
-                format!("[{}]", vals.join(","))
-            })
-            .collect();
-        format!("[{}]", items.join(","))
-    };
-    let t: Vec<String> = rows.iter().map(|row| num(row.get(idx[0]).copied().unwrap_or(f64::NAN))).collect();
-    let name = rel.with_extension("").to_string_lossy().replace('\\', "/");
-    Ok(Some(format!(
-        "{{\"name\":{},\"t\":[{}],\"p\":{},\"a\":{},\"r\":{}}}",
-        serde_json::Value::String(name),
-        t.join(","),
-        series(&idx[1..4]),
-        series(&idx[4..7]),
-        refs.map_or("null".to_string(), |r| series(&r))
-    )))
+    Ok(Some(columns.track(rel, &rows)))
+}
+
+/// [`replay_track`] of the CSV a [`Recording`] writes
+/// ([`Recording::write_csv`]), taken from the recording in memory instead
+/// of the file: the same text, since every number of the CSV is written in
+/// a form that parses back to its own bits (non-finite ones as `NaN`,
+/// `inf`, `-inf`, which parse back too) and the replay rounds what it
+/// parses. `ftsmc run` hands its recordings over, so a 20 MB CSV is not
+/// read twice more to show 400 of its rows.
+fn recorded_track(rel: &Path, recording: &Recording) -> Option<String> {
+    let header: Vec<&str> = recording.names.iter().map(String::as_str).collect();
+    let columns = ReplayColumns::find(&header)?;
+    let picks = replay_picks(recording.len())?;
+    let rows: Vec<Vec<f64>> =
+        picks.iter().map(|&r| recording.columns.iter().map(|column| column[r]).collect()).collect();
+    Some(columns.track(rel, &rows))
+}
+
+/// The rows the replay shows of `n_rows`: evenly spaced, at most about
+/// [`REPLAY_POINTS`], the last one kept; `None` under two rows.
+fn replay_picks(n_rows: usize) -> Option<Vec<usize>> {
+    if n_rows < 2 {
+        return None;
+    }
+    let step = n_rows.div_ceil(REPLAY_POINTS).max(1);
+    let mut picks: Vec<usize> = (0..n_rows).step_by(step).collect();
+    if picks.last() != Some(&(n_rows - 1)) {
+        picks.push(n_rows - 1);
+    }
+    Some(picks)
+}
+
+/// Where the replay's columns sit in a recording's header.
+struct ReplayColumns {
+    /// `t`, `x`, `y`, `z`, `phi`, `theta`, `psi`.
+    idx: Vec<usize>,
+    /// `x_ref`, `y_ref`, `z_ref`, if all three are there.
+    refs: Option<Vec<usize>>,
+}
+
+impl ReplayColumns {
+    /// `None` without the time, position and attitude columns.
+    fn find(header: &[&str]) -> Option<Self> {
+        let col = |name: &str| header.iter().position(|h| *h == name);
+        let need = ["t", "x", "y", "z", "phi", "theta", "psi"];
+        let idx = need.iter().map(|n| col(n)).collect::<Option<Vec<usize>>>()?;
+        let refs: Option<Vec<usize>> = ["x_ref", "y_ref", "z_ref"].iter().map(|n| col(n)).collect();
+        Some(Self { idx, refs })
+    }
+
+    /// The replay's JSON of the picked `rows` (a missing cell is NaN),
+    /// every number rounded to 1e-4 (`null` when not finite).
+    fn track(&self, rel: &Path, rows: &[Vec<f64>]) -> String {
+        let idx = &self.idx;
+        let num = |v: f64| if v.is_finite() { format!("{}", (v * 1e4).round() / 1e4) } else { "null".to_string() };
+        let series = |cols: &[usize]| -> String {
+            let items: Vec<String> = rows
+                .iter()
+                .map(|row| {
+                    let vals: Vec<String> =
+                        cols.iter().map(|&c| num(row.get(c).copied().unwrap_or(f64::NAN))).collect();
+                    format!("[{}]", vals.join(","))
+                })
+                .collect();
+            format!("[{}]", items.join(","))
+        };
+        let t: Vec<String> = rows.iter().map(|row| num(row.get(idx[0]).copied().unwrap_or(f64::NAN))).collect();
+        let name = rel.with_extension("").to_string_lossy().replace('\\', "/");
+        format!(
+            "{{\"name\":{},\"t\":[{}],\"p\":{},\"a\":{},\"r\":{}}}",
+            serde_json::Value::String(name),
+            t.join(","),
+            series(&idx[1..4]),
+            series(&idx[4..7]),
+            self.refs.as_ref().map_or("null".to_string(), |r| series(r))
+        )
+    }
 }
 
 /// The provenance block of `summary.json`, if it has one.
@@ -320,6 +370,19 @@ fn provenance(root: &Path) -> Option<String> {
 /// folder: every file written so far is on the page): `title`, the
 /// command's `markdown` report, provenance, figures, replay and links.
 pub fn report(root: &Path, title: &str, markdown_text: &str) -> Result<String> {
+    report_with(root, title, markdown_text, &[])
+}
+
+/// [`report`], the replay of each CSV listed in `recorded` (its path
+/// relative to `root`, the recording it was written from by
+/// [`Recording::write_csv`]) taken from the recording in memory rather
+/// than read back from the file: the same page, byte for byte.
+pub fn report_with(
+    root: &Path,
+    title: &str,
+    markdown_text: &str,
+    recorded: &[(PathBuf, &Recording)],
+) -> Result<String> {
     let all = files(root)?;
     let mut body = String::new();
     let figures: Vec<&PathBuf> = all.iter().filter(|p| ext(p) == "svg").collect();
@@ -330,7 +393,10 @@ pub fn report(root: &Path, title: &str, markdown_text: &str) -> Result<String> {
         if tracks.len() >= REPLAY_RUNS {
             break;
         }
-        let track = replay_track(rel, &root.join(rel)).with_context(|| format!("cannot read {}", rel.display()))?;
+        let track = match recorded.iter().find(|(path, _)| path == rel) {
+            Some((_, recording)) => recorded_track(rel, recording),
+            None => replay_track(rel, &root.join(rel)).with_context(|| format!("cannot read {}", rel.display()))?,
+        };
         if let Some(track) = track {
             tracks.push(track);
         }
@@ -462,6 +528,66 @@ mod tests {
         assert!(two.contains("\"t\":[0,0.5]") && two.contains("[4,5,6]"), "{two}");
         assert!(one.is_none());
         assert!(three.contains("\"t\":[0,0.5,1]"), "{three}");
+    }
+
+    /// The replay taken from a recording in memory is the replay read back
+    /// from the CSV it writes, whatever its numbers.
+    #[test]
+    fn replay_from_a_recording_is_the_replay_of_its_csv() {
+        let dir = std::env::temp_dir().join(format!("ftsmc-replay-mem-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let names = ["t", "x", "y", "z", "phi", "theta", "psi", "x_ref", "y_ref", "z_ref", "extra"];
+        let mut recording = Recording::with_columns(names.iter().map(|n| n.to_string()).collect());
+        let odd = [
+            0.0,
+            -0.0,
+            1e-300,
+            -5e-324,
+            1.2e16,
+            0.1 + 0.2,
+            12345.67895,
+            -0.00005,
+            0.00005,
+            2.5e-5,
+            1e15,
+            1e-5,
+            f64::NAN,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::MAX,
+            f64::MIN_POSITIVE,
+            0.333333333333333,
+        ];
+        let mut state = 0x9e3779b97f4a7c15u64;
+        for (rows, path) in [(1500usize, "a.csv"), (2, "b.csv"), (1, "c.csv"), (401, "d.csv")] {
+            recording.columns.iter_mut().for_each(Vec::clear);
+            for r in 0..rows {
+                let row: Vec<f64> = (0..names.len())
+                    .map(|c| {
+                        state ^= state << 13;
+                        state ^= state >> 7;
+                        state ^= state << 17;
+                        match state % 4 {
+                            0 => odd[(state >> 8) as usize % odd.len()],
+                            1 => f64::from_bits(state >> 2),
+                            2 => (state >> 11) as f64 / (1u64 << 53) as f64 * 20.0 - 10.0,
+                            _ => r as f64 * 0.01 + c as f64,
+                        }
+                    })
+                    .collect();
+                recording.push_row(&row);
+            }
+            let file = dir.join(path);
+            std::fs::write(&file, recording.to_csv()).unwrap();
+            let rel = Path::new(path);
+            assert_eq!(recorded_track(rel, &recording), replay_track(rel, &file).unwrap(), "{path}");
+            assert_eq!(recorded_track(rel, &recording).is_some(), rows >= 2);
+        }
+        // The recording now holds d.csv's rows: the page with them from
+        // memory is the page read from the files.
+        let page = report(&dir, "t", "").unwrap();
+        assert_eq!(report_with(&dir, "t", "", &[(PathBuf::from("d.csv"), &recording)]).unwrap(), page);
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]

@@ -1,14 +1,15 @@
 //! `ftsmc reproduce` and `ftsmc run`: fly the runs in parallel with a
-//! progress bar, then write CSV, JSON, figures and the comparison tables.
+//! progress bar, each run's CSV written while it flies, then write JSON,
+//! figures and the comparison tables.
 
 use std::fmt::Write as _;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::{anyhow, Context, Result};
 use ftsmc_core::cascade::AttitudeDerivatives;
 use ftsmc_sim::registry::{self, label};
-use ftsmc_sim::run::{planned_steps, reference_at, RunOptions, RunOutput};
+use ftsmc_sim::run::{planned_steps, reference_at, stream_csv, Recording, RunOptions, RunOutput, STREAM_CHUNK_ROWS};
 use ftsmc_sim::scenario::Scenario;
 use rayon::prelude::*;
 use serde_json::{json, Map, Value};
@@ -40,7 +41,8 @@ pub struct Job {
 
 /// Fly all jobs in parallel (deterministic: each job is independent). The
 /// progress bar counts simulated control steps, updated from inside each
-/// flight.
+/// flight. (The commands fly with [`fly_into`], which writes the CSVs too.)
+#[cfg(test)]
 pub fn fly(jobs: &[Job]) -> Result<Vec<RunOutput>> {
     let total = jobs.iter().map(|j| planned_steps(&j.scenario)).sum();
     let bar = steps_bar(total, jobs.len() as u64);
@@ -57,15 +59,36 @@ pub fn fly(jobs: &[Job]) -> Result<Vec<RunOutput>> {
     out
 }
 
-/// Write each run's CSV to `<scenario>/<controller>.csv` (or, with
-/// `flat`, `<controller>.csv`) inside the result folder.
-fn write_runs(runs: &[RunOutput], dir: &ResultDir, flat: bool) -> Result<()> {
-    for run in runs {
-        let file = format!("{}.csv", run.controller);
-        let rel = if flat { Path::new(&file).to_path_buf() } else { Path::new(&run.scenario).join(&file) };
-        dir.write_with(rel, |w| run.recording.write_csv(w))?;
-    }
-    Ok(())
+/// [`fly`], each run's recording written as CSV into `dir` at `csv(job)`
+/// while it flies ([`stream_csv`]: another thread formats, hashes and
+/// writes the rows as they are recorded), the bytes those of
+/// [`Recording::write_csv`]. A failed write is an error; the file is then
+/// removed (and the uncommitted `dir` goes with its staging folder).
+fn fly_into(jobs: &[Job], dir: &ResultDir, csv: impl Fn(&Job) -> PathBuf + Sync) -> Result<Vec<RunOutput>> {
+    let total = jobs.iter().map(|j| planned_steps(&j.scenario)).sum();
+    let bar = steps_bar(total, jobs.len() as u64);
+    let progress = |n: u64| bar.inc(n);
+    let out: Result<Vec<RunOutput>> = jobs
+        .par_iter()
+        .map(|job| {
+            let mut flown = None;
+            let written = dir.write_with(csv(job), |w| {
+                let (run, written) = stream_csv(w, STREAM_CHUNK_ROWS, |stream| {
+                    let options = RunOptions { progress: Some(&progress), stream: Some(stream), ..Default::default() };
+                    registry::run_as(&job.controller, &job.key, &job.scenario, options)
+                });
+                flown = Some(run);
+                written
+            });
+            match flown {
+                Some(Err(known)) => Err(anyhow!("unknown controller `{}` (known: {known})", job.controller)),
+                Some(Ok(run)) => written.map(|()| run),
+                None => Err(written.err().unwrap_or_else(|| anyhow!("internal: {} was not flown", job.key))),
+            }
+        })
+        .collect();
+    bar.finish_and_clear();
+    out
 }
 
 /// The cell shown instead of a metric of a run that did not complete: its
@@ -411,8 +434,7 @@ pub fn reproduce(out: &Path, options: &Options) -> Result<()> {
     // folder swapped into place at the end (keeping files reproduce did not write).
     let dir = ResultDir::begin(out, "reproduce")?;
     eprintln!("flying {} runs ({} and {}) …", jobs.len(), s1.name, s2.name);
-    let runs = fly(&jobs)?;
-    write_runs(&runs, &dir, false)?;
+    let runs = fly_into(&jobs, &dir, |job| Path::new(&job.scenario.name).join(format!("{}.csv", job.key)))?;
     // The resolved scenarios as flown: `<scenario>/scenario.toml` for the
     // paper scenarios, `<scenario>/<key>.scenario.toml` for a variant that
     // flew a modified copy.
@@ -682,12 +704,8 @@ pub fn beyond_the_paper(dir: &ResultDir, figures: bool, mc_runs: u64, confidence
         jobs.len(),
         scenarios.iter().map(|s| s.name.as_str()).collect::<Vec<_>>().join(" and ")
     );
-    let runs = fly(&jobs)?;
-    for run in &runs {
-        dir.write_with(Path::new("beyond").join(&run.scenario).join(format!("{}.csv", run.controller)), |w| {
-            run.recording.write_csv(w)
-        })?;
-    }
+    let runs =
+        fly_into(&jobs, dir, |job| Path::new("beyond").join(&job.scenario.name).join(format!("{}.csv", job.key)))?;
     let mut files = Vec::new();
     for s in &scenarios {
         let rel = format!("beyond/{}/scenario.toml", s.name);
@@ -917,9 +935,9 @@ pub fn run_scenario(scenario: &Scenario, out: &Path, figures: bool) -> Result<()
         .map(|n| Job { scenario: scenario.clone(), controller: n.clone(), key: n.clone() })
         .collect();
     let started = std::time::Instant::now();
-    let runs = fly(&jobs)?;
+    // Each CSV is written while its flight flies.
+    let runs = fly_into(&jobs, &dir, |job| PathBuf::from(format!("{}.csv", job.key)))?;
     let flight_seconds = started.elapsed().as_secs_f64();
-    write_runs(&runs, &dir, true)?;
     let file = dir.write_scenario("scenario.toml", scenario, "scenario.toml")?;
     let refs: Vec<&RunOutput> = runs.iter().collect();
     let flown: Vec<Flown> = runs.iter().map(|r| (r, scenario)).collect();
@@ -931,7 +949,10 @@ pub fn run_scenario(scenario: &Scenario, out: &Path, figures: bool) -> Result<()
     if figures {
         crate::figures::generic(&refs, &dir.path().join("figures"))?;
     }
-    let html = crate::html::report(dir.path(), &format!("ftsmc run {}", scenario.name), &table)?;
+    // The replay's rows from the recordings in memory, not the files just written.
+    let recorded: Vec<(PathBuf, &Recording)> =
+        runs.iter().map(|r| (PathBuf::from(format!("{}.csv", r.controller)), &r.recording)).collect();
+    let html = crate::html::report_with(dir.path(), &format!("ftsmc run {}", scenario.name), &table, &recorded)?;
     dir.write("report.html", html.as_bytes())?;
     dir.commit()?;
     println!("{table}");
@@ -959,6 +980,41 @@ mod tests {
             s.controllers.iter().map(|n| Job { scenario: s.clone(), controller: n.clone(), key: n.clone() }).collect();
         let runs = fly(&jobs).unwrap();
         (s, runs)
+    }
+
+    /// Each CSV written while its flight flies is that run's recording as
+    /// `write_csv` writes it, byte for byte (a flight shorter than one
+    /// chunk of rows and one of several chunks, three controllers at once);
+    /// an unknown controller is an error and leaves no file.
+    #[test]
+    fn csvs_written_while_flying_are_the_recordings() {
+        let parent = tempfile::Builder::new().prefix("ftsmc-fly-into-").tempdir().unwrap();
+        let dir = ResultDir::begin(&parent.path().join("out"), "run").unwrap();
+        let mut jobs = Vec::new();
+        for duration in [2.0, 25.0] {
+            let mut s = Scenario::paper_scenarios().remove(1);
+            s.duration = duration;
+            s.name = format!("s{duration}");
+            for n in &s.controllers {
+                jobs.push(Job { scenario: s.clone(), controller: n.clone(), key: n.clone() });
+            }
+        }
+        let path = |job: &Job| Path::new(&job.scenario.name).join(format!("{}.csv", job.key));
+        let runs = fly_into(&jobs, &dir, path).unwrap();
+        assert_eq!(runs.len(), jobs.len());
+        assert!(runs.iter().any(|r| r.recording.len() < ftsmc_sim::run::STREAM_CHUNK_ROWS));
+        assert!(runs.iter().any(|r| r.recording.len() > 2 * ftsmc_sim::run::STREAM_CHUNK_ROWS));
+        for (job, run) in jobs.iter().zip(&runs) {
+            let written = std::fs::read(dir.path().join(path(job))).unwrap();
+            assert!(written == run.recording.to_csv(), "{}: the CSV differs from its recording", path(job).display());
+        }
+
+        let mut bad = Scenario::paper_scenarios().remove(1);
+        bad.duration = 1.0;
+        let job = Job { scenario: bad, controller: "no-such-controller".into(), key: "nope".into() };
+        let err = fly_into(std::slice::from_ref(&job), &dir, path).unwrap_err();
+        assert!(err.to_string().contains("unknown controller `no-such-controller`"), "{err}");
+        assert!(!dir.path().join(path(&job)).exists(), "no file of a failed flight");
     }
 
     #[test]

@@ -10,7 +10,9 @@
 //!    in the staging folder: beside the new files it puts a *hard link* to
 //!    every entry of the current destination that is kept, and it writes the
 //!    manifest `.ftsmc-<owner>.manifest`, one line `<sha256> <size> <path>`
-//!    per file of the result. It then swaps the two folders in one step
+//!    per file of the result (hashed as [`ResultDir::write`] and
+//!    [`ResultDir::write_with`] wrote it; a file written by other means,
+//!    or changed since, is read back). It then swaps the two folders in one step
 //!    (Linux `renameat2(RENAME_EXCHANGE)`; elsewhere two renames).
 //! 3. The old folder, now at the staging name, loses what is provably ours
 //!    to delete: entries that are the same file as the new folder's (the
@@ -47,6 +49,12 @@ use crate::bounded_read::{read_limited, MAX_MANIFEST_BYTES};
 /// Size and SHA-256 (lowercase hex) of a file ftsmc wrote.
 type Stamp = (u64, String);
 
+/// The stamp of a file as [`write_file`] wrote it, hashed on the way, and
+/// the file's modification time then: [`ResultDir::commit`] takes the
+/// stamp without reading the file again while its size and modification
+/// time are still these.
+type Hashed = (Stamp, Option<std::time::SystemTime>);
+
 /// A result folder being written: files go into a hidden staging folder
 /// beside `dest`; [`ResultDir::commit`] swaps it into place; dropping it
 /// uncommitted removes the staging folder.
@@ -66,6 +74,9 @@ pub struct ResultDir {
     /// on the staging folder also holds links to kept files, and only these
     /// are removed on failure.
     written: Option<BTreeMap<String, Stamp>>,
+    /// The files [`ResultDir::write`] and [`ResultDir::write_with`] wrote,
+    /// by staging path, with their stamps taken as they were written.
+    hashed: std::sync::Mutex<BTreeMap<PathBuf, Hashed>>,
     committed: bool,
 }
 
@@ -318,6 +329,7 @@ impl ResultDir {
             _lock: None,
             created: Vec::new(),
             written: None,
+            hashed: Default::default(),
             committed: false,
         };
         // On failure `dir` is dropped: the folders created go again.
@@ -345,7 +357,7 @@ impl ResultDir {
     /// Write `bytes` to `rel` (relative to the result folder), creating
     /// sub-folders as needed.
     pub fn write(&self, rel: impl AsRef<Path>, bytes: &[u8]) -> Result<()> {
-        write_file(&self.staging.join(rel), |f| f.write_all(bytes))
+        self.write_with(rel, |f| f.write_all(bytes))
     }
 
     /// Write `rel` as `fill` streams it (a large time series is written
@@ -353,9 +365,27 @@ impl ResultDir {
     pub fn write_with(
         &self,
         rel: impl AsRef<Path>,
-        fill: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
+        fill: impl FnOnce(&mut (dyn Write + Send)) -> std::io::Result<()>,
     ) -> Result<()> {
-        write_file(&self.staging.join(rel), fill)
+        let path = self.staging.join(rel);
+        let hashed = write_file(&path, fill)?;
+        self.hashed.lock().unwrap_or_else(std::sync::PoisonError::into_inner).insert(path, hashed);
+        Ok(())
+    }
+
+    /// The stamp of `path` taken as it was written, if the file still has
+    /// that size and modification time; otherwise (written by other means,
+    /// or changed since) it is read and hashed again ([`stamp`]).
+    fn stamp_of(&self, path: &Path) -> Option<Stamp> {
+        let hashed = self.hashed.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+        let unchanged = |(size, _): &Stamp, modified: &Option<std::time::SystemTime>| {
+            std::fs::symlink_metadata(path)
+                .is_ok_and(|m| m.is_file() && m.len() == *size && modified.is_some() && m.modified().ok() == *modified)
+        };
+        match hashed.get(path) {
+            Some((s, modified)) if unchanged(s, modified) => Some(s.clone()),
+            _ => stamp(path),
+        }
     }
 
     /// Put the result in place (see the module docs): afterwards `dest`
@@ -370,7 +400,7 @@ impl ResultDir {
             if rel.chars().any(char::is_control) {
                 bail!("internal: result file name {rel:?} has a control character");
             }
-            let s = stamp(&self.staging.join(&rel)).with_context(|| format!("cannot read back {rel}"))?;
+            let s = self.stamp_of(&self.staging.join(&rel)).with_context(|| format!("cannot read back {rel}"))?;
             written.insert(rel, s);
         }
         self.written = Some(written.clone());
@@ -459,9 +489,9 @@ impl ResultDir {
         for (rel, (size, sha)) in &written {
             text.push_str(&format!("{sha} {size} {rel}\n"));
         }
-        write_file(&self.staging.join(&manifest_name), |f| f.write_all(text.as_bytes()))?;
-        if let (Some(w), Some(s)) = (self.written.as_mut(), stamp(&self.staging.join(&manifest_name))) {
-            w.insert(manifest_name.clone(), s);
+        let (manifest_stamp, _) = write_file(&self.staging.join(&manifest_name), |f| f.write_all(text.as_bytes()))?;
+        if let Some(w) = self.written.as_mut() {
+            w.insert(manifest_name.clone(), manifest_stamp);
         }
 
         if killed_at(3) {
@@ -574,22 +604,45 @@ pub fn write_result(dest: &Path, owner: &str, files: &[(&str, &[u8])]) -> Result
 }
 
 /// Write to `path` what `fill` streams into it (buffered), creating its
-/// parent folders; a partly written file (disk full, a failing `fill`) is
-/// removed before the error is returned.
-fn write_file(path: &Path, fill: impl FnOnce(&mut dyn Write) -> std::io::Result<()>) -> Result<()> {
+/// parent folders, and return its stamp, hashed as the bytes went by (the
+/// file is not read back), with its modification time once written; a
+/// partly written file (disk full, a failing `fill`) is removed before the
+/// error is returned.
+fn write_file(path: &Path, fill: impl FnOnce(&mut (dyn Write + Send)) -> std::io::Result<()>) -> Result<Hashed> {
     if let Some(parent) = path.parent() {
         std::fs::create_dir_all(parent).with_context(|| format!("cannot create directory {}", parent.display()))?;
     }
     let written = File::create(path).and_then(|file| {
-        let mut out = std::io::BufWriter::with_capacity(1 << 16, file);
+        let mut out = Hashing { inner: std::io::BufWriter::with_capacity(1 << 16, file), sha: Sha256::new(), size: 0 };
         fill(&mut out)?;
-        out.flush()
+        out.inner.flush()?;
+        let modified = out.inner.get_ref().metadata()?.modified().ok();
+        Ok(((out.size, format!("{:x}", out.sha.finalize())), modified))
     });
-    if let Err(e) = written {
+    written.or_else(|e| {
         let _ = std::fs::remove_file(path);
-        return Err(e).with_context(|| format!("cannot write {}", path.display()));
+        Err(e).with_context(|| format!("cannot write {}", path.display()))
+    })
+}
+
+/// A writer that hashes (SHA-256) and counts the bytes it hands on.
+struct Hashing<W> {
+    inner: W,
+    sha: Sha256,
+    size: u64,
+}
+
+impl<W: Write> Write for Hashing<W> {
+    fn write(&mut self, bytes: &[u8]) -> std::io::Result<usize> {
+        let n = self.inner.write(bytes)?;
+        self.sha.update(&bytes[..n]);
+        self.size += n as u64;
+        Ok(n)
     }
-    Ok(())
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        self.inner.flush()
+    }
 }
 
 #[cfg(test)]
@@ -623,6 +676,28 @@ mod tests {
     fn sha256_matches_the_standard_test_vectors() {
         assert_eq!(sha256_hex(b""), "e3b0c44298fc1c149afbf4c8996fb92427ae41e4649b934ca495991b7852b855");
         assert_eq!(sha256_hex(b"abc"), "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad");
+    }
+
+    /// The manifest lists every file as it ends up: hashed while written,
+    /// or read back when it was written by other means or changed since.
+    #[test]
+    fn the_manifest_stamps_each_file_as_it_ends_up() {
+        let tmp = temp("stamps");
+        let dest = tmp.path().join("res");
+        let dir = ResultDir::begin(&dest, "run").unwrap();
+        dir.write_with("a.csv", |w| {
+            w.write_all(b"t,x\n")?;
+            w.write_all(b"0,1\n")
+        })
+        .unwrap();
+        dir.write("b.txt", b"first").unwrap();
+        std::fs::write(dir.path().join("b.txt"), b"second, longer").unwrap();
+        std::fs::write(dir.path().join("c.txt"), b"direct").unwrap();
+        dir.commit().unwrap();
+        let manifest = read(&dest.join(manifest_file("run")));
+        for (name, bytes) in [("a.csv", &b"t,x\n0,1\n"[..]), ("b.txt", b"second, longer"), ("c.txt", b"direct")] {
+            assert!(manifest.contains(&format!("{} {} {name}\n", sha256_hex(bytes), bytes.len())), "{manifest}");
+        }
     }
 
     #[test]

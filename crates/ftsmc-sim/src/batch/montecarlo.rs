@@ -117,7 +117,7 @@ pub fn run_batch(
     if !LANE_COUNTS.contains(&lanes) {
         return Err(format!("lanes = {lanes}: expected one of {LANE_COUNTS:?}"));
     }
-    let options = RunOptions { record: false, progress, cancel };
+    let options = RunOptions { record: false, progress, cancel, stream: None };
     let indices: Vec<u64> = indices.collect();
     let rows: Vec<Vec<McRun>> = indices
         .par_chunks(runs_per_task(indices.len(), lanes))

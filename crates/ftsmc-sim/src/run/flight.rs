@@ -529,7 +529,7 @@ impl<'o> LaneFlight<'o> {
             margin: margin.finish(exit.margin_end(), self.scenario.duration),
             exit,
             metrics,
-            recording: recorder.recording,
+            recording: recorder.finish(),
             steps: self.k,
             stats,
         }
@@ -590,13 +590,17 @@ pub struct Flights<'o, C: Controller<R>, R: Real> {
 /// Per lane, the first earlier lane whose scenario has the same reference
 /// signals, bit for bit, on the same control period: [`ReferenceGrid::at`]
 /// is a function of the step and its time alone, so both lanes' references
-/// at one step are the same bits. `Debug` spells every number of a
-/// validated signal (all finite) exactly, `-0.0` included, so equal texts
-/// are equal signals (`PartialEq` would take `-0.0` for `0.0`).
+/// at one step are the same bits. The signals are compared by
+/// [`ReferenceSignals::same_bits`](crate::scenario::ReferenceSignals::same_bits)
+/// (`PartialEq` would take `-0.0` for `0.0`).
 fn reference_twins(lanes: &[LaneFlight<'_>]) -> Vec<Option<usize>> {
-    let keys: Vec<String> = lanes.iter().map(|lane| format!("{:?}", lane.scenario.reference)).collect();
     (0..lanes.len())
-        .map(|i| (0..i).find(|&j| lanes[j].dt.to_bits() == lanes[i].dt.to_bits() && keys[j] == keys[i]))
+        .map(|i| {
+            let (lane, reference) = (&lanes[i], &lanes[i].scenario.reference);
+            (0..i).find(|&j| {
+                lanes[j].dt.to_bits() == lane.dt.to_bits() && lanes[j].scenario.reference.same_bits(reference)
+            })
+        })
         .collect()
 }
 
@@ -700,7 +704,9 @@ impl<'o, C: Controller<R>, R: Real> Flights<'o, C, R> {
         let mut refused = Vec::new();
         for (i, scenario) in scenarios.iter().enumerate() {
             let steps = super::planned_steps(scenario);
-            let recorder = Recorder::new(scenario, options.record, steps, &controller);
+            // A stream carries one flight: only a single lane's first flight uses it.
+            let stream = options.stream.filter(|_| R::LANES == 1).cloned();
+            let recorder = Recorder::new(scenario, options.record, steps, &controller, stream);
             let (mut lane, r) = LaneFlight::new(scenario.clone(), recorder);
             if let Err(why) = truth.start_lane(i, scenario) {
                 lane.exit = Some(ExitStatus::Diverged { divergence: refusal(scenario, why), time: 0.0 });
@@ -750,7 +756,7 @@ impl<'o, C: Controller<R>, R: Real> Flights<'o, C, R> {
     pub fn start_lane(&mut self, lane: usize, scenario: impl Into<Arc<Scenario>>) {
         let scenario: Arc<Scenario> = scenario.into();
         let steps = super::planned_steps(&scenario);
-        let recorder = Recorder::new(&scenario, self.options.record, steps, &self.controller);
+        let recorder = Recorder::new(&scenario, self.options.record, steps, &self.controller, None);
         let (mut fresh, r) = LaneFlight::new(scenario.clone(), recorder);
         let started = self.truth.start_lane(lane, &scenario);
         if let Err(why) = started {
@@ -773,7 +779,7 @@ impl<'o, C: Controller<R>, R: Real> Flights<'o, C, R> {
     /// (to be restarted with [`Flights::start_lane`] or left idle).
     pub fn lane_output(&mut self, lane: usize) -> RunOutput {
         let scenario = self.lanes[lane].scenario.clone();
-        let recorder = Recorder::new(&scenario, false, 0, &self.controller);
+        let recorder = Recorder::new(&scenario, false, 0, &self.controller, None);
         let (mut idle, _) = LaneFlight::new(scenario, recorder);
         idle.exit = Some(ExitStatus::Completed);
         idle.set_step(idle.steps);

@@ -21,6 +21,7 @@ mod exit;
 pub mod flight;
 pub mod observer;
 mod recording;
+mod stream;
 pub mod summary;
 mod truth;
 
@@ -28,8 +29,9 @@ pub use actuation::actuators;
 pub use exit::{Divergence, ExitStatus};
 pub use flight::{Flight, Flights, StepOutcome};
 pub use observer::{FlightStats, Observer, Tick};
-pub use recording::{push_number, recording_columns, Recording, CSV_CHUNK_BYTES, MAX_RECORDING_COLUMNS};
+pub use recording::{push_number, recording_columns, Recording, RowStream, CSV_CHUNK_BYTES, MAX_RECORDING_COLUMNS};
 use std::sync::atomic::{AtomicBool, Ordering};
+pub use stream::{stream_csv, STREAM_CHUNK_ROWS};
 
 /// Result of one flight.
 #[derive(Clone, Debug)]
@@ -96,6 +98,10 @@ pub struct RunOptions<'a> {
     /// the run stops within [`PROGRESS_EVERY`] control steps with
     /// [`ExitStatus::Interrupted`].
     pub cancel: Option<&'a AtomicBool>,
+    /// Hand the recording's rows to this stream while flying, to be
+    /// written as CSV by another thread ([`stream_csv`]); for one flight
+    /// (a flight of lanes, or a lane started afresh, does not use it).
+    pub stream: Option<&'a RowStream>,
 }
 
 /// Control steps between two [`RunOptions::progress`] calls.
@@ -103,7 +109,7 @@ pub const PROGRESS_EVERY: u64 = 1000;
 
 impl Default for RunOptions<'_> {
     fn default() -> Self {
-        Self { record: true, progress: None, cancel: None }
+        Self { record: true, progress: None, cancel: None, stream: None }
     }
 }
 
@@ -141,6 +147,7 @@ impl core::fmt::Debug for RunOptions<'_> {
             .field("record", &self.record)
             .field("progress", &self.progress.is_some())
             .field("cancel", &self.cancel.is_some())
+            .field("stream", &self.stream.is_some())
             .finish()
     }
 }

@@ -221,6 +221,18 @@ pub struct ReferenceSignals {
     pub psi: Signal,
 }
 
+impl ReferenceSignals {
+    /// The same four signals bit for bit ([`Signal::same_bits`]: `-0.0`
+    /// and `0.0` differ): flown on the same control grid, two such
+    /// references give the same bits at every step.
+    pub fn same_bits(&self, other: &ReferenceSignals) -> bool {
+        self.x.same_bits(&other.x)
+            && self.y.same_bits(&other.y)
+            && self.z.same_bits(&other.z)
+            && self.psi.same_bits(&other.psi)
+    }
+}
+
 fn default_controllers() -> Vec<String> {
     PAPER_CONTROLLERS.iter().map(|s| s.to_string()).collect()
 }
@@ -530,5 +542,43 @@ impl Scenario {
             disturbance: &self.disturbance,
             seed: self.seed,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::signal::{Signal, Term};
+
+    fn helix(phase: f64) -> ReferenceSignals {
+        let circle = |term: fn(f64) -> Term| Signal { terms: vec![term(phase)], window: None };
+        ReferenceSignals {
+            x: circle(|phase| Term::Cosine { amplitude: 1.0, omega: Some(0.5), frequency: None, phase }),
+            y: circle(|phase| Term::Sine { amplitude: 1.0, omega: Some(0.5), frequency: None, phase }),
+            z: Signal { terms: vec![Term::Polynomial { coefficients: vec![0.0, 0.1] }], window: None },
+            psi: Signal::constant(0.0),
+        }
+    }
+
+    #[test]
+    fn reference_twins_are_equal_bit_for_bit() {
+        assert!(helix(0.3).same_bits(&helix(0.3)));
+        assert!(!helix(0.3).same_bits(&helix(0.4)));
+        // -0.0 and 0.0 are equal numbers (`PartialEq`) but not the same bits.
+        assert_eq!(helix(-0.0), helix(0.0));
+        assert!(!helix(-0.0).same_bits(&helix(0.0)));
+        // Any one of the four signals tells them apart.
+        for axis in 0..4 {
+            let mut other = helix(0.3);
+            let signal = match axis {
+                0 => &mut other.x,
+                1 => &mut other.y,
+                2 => &mut other.z,
+                _ => &mut other.psi,
+            };
+            signal.terms.push(Term::Constant { value: 0.0 });
+            assert!(!other.same_bits(&helix(0.3)), "axis {axis}");
+        }
+        assert!(ReferenceSignals::default().same_bits(&ReferenceSignals::default()));
     }
 }

@@ -177,6 +177,59 @@ impl Term {
     }
 }
 
+/// Bit-exact equality of signals: every number compared by its bits
+/// (`f64::to_bits`), every structural choice (term kind, optional field
+/// present or not, piece count, waypoint velocity rule) exactly. Unlike
+/// `PartialEq`, `-0.0` and `0.0` differ (and a NaN equals the same NaN):
+/// two signals that compare equal here give the same bits at every instant,
+/// which is what lets the run loop copy one lane's reference to another
+/// ([`Signal::same_bits`], `ReferenceSignals::same_bits`). Allocates nothing.
+fn same_f64(a: f64, b: f64) -> bool {
+    a.to_bits() == b.to_bits()
+}
+
+fn same_f64s(a: &[f64], b: &[f64]) -> bool {
+    a.len() == b.len() && a.iter().zip(b).all(|(&x, &y)| same_f64(x, y))
+}
+
+fn same_option(a: Option<f64>, b: Option<f64>) -> bool {
+    match (a, b) {
+        (None, None) => true,
+        (Some(x), Some(y)) => same_f64(x, y),
+        _ => false,
+    }
+}
+
+impl Term {
+    /// The same term bit for bit: the same kind, and every number of it
+    /// with the same bits (`-0.0` is not `0.0`; a waypoint term by its times,
+    /// values and velocity rule, from which its segments follow).
+    pub fn same_bits(&self, other: &Term) -> bool {
+        use Term::*;
+        match (self, other) {
+            (Constant { value: a }, Constant { value: b }) => same_f64(*a, *b),
+            (Step { time: t1, height: h1 }, Step { time: t2, height: h2 }) => same_f64(*t1, *t2) && same_f64(*h1, *h2),
+            (
+                Sine { amplitude: a1, omega: w1, frequency: f1, phase: p1 },
+                Sine { amplitude: a2, omega: w2, frequency: f2, phase: p2 },
+            )
+            | (
+                Cosine { amplitude: a1, omega: w1, frequency: f1, phase: p1 },
+                Cosine { amplitude: a2, omega: w2, frequency: f2, phase: p2 },
+            ) => same_f64(*a1, *a2) && same_option(*w1, *w2) && same_option(*f1, *f2) && same_f64(*p1, *p2),
+            (Polynomial { coefficients: a }, Polynomial { coefficients: b }) => same_f64s(a, b),
+            (Waypoints(a), Waypoints(b)) => {
+                a.velocity() == b.velocity() && same_f64s(a.times(), b.times()) && same_f64s(a.values(), b.values())
+            }
+            (Piecewise { pieces: a }, Piecewise { pieces: b }) => {
+                a.len() == b.len()
+                    && a.iter().zip(b).all(|(p, q)| same_option(p.until, q.until) && p.signal.same_bits(&q.signal))
+            }
+            _ => false,
+        }
+    }
+}
+
 /// `Σ_k coefficients[k] · t^k` and its two derivatives at `t` (s), by Horner.
 #[inline]
 fn polynomial(coefficients: &[f64], t: f64) -> Sample {
@@ -266,6 +319,20 @@ impl Signal {
                 _ => 1.0,
             })
             .sum()
+    }
+
+    /// The same signal bit for bit: the same terms in the same order
+    /// ([`Term::same_bits`]) and the same window, bit for bit. Such signals
+    /// evaluate to the same bits at every time.
+    pub fn same_bits(&self, other: &Signal) -> bool {
+        let window = match (self.window, other.window) {
+            (None, None) => true,
+            (Some(a), Some(b)) => same_f64s(&a, &b),
+            _ => false,
+        };
+        window
+            && self.terms.len() == other.terms.len()
+            && self.terms.iter().zip(&other.terms).all(|(a, b)| a.same_bits(b))
     }
 
     /// A constant signal.
@@ -395,6 +462,99 @@ impl Signal {
 mod tests {
     use super::*;
     use approx::assert_relative_eq;
+    use waypoints::WaypointVelocity;
+
+    /// A signal of every term kind (piecewise and waypoints included) with
+    /// `x` as one of its numbers.
+    fn every_kind(x: f64) -> Signal {
+        let inner = Signal {
+            terms: vec![
+                Term::Constant { value: 0.25 },
+                Term::Waypoints(Waypoints::new(vec![0.0, 1.0, 3.0], vec![x, 1.0, -1.0], Default::default())),
+            ],
+            window: None,
+        };
+        Signal {
+            terms: vec![
+                Term::Step { time: 1.0, height: 0.5 },
+                Term::Sine { amplitude: 0.5, omega: Some(0.4), frequency: None, phase: x },
+                Term::Cosine { amplitude: 1.0, omega: None, frequency: Some(0.2), phase: 0.0 },
+                Term::Polynomial { coefficients: vec![1.0, x, 0.3] },
+                Term::Piecewise {
+                    pieces: vec![
+                        Piece { until: Some(2.0), signal: inner },
+                        Piece { until: None, signal: Signal::constant(x) },
+                    ],
+                },
+            ],
+            window: Some([0.0, 10.0]),
+        }
+    }
+
+    #[test]
+    fn same_bits_holds_for_equal_signals_only() {
+        assert!(every_kind(0.0).same_bits(&every_kind(0.0)));
+        assert!(every_kind(0.7).same_bits(&every_kind(0.7)));
+        assert!(!every_kind(0.7).same_bits(&every_kind(0.7000000000000001)));
+        // `PartialEq` takes -0.0 for 0.0; the bits do not.
+        assert_eq!(every_kind(-0.0), every_kind(0.0));
+        assert!(!every_kind(-0.0).same_bits(&every_kind(0.0)));
+        assert!(!Signal::constant(-0.0).same_bits(&Signal::constant(0.0)));
+        // Each place `x` sits in, alone, tells the signals apart.
+        let base = every_kind(0.0);
+        let mut count = 0;
+        base.clone().for_each_leaf_term_mut(&mut |_| count += 1);
+        for k in 0..count {
+            let mut one = base.clone();
+            let mut i = 0;
+            one.for_each_leaf_term_mut(&mut |term| {
+                if i == k {
+                    match term {
+                        Term::Constant { value } => *value = -*value,
+                        Term::Step { height, .. } => *height = -*height,
+                        Term::Sine { phase, .. } | Term::Cosine { phase, .. } => *phase = -*phase,
+                        Term::Polynomial { coefficients } => coefficients[2] = -coefficients[2],
+                        Term::Waypoints(w) => w.scale(-1.0),
+                        Term::Piecewise { .. } => unreachable!("leaves only"),
+                    }
+                }
+                i += 1;
+            });
+            assert!(!one.same_bits(&base), "leaf {k} changed sign");
+        }
+        // The window, present or not and its bits.
+        let mut unwindowed = base.clone();
+        unwindowed.window = None;
+        assert!(!unwindowed.same_bits(&base));
+        let mut windowed = base.clone();
+        windowed.window = Some([-0.0, 10.0]);
+        assert!(!windowed.same_bits(&base));
+    }
+
+    #[test]
+    fn same_bits_tells_term_kinds_and_forms_apart() {
+        let sine = Term::Sine { amplitude: 0.5, omega: Some(0.4), frequency: None, phase: 0.0 };
+        let cosine = Term::Cosine { amplitude: 0.5, omega: Some(0.4), frequency: None, phase: 0.0 };
+        assert!(sine.same_bits(&sine.clone()));
+        assert!(!sine.same_bits(&cosine));
+        // The same number as `omega` or as `frequency`.
+        let hz = Term::Sine { amplitude: 0.5, omega: None, frequency: Some(0.4), phase: 0.0 };
+        assert!(!sine.same_bits(&hz));
+        // The same value from another kind of term, or another coefficient count.
+        let constant = Term::Constant { value: 2.0 };
+        let polynomial = Term::Polynomial { coefficients: vec![2.0] };
+        assert!(!constant.same_bits(&polynomial));
+        assert!(!polynomial.same_bits(&Term::Polynomial { coefficients: vec![2.0, 0.0] }));
+        // Waypoints: the velocity rule counts.
+        let zero = Waypoints::new(vec![0.0, 1.0, 2.0], vec![0.0, 1.0, 0.0], WaypointVelocity::Zero);
+        let spline = Waypoints::new(vec![0.0, 1.0, 2.0], vec![0.0, 1.0, 0.0], WaypointVelocity::Spline);
+        assert!(Term::Waypoints(zero.clone()).same_bits(&Term::Waypoints(zero.clone())));
+        assert!(!Term::Waypoints(zero).same_bits(&Term::Waypoints(spline)));
+        // Terms in another order are another signal (their sum may round otherwise).
+        let ab = Signal { terms: vec![sine.clone(), constant.clone()], window: None };
+        let ba = Signal { terms: vec![constant, sine], window: None };
+        assert!(!ab.same_bits(&ba));
+    }
 
     #[test]
     fn terms_evaluate_to_their_formulas() {
