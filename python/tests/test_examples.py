@@ -13,6 +13,7 @@ import pytest
 
 REPO = Path(__file__).resolve().parents[2]
 EXAMPLES = REPO / "examples" / "python"
+TUNER_BENCHMARK = REPO / "examples" / "tuner-benchmark"
 
 
 def run(args: list, tmp_path: Path) -> str:
@@ -48,7 +49,8 @@ def test_mypy_strict_on_the_examples_and_package() -> None:
     if shutil.which("mypy") is None and not (Path(sys.executable).parent / "mypy").exists():
         pytest.fail("mypy is not installed (.ci/run installs it)")
     mypy = [sys.executable, "-m", "mypy", "--strict", "--ignore-missing-imports", "--no-incremental"]
-    for target in (["-p", "ftsmc"], [str(p) for p in sorted(EXAMPLES.glob("*.py"))]):
+    examples = [str(p) for p in sorted(EXAMPLES.glob("*.py"))] + [str(TUNER_BENCHMARK / "table.py")]
+    for target in (["-p", "ftsmc"], examples):
         done = subprocess.run([*mypy, *target], capture_output=True, text=True, cwd=REPO)
         assert done.returncode == 0, done.stdout + done.stderr
 
@@ -68,3 +70,26 @@ def test_train_hover_runs_and_plots_its_reward_curve(tmp_path: Path) -> None:
     out = run([str(EXAMPLES / "train_hover.py"), *args], tmp_path)
     assert out.count("iteration") == 2 and "held-out seeds" in out, out
     assert (tmp_path / "train-hover-reward.png").stat().st_size > 5_000
+
+
+def test_tuner_benchmark_table(cli: Path, tmp_path: Path) -> None:
+    """table.py reads what run.sh leaves: two committed tuned files per
+    controller of paper-scenario-1 (standing in for the two tuners) flown
+    by `ftsmc compare` on 4 draws; the same file twice ties every cell."""
+    from conftest import run_cli
+
+    controllers = ["ftaftsmc", "ranftsmc", "tsm-sta", "pid", "se3"]
+    for c in controllers:
+        d = tmp_path / "cmp" / f"paper-scenario-1-{c}"
+        d.mkdir(parents=True)
+        text = (REPO / "scenarios" / "tuned" / f"paper-scenario-1-{c}.toml").read_text()
+        (d / "first.toml").write_text(text)
+        (d / "current.toml").write_text(text)
+        out = d / "out"
+        run_cli(cli, "compare", "paper-scenario-1", "-c", f"{d / 'first.toml'},{d / 'current.toml'}",
+                "--runs", "4", "--seed", "2026", "--out", str(out), "--no-figures")
+    lines = run([str(TUNER_BENCHMARK / "table.py"), str(tmp_path), "paper-scenario-1"], tmp_path).splitlines()
+    rows = [line for line in lines if line.startswith("| paper-scenario-1 |")]
+    assert len(rows) == 5, lines
+    assert all("4/4 [51.0, 100.0] | 4/4 [51.0, 100.0]" in r and r.endswith("| one flight |") for r in rows), rows
+    assert lines[-1] == "new better in 0, no difference shown in 5, first better in 0: at least as good in 5 of 5", lines

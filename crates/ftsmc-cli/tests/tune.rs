@@ -81,11 +81,12 @@ fn two_controllers_tuned_into_one_folder_keep_both_results() {
     // PID's figure survives SE(3)'s tune without figures.
     assert!(folder.join("pid.convergence.svg").is_file() && folder.join("pid.convergence.png").is_file());
     assert!(!folder.join("se3.convergence.svg").exists());
-    // Candidates are independent samples: points, with the best so far as
-    // the one line (a dashed line through them read as a time series).
+    // Candidates are independent samples: points, with the search's mean
+    // (each on its own generation's draws) as the one line (a dashed line
+    // through the points read as a time series).
     let convergence = std::fs::read_to_string(folder.join("pid.convergence.svg")).unwrap();
     assert!(convergence.contains(r#"<g class="points">"#) && !convergence.contains("stroke-dasharray"));
-    assert!(convergence.contains(">best so far</text>") && convergence.contains(">candidate</text>"));
+    assert!(convergence.contains(">mean of the search</text>") && convergence.contains(">candidate</text>"));
     // Each tune writes its own page of the shared folder.
     for c in ["pid", "se3"] {
         let page = std::fs::read_to_string(folder.join(format!("{c}.report.html"))).unwrap();
@@ -98,9 +99,11 @@ fn two_controllers_tuned_into_one_folder_keep_both_results() {
     let se3 = std::fs::read_to_string(folder.join("se3.tuned.toml")).unwrap();
     assert!(se3.contains("controllers = [\"se3\"]"), "{se3}");
 
-    // History: one row per evaluated candidate (start + 3 × 4), the summary names the controller.
+    // History: one row per evaluated entry (the start, then 3 generations
+    // of 4 samples and the mean, the second and third with the anchor),
+    // the summary names the controller.
     let history = std::fs::read_to_string(folder.join("pid.history.csv")).unwrap();
-    assert_eq!(history.lines().count(), 1 + 1 + 3 * 4, "{history}");
+    assert_eq!(history.lines().count(), 1 + 1 + 5 + 6 + 6, "{history}");
     let summary: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(folder.join("se3.summary.json")).unwrap()).unwrap();
     assert_eq!(summary["controller"], "se3");
@@ -137,13 +140,13 @@ fn a_path_with_a_newline_cannot_inject_a_key_into_the_tuned_file() {
     let dir = tmp.path();
     let evil = "x\nseed = 4242\n#.toml";
     std::fs::copy(dir.join("tiny.toml"), dir.join(evil)).unwrap();
-    ok(&["tune", evil, "-c", "pid", "--budget", "10", "--threads", "1", "--out", "ti", "--no-figures"], dir);
+    ok(&["tune", evil, "-c", "pid", "--budget", "12", "--threads", "1", "--out", "ti", "--no-figures"], dir);
     let tuned_path = dir.join("ti/tiny-tune/pid.tuned.toml");
     let text = std::fs::read_to_string(&tuned_path).unwrap();
     let made_by: Vec<&str> = text.lines().filter(|l| l.starts_with("# Made by:")).collect();
     assert_eq!(
         made_by,
-        ["# Made by: ftsmc tune $'x\\nseed = 4242\\n#.toml' -c pid --budget 10 --threads 1 --out ti --no-figures"]
+        ["# Made by: ftsmc tune $'x\\nseed = 4242\\n#.toml' -c pid --budget 12 --threads 1 --out ti --no-figures"]
     );
     let table: toml::Table = toml::from_str(&text).unwrap();
     assert!(!table.contains_key("seed"), "{text}");

@@ -1,0 +1,97 @@
+"""The Markdown table of docs/tuning.md's tuner benchmark, from the
+`ftsmc compare` outputs `run.sh` leaves in WORKDIR/cmp/<rung>-<controller>/.
+
+    python table.py WORKDIR RUNG [RUNG ...]
+
+One row per cell: each tuner's held-out success with its 95 % Wilson
+interval, the paired success difference (new − first) with its interval
+and Holm-adjusted McNemar p, which tuner the success verdict favours, the
+RMS position error medians and the Wilcoxon verdict on it; then the count
+of cells where the new tuner is better, not shown to differ, or worse.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import json
+import math
+from pathlib import Path
+
+NAMES = {"ftaftsmc": "FTAFTSMC", "ranftsmc": "RANFTSMC", "tsm-sta": "TSM-STA", "pid": "PID", "se3": "SE(3)"}
+# Scenarios without random draws: 200 flights are one flight flown 200 times.
+DETERMINISTIC = {"paper-scenario-1"}
+
+
+def wilson(k: int, n: int, z: float = 1.959963984540054) -> tuple[float, float]:
+    """The 95 % Wilson score interval of k successes in n, in percent."""
+    p = k / n
+    d = 1 + z * z / n
+    c = p + z * z / (2 * n)
+    h = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n))
+    return (c - h) / d * 100, (c + h) / d * 100
+
+
+def signed(x: float) -> str:
+    """A difference in percentage points, signed, with a true minus."""
+    v = round(x * 100, 1) + 0.0
+    return f"{v:+.1f}".replace("-", "−")
+
+
+def side(verdict: dict[str, object]) -> str:
+    """Which gain set a verdict favours: `first`, `new` or `=`."""
+    return {"A better": "first", "B better": "new"}.get(str(verdict["verdict"]), "=")
+
+
+def row(work: Path, rung: str, controller: str) -> tuple[str, str]:
+    folder = work / "cmp" / f"{rung}-{controller}"
+    out = folder / "out" / rung
+    summary = json.loads((out / "summary.json").read_text())
+    with open(out / "runs.csv", newline="") as f:
+        runs = list(csv.DictReader(f))
+    counts: dict[str, tuple[int, int]] = {}
+    for name in ("first.toml", "current.toml"):
+        mine = [r for r in runs if r["controller"] == name]
+        counts[name] = (sum(r["success"] == "true" for r in mine), len(mine))
+    verdicts = {v["metric"]: v for v in summary["verdicts"]}
+    success, error = verdicts["success"], verdicts["error"]
+    effect = success["effect"]  # first − new
+    medians = {k: v["intervals"]["rms_median"]["estimate"] for k, v in summary["contestants"].items()}
+    kept = "# Improved: false" in (folder / "current.toml").read_text()
+    (k0, n0), (k1, n1) = counts["first.toml"], counts["current.toml"]
+    lo0, hi0 = wilson(k0, n0)
+    lo1, hi1 = wilson(k1, n1)
+    verdict = side(success)
+    p = format(success["p_holm"], ".2g").replace("-", "−")
+    cells = [
+        rung.replace("realistic-", ""),
+        NAMES[controller],
+        f"{k0}/{n0} [{lo0:.1f}, {hi0:.1f}]",
+        f"{k1}/{n1} [{lo1:.1f}, {hi1:.1f}]" + (" (start)" if kept else ""),
+        f"{signed(-effect['estimate'])} [{signed(-effect['hi'])}, {signed(-effect['lo'])}], p = {p}",
+        "**new**" if verdict == "new" else verdict,
+        f"{medians['first.toml']:.3g} / {medians['current.toml']:.3g}",
+        "one flight" if rung in DETERMINISTIC else side(error),
+    ]
+    return "| " + " | ".join(cells) + " |", verdict
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
+    parser.add_argument("work", type=Path)
+    parser.add_argument("rungs", nargs="+")
+    args = parser.parse_args()
+    tally = {"new": 0, "=": 0, "first": 0}
+    for rung in args.rungs:
+        for controller in NAMES:
+            line, verdict = row(args.work, rung, controller)
+            tally[verdict] += 1
+            print(line)
+    print(
+        f"new better in {tally['new']}, no difference shown in {tally['=']}, first better in {tally['first']}: "
+        f"at least as good in {tally['new'] + tally['=']} of {sum(tally.values())}"
+    )
+
+
+if __name__ == "__main__":
+    main()
