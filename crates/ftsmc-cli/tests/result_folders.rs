@@ -215,7 +215,7 @@ fn a_hand_edited_manifest_of_tune_deletes_nothing() {
     let tmp = scratch("tamper-tune");
     let tiny = "extends = \"realistic-scenario-2\"\nname = \"tiny-tune\"\nduration = 1.0\n\n[tune]\nruns = 1\nvalidation_runs = 1\npopulation = 4\n";
     std::fs::write(tmp.path().join("tiny.toml"), tiny).unwrap();
-    let args = ["tune", "tiny.toml", "-c", "pid", "--budget", "5", "--out", "o", "--no-figures"];
+    let args = ["tune", "tiny.toml", "-c", "pid", "--budget", "6", "--out", "o", "--no-figures"];
     a_hand_edited_manifest_deletes_nothing(tmp.path(), &args, "o/tiny-tune", ".ftsmc-tune-pid.manifest");
 }
 
