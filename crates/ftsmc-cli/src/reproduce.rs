@@ -44,17 +44,24 @@ pub struct Job {
 /// flight. (The commands fly with [`fly_into`], which writes the CSVs too.)
 #[cfg(test)]
 pub fn fly(jobs: &[Job]) -> Result<Vec<RunOutput>> {
+    fly_each(jobs, |job, progress| {
+        let options = RunOptions { progress: Some(progress), ..Default::default() };
+        registry::run_as(&job.controller, &job.key, &job.scenario, options)
+            .map_err(|known| anyhow!("unknown controller `{}` (known: {known})", job.controller))
+    })
+}
+
+/// `fly_one(job, progress)` for every job in parallel, in the jobs' order,
+/// under one progress bar of the jobs' planned control steps (`progress`
+/// adds steps to it; hand it to the flight's [`RunOptions::progress`]).
+fn fly_each(
+    jobs: &[Job],
+    fly_one: impl Fn(&Job, &(dyn Fn(u64) + Sync)) -> Result<RunOutput> + Sync,
+) -> Result<Vec<RunOutput>> {
     let total = jobs.iter().map(|j| planned_steps(&j.scenario)).sum();
     let bar = steps_bar(total, jobs.len() as u64);
     let progress = |n: u64| bar.inc(n);
-    let out: Result<Vec<RunOutput>> = jobs
-        .par_iter()
-        .map(|job| {
-            let options = RunOptions { progress: Some(&progress), ..Default::default() };
-            registry::run_as(&job.controller, &job.key, &job.scenario, options)
-                .map_err(|known| anyhow!("unknown controller `{}` (known: {known})", job.controller))
-        })
-        .collect();
+    let out = jobs.par_iter().map(|job| fly_one(job, &progress)).collect();
     bar.finish_and_clear();
     out
 }
@@ -65,30 +72,22 @@ pub fn fly(jobs: &[Job]) -> Result<Vec<RunOutput>> {
 /// [`Recording::write_csv`]. A failed write is an error; the file is then
 /// removed (and the uncommitted `dir` goes with its staging folder).
 fn fly_into(jobs: &[Job], dir: &ResultDir, csv: impl Fn(&Job) -> PathBuf + Sync) -> Result<Vec<RunOutput>> {
-    let total = jobs.iter().map(|j| planned_steps(&j.scenario)).sum();
-    let bar = steps_bar(total, jobs.len() as u64);
-    let progress = |n: u64| bar.inc(n);
-    let out: Result<Vec<RunOutput>> = jobs
-        .par_iter()
-        .map(|job| {
-            let mut flown = None;
-            let written = dir.write_with(csv(job), |w| {
-                let (run, written) = stream_csv(w, STREAM_CHUNK_ROWS, |stream| {
-                    let options = RunOptions { progress: Some(&progress), stream: Some(stream), ..Default::default() };
-                    registry::run_as(&job.controller, &job.key, &job.scenario, options)
-                });
-                flown = Some(run);
-                written
+    fly_each(jobs, |job, progress| {
+        let mut flown = None;
+        let written = dir.write_with(csv(job), |w| {
+            let (run, written) = stream_csv(w, STREAM_CHUNK_ROWS, |stream| {
+                let options = RunOptions { progress: Some(progress), stream: Some(stream), ..Default::default() };
+                registry::run_as(&job.controller, &job.key, &job.scenario, options)
             });
-            match flown {
-                Some(Err(known)) => Err(anyhow!("unknown controller `{}` (known: {known})", job.controller)),
-                Some(Ok(run)) => written.map(|()| run),
-                None => Err(written.err().unwrap_or_else(|| anyhow!("internal: {} was not flown", job.key))),
-            }
-        })
-        .collect();
-    bar.finish_and_clear();
-    out
+            flown = Some(run);
+            written
+        });
+        match flown {
+            Some(Err(known)) => Err(anyhow!("unknown controller `{}` (known: {known})", job.controller)),
+            Some(Ok(run)) => written.map(|()| run),
+            None => Err(written.err().unwrap_or_else(|| anyhow!("internal: {} was not flown", job.key))),
+        }
+    })
 }
 
 /// The cell shown instead of a metric of a run that did not complete: its
