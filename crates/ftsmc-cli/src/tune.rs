@@ -115,6 +115,7 @@ pub fn history_csv(r: &TuneResult) -> Result<Vec<u8>> {
             "torque_activity",
             "saturated",
             "divergence_score",
+            "margin_shortfall",
             "error",
         ]
         .iter()
@@ -136,9 +137,18 @@ pub fn history_csv(r: &TuneResult) -> Result<Vec<u8>> {
             [s.runs, s.success, s.completed, s.crashed, s.diverged, s.envelope_failures].iter().map(|v| v.to_string()),
         );
         row.extend(
-            [s.rms_median, s.rms_p90, s.rms_p95, s.thrust_activity, s.torque_activity, s.saturated, s.divergence_score]
-                .iter()
-                .map(|v| v.to_string()),
+            [
+                s.rms_median,
+                s.rms_p90,
+                s.rms_p95,
+                s.thrust_activity,
+                s.torque_activity,
+                s.saturated,
+                s.divergence_score,
+                s.margin_shortfall,
+            ]
+            .iter()
+            .map(|v| v.to_string()),
         );
         row.push(h.error.clone().unwrap_or_default());
         w.write_record(&row)?;

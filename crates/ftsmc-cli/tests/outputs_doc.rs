@@ -213,3 +213,86 @@ fn generalisation_keeps_undocumented_names_undocumented() {
     // Mentioned in prose only is not enough.
     assert!(!doc.contains("est_<axis>_0") && !doc.contains("<controller>"));
 }
+
+/// The rows of docs/outputs.md's `ftsmc tune` section: for each table row,
+/// the backticked names of its first cell and the whole row's text.
+fn tune_section_rows() -> Vec<(Vec<String>, String)> {
+    let doc = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("../../docs/outputs.md")).unwrap();
+    let start = doc.find("## Tuning: `ftsmc tune`").expect("docs/outputs.md has a tune section");
+    let section = &doc[start..];
+    let end = section[3..].find("\n## ").map_or(section.len(), |e| e + 3);
+    section[..end]
+        .lines()
+        .filter(|l| l.starts_with("| `"))
+        .map(|l| {
+            let first = l[1..].split(" | ").next().unwrap_or("");
+            let names =
+                first.split(", ").filter_map(|n| n.trim().strip_prefix('`')?.strip_suffix('`')).map(String::from);
+            (names.collect(), l.to_string())
+        })
+        .collect()
+}
+
+#[test]
+fn every_column_and_key_of_tune_is_in_docs_outputs_md() {
+    let tmp = scratch("tune-doc");
+    let dir = tmp.path();
+    // A budget with a race (one screening draw, four final ones).
+    let tiny = "extends = \"realistic-scenario-2\"\nname = \"tiny\"\nduration = 0.5\n\n[tune]\nruns = 2\n\
+                population = 4\nvalidation_runs = 4\nrace = 2\nrace_runs = 1\nrace_final_runs = 4\n";
+    std::fs::write(dir.join("tiny.toml"), tiny).unwrap();
+    ftsmc(&["tune", "tiny.toml", "-c", "pid", "--budget", "150", "--no-figures", "--out", "t"], dir);
+    let folder = dir.join("t").join("tiny");
+    let summary: Value =
+        serde_json::from_str(&std::fs::read_to_string(folder.join("pid.summary.json")).unwrap()).unwrap();
+    let rows = tune_section_rows();
+    let names: BTreeSet<&str> = rows.iter().flat_map(|(n, _)| n.iter().map(String::as_str)).collect();
+    let row_of = |name: &str| rows.iter().find(|(n, _)| n.iter().any(|x| x == name)).map(|(_, r)| r.as_str());
+    let mut missing = Vec::new();
+
+    // history.csv: every column, the searched parameters as `<parameter>`.
+    let parameters: BTreeSet<String> = summary["best"]["parameters"].as_object().unwrap().keys().cloned().collect();
+    assert!(!parameters.is_empty() && names.contains("<parameter>"));
+    let history = std::fs::read_to_string(folder.join("pid.history.csv")).unwrap();
+    let columns: Vec<&str> = history.lines().next().unwrap().split(',').collect();
+    for c in &columns {
+        if !names.contains(c) && !parameters.contains(*c) {
+            missing.push(format!("history.csv column `{c}`"));
+        }
+    }
+    // summary.json: every top-level key (a dotted row `best.cost` documents
+    // `best`, a row `race[]` the array `race`).
+    for key in summary.as_object().unwrap().keys() {
+        let dotted = format!("{key}.");
+        let array = format!("{key}[]");
+        if !names.contains(key.as_str())
+            && !names.contains(array.as_str())
+            && !names.iter().any(|n| n.starts_with(&dotted))
+        {
+            missing.push(format!("summary.json key `{key}`"));
+        }
+    }
+    // The fields of the arrays' entries, named in their row.
+    for array in ["generations", "race"] {
+        let row = row_of(&format!("{array}[]")).unwrap_or_else(|| panic!("no row for `{array}[]`"));
+        let entries = summary[array].as_array().unwrap();
+        assert!(!entries.is_empty(), "{array} is empty: the test must see its fields");
+        for field in entries.iter().flat_map(|e| e.as_object().unwrap().keys()) {
+            if !row.contains(&format!("`{field}`")) {
+                missing.push(format!("summary.json `{array}[].{field}`"));
+            }
+        }
+    }
+    // Statistics objects are "the history.csv statistic columns, by name".
+    let finalist = summary["race"].as_array().unwrap().iter().find(|r| !r["stats"].is_null()).expect("a finalist");
+    for stats in [&summary["training"]["start"], &summary["held_out"]["tuned"], &finalist["screen_stats"]] {
+        for field in stats.as_object().unwrap().keys() {
+            if !columns.contains(&field.as_str()) {
+                missing.push(format!("statistic `{field}` is not a history.csv column"));
+            }
+        }
+    }
+    missing.sort();
+    missing.dedup();
+    assert!(missing.is_empty(), "not documented in docs/outputs.md's tune section:\n{}", missing.join("\n"));
+}

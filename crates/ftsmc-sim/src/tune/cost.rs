@@ -167,10 +167,18 @@ impl OutcomeStats {
         let runs = flights.len();
         let crashed = flights.iter().filter(|f| f.crashed).count();
         let success = flights.iter().filter(|f| f.success).count();
-        let score: f64 =
-            flights.iter().filter(|f| !f.completed).map(|f| 2.0 - (f.time / duration).clamp(0.0, 1.0)).sum::<f64>();
-        let shortfall: f64 =
-            flights.iter().filter_map(|f| f.margin).map(|m| (MARGIN_TARGET - m).clamp(0.0, 1.0 + MARGIN_TARGET)).sum();
+        // Summed from +0.0 (`Iterator::sum` of floats starts at −0.0, which
+        // an empty sum would keep and the CSV would print as `-0`).
+        let score = flights
+            .iter()
+            .filter(|f| !f.completed)
+            .map(|f| 2.0 - (f.time / duration).clamp(0.0, 1.0))
+            .fold(0.0, |a, x| a + x);
+        let shortfall = flights
+            .iter()
+            .filter_map(|f| f.margin)
+            .map(|m| (MARGIN_TARGET - m).clamp(0.0, 1.0 + MARGIN_TARGET))
+            .fold(0.0, |a, x| a + x);
         Self {
             runs,
             success,
@@ -208,5 +216,43 @@ impl OutcomeStats {
             + w.thrust_activity * or0(self.thrust_activity)
             + w.torque_activity * or0(self.torque_activity)
             + w.saturated * or0(self.saturated)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn completed(margin: Option<f64>) -> FlightOutcome {
+        FlightOutcome {
+            completed: true,
+            crashed: false,
+            success: true,
+            time: 20.0,
+            rms: 0.3,
+            thrust_activity: 40.0,
+            torque_activity: 20.0,
+            saturated: 0.0,
+            margin,
+        }
+    }
+
+    #[test]
+    fn flights_that_neither_fail_nor_fall_short_score_plus_zero() {
+        // No failed flight, no margin: both sums are empty.
+        let s = OutcomeStats::of(&[completed(None), completed(None)], 20.0);
+        assert_eq!(s.divergence_score.to_bits(), 0.0f64.to_bits(), "{}", s.divergence_score);
+        assert_eq!(s.margin_shortfall.to_bits(), 0.0f64.to_bits(), "{}", s.margin_shortfall);
+        // Margins at or above the target fall short by nothing.
+        let s = OutcomeStats::of(&[completed(Some(0.5)), completed(Some(MARGIN_TARGET))], 20.0);
+        assert_eq!(s.margin_shortfall.to_bits(), 0.0f64.to_bits());
+        // And the terms still count what they should.
+        let mut failed = completed(Some(-1.0));
+        failed.completed = false;
+        failed.success = false;
+        failed.time = 5.0;
+        let s = OutcomeStats::of(&[failed, completed(Some(0.0))], 20.0);
+        assert_eq!(s.divergence_score, (2.0 - 0.25) / 2.0);
+        assert_eq!(s.margin_shortfall, ((1.0 + MARGIN_TARGET) + MARGIN_TARGET) / 2.0);
     }
 }

@@ -151,16 +151,19 @@ impl Role {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum RestartReason {
-    /// No candidate of the run beat the cost it started from within
-    /// [`NO_PROGRESS_GENERATIONS`] generations: the step is too large for
-    /// the landscape here (a cliff). Restart from the best so far with
-    /// half the step.
+    /// No sample of the run beat its anchor (the point it started from,
+    /// flown on the same draws) within [`NO_PROGRESS_GENERATIONS`]
+    /// generations: the step is too large for the landscape here (a
+    /// cliff). Restart from the anchor with half the initial step.
     NoProgress,
     /// The step collapsed ([`COLLAPSED_STEP`]): a local optimum. Restart
-    /// from the best so far with the initial step and twice the population.
+    /// from the run's final mean with the initial step and twice the
+    /// population.
     Collapsed,
-    /// The run's best did not improve for [`STALL_GENERATIONS`]
-    /// generations: a plateau or a local optimum. Restart as for `Collapsed`.
+    /// The median of the run's generation medians over the last
+    /// [`STALL_GENERATIONS`] generations is no lower than over the
+    /// [`STALL_GENERATIONS`] before them (`stalled`): a plateau or a local
+    /// optimum. Restart as for `Collapsed`.
     Stalled,
 }
 
