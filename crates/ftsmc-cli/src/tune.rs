@@ -159,8 +159,8 @@ pub fn history_csv(r: &TuneResult) -> Result<Vec<u8>> {
 /// The start-vs-tuned table of training, race and held-out statistics:
 /// success with its Wilson interval, the RMS position error median with
 /// its order-statistic interval (held-out; the training and race rows keep
-/// no per-run values, and 4 training runs cannot bound a median at 95 %
-/// anyway), at `confidence`.
+/// no per-run values, and the 95 % interval of a median of 8 runs spans
+/// all 8 anyway), at `confidence`.
 pub fn comparison_table(r: &TuneResult, confidence: f64) -> String {
     let mut t = Table::new([
         "gains, draws",
