@@ -935,7 +935,8 @@ pub fn run_scenario(scenario: &Scenario, out: &Path, figures: bool) -> Result<()
         .collect();
     let started = std::time::Instant::now();
     // Each CSV is written while its flight flies.
-    let runs = fly_into(&jobs, &dir, |job| PathBuf::from(format!("{}.csv", job.key)))?;
+    let csv = |job: &Job| PathBuf::from(format!("{}.csv", job.key));
+    let runs = fly_into(&jobs, &dir, csv)?;
     let flight_seconds = started.elapsed().as_secs_f64();
     let file = dir.write_scenario("scenario.toml", scenario, "scenario.toml")?;
     let refs: Vec<&RunOutput> = runs.iter().collect();
@@ -950,7 +951,7 @@ pub fn run_scenario(scenario: &Scenario, out: &Path, figures: bool) -> Result<()
     }
     // The replay's rows from the recordings in memory, not the files just written.
     let recorded: Vec<(PathBuf, &Recording)> =
-        runs.iter().map(|r| (PathBuf::from(format!("{}.csv", r.controller)), &r.recording)).collect();
+        jobs.iter().zip(&runs).map(|(job, r)| (csv(job), &r.recording)).collect();
     let html = crate::html::report_with(dir.path(), &format!("ftsmc run {}", scenario.name), &table, &recorded)?;
     dir.write("report.html", html.as_bytes())?;
     dir.commit()?;

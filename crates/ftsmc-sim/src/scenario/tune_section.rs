@@ -51,8 +51,9 @@ pub struct TuneSection {
     /// Extra parameters: gains of the controller's own section, absolute values.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub extra: Vec<ExtraParameter>,
-    /// Training flights per candidate (the same Monte Carlo draws for every
-    /// candidate: common random numbers). Default 8.
+    /// Training flights per candidate and generation: fresh Monte Carlo
+    /// draws each generation, the same for every entry of it (common random
+    /// numbers). Default 8.
     pub runs: u64,
     /// Held-out flights that judge the start and the result (seeds the
     /// search never used). Default 200.

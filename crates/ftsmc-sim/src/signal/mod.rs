@@ -177,13 +177,15 @@ impl Term {
     }
 }
 
-/// Bit-exact equality of signals: every number compared by its bits
-/// (`f64::to_bits`), every structural choice (term kind, optional field
-/// present or not, piece count, waypoint velocity rule) exactly. Unlike
-/// `PartialEq`, `-0.0` and `0.0` differ (and a NaN equals the same NaN):
-/// two signals that compare equal here give the same bits at every instant,
-/// which is what lets the run loop copy one lane's reference to another
-/// ([`Signal::same_bits`], `ReferenceSignals::same_bits`). Allocates nothing.
+// Bit-exact equality of signals: every number compared by its bits
+// (`f64::to_bits`), every structural choice (term kind, optional field
+// present or not, piece count, waypoint velocity rule) exactly. Unlike
+// `PartialEq`, `-0.0` and `0.0` differ (and a NaN equals the same NaN):
+// two signals that compare equal here give the same bits at every instant,
+// which is what lets the run loop copy one lane's reference to another
+// (`Signal::same_bits`, `ReferenceSignals::same_bits`). Allocates nothing.
+
+/// The same bits.
 fn same_f64(a: f64, b: f64) -> bool {
     a.to_bits() == b.to_bits()
 }

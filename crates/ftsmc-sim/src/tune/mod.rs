@@ -605,7 +605,7 @@ fn tune_inner(
         training,
         held_out,
         held_out_runs,
-        training_indices: (TRAINING_OFFSET..TRAINING_OFFSET + (generation + 1) * runs).collect(),
+        training_indices: training_indices((generation + 1) * runs),
         race_indices: race_idx,
         held_out_indices: held,
         training_flights: flights,
@@ -695,18 +695,26 @@ fn race_pool(history: &[Evaluated], race: u64) -> Vec<usize> {
             }
         }
     }
+    // Each generation's lowest-cost valid sample (ties: the earlier),
+    // newest generation first: a generation's entries are contiguous.
     let mut winners: Vec<usize> = Vec::new();
     let mut g = u64::MAX;
     for i in (1..history.len()).rev() {
         let e = &history[i];
-        if e.role != Role::Sample || !valid(i) || e.generation == g {
+        if e.role != Role::Sample || !valid(i) {
             continue;
         }
-        g = e.generation;
-        let best = (1..history.len())
-            .filter(|&j| history[j].generation == g && history[j].role == Role::Sample && valid(j))
-            .min_by(|&a, &b| history[a].cost.total_cmp(&history[b].cost).then(a.cmp(&b)));
-        winners.extend(best);
+        match winners.last_mut() {
+            Some(best) if e.generation == g => {
+                if e.cost.total_cmp(&history[*best].cost).is_le() {
+                    *best = i;
+                }
+            }
+            _ => {
+                g = e.generation;
+                winners.push(i);
+            }
+        }
     }
     let mut pool: Vec<usize> = Vec::new();
     let push = |pool: &mut Vec<usize>, i: usize| {
@@ -750,12 +758,13 @@ fn run_race(
         return Ok((Vec::new(), Vec::new(), 0, 0));
     }
     let scenario = |i: usize| if i == 0 { Ok(start.clone()) } else { space.apply(start, &history[i].values) };
-    let screen_idx = race_indices(screen);
-    let final_idx: Vec<u64> = (RACE_OFFSET + screen..RACE_OFFSET + screen + last).collect();
+    // Screening draws first, the final's after them.
+    let indices = race_indices(screen + last);
+    let (screen_idx, final_idx) = indices.split_at(screen as usize);
     let mut contenders = vec![0usize];
     contenders.extend(&pool);
     let scenarios: Vec<Scenario> = contenders.iter().map(|&i| scenario(i)).collect::<Result<_, _>>()?;
-    let stats = one(evaluator(&scenarios, &screen_idx)?, scenarios.len())?;
+    let stats = one(evaluator(&scenarios, screen_idx)?, scenarios.len())?;
     let mut race: Vec<Raced> = contenders
         .iter()
         .zip(stats)
@@ -766,7 +775,7 @@ fn run_race(
     let mut finalists = vec![0usize];
     finalists.extend(order.iter().take(RACE_FINALISTS as usize));
     let scenarios: Vec<Scenario> = finalists.iter().map(|&k| scenario(race[k].index)).collect::<Result<_, _>>()?;
-    let stats = one(evaluator(&scenarios, &final_idx)?, scenarios.len())?;
+    let stats = one(evaluator(&scenarios, final_idx)?, scenarios.len())?;
     for (&k, st) in finalists.iter().zip(stats) {
         race[k].cost = Some(st.cost(settings));
         race[k].stats = Some(st);
@@ -777,8 +786,6 @@ fn run_race(
         .copied()
         .min_by(|&a, &b| race[a].cost.unwrap_or(f64::INFINITY).total_cmp(&race[b].cost.unwrap_or(f64::INFINITY)))
         .map_or(0, |k| race[k].index);
-    let mut indices = screen_idx;
-    indices.extend(final_idx);
     Ok((race, indices, flights, winner))
 }
 
