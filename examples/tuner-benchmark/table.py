@@ -2,12 +2,17 @@
 `ftsmc compare` outputs `run.sh` leaves in WORKDIR/cmp/<rung>-<controller>/.
 
     python table.py WORKDIR RUNG [RUNG ...]
+    python table.py --completion WORKDIR RUNG [RUNG ...]
 
 One row per cell: each tuner's held-out success with its 95 % Wilson
 interval, the paired success difference (new − first) with its interval
 and Holm-adjusted McNemar p, which tuner the success verdict favours, the
 RMS position error medians and the Wilcoxon verdict on it; then the count
 of cells where the new tuner is better, not shown to differ, or worse.
+
+With ``--completion``: per cell, the flights each tuner's gains complete
+(no divergence, no crash) on the same draws, the discordant pairs and the
+exact McNemar test on them, Holm-adjusted over the listed cells.
 """
 
 from __future__ import annotations
@@ -41,6 +46,53 @@ def signed(x: float) -> str:
 def side(verdict: dict[str, object]) -> str:
     """Which gain set a verdict favours: `first`, `new` or `=`."""
     return {"A better": "first", "B better": "new"}.get(str(verdict["verdict"]), "=")
+
+
+def mcnemar_exact(b: int, c: int) -> float:
+    """Two-sided exact McNemar p of b and c discordant pairs: the binomial
+    test of min(b, c) in b + c at 1/2."""
+    n = b + c
+    if n == 0:
+        return 1.0
+    tail = sum(math.comb(n, i) for i in range(min(b, c) + 1)) / (1 << n)
+    return min(1.0, 2 * tail)
+
+
+def holm(ps: list[float]) -> list[float]:
+    """Holm's step-down adjustment of ps, in their order."""
+    order = sorted(range(len(ps)), key=lambda i: ps[i])
+    adjusted = [0.0] * len(ps)
+    running = 0.0
+    for rank, i in enumerate(order):
+        running = max(running, min(1.0, (len(ps) - rank) * ps[i]))
+        adjusted[i] = running
+    return adjusted
+
+
+def completion(work: Path, rung: str, controller: str) -> tuple[int, int, int, int, int]:
+    """Flights completed by the first and the new gains of a cell, its
+    draws, and the pairs only the new (b) or only the first (c) completed."""
+    with open(work / "cmp" / f"{rung}-{controller}" / "out" / rung / "runs.csv", newline="") as f:
+        runs = list(csv.DictReader(f))
+    done = {
+        name: {r["run"]: r["exit"] == "completed" for r in runs if r["controller"] == name}
+        for name in ("first.toml", "current.toml")
+    }
+    first, new = done["first.toml"], done["current.toml"]
+    b = sum(new[k] and not first[k] for k in first)
+    c = sum(first[k] and not new[k] for k in first)
+    return sum(first.values()), sum(new.values()), len(first), b, c
+
+
+def completion_table(work: Path, rungs: list[str]) -> list[str]:
+    cells = [(rung, c, completion(work, rung, c)) for rung in rungs for c in NAMES]
+    adjusted = holm([mcnemar_exact(b, c) for _, _, (_, _, _, b, c) in cells])
+    lines = ["| rung | controller | completed, first | completed, new | only new / only first | Holm p |", "|---|---|---|---|---|---|"]
+    for (rung, controller, (k0, k1, n, b, c)), p in zip(cells, adjusted):
+        lines.append(
+            f"| {rung.replace('realistic-', '')} | {NAMES[controller]} | {k0}/{n} | {k1}/{n} | {b} / {c} | {p:.2g} |"
+        )
+    return lines
 
 
 def row(work: Path, rung: str, controller: str) -> tuple[str, str]:
@@ -78,9 +130,13 @@ def row(work: Path, rung: str, controller: str) -> tuple[str, str]:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
+    parser.add_argument("--completion", action="store_true", help="the completion table instead")
     parser.add_argument("work", type=Path)
     parser.add_argument("rungs", nargs="+")
     args = parser.parse_args()
+    if args.completion:
+        print("\n".join(completion_table(args.work, args.rungs)))
+        return
     tally = {"new": 0, "=": 0, "first": 0}
     for rung in args.rungs:
         for controller in NAMES:

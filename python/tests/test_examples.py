@@ -93,3 +93,25 @@ def test_tuner_benchmark_table(cli: Path, tmp_path: Path) -> None:
     assert len(rows) == 5, lines
     assert all("4/4 [51.0, 100.0] | 4/4 [51.0, 100.0]" in r and r.endswith("| one flight |") for r in rows), rows
     assert lines[-1] == "new better in 0, no difference shown in 5, first better in 0: at least as good in 5 of 5", lines
+    # The completion table: the same gains complete the same flights.
+    lines = run([str(TUNER_BENCHMARK / "table.py"), "--completion", str(tmp_path), "paper-scenario-1"], tmp_path)
+    rows = [line for line in lines.splitlines() if line.startswith("| paper-scenario-1 |")]
+    assert len(rows) == 5 and all(r.endswith("| 4/4 | 4/4 | 0 / 0 | 1 |") for r in rows), rows
+
+
+def test_tuner_benchmark_mcnemar_and_holm_match_scipy() -> None:
+    """table.py's exact McNemar test is scipy's two-sided binomial test of
+    the discordant pairs, and its Holm adjustment statsmodels' definition."""
+    import importlib.util
+
+    from scipy.stats import binomtest
+
+    spec = importlib.util.spec_from_file_location("tuner_table", TUNER_BENCHMARK / "table.py")
+    assert spec is not None and spec.loader is not None
+    table = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(table)
+    for b, c in [(0, 0), (1, 0), (4, 0), (14, 0), (30, 7), (5, 5), (3, 40), (100, 80)]:
+        expected = binomtest(min(b, c), b + c, 0.5).pvalue if b + c else 1.0
+        assert table.mcnemar_exact(b, c) == pytest.approx(expected, rel=1e-12), (b, c)
+    # Holm: sorted p times (m − rank), made monotone, capped at 1, in the input's order.
+    assert table.holm([0.01, 0.04, 0.03, 0.5]) == pytest.approx([0.04, 0.09, 0.09, 0.5])
