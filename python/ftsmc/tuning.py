@@ -20,9 +20,12 @@ class Tuned(NamedTuple):
     scenario: Scenario
     """The input scenario with the tuned gains applied (``controllers`` = the tuned one)."""
     toml: str
-    """The tuned scenario file: ``extends`` the input, sets only the tuned gains, records the cost and statistics."""
+    """The tuned scenario file: the complete scenario tuned on (its vehicle and every override) with the tuned
+    gains, as the keys that differ from the built-in scenario it extends (or every key); records the cost,
+    the headline verdict and the statistics."""
     summary: Dict[str, Any]
-    """Parameters, chosen candidate, ``improved`` (false: the start's gains), every candidate (``history``), the
+    """Parameters, chosen candidate, ``improved`` (the held-out headline: success by McNemar, then RMS position
+    error by Wilcoxon) with ``improved_reason``, every candidate (``history``), the
     generations and the race, training and held-out statistics (NaN as None)."""
 
 
@@ -42,10 +45,13 @@ def tune(
     search and the Monte Carlo draws (default: the scenario's ``seed``),
     ``threads`` workers (default: all cores), the GIL released. The
     scenario's ``[tune]`` section narrows the parameters and sets the cost
-    weights. ``extends`` is what the returned TOML extends (default: the
-    scenario's name, right for a built-in scenario). Raises ``ValueError``
-    for an unknown controller, a budget below one generation, or a bad
-    ``[tune]`` value.
+    weights. ``extends`` names the built-in scenario the returned TOML
+    extends (default: the scenario's name, when it is a built-in one); the
+    TOML holds only the keys that differ from it when that loads back to the
+    tuned scenario exactly, and every key otherwise, so it never depends on
+    a path and keeps a vehicle changed by ``with_overrides``. Raises ``ValueError``
+    for an unknown controller, a budget below one generation, a bad
+    ``[tune]`` value, or start gains that fail every first training draw.
 
     ``client``: a ``dask.distributed.Client``. The CMA-ES search stays in
     this process; each generation's candidates (and the held-out flights)

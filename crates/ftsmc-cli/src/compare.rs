@@ -53,6 +53,7 @@ pub struct Request<'a> {
 /// for another vehicle without `--allow-other-vehicle`).
 pub fn contestants(req: &Request<'_>) -> Result<Vec<Contestant>> {
     let mut out: Vec<Contestant> = Vec::new();
+    let mut given: Vec<&String> = Vec::new();
     for c in req.contestants {
         let contestant = if ftsmc_sim::registry::check_name(c).is_ok() {
             Contestant::built_in(req.scenario, c)
@@ -70,9 +71,16 @@ pub fn contestants(req: &Request<'_>) -> Result<Vec<Contestant>> {
             Contestant::from_file(req.scenario, &name, &loaded.scenario, req.allow_other_vehicle)
                 .map_err(|e| anyhow!("{e}"))?
         };
-        if out.iter().any(|o| o.name == contestant.name) {
-            bail!("contestant `{}` is given twice", contestant.name);
+        let mut contestant = contestant;
+        if let Some(i) = out.iter().position(|o| o.name == contestant.name) {
+            if given[i] == c {
+                bail!("contestant `{}` is given twice", contestant.name);
+            }
+            // Two files with the same label (two tunes of one controller):
+            // the path tells them apart.
+            contestant.name = format!("{} [{c}]", contestant.name);
         }
+        given.push(c);
         out.push(contestant);
     }
     if out.len() < 2 {

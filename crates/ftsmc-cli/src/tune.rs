@@ -235,23 +235,47 @@ pub fn run(scenario: &Scenario, scenario_arg: &str, controllers: &[String], req:
     let seed = req.seed.unwrap_or(scenario.seed);
     let started = Instant::now();
     let mut results = Vec::new();
+    let mut skipped = Vec::new();
     for controller in controllers {
-        results.push(tune_one(scenario, scenario_arg, controller, seed, req, &pool)?);
+        match tune_one(scenario, scenario_arg, controller, seed, req, &pool) {
+            Ok(r) => results.push(r),
+            // With several controllers one that cannot fly the vehicle is
+            // skipped (no file written for it), the others tuned.
+            Err(e) if controllers.len() > 1 && format!("{e:#}").contains(ftsmc_sim::tune::UNFIT_START) => {
+                eprintln!("skipped: {e:#}");
+                skipped.push(format!("{e:#}"));
+            }
+            Err(e) => return Err(e),
+        }
         if controllers.len() > 1 {
             println!();
         }
     }
-    if controllers.len() > 1 {
+    if results.len() < 2 && !skipped.is_empty() {
+        println!(
+            "Bottom line: {} of {} controllers could fly {} from their start gains ({}); nothing to compare.",
+            results.len(),
+            controllers.len(),
+            scenario.name,
+            if results.is_empty() { "none".to_string() } else { results[0].controller.clone() }
+        );
+    }
+    if results.len() > 1 {
         let folder = req.out.join(&scenario.name);
         let dir = ResultDir::begin(&folder, "tune-comparison")?;
-        let (md, json) = comparison(scenario, &results, req.budget, seed, req.confidence)?;
+        let (md, json) = comparison(scenario, &results, &skipped, req.budget, seed, req.confidence)?;
         dir.write("comparison.md", md.as_bytes())?;
         dir.write("comparison.json", serde_json::to_string_pretty(&json)?.as_bytes())?;
         dir.commit()?;
         println!("{md}");
         println!(
-            "{} controllers tuned on {} in {:.1} s wall; wrote {}/comparison.{{md,json}}",
-            controllers.len(),
+            "{} controllers tuned{} on {} in {:.1} s wall; wrote {}/comparison.{{md,json}}",
+            results.len(),
+            if skipped.is_empty() {
+                String::new()
+            } else {
+                format!(" ({} skipped: start gains that do not fly)", skipped.len())
+            },
             scenario.name,
             started.elapsed().as_secs_f64(),
             folder.display()
@@ -266,6 +290,7 @@ pub fn run(scenario: &Scenario, scenario_arg: &str, controllers: &[String], req:
 pub fn comparison(
     scenario: &Scenario,
     results: &[TuneResult],
+    skipped: &[String],
     budget: u64,
     seed: u64,
     confidence: f64,
@@ -284,14 +309,18 @@ pub fn comparison(
     let refs: Vec<(String, &Outcomes)> = named.iter().map(|(n, o)| (n.clone(), o)).collect();
     let verdicts = pairwise(&refs, confidence)?;
     let runs = named.first().map_or(0, |(_, o)| o.runs());
-    let md = format!(
-        "Tuned on {} with a budget of {budget} training flights each (seed {seed}), judged on the same {runs} held-out draws (paired).\n\n{}\n\n{}\n\nPaired verdicts (McNemar on success, Wilcoxon signed-rank on RMS position error; Holm over all {} tests):\n\n{}\n",
+    let bottom = bottom_line(&rows, &verdicts, results);
+    let mut md = format!(
+        "Tuned on {} with a budget of {budget} training flights each (seed {seed}), judged on the same {runs} held-out draws (paired).\n\n{}\n\n{}\n\nPaired verdicts (McNemar on success, Wilcoxon signed-rank on RMS position error; Holm over all {} tests):\n\n{}\n\n{bottom}\n",
         scenario.name,
         level_note(confidence),
         interval_table(&rows).render(),
         verdicts.len(),
         verdict_table(&verdicts).render()
     );
+    for s in skipped {
+        md.push_str(&format!("\nSkipped (no file written): {s}\n"));
+    }
     let json = json!({
         "scenario": scenario.name,
         "budget": budget,
@@ -300,8 +329,75 @@ pub fn comparison(
         "held_out_runs": runs,
         "controllers": rows.iter().map(|(n, i)| json!({"controller": n, "improved": results.iter().find(|r| &r.controller == n).map(|r| r.improved), "held_out": i})).collect::<Vec<_>>(),
         "verdicts": verdicts,
+        "bottom_line": bottom,
+        "skipped": skipped,
     });
     Ok((md, json))
+}
+
+/// The one conclusion of a multi-controller tune: the controller whose
+/// tuned gains did best on the held-out draws (most successes, then the
+/// lowest RMS median), its paired verdicts against the runner-up (the
+/// tests named, Holm-adjusted over the whole table), and a flag for every
+/// tuned file that is not better than its start on the headline.
+pub fn bottom_line(
+    rows: &[(String, Intervals)],
+    verdicts: &[ftsmc_sim::batch::verdicts::PairVerdict],
+    results: &[TuneResult],
+) -> String {
+    let rms = |i: &Intervals| i.rms_median.as_ref().map_or(f64::INFINITY, |m| m.estimate);
+    let mut order: Vec<usize> = (0..rows.len()).collect();
+    order.sort_by(|&a, &b| {
+        rows[b].1.successes.cmp(&rows[a].1.successes).then(rms(&rows[a].1).total_cmp(&rms(&rows[b].1)))
+    });
+    let mut out = String::new();
+    if let [best, second, ..] = order[..] {
+        let (b, r) = (&rows[best], &rows[second]);
+        let tests: Vec<String> = verdicts
+            .iter()
+            .filter(|v| (v.a == b.0 && v.b == r.0) || (v.a == r.0 && v.b == b.0))
+            .map(|v| {
+                let test = match v.test.metric {
+                    ftsmc_sim::stats::paired::PairedMetric::Success => "McNemar on success",
+                    _ => "Wilcoxon on RMS position error",
+                };
+                format!("{test}: {}, Holm p = {}", v.sentence(), crate::intervals::p_cell(v.p_holm))
+            })
+            .collect();
+        let decided = verdicts.iter().any(|v| {
+            ((v.a == b.0 && v.b == r.0) || (v.a == r.0 && v.b == b.0))
+                && v.verdict != ftsmc_sim::stats::paired::Verdict::NoDifference
+        });
+        out.push_str(&format!(
+            "Bottom line: {} did best on the held-out draws ({}/{} successes, RMS median {}); against the runner-up {} ({}/{}, {}): {}{}.",
+            b.0,
+            b.1.successes,
+            b.1.runs,
+            metre_cell(b.1.rms_median.as_ref()),
+            r.0,
+            r.1.successes,
+            r.1.runs,
+            metre_cell(r.1.rms_median.as_ref()),
+            tests.join("; "),
+            if decided { "" } else { " — no difference shown: the runs do not separate the two" }
+        ));
+    }
+    for r in results {
+        if let Some(h) = &r.held_out {
+            if h.tuned.success < h.start.success {
+                out.push_str(&format!(
+                    "\nFlag: {}'s tuned gains succeed on fewer held-out draws ({}/{}) than its start ({}/{}).",
+                    r.controller, h.tuned.success, h.tuned.runs, h.start.success, h.start.runs
+                ));
+            } else if !r.improved && r.best != 0 {
+                out.push_str(&format!(
+                    "\nFlag: {}'s tuned gains are not better than its start on the headline ({}).",
+                    r.controller, r.improved_reason
+                ));
+            }
+        }
+    }
+    out
 }
 
 /// Tune one controller and write its files into `out/<scenario name>/`.
@@ -339,15 +435,7 @@ fn tune_one(
     // As shell words: a path with a newline stays one line (and reads back).
     let args: Vec<String> = std::env::args_os().skip(1).map(|a| a.to_string_lossy().into_owned()).collect();
     let command = ftsmc_sim::escape::command_line(&[&["ftsmc".to_string()], args.as_slice()].concat());
-    // A file input is extended by its absolute path; a built-in by its name.
-    let extends = if Path::new(scenario_arg).exists() {
-        std::fs::canonicalize(scenario_arg)
-            .map(|p| p.display().to_string())
-            .unwrap_or_else(|_| scenario_arg.to_string())
-    } else {
-        scenario_arg.to_string()
-    };
-    let text = tuned_toml(&result, &extends, &command).map_err(anyhow::Error::msg)?;
+    let text = tuned_toml(&result, built_in_base(scenario_arg).as_deref(), &command).map_err(anyhow::Error::msg)?;
     let tuned_name = format!("{controller}.tuned.toml");
     dir.write(&tuned_name, text.as_bytes())?;
     let history_name = format!("{controller}.history.csv");
@@ -367,6 +455,7 @@ fn tune_one(
         "seed": seed,
         "confidence": confidence,
         "improved": result.improved,
+        "improved_reason": result.improved_reason,
         "training_flights": result.training_flights,
         "race_flights": result.race_flights,
         "held_out_flights": result.held_out_flights,
@@ -443,13 +532,29 @@ fn tune_one(
         folder.display(),
         if figures { format!(", {controller}.convergence.{{svg,png}}") } else { String::new() }
     );
-    if !result.improved {
+    if result.best == 0 {
         eprintln!(
             "warning: {controller} on {}: the search found nothing better than the start (the scenario's own gains, written back unchanged; `improved: false`). Try a larger --budget (now {budget}) or a smaller `[tune] sigma`.",
             scenario.name
         );
+    } else if !result.improved {
+        eprintln!(
+            "warning: {controller} on {}: the chosen gains won on the cost but are not better than the start on the headline ({}); `improved: false` in {tuned_name}",
+            scenario.name, result.improved_reason
+        );
     }
     Ok(result)
+}
+
+/// The built-in scenario `arg` is, or the one its `extends` chain ends at:
+/// what a tuned file extends (never a path, so the file can be moved).
+pub fn built_in_base(arg: &str) -> Option<String> {
+    let path = Path::new(arg);
+    if !path.exists() {
+        return ftsmc_sim::scenario::resolve::built_in(arg)
+            .map(|_| arg.strip_suffix(".toml").unwrap_or(arg).to_string());
+    }
+    Scenario::load_with_warnings(path, &[]).ok()?.built_in_base.map(str::to_string)
 }
 
 /// Cost of every candidate and of the search distribution's mean (each on

@@ -114,7 +114,9 @@ pub fn tune_native(
         ftsmc_sim::limits::check_threads(&base.limits, n).map_err(|e| value_error(chain_message(&e)))?;
     }
     let options = ftsmc_sim::tune::TuneOptions { controller, budget, seed: seed.unwrap_or(base.seed) };
-    let extends = extends.unwrap_or_else(|| base.name.clone());
+    // A built-in scenario to extend: the one named, else the scenario's own
+    // name when it is one; otherwise the file holds every key.
+    let extends = extends.or_else(|| Some(base.name.clone()));
     let result = py.detach(move || {
         let mut builder = rayon::ThreadPoolBuilder::new();
         if let Some(t) = threads {
@@ -130,13 +132,14 @@ pub fn tune_native(
         }
     });
     let result = result.map_err(value_error)?;
-    let text = ftsmc_sim::tune::tuned_toml(&result, &extends, "ftsmc.tune (Python)").map_err(value_error)?;
+    let text = ftsmc_sim::tune::tuned_toml(&result, extends.as_deref(), "ftsmc.tune (Python)").map_err(value_error)?;
     let names: Vec<&str> = result.space.dims.iter().map(|d| d.name.as_str()).collect();
     let summary = serde_json::json!({
         "controller": result.controller,
         "parameters": names,
         "best": result.best(),
         "improved": result.improved,
+        "improved_reason": result.improved_reason,
         "start_cost": result.history[0].cost,
         "training": result.training,
         "held_out": result.held_out,

@@ -180,8 +180,8 @@ fn a_tiny_tune_is_identical_with_one_and_two_threads() {
         assert_eq!(e.role == ftsmc_sim::tune::Role::Start, e.generation == 0);
     }
     assert_eq!(one.training_indices, ftsmc_sim::tune::generation_indices(0, 2 * 4));
-    let a = tuned_toml(&one, "realistic-scenario-2", "test").unwrap();
-    let b = tuned_toml(&two, "realistic-scenario-2", "test").unwrap();
+    let a = tuned_toml(&one, Some("realistic-scenario-2"), "test").unwrap();
+    let b = tuned_toml(&two, Some("realistic-scenario-2"), "test").unwrap();
     assert_eq!(a, b);
     // The search moved: not every candidate is the start.
     assert!(one.history.iter().any(|h| h.values != one.history[0].values));
@@ -204,19 +204,56 @@ fn the_tuned_toml_round_trips_the_parameter_map() {
         r.tuned = Scenario { controllers: vec![controller.to_string()], ..r.space.apply(&r.start, &values).unwrap() };
         let best = r.best;
         r.history[best].values = values;
-        let text = tuned_toml(&r, "base.toml", "test").unwrap();
-        let tmp = tempfile::Builder::new().prefix(&format!("ftsmc-tune-test-{controller}-")).tempdir().unwrap();
-        let dir = tmp.path();
-        std::fs::write(dir.join("base.toml"), base.to_toml().unwrap()).unwrap();
-        std::fs::write(dir.join("tuned.toml"), &text).unwrap();
-        let loaded = Scenario::from_file(&dir.join("tuned.toml")).unwrap_or_else(|e| panic!("{e}\n{text}"));
         let expected = Scenario { name: format!("{}-{controller}-tuned", base.name), ..r.tuned.clone() };
-        assert_eq!(loaded, expected, "{controller}\n{text}");
+        // Extending the built-in scenario, and complete (no base): both load
+        // to the tuned scenario, wherever the file is.
+        for base_name in [Some("realistic-scenario-2"), None] {
+            let text = tuned_toml(&r, base_name, "test").unwrap();
+            let tmp = tempfile::Builder::new().prefix(&format!("ftsmc-tune-test-{controller}-")).tempdir().unwrap();
+            std::fs::write(tmp.path().join("tuned.toml"), &text).unwrap();
+            let loaded = Scenario::from_file(&tmp.path().join("tuned.toml")).unwrap_or_else(|e| panic!("{e}\n{text}"));
+            assert_eq!(loaded, expected, "{controller} {base_name:?}\n{text}");
+            assert_eq!(text.lines().any(|l| l.starts_with("extends")), base_name.is_some(), "{text}");
+            if base_name.is_some() {
+                // Below the header: the gains, and the keys the test scenario
+                // changed from the built-in one (duration, [tune]).
+                let body: Vec<&str> = text.lines().filter(|l| l.starts_with('[')).collect();
+                assert!(
+                    body.iter().all(|l| l.starts_with(&format!("[{controller}"))
+                        || l.starts_with("[cascade")
+                        || l.starts_with("[tune")),
+                    "{body:?}"
+                );
+                assert!(text.contains("\nduration = 1.5\n"), "{text}");
+            }
+        }
         assert_ne!(r.tuned.gains, base.gains, "{controller}: the tune changed nothing");
-        // Only gain (and cascade) keys are written below the header.
-        let body: Vec<&str> = text.lines().filter(|l| l.starts_with('[')).collect();
-        assert!(body.iter().all(|l| l.starts_with(&format!("[{controller}")) || l.starts_with("[cascade")), "{body:?}");
     }
+}
+
+/// The vehicle a tune flew travels with its file: a scenario whose vehicle
+/// was switched by an override (`--set vehicle.preset=…`, Python's
+/// `with_overrides`) gives a tuned file that flies that vehicle, not the
+/// built-in scenario's, and is named after it.
+#[test]
+fn a_tuned_file_keeps_an_overridden_vehicle() {
+    let (file, text) = ftsmc_sim::scenario::resolve::built_in("realistic-calm-1").unwrap();
+    let s = Scenario::from_toml_str(text, file).unwrap();
+    let set = |k: &str, v: &str| (k.to_string(), toml::Value::String(v.to_string()));
+    let mut s = s.with_overrides(&[set("vehicle.preset", "crazyflie-2")]).unwrap().scenario;
+    assert_eq!(s.name, "realistic-calm-1-crazyflie-2", "the name follows the vehicle");
+    s.duration = 1.5;
+    s.tune = Some(TuneSection { runs: 2, validation_runs: 3, population: Some(4), ..TuneSection::default() });
+    let options = TuneOptions { controller: "pid".into(), budget: TINY_BUDGET, seed: 5 };
+    let r = tune(&s, &options, &|_| {}).unwrap();
+    let text = tuned_toml(&r, Some("realistic-calm-1"), "test").unwrap();
+    let loaded = Scenario::from_toml_str(&text, "elsewhere/pid.tuned.toml").unwrap_or_else(|e| panic!("{e}\n{text}"));
+    assert_eq!(loaded.vehicle, s.vehicle, "{text}");
+    assert_eq!(loaded.plant, s.plant);
+    assert_eq!(loaded.actuators, s.actuators);
+    assert_eq!(loaded.gains, r.tuned.gains);
+    assert_eq!(loaded.name, "realistic-calm-1-crazyflie-2-pid-tuned");
+    assert!(text.contains("# Vehicle: crazyflie-2"), "{text}");
 }
 
 /// A scenario text with one `[[tune.extra]]` of `key` (any range).
@@ -323,7 +360,10 @@ fn a_tune_whose_start_sits_on_a_cliff_recovers_and_improves() {
     // The default step (×1.4) and the restart policy: better gains, on the
     // training draws, in the race and on the held-out draws.
     for r in [&old_step, &tune(&cliff("tsm-sta", None), &options, &|_| {}).unwrap()] {
-        assert!(r.improved, "{:?}", r.generations);
+        // The search moved off the start; two held-out draws cannot show a
+        // paired difference, so the headline does not call it improved.
+        assert!(r.best != 0, "{:?}", r.generations);
+        assert!(!r.improved && r.improved_reason.contains("McNemar"), "{}", r.improved_reason);
         assert!(r.best().cost < r.history[0].cost);
         let h = r.held_out.unwrap();
         assert_eq!(h.tuned.completed, h.tuned.runs);
@@ -342,7 +382,7 @@ fn a_tiny_budget_that_finds_nothing_says_so() {
     assert_eq!(r.generations.len(), 1);
     assert!(!r.improved && r.best == 0, "{:?}", r.history);
     assert_eq!(r.tuned.gains, r.start.gains);
-    let text = tuned_toml(&r, "paper-scenario-1", "test").unwrap();
+    let text = tuned_toml(&r, Some("paper-scenario-1"), "test").unwrap();
     assert!(text.contains("# Improved: false") && text.contains("larger --budget"), "{text}");
 }
 
@@ -373,8 +413,9 @@ fn training_race_and_held_out_draws_never_meet_a_default_monte_carlo() {
     // The tuned file keeps its scenario's seed, which is the tune's seed by
     // default: its own Monte Carlo flies run indices 0, 1, … of that seed.
     let (s, r) = tiny("pid", 1);
-    let tuned = tuned_toml(&r, "realistic-scenario-2", "test").unwrap();
-    assert!(!tuned.lines().any(|l| l.starts_with("seed")), "the tuned file keeps the scenario's seed");
+    let tuned = tuned_toml(&r, Some("realistic-scenario-2"), "test").unwrap();
+    let loaded = Scenario::from_toml_str(&tuned, "tuned.toml").unwrap();
+    assert_eq!(loaded.seed, s.seed, "the tuned file keeps the scenario's seed");
     assert_eq!(r.options.seed, 5);
     let mut tune_draws: Vec<u64> = r.training_indices.clone();
     tune_draws.extend(&r.race_indices);
@@ -392,4 +433,47 @@ fn training_race_and_held_out_draws_never_meet_a_default_monte_carlo() {
     assert!(training_indices(1000).iter().all(|&i| (TRAINING_OFFSET..RACE_OFFSET).contains(&i)));
     assert!(race_indices(1000).iter().all(|&i| i >= RACE_OFFSET));
     assert!(held_out_indices(5, 1000, 1000).iter().all(|&i| (HELD_OUT_OFFSET..TRAINING_OFFSET).contains(&i)));
+}
+
+/// `improved` is the headline on the paired held-out draws: success first
+/// (McNemar), then RMS position error (Wilcoxon), never the cost.
+#[test]
+fn improved_means_better_on_the_headline() {
+    use ftsmc_sim::tune::{headline, Comparison, FlightOutcome};
+    let flight = |success: bool, rms: f64| FlightOutcome {
+        completed: success,
+        crashed: false,
+        success,
+        time: 1.0,
+        rms,
+        thrust_activity: 0.0,
+        torque_activity: 0.0,
+        saturated: 0.0,
+        margin: None,
+    };
+    let judge = |a: Vec<FlightOutcome>, b: Vec<FlightOutcome>| {
+        let c = Comparison { start: OutcomeStats::of(&a, 1.0), tuned: OutcomeStats::of(&b, 1.0) };
+        headline(Some(&[a, b]), Some(&c), 0.95)
+    };
+    let n = 40;
+    let start: Vec<FlightOutcome> = (0..n).map(|i| flight(true, 0.356 + 1e-4 * i as f64)).collect();
+    // Lower RMS on every draw, the same successes: improved.
+    let better: Vec<FlightOutcome> = start.iter().map(|f| flight(true, f.rms - 0.01)).collect();
+    let (yes, why) = judge(start.clone(), better);
+    assert!(yes && why.contains("Wilcoxon on RMS: tuned better"), "{why}");
+    // Worse RMS and one success fewer (the X500 case): not improved.
+    let mut worse: Vec<FlightOutcome> = start.iter().map(|f| flight(true, f.rms + 0.007)).collect();
+    worse[3] = flight(false, f64::NAN);
+    let (yes, why) = judge(start.clone(), worse);
+    assert!(!yes && why.contains("39/40 against the start's 40/40"), "{why}");
+    // Lower RMS but one success fewer, not significant on success: still
+    // not improved (success comes first).
+    let mut mixed: Vec<FlightOutcome> = start.iter().map(|f| flight(true, f.rms - 0.01)).collect();
+    mixed[0] = flight(false, f64::NAN);
+    assert!(!judge(start.clone(), mixed).0);
+    // Many more successes: improved whatever the RMS.
+    let failing: Vec<FlightOutcome> = (0..n).map(|i| flight(i % 2 == 0, 0.3)).collect();
+    let all: Vec<FlightOutcome> = (0..n).map(|_| flight(true, 0.5)).collect();
+    let (yes, why) = judge(failing, all);
+    assert!(yes && why.contains("McNemar on success: tuned better"), "{why}");
 }

@@ -24,7 +24,8 @@ use crate::stats::sequential::Campaign;
 /// scenario with the contestant's controller section).
 #[derive(Clone, Debug)]
 pub struct Contestant {
-    /// Name in tables (`pid`, or `pid.tuned.toml` for a file).
+    /// Name in tables (`pid`, or [`file_label`] for a file: `pid (tuned,
+    /// crazyflie-2, calm-1)`).
     pub name: String,
     /// Registered controller.
     pub controller: String,
@@ -50,20 +51,49 @@ impl Contestant {
             .clone();
         let differ = vehicle_differences(base, file);
         if !differ.is_empty() && !allow_other_vehicle {
-            let shown: Vec<&str> = differ.iter().take(8).map(String::as_str).collect();
+            // The remedy first: a long list of keys must not push it past
+            // the first line's 300 characters.
+            let remedy = match file.vehicle.preset {
+                Some(p) if base.vehicle.preset != Some(p) => {
+                    format!("fly it on its vehicle (`--set vehicle.preset={}`)", p.name())
+                }
+                _ => "fly it on a scenario with its vehicle".to_string(),
+            };
+            let shown: Vec<&str> = differ.iter().take(3).map(String::as_str).collect();
             return Err(format!(
-                "{name}: its vehicle differs from {}'s at {}{}; its gains were made for another vehicle \
-                 (--allow-other-vehicle flies them anyway)",
+                "{name}: its vehicle differs from {}'s: {remedy}, or pass --allow-other-vehicle; differs at {}{}",
                 base.name,
                 shown.join(", "),
-                if differ.len() > 8 { format!(" and {} more", differ.len() - 8) } else { String::new() }
+                if differ.len() > 3 { format!(" and {} more", differ.len() - 3) } else { String::new() }
             ));
         }
         let mut scenario = base.clone();
         scenario.gains = file.gains.clone();
         scenario.cascade = file.cascade;
-        Ok(Self { name: name.to_string(), controller, scenario })
+        Ok(Self { name: file_label(name, &controller, file), controller, scenario })
     }
+}
+
+/// The table name of a file contestant: its controller, and what the
+/// file's gains are (`tuned`), which vehicle preset they were made for and
+/// on which scenario: `pid (tuned, crazyflie-2, calm-1)` for a file
+/// `ftsmc tune` wrote (named `<scenario>[-<preset>]-<controller>-tuned`);
+/// `pid (gains.toml)` (the file name) for any other file.
+pub fn file_label(file_name: &str, controller: &str, file: &Scenario) -> String {
+    let Some(tuned_on) = file.name.strip_suffix(&format!("-{controller}-tuned")) else {
+        return format!("{controller} ({file_name})");
+    };
+    let mut parts = vec!["tuned".to_string()];
+    let mut on = tuned_on;
+    if let Some(p) = file.vehicle.preset {
+        parts.push(p.name().to_string());
+        on = on.strip_suffix(&format!("-{}", p.name())).unwrap_or(on);
+    }
+    let on = on.strip_prefix("realistic-").unwrap_or(on);
+    if !on.is_empty() {
+        parts.push(on.to_string());
+    }
+    format!("{controller} ({})", parts.join(", "))
 }
 
 /// The keys (`plant.mass`, `vehicle.inertia`, …) at which the vehicles of

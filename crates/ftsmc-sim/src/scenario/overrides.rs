@@ -15,6 +15,11 @@
 //!   extends the scenario and names it ([`crate::vehicle::presets`]);
 //! - when `wind.preset` is overridden, the wind keys a preset owns are
 //!   dropped unless also overridden ([`crate::environment::wind::PRESET_OWNED_KEYS`]).
+//!
+//! An override of `vehicle.preset` to another vehicle than the scenario's
+//! (and no override of `name`) appends the preset to the name
+//! (`realistic-calm-1-crazyflie-2`): result folders, report and figure
+//! titles and tuned files then name the vehicle that flew.
 
 use super::resolve::Loaded;
 use super::{Scenario, ScenarioError};
@@ -65,6 +70,19 @@ pub fn parse_set(arg: &str) -> Result<(String, toml::Value), String> {
     let value = value.trim();
     let parsed = toml::from_str::<toml::Table>(&format!("v = {value}")).ok().and_then(|mut t| t.remove("v"));
     Ok((key.to_string(), parsed.unwrap_or_else(|| toml::Value::String(value.to_string()))))
+}
+
+/// The preset `overrides` switch the vehicle to, when it is not `s`'s own
+/// and the overrides leave `name` alone: the suffix of the new name.
+fn renamed_for(s: &Scenario, overrides: &[(String, toml::Value)]) -> Option<&'static str> {
+    if overrides.iter().any(|(k, _)| k == "name") {
+        return None;
+    }
+    let (_, toml::Value::String(name)) = overrides.iter().rev().find(|(k, _)| k == "vehicle.preset")? else {
+        return None;
+    };
+    let preset = crate::vehicle::presets::VehiclePreset::from_name(name)?;
+    (s.vehicle.preset != Some(preset)).then_some(preset.name())
 }
 
 impl Scenario {
@@ -122,6 +140,11 @@ impl Scenario {
         }
         for (key, value) in overrides {
             set_dotted(&mut table, key, value.clone()).map_err(|m| fail(format!("override `{key}`: {m}")))?;
+        }
+        // A scenario flown on another vehicle is named after it, so its
+        // result folders, reports and tuned files say which vehicle flew.
+        if let Some(preset) = renamed_for(self, overrides) {
+            table.insert("name".into(), toml::Value::String(format!("{}-{preset}", self.name)));
         }
         let text = toml::to_string(&table).map_err(|e| fail(e.to_string()))?;
         super::resolve::load(super::resolve::Source::Text { text: &text, path: &shown }, &[])

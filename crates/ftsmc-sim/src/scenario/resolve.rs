@@ -63,6 +63,10 @@ pub struct Loaded {
     pub files: Vec<String>,
     /// Likely unit slips, one line each, naming file, key and value.
     pub warnings: Vec<String>,
+    /// The nearest built-in scenario of the `extends` chain
+    /// (`realistic-calm-1`), if it has one: what a file written from this
+    /// scenario can extend and still load wherever it is moved.
+    pub built_in_base: Option<&'static str>,
 }
 
 struct Layer {
@@ -187,6 +191,8 @@ fn locate(text: &str, path: &str) -> Option<(usize, usize)> {
 struct Chain {
     layers: Vec<Layer>,
     origin: BTreeMap<String, usize>,
+    /// The nearest built-in scenario of the chain, if any.
+    built_in_base: Option<&'static str>,
 }
 
 impl Chain {
@@ -282,6 +288,7 @@ fn load_chain(source: Source<'_>, limits: &Limits) -> Result<Chain, ScenarioErro
     };
     let mut layers: Vec<Layer> = Vec::new();
     let mut ids: Vec<String> = Vec::new();
+    let mut built_in_base: Option<&'static str> = None;
     loop {
         let mut table: toml::Table = toml::from_str(&text).map_err(|e| ScenarioError::Parse {
             path: shown.clone(),
@@ -323,6 +330,8 @@ fn load_chain(source: Source<'_>, limits: &Limits) -> Result<Chain, ScenarioErro
         };
         let (next_shown, next_text, next_dir, next_id) = match built_in(&target) {
             Some((file, text)) if !target.contains(['/', '\\']) => {
+                // The nearest built-in (built-ins only extend built-ins).
+                built_in_base = built_in_base.or(Some(file.strip_suffix(".toml").unwrap_or(file)));
                 (file.to_string(), text.to_string(), None, format!("built-in:{file}"))
             }
             _ => {
@@ -363,7 +372,7 @@ fn load_chain(source: Source<'_>, limits: &Limits) -> Result<Chain, ScenarioErro
         }
         (shown, text, dir, id) = (next_shown, next_text, next_dir, next_id);
     }
-    Ok(Chain { layers, origin: BTreeMap::new() })
+    Ok(Chain { layers, origin: BTreeMap::new(), built_in_base })
 }
 
 /// The Monte Carlo draws with a relative form: `(absolute key, relative key)`.
@@ -626,7 +635,12 @@ pub fn load(source: Source<'_>, overrides: &[String]) -> Result<Loaded, Scenario
         .chain(unit_slip_warnings(&scenario))
         .map(|w| format!("{}: `{}` = {}: {}", chain.shown(chain.writer(&w.key)), w.key, w.value, w.message))
         .collect();
-    Ok(Loaded { scenario, files: chain.layers.iter().map(|l| l.shown.clone()).collect(), warnings })
+    Ok(Loaded {
+        scenario,
+        files: chain.layers.iter().map(|l| l.shown.clone()).collect(),
+        warnings,
+        built_in_base: chain.built_in_base,
+    })
 }
 
 /// `[pid] px4_params = "FILE.params"`: the PX4 gains of a QGroundControl

@@ -231,9 +231,14 @@ pub struct TuneResult {
     pub race: Vec<Raced>,
     /// Index of the chosen candidate in `history` (0: the start).
     pub best: usize,
-    /// False when the chosen gains are the start's: the search found nothing
-    /// better (on the training draws, or in the race).
+    /// The tuned gains beat the start on the headline, judged on the
+    /// held-out draws ([`headline`]): more successes (McNemar), or no fewer
+    /// and a lower RMS position error (Wilcoxon signed-rank), Holm over the
+    /// two tests. False when the chosen gains are the start's.
     pub improved: bool,
+    /// Why [`TuneResult::improved`] is what it is, one sentence naming its
+    /// tests (`held-out success 199/200 against the start's 200/200 …`).
+    pub improved_reason: String,
     /// The scenario flown at the start (the input, `controllers = [controller]`).
     pub start: Scenario,
     /// The scenario with the best parameters applied.
@@ -432,6 +437,9 @@ fn tune_inner(
     let mut flights = 0u64;
     let start_values = space.start_values();
     let start_stats = one(evaluator(std::slice::from_ref(&start), &train)?, 1)?[0];
+    if start_stats.completed == 0 {
+        return Err(unfit_start(&start, &options.controller, &start_stats));
+    }
     flights += runs;
     let mut charged = runs;
     history.push(Evaluated {
@@ -570,7 +578,6 @@ fn tune_inner(
     }
     let (race, race_idx, race_flights, pick) =
         run_race(&history, &space, &start, &settings, evaluator, screen_runs, final_runs)?;
-    let improved = pick != 0;
     // The start is flown as given (an extra key's start may have been
     // clamped into its range, which the scenario itself is not).
     let mut tuned = if pick == 0 { start.clone() } else { space.apply(&start, &history[pick].values)? };
@@ -590,6 +597,11 @@ fn tune_inner(
         let c = Comparison { start: both[0], tuned: both[1] };
         (Some(c), None, 2 * held.len() as u64)
     };
+    let (improved, improved_reason) = if pick == 0 {
+        (false, "the search found nothing better than the start on the training draws and in the race".to_string())
+    } else {
+        headline(held_out_runs.as_ref(), held_out.as_ref(), crate::stats::DEFAULT_CONFIDENCE)
+    };
     Ok(TuneResult {
         controller: options.controller.clone(),
         space,
@@ -600,6 +612,7 @@ fn tune_inner(
         race,
         best: pick,
         improved,
+        improved_reason,
         start,
         tuned,
         training,
@@ -612,6 +625,78 @@ fn tune_inner(
         race_flights,
         held_out_flights,
     })
+}
+
+/// The words that mark [`tune`]'s refusal of start gains that fail every
+/// first training draw (`ftsmc tune -c all` skips such a controller and
+/// goes on with the others).
+pub const UNFIT_START: &str = "its start gains fail all";
+
+/// The refusal of a start whose every first training draw diverged or
+/// crashed: no candidate near it flies either, so the search would spend
+/// its budget on failures and write junk gains.
+fn unfit_start(start: &Scenario, controller: &str, s: &OutcomeStats) -> String {
+    let vehicle =
+        start.vehicle.preset.map_or_else(|| "this vehicle".to_string(), |p| format!("the {} preset", p.name()));
+    let section = crate::controllers::DECLARED.iter().find(|d| d.name == controller).map_or(controller, |d| d.section);
+    format!(
+        "{controller} on {}: {UNFIT_START} {} first training draws ({} crashed, {} diverged); give `[{section}]` \
+         gains that fly {vehicle}{}, or tune a controller that flies it (`ftsmc compare … -c all` shows which)",
+        start.name,
+        s.runs,
+        s.crashed,
+        s.diverged,
+        if section == "pid" { " (`ftsmc px4 import` converts a PX4 vehicle's)" } else { "" },
+    )
+}
+
+/// Whether tuned gains beat the start on the headline, on the paired
+/// held-out draws at `confidence`: held-out success first (McNemar's exact
+/// test), then RMS position error (Wilcoxon signed-rank), Holm over the two
+/// ([`crate::batch::verdicts::pairwise`]). Improved when success is
+/// significantly higher, or when it is no lower and the RMS position error
+/// is significantly lower. Without per-run held-out flights (a remote
+/// evaluator) the counts and medians are compared without a test, which the
+/// reason says; without held-out draws at all, the training cost decided.
+pub fn headline(runs: Option<&[Vec<FlightOutcome>; 2]>, stats: Option<&Comparison>, confidence: f64) -> (bool, String) {
+    use crate::batch::verdicts::{pairwise, Outcomes};
+    use crate::stats::paired::Verdict;
+    let Some(c) = stats else {
+        return (true, "no held-out draws (`tune.validation_runs` = 0): the training cost decided".to_string());
+    };
+    let counts = format!(
+        "held-out success {}/{} against the start's {}/{}, RMS median {:.4} m against {:.4} m",
+        c.tuned.success, c.tuned.runs, c.start.success, c.start.runs, c.tuned.rms_median, c.start.rms_median
+    );
+    let Some([a, b]) = runs else {
+        let better = c.tuned.success > c.start.success
+            || (c.tuned.success == c.start.success && c.tuned.rms_median < c.start.rms_median);
+        return (better, format!("{counts} (per-run flights not kept: compared without a test)"));
+    };
+    let outcomes = |f: &[FlightOutcome]| {
+        let mut o = Outcomes::default();
+        for x in f {
+            o.push(x.success, x.completed, x.crashed, x.rms);
+        }
+        o
+    };
+    let (oa, ob) = (outcomes(a), outcomes(b));
+    let v = match pairwise(&[("start".to_string(), &oa), ("tuned".to_string(), &ob)], confidence) {
+        Ok(v) if v.len() == 2 => v,
+        Ok(_) | Err(_) => return (false, format!("{counts} (the paired tests could not be computed)")),
+    };
+    let said = |p: &crate::batch::verdicts::PairVerdict, test: &str| {
+        let q = p.p_holm;
+        let q = if q < 0.001 { format!("{q:.1e}") } else { format!("{q:.3}") };
+        format!("{test}: {}, Holm p = {q}", p.sentence())
+    };
+    let tests = format!("{}; {}", said(&v[0], "McNemar on success"), said(&v[1], "Wilcoxon on RMS"));
+    let improved = match v[0].verdict {
+        Verdict::BBetter => true,
+        Verdict::ABetter => false,
+        Verdict::NoDifference => c.tuned.success >= c.start.success && v[1].verdict == Verdict::BBetter,
+    };
+    (improved, format!("{counts} ({tests}, at {:.0} % confidence)", 100.0 * confidence))
 }
 
 /// `stats` when it holds `n` entries, else the evaluator's error.
@@ -824,17 +909,24 @@ pub fn judge_flights(
     Ok(flights.pop().unwrap_or_default())
 }
 
-/// The tuned scenario file: `extends = "<extends>"`, a new name
-/// (`<scenario>-<controller>-tuned`), `controllers = [controller]` and only
-/// the keys the tune changed, after comment lines recording the command,
-/// the cost weights, budget, seed, parameters and the training and held-out
-/// statistics. User text in the comments (`command`, names) is escaped
-/// ([`toml_comment`]): it cannot end a comment line and add a key.
-pub fn tuned_toml(result: &TuneResult, extends: &str, command: &str) -> Result<String, String> {
-    let base = space::scenario_table(&result.start)?;
-    let tuned = space::scenario_table(&result.tuned)?;
-    let mut changed = space::changed(&base, &tuned);
-    changed.remove("controllers");
+/// The tuned scenario file: the complete scenario the gains were tuned on
+/// (its vehicle, wind and draws, whatever `--set` or `with_overrides`
+/// changed) with the tuned gains, a new name (`<scenario>-<controller>-tuned`)
+/// and `controllers = [controller]`, after comment lines recording the
+/// command, the vehicle, the cost weights, budget, seed, parameters, the
+/// headline verdict and the training and held-out statistics.
+///
+/// When `base` names a built-in scenario the file `extends` it and holds
+/// only the keys that differ from it (readable, and it loads wherever the
+/// file is moved); the text is loaded back and must give the tuned scenario
+/// exactly, else (and without a built-in `base`) the file holds every key
+/// and extends nothing. A file therefore never depends on a path. User
+/// text in the comments (`command`, names) is escaped ([`toml_comment`]):
+/// it cannot end a comment line and add a key.
+pub fn tuned_toml(result: &TuneResult, base: Option<&str>, command: &str) -> Result<String, String> {
+    let mut tuned_scenario = result.tuned.clone();
+    tuned_scenario.name = format!("{}-{}-tuned", result.start.name, result.controller);
+    let tuned = space::scenario_table(&tuned_scenario)?;
     let s = &result.settings;
     let b = result.best();
     let mut out = String::new();
@@ -885,10 +977,16 @@ pub fn tuned_toml(result: &TuneResult, extends: &str, command: &str) -> Result<S
             _ => String::new(),
         }
     ));
-    line(format!("# Improved: {}", result.improved));
-    if !result.improved {
+    line(format!("# Vehicle: {}", toml_comment(&vehicle_line(&result.tuned))));
+    line(format!("# Improved: {} ({})", result.improved, toml_comment(&result.improved_reason)));
+    if result.best == 0 {
         line(
             "# The search found nothing better than the start: these are the scenario's own gains (try a larger --budget or `[tune] sigma`)."
+                .to_string(),
+        );
+    } else if !result.improved {
+        line(
+            "# The chosen gains won on the cost (weights above) but not on the headline: the start's gains may serve you better."
                 .to_string(),
         );
     }
@@ -924,12 +1022,53 @@ pub fn tuned_toml(result: &TuneResult, extends: &str, command: &str) -> Result<S
         line(describe("start", &h.start));
         line(describe("tuned", &h.tuned));
     }
-    let mut head = toml::Table::new();
-    head.insert("extends".into(), toml::Value::String(extends.to_string()));
-    head.insert("name".into(), toml::Value::String(format!("{}-{}-tuned", result.start.name, result.controller)));
-    head.insert("controllers".into(), toml::Value::Array(vec![toml::Value::String(result.controller.clone())]));
-    out.push_str(&toml::to_string(&head).map_err(|e| e.to_string())?);
-    out.push('\n');
-    out.push_str(&toml::to_string(&changed).map_err(|e| e.to_string())?);
+    if let Some(body) = base.and_then(|b| extending_body(b, &tuned, &tuned_scenario)) {
+        out.push_str(&body);
+        return Ok(out);
+    }
+    line("# Complete: every key of the scenario, so the file flies the same wherever it is moved.".to_string());
+    out.push_str(&toml::to_string(&tuned).map_err(|e| e.to_string())?);
     Ok(out)
+}
+
+/// The vehicle of `s` in one line: its preset (or `custom`), model, mass
+/// and top rotor speed, for file headers.
+pub fn vehicle_line(s: &Scenario) -> String {
+    let v = s.true_vehicle();
+    format!(
+        "{} ({} model, {:.4} kg, arm {:.4} m{})",
+        s.vehicle.preset.map_or("custom", |p| p.name()),
+        s.vehicle.model.name(),
+        v.mass,
+        v.arm_length,
+        s.actuators.as_ref().map_or(String::new(), |a| format!(", rotors up to {} rad/s", a.max_rotor_speed))
+    )
+}
+
+/// `extends = "<base>"`, the name, the controller and the keys of `tuned`
+/// that differ from the built-in scenario `base`, if that text loads back
+/// to exactly `scenario`.
+fn extending_body(base: &str, tuned: &toml::Table, scenario: &Scenario) -> Option<String> {
+    let (file, text) = crate::scenario::resolve::built_in(base)?;
+    let parent = Scenario::from_toml_str(text, file).ok()?;
+    let mut changed = space::changed(&space::scenario_table(&parent).ok()?, tuned);
+    changed.remove("name");
+    changed.remove("controllers");
+    // Gain sections at their vehicle-derived defaults follow the vehicle
+    // when loaded: writing them would only repeat them.
+    for key in scenario.gains.keys_at_defaults(&scenario.nominal_vehicle()) {
+        changed.remove(key);
+    }
+    let mut head = toml::Table::new();
+    head.insert("extends".into(), toml::Value::String(base.strip_suffix(".toml").unwrap_or(base).to_string()));
+    head.insert("name".into(), toml::Value::String(scenario.name.clone()));
+    head.insert(
+        "controllers".into(),
+        toml::Value::Array(scenario.controllers.iter().cloned().map(toml::Value::String).collect()),
+    );
+    let mut body = toml::to_string(&head).ok()?;
+    body.push('\n');
+    body.push_str(&toml::to_string(&changed).ok()?);
+    let back = Scenario::from_toml_str(&body, "tuned.toml").ok()?;
+    (space::scenario_table(&back).ok()? == *tuned).then_some(body)
 }
