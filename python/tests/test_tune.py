@@ -36,6 +36,19 @@ def test_a_tiny_tune_is_the_same_on_one_and_two_threads(tmp_path: Path) -> None:
     assert loaded == one.scenario.with_overrides({"name": loaded.name})
 
 
+def test_a_vehicle_set_by_with_overrides_travels_with_the_tuned_toml(tmp_path: Path) -> None:
+    s = ftsmc.Scenario.builtin("realistic-calm-1").with_overrides(
+        {"vehicle.preset": "crazyflie-2", "duration": 1.5, "tune": {"runs": 2, "validation_runs": 3, "population": 4}}
+    )
+    assert s.name == "realistic-calm-1-crazyflie-2"
+    tuned = ftsmc.tune(s, "pid", budget=BUDGET, seed=3, threads=1, extends="realistic-calm-1")
+    assert 'extends = "realistic-calm-1"' in tuned.toml and 'preset = "crazyflie-2"' in tuned.toml
+    (tmp_path / "pid.tuned.toml").write_text(tuned.toml)
+    loaded = ftsmc.Scenario.from_file(tmp_path / "pid.tuned.toml")
+    assert loaded == tuned.scenario.with_overrides({"name": loaded.name})
+    assert "improved_reason" in tuned.summary
+
+
 def test_bad_input_raises_value_error() -> None:
     with pytest.raises(ValueError, match="unknown controller"):
         ftsmc.tune(tiny(), "pidd", budget=100)

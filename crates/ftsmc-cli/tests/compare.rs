@@ -33,6 +33,21 @@ fn unknown_contestants_and_other_vehicles_are_refused_before_flying() {
     assert!(!out.status.success());
     assert!(err.contains("vehicle differs") && err.contains("--allow-other-vehicle"), "{err}");
     assert!(err.contains("vehicle.") || err.contains("plant.") || err.contains("actuators"), "{err}");
+    // The remedy is on the first line, within its 300 characters.
+    let first = err.lines().next().unwrap();
+    assert!(first.chars().count() <= 300 && first.contains("--allow-other-vehicle"), "{first}");
+
+    // A Crazyflie file offered to the Hummingbird: the remedy names its preset.
+    std::fs::write(
+        tmp.path().join("cf.toml"),
+        "extends = \"realistic-calm-1\"\nname = \"cf\"\n[vehicle]\npreset = \"crazyflie-2\"\n",
+    )
+    .unwrap();
+    let out = ftsmc(&["compare", "realistic-calm-1", "-c", "pid,cf.toml", "--out", "o"], tmp.path());
+    let err = String::from_utf8_lossy(&out.stderr);
+    let first = err.lines().next().unwrap();
+    assert!(!out.status.success());
+    assert!(first.chars().count() <= 300 && first.contains("`--set vehicle.preset=crazyflie-2`"), "{first}");
     assert!(!tmp.path().join("o").exists(), "nothing written for a refused comparison");
 }
 
@@ -64,4 +79,22 @@ fn a_short_comparison_writes_intervals_and_verdicts() {
     for part in ["Verdict matrix", "<table>", "<svg", "href=\"runs.csv\"", "href=\"summary.json\""] {
         assert!(page.contains(part), "report.html lacks {part}");
     }
+}
+
+/// A tuned file is labelled by what it is, not by its file name.
+#[test]
+fn a_tuned_file_is_labelled_as_tuned_gains_of_its_scenario() {
+    let tmp = scratch("label");
+    let file = repo().join("scenarios/tuned/realistic-calm-1-pid.toml");
+    let file = file.to_str().unwrap();
+    let out = ftsmc(
+        &["compare", "realistic-calm-1", "-c", &format!("pid,{file}"), "--runs", "2", "--no-figures", "--out", "o"],
+        tmp.path(),
+    );
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(tmp.path().join("o/realistic-calm-1/summary.json")).unwrap())
+            .unwrap();
+    let names: Vec<&String> = s["contestants"].as_object().unwrap().keys().collect();
+    assert!(names.iter().any(|n| n.as_str() == "pid (tuned, hummingbird, calm-1)"), "{names:?}");
 }
