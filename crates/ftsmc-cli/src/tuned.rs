@@ -255,11 +255,15 @@ pub fn table(rows: &[Row], confidence: f64) -> String {
     out
 }
 
-/// True when a tuned file's header says its search kept the start
-/// (`# Improved: false`; files of the first tuner: `# Best: generation 0,
-/// candidate 0,`).
+/// True when a tuned file's header says its search kept the start (`# The
+/// search found nothing better than the start`; older files: a bare
+/// `# Improved: false`, and those of the first tuner `# Best: generation
+/// 0, candidate 0,`). A file whose chosen gains merely lost on the headline
+/// (`# Improved: false (…)`) holds tuned gains.
 fn holds_defaults(text: &str) -> bool {
-    text.contains("# Improved: false") || text.contains("# Best: generation 0, candidate 0,")
+    text.contains("# The search found nothing better than the start")
+        || text.lines().any(|l| l.trim_end() == "# Improved: false")
+        || text.contains("# Best: generation 0, candidate 0,")
 }
 
 /// The controllers' labels of `scenario`'s rows, comma-separated.
