@@ -418,3 +418,54 @@ fn px4_export_then_import_writes_a_pid_section_that_flies() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(!out.status.success() && err.contains("bad.params, line 1") && err.contains("MC_YAW_P"), "{err}");
 }
+
+/// `[plant]`, `[vehicle]` and `[actuators]` of a scenario file ftsmc wrote.
+fn vehicle_sections(path: &Path) -> Vec<toml::Value> {
+    let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let t: toml::Table = toml::from_str(&text).unwrap();
+    ["plant", "vehicle", "actuators"].iter().map(|k| t[*k].clone()).collect()
+}
+
+/// Every writer given `--set vehicle.preset=crazyflie-2` writes files that
+/// hold the Crazyflie (the same sections as a file naming the preset),
+/// into a folder named after it.
+#[test]
+fn every_writer_keeps_a_vehicle_set_on_the_command_line() {
+    let tmp = scratch("writers-vehicle");
+    let dir = tmp.path();
+    std::fs::write(
+        dir.join("cf.toml"),
+        "extends = \"realistic-calm-1\"\nname = \"cf-file\"\nduration = 1.5\n[vehicle]\npreset = \"crazyflie-2\"\n",
+    )
+    .unwrap();
+    let run = |args: &[&str]| {
+        let out = ftsmc(args, dir);
+        assert!(out.status.success(), "{args:?}: {}", String::from_utf8_lossy(&out.stderr));
+    };
+    run(&["run", "cf.toml", "-c", "pid", "--out", "own", "--no-figures"]);
+    let own = vehicle_sections(&dir.join("own/cf-file/scenario.toml"));
+    let set = ["--set", "vehicle.preset=crazyflie-2", "--set", "duration=1.5"];
+    let writers: [(&[&str], &str); 4] = [
+        (&["run", "realistic-calm-1", "-c", "pid", "--out", "w", "--no-figures"], "scenario.toml"),
+        (
+            &["montecarlo", "realistic-calm-1", "-c", "pid", "--runs", "2", "--out", "w", "--no-figures"],
+            "scenario.toml",
+        ),
+        (
+            &["compare", "realistic-calm-1", "-c", "pid,se3", "--runs", "2", "--out", "w", "--no-figures"],
+            "scenario.toml",
+        ),
+        (
+            &["falsify", "realistic-calm-1", "-c", "pid", "--budget", "12", "--out", "w", "--no-figures"],
+            "pid.worst.toml",
+        ),
+    ];
+    for (args, file) in writers {
+        let _ = std::fs::remove_dir_all(dir.join("w"));
+        let mut all = args.to_vec();
+        all.extend(set);
+        run(&all);
+        let written = dir.join("w/realistic-calm-1-crazyflie-2").join(file);
+        assert_eq!(vehicle_sections(&written), own, "{args:?}: {}", written.display());
+    }
+}
