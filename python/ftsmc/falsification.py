@@ -52,7 +52,12 @@ def failure_probability(
     ``[montecarlo]`` draws and the turbulence as ``ftsmc montecarlo`` draws
     them. Returns a dict: ``p`` with its interval ``lo``, ``hi`` at
     ``confidence``, ``flights``, ``final_flights``, ``failures``, ``ess``
-    (effective sample size), ``plain_mc_equivalent`` and the CE ``levels``.
+    (effective sample size), ``plain_mc_equivalent`` (NaN when unreliable),
+    ``one_sided`` (no failing flight: the interval is ``[0, hi]``),
+    ``reliable`` (false below 30 effective failing flights: do not trust the
+    interval; try a larger budget) and the CE ``levels``. The final flights
+    are drawn from a defensive mixture (10 % nominal draws), so every weight
+    is at most 10.
     """
     result: Dict[str, Any] = json.loads(
         _ftsmc.failure_probability_native(scenario, controller, budget, confidence, seed, threads)

@@ -274,6 +274,7 @@ fn estimate_json(e: &Estimate) -> serde_json::Value {
         "relative_half_width": e.relative_half_width(),
         "flights": e.flights, "final_flights": e.final_flights, "failures": e.failures,
         "effective_sample_size": e.ess, "plain_mc_equivalent": e.plain_mc_equivalent,
+        "one_sided": e.one_sided, "reliable": e.reliable, "suggested_budget": e.suggested_budget(),
         "levels": e.levels,
     })
 }
@@ -312,7 +313,8 @@ pub fn run_failure_probability(
     let seconds = started.elapsed().as_secs_f64();
     let mc = (plain_runs > 0).then(|| pool.install(|| plain(&rare, plain_runs, seed, confidence)));
     let h = e.relative_half_width();
-    let needed = if e.p > 0.0 { plain_flights_for(e.p, h, confidence) } else { f64::NAN };
+    // A speed-up only where the estimate's variance holds.
+    let needed = if e.p > 0.0 && e.reliable { plain_flights_for(e.p, h, confidence) } else { f64::NAN };
     let file = dir.write_scenario(&format!("{controller}.scenario.toml"), scenario, "scenario.toml")?;
     let summary = json!({
         "scenario": scenario.name,
@@ -336,10 +338,23 @@ pub fn run_failure_probability(
     };
     println!("P(margin < 0) of {controller} on {} ({method}):", scenario.name);
     println!(
-        "  p = {:.3e}  [{:.3e}, {:.3e}] ({pct:.0} %), {} failing of {} final flights, effective sample size {:.0}",
-        e.p, e.lo, e.hi, e.failures, e.final_flights, e.ess
+        "  p = {:.3e}  [{:.3e}, {:.3e}] ({pct:.0} %{}), {} failing of {} final flights, effective sample size {:.0}",
+        e.p,
+        e.lo,
+        e.hi,
+        if e.one_sided { ", one-sided: no failing flight" } else { "" },
+        e.failures,
+        e.final_flights,
+        e.ess
     );
-    if e.p > 0.0 {
+    if let Some(b) = e.suggested_budget() {
+        println!(
+            "  unreliable: {} effective failing flights (at least {:.0} needed for the interval to hold); no speed-up is claimed. Try --budget {b}.",
+            format_args!("{:.1}", e.ess),
+            ftsmc_sim::falsify::rare::MIN_ESS
+        );
+    }
+    if e.p > 0.0 && e.reliable {
         println!(
             "  plain Monte Carlo needs ≈ {needed:.0} flights for the same relative half-width ({:.1} %): {:.1}× the flights",
             100.0 * h,

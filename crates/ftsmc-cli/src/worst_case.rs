@@ -129,9 +129,13 @@ pub fn write(
             num(c.lowest),
             c.first_violation.map_or_else(|| "none".into(), |f| f.to_string()),
             format!("{}/{budget}", c.violations),
-            format!("{:.2e} [{:.2e}, {:.2e}]", e.p, e.lo, e.hi),
+            if e.one_sided {
+                format!("0 [0, {:.2e}] one-sided", e.hi)
+            } else {
+                format!("{:.2e} [{:.2e}, {:.2e}]", e.p, e.lo, e.hi)
+            },
             if e.levels.is_empty() { "plain (not rare)".into() } else { format!("CE, {} levels", e.levels.len()) },
-            format!("{:.0}", e.ess),
+            if e.reliable { format!("{:.0}", e.ess) } else { format!("{:.0} (unreliable)", e.ess) },
         ]);
         let file = format!("beyond/worst-case/{}-{}-{}.toml", c.rung, c.controller, c.gains);
         dir.write_scenario(&file, &c.worst, &file)?;
@@ -147,7 +151,8 @@ pub fn write(
         m.insert(
             "failure_probability".into(),
             json!({"p": e.p, "lo": e.lo, "hi": e.hi, "confidence": e.confidence, "flights": e.flights,
-                   "levels": e.levels.len(), "effective_sample_size": e.ess, "failures": e.failures}),
+                   "levels": e.levels.len(), "effective_sample_size": e.ess, "failures": e.failures,
+                   "one_sided": e.one_sided, "reliable": e.reliable}),
         );
         json_cells.push(Value::Object(m));
     }

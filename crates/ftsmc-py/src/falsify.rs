@@ -88,7 +88,8 @@ pub fn falsify_native(
 
 /// `ftsmc failure-probability`: `P(margin < 0)` by cross-entropy
 /// importance sampling with `budget` flights, as JSON text (`p`, `lo`,
-/// `hi`, `confidence`, `flights`, `failures`, `ess`, `plain_mc_equivalent`, `levels`).
+/// `hi`, `confidence`, `flights`, `failures`, `ess`, `plain_mc_equivalent`,
+/// `one_sided`, `reliable`, `levels`).
 #[pyfunction]
 #[pyo3(signature = (scenario, controller, budget=2000, confidence=0.95, seed=None, threads=None))]
 pub fn failure_probability_native(

@@ -220,3 +220,30 @@ fn failure_probability_agrees_with_plain_monte_carlo_on_a_real_scenario() {
     assert!((0.003..0.05).contains(&mc.p), "p ≈ 1e-2 expected, plain gave {}", mc.p);
     assert!(ce.lo <= mc.hi && mc.lo <= ce.hi, "the intervals do not overlap");
 }
+
+/// The defensive mixture bounds every weight by 1/α; a zero-failure
+/// estimate is one-sided, clipped to [0, 1] and unreliable; a failure the
+/// proposal barely reaches is marked unreliable with a larger budget to try.
+#[test]
+fn cross_entropy_is_honest_about_what_it_cannot_bound() {
+    use ftsmc_sim::falsify::rare::{mixture_weight, DEFENSIVE_SHARE, MIN_ESS};
+    // Weights: far in the proposal's tail φ/q is huge; the mixture's is not.
+    for z in [-8.0, -3.0, 0.0, 3.0, 8.0] {
+        let w = mixture_weight(&[z, 0.0], &[4.0, 0.0], &[0.75, 0.75]);
+        assert!(w > 0.0 && w <= 1.0 / DEFENSIVE_SHARE + 1e-12, "z = {z}: w = {w}");
+    }
+    // No failure reachable: 0 with a one-sided bound inside [0, 1].
+    let never = Tail(1e3);
+    let e = cross_entropy(&never, 40, 3, 0.95);
+    assert_eq!(e.p, 0.0);
+    assert!(e.one_sided && !e.reliable && e.lo == 0.0 && e.hi > 0.0 && e.hi <= 1.0, "{e:?}");
+    assert!(e.suggested_budget().unwrap() > e.flights);
+    assert!(e.plain_mc_equivalent.is_nan());
+    // p = 1e-4 on 2,000 flights: reliable, as the coverage test relies on.
+    let beta = ftsmc_sim::stats::normal_quantile(1.0 - 1e-4);
+    let e = cross_entropy(&Tail(beta), 2000, 1, 0.95);
+    assert!(e.reliable && e.ess >= MIN_ESS && e.suggested_budget().is_none(), "{e:?}");
+    // The same on a budget too small to reach the failure region reliably.
+    let e = cross_entropy(&Tail(ftsmc_sim::stats::normal_quantile(1.0 - 1e-7)), 40, 1, 0.95);
+    assert!(!e.reliable, "{e:?}");
+}

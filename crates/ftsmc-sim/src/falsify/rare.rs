@@ -36,13 +36,26 @@
 //! interval p̂ ± z_{1−α/2} s/√N   (central limit theorem, clipped to [0, 1])
 //! ```
 //!
-//! With no failing draw the estimate is 0 and the upper bound is the
-//! zero-failure bound `1 − α^{1/N}` (Clopper–Pearson) times the largest
-//! weight drawn, an approximate bound. The effective sample size is Kish's
-//! `(Σ w)²/Σ w²` over the failing draws. `plain_mc_equivalent =
-//! p̂(1 − p̂)/(s²/N)` is the number of plain Monte Carlo flights with the
-//! same variance.
+//! **Defensive mixture** (Hesterberg 1995, "Weighted average importance
+//! sampling and defensive mixture distributions", Technometrics 37): the
+//! final flights are drawn from `q_α = α N(0, I) + (1 − α) q` with
+//! `α =` [`DEFENSIVE_SHARE`], a share of nominal draws, so every weight
+//! `w = φ/q_α ≤ 1/α`: a proposal fitted to a few elite draws cannot give the
+//! rare huge weights that make `s²` — and the interval — far too small.
+//!
+//! With no failing draw the estimate is 0 and the interval is the
+//! **one-sided** zero-failure bound `[0, min(1, (1 − α_c^{1/N}) max w)]`
+//! (`α_c = 1 − confidence`; Clopper–Pearson's bound for a count of zero,
+//! scaled by the largest weight drawn, itself at most `1/α`), stated as
+//! one-sided. The effective sample size is Kish's `(Σ w)²/Σ w²` over the
+//! failing draws. Below [`MIN_ESS`] (or with no failing draw) the
+//! estimate is marked **unreliable**: its variance estimate rests on too
+//! few effective failures to hold, so no plain-Monte-Carlo equivalent is
+//! given and [`Estimate::suggested_budget`] says what to try.
+//! `plain_mc_equivalent = p̂(1 − p̂)/(s²/N)` is the number of plain Monte
+//! Carlo flights with the same variance, for reliable estimates only.
 
+use rand::RngExt;
 use serde::Serialize;
 use statrs::distribution::{ContinuousCDF, Normal};
 
@@ -58,6 +71,15 @@ pub const RHO: f64 = 0.1;
 /// than the nominal's), and a proposal near that bound has rare huge
 /// weights that make the interval too short; 0.75 keeps clear of it.
 pub const SIGMA_FLOOR: f64 = 0.75;
+/// Share α of nominal draws in the final, defensive-mixture proposal
+/// (module documentation): weights stay below `1/α = 10`.
+pub const DEFENSIVE_SHARE: f64 = 0.1;
+/// Smallest effective sample size of the failing draws for a reliable
+/// importance-sampling estimate: the normal-approximation interval needs
+/// enough effectively independent failures for `s²` to be estimated
+/// (Owen 2013, "Monte Carlo theory, methods and examples", §9.3, uses Kish's
+/// ESS this way; 30 is the usual rule for the central limit theorem).
+pub const MIN_ESS: f64 = 30.0;
 /// Smoothing of the standard deviation's update: `σ ← a σ_fit + (1 − a) σ`
 /// (Rubinstein & Kroese 2004, §3.6: without it σ shrinks faster than the
 /// mean moves and the levels stall short of the failure region).
@@ -104,13 +126,30 @@ pub struct Estimate {
     pub failures: u64,
     /// Kish's effective sample size of the failing flights' weights.
     pub ess: f64,
-    /// Flights plain Monte Carlo needs for the same variance (`NaN` when `p̂ = 0`).
+    /// Flights plain Monte Carlo needs for the same variance (`NaN` when `p̂ = 0`
+    /// or the estimate is unreliable).
     pub plain_mc_equivalent: f64,
+    /// The interval is one-sided, `[0, hi]` (no failing draw).
+    pub one_sided: bool,
+    /// The interval can be trusted: plain Monte Carlo (Wilson), or
+    /// importance sampling with at least [`MIN_ESS`] effective failures.
+    pub reliable: bool,
     /// The CE levels (empty for plain Monte Carlo).
     pub levels: Vec<Level>,
 }
 
 impl Estimate {
+    /// A budget to try for a reliable estimate: the flights flown scaled by
+    /// [`MIN_ESS`] over the effective sample size (ten times the flights
+    /// with no failing draw); `None` when already reliable.
+    pub fn suggested_budget(&self) -> Option<u64> {
+        if self.reliable {
+            return None;
+        }
+        let factor = if self.ess >= 1.0 { (MIN_ESS / self.ess).ceil() } else { 10.0 };
+        Some((self.flights as f64 * factor.max(2.0)) as u64)
+    }
+
     /// Half the interval's width over `p̂` (`inf` when `p̂ = 0`).
     pub fn relative_half_width(&self) -> f64 {
         if self.p > 0.0 {
@@ -134,6 +173,14 @@ pub fn log_weight(z: &[f64], mean: &[f64], std: &[f64]) -> f64 {
             ftsmc_core::math::ln(s) - 0.5 * z * z + 0.5 * u * u
         })
         .sum()
+}
+
+/// `w(z) = φ(z)/q_α(z)` of the defensive mixture `q_α = α φ + (1 − α) q`
+/// (`q` the proposal `(mean, std)`): `1/(α + (1 − α)/w_q)` with `w_q = φ/q`
+/// ([`log_weight`]), at most `1/α`.
+pub fn mixture_weight(z: &[f64], mean: &[f64], std: &[f64]) -> f64 {
+    let inv_wq = ftsmc_core::math::exp(-log_weight(z, mean, std));
+    1.0 / (DEFENSIVE_SHARE + (1.0 - DEFENSIVE_SHARE) * inv_wq)
 }
 
 /// Cross-entropy importance sampling of `P(margin < 0)` with `budget`
@@ -190,10 +237,25 @@ pub fn cross_entropy(objective: &dyn RareObjective, budget: u64, seed: u64, conf
     }
     let n = budget.saturating_sub(next).max(1);
     let mut rng = chacha_stream(seed, 2);
-    let z: Vec<Vec<f64>> = (0..n).map(|_| draw(&mut rng, &mean, &std)).collect();
+    let (nominal_mean, nominal_std) = (vec![0.0; d], vec![1.0; d]);
+    // The defensive mixture: a share of the draws from the nominal law.
+    let z: Vec<Vec<f64>> = (0..n)
+        .map(|_| {
+            let nominal = rng.random_range(0.0..1.0) < DEFENSIVE_SHARE;
+            if nominal {
+                draw(&mut rng, &nominal_mean, &nominal_std)
+            } else {
+                draw(&mut rng, &mean, &std)
+            }
+        })
+        .collect();
     let margins = objective.margins(next, &z);
-    let weights: Vec<f64> = z.iter().map(|z| ftsmc_core::math::exp(log_weight(z, &mean, &std))).collect();
+    let weights: Vec<f64> = z.iter().map(|z| mixture_weight(z, &mean, &std)).collect();
     let mut estimate = summarise(&margins, &weights, confidence);
+    estimate.reliable = estimate.failures > 0 && estimate.ess >= MIN_ESS;
+    if !estimate.reliable {
+        estimate.plain_mc_equivalent = f64::NAN;
+    }
     estimate.flights = next + n;
     estimate.levels = levels;
     estimate
@@ -250,7 +312,7 @@ fn summarise(margins: &[f64], weights: &[f64], confidence: f64) -> Estimate {
     let (sw, sw2) = failing.iter().fold((0.0, 0.0), |(a, b), w| (a + w, b + w * w));
     let (lo, hi) = if failing.is_empty() {
         let max_w = weights.iter().copied().fold(0.0, f64::max);
-        (0.0, (1.0 - ftsmc_core::math::powf(1.0 - confidence, 1.0 / n)) * max_w)
+        (0.0, ((1.0 - ftsmc_core::math::powf(1.0 - confidence, 1.0 / n)) * max_w).min(1.0))
     } else {
         ((p - half).max(0.0), (p + half).min(1.0))
     };
@@ -264,6 +326,10 @@ fn summarise(margins: &[f64], weights: &[f64], confidence: f64) -> Estimate {
         failures: failing.len() as u64,
         ess: if sw2 > 0.0 { sw * sw / sw2 } else { 0.0 },
         plain_mc_equivalent: if var > 0.0 { p * (1.0 - p) / (var / n) } else { f64::NAN },
+        one_sided: failing.is_empty(),
+        // Weights 1 (plain Monte Carlo): the Wilson interval the callers
+        // put in holds at any count. Importance sampling sets its own.
+        reliable: true,
         levels: Vec::new(),
     }
 }
