@@ -178,7 +178,7 @@ pub fn report_md(scenario: &Scenario, names: &[String], r: &Comparison) -> Strin
     let _ = writeln!(
         md,
         "Paired verdicts: success by McNemar's exact test (effect p_A − p_B, percentage points), RMS position error \
-         by the Wilcoxon signed-rank test (effect: median of A − B over the pairs where both completed); Holm's \
+         by the Wilcoxon signed-rank test (effect: the Hodges–Lehmann shift of A − B over the pairs where both completed, with the interval inverting the same test); Holm's \
          correction over all {} tests, family-wise error at most {:.0} %.",
         r.verdicts.len(),
         100.0 * (1.0 - r.confidence)

@@ -7,12 +7,14 @@
 //!   binomial form, Fagerland et al. 2013) on the discordant pairs;
 //! - a per-run metric where lower is better (RMS position error): the
 //!   Wilcoxon signed-rank test (Wilcoxon 1945) on the differences `A − B`,
-//!   with the median difference and its distribution-free interval as the
-//!   effect size;
+//!   with the Hodges–Lehmann shift (Hodges & Lehmann 1963, "Estimates of
+//!   location based on rank tests", Ann. Math. Stat. 34) as the effect and
+//!   the interval that inverts the same test, `{δ : p(A − B − δ) > α}`
+//!   ([`hodges_lehmann`]): a verdict "better" (Holm p ≤ α, so the plain p ≤
+//!   α) therefore never stands beside an effect interval containing 0;
 //! - Holm's step-down correction over every test of a comparison
 //!   (Holm 1979), so the chance of any false verdict stays at most `α`.
 
-use super::order::quantile_of;
 use super::rate::clopper_pearson;
 use super::{check_confidence, normal_sf, Interval, StatsError};
 use serde::Serialize;
@@ -202,7 +204,8 @@ pub enum PairedMetric {
     /// Success (higher is better): McNemar's exact test; effect `p_A − p_B`.
     Success,
     /// A per-run error (lower is better): Wilcoxon signed-rank; effect the
-    /// median of `A − B` over the pairs where both have a value.
+    /// Hodges–Lehmann shift of `A − B` over the pairs where both have a
+    /// value, with the interval inverting the signed-rank test.
     Error,
 }
 
@@ -213,8 +216,8 @@ pub struct PairTest {
     pub metric: PairedMetric,
     /// Pairs the test is over.
     pub pairs: usize,
-    /// Effect size with its interval: `p_A − p_B` (success) or the median
-    /// of `A − B` (error, in the metric's unit).
+    /// Effect size with its interval: `p_A − p_B` (success) or the
+    /// Hodges–Lehmann shift of `A − B` (error, in the metric's unit).
     pub effect: Interval,
     /// Two-sided p-value, uncorrected.
     pub p: f64,
@@ -243,12 +246,103 @@ pub fn success_test(a: &[bool], b: &[bool], confidence: f64) -> Result<PairTest,
 pub fn error_test(a: &[f64], b: &[f64], confidence: f64) -> Result<PairTest, StatsError> {
     let diffs: Vec<f64> = a.iter().zip(b).filter(|(x, y)| x.is_finite() && y.is_finite()).map(|(x, y)| x - y).collect();
     let w = wilcoxon(&diffs);
-    let effect = quantile_of(&diffs, 0.5, confidence)?.unwrap_or(Interval {
-        estimate: f64::NAN,
-        lo: f64::NEG_INFINITY,
-        hi: f64::INFINITY,
-    });
+    let effect = hodges_lehmann(&diffs, confidence)?;
     Ok(PairTest { metric: PairedMetric::Error, pairs: diffs.len(), effect, p: w.p, a_leads: w.r_minus > w.r_plus })
+}
+
+/// An `f64` as a `u64` in the same order (`-inf < … < -0 < 0 < … < inf`),
+/// for bisection over every representable value.
+fn ordered_bits(x: f64) -> u64 {
+    let b = x.to_bits();
+    if b >> 63 == 1 {
+        !b
+    } else {
+        b | (1 << 63)
+    }
+}
+
+/// The inverse of [`ordered_bits`].
+fn from_ordered_bits(u: u64) -> f64 {
+    f64::from_bits(if u >> 63 == 1 { u & !(1 << 63) } else { !u })
+}
+
+/// The smallest `x` in `[lo, hi]` (as representable values, `pred(hi)`
+/// true) with `pred(x)` true, for a `pred` false below some point and true
+/// above it: bisection over the ordered bit patterns, exact.
+fn first_true(lo: f64, hi: f64, pred: impl Fn(f64) -> bool) -> f64 {
+    let (mut a, mut b) = (ordered_bits(lo), ordered_bits(hi));
+    while a < b {
+        let m = a + (b - a) / 2;
+        if pred(from_ordered_bits(m)) {
+            b = m;
+        } else {
+            a = m + 1;
+        }
+    }
+    from_ordered_bits(a)
+}
+
+/// The `k`-th smallest (1-based) Walsh sum `d_i + d_j`, `i ≤ j`, of the
+/// sorted `d`, without forming the `n(n+1)/2` sums: bisection on the value
+/// with an O(n) two-pointer count.
+fn walsh_sum(d: &[f64], k: usize) -> f64 {
+    let count = |t: f64| {
+        let (mut c, mut r) = (0usize, d.len());
+        for i in 0..d.len() {
+            while r > 0 && d[i] + d[r - 1] > t {
+                r -= 1;
+            }
+            if r <= i {
+                break;
+            }
+            c += r - i;
+        }
+        c
+    };
+    let (lo, hi) = (d[0] + d[0], d[d.len() - 1] + d[d.len() - 1]);
+    first_true(lo, hi, |t| count(t) >= k)
+}
+
+/// The Hodges–Lehmann shift of paired differences `diffs` (non-finite
+/// values left out) — the median of the Walsh averages `(d_i + d_j)/2`,
+/// `i ≤ j` — with the interval `{δ : wilcoxon(d − δ).p > 1 − confidence}`,
+/// the shifts the signed-rank test ([`wilcoxon`], its exact or normal form
+/// as there) does not reject (Hollander, Wolfe & Chicco 2014,
+/// "Nonparametric Statistical Methods", §3.2). Each bound is found by exact
+/// bisection between the estimate and a shift past every difference; a
+/// side where even that is not rejected (too few pairs) is infinite.
+/// Consistent with the test by construction: `0` lies outside the interval
+/// exactly when the test at `0` rejects (up to the test's own monotonicity
+/// in `δ`, which holds for the exact form and, away from ties, the normal one).
+pub fn hodges_lehmann(diffs: &[f64], confidence: f64) -> Result<Interval, StatsError> {
+    let alpha = 1.0 - check_confidence(confidence)?;
+    let mut d: Vec<f64> = diffs.iter().copied().filter(|x| x.is_finite()).collect();
+    if d.is_empty() {
+        return Ok(Interval { estimate: f64::NAN, lo: f64::NEG_INFINITY, hi: f64::INFINITY });
+    }
+    d.sort_by(f64::total_cmp);
+    let m = d.len() * (d.len() + 1) / 2;
+    let estimate = if m % 2 == 1 {
+        0.5 * walsh_sum(&d, m.div_ceil(2))
+    } else {
+        0.25 * (walsh_sum(&d, m / 2) + walsh_sum(&d, m / 2 + 1))
+    };
+    let rejects = |delta: f64| {
+        let shifted: Vec<f64> = d.iter().map(|x| x - delta).collect();
+        wilcoxon(&shifted).p <= alpha
+    };
+    let span = (d[d.len() - 1] - d[0]).abs().max(d[0].abs()).max(d[d.len() - 1].abs()).max(f64::MIN_POSITIVE);
+    let (below, above) = (d[0] - span, d[d.len() - 1] + span);
+    let lo = if rejects(below) { first_true(below, estimate, |x| !rejects(x)) } else { f64::NEG_INFINITY };
+    // The upper bound: the last shift not rejected, i.e. just below the
+    // first rejected one above the estimate.
+    let hi = if rejects(above) {
+        let first = first_true(estimate, above, rejects);
+        from_ordered_bits(ordered_bits(first) - 1).max(estimate)
+    } else {
+        f64::INFINITY
+    };
+    Ok(Interval { estimate, lo, hi })
 }
 
 /// The verdicts of a family of tests at family-wise level `1 − confidence`
@@ -281,6 +375,36 @@ pub fn verdicts_at(tests: &[PairTest], alpha: f64) -> Result<Vec<(f64, Verdict)>
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn hodges_lehmann_worked_values() {
+        // Walsh averages of (1, 2, 4): 1, 1.5, 2, 2.5, 3, 4: median 2.25.
+        let e = hodges_lehmann(&[4.0, 1.0, 2.0], 0.95).unwrap();
+        assert_eq!(e.estimate, 2.25);
+        // Three pairs cannot reject anything at 5 %: both sides infinite.
+        assert!(e.lo == f64::NEG_INFINITY && e.hi == f64::INFINITY);
+        // A symmetric sample's shift is its centre.
+        let d: Vec<f64> = (0..41).map(|i| 0.5 + (i as f64 - 20.0) * 0.01).collect();
+        let e = hodges_lehmann(&d, 0.95).unwrap();
+        assert!((e.estimate - 0.5).abs() < 1e-12 && e.lo < 0.5 && e.hi > 0.5, "{e:?}");
+        assert!(e.lo > 0.0, "all differences positive: 0 is rejected");
+    }
+
+    proptest::proptest! {
+        /// "better" never stands beside an effect interval containing 0: the
+        /// interval excludes 0 exactly when the test at 0 rejects.
+        #[test]
+        fn the_effect_interval_agrees_with_the_signed_rank_test(
+            d in proptest::collection::vec(-1.0f64..1.0, 1..120),
+            shift in -0.5f64..0.5,
+        ) {
+            let d: Vec<f64> = d.iter().map(|x| x + shift).collect();
+            let e = hodges_lehmann(&d, 0.95).unwrap();
+            let rejects = wilcoxon(&d).p <= 0.05;
+            proptest::prop_assert_eq!(rejects, !(e.lo <= 0.0 && 0.0 <= e.hi), "{:?} p {}", e, wilcoxon(&d).p);
+            proptest::prop_assert!(e.lo <= e.estimate && e.estimate <= e.hi);
+        }
+    }
 
     #[test]
     fn mcnemar_worked_values() {
