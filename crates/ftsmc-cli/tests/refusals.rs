@@ -15,8 +15,8 @@ const TIME_LIMIT: Duration = Duration::from_secs(20);
 /// Run `ftsmc args… --out <dir>/out/sub` in a fresh directory (with
 /// `s.toml` = `scenario` when given) and check the refusal: in time,
 /// non-zero exit, one `error:` line containing every `expected` string,
-/// nothing under `<dir>/out`.
-fn refused(test: &str, args: &[&str], scenario: Option<&str>, expected: &[&str]) {
+/// nothing under `<dir>/out`. Returns the message (the line without `error: `).
+fn refused(test: &str, args: &[&str], scenario: Option<&str>, expected: &[&str]) -> String {
     let tmp = scratch(test);
     let dir = tmp.path();
     if let Some(text) = scenario {
@@ -61,6 +61,7 @@ fn refused(test: &str, args: &[&str], scenario: Option<&str>, expected: &[&str])
     }
     let written: Vec<_> = std::fs::read_dir(dir.join("out")).map(|rd| rd.flatten().collect()).unwrap_or_default();
     assert!(written.is_empty(), "{test}: files written under --out: {written:?}");
+    message.to_string()
 }
 
 fn run_refused(test: &str, extra: &str, expected: &[&str]) {
@@ -154,6 +155,42 @@ fn a_fifo() {
     let fifo = dir.join("fifo.toml");
     assert!(Command::new("mkfifo").arg(&fifo).status().expect("mkfifo runs").success());
     refused("fifo", &["run", fifo.to_str().unwrap()], None, &["regular file"]);
+}
+
+#[test]
+fn px4_import_of_a_fifo() {
+    // `px4 import` read its file with a blocking open: a FIFO hung it.
+    let tmp = scratch("px4-fifo-holder");
+    let fifo = tmp.path().join("fifo.params");
+    assert!(Command::new("mkfifo").arg(&fifo).status().expect("mkfifo runs").success());
+    let fifo = fifo.to_str().unwrap();
+    refused("px4-fifo", &["px4", "import", fifo, "--scenario", "realistic-calm-1"], None, &[fifo, "regular file"]);
+}
+
+#[test]
+fn a_scenario_importing_px4_params_from_a_fifo() {
+    let tmp = scratch("px4-params-fifo-holder");
+    let fifo = tmp.path().join("fifo.params");
+    assert!(Command::new("mkfifo").arg(&fifo).status().expect("mkfifo runs").success());
+    let text =
+        format!("extends = \"realistic-calm-1\"\nname = \"p\"\n[pid]\npx4_params = {:?}\n", fifo.to_str().unwrap());
+    refused(
+        "px4-params-fifo",
+        &["run", "s.toml", "-c", "pid"],
+        Some(&text),
+        &["px4_params", "fifo.params: not a regular file"],
+    );
+}
+
+#[test]
+fn px4_import_of_a_missing_file_says_the_cause_once() {
+    let message = refused(
+        "px4-missing",
+        &["px4", "import", "missing.params", "--scenario", "realistic-calm-1"],
+        None,
+        &["missing.params"],
+    );
+    assert_eq!(message.matches("No such file or directory").count(), 1, "{message}");
 }
 
 #[test]
