@@ -112,6 +112,17 @@ fn per_decade_that_never_ends() {
 }
 
 #[test]
+fn a_set_value_that_is_a_toml_fragment() {
+    // `v = VALUE` read this as `name = "a"` and a second key, `seed`.
+    refused(
+        "set-fragment",
+        &["run", "paper-scenario-1", "--set", "name=\"a\"\nseed = 4242"],
+        None,
+        &["--set name", "line break"],
+    );
+}
+
+#[test]
 fn an_unknown_limit_key() {
     refused("limit-key", &["run", "paper-scenario-1", "--limit", "max_stepz=1"], None, &["max_stepz"]);
 }
