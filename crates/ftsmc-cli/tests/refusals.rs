@@ -30,8 +30,10 @@ fn refused(test: &str, args: &[&str], scenario: Option<&str>, expected: &[&str])
     let lines: Vec<&str> = err.lines().collect();
     assert_eq!(lines.len(), 1, "{test}: one line on stderr:\n{err}");
     // The documented bound on a message's first line: 300 characters.
+    // `main` cuts a longer one to 300 ending in `…`: a cut line lost its end.
     let message = lines[0].strip_prefix("error: ").unwrap_or_else(|| panic!("{test}: not an error line: {err}"));
     assert!(message.chars().count() <= 300, "{test}: {} characters: {err}", message.chars().count());
+    assert!(!message.ends_with('…'), "{test}: over 300 characters, cut by main: {err}");
     for e in expected {
         assert!(lines[0].contains(e), "{test}: `{e}` missing from: {err}");
     }
@@ -471,6 +473,36 @@ fn clap_names_the_flag_of_a_negative_number() {
         let err = String::from_utf8_lossy(&out.stderr);
         assert!(!out.status.success() && err.lines().next().unwrap_or("").contains(flag), "{args:?}: {err}");
     }
+}
+
+// ---- messages that fit their line ----------------------------------------
+
+#[test]
+fn an_unknown_falsify_parameter_fits_the_line_with_its_remedy() {
+    // serde listed all 15 [falsify] keys: 307 characters, cut before the end.
+    let text = "extends = \"realistic-calm-1\"\nname = \"f\"\n[falsify]\nwind_sped = { low = 0.0, high = 1.0 }\n";
+    refused(
+        "falsify-key",
+        &["falsify", "s.toml", "-c", "pid"],
+        Some(text),
+        &["`wind_sped`", "did you mean `wind_speed`?"],
+    );
+}
+
+#[test]
+fn an_unknown_set_key_fits_the_line_with_its_remedy() {
+    refused(
+        "set-key",
+        &["run", "paper-scenario-1", "--set", "durtion=5"],
+        None,
+        &["`durtion`", "did you mean `duration`?"],
+    );
+    refused(
+        "set-key-far",
+        &["run", "paper-scenario-1", "--set", "nosuch.key=1"],
+        None,
+        &["`nosuch`", "docs/scenarios.md"],
+    );
 }
 
 // ---- contradictory or empty flags ------------------------------------------

@@ -111,7 +111,7 @@ impl Scenario {
             }
         }
         let keys: Vec<&str> = overrides.iter().map(|(k, _)| k.as_str()).collect();
-        let shown = format!("{} with overrides {}", self.name, keys.join(", "));
+        let shown = format!("{} with overrides {}", self.name, shown_keys(&keys));
         let fail = |message: String| ScenarioError::Parse { path: shown.clone(), message };
         let text = self.to_toml().map_err(|e| fail(e.to_string()))?;
         let mut table: toml::Table = toml::from_str(&text).map_err(|e| fail(e.to_string()))?;
@@ -152,8 +152,45 @@ impl Scenario {
             set_dotted(&mut table, key, value.clone()).map_err(|m| fail(format!("override `{key}`: {m}")))?;
         }
         let text = toml::to_string(&table).map_err(|e| fail(e.to_string()))?;
-        super::resolve::load(super::resolve::Source::Text { text: &text, path: &shown }, &[])
+        super::resolve::load(super::resolve::Source::Text { text: &text, path: &shown }, &[]).map_err(|e| match e {
+            // A line of the text written here means nothing to the user.
+            ScenarioError::Parse { path, message } if path == shown => {
+                ScenarioError::Parse { message: without_position(&message, &text).to_string(), path }
+            }
+            other => other,
+        })
     }
+}
+
+/// Most characters of override keys named in a message's path.
+const MAX_SHOWN_KEYS_CHARS: usize = 80;
+
+/// The override keys for a message: `a, b, c`, or as many as fit in
+/// [`MAX_SHOWN_KEYS_CHARS`] and `and N more` (each message names its key).
+fn shown_keys(keys: &[&str]) -> String {
+    let mut out = String::new();
+    for (i, key) in keys.iter().enumerate() {
+        let next = if i == 0 { crate::text::show_str(key) } else { format!(", {}", crate::text::show_str(key)) };
+        if i > 0 && out.chars().count() + next.chars().count() > MAX_SHOWN_KEYS_CHARS {
+            out.push_str(&format!(" and {} more", keys.len() - i));
+            break;
+        }
+        out.push_str(&next);
+    }
+    out
+}
+
+/// `message` without the `TOML parse error at line L, column C (`source`): `
+/// prefix the loader gives an error in `text` (see `text::parse_message`).
+fn without_position<'a>(message: &'a str, text: &str) -> &'a str {
+    let strip = || {
+        let rest = message.strip_prefix("TOML parse error at line ")?;
+        let (line, rest) = rest.split_once(", column ")?;
+        let (_column, rest) = rest.split_once(" (`")?;
+        let source = text.lines().nth(line.parse::<usize>().ok()?.checked_sub(1)?)?.trim();
+        rest.strip_prefix(crate::text::show_str(source).as_str())?.strip_prefix("`): ")
+    };
+    strip().unwrap_or(message)
 }
 
 #[cfg(test)]
@@ -196,6 +233,33 @@ mod tests {
             let err = parse_set(arg).unwrap_err();
             assert!(err.starts_with("--set name: ") && err.contains("one TOML value"), "{arg:?}: {err}");
         }
+    }
+
+    #[test]
+    fn an_override_error_names_no_line_of_the_generated_text() {
+        let (file, text) = super::super::resolve::built_in("paper-scenario-1").unwrap();
+        let s = Scenario::from_toml_str(text, file).unwrap();
+        let err = s.with_overrides(&[parse_set("durtion=5").unwrap()]).unwrap_err().to_string();
+        assert!(
+            err.starts_with(
+                "paper-scenario-1 with overrides durtion: unknown field `durtion` (did you mean `duration`?)"
+            ),
+            "{err}"
+        );
+        let text = "a = 1\n[b]\nc = \"x`): y\"\n";
+        let message = "TOML parse error at line 3, column 1 (`c = \\\"x`): y\\\"`): unknown field `c`";
+        assert_eq!(without_position(message, text), "unknown field `c`");
+        assert_eq!(without_position("unknown field `c`", text), "unknown field `c`");
+    }
+
+    #[test]
+    fn many_override_keys_are_named_up_to_a_bound() {
+        let keys: Vec<String> = (0..40).map(|i| format!("payload.key_{i}")).collect();
+        let refs: Vec<&str> = keys.iter().map(String::as_str).collect();
+        let shown = shown_keys(&refs);
+        assert!(shown.starts_with("payload.key_0, payload.key_1") && shown.ends_with(" more"), "{shown}");
+        assert!(shown.chars().count() <= MAX_SHOWN_KEYS_CHARS + 12, "{shown}");
+        assert_eq!(shown_keys(&["a", "b"]), "a, b");
     }
 
     #[test]
