@@ -305,7 +305,12 @@ class Controller:
         self.name: str = name
 
     def update(self, state: State, reference: Reference, dt: float) -> Command:
-        """One control period of ``dt`` s: the command for ``state`` and ``reference``."""
+        """One control period of ``dt`` s: the command for ``state`` and ``reference``.
+
+        Every state and reference value must be finite: a NaN or infinite one
+        raises :class:`ValueError` naming it (``Controller.update:
+        state.position[1] is nan; ...``) and the controller is not updated
+        (the laws themselves would return a NaN command without a word)."""
         s = (*state.position, *state.attitude, *state.velocity, *state.angular_rate)
         r = (
             *reference.position,
@@ -321,7 +326,9 @@ class Controller:
     def update_arrays(self, state: Sequence[float], reference: Sequence[float], dt: float) -> Tuple[float, float, float, float]:
         """:meth:`update` on flat sequences (12 state values in :class:`State`'s
         field order, 12 reference values in :class:`Reference`'s), returning
-        ``(thrust, roll torque, pitch torque, yaw torque)``: no dataclasses."""
+        ``(thrust, roll torque, pitch torque, yaw torque)``: no dataclasses.
+        A NaN or infinite value raises :class:`ValueError` as in :meth:`update`
+        (named by its :class:`State` or :class:`Reference` field)."""
         return self._inner.update(state, reference, dt)
 
     def reset(self) -> None:

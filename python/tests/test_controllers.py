@@ -4,6 +4,9 @@ ftsmc's own loop."""
 
 from __future__ import annotations
 
+import dataclasses
+import math
+import re
 from typing import List
 
 import numpy as np
@@ -135,3 +138,56 @@ def test_reset_restores_the_initial_states() -> None:
         c.update(state, ref, 0.0)
     with pytest.raises(ValueError, match="unknown controller"):
         ftsmc.Controller("nope", s)
+
+
+FIVE = ["ftaftsmc", "ranftsmc", "tsm-sta", "pid", "se3"]
+
+
+@pytest.mark.parametrize("name", FIVE)
+@pytest.mark.parametrize(
+    "field, bad",
+    [
+        ("state.position[1]", float("nan")),
+        ("state.attitude[0]", float("inf")),
+        ("state.velocity[2]", float("-inf")),
+        ("state.angular_rate[1]", float("nan")),
+        ("reference.position[0]", float("nan")),
+        ("reference.velocity[1]", float("inf")),
+        ("reference.acceleration[2]", float("nan")),
+        ("reference.yaw", float("nan")),
+        ("reference.yaw_rate", float("inf")),
+        ("reference.yaw_acceleration", float("-inf")),
+    ],
+)
+def test_a_non_finite_input_raises_naming_its_field(name: str, field: str, bad: float) -> None:
+    s = ftsmc.Scenario.builtin("paper-scenario-1")
+    state = ftsmc.State((0.1, -0.2, 0.5), (0.01, 0.02, 0.03), (0.0, 0.1, 0.0), (0.0, 0.0, 0.1))
+    reference = ftsmc.Reference((0.0, 0.0, 1.0), (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), 0.0, 0.0, 0.0)
+    where, _, rest = field.partition(".")
+    attr, _, index = rest.partition("[")
+    target = state if where == "state" else reference
+    if index:
+        values = list(getattr(target, attr))
+        values[int(index.rstrip("]"))] = bad
+        bad_target = dataclasses.replace(target, **{attr: tuple(values)})
+    else:
+        bad_target = dataclasses.replace(target, **{attr: bad})
+    bad_state, bad_reference = (bad_target, reference) if where == "state" else (state, bad_target)
+    c = ftsmc.Controller(name, s)
+    shown = "nan" if math.isnan(bad) else repr(bad)
+    with pytest.raises(ValueError, match=re.escape(f"Controller.update: {field} is {shown};")):
+        c.update(bad_state, bad_reference, 0.01)
+    flat_state = (*bad_state.position, *bad_state.attitude, *bad_state.velocity, *bad_state.angular_rate)
+    flat_reference = (
+        *bad_reference.position,
+        *bad_reference.velocity,
+        *bad_reference.acceleration,
+        bad_reference.yaw,
+        bad_reference.yaw_rate,
+        bad_reference.yaw_acceleration,
+    )
+    with pytest.raises(ValueError, match=re.escape(field)):
+        c.update_arrays(flat_state, flat_reference, 0.01)
+    # The refused calls left the controller as built: its next command is a fresh one's.
+    fresh = ftsmc.Controller(name, s)
+    assert c.update(state, reference, 0.01) == fresh.update(state, reference, 0.01)

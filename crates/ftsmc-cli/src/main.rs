@@ -73,7 +73,7 @@ enum Command {
         #[arg(long, default_value = "results")]
         out: PathBuf,
         /// Skip figure rendering (tables, CSV and JSON only).
-        #[arg(long)]
+        #[arg(long, conflicts_with = "style")]
         no_figures: bool,
         /// Monte Carlo runs of each wind-ladder rung (`realistic-<level>-<n>`) per controller in the "Beyond the paper" section (0: none).
         #[arg(long, allow_negative_numbers = true, default_value_t = reproduce::DEFAULT_REALISTIC_RUNS)]
@@ -98,13 +98,13 @@ enum Command {
         /// Scenario file (TOML), or the name of a built-in paper scenario.
         scenario: String,
         /// Controller(s) to run (repeat or comma-separate); default: the scenario's `controllers` list.
-        #[arg(long, short = 'c', alias = "controller", value_delimiter = ',')]
+        #[arg(long, short = 'c', alias = "controller", value_delimiter = ',', value_parser = controller_names)]
         controllers: Vec<String>,
         /// Parent folder: the results go to `OUT/<scenario name>/`.
         #[arg(long, default_value = "results")]
         out: PathBuf,
         /// Skip figure rendering.
-        #[arg(long)]
+        #[arg(long, conflicts_with = "style")]
         no_figures: bool,
         /// Raise a cost limit, e.g. `--limit max_steps=1e10` (repeatable; keys: max_steps, max_samples,
         /// max_output_bytes, max_flights, max_sweep_points, max_threads, max_scenario_bytes; see docs/scenarios.md).
@@ -121,7 +121,7 @@ enum Command {
         #[arg(long, default_value = "paper-scenario-1")]
         scenario: String,
         /// Controller(s) to sweep (repeat or comma-separate); default: the scenario's `controllers` list.
-        #[arg(long, short = 'c', value_delimiter = ',')]
+        #[arg(long, short = 'c', value_delimiter = ',', value_parser = controller_names)]
         controllers: Vec<String>,
         /// Log-spaced magnitudes per decade.
         #[arg(long, allow_negative_numbers = true, default_value_t = 3)]
@@ -155,13 +155,13 @@ enum Command {
         #[arg(long, allow_negative_numbers = true, default_value_t = ftsmc_sim::batch::montecarlo::DEFAULT_LANES)]
         lanes: usize,
         /// Controller(s) to fly (repeat or comma-separate); default: the scenario's `controllers` list.
-        #[arg(long, short = 'c', value_delimiter = ',')]
+        #[arg(long, short = 'c', value_delimiter = ',', value_parser = controller_names)]
         controllers: Vec<String>,
         /// Parent folder: the results go to `OUT/<scenario name>/`.
         #[arg(long, default_value = "results/montecarlo")]
         out: PathBuf,
         /// Skip the box-plot figure.
-        #[arg(long)]
+        #[arg(long, conflicts_with = "style")]
         no_figures: bool,
         /// Raise a cost limit, e.g. `--limit max_steps=1e10` (repeatable; keys: max_steps, max_samples,
         /// max_output_bytes, max_flights, max_sweep_points, max_threads, max_scenario_bytes; see docs/scenarios.md).
@@ -184,7 +184,7 @@ enum Command {
         /// Scenario file (TOML) or built-in name with a [falsify] section and an [envelope].
         scenario: String,
         /// Controller to falsify.
-        #[arg(long, short = 'c')]
+        #[arg(long, short = 'c', value_parser = controller_names)]
         controller: String,
         /// Flights per method (default: `[falsify] budget`, else 200).
         #[arg(long, allow_negative_numbers = true)]
@@ -199,7 +199,7 @@ enum Command {
         #[arg(long, default_value = "results/falsify")]
         out: PathBuf,
         /// Skip the worst-vs-nominal figure.
-        #[arg(long)]
+        #[arg(long, conflicts_with = "style")]
         no_figures: bool,
         /// Raise a cost limit (repeatable; see docs/scenarios.md).
         #[arg(long = "limit", value_name = "KEY=VALUE")]
@@ -213,7 +213,7 @@ enum Command {
         /// Scenario file (TOML) or built-in name with a [falsify] section and an [envelope].
         scenario: String,
         /// Controller.
-        #[arg(long, short = 'c')]
+        #[arg(long, short = 'c', value_parser = controller_names)]
         controller: String,
         /// Flights, CE levels included.
         #[arg(long, allow_negative_numbers = true, default_value_t = 2000)]
@@ -244,22 +244,23 @@ enum Command {
     Compare {
         /// Scenario file (TOML) or built-in name: its vehicle, wind and [montecarlo] draws.
         scenario: String,
-        /// Contestants (comma-separated or repeated): controller names, or files (a `*.tuned.toml`, any
-        /// scenario) whose controller section is flown on SCENARIO.
-        #[arg(long, short = 'c', value_delimiter = ',', required = true)]
+        /// Contestants (required; comma-separated or repeated): controller names, or files (a `*.tuned.toml`,
+        /// any scenario) whose controller section is flown on SCENARIO.
+        #[arg(long = "controllers", short = 'c', alias = "contestants", value_name = "CONTESTANTS")]
+        #[arg(value_delimiter = ',', value_parser = controller_names)]
         contestants: Vec<String>,
-        /// Runs per contestant (ignored with --until-decided).
-        #[arg(long, default_value_t = 100)]
+        /// Runs per contestant (not with --until-decided).
+        #[arg(long, default_value_t = 100, conflicts_with_all = ["until_decided", "max_runs", "batch"])]
         runs: u64,
         /// Fly batches of --batch runs until every pair is decided (alpha spending keeps the error rate).
         #[arg(long)]
         until_decided: bool,
-        /// Most runs per contestant with --until-decided.
-        #[arg(long, default_value_t = 1000)]
-        max_runs: u64,
-        /// Runs per look with --until-decided.
-        #[arg(long, default_value_t = 50)]
-        batch: u64,
+        /// Most runs per contestant with --until-decided (only with it; default 1000).
+        #[arg(long)]
+        max_runs: Option<u64>,
+        /// Runs per look with --until-decided (only with it; default 50).
+        #[arg(long)]
+        batch: Option<u64>,
         /// Confidence level of every interval and verdict (family-wise error 1 − confidence).
         #[arg(long, default_value_t = ftsmc_sim::stats::DEFAULT_CONFIDENCE)]
         confidence: f64,
@@ -279,7 +280,7 @@ enum Command {
         #[arg(long, default_value = "results/compare")]
         out: PathBuf,
         /// Skip the forest plot.
-        #[arg(long)]
+        #[arg(long, conflicts_with = "style")]
         no_figures: bool,
         /// Raise a cost limit (repeatable; see docs/scenarios.md).
         #[arg(long = "limit", value_name = "KEY=VALUE")]
@@ -298,7 +299,7 @@ enum Command {
         #[arg(long, default_value = "results/montecarlo")]
         out: PathBuf,
         /// Skip the box-plot figure.
-        #[arg(long)]
+        #[arg(long, conflicts_with = "style")]
         no_figures: bool,
         /// Confidence level of every interval in the tables and summary.json (recorded there).
         #[arg(long, default_value_t = ftsmc_sim::stats::DEFAULT_CONFIDENCE)]
@@ -310,7 +311,7 @@ enum Command {
         scenario: String,
         /// Controller to tune; a comma-separated list or `all` tunes each on an equal budget, then compares them on
         /// the same held-out draws.
-        #[arg(long, short = 'c')]
+        #[arg(long, short = 'c', value_parser = controller_names)]
         controller: String,
         /// Confidence level of every interval and verdict (family-wise error 1 − confidence).
         #[arg(long, default_value_t = ftsmc_sim::stats::DEFAULT_CONFIDENCE)]
@@ -328,7 +329,7 @@ enum Command {
         #[arg(long, default_value = "results/tune")]
         out: PathBuf,
         /// Skip the convergence figure.
-        #[arg(long)]
+        #[arg(long, conflicts_with = "style")]
         no_figures: bool,
         /// Raise a cost limit, e.g. `--limit max_flights=1e6` (repeatable; see docs/scenarios.md).
         #[arg(long = "limit", value_name = "KEY=VALUE")]
@@ -392,6 +393,11 @@ enum Px4Action {
     },
 }
 
+/// `ftsmc compare --until-decided`: most runs per contestant without `--max-runs`.
+const COMPARE_MAX_RUNS: u64 = 1000;
+/// `ftsmc compare --until-decided`: runs per look without `--batch`.
+const COMPARE_BATCH: u64 = 50;
+
 /// Load a scenario from a file path or a built-in name.
 pub fn load_scenario(arg: &str) -> Result<Scenario> {
     load_scenario_with_limits(arg, &[], &[])
@@ -439,6 +445,18 @@ pub fn load_scenario_with_limits(arg: &str, limits: &[String], sets: &[String]) 
 /// The built-in scenario names (file names without `.toml`), for `ftsmc scenario`.
 fn built_in_names() -> clap::builder::PossibleValuesParser {
     clap::builder::PossibleValuesParser::new(ftsmc_sim::scenario::resolve::built_in_names())
+}
+
+/// The value parser of every `-c`: a value naming no controller (`-c ''`,
+/// `-c ','`, an empty entry of a comma-separated list) is refused, naming
+/// the flag, instead of meaning "no controllers" or an unknown name ``.
+fn controller_names(value: &str) -> Result<String, String> {
+    if value.split(',').all(|name| name.trim().is_empty()) {
+        return Err("no controller named: expected a name such as `pid`, or a comma-separated list such as \
+                    `pid,se3` (`ftsmc list` lists them)"
+            .into());
+    }
+    Ok(value.to_string())
 }
 
 fn check_names(names: &[String]) -> Result<()> {
@@ -631,6 +649,21 @@ fn run(cli: Cli) -> Result<()> {
             limit,
             set,
         } => {
+            anyhow::ensure!(
+                !contestants.is_empty(),
+                "compare needs its contestants, -c/--controllers: controller names or gain files (-c pid,se3 or \
+                 -c pid.tuned.toml,pid)"
+            );
+            if !until_decided {
+                // Given without the sequential plan they would be ignored.
+                for (flag, value) in [("--max-runs", max_runs), ("--batch", batch)] {
+                    anyhow::ensure!(
+                        value.is_none(),
+                        "{flag} sets the sequential plan: it needs --until-decided (a fixed number of runs is --runs)"
+                    );
+                }
+            }
+            let (max_runs, batch) = (max_runs.unwrap_or(COMPARE_MAX_RUNS), batch.unwrap_or(COMPARE_BATCH));
             let mut scenario = load_scenario_with_limits(&scenario, &limit, &set)?;
             ftsmc_sim::stats::check_confidence(confidence).map_err(|e| anyhow::anyhow!("--confidence: {e}"))?;
             anyhow::ensure!(

@@ -68,7 +68,14 @@ pub fn export(scenario: &Scenario, source: &str, out: Option<&Path>) -> Result<(
 /// `ftsmc px4 import`: the `.params` file `params` as a `[pid]` section for
 /// the vehicle of `scenario` (named `source`).
 pub fn import(params: &Path, scenario: &Scenario, source: &str, out: Option<&Path>) -> Result<()> {
-    let file = px4_params::read_qgc(params)?;
+    // The bounded reader of every file ftsmc did not write: a FIFO or a
+    // device is refused without blocking, the size without reading past it.
+    let bytes = crate::bounded_read::read_limited(params, px4_params::MAX_PARAMS_BYTES, "PX4 parameter file")?;
+    let shown = params.display().to_string();
+    let text = String::from_utf8(bytes).map_err(|e| {
+        anyhow::anyhow!("{shown}: not UTF-8 text (invalid byte at offset {})", e.utf8_error().valid_up_to())
+    })?;
+    let file = px4_params::parse_qgc(&text, &shown)?;
     if file.values.is_empty() {
         bail!(
             "{}: no PX4 parameter ftsmc maps (MC_ROLLRATE_P, MPC_XY_P, …; docs/px4.md): not a PX4 multicopter parameter \

@@ -15,20 +15,40 @@ const TIME_LIMIT: Duration = Duration::from_secs(20);
 /// Run `ftsmc args… --out <dir>/out/sub` in a fresh directory (with
 /// `s.toml` = `scenario` when given) and check the refusal: in time,
 /// non-zero exit, one `error:` line containing every `expected` string,
-/// nothing under `<dir>/out`.
-fn refused(test: &str, args: &[&str], scenario: Option<&str>, expected: &[&str]) {
+/// nothing under `<dir>/out`. Returns the message (the line without `error: `).
+fn refused(test: &str, args: &[&str], scenario: Option<&str>, expected: &[&str]) -> String {
     let tmp = scratch(test);
     let dir = tmp.path();
     if let Some(text) = scenario {
         std::fs::write(dir.join("s.toml"), text).unwrap();
     }
     let out = dir.join("out").join("sub");
+    let all: Vec<&str> = args.iter().copied().chain(["--out", out.to_str().unwrap()]).collect();
+    let (status, err) = in_time(test, &all, dir);
+    assert!(!status.success(), "{test}: must fail, got {status}; stderr: {err}");
+    assert_eq!(status.code(), Some(1), "{test}: an error exit, not a crash/abort; stderr: {err}");
+    let lines: Vec<&str> = err.lines().collect();
+    assert_eq!(lines.len(), 1, "{test}: one line on stderr:\n{err}");
+    // The documented bound on a message's first line: 300 characters.
+    // `main` cuts a longer one to 300 ending in `…`: a cut line lost its end.
+    let message = lines[0].strip_prefix("error: ").unwrap_or_else(|| panic!("{test}: not an error line: {err}"));
+    assert!(message.chars().count() <= 300, "{test}: {} characters: {err}", message.chars().count());
+    assert!(!message.ends_with('…'), "{test}: over 300 characters, cut by main: {err}");
+    for e in expected {
+        assert!(lines[0].contains(e), "{test}: `{e}` missing from: {err}");
+    }
+    let written: Vec<_> = std::fs::read_dir(dir.join("out")).map(|rd| rd.flatten().collect()).unwrap_or_default();
+    assert!(written.is_empty(), "{test}: files written under --out: {written:?}");
+    message.to_string()
+}
+
+/// Run `ftsmc args…` in `dir` (stdin empty): its exit status and stderr,
+/// the child killed and the test failed if it runs past [`TIME_LIMIT`].
+fn in_time(test: &str, args: &[&str], dir: &std::path::Path) -> (std::process::ExitStatus, String) {
     let stdout = std::fs::File::create(dir.join("stdout.txt")).unwrap();
     let stderr = std::fs::File::create(dir.join("stderr.txt")).unwrap();
     let mut child = Command::new(env!("CARGO_BIN_EXE_ftsmc"))
         .args(args)
-        .arg("--out")
-        .arg(&out)
         .current_dir(dir)
         .env("RUST_BACKTRACE", "1")
         .stdin(Stdio::null())
@@ -48,19 +68,27 @@ fn refused(test: &str, args: &[&str], scenario: Option<&str>, expected: &[&str])
         }
         std::thread::sleep(Duration::from_millis(20));
     };
-    let err = std::fs::read_to_string(dir.join("stderr.txt")).unwrap();
-    assert!(!status.success(), "{test}: must fail, got {status}; stderr: {err}");
-    assert_eq!(status.code(), Some(1), "{test}: an error exit, not a crash/abort; stderr: {err}");
-    let lines: Vec<&str> = err.lines().collect();
-    assert_eq!(lines.len(), 1, "{test}: one line on stderr:\n{err}");
-    // The documented bound on a message's first line: 300 characters.
-    let message = lines[0].strip_prefix("error: ").unwrap_or_else(|| panic!("{test}: not an error line: {err}"));
+    (status, std::fs::read_to_string(dir.join("stderr.txt")).unwrap())
+}
+
+/// `ftsmc args…` refused by the argument parser before any work: in time,
+/// clap's usage-error exit code 2, a first line `error: …` of at most 300
+/// characters containing every `expected` string, nothing written.
+fn usage_refused(test: &str, args: &[&str], expected: &[&str]) -> String {
+    let tmp = scratch(test);
+    let dir = tmp.path();
+    let out = dir.join("out");
+    let all: Vec<&str> = args.iter().copied().chain(["--out", out.to_str().unwrap()]).collect();
+    let (status, err) = in_time(test, &all, dir);
+    assert_eq!(status.code(), Some(2), "{test}: `ftsmc {}` must be a usage error; stderr: {err}", args.join(" "));
+    let first = err.lines().next().unwrap_or("");
+    let message = first.strip_prefix("error: ").unwrap_or_else(|| panic!("{test}: not an error line: {err}"));
     assert!(message.chars().count() <= 300, "{test}: {} characters: {err}", message.chars().count());
     for e in expected {
-        assert!(lines[0].contains(e), "{test}: `{e}` missing from: {err}");
+        assert!(first.contains(e), "{test}: `{e}` missing from the first line: {err}");
     }
-    let written: Vec<_> = std::fs::read_dir(dir.join("out")).map(|rd| rd.flatten().collect()).unwrap_or_default();
-    assert!(written.is_empty(), "{test}: files written under --out: {written:?}");
+    assert!(!out.exists(), "{test}: {} written", out.display());
+    message.to_string()
 }
 
 fn run_refused(test: &str, extra: &str, expected: &[&str]) {
@@ -111,6 +139,17 @@ fn per_decade_that_never_ends() {
 }
 
 #[test]
+fn a_set_value_that_is_a_toml_fragment() {
+    // `v = VALUE` read this as `name = "a"` and a second key, `seed`.
+    refused(
+        "set-fragment",
+        &["run", "paper-scenario-1", "--set", "name=\"a\"\nseed = 4242"],
+        None,
+        &["--set name", "line break"],
+    );
+}
+
+#[test]
 fn an_unknown_limit_key() {
     refused("limit-key", &["run", "paper-scenario-1", "--limit", "max_stepz=1"], None, &["max_stepz"]);
 }
@@ -154,6 +193,42 @@ fn a_fifo() {
     let fifo = dir.join("fifo.toml");
     assert!(Command::new("mkfifo").arg(&fifo).status().expect("mkfifo runs").success());
     refused("fifo", &["run", fifo.to_str().unwrap()], None, &["regular file"]);
+}
+
+#[test]
+fn px4_import_of_a_fifo() {
+    // `px4 import` read its file with a blocking open: a FIFO hung it.
+    let tmp = scratch("px4-fifo-holder");
+    let fifo = tmp.path().join("fifo.params");
+    assert!(Command::new("mkfifo").arg(&fifo).status().expect("mkfifo runs").success());
+    let fifo = fifo.to_str().unwrap();
+    refused("px4-fifo", &["px4", "import", fifo, "--scenario", "realistic-calm-1"], None, &[fifo, "regular file"]);
+}
+
+#[test]
+fn a_scenario_importing_px4_params_from_a_fifo() {
+    let tmp = scratch("px4-params-fifo-holder");
+    let fifo = tmp.path().join("fifo.params");
+    assert!(Command::new("mkfifo").arg(&fifo).status().expect("mkfifo runs").success());
+    let text =
+        format!("extends = \"realistic-calm-1\"\nname = \"p\"\n[pid]\npx4_params = {:?}\n", fifo.to_str().unwrap());
+    refused(
+        "px4-params-fifo",
+        &["run", "s.toml", "-c", "pid"],
+        Some(&text),
+        &["px4_params", "fifo.params: not a regular file"],
+    );
+}
+
+#[test]
+fn px4_import_of_a_missing_file_says_the_cause_once() {
+    let message = refused(
+        "px4-missing",
+        &["px4", "import", "missing.params", "--scenario", "realistic-calm-1"],
+        None,
+        &["missing.params"],
+    );
+    assert_eq!(message.matches("No such file or directory").count(), 1, "{message}");
 }
 
 #[test]
@@ -398,4 +473,91 @@ fn clap_names_the_flag_of_a_negative_number() {
         let err = String::from_utf8_lossy(&out.stderr);
         assert!(!out.status.success() && err.lines().next().unwrap_or("").contains(flag), "{args:?}: {err}");
     }
+}
+
+// ---- messages that fit their line ----------------------------------------
+
+#[test]
+fn an_unknown_falsify_parameter_fits_the_line_with_its_remedy() {
+    // serde listed all 15 [falsify] keys: 307 characters, cut before the end.
+    let text = "extends = \"realistic-calm-1\"\nname = \"f\"\n[falsify]\nwind_sped = { low = 0.0, high = 1.0 }\n";
+    refused(
+        "falsify-key",
+        &["falsify", "s.toml", "-c", "pid"],
+        Some(text),
+        &["`wind_sped`", "did you mean `wind_speed`?"],
+    );
+}
+
+#[test]
+fn an_unknown_set_key_fits_the_line_with_its_remedy() {
+    refused(
+        "set-key",
+        &["run", "paper-scenario-1", "--set", "durtion=5"],
+        None,
+        &["`durtion`", "did you mean `duration`?"],
+    );
+    refused(
+        "set-key-far",
+        &["run", "paper-scenario-1", "--set", "nosuch.key=1"],
+        None,
+        &["`nosuch`", "docs/scenarios.md"],
+    );
+}
+
+// ---- contradictory or empty flags ------------------------------------------
+
+#[test]
+fn contradictory_flags_are_refused_naming_both() {
+    let compare = ["compare", "paper-scenario-1", "-c", "pid,se3"];
+    let cases: &[(&[&str], &str, &str)] = &[
+        (&["--runs", "4", "--until-decided"], "--runs", "--until-decided"),
+        (&["--runs", "4", "--max-runs", "10"], "--runs", "--max-runs"),
+        (&["--batch", "10", "--runs", "4"], "--batch", "--runs"),
+    ];
+    for (i, (extra, a, b)) in cases.iter().enumerate() {
+        let args: Vec<&str> = compare.iter().chain(extra.iter()).copied().collect();
+        usage_refused(&format!("conflict-compare-{i}"), &args, &[a, b]);
+    }
+    // --max-runs and --batch mean something only with --until-decided.
+    for flag in ["--max-runs", "--batch"] {
+        let args: Vec<&str> = compare.iter().copied().chain([flag, "10"]).collect();
+        refused(&format!("requires{flag}"), &args, None, &[flag, "needs --until-decided"]);
+    }
+    // The figure style is meaningless without figures, on every command with --no-figures.
+    for command in [
+        &["run", "paper-scenario-1"][..],
+        &["reproduce"],
+        &["montecarlo", "paper-scenario-1"],
+        &["falsify", "realistic-calm-1", "-c", "pid"],
+        &["compare", "paper-scenario-1", "-c", "pid"],
+        &["merge", "a"],
+        &["tune", "paper-scenario-1", "-c", "pid"],
+    ] {
+        let args: Vec<&str> = command.iter().copied().chain(["--no-figures", "--style", "paper"]).collect();
+        usage_refused(&format!("style-{}", command[0]), &args, &["--no-figures", "--style"]);
+    }
+}
+
+#[test]
+fn empty_controller_lists_are_refused_on_every_command() {
+    for command in [
+        &["run", "paper-scenario-1"][..],
+        &["fixed-time"],
+        &["montecarlo", "paper-scenario-1"],
+        &["compare", "paper-scenario-1"],
+        &["tune", "paper-scenario-1"],
+        &["falsify", "realistic-calm-1"],
+        &["failure-probability", "realistic-calm-1"],
+    ] {
+        for (i, list) in ["", ",", " , "].into_iter().enumerate() {
+            let args: Vec<&str> = command.iter().copied().chain(["-c", list]).collect();
+            usage_refused(&format!("empty-c-{}-{i}", command[0]), &args, &["--controller", "no controller named"]);
+        }
+    }
+}
+
+#[test]
+fn compare_without_controllers_names_the_flag() {
+    refused("compare-no-c", &["compare", "paper-scenario-1"], None, &["-c/--controllers"]);
 }

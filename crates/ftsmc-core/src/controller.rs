@@ -97,6 +97,14 @@ pub trait Controller<R: Real = f64> {
     fn name(&self) -> &'static str;
     /// One control period: compute the command from the measured state and
     /// the reference, and advance internal states by `dt` (s).
+    ///
+    /// Contract: every component of `state` and `reference` is finite and
+    /// `dt` is a positive finite time step. The laws do not check it (the
+    /// update stays branch-free per lane in the simulator's loop): a NaN or
+    /// infinite input gives a non-finite command, which the simulator
+    /// treats as a diverged flight. A caller whose inputs come from
+    /// elsewhere (another simulator, a user) checks them with
+    /// [`check_input`] or calls [`update_checked`].
     fn update(&mut self, state: &QuadState<R>, reference: &Reference<R>, dt: f64) -> Command<R>;
     /// [`Controller::update`] from a [`Measurement`], which may carry the
     /// attitude quaternion and body rates beside the Euler state. The
@@ -148,6 +156,90 @@ pub trait Controller<R: Real = f64> {
     fn actuator_feedback(&mut self, saturated: R::Mask) {
         let _ = saturated;
     }
+}
+
+/// An input of [`Controller::update`] outside its contract: a state or
+/// reference component that is not finite, or a `dt` that is not a
+/// positive finite time step. Its `Display` names the field:
+/// `state.position[1] is nan`, `reference.yaw is inf`, `dt is 0`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct InvalidInput {
+    /// The field: `state.position`, `state.attitude`, `state.velocity`,
+    /// `state.angular_rate`, `reference.position`, `reference.velocity`,
+    /// `reference.acceleration`, `reference.yaw`, `reference.yaw_rate`,
+    /// `reference.yaw_acceleration` or `dt`.
+    pub field: &'static str,
+    /// The element of an array field (`None` for a scalar).
+    pub index: Option<usize>,
+    /// The offending value.
+    pub value: f64,
+}
+
+impl core::fmt::Display for InvalidInput {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str(self.field)?;
+        if let Some(i) = self.index {
+            write!(f, "[{i}]")?;
+        }
+        // NaN as Python and the CSV files spell it.
+        if self.value.is_nan() {
+            f.write_str(" is nan")
+        } else {
+            write!(f, " is {}", self.value)
+        }
+    }
+}
+
+#[cfg(feature = "std")]
+impl std::error::Error for InvalidInput {}
+
+/// The first input of [`Controller::update`] outside its contract, in the
+/// order state (position, attitude, velocity, angular rate), reference
+/// (position, velocity, acceleration, yaw, yaw rate, yaw acceleration),
+/// `dt`; `Ok` when every state and reference component is finite and `dt`
+/// is positive and finite.
+pub fn check_input(state: &QuadState, reference: &Reference, dt: f64) -> Result<(), InvalidInput> {
+    let arrays: [(&'static str, &[f64; 3]); 7] = [
+        ("state.position", &state.position),
+        ("state.attitude", &state.attitude),
+        ("state.velocity", &state.velocity),
+        ("state.angular_rate", &state.angular_rate),
+        ("reference.position", &reference.position),
+        ("reference.velocity", &reference.velocity),
+        ("reference.acceleration", &reference.acceleration),
+    ];
+    for (field, values) in arrays {
+        if let Some(i) = values.iter().position(|v| !v.is_finite()) {
+            return Err(InvalidInput { field, index: Some(i), value: values[i] });
+        }
+    }
+    let scalars = [
+        ("reference.yaw", reference.yaw),
+        ("reference.yaw_rate", reference.yaw_rate),
+        ("reference.yaw_acceleration", reference.yaw_acceleration),
+    ];
+    for (field, value) in scalars {
+        if !value.is_finite() {
+            return Err(InvalidInput { field, index: None, value });
+        }
+    }
+    if !(dt.is_finite() && dt > 0.0) {
+        return Err(InvalidInput { field: "dt", index: None, value: dt });
+    }
+    Ok(())
+}
+
+/// [`Controller::update`] with its inputs checked first ([`check_input`]):
+/// an input outside the contract is an error naming it, and the controller
+/// is not updated (its internal states are left as they were).
+pub fn update_checked<C: Controller + ?Sized>(
+    controller: &mut C,
+    state: &QuadState,
+    reference: &Reference,
+    dt: f64,
+) -> Result<Command, InvalidInput> {
+    check_input(state, reference, dt)?;
+    Ok(controller.update(state, reference, dt))
 }
 
 /// One `impl Controller<R>` that forwards every method to the controller
@@ -203,3 +295,60 @@ forward_controller!(
     #[cfg(feature = "std")]
     std::boxed::Box<C>
 );
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A controller that counts its updates and returns its input's x.
+    struct Echo(usize, Telemetry);
+
+    impl Controller for Echo {
+        fn name(&self) -> &'static str {
+            "echo"
+        }
+        fn update(&mut self, state: &QuadState, _: &Reference, _: f64) -> Command {
+            self.0 += 1;
+            Command { thrust: state.position[0], torque: [0.0; 3] }
+        }
+        fn telemetry(&self) -> &Telemetry {
+            &self.1
+        }
+        fn reset(&mut self) {
+            self.0 = 0;
+        }
+    }
+
+    #[test]
+    fn check_input_names_the_first_field_outside_the_contract() {
+        let (state, reference) = (QuadState::default(), Reference::default());
+        assert_eq!(check_input(&state, &reference, 0.01), Ok(()));
+        let mut s = state;
+        s.position[1] = f64::NAN;
+        s.velocity[0] = f64::INFINITY;
+        let e = check_input(&s, &reference, 0.01).unwrap_err();
+        assert_eq!((e.field, e.index), ("state.position", Some(1)));
+        assert_eq!(e.to_string(), "state.position[1] is nan");
+        let mut r = reference;
+        r.yaw_rate = f64::NEG_INFINITY;
+        assert_eq!(check_input(&state, &r, 0.01).unwrap_err().to_string(), "reference.yaw_rate is -inf");
+        let mut r = reference;
+        r.acceleration[2] = f64::INFINITY;
+        assert_eq!(check_input(&state, &r, 0.01).unwrap_err().to_string(), "reference.acceleration[2] is inf");
+        for dt in [0.0, -0.01, f64::NAN, f64::INFINITY] {
+            assert_eq!(check_input(&state, &reference, dt).unwrap_err().field, "dt", "{dt}");
+        }
+    }
+
+    #[test]
+    fn update_checked_updates_only_on_valid_input() {
+        let mut c = Echo(0, Telemetry::default());
+        let mut state = QuadState::default();
+        state.position[0] = 2.0;
+        let u = update_checked(&mut c, &state, &Reference::default(), 0.01).unwrap();
+        assert_eq!((u.thrust, c.0), (2.0, 1));
+        state.attitude[2] = f64::NAN;
+        let e = update_checked(&mut c, &state, &Reference::default(), 0.01).unwrap_err();
+        assert_eq!((e.field, e.index, c.0), ("state.attitude", Some(2), 1));
+    }
+}

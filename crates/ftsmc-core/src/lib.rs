@@ -40,7 +40,7 @@ mod setpoint;
 pub mod tsm_sta;
 
 pub use cascade::{Cascade, CascadeConfig, CascadeSettings, MassAdaptation};
-pub use controller::{Controller, SlidingTelemetry, Telemetry};
+pub use controller::{check_input, update_checked, Controller, InvalidInput, SlidingTelemetry, Telemetry};
 pub use ftaftsmc::{FtaftsmcAxis, FtaftsmcGains};
 pub use law::{AxisLaw, GainError};
 pub use measured::{BodyAttitude, Measurement};

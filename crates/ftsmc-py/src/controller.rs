@@ -73,7 +73,9 @@ impl NativeController {
     /// One control period: state (12 floats: position, attitude, velocity,
     /// attitude rates), reference (12 floats: position, velocity,
     /// acceleration, yaw, yaw rate, yaw acceleration), `dt` s; returns
-    /// `(thrust, roll torque, pitch torque, yaw torque)`.
+    /// `(thrust, roll torque, pitch torque, yaw torque)`. A NaN or infinite
+    /// state or reference value is a `ValueError` naming it
+    /// (`ftsmc_core::update_checked`), and the controller is not updated.
     fn update(
         &self,
         state: &Bound<'_, PyAny>,
@@ -95,7 +97,12 @@ impl NativeController {
             yaw_acceleration: r[11],
         };
         let mut c = self.inner.lock().map_err(|_| value_error("controller poisoned by an earlier panic"))?;
-        let u = c.update(&state, &reference, dt);
+        let u = ftsmc_core::update_checked(&mut **c, &state, &reference, dt).map_err(|e| {
+            value_error(format!(
+                "Controller.update: {e}; every state and reference value must be finite (the controller was not \
+                 updated)"
+            ))
+        })?;
         Ok((u.thrust, u.torque[0], u.torque[1], u.torque[2]))
     }
 

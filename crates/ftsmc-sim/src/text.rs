@@ -69,6 +69,73 @@ pub fn show_str(s: &str) -> String {
     }
 }
 
+/// Longest list of known keys in an unknown-field message, characters:
+/// with a file path, the parser's position and the quoted source line, the
+/// message's one line stays within 300 characters (the CLI's bound).
+const MAX_KNOWN_KEYS_CHARS: usize = 60;
+
+/// serde's `unknown field `k`, expected one of `a`, `b`, …` (every known
+/// key: 50 of them at a scenario's top level, a first line over 300
+/// characters cut before its end) made short: the closest known key as a
+/// remedy when one is near (`did you mean `mass`?`), the known keys as far
+/// as [`MAX_KNOWN_KEYS_CHARS`] allows, then how many more and where they
+/// are documented. `None` for any other message.
+pub(crate) fn shorten_unknown_field(message: &str) -> Option<String> {
+    let message: String = message.split_whitespace().collect::<Vec<_>>().join(" ");
+    let rest = message.strip_prefix("unknown field `")?;
+    let (field, rest) = rest.split_once('`')?;
+    let known: Vec<&str> = rest.strip_prefix(", expected one of ")?.split(", ").map(|k| k.trim_matches('`')).collect();
+    let mut out = format!("unknown field `{}`", show_str(field));
+    if let Some(near) = closest(field, &known) {
+        out.push_str(&format!(" (did you mean `{near}`?)"));
+    }
+    out.push_str(", expected one of ");
+    let mut listed = 0;
+    let mut list = String::new();
+    for key in &known {
+        let item = format!("{}`{key}`", if listed == 0 { "" } else { ", " });
+        if list.chars().count() + item.chars().count() > MAX_KNOWN_KEYS_CHARS {
+            break;
+        }
+        list.push_str(&item);
+        listed += 1;
+    }
+    out.push_str(&list);
+    if listed < known.len() {
+        out.push_str(&format!(", … ({} more; docs/scenarios.md)", known.len() - listed));
+    }
+    Some(out)
+}
+
+/// The known key nearest `field` by edit distance, when it is near: at most
+/// one edit in four characters (at least one), or `field` is a prefix of it
+/// or it of `field` (`wind` for `wind_speeds`).
+fn closest<'a>(field: &str, known: &[&'a str]) -> Option<&'a str> {
+    let field_chars: Vec<char> = field.chars().collect();
+    let allowed = (field_chars.len() / 4).max(1);
+    known
+        .iter()
+        .map(|k| (edit_distance(&field_chars, &k.chars().collect::<Vec<_>>()), *k))
+        .filter(|(d, k)| *d <= allowed || (k.len() >= 3 && (field.starts_with(k) || k.starts_with(field))))
+        .min_by_key(|(d, _)| *d)
+        .map(|(_, k)| k)
+}
+
+/// Levenshtein distance (insertions, deletions, substitutions).
+fn edit_distance(a: &[char], b: &[char]) -> usize {
+    let mut row: Vec<usize> = (0..=b.len()).collect();
+    for (i, ca) in a.iter().enumerate() {
+        let mut diagonal = row[0];
+        row[0] = i + 1;
+        for (j, cb) in b.iter().enumerate() {
+            let next = (diagonal + usize::from(ca != cb)).min(row[j] + 1).min(row[j + 1] + 1);
+            diagonal = row[j + 1];
+            row[j + 1] = next;
+        }
+    }
+    row[b.len()]
+}
+
 /// `#[serde(with = "exact_array")]` for fixed-size arrays in scenario files:
 /// serde's own `[T; N]` reads the first N elements and, in TOML, silently
 /// ignores the rest (`position = [0.5, 0.25, 0.0, 99.0, "junk", [1]]` was a
@@ -150,5 +217,36 @@ pub mod exact_array {
         ) -> Result<Option<[T; N]>, D::Error> {
             Option::<Wrap<T, N>>::deserialize(d).map(|o| o.map(|w| w.0))
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_unknown_field_names_the_nearest_key_and_a_bounded_list() {
+        let known: Vec<String> = (0..50).map(|i| format!("`key_number_{i}`")).collect();
+        let message = format!("unknown field `key_numbr_7`, expected one of {}", known.join(", "));
+        let short = shorten_unknown_field(&message).unwrap();
+        assert!(short.starts_with("unknown field `key_numbr_7` (did you mean `key_number_7`?), expected one of "));
+        assert!(short.ends_with("more; docs/scenarios.md)"), "{short}");
+        assert!(short.chars().count() < 160, "{} characters: {short}", short.chars().count());
+        let listed = short.matches("`key_number_").count() - 1;
+        assert!(short.contains(&format!("({} more;", 50 - listed)), "{short}");
+        // A short list is kept whole; a far name gets no suggestion.
+        let short = shorten_unknown_field("unknown field `zzz`, expected one of `mass`, `gravity`").unwrap();
+        assert_eq!(short, "unknown field `zzz`, expected one of `mass`, `gravity`");
+        assert_eq!(
+            shorten_unknown_field("unknown field `mas`, expected one of `mass`, `gravity`").unwrap(),
+            "unknown field `mas` (did you mean `mass`?), expected one of `mass`, `gravity`"
+        );
+        assert_eq!(shorten_unknown_field("missing field `mass`"), None);
+    }
+
+    #[test]
+    fn edit_distance_counts_single_character_edits() {
+        let d = |a: &str, b: &str| edit_distance(&a.chars().collect::<Vec<_>>(), &b.chars().collect::<Vec<_>>());
+        assert_eq!((d("", ""), d("a", ""), d("kitten", "sitting"), d("wind_sped", "wind_speed")), (0, 1, 3, 1));
     }
 }

@@ -237,11 +237,18 @@ impl Px4ParamFile {
     }
 }
 
-/// Read a QGroundControl `.params` file (at most [`MAX_PARAMS_BYTES`]).
+/// Read a QGroundControl `.params` file (a regular file of at most
+/// [`MAX_PARAMS_BYTES`]). The type is checked on the metadata before the
+/// file is opened (opening a FIFO would block until a writer came, as in
+/// [`crate::scenario::read_scenario_text`]) and again on the open file; the
+/// read itself is bounded.
 pub fn read_qgc(path: &Path) -> Result<Px4ParamFile, Px4ParamsError> {
     use std::io::Read as _;
     let file = path.display().to_string();
     let io = |source| Px4ParamsError::Io { file: file.clone(), source };
+    if !std::fs::metadata(path).map_err(io)?.is_file() {
+        return Err(Px4ParamsError::File { file, message: "not a regular file".into() });
+    }
     let handle = std::fs::File::open(path).map_err(io)?;
     let meta = handle.metadata().map_err(io)?;
     if !meta.is_file() {

@@ -55,10 +55,18 @@ pub fn set_dotted(table: &mut toml::Table, key: &str, value: toml::Value) -> Res
     Ok(())
 }
 
+/// What `--set KEY=VALUE` accepts as VALUE, for its error messages.
+const ONE_VALUE: &str =
+    "expected one TOML value (5, true, \"text\", [1, 2], { low = 1, high = 2 }) or a bare word (crazyflie-2)";
+
 /// `KEY=VALUE` of the command line as a dotted key and a TOML value: VALUE
-/// is read as a TOML value (`0.5`, `true`, `"text"`, `[1, 2]`,
-/// `{ dist = "uniform", low = 1, high = 2 }`), and as a string when it is
-/// not one (`vehicle.preset=crazyflie-2`).
+/// is read as exactly one TOML value (`0.5`, `true`, `"text"`, `[1, 2]`,
+/// `{ dist = "uniform", low = 1, high = 2 }`), and as a string when it is a
+/// bare word that is not one (`vehicle.preset=crazyflie-2`, also an empty
+/// VALUE). Refused, naming the key: a VALUE on several lines (a TOML
+/// fragment such as `"a"\nseed = 4242` would set a second key), and one
+/// that opens a TOML string, array or table (`"`, `'`, `[`, `{`) but is not
+/// a valid one (it is not read as a string either).
 pub fn parse_set(arg: &str) -> Result<(String, toml::Value), String> {
     let Some((key, value)) = arg.split_once('=') else {
         return Err(format!(
@@ -67,9 +75,29 @@ pub fn parse_set(arg: &str) -> Result<(String, toml::Value), String> {
         ));
     };
     let key = key.trim();
+    let shown_key = crate::text::show_str(key);
+    // Checked before trimming: a line break anywhere, even a trailing one.
+    if value.contains(['\n', '\r']) {
+        return Err(format!("--set {shown_key}: the value holds a line break; {ONE_VALUE}"));
+    }
     let value = value.trim();
-    let parsed = toml::from_str::<toml::Table>(&format!("v = {value}")).ok().and_then(|mut t| t.remove("v"));
-    Ok((key.to_string(), parsed.unwrap_or_else(|| toml::Value::String(value.to_string()))))
+    match toml::from_str::<toml::Table>(&format!("v = {value}")) {
+        Ok(mut table) => match (table.remove("v"), table.is_empty()) {
+            (Some(parsed), true) => Ok((key.to_string(), parsed)),
+            _ => {
+                Err(format!("--set {shown_key}: `{}` is not one TOML value; {ONE_VALUE}", crate::text::show_str(value)))
+            }
+        },
+        Err(e) if value.starts_with(['"', '\'', '[', '{']) => {
+            let why: String = e.message().split_whitespace().collect::<Vec<_>>().join(" ");
+            Err(format!(
+                "--set {shown_key}: `{}` is not a TOML value ({}); {ONE_VALUE}",
+                crate::text::show_str(value),
+                crate::text::show_str(&why)
+            ))
+        }
+        Err(_) => Ok((key.to_string(), toml::Value::String(value.to_string()))),
+    }
 }
 
 /// The preset `overrides` switch the vehicle to, when it is not `s`'s own
@@ -101,7 +129,7 @@ impl Scenario {
             }
         }
         let keys: Vec<&str> = overrides.iter().map(|(k, _)| k.as_str()).collect();
-        let shown = format!("{} with overrides {}", self.name, keys.join(", "));
+        let shown = format!("{} with overrides {}", self.name, shown_keys(&keys));
         let fail = |message: String| ScenarioError::Parse { path: shown.clone(), message };
         let text = self.to_toml().map_err(|e| fail(e.to_string()))?;
         let mut table: toml::Table = toml::from_str(&text).map_err(|e| fail(e.to_string()))?;
@@ -147,6 +175,123 @@ impl Scenario {
             table.insert("name".into(), toml::Value::String(format!("{}-{preset}", self.name)));
         }
         let text = toml::to_string(&table).map_err(|e| fail(e.to_string()))?;
-        super::resolve::load(super::resolve::Source::Text { text: &text, path: &shown }, &[])
+        super::resolve::load(super::resolve::Source::Text { text: &text, path: &shown }, &[]).map_err(|e| match e {
+            // A line of the text written here means nothing to the user.
+            ScenarioError::Parse { path, message } if path == shown => {
+                ScenarioError::Parse { message: without_position(&message, &text).to_string(), path }
+            }
+            other => other,
+        })
+    }
+}
+
+/// Most characters of override keys named in a message's path.
+const MAX_SHOWN_KEYS_CHARS: usize = 80;
+
+/// The override keys for a message: `a, b, c`, or as many as fit in
+/// [`MAX_SHOWN_KEYS_CHARS`] and `and N more` (each message names its key).
+fn shown_keys(keys: &[&str]) -> String {
+    let mut out = String::new();
+    for (i, key) in keys.iter().enumerate() {
+        let next = if i == 0 { crate::text::show_str(key) } else { format!(", {}", crate::text::show_str(key)) };
+        if i > 0 && out.chars().count() + next.chars().count() > MAX_SHOWN_KEYS_CHARS {
+            out.push_str(&format!(" and {} more", keys.len() - i));
+            break;
+        }
+        out.push_str(&next);
+    }
+    out
+}
+
+/// `message` without the `TOML parse error at line L, column C (`source`): `
+/// prefix the loader gives an error in `text` (see `text::parse_message`).
+fn without_position<'a>(message: &'a str, text: &str) -> &'a str {
+    let strip = || {
+        let rest = message.strip_prefix("TOML parse error at line ")?;
+        let (line, rest) = rest.split_once(", column ")?;
+        let (_column, rest) = rest.split_once(" (`")?;
+        let source = text.lines().nth(line.parse::<usize>().ok()?.checked_sub(1)?)?.trim();
+        rest.strip_prefix(crate::text::show_str(source).as_str())?.strip_prefix("`): ")
+    };
+    strip().unwrap_or(message)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn each_kind_of_toml_value_is_one_value() {
+        let v = |arg: &str| parse_set(arg).unwrap_or_else(|e| panic!("{arg}: {e}"));
+        assert_eq!(v("seed=4242"), ("seed".into(), toml::Value::Integer(4242)));
+        assert_eq!(v("payload.mass = 0.2").1, toml::Value::Float(0.2));
+        assert_eq!(v("a=true").1, toml::Value::Boolean(true));
+        assert_eq!(v("name=\"a b\"").1, toml::Value::String("a b".into()));
+        assert_eq!(v("name='a'").1, toml::Value::String("a".into()));
+        assert_eq!(v("seed=42 # a comment").1, toml::Value::Integer(42));
+        let array = v("controllers=[\"pid\", \"se3\"]").1;
+        assert_eq!(array.as_array().map(Vec::len), Some(2));
+        let table = v("mass={ dist = \"uniform\", low = 1, high = 2 }").1;
+        assert_eq!(table.as_table().and_then(|t| t.get("high")), Some(&toml::Value::Integer(2)));
+    }
+
+    #[test]
+    fn a_bare_word_is_a_string_as_before() {
+        for (arg, word) in [
+            ("vehicle.preset=crazyflie-2", "crazyflie-2"),
+            ("wind.preset=breeze", "breeze"),
+            ("description=two words", "two words"),
+            ("description=", ""),
+        ] {
+            assert_eq!(parse_set(arg).unwrap().1, toml::Value::String(word.into()), "{arg}");
+        }
+    }
+
+    #[test]
+    fn a_toml_fragment_is_refused_naming_the_key() {
+        // Read as `v = VALUE`, this set `seed` beside `name`.
+        for arg in
+            ["name=\"a\"\nseed = 4242", "name=\"a\"\r\nseed = 4242", "name=a\nseed = 4242", "name=\n", "name=5\n"]
+        {
+            let err = parse_set(arg).unwrap_err();
+            assert!(err.starts_with("--set name: ") && err.contains("one TOML value"), "{arg:?}: {err}");
+        }
+    }
+
+    #[test]
+    fn an_override_error_names_no_line_of_the_generated_text() {
+        let (file, text) = super::super::resolve::built_in("paper-scenario-1").unwrap();
+        let s = Scenario::from_toml_str(text, file).unwrap();
+        let err = s.with_overrides(&[parse_set("durtion=5").unwrap()]).unwrap_err().to_string();
+        assert!(
+            err.starts_with(
+                "paper-scenario-1 with overrides durtion: unknown field `durtion` (did you mean `duration`?)"
+            ),
+            "{err}"
+        );
+        let text = "a = 1\n[b]\nc = \"x`): y\"\n";
+        let message = "TOML parse error at line 3, column 1 (`c = \\\"x`): y\\\"`): unknown field `c`";
+        assert_eq!(without_position(message, text), "unknown field `c`");
+        assert_eq!(without_position("unknown field `c`", text), "unknown field `c`");
+    }
+
+    #[test]
+    fn many_override_keys_are_named_up_to_a_bound() {
+        let keys: Vec<String> = (0..40).map(|i| format!("payload.key_{i}")).collect();
+        let refs: Vec<&str> = keys.iter().map(String::as_str).collect();
+        let shown = shown_keys(&refs);
+        assert!(shown.starts_with("payload.key_0, payload.key_1") && shown.ends_with(" more"), "{shown}");
+        assert!(shown.chars().count() <= MAX_SHOWN_KEYS_CHARS + 12, "{shown}");
+        assert_eq!(shown_keys(&["a", "b"]), "a, b");
+    }
+
+    #[test]
+    fn a_malformed_toml_value_is_refused_not_read_as_a_string() {
+        for arg in ["name=\"a", "controllers=[\"pid\"", "mass={ low = 1", "name='a"] {
+            let err = parse_set(arg).unwrap_err();
+            assert!(err.starts_with("--set ") && err.contains("not a TOML value"), "{arg:?}: {err}");
+            let key = arg.split_once('=').unwrap().0;
+            assert!(err.starts_with(&format!("--set {key}: ")), "{arg:?}: {err}");
+        }
     }
 }

@@ -529,7 +529,8 @@ fn with_gain_sections(message: &str) -> Option<String> {
         return None;
     }
     let sections: Vec<String> = GainSections::KEYS.iter().map(|k| format!("`{k}`")).collect();
-    Some(format!("{head}, expected one of {known}, {}", sections.join(", ")))
+    let all = format!("{head}, expected one of {known}, {}", sections.join(", "));
+    crate::text::shorten_unknown_field(&all).or(Some(all))
 }
 
 /// Resolve, deserialize and validate the scenario at `source`, with
@@ -570,7 +571,8 @@ pub fn load(source: Source<'_>, overrides: &[String]) -> Result<Loaded, Scenario
         renamed_warnings.push(Warning { key, value, message });
     }
     let describe = |e: &toml::de::Error, path: &str| {
-        let mut message: String = e.message().split_whitespace().collect::<Vec<_>>().join(" ");
+        let mut message: String = crate::text::shorten_unknown_field(e.message())
+            .unwrap_or_else(|| e.message().split_whitespace().collect::<Vec<_>>().join(" "));
         if e.message().starts_with("missing field") {
             let key = if path.is_empty() { String::new() } else { format!(" in `{path}`") };
             message = if chain.layers.len() > 1 {
