@@ -372,7 +372,8 @@ fn set_changes_the_scenario_and_the_written_file_records_it() {
         dir,
     );
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    let written = dir.join("out/realistic-calm-1/scenario.toml");
+    // The folder is named after the vehicle that flew.
+    let written = dir.join("out/realistic-calm-1-crazyflie-2/scenario.toml");
     let text = std::fs::read_to_string(&written).unwrap();
     assert!(text.contains("preset = \"crazyflie-2\""), "{text}");
     let again = ftsmc_sim::Scenario::from_file(&written).unwrap();
