@@ -34,6 +34,8 @@ pub struct Request<'a> {
     pub plan: Plan,
     /// Confidence level of every interval and verdict.
     pub confidence: f64,
+    /// Practical-difference margins (`--min-effect`).
+    pub min_effect: Option<ftsmc_sim::batch::verdicts::MinEffect>,
     /// Fly a file's gains even if it was made for another vehicle.
     pub allow_other_vehicle: bool,
     /// Worker threads (default: all cores).
@@ -121,9 +123,9 @@ pub fn run(req: &Request<'_>) -> Result<()> {
     dir.write("runs.csv", &crate::montecarlo::runs_csv(&result.rows)?)?;
     let file = dir.write_scenario("scenario.toml", scenario, "scenario.toml")?;
     let names: Vec<String> = list.iter().map(|c| c.name.clone()).collect();
-    let report = report_md(scenario, &names, &result);
+    let report = report_md(scenario, &names, &result, req.min_effect.as_ref());
     dir.write("report.md", report.as_bytes())?;
-    let summary = summary_json(scenario, &list, &result, provenance(&[file]));
+    let summary = summary_json(scenario, &list, &result, req.min_effect.as_ref(), provenance(&[file]));
     dir.write("summary.json", serde_json::to_string_pretty(&summary)?.as_bytes())?;
     if req.figures {
         let panel =
@@ -164,7 +166,12 @@ pub fn run(req: &Request<'_>) -> Result<()> {
 }
 
 /// The Markdown report (also printed).
-pub fn report_md(scenario: &Scenario, names: &[String], r: &Comparison) -> String {
+pub fn report_md(
+    scenario: &Scenario,
+    names: &[String],
+    r: &Comparison,
+    min_effect: Option<&ftsmc_sim::batch::verdicts::MinEffect>,
+) -> String {
     let mut md = String::new();
     let _ =
         writeln!(md, "# Comparison on {} ({} runs per contestant, seed {})\n", scenario.name, r.runs, scenario.seed);
@@ -198,6 +205,17 @@ pub fn report_md(scenario: &Scenario, names: &[String], r: &Comparison) -> Strin
         );
     }
     let _ = writeln!(md, "\n{}", verdict_table(&r.verdicts).render());
+    if let Some(m) = min_effect {
+        let _ = writeln!(
+            md,
+            "Against the practical margins (--min-effect: success ±{:.1} pp, RMS position error ±{} m): better only when \
+             the test says so and the whole effect interval lies beyond the margin; equivalent when the whole interval \
+             lies within it (two one-sided tests, each at half the error level).\n\n{}",
+            100.0 * m.success,
+            m.rms,
+            crate::intervals::practical_table(&r.verdicts, m).render()
+        );
+    }
     let _ = writeln!(
         md,
         "Verdict matrix (row A against column B; `A`: the row is better, `B`: the column, `=`: no difference shown):\n\n{}",
@@ -216,7 +234,13 @@ pub fn report_md(scenario: &Scenario, names: &[String], r: &Comparison) -> Strin
 
 /// `summary.json`: the plan, the confidence level, each contestant's
 /// intervals, every verdict and the looks.
-pub fn summary_json(scenario: &Scenario, list: &[Contestant], r: &Comparison, provenance: Value) -> Value {
+pub fn summary_json(
+    scenario: &Scenario,
+    list: &[Contestant],
+    r: &Comparison,
+    min_effect: Option<&ftsmc_sim::batch::verdicts::MinEffect>,
+    provenance: Value,
+) -> Value {
     let mut contestants = Map::new();
     for (c, (_, i)) in list.iter().zip(&r.intervals) {
         contestants.insert(c.name.clone(), json!({"controller": c.controller, "intervals": i}));
@@ -229,6 +253,8 @@ pub fn summary_json(scenario: &Scenario, list: &[Contestant], r: &Comparison, pr
         "runs": r.runs,
         "contestants": Value::Object(contestants),
         "verdicts": r.verdicts,
+        "min_effect": min_effect,
+        "practical": min_effect.map(|m| r.verdicts.iter().map(|v| ftsmc_sim::batch::verdicts::practical(v, m)).collect::<Vec<_>>()),
         "looks": r.looks,
         "all_decided": r.all_decided,
         "provenance": provenance,

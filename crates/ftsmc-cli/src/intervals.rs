@@ -65,10 +65,35 @@ pub fn effect_cell(v: &PairVerdict) -> String {
             if e.estimate.is_nan() {
                 "—".into()
             } else {
-                format!("{:+.4} m [{:+.4}, {:+.4}]", e.estimate, e.lo, e.hi)
+                metres_with_justified_digits(e.estimate, e.lo, e.hi)
             }
         }
     }
+}
+
+/// A signed effect in metres with its interval, to the digits the
+/// interval justifies: two significant digits of its width (so `+0.0000
+/// [−0.0000, −0.0000]` never appears); scientific notation below 1e-4 m;
+/// an infinite bound as `−∞`/`+∞`.
+pub fn metres_with_justified_digits(estimate: f64, lo: f64, hi: f64) -> String {
+    let width = if lo.is_finite() && hi.is_finite() { hi - lo } else { 0.0 };
+    let scale = if width > 0.0 { width } else { estimate.abs() };
+    let bound = |x: f64, d: usize, sci: bool| {
+        if x == f64::INFINITY {
+            "+∞".to_string()
+        } else if x == f64::NEG_INFINITY {
+            "−∞".to_string()
+        } else if sci {
+            format!("{x:+.1e}")
+        } else {
+            format!("{x:+.d$}")
+        }
+    };
+    if scale > 0.0 && scale < 1e-4 {
+        return format!("{} m [{}, {}]", bound(estimate, 0, true), bound(lo, 0, true), bound(hi, 0, true));
+    }
+    let digits = if scale > 0.0 { (1.0 - scale.log10().floor()).clamp(1.0, 6.0) as usize } else { 4 };
+    format!("{} m [{}, {}]", bound(estimate, digits, false), bound(lo, digits, false), bound(hi, digits, false))
 }
 
 /// A p-value: 3 significant digits, `below 1e-12` under it (no `<`: the cell is printed as Markdown).
@@ -101,6 +126,28 @@ pub fn verdict_table(verdicts: &[PairVerdict]) -> Table {
                 ftsmc_sim::stats::paired::Verdict::BBetter => format!("{} better", display_name(&v.b)),
             },
         ]);
+    }
+    t
+}
+
+/// One row per pair and metric against `--min-effect`'s margins: A, B,
+/// metric, effect [interval], the test's verdict, the practical verdict.
+pub fn practical_table(verdicts: &[PairVerdict], m: &ftsmc_sim::batch::verdicts::MinEffect) -> Table {
+    use ftsmc_sim::batch::verdicts::{practical, Practical};
+    let mut t = Table::new(["A", "B", "metric", "effect A − B [interval]", "margin", "practical verdict"]);
+    for v in verdicts {
+        let (a, b) = (display_name(&v.a), display_name(&v.b));
+        let margin = match v.test.metric {
+            PairedMetric::Success => format!("±{:.1} pp", 100.0 * m.success),
+            PairedMetric::Error => format!("±{} m", m.rms),
+        };
+        let said = match practical(v, m) {
+            Practical::ABetter => format!("{a} better by more than the margin"),
+            Practical::BBetter => format!("{b} better by more than the margin"),
+            Practical::Equivalent => "equivalent within the margin".to_string(),
+            Practical::Undecided => "not decided at this margin".to_string(),
+        };
+        t.row(vec![a, b, metric_label(v.test.metric).to_string(), effect_cell(v), margin, said]);
     }
     t
 }
@@ -162,4 +209,18 @@ pub fn level_note(confidence: f64) -> String {
          to bound); mean Student t (docs/statistics.md).",
         level_percent(confidence)
     )
+}
+
+#[cfg(test)]
+mod digits_tests {
+    use super::metres_with_justified_digits as f;
+
+    #[test]
+    fn an_effect_gets_the_digits_its_interval_justifies() {
+        assert_eq!(f(-0.0123, -0.0150, -0.0100), "-0.0123 m [-0.0150, -0.0100]");
+        assert_eq!(f(-0.2, -0.31, -0.12), "-0.20 m [-0.31, -0.12]");
+        // Never "−0.0000 [−0.0000, −0.0000]" for a tiny but real effect.
+        assert_eq!(f(-1.8e-11, -2.0e-11, -1.6e-11), "-1.8e-11 m [-2.0e-11, -1.6e-11]");
+        assert_eq!(f(0.01, f64::NEG_INFINITY, f64::INFINITY), "+0.010 m [−∞, +∞]");
+    }
 }

@@ -264,6 +264,11 @@ enum Command {
         /// Confidence level of every interval and verdict (family-wise error 1 − confidence).
         #[arg(long, default_value_t = ftsmc_sim::stats::DEFAULT_CONFIDENCE)]
         confidence: f64,
+        /// A practical-difference margin (repeatable): `rms=0.005` (m), `success=0.02` (a fraction). Each
+        /// verdict is then also judged against it: better by more than the margin, equivalent within it
+        /// (two one-sided tests), or not decided.
+        #[arg(long = "min-effect", value_name = "METRIC=MARGIN")]
+        min_effect: Vec<String>,
         /// Fly a file's gains even if it was made for another vehicle.
         #[arg(long)]
         allow_other_vehicle: bool,
@@ -640,6 +645,7 @@ fn run(cli: Cli) -> Result<()> {
             max_runs,
             batch,
             confidence,
+            min_effect,
             allow_other_vehicle,
             seed,
             threads,
@@ -649,6 +655,11 @@ fn run(cli: Cli) -> Result<()> {
             limit,
             set,
         } => {
+            let min_effect = if min_effect.is_empty() {
+                None
+            } else {
+                Some(ftsmc_sim::batch::verdicts::MinEffect::parse(&min_effect).map_err(anyhow::Error::msg)?)
+            };
             anyhow::ensure!(
                 !contestants.is_empty(),
                 "compare needs its contestants, -c/--controllers: controller names or gain files (-c pid,se3 or \
@@ -690,6 +701,7 @@ fn run(cli: Cli) -> Result<()> {
                 contestants: &contestants,
                 plan,
                 confidence,
+                min_effect,
                 allow_other_vehicle,
                 threads,
                 lanes,

@@ -98,3 +98,27 @@ fn a_tuned_file_is_labelled_as_tuned_gains_of_its_scenario() {
     let names: Vec<&String> = s["contestants"].as_object().unwrap().keys().collect();
     assert!(names.iter().any(|n| n.as_str() == "pid (tuned, hummingbird, calm-1)"), "{names:?}");
 }
+
+/// `--min-effect` judges every verdict against a practical margin too; a
+/// bad margin is refused naming itself.
+#[test]
+fn min_effect_adds_practical_verdicts_and_refuses_bad_margins() {
+    let tmp = scratch("min-effect");
+    let args = ["compare", "paper-scenario-1", "-c", "pid,se3", "--runs", "3", "--no-figures", "--out", "o"];
+    let mut with = args.to_vec();
+    with.extend(["--min-effect", "rms=0.001", "--min-effect", "success=0.05"]);
+    let out = ftsmc(&with, tmp.path());
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let dir = tmp.path().join("o/paper-scenario-1");
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(s["min_effect"]["rms"], 0.001);
+    assert_eq!(s["practical"].as_array().unwrap().len(), s["verdicts"].as_array().unwrap().len());
+    let report = std::fs::read_to_string(dir.join("report.md")).unwrap();
+    assert!(report.contains("practical verdict") && report.contains("two one-sided tests"), "{report}");
+    let mut bad = args.to_vec();
+    bad.extend(["--min-effect", "tilt=0.1"]);
+    let out = ftsmc(&bad, tmp.path());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success() && err.contains("--min-effect tilt=0.1: unknown metric"), "{err}");
+}

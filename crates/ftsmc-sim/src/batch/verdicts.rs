@@ -177,3 +177,136 @@ pub fn metric_label(m: PairedMetric) -> &'static str {
         PairedMetric::Error => "RMS pos. err.",
     }
 }
+
+/// Practical-difference margins per metric for `ftsmc compare
+/// --min-effect`: a difference smaller than these does not matter to the
+/// user, whatever its p-value.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct MinEffect {
+    /// Success-rate margin Δ, as a fraction (0.02: two percentage points).
+    pub success: f64,
+    /// RMS position error margin Δ, m.
+    pub rms: f64,
+}
+
+impl MinEffect {
+    /// Parse `success=0.02` / `rms=0.005` entries (either may be left
+    /// out: margin 0); a clear error names a bad entry.
+    pub fn parse(entries: &[String]) -> Result<Self, String> {
+        let mut m = Self { success: 0.0, rms: 0.0 };
+        for e in entries {
+            let (k, v) = e.split_once('=').ok_or_else(|| {
+                format!("--min-effect {e}: expected METRIC=MARGIN (success=0.02 as a fraction, rms=0.005 in m)")
+            })?;
+            let v: f64 = v.trim().parse().map_err(|_| format!("--min-effect {e}: `{v}` is not a number"))?;
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(format!("--min-effect {e}: a margin is a finite number ≥ 0"));
+            }
+            match k.trim() {
+                "success" if v < 1.0 => m.success = v,
+                "success" => return Err(format!("--min-effect {e}: a success margin is a fraction below 1")),
+                "rms" => m.rms = v,
+                other => return Err(format!("--min-effect {e}: unknown metric `{other}` (expected success or rms)")),
+            }
+        }
+        Ok(m)
+    }
+}
+
+/// A verdict judged against a practical margin ([`practical`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+pub enum Practical {
+    /// A is better, and by more than the margin (the whole interval beyond it).
+    #[serde(rename = "A better by more than the margin")]
+    ABetter,
+    /// B is better, and by more than the margin.
+    #[serde(rename = "B better by more than the margin")]
+    BBetter,
+    /// Equivalent: the whole interval within ± the margin.
+    #[serde(rename = "equivalent within the margin")]
+    Equivalent,
+    /// Neither shown: more runs, or a difference near the margin.
+    #[serde(rename = "not decided at this margin")]
+    Undecided,
+}
+
+/// `v` against the margin `m` of its metric. With the effect turned so
+/// that positive favours A (success: `p_A − p_B`; error: `B − A`) and its
+/// interval `[lo, hi]` at the comparison's level: **A better** when the
+/// test says so (Holm) and `lo > Δ`; **B better** likewise with `hi < −Δ`;
+/// **equivalent** when `−Δ < lo` and `hi < Δ` — the two one-sided tests of
+/// Schuirmann (1987, "A comparison of the two one-sided tests procedure
+/// and the power approach for assessing the equivalence of average
+/// bioavailability", J. Pharmacokinet. Biopharm. 15) each at
+/// `(1 − confidence)/2`, so conservative at the stated level; otherwise
+/// undecided. With `Δ = 0` "equivalent" cannot happen and "better" needs
+/// the interval to exclude 0, which the test's own verdict implies.
+pub fn practical(v: &PairVerdict, m: &MinEffect) -> Practical {
+    let (delta, sign) = match v.test.metric {
+        PairedMetric::Success => (m.success, 1.0),
+        PairedMetric::Error => (m.rms, -1.0),
+    };
+    let e = v.test.effect;
+    let (lo, hi) = if sign > 0.0 { (e.lo, e.hi) } else { (-e.hi, -e.lo) };
+    if v.verdict == Verdict::ABetter && lo > delta {
+        Practical::ABetter
+    } else if v.verdict == Verdict::BBetter && hi < -delta {
+        Practical::BBetter
+    } else if delta > 0.0 && -delta < lo && hi < delta {
+        Practical::Equivalent
+    } else {
+        Practical::Undecided
+    }
+}
+
+#[cfg(test)]
+mod practical_tests {
+    use super::*;
+
+    fn error_verdict(lo: f64, est: f64, hi: f64, verdict: Verdict) -> PairVerdict {
+        PairVerdict {
+            a: "a".into(),
+            b: "b".into(),
+            test: PairTest {
+                metric: PairedMetric::Error,
+                pairs: 50,
+                effect: Interval { estimate: est, lo, hi },
+                p: 0.001,
+                a_leads: est < 0.0,
+            },
+            p_holm: 0.002,
+            verdict,
+        }
+    }
+
+    #[test]
+    fn a_tiny_real_difference_is_not_a_practical_one() {
+        let m = MinEffect { success: 0.02, rms: 1e-3 };
+        // 1.8e-11 m better: significant, meaningless at a 1 mm margin: equivalent.
+        let v = error_verdict(-2.0e-11, -1.8e-11, -1.6e-11, Verdict::ABetter);
+        assert_eq!(practical(&v, &m), Practical::Equivalent);
+        // 5 mm better, interval [−6, −4] mm: better beyond the margin.
+        let v = error_verdict(-6e-3, -5e-3, -4e-3, Verdict::ABetter);
+        assert_eq!(practical(&v, &m), Practical::ABetter);
+        // B better on error: a positive A − B beyond the margin.
+        let v = error_verdict(4e-3, 5e-3, 6e-3, Verdict::BBetter);
+        assert_eq!(practical(&v, &m), Practical::BBetter);
+        // An interval straddling the margin: undecided.
+        let v = error_verdict(-2e-3, -1e-3, -1e-4, Verdict::ABetter);
+        assert_eq!(practical(&v, &m), Practical::Undecided);
+        // Margin 0: only the test's verdict.
+        let zero = MinEffect { success: 0.0, rms: 0.0 };
+        let v = error_verdict(-2.0e-11, -1.8e-11, -1.6e-11, Verdict::ABetter);
+        assert_eq!(practical(&v, &zero), Practical::ABetter);
+    }
+
+    #[test]
+    fn margins_parse_or_are_refused_by_name() {
+        let m = MinEffect::parse(&["rms=0.005".into(), "success=0.02".into()]).unwrap();
+        assert_eq!(m, MinEffect { success: 0.02, rms: 0.005 });
+        for bad in ["rms", "rms=x", "rms=-1", "success=1.5", "tilt=0.1", "rms=inf"] {
+            let e = MinEffect::parse(&[bad.to_string()]).unwrap_err();
+            assert!(e.starts_with(&format!("--min-effect {bad}")), "{e}");
+        }
+    }
+}
