@@ -92,7 +92,7 @@ pub fn metres_with_justified_digits(estimate: f64, lo: f64, hi: f64) -> String {
     if scale > 0.0 && scale < 1e-4 {
         return format!("{} m [{}, {}]", bound(estimate, 0, true), bound(lo, 0, true), bound(hi, 0, true));
     }
-    let digits = if scale > 0.0 { (1.0 - scale.log10().floor()).clamp(1.0, 6.0) as usize } else { 4 };
+    let digits = if scale > 0.0 { (1.0 - ftsmc_core::math::log10(scale).floor()).clamp(1.0, 6.0) as usize } else { 4 };
     format!("{} m [{}, {}]", bound(estimate, digits, false), bound(lo, digits, false), bound(hi, digits, false))
 }
 
