@@ -69,16 +69,27 @@ def holm(ps: list[float]) -> list[float]:
     return adjusted
 
 
+def contestants(runs: list[dict[str, str]]) -> tuple[str, str]:
+    """The labels of first.toml and current.toml in runs.csv: compare
+    labels a file by what it holds (`pid (tuned, …)`, the path added when
+    two files share a label), in the order given, first.toml first."""
+    names = list(dict.fromkeys(r["controller"] for r in runs))
+    if len(names) != 2:
+        raise SystemExit(f"expected the two contestants first.toml and current.toml, found {names}")
+    return names[0], names[1]
+
+
 def completion(work: Path, rung: str, controller: str) -> tuple[int, int, int, int, int]:
     """Flights completed by the first and the new gains of a cell, its
     draws, and the pairs only the new (b) or only the first (c) completed."""
     with open(work / "cmp" / f"{rung}-{controller}" / "out" / rung / "runs.csv", newline="") as f:
         runs = list(csv.DictReader(f))
+    first_name, new_name = contestants(runs)
     done = {
         name: {r["run"]: r["exit"] == "completed" for r in runs if r["controller"] == name}
-        for name in ("first.toml", "current.toml")
+        for name in (first_name, new_name)
     }
-    first, new = done["first.toml"], done["current.toml"]
+    first, new = done[first_name], done[new_name]
     b = sum(new[k] and not first[k] for k in first)
     c = sum(first[k] and not new[k] for k in first)
     return sum(first.values()), sum(new.values()), len(first), b, c
@@ -101,8 +112,9 @@ def row(work: Path, rung: str, controller: str) -> tuple[str, str]:
     summary = json.loads((out / "summary.json").read_text())
     with open(out / "runs.csv", newline="") as f:
         runs = list(csv.DictReader(f))
+    first_name, new_name = contestants(runs)
     counts: dict[str, tuple[int, int]] = {}
-    for name in ("first.toml", "current.toml"):
+    for name in (first_name, new_name):
         mine = [r for r in runs if r["controller"] == name]
         counts[name] = (sum(r["success"] == "true" for r in mine), len(mine))
     verdicts = {v["metric"]: v for v in summary["verdicts"]}
@@ -110,7 +122,7 @@ def row(work: Path, rung: str, controller: str) -> tuple[str, str]:
     effect = success["effect"]  # first − new
     medians = {k: v["intervals"]["rms_median"]["estimate"] for k, v in summary["contestants"].items()}
     kept = "# Improved: false" in (folder / "current.toml").read_text()
-    (k0, n0), (k1, n1) = counts["first.toml"], counts["current.toml"]
+    (k0, n0), (k1, n1) = counts[first_name], counts[new_name]
     lo0, hi0 = wilson(k0, n0)
     lo1, hi1 = wilson(k1, n1)
     verdict = side(success)
@@ -122,7 +134,7 @@ def row(work: Path, rung: str, controller: str) -> tuple[str, str]:
         f"{k1}/{n1} [{lo1:.1f}, {hi1:.1f}]" + (" (start)" if kept else ""),
         f"{signed(-effect['estimate'])} [{signed(-effect['hi'])}, {signed(-effect['lo'])}], p = {p}",
         "**new**" if verdict == "new" else verdict,
-        f"{medians['first.toml']:.3g} / {medians['current.toml']:.3g}",
+        f"{medians[first_name]:.3g} / {medians[new_name]:.3g}",
         "one flight" if rung in DETERMINISTIC else side(error),
     ]
     return "| " + " | ".join(cells) + " |", verdict

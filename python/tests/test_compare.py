@@ -68,7 +68,8 @@ def test_a_tuned_file_is_a_contestant_and_bad_ones_are_refused(tmp_path: Path) -
     scenario = _short()
     tuned = Path(__file__).resolve().parents[2] / "scenarios" / "tuned" / "realistic-calm-1-pid.toml"
     result = ftsmc.compare(scenario, ["pid", str(tuned)], runs=3, threads=1)
-    assert list(result.summary.index) == ["pid", tuned.name]
+    # A file is labelled by what it holds: its controller, "tuned", vehicle and rung.
+    assert list(result.summary.index) == ["pid", "pid (tuned, hummingbird, calm-1)"]
     with pytest.raises(ValueError, match="no-such-controller"):
         ftsmc.compare(scenario, ["pid", "no-such-controller"], runs=2)
     with pytest.raises(ValueError, match="given twice"):

@@ -8,6 +8,7 @@
 //! - [`ftaftsmc`]: the fixed-time sliding surface, reaching and adaptive laws (Eq. 5–17).
 //! - [`cascade`]: the outer/inner cascade with mass adaptation (Eq. 18–20, 44, 52, 56–58).
 //! - [`allocation`]: rotor allocation (Eq. 2).
+//! - [`rotor_layout`]: any planar four-rotor layout, its effectiveness and PX4's normalisation of it.
 //! - [`model`]: physical parameters (Table 2, corrected), state, reference, command.
 //! - [`law`]: the [`law::AxisLaw`] interface all cascaded sliding-mode laws implement.
 //! - [`measured`]: the measurement a controller receives (Euler state, and quaternion and body rates when known).
@@ -35,6 +36,7 @@ pub mod measured;
 pub mod model;
 pub mod pid;
 pub mod ranftsmc;
+pub mod rotor_layout;
 pub mod se3;
 mod setpoint;
 pub mod tsm_sta;

@@ -77,6 +77,11 @@
 //!   yaws by `±T_max/4`: `τ_max = (d/b) T_max`. `MC_*RATE_P/I/D` and
 //!   `MC_*R_INT_LIM` are multiplied by these. (An earlier ftsmc took
 //!   `l T_max/4` with `T_max = 2 m g`: 2.42× softer on the Hummingbird.)
+//!   On any other layout the same normalisation is worked out from the
+//!   layout's effectiveness ([`crate::rotor_layout::RotorGeometry::px4_torque_scale`]):
+//!   a square "×" has four rotors rolling the vehicle, `τ_max = l T_max/2`
+//!   (√2 times the "+" of the same arm); a stretched or irregular layout
+//!   has its own ([`PidGains::for_vehicle_on`]).
 //! * **Attitude.** `MC_ROLL_P = MC_PITCH_P = 4.0`, `MC_YAW_P = 2.8`: the
 //!   values of PX4's current `mc_att_control_params.c` (older releases
 //!   shipped 6.5). PX4's rate loop has no reference model by default, so
@@ -108,6 +113,7 @@ use crate::law::{
 use crate::math::{cross, dot, exp, mat_t_vec, norm, Mat3, Vec3};
 use crate::measured::{BodyAttitude, Measurement};
 use crate::model::{Command, QuadState, QuadrotorParams, Reference};
+use crate::rotor_layout::RotorGeometry;
 use crate::setpoint::{finite_lanes, nan_command, HeadingSinCos, TiltLimit};
 
 /// PX4 `MPC_THR_HOVER` default: hover at half the maximum thrust (T/W = 2).
@@ -192,10 +198,17 @@ impl PidGains {
     /// `T_max = m g / MPC_THR_HOVER`) ([module docs](self), "Gains"):
     /// torque = normalised rate-loop output × [`Self::max_torques`].
     pub fn for_vehicle_with_max_thrust(params: &QuadrotorParams, max_thrust: Option<f64>) -> Self {
+        Self::for_vehicle_on(params, max_thrust, &RotorGeometry::Plus { arm_length: params.arm_length })
+    }
+
+    /// [`Self::for_vehicle_with_max_thrust`] on the rotor layout `geometry`:
+    /// the torque normalisation is PX4's for that layout
+    /// ([`Self::max_torques_on`]).
+    pub fn for_vehicle_on(params: &QuadrotorParams, max_thrust: Option<f64>, geometry: &RotorGeometry) -> Self {
         let deg = core::f64::consts::PI / 180.0;
         let weight = params.mass * params.gravity;
         let t_max = Self::normalisation_thrust(params, max_thrust);
-        let [roll, pitch, yaw] = Self::max_torques_for(params, t_max);
+        let [roll, pitch, yaw] = Self::max_torques_on(params, t_max, geometry);
         let scale = |normalised: [f64; 3]| [normalised[0] * roll, normalised[1] * pitch, normalised[2] * yaw];
         Self {
             position_p: [0.95, 0.95, 1.0],
@@ -248,6 +261,19 @@ impl PidGains {
     pub fn max_torques_for(params: &QuadrotorParams, t_max: f64) -> [f64; 3] {
         let tilt = core::f64::consts::SQRT_2 * params.arm_length * t_max / 4.0;
         [tilt, tilt, params.yaw_drag_coefficient / params.lift_coefficient * t_max]
+    }
+
+    /// Torque, N·m, that a normalised rate-loop output of 1 stands for with
+    /// PX4's allocation normalisation on the layout `geometry`, each rotor
+    /// giving `t_max / 4` at full thrust and yawing by `d/b` of its thrust
+    /// ([`RotorGeometry::px4_torque_scale`]; on the "+" layout of arm
+    /// `params.arm_length`, [`Self::max_torques_for`] bit for bit). A
+    /// layout that cannot make every torque (singular) takes the "+"
+    /// value, which [`RotorGeometry::px4_torque_scale`]'s callers refuse
+    /// before it comes to that.
+    pub fn max_torques_on(params: &QuadrotorParams, t_max: f64, geometry: &RotorGeometry) -> [f64; 3] {
+        let ratio = params.yaw_drag_coefficient / params.lift_coefficient;
+        geometry.px4_torque_scale(t_max / 4.0, ratio).unwrap_or_else(|| Self::max_torques_for(params, t_max))
     }
 
     /// Range checks (the error names the field and value): P gains, limits,

@@ -514,43 +514,6 @@ pub struct Mixer {
     px4: Option<SequentialDesaturation>,
 }
 
-/// Inverse of a 4×4 matrix by Gauss–Jordan elimination with partial
-/// pivoting; `None` if a pivot is below `1e-12` of the largest entry.
-fn invert4(a: &[[f64; 4]; 4]) -> Option<[[f64; 4]; 4]> {
-    let scale = a.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
-    if !scale.is_normal() {
-        return None;
-    }
-    let mut m = *a;
-    let mut inv = [[0.0; 4]; 4];
-    for i in 0..4 {
-        inv[i][i] = 1.0;
-    }
-    for col in 0..4 {
-        let pivot = (col..4).max_by(|&r, &s| m[r][col].abs().total_cmp(&m[s][col].abs()))?;
-        if m[pivot][col].abs() < 1e-12 * scale {
-            return None;
-        }
-        m.swap(col, pivot);
-        inv.swap(col, pivot);
-        let d = m[col][col];
-        for k in 0..4 {
-            m[col][k] /= d;
-            inv[col][k] /= d;
-        }
-        for r in 0..4 {
-            if r != col {
-                let f = m[r][col];
-                for k in 0..4 {
-                    m[r][k] -= f * m[col][k];
-                    inv[r][k] -= f * inv[col][k];
-                }
-            }
-        }
-    }
-    Some(inv)
-}
-
 /// Paper Eq. 2 as a matrix (`[U1, u2, u3, u4]ᵀ = A [ω1², .., ω4²]ᵀ`).
 pub fn paper_allocation_matrix(p: &QuadrotorParams) -> [[f64; 4]; 4] {
     let b = p.lift_coefficient;
@@ -567,7 +530,7 @@ impl Mixer {
     /// not carry a positive share of the thrust.
     pub fn new(allocation: [[f64; 4]; 4], actuators: &ActuatorParams) -> Result<Self, GainError> {
         actuators.check()?;
-        let inverse = invert4(&allocation).ok_or(GainError {
+        let inverse = ftsmc_core::rotor_layout::invert4(&allocation).ok_or(GainError {
             field: "allocation",
             value: allocation[0][0],
             expected: "an invertible allocation matrix",

@@ -12,7 +12,8 @@
 //! `[ω_min² / ω_max², 1]`.
 //!
 //! The steps, with the mix `M` (the allocation's inverse in actuator space,
-//! each column divided by its axis scale, entries below `1e-3` set to 0)
+//! each column divided by its axis scale, entries below `1e-3` set to 0;
+//! the scales: [`ftsmc_core::rotor_layout::px4_scales`])
 //! and the command in normalised units (`c_k = u_k · scale_k`):
 //!
 //! 1. `a = M_roll c_roll + M_pitch c_pitch + M_thrust c_thrust` (no yaw).
@@ -37,10 +38,6 @@ const THRUST: usize = 0;
 const ROLL: usize = 1;
 const PITCH: usize = 2;
 const YAW: usize = 3;
-
-/// PX4's `FLT_EPSILON` (the `f32` machine epsilon), below which a scale is
-/// not applied.
-const FLT_EPSILON: f64 = f32::EPSILON as f64;
 
 /// PX4's sequential-desaturation allocation for one vehicle (the mix and its
 /// normalisation worked out once).
@@ -73,34 +70,7 @@ impl SequentialDesaturation {
     pub fn new(inverse: &[[f64; 4]; 4], w_min: f64, w_max: f64) -> Self {
         // The un-normalised mix in actuator space: a = inverse · u / w_max.
         let mut mix: [[f64; 4]; 4] = core::array::from_fn(|k| core::array::from_fn(|i| inverse[i][k] / w_max));
-        // Roll and pitch share one scale: sqrt(|col|² / (n / 2)) over the
-        // actuators with a nonzero entry (|x| > 1e-3), the larger of the two.
-        let rp_scale = |col: &[f64; 4]| {
-            let n = col.iter().filter(|x| x.abs() > 1e-3).count();
-            if n > 0 {
-                (col.iter().map(|x| x * x).sum::<f64>() / (n as f64 / 2.0)).sqrt()
-            } else {
-                1.0
-            }
-        };
-        let rp = rp_scale(&mix[ROLL]).max(rp_scale(&mix[PITCH]));
-        // Yaw: the largest (signed) entry of its column.
-        let yaw = mix[YAW].iter().copied().fold(f64::NEG_INFINITY, f64::max);
-        // Thrust: the mean norm of the actuators' thrust entries over those
-        // with a nonzero one.
-        let nonzero = mix[THRUST].iter().filter(|x| x.abs() > FLT_EPSILON).count();
-        let thrust = if nonzero > 0 { mix[THRUST].iter().map(|x| x.abs()).sum::<f64>() / nonzero as f64 } else { 1.0 };
-        let mut scale = [1.0; 4];
-        if rp > FLT_EPSILON {
-            scale[ROLL] = rp;
-            scale[PITCH] = rp;
-        }
-        if yaw > FLT_EPSILON {
-            scale[YAW] = yaw;
-        }
-        if thrust > FLT_EPSILON {
-            scale[THRUST] = thrust;
-        }
+        let scale = ftsmc_core::rotor_layout::px4_scales(&mix);
         for k in 0..4 {
             for x in mix[k].iter_mut() {
                 *x /= scale[k];

@@ -12,7 +12,7 @@
 
 use ftsmc_core::model::{Command, QuadrotorParams};
 use ftsmc_sim::actuators::{paper_allocation_matrix, ActuatorParams, Mixer, MixerKind};
-use ftsmc_sim::vehicle::{Configuration, RigidBodyParams};
+use ftsmc_sim::vehicle::{Configuration, RigidBodyParams, VehiclePreset};
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
@@ -299,4 +299,36 @@ fn a_feasible_command_keeps_its_forces_with_the_px4_mixer() {
         assert!(!out.saturated, "{name}");
         assert_eq!(out.applied, c, "{name}");
     }
+}
+
+/// PX4 takes the yaw scale as the largest entry of the yaw column in
+/// its own (z-down) frame, the negated smallest in ftsmc's. On the "+"
+/// and square "×" layouts of every preset the column is symmetric bit
+/// for bit, so this is the largest entry of ftsmc's column, as before
+/// the scales moved to `ftsmc_core::rotor_layout` (the flights of the
+/// square layouts keep their bits).
+#[test]
+fn square_layouts_have_symmetric_yaw_columns() {
+    let mut bodies = vec![RigidBodyParams::default(), RigidBodyParams::crazyflie(), RigidBodyParams::hummingbird()];
+    for preset in VehiclePreset::ALL {
+        let s = ftsmc_sim::scenario::Scenario::from_toml_str(
+            &format!("extends = \"realistic-calm-1\"\nname = \"p\"\n[vehicle]\npreset = \"{}\"\n", preset.name()),
+            "test",
+        )
+        .unwrap();
+        bodies.push(s.rigid_body_params());
+    }
+    let mut squares = 0;
+    for rb in bodies {
+        if rb.configuration == Configuration::Custom {
+            continue;
+        }
+        squares += 1;
+        let inverse = ftsmc_core::rotor_layout::invert4(&rb.allocation_matrix()).unwrap();
+        let yaw: [f64; 4] = core::array::from_fn(|i| inverse[i][3]);
+        let max = yaw.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        let min = yaw.iter().copied().fold(f64::INFINITY, f64::min);
+        assert_eq!(max.to_bits(), (-min).to_bits(), "{:?}: {yaw:?}", rb.configuration);
+    }
+    assert!(squares >= 6, "{squares}");
 }

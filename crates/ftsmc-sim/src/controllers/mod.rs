@@ -81,6 +81,7 @@
 use ftsmc_core::cascade::{CascadeConfig, CascadeSettings, Controller, MassAdaptation};
 use ftsmc_core::law::{AxisLaw, GainError};
 use ftsmc_core::model::QuadrotorParams;
+use ftsmc_core::rotor_layout::RotorGeometry;
 use serde::de::DeserializeOwned;
 use serde::Serialize;
 
@@ -130,7 +131,7 @@ impl BuildContext {
 
 /// What a scenario tells its controllers about the vehicle when their
 /// default gains are derived from it ([`GainSection::defaults_for`]).
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct NominalVehicle {
     /// Nominal plant parameters (`[plant]`).
     pub plant: QuadrotorParams,
@@ -139,15 +140,33 @@ pub struct NominalVehicle {
     /// `[actuators]` (or `simulation.max_rotor_speed`); `None` when the
     /// rotors are unlimited (the paper plant).
     pub max_thrust: Option<f64>,
+    /// The rotor layout PX4's allocation is normalised on
+    /// ([`ftsmc_core::pid::PidGains::for_vehicle_on`]): the true vehicle's
+    /// (`[vehicle] configuration`, `rotor_positions`, `spin` on the rigid
+    /// body; paper Eq. 2's "+" with `[plant] arm_length` on Eq. 1).
+    pub geometry: RotorGeometry,
+}
+
+impl Default for NominalVehicle {
+    /// The paper vehicle with unlimited rotors.
+    fn default() -> Self {
+        Self::new(QuadrotorParams::default(), None)
+    }
 }
 
 impl NominalVehicle {
     /// The vehicle with nominal `plant` whose rotors stop at
-    /// `max_rotor_speed` rad/s (`None` or infinite: unlimited).
+    /// `max_rotor_speed` rad/s (`None` or infinite: unlimited), on paper
+    /// Eq. 2's "+" layout ([`NominalVehicle::on`] for another).
     pub fn new(plant: QuadrotorParams, max_rotor_speed: Option<f64>) -> Self {
         let max_thrust =
             max_rotor_speed.filter(|w| w.is_finite() && *w > 0.0).map(|w| 4.0 * plant.lift_coefficient * w * w);
-        Self { plant, max_thrust }
+        Self { plant, max_thrust, geometry: RotorGeometry::Plus { arm_length: plant.arm_length } }
+    }
+
+    /// This vehicle on the rotor layout `geometry`.
+    pub fn on(self, geometry: RotorGeometry) -> Self {
+        Self { geometry, ..self }
     }
 
     /// A collective-thrust cap for a controller that keeps `margin` (0..1)

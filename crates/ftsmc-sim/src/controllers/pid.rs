@@ -10,7 +10,7 @@ use super::generic::{FullState, FullStateGains};
 use super::{GainSection, InvalidGain, NominalVehicle};
 
 /// `[pid]`: PX4's default gains rescaled to the scenario's nominal `[plant]`
-/// and rotor limit ([`PidGains::for_vehicle_with_max_thrust`]); keys the
+/// and rotor limit ([`PidGains::for_vehicle_on`]); keys the
 /// table gives replace them one by one.
 impl GainSection for PidGains {
     const KEY: &'static str = "pid";
@@ -54,7 +54,7 @@ impl GainSection for PidGains {
         // never binds there.
         Self {
             thrust_max: vehicle.thrust_cap(0.0, 10.0),
-            ..Self::for_vehicle_with_max_thrust(&vehicle.plant, vehicle.max_thrust)
+            ..Self::for_vehicle_on(&vehicle.plant, vehicle.max_thrust, &vehicle.geometry)
         }
     }
 

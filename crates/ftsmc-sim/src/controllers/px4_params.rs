@@ -22,7 +22,8 @@
 //! cut-offs in Hz). Its thrusts and torques are normalised: thrust by the
 //! vehicle's maximum collective thrust `T_max`, torques by what the control
 //! allocation makes of a normalised torque of 1, `τ_max`
-//! ([`PidGains::normalisation_thrust`], [`PidGains::max_torques_for`], the
+//! ([`PidGains::normalisation_thrust`], [`PidGains::max_torques_on`] on the
+//! vehicle's rotor layout, the
 //! module docs of `ftsmc_core::pid`). So the rate gains are
 //! `rate_p = MC_ROLLRATE_K · MC_ROLLRATE_P · τ_max,roll` (and so for `I`,
 //! `D`; PX4's `MC_*RATE_K` scales P, I and D, `mc_rate_control_params.c`),
@@ -332,7 +333,7 @@ pub fn write_qgc(params: &[Px4Param], header: &[String]) -> String {
 /// The normalisation of `vehicle`: (`T_max`, N; `τ_max` per body axis, N·m).
 pub fn normalisation(vehicle: &NominalVehicle) -> (f64, [f64; 3]) {
     let t_max = PidGains::normalisation_thrust(&vehicle.plant, vehicle.max_thrust);
-    (t_max, PidGains::max_torques_for(&vehicle.plant, t_max))
+    (t_max, PidGains::max_torques_on(&vehicle.plant, t_max, &vehicle.geometry))
 }
 
 /// Whether `hover_thrust` is the nominal vehicle's weight (to 1e-12 relative).

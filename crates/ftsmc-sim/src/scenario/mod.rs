@@ -403,12 +403,17 @@ impl Scenario {
     }
 
     /// What the controllers' vehicle-derived default gains are built for:
-    /// the nominal `[plant]` and the rotor limit of `[actuators]` (or
-    /// `simulation.max_rotor_speed`); see [`crate::controllers::GainSection::defaults_for`].
+    /// the nominal `[plant]`, the rotor limit of `[actuators]` (or
+    /// `simulation.max_rotor_speed`) and the true vehicle's rotor layout
+    /// (the rigid body's; "+" on Eq. 1); see [`crate::controllers::GainSection::defaults_for`].
     pub fn nominal_vehicle(&self) -> crate::controllers::NominalVehicle {
         let limit =
             self.actuators.map(|a| a.max_rotor_speed).filter(|w| w.is_finite()).or(self.simulation.max_rotor_speed);
-        crate::controllers::NominalVehicle::new(self.plant, limit)
+        let vehicle = crate::controllers::NominalVehicle::new(self.plant, limit);
+        match self.vehicle.model {
+            crate::vehicle::VehicleModel::Paper => vehicle,
+            crate::vehicle::VehicleModel::RigidBody => vehicle.on(self.rigid_body_params().geometry()),
+        }
     }
 
     /// Allocation matrix of the truth model and the paper-form parameters used

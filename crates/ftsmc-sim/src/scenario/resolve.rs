@@ -459,11 +459,13 @@ fn release_wind_preset_keys(merged: &mut toml::Table, layer: &toml::Table, origi
 /// index at most the naming file's); the values of its base files are
 /// replaced, so a child that names another vehicle gets that vehicle's
 /// nominal model, true vehicle and rotors. With `model = "paper"` written
-/// at or above the naming file, the rigid-body-only keys are left out.
+/// at or above the naming file, the rigid-body-only keys are left out. The
+/// layout (`configuration`, `rotor_positions`) is filled or kept whole.
 /// A filled key is recorded as written by the naming file. `Err(message)`
 /// for a name that is not a preset.
 fn apply_vehicle_preset(merged: &mut toml::Table, origin: &mut BTreeMap<String, usize>) -> Result<(), String> {
     use crate::vehicle::presets::{VehiclePreset, PRESET_SECTIONS, RIGID_BODY_ONLY_KEYS};
+    const LAYOUT_KEYS: [&str; 2] = ["configuration", "rotor_positions"];
     let Some(name) = merged.get("vehicle").and_then(|v| v.get("preset")) else { return Ok(()) };
     let preset = match name.as_str().and_then(VehiclePreset::from_name) {
         Some(p) => p,
@@ -479,6 +481,19 @@ fn apply_vehicle_preset(merged: &mut toml::Table, origin: &mut BTreeMap<String, 
     let kept = |origin: &BTreeMap<String, usize>, path: &str| origin.get(path).is_some_and(|&i| i <= naming);
     let paper = merged.get("vehicle").and_then(|v| v.get("model")).and_then(|m| m.as_str()) == Some("paper")
         && kept(origin, "vehicle.model");
+    // The layout is one thing, `configuration` and `rotor_positions` two
+    // keys of it: a file at or below the naming one that writes either
+    // keeps its layout whole, and otherwise the preset's layout replaces a
+    // base file's whole (no "cross" of the preset beside positions of a base).
+    let own_layout = LAYOUT_KEYS.iter().any(|k| kept(origin, &format!("vehicle.{k}")));
+    if !own_layout && !paper {
+        if let Some(v) = merged.get_mut("vehicle").and_then(|v| v.as_table_mut()) {
+            for key in LAYOUT_KEYS {
+                v.remove(key);
+                origin.remove(&format!("vehicle.{key}"));
+            }
+        }
+    }
     let mut table = preset.table();
     for section in PRESET_SECTIONS {
         let Some(toml::Value::Table(values)) = table.remove(section) else { continue };
@@ -486,8 +501,9 @@ fn apply_vehicle_preset(merged: &mut toml::Table, origin: &mut BTreeMap<String, 
         let Some(target) = target.as_table_mut() else { continue };
         for (key, value) in values {
             let path = format!("{section}.{key}");
-            let skipped =
-                section == "vehicle" && paper && (RIGID_BODY_ONLY_KEYS.contains(&key.as_str()) || key == "model");
+            let skipped = section == "vehicle"
+                && ((paper && (RIGID_BODY_ONLY_KEYS.contains(&key.as_str()) || key == "model"))
+                    || (own_layout && LAYOUT_KEYS.contains(&key.as_str())));
             if !kept(origin, &path) && !skipped {
                 origin.retain(|k, _| !k.starts_with(&format!("{path}.")));
                 origin.insert(path, naming);

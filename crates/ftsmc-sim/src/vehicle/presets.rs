@@ -21,6 +21,10 @@ pub enum VehiclePreset {
     /// Crazyflie 2.0, RotorPy's set (Förster 2015; `vehicles/crazyflie-2.toml`).
     #[serde(rename = "crazyflie-2")]
     Crazyflie2,
+    /// Crazyflie 2.1 with the 2.1+ propellers, Bitcraze's firmware constants
+    /// and Gazebo model (`vehicles/crazyflie-2.1.toml`).
+    #[serde(rename = "crazyflie-2.1")]
+    Crazyflie21,
     /// PX4's reference X500, PX4's Gazebo model (`vehicles/px4-x500.toml`).
     #[serde(rename = "px4-x500")]
     Px4X500,
@@ -35,19 +39,32 @@ pub const PRESET_SECTIONS: [&str; 3] = ["plant", "vehicle", "actuators"];
 
 /// The `[vehicle]` keys only the rigid body flies: a preset leaves them out
 /// when a file sets `model = "paper"`.
-pub const RIGID_BODY_ONLY_KEYS: [&str; 6] =
-    ["configuration", "spin", "parasitic_drag", "rotor_drag_xy", "rotor_drag_z", "translational_lift"];
+pub const RIGID_BODY_ONLY_KEYS: [&str; 7] = [
+    "configuration",
+    "rotor_positions",
+    "spin",
+    "parasitic_drag",
+    "rotor_drag_xy",
+    "rotor_drag_z",
+    "translational_lift",
+];
 
 impl VehiclePreset {
     /// Every preset, in the order `ftsmc list` shows them.
-    pub const ALL: [VehiclePreset; 4] =
-        [VehiclePreset::Hummingbird, VehiclePreset::Crazyflie2, VehiclePreset::Px4X500, VehiclePreset::Agilicious];
+    pub const ALL: [VehiclePreset; 5] = [
+        VehiclePreset::Hummingbird,
+        VehiclePreset::Crazyflie2,
+        VehiclePreset::Crazyflie21,
+        VehiclePreset::Px4X500,
+        VehiclePreset::Agilicious,
+    ];
 
     /// The name a scenario file writes.
     pub fn name(self) -> &'static str {
         match self {
             VehiclePreset::Hummingbird => "hummingbird",
             VehiclePreset::Crazyflie2 => "crazyflie-2",
+            VehiclePreset::Crazyflie21 => "crazyflie-2.1",
             VehiclePreset::Px4X500 => "px4-x500",
             VehiclePreset::Agilicious => "agilicious",
         }
@@ -68,6 +85,7 @@ impl VehiclePreset {
         match self {
             VehiclePreset::Hummingbird => include_str!("../../../../vehicles/hummingbird.toml"),
             VehiclePreset::Crazyflie2 => include_str!("../../../../vehicles/crazyflie-2.toml"),
+            VehiclePreset::Crazyflie21 => include_str!("../../../../vehicles/crazyflie-2.1.toml"),
             VehiclePreset::Px4X500 => include_str!("../../../../vehicles/px4-x500.toml"),
             VehiclePreset::Agilicious => include_str!("../../../../vehicles/agilicious.toml"),
         }

@@ -84,6 +84,7 @@ use ftsmc_core::kinematics;
 use ftsmc_core::lanes::{branch, Lanewise, Mask, Real};
 use ftsmc_core::law::GainError;
 use ftsmc_core::model::{QuadState, QuadrotorParams};
+use ftsmc_core::rotor_layout::RotorGeometry;
 use serde::{Deserialize, Serialize};
 
 use super::math::{
@@ -124,6 +125,9 @@ pub enum Configuration {
     /// `l(1, 1)/√2`, 2 at `l(1, −1)/√2`, 3 at `l(−1, −1)/√2`, 4 at
     /// `l(−1, 1)/√2` — RotorPy's `crazyflie_params.py` / `hummingbird_params.py` layout.
     Cross,
+    /// Any planar layout: rotor `i` at [`RigidBodyParams::rotor_positions`]'s
+    /// entry `i` (`[vehicle] rotor_positions`; the arm length is not used).
+    Custom,
 }
 
 /// Spin direction of a rotor, seen from above (from `+z_b`).
@@ -166,6 +170,13 @@ pub struct RigidBodyParams {
     pub arm_length: f64,
     /// Rotor layout (default `plus`, paper Eq. 2).
     pub configuration: Configuration,
+    /// Hub `(x, y)` of rotors 1..4 in body axes, m: given exactly when
+    /// `configuration` is [`Configuration::Custom`] (default none). A
+    /// scenario sets it as `[vehicle] rotor_positions`
+    /// ([`crate::vehicle::VehicleSettings`]); the deprecated `[rigid_body]`
+    /// section has no such key.
+    #[serde(skip)]
+    pub custom_positions: Option<[[f64; 2]; 4]>,
     /// Spin direction of rotors 1..4 (default `["cw", "ccw", "cw", "ccw"]`, [`PAPER_SPIN`]).
     pub spin: [Spin; 4],
     /// Thrust coefficient k_f (per rotor `T = k_f ω²`), N·s²/rad²
@@ -224,6 +235,7 @@ impl RigidBodyParams {
             inertia: diag(p.inertia),
             arm_length: p.arm_length,
             configuration: Configuration::Plus,
+            custom_positions: None,
             spin: PAPER_SPIN,
             thrust_coefficient: p.lift_coefficient,
             moment_coefficient: p.yaw_drag_coefficient,
@@ -247,6 +259,7 @@ impl RigidBodyParams {
             inertia: diag([1.43e-5, 1.43e-5, 2.89e-5]),
             arm_length: 0.043,
             configuration: Configuration::Cross,
+            custom_positions: None,
             spin: PAPER_SPIN,
             thrust_coefficient: 2.3e-8,
             moment_coefficient: 7.8e-10,
@@ -269,6 +282,7 @@ impl RigidBodyParams {
             inertia: diag([3.65e-3, 3.68e-3, 7.03e-3]),
             arm_length: 0.17,
             configuration: Configuration::Cross,
+            custom_positions: None,
             spin: PAPER_SPIN,
             thrust_coefficient: 5.57e-6,
             moment_coefficient: 1.36e-7,
@@ -336,6 +350,43 @@ impl RigidBodyParams {
     /// The rows of [`RigidBodyParams::check`] after the inertia.
     fn check_rest(&self) -> Result<(), GainError> {
         closed("arm_length", self.arm_length, 1e-6, 1e6, "1e-6 <= arm_length <= 1e6 m")?;
+        match (self.configuration, self.custom_positions) {
+            (Configuration::Custom, None) => {
+                return Err(GainError {
+                    field: "rotor_positions",
+                    value: f64::NAN,
+                    expected: "four rotor positions [[x, y], ..] (m) with configuration = \"custom\"",
+                })
+            }
+            (Configuration::Custom, Some(p)) => {
+                const NAMES: [[&str; 2]; 4] = [
+                    ["rotor_positions[0][0]", "rotor_positions[0][1]"],
+                    ["rotor_positions[1][0]", "rotor_positions[1][1]"],
+                    ["rotor_positions[2][0]", "rotor_positions[2][1]"],
+                    ["rotor_positions[3][0]", "rotor_positions[3][1]"],
+                ];
+                for (names, xy) in NAMES.iter().zip(&p) {
+                    for (name, &v) in names.iter().zip(xy) {
+                        closed(name, v, -1e6, 1e6, "a finite position, |x|, |y| <= 1e6 m")?;
+                    }
+                }
+                if self.geometry().px4_torque_scale(1.0, 1.0).is_none() {
+                    return Err(GainError {
+                        field: "rotor_positions",
+                        value: p[0][0],
+                        expected: "rotors that can roll, pitch and yaw the vehicle (an invertible allocation: not all on one line, spins not all alike)",
+                    });
+                }
+            }
+            (_, Some(p)) => {
+                return Err(GainError {
+                    field: "rotor_positions",
+                    value: p[0][0],
+                    expected: "rotor positions only with configuration = \"custom\"",
+                })
+            }
+            (_, None) => {}
+        }
         const COEF: &str = "1e-12 <= value <= 1e6 (the mixer divides by it)";
         closed("thrust_coefficient", self.thrust_coefficient, 1e-12, 1e6, COEF)?;
         closed("moment_coefficient", self.moment_coefficient, 1e-12, 1e6, COEF)?;
@@ -359,6 +410,22 @@ impl RigidBodyParams {
                 let a = l * core::f64::consts::FRAC_1_SQRT_2;
                 [[a, a, 0.0], [a, -a, 0.0], [-a, -a, 0.0], [-a, a, 0.0]]
             }
+            Configuration::Custom => self.custom_positions.unwrap_or_default().map(|[x, y]| [x, y, 0.0]),
+        }
+    }
+
+    /// The layout as [`ftsmc_core::rotor_layout`] takes it (the positions of
+    /// [`RigidBodyParams::rotor_positions`], the spins of [`RigidBodyParams::spin`]):
+    /// "+" and "×" with the paper's spins keep their closed forms.
+    pub fn geometry(&self) -> RotorGeometry {
+        let arm_length = self.arm_length;
+        match self.configuration {
+            Configuration::Plus if self.spin == PAPER_SPIN => RotorGeometry::Plus { arm_length },
+            Configuration::Cross if self.spin == PAPER_SPIN => RotorGeometry::Cross { arm_length },
+            _ => RotorGeometry::Custom {
+                positions: self.rotor_positions().map(|[x, y, _]| [x, y]),
+                spin: self.spin.map(Spin::sign),
+            },
         }
     }
 
@@ -452,8 +519,10 @@ pub struct RigidBody<R: Real = f64> {
     diagonal: R::Mask,
     /// Arm length l, m.
     arm_length: R,
-    /// The "×" layout ([`Configuration::Cross`]); "+" otherwise.
+    /// The "×" layout ([`Configuration::Cross`]).
     cross_layout: R::Mask,
+    /// A custom layout ([`Configuration::Custom`]); "+" when neither mask is set.
+    custom_layout: R::Mask,
     /// Rotor hub positions, all with `z = 0` ([`RigidBodyParams::rotor_positions`]), m.
     rotors: [Vec3<R>; 4],
     /// Spin signs `s_i` ([`Spin::sign`]).
@@ -488,6 +557,7 @@ ftsmc_core::lanewise_struct!(RigidBody {
     diagonal,
     arm_length,
     cross_layout,
+    custom_layout,
     rotors,
     spin,
     thrust_coefficient,
@@ -562,6 +632,7 @@ impl RigidBody<f64> {
             diagonal: is_diagonal(&p.inertia),
             arm_length: p.arm_length,
             cross_layout: p.configuration == Configuration::Cross,
+            custom_layout: p.configuration == Configuration::Custom,
             rotors: p.rotor_positions(),
             spin: p.spin.map(Spin::sign),
             thrust_coefficient: p.thrust_coefficient,
@@ -659,6 +730,7 @@ impl<R: Real> RigidBody<R> {
             diagonal: m(body.diagonal),
             arm_length: s(body.arm_length),
             cross_layout: m(body.cross_layout),
+            custom_layout: m(body.custom_layout),
             rotors: body.rotors.map(|r| r.map(s)),
             spin: body.spin.map(s),
             thrust_coefficient: s(body.thrust_coefficient),
@@ -682,7 +754,17 @@ impl<R: Real> RigidBody<R> {
             gravity: self.gravity.get_lane(lane),
             inertia: self.inertia.get_lane(lane),
             arm_length: self.arm_length.get_lane(lane),
-            configuration: if self.cross_layout.get_lane(lane) { Configuration::Cross } else { Configuration::Plus },
+            configuration: if self.custom_layout.get_lane(lane) {
+                Configuration::Custom
+            } else if self.cross_layout.get_lane(lane) {
+                Configuration::Cross
+            } else {
+                Configuration::Plus
+            },
+            custom_positions: self
+                .custom_layout
+                .get_lane(lane)
+                .then(|| self.rotors.map(|r| [r[0].get_lane(lane), r[1].get_lane(lane)])),
             spin,
             thrust_coefficient: self.thrust_coefficient.get_lane(lane),
             moment_coefficient: self.moment_coefficient.get_lane(lane),

@@ -15,7 +15,8 @@
 //! | `moment_coefficient` | N·m·s²/rad² | d | k_m |
 //! | `arm_length` | m | l | l |
 //! | `drag_translational`, `drag_rotational` | N·s/m, N·m·s²/rad² | K_f1, K_f2 | — (an error) |
-//! | `configuration`, `spin`, `parasitic_drag`, `rotor_drag_xy`, `rotor_drag_z`, `translational_lift` | see [`RigidBodyParams`] | — (an error) | RotorPy-style aerodynamics |
+//! | `configuration`, `rotor_positions`, `spin` | see [`RigidBodyParams`] | — (an error) | the rotor layout (`rotor_positions`: any planar one) |
+//! | `parasitic_drag`, `rotor_drag_xy`, `rotor_drag_z`, `translational_lift` | see [`RigidBodyParams`] | — (an error) | RotorPy-style aerodynamics |
 //!
 //! A key not given takes `[plant]`'s value (`thrust_coefficient` ← `plant.lift_coefficient`,
 //! `moment_coefficient` ← `plant.yaw_drag_coefficient`); the rigid-body-only
@@ -135,6 +136,11 @@ pub struct VehicleSettings {
     /// Rigid body only: rotor layout ([`Configuration`], default `plus`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub configuration: Option<Configuration>,
+    /// Rigid body only: hub `(x, y)` of rotors 1..4 in body axes (x
+    /// forward, y left), m, for any planar layout; implies (and needs)
+    /// `configuration = "custom"`.
+    #[serde(default, deserialize_with = "four_positions", skip_serializing_if = "Option::is_none")]
+    pub rotor_positions: Option<[[f64; 2]; 4]>,
     /// Rigid body only: spin of rotors 1..4 (default `["cw", "ccw", "cw", "ccw"]`).
     #[serde(default, with = "exact_array::option", skip_serializing_if = "Option::is_none")]
     pub spin: Option<[Spin; 4]>,
@@ -153,7 +159,7 @@ pub struct VehicleSettings {
 }
 
 /// The keys of `[vehicle]` that describe the true vehicle (all but `model`).
-pub const TRUE_VEHICLE_KEYS: [&str; 15] = [
+pub const TRUE_VEHICLE_KEYS: [&str; 16] = [
     "mass",
     "gravity",
     "inertia",
@@ -164,6 +170,7 @@ pub const TRUE_VEHICLE_KEYS: [&str; 15] = [
     "drag_translational",
     "drag_rotational",
     "configuration",
+    "rotor_positions",
     "spin",
     "parasitic_drag",
     "rotor_drag_xy",
@@ -218,6 +225,7 @@ impl VehicleSettings {
             self.drag_translational.is_some(),
             self.drag_rotational.is_some(),
             self.configuration.is_some(),
+            self.rotor_positions.is_some(),
             self.spin.is_some(),
             self.parasitic_drag.is_some(),
             self.rotor_drag_xy.is_some(),
@@ -254,6 +262,12 @@ impl VehicleSettings {
             rb.inertia = i.matrix();
         }
         rb.configuration = self.configuration.unwrap_or(rb.configuration);
+        if let Some(p) = self.rotor_positions {
+            // Positions imply the custom layout; a conflicting `configuration`
+            // is refused by `check_model_keys`, never ignored.
+            rb.configuration = self.configuration.unwrap_or(Configuration::Custom);
+            rb.custom_positions = Some(p);
+        }
         rb.spin = self.spin.unwrap_or(rb.spin);
         rb.parasitic_drag = self.parasitic_drag.unwrap_or(rb.parasitic_drag);
         rb.rotor_drag_xy = self.rotor_drag_xy.unwrap_or(rb.rotor_drag_xy);
@@ -275,6 +289,9 @@ impl VehicleSettings {
                 const ONLY_RB: &str = "only model = \"rigid-body\" flies the rotor layout and aerodynamics (Eq. 1's drags are `drag_translational`, `drag_rotational`)";
                 if let Some(c) = self.configuration {
                     return refuse("configuration", format!("{c:?}").to_lowercase(), ONLY_RB);
+                }
+                if let Some(p) = self.rotor_positions {
+                    return refuse("rotor_positions", positions_text(&p), ONLY_RB);
                 }
                 if let Some(s) = self.spin {
                     return refuse("spin", format!("{s:?}").to_lowercase(), ONLY_RB);
@@ -306,6 +323,23 @@ impl VehicleSettings {
                 }
                 if let Some(v) = self.drag_rotational {
                     return refuse("drag_rotational", arr(&v), ONLY_PAPER);
+                }
+                match (self.configuration, self.rotor_positions) {
+                    (Some(c), Some(_)) if c != Configuration::Custom => {
+                        return Err((
+                            "vehicle.configuration".into(),
+                            format!("{c:?}").to_lowercase(),
+                            "remove `configuration` (or set it to \"custom\") where `rotor_positions` is set (here or by the preset): the positions are the layout".into(),
+                        ))
+                    }
+                    (Some(Configuration::Custom), None) => {
+                        return Err((
+                            "vehicle.rotor_positions".into(),
+                            "none".into(),
+                            "four hub positions [[x, y], ..] (m) with configuration = \"custom\"".into(),
+                        ))
+                    }
+                    _ => {}
                 }
             }
         }
@@ -364,6 +398,38 @@ fn plant_field_static(field: &'static str) -> &'static str {
         },
         _ => field,
     }
+}
+
+/// `rotor_positions`: exactly four `[x, y]` pairs (serde's own arrays
+/// would ignore extra elements silently).
+fn four_positions<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Option<[[f64; 2]; 4]>, D::Error> {
+    use serde::de::Error;
+    let rows: Vec<Vec<f64>> = Deserialize::deserialize(d)?;
+    if rows.len() != 4 {
+        return Err(D::Error::custom(format!(
+            "{} rotor positions where a quadrotor has 4 ([[x, y], ..], m)",
+            rows.len()
+        )));
+    }
+    let mut out = [[0.0; 2]; 4];
+    for (i, row) in rows.iter().enumerate() {
+        match row.as_slice() {
+            [x, y] => out[i] = [*x, *y],
+            _ => {
+                return Err(D::Error::custom(format!(
+                    "rotor position {i} has {} numbers where [x, y] has 2 (m, body x forward, y left; the hubs lie in the body plane)",
+                    row.len()
+                )))
+            }
+        }
+    }
+    Ok(Some(out))
+}
+
+/// Rotor positions as TOML shows them.
+fn positions_text(p: &[[f64; 2]; 4]) -> String {
+    let each: Vec<String> = p.iter().map(|[x, y]| format!("[{}, {}]", show(*x), show(*y))).collect();
+    format!("[{}]", each.join(", "))
 }
 
 /// `field` as the `[vehicle]` key name: a `'static` string.
