@@ -7,13 +7,18 @@ use std::io::Write as _;
 use std::path::Path;
 
 use anyhow::{bail, Context, Result};
-use ftsmc_sim::controllers::px4_params;
+use ftsmc_sim::controllers::{px4_params, NominalVehicle};
 use ftsmc_sim::scenario::Scenario;
 
+/// Rotor positions as `[[x, y], ..]` (m), as a scenario file writes them.
+fn positions_text(p: &[[f64; 2]; 4]) -> String {
+    let each: Vec<String> = p.iter().map(|[x, y]| format!("[{x:?}, {y:?}]")).collect();
+    format!("[{}]", each.join(", "))
+}
+
 /// The comment lines naming the vehicle and its normalisation.
-fn vehicle_lines(scenario: &Scenario) -> Vec<String> {
-    let vehicle = scenario.nominal_vehicle();
-    let (t_max, tau) = px4_params::normalisation(&vehicle);
+fn vehicle_lines(scenario: &Scenario, vehicle: &NominalVehicle) -> Vec<String> {
+    let (t_max, tau) = px4_params::normalisation(vehicle);
     vec![
         format!(
             "vehicle: {} (scenario {}), nominal mass {} kg, rotors {}",
@@ -23,8 +28,12 @@ fn vehicle_lines(scenario: &Scenario) -> Vec<String> {
             if vehicle.max_thrust.is_some() { "limited" } else { "unlimited (T_max = m g / MPC_THR_HOVER 0.5)" }
         ),
         format!(
-            "normalisation: T_max = {t_max:.6} N; tau_max roll, pitch, yaw = {:.6}, {:.6}, {:.6} N m",
-            tau[0], tau[1], tau[2]
+            "normalisation: T_max = {t_max:.6} N; tau_max roll, pitch, yaw = {:.6}, {:.6}, {:.6} N m on rotors at {} m \
+             (x forward, y left)",
+            tau[0],
+            tau[1],
+            tau[2],
+            positions_text(&vehicle.geometry.positions())
         ),
     ]
 }
@@ -61,7 +70,7 @@ pub fn export(scenario: &Scenario, source: &str, out: Option<&Path>) -> Result<(
         format!("PX4 parameters of the [pid] gains of {source}, written by ftsmc {}", env!("CARGO_PKG_VERSION")),
         "(mapping and normalisation: docs/px4.md)".to_string(),
     ];
-    header.extend(vehicle_lines(scenario));
+    header.extend(vehicle_lines(scenario, &vehicle));
     emit(&px4_params::write_qgc(&params, &header), out)
 }
 
@@ -83,14 +92,48 @@ pub fn import(params: &Path, scenario: &Scenario, source: &str, out: Option<&Pat
             params.display()
         );
     }
-    let gains = px4_params::gains_from_params(&file, &scenario.nominal_vehicle())?;
+    // The airframe the file describes (CA_ROTOR*, SIM_GZ_EC_*) is the one the
+    // gains are normalised on and the one the written sections fly.
+    let frame = px4_params::airframe(&file)?;
+    let base = scenario.nominal_vehicle();
+    let vehicle = match &frame {
+        Some(f) => {
+            let limit = f.max_speed.or_else(|| scenario.actuators.map(|a| a.max_rotor_speed));
+            NominalVehicle::new(base.plant, limit).on(f.geometry())
+        }
+        None => base,
+    };
+    let gains = px4_params::gains_from_params(&file, &vehicle)?;
     let mut text = format!(
         "# [pid] gains of the PX4 parameter file {} on the vehicle of {source}, written by ftsmc {}\n",
         params.display(),
         env!("CARGO_PKG_VERSION")
     );
-    for line in vehicle_lines(scenario) {
+    for line in vehicle_lines(scenario, &vehicle) {
         text.push_str(&format!("# {line}\n"));
+    }
+    let mut notes = Vec::new();
+    if let Some(f) = &frame {
+        if !f.same_layout_as(&base.geometry) {
+            notes.push(format!(
+                "the file's CA_ROTOR layout is not {source}'s vehicle (rotors at {} m): the [vehicle] section below flies \
+                 the file's",
+                positions_text(&base.geometry.positions())
+            ));
+        }
+        if scenario.vehicle.model == ftsmc_sim::vehicle::VehicleModel::Paper {
+            notes.push(format!(
+                "{source} flies paper Eq. 1 (the \"+\" of Eq. 2): the [vehicle] section below switches to model = \
+                 \"rigid-body\" to fly the file's layout"
+            ));
+        }
+    }
+    for line in px4_params::not_flown(&file) {
+        notes.push(format!("not flown: {line}"));
+    }
+    for note in &notes {
+        eprintln!("note: {note}");
+        text.push_str(&format!("# {note}\n"));
     }
     let missing = px4_params::PX4_DEFAULTS.iter().filter(|(n, _, _)| !file.values.contains_key(*n)).count();
     if missing > 0 {
@@ -99,5 +142,23 @@ pub fn import(params: &Path, scenario: &Scenario, source: &str, out: Option<&Pat
     let body = toml::to_string(&gains).context("serialising the [pid] gains")?;
     text.push_str("[pid]\n");
     text.push_str(&body);
+    if let Some(f) = &frame {
+        text.push_str("\n# The airframe of the parameter file (CA_ROTOR*: PX4's order, y = -PY; KM > 0 counter-clockwise)\n[vehicle]\n");
+        if scenario.vehicle.model == ftsmc_sim::vehicle::VehicleModel::Paper {
+            text.push_str("model = \"rigid-body\"\n");
+        }
+        let spins: Vec<String> =
+            f.spin.iter().map(|s| format!("\"{}\"", if s.sign() > 0.0 { "ccw" } else { "cw" })).collect();
+        text.push_str(&format!("rotor_positions = {}\nspin = [{}]\n", positions_text(&f.positions), spins.join(", ")));
+        if f.idle_speed.is_some() || f.max_speed.is_some() {
+            text.push_str("\n[actuators]\n");
+            if let Some(w) = f.idle_speed {
+                text.push_str(&format!("min_rotor_speed = {w:?}                 # rad/s: SIM_GZ_EC_MIN\n"));
+            }
+            if let Some(w) = f.max_speed {
+                text.push_str(&format!("max_rotor_speed = {w:?}                # rad/s: SIM_GZ_EC_MAX\n"));
+            }
+        }
+    }
     emit(&text, out)
 }

@@ -420,6 +420,64 @@ fn px4_export_then_import_writes_a_pid_section_that_flies() {
     assert!(!out.status.success() && err.contains("bad.params, line 1") && err.contains("MC_YAW_P"), "{err}");
 }
 
+/// PX4's Gazebo X500 airframe (`tests/data/4001_gz_x500.params`): import
+/// flies its rotor layout and idle speed, normalises the gains on that
+/// layout, and lists what it reads but does not fly; `[pid] px4_params` of
+/// the file on a vehicle of another layout is refused naming the remedy.
+#[test]
+fn px4_import_of_the_gz_x500_airframe_flies_its_layout_and_idle() {
+    let tmp = scratch("px4-airframe");
+    let dir = tmp.path();
+    let params = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/4001_gz_x500.params");
+    std::fs::copy(&params, dir.join("x500.params")).unwrap();
+    let out = ftsmc(&["px4", "import", "x500.params", "--scenario", "realistic-calm-1", "-o", "x500.toml"], dir);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    for wanted in [
+        "CA_ROTOR0_CT = 6.5",
+        "CA_ROTOR0_KM = 0.05",
+        "SIM_GZ_EC_*",
+        "MPC_THR_HOVER",
+        "CA_AIRFRAME",
+        "not realistic-calm-1's vehicle",
+    ] {
+        assert!(err.contains(wanted), "stderr lacks {wanted}: {err}");
+    }
+    let text = std::fs::read_to_string(dir.join("x500.toml")).unwrap();
+    assert!(text.contains("# not flown: CA_ROTOR0_CT = 6.5"), "{text}");
+    // The sections fly: a file extending the X500 preset with them.
+    std::fs::write(
+        dir.join("s.toml"),
+        format!(
+            "extends = \"realistic-calm-1\"\nname = \"gz-x500\"\n{}",
+            text.replace("[vehicle]\n", "[vehicle]\npreset = \"px4-x500\"\n")
+        ),
+    )
+    .unwrap();
+    let s = ftsmc_sim::scenario::Scenario::from_file(&dir.join("s.toml")).unwrap();
+    let rb = s.rigid_body_params();
+    assert_eq!(rb.custom_positions, Some([[0.13, -0.22], [-0.13, 0.20], [0.13, 0.22], [-0.13, -0.20]]));
+    assert_eq!(rb.spin.map(|s| s.sign()), [1.0, 1.0, -1.0, -1.0]);
+    let a = s.actuators.unwrap();
+    assert_eq!((a.min_rotor_speed, a.max_rotor_speed), (150.0, 1000.0));
+    // The gains were normalised on that layout: export gives MC_ROLLRATE_P back.
+    let out = ftsmc(&["px4", "export", "s.toml"], dir);
+    let exported = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success() && exported.contains("1\t1\tMC_ROLLRATE_P\t0.15\t9\n"), "{exported}");
+    // Flying the file's gains directly on the square preset is refused.
+    std::fs::write(
+        dir.join("direct.toml"),
+        "extends = \"realistic-calm-1\"\nname = \"d\"\n[vehicle]\npreset = \"px4-x500\"\n[pid]\npx4_params = \"x500.params\"\n",
+    )
+    .unwrap();
+    let e = ftsmc_sim::scenario::Scenario::from_file(&dir.join("direct.toml")).unwrap_err().to_string();
+    assert!(
+        e.contains("px4_params") && e.contains("set [vehicle] rotor_positions") && e.contains("(0.13, -0.22)"),
+        "{e}"
+    );
+    assert!(e.contains("(0.174, 0.174)"), "{e}");
+}
+
 /// `[plant]`, `[vehicle]` and `[actuators]` of a scenario file ftsmc wrote.
 fn vehicle_sections(path: &Path) -> Vec<toml::Value> {
     let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));

@@ -215,6 +215,10 @@ pub struct Px4ParamFile {
     pub file: String,
     /// Value and line of every mapped parameter the file sets.
     pub values: BTreeMap<String, (f64, usize)>,
+    /// Value and line of every other parameter with a finite value: the
+    /// airframe ([`airframe`]) and what ftsmc reads but does not fly
+    /// ([`not_flown`]).
+    pub others: BTreeMap<String, (f64, usize)>,
 }
 
 impl Px4ParamFile {
@@ -271,7 +275,7 @@ pub fn read_qgc(path: &Path) -> Result<Px4ParamFile, Px4ParamsError> {
 /// Parse the text of a QGroundControl `.params` file named `file` (for
 /// messages): the mapped parameters ([`PX4_DEFAULTS`]), each at most once.
 pub fn parse_qgc(text: &str, file: &str) -> Result<Px4ParamFile, Px4ParamsError> {
-    let mut out = Px4ParamFile { file: file.to_string(), values: BTreeMap::new() };
+    let mut out = Px4ParamFile { file: file.to_string(), values: BTreeMap::new(), others: BTreeMap::new() };
     for (i, raw) in text.lines().enumerate() {
         let line = i + 1;
         let trimmed = raw.trim();
@@ -287,7 +291,16 @@ pub fn parse_qgc(text: &str, file: &str) -> Result<Px4ParamFile, Px4ParamsError>
             )));
         }
         let name = fields[2];
-        let Some(&(_, _, kind)) = PX4_DEFAULTS.iter().find(|(n, _, _)| *n == name) else { continue };
+        let Some(&(_, _, kind)) = PX4_DEFAULTS.iter().find(|(n, _, _)| *n == name) else {
+            // Not a gain: kept for the airframe and the not-flown list; a
+            // value that is not a finite number is not one ftsmc reads.
+            if let Some(v) = fields[3].parse::<f64>().ok().filter(|v| v.is_finite()) {
+                if let Some((_, first)) = out.others.insert(name.to_string(), (v, line)) {
+                    return Err(bad(format!("`{name}` is set twice (lines {first} and {line})")));
+                }
+            }
+            continue;
+        };
         let shown = crate::text::show_str(fields[3]);
         let value: f64 =
             fields[3].parse().ok().filter(|v: &f64| v.is_finite()).ok_or_else(|| Px4ParamsError::Value {
@@ -505,6 +518,263 @@ fn px4_name_of(field: &str, hte: bool) -> &'static str {
     }
 }
 
+/// A PX4 airframe's rotors and motor limits, as its parameters give them
+/// (`CA_ROTOR_COUNT`, `CA_ROTOR{n}_PX`, `_PY`, `_KM`; `SIM_GZ_EC_MIN{n}`,
+/// `SIM_GZ_EC_MAX{n}` of PX4's Gazebo bridge), in ftsmc's body axes.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Px4Airframe {
+    /// Hub `(x, y)` of rotors 1..4 = `CA_ROTOR0..3`, m, x forward, y left
+    /// (`y = −CA_ROTOR{n}_PY`: PX4's body y points right).
+    pub positions: [[f64; 2]; 4],
+    /// Spin of rotors 1..4: `CA_ROTOR{n}_KM > 0` counter-clockwise (PX4's
+    /// convention: a positive moment ratio is a counter-clockwise rotor).
+    pub spin: [crate::vehicle::Spin; 4],
+    /// Idle rotor speed ω_min, rad/s (`SIM_GZ_EC_MIN1..4`, all equal), if set.
+    pub idle_speed: Option<f64>,
+    /// Top rotor speed ω_max, rad/s (`SIM_GZ_EC_MAX1..4`, all equal), if set.
+    pub max_speed: Option<f64>,
+}
+
+impl Px4Airframe {
+    /// The layout as [`ftsmc_core::rotor_layout`] takes it.
+    pub fn geometry(&self) -> ftsmc_core::rotor_layout::RotorGeometry {
+        ftsmc_core::rotor_layout::RotorGeometry::Custom {
+            positions: self.positions,
+            spin: self.spin.map(crate::vehicle::Spin::sign),
+        }
+    }
+
+    /// Whether `geometry` has this airframe's rotors, in any order: the
+    /// same hubs (to 1e-6 m) with the same spins.
+    pub fn same_layout_as(&self, geometry: &ftsmc_core::rotor_layout::RotorGeometry) -> bool {
+        let (theirs, their_spin) = (geometry.positions(), geometry.spin());
+        let mut used = [false; 4];
+        for (p, s) in self.positions.iter().zip(self.spin) {
+            let found = (0..4).find(|&j| {
+                !used[j]
+                    && (theirs[j][0] - p[0]).abs() <= 1e-6
+                    && (theirs[j][1] - p[1]).abs() <= 1e-6
+                    && their_spin[j] == s.sign()
+            });
+            match found {
+                Some(j) => used[j] = true,
+                None => return false,
+            }
+        }
+        true
+    }
+}
+
+impl Px4ParamFile {
+    /// A non-gain parameter's value and line, if the file sets it.
+    fn other(&self, name: &str) -> Option<(f64, usize)> {
+        self.others.get(name).copied()
+    }
+
+    fn other_invalid(&self, name: &str, value: f64, line: usize, expected: &str) -> Px4ParamsError {
+        Px4ParamsError::Value {
+            file: self.file.clone(),
+            line,
+            name: name.to_string(),
+            value: crate::text::show(value),
+            expected: expected.to_string(),
+        }
+    }
+
+    /// `SIM_GZ_EC_{kind}1..4`: one speed for all four motors, if any is set.
+    fn motor_speed(&self, kind: &str) -> Result<Option<f64>, Px4ParamsError> {
+        let names: Vec<String> = (1..=4).map(|n| format!("SIM_GZ_EC_{kind}{n}")).collect();
+        let values: Vec<Option<(f64, usize)>> = names.iter().map(|n| self.other(n)).collect();
+        if values.iter().all(Option::is_none) {
+            return Ok(None);
+        }
+        let Some((first, _)) = values[0] else {
+            return Err(self.other_invalid(
+                &names[0],
+                f64::NAN,
+                0,
+                "set with the other three motors (one speed for all four)",
+            ));
+        };
+        for (name, v) in names.iter().zip(&values) {
+            match v {
+                Some((x, line)) if *x != first => {
+                    return Err(self.other_invalid(
+                        name,
+                        *x,
+                        *line,
+                        &format!("{first}, as SIM_GZ_EC_{kind}1 (ftsmc flies one rotor limit for all four motors)"),
+                    ))
+                }
+                None => return Err(self.other_invalid(name, f64::NAN, 0, "set with the other three motors")),
+                _ => {}
+            }
+        }
+        if first < 0.0 {
+            return Err(self.other_invalid(&names[0], first, values[0].map_or(0, |v| v.1), "a rotor speed >= 0 rad/s"));
+        }
+        Ok(Some(first))
+    }
+}
+
+/// The airframe of `params`: `None` when it sets no `CA_ROTOR*` geometry
+/// (a gains-only file). Refused, naming the parameter: a rotor count other
+/// than 4, a rotor without its `_PX`/`_PY`, a zero `_KM` (no spin), motor
+/// limits that differ between motors or are inverted.
+pub fn airframe(params: &Px4ParamFile) -> Result<Option<Px4Airframe>, Px4ParamsError> {
+    let count = params.other("CA_ROTOR_COUNT");
+    let any_rotor = params.others.keys().any(|k| k.starts_with("CA_ROTOR") && k != "CA_ROTOR_COUNT");
+    let (idle_speed, max_speed) = (params.motor_speed("MIN")?, params.motor_speed("MAX")?);
+    if let (Some(lo), Some(hi)) = (idle_speed, max_speed) {
+        if lo >= hi {
+            let line = params.other("SIM_GZ_EC_MIN1").map_or(0, |v| v.1);
+            return Err(params.other_invalid("SIM_GZ_EC_MIN1", lo, line, &format!("below SIM_GZ_EC_MAX1 = {hi}")));
+        }
+    }
+    let Some((n, line)) = count else {
+        if any_rotor {
+            return Err(params.other_invalid(
+                "CA_ROTOR_COUNT",
+                f64::NAN,
+                0,
+                "4, set where CA_ROTOR{n}_* are (the rotor count PX4's allocation reads them with)",
+            ));
+        }
+        return Ok(None);
+    };
+    if n != 4.0 {
+        return Err(params.other_invalid("CA_ROTOR_COUNT", n, line, "4 (ftsmc flies quadrotors)"));
+    }
+    let mut positions = [[0.0; 2]; 4];
+    let mut spin = [crate::vehicle::Spin::Ccw; 4];
+    for r in 0..4 {
+        let need = |axis: &str| {
+            let name = format!("CA_ROTOR{r}_P{axis}");
+            params.other(&name).map(|v| v.0).ok_or_else(|| {
+                params.other_invalid(
+                    &name,
+                    f64::NAN,
+                    0,
+                    "set for every rotor (PX4's default, 0, puts the hub on the centre)",
+                )
+            })
+        };
+        positions[r] = [need("X")?, -need("Y")?];
+        let km_name = format!("CA_ROTOR{r}_KM");
+        // PX4's default moment ratio, 0.05 (a counter-clockwise rotor).
+        let (km, km_line) = params.other(&km_name).unwrap_or((0.05, 0));
+        spin[r] = if km > 0.0 {
+            crate::vehicle::Spin::Ccw
+        } else if km < 0.0 {
+            crate::vehicle::Spin::Cw
+        } else {
+            return Err(params.other_invalid(
+                &km_name,
+                km,
+                km_line,
+                "nonzero: its sign is the rotor's spin (> 0 counter-clockwise)",
+            ));
+        };
+    }
+    let frame = Px4Airframe { positions, spin, idle_speed, max_speed };
+    if frame.geometry().px4_torque_scale(1.0, 0.01).is_none() {
+        let line = params.other("CA_ROTOR0_PX").map_or(0, |v| v.1);
+        return Err(params.other_invalid(
+            "CA_ROTOR0_PX",
+            positions[0][0],
+            line,
+            "rotors that can roll, pitch and yaw the vehicle (this layout's allocation is singular)",
+        ));
+    }
+    Ok(Some(frame))
+}
+
+/// What `params` sets that ftsmc reads but does not fly, one line each
+/// (name, value, line and why): the allocation's own coefficients
+/// (`CA_ROTOR{n}_CT`, the magnitude of `_KM`), rotor heights and tilted
+/// axes, the Gazebo bridge's command mapping, the thrust curve
+/// (`THR_MDL_FAC`), airmode, battery scaling, the attitude reference model
+/// and yaw-torque filter, `MPC_THR_HOVER` under the hover-thrust estimator;
+/// then a count of the other multicopter parameters (`MC_*`, `MPC_*`,
+/// `CA_*`) no mapping uses. Parameters of other modules (estimator,
+/// commander, drivers) are not listed.
+pub fn not_flown(params: &Px4ParamFile) -> Vec<String> {
+    let mut out = Vec::new();
+    let at = |name: &str| params.other(name).map(|(v, l)| format!("{name} = {} (line {l})", crate::text::show(v)));
+    let mut claimed: std::collections::BTreeSet<String> = std::collections::BTreeSet::new();
+    let mut claim = |name: String| {
+        claimed.insert(name);
+    };
+    for r in 0..8 {
+        for suffix in ["CT", "KM", "PZ", "AX", "AY", "AZ"] {
+            let name = format!("CA_ROTOR{r}_{suffix}");
+            let Some(text) = at(&name) else { continue };
+            let v = params.other(&name).map_or(0.0, |v| v.0);
+            let why = match suffix {
+                "CT" => "PX4's allocation thrust coefficient: not flown (the vehicle's thrust_coefficient is)",
+                "KM" => "its sign is flown as the spin; its size, PX4's yaw-moment ratio in the allocation, is not (the vehicle's moment_coefficient is)",
+                "PZ" if v == 0.0 => continue,
+                "PZ" => "rotor height: not flown (ftsmc's hubs lie in the body plane)",
+                "AZ" if v == -1.0 => continue,
+                "AX" | "AY" if v == 0.0 => continue,
+                _ => "a tilted rotor axis: not flown (ftsmc's rotors thrust along the body z axis)",
+            };
+            out.push(format!("{text}: {why}"));
+            claim(name);
+        }
+        for suffix in ["PX", "PY"] {
+            claim(format!("CA_ROTOR{r}_{suffix}"));
+        }
+    }
+    claim("CA_ROTOR_COUNT".into());
+    if params.others.keys().any(|k| k.starts_with("SIM_GZ_EC_")) {
+        out.push(
+            "SIM_GZ_EC_*: PX4's Gazebo bridge maps a motor setpoint linearly to rotor speed between SIM_GZ_EC_MIN and SIM_GZ_EC_MAX; ftsmc flies a setpoint proportional to thrust (ω² / ω_max²) — the command mapping changes the vehicle and is not flown (the limits are)"
+                .into(),
+        );
+        for k in params.others.keys().filter(|k| k.starts_with("SIM_GZ_EC_")) {
+            claim(k.clone());
+        }
+    }
+    for (name, why) in [
+        ("THR_MDL_FAC", "PX4's thrust-curve factor (setpoint to thrust): not flown, ftsmc's setpoint is thrust"),
+        ("MC_AIRMODE", "airmode: flown only with [actuators] mixer = \"px4-exact-airmode\""),
+        ("MC_BAT_SCALE_EN", "battery scaling: not flown (no battery model)"),
+        ("MC_YAW_TQ_CUTOFF", "yaw-torque low-pass: not flown"),
+        ("CA_AIRFRAME", "PX4's airframe type: ftsmc flies the CA_ROTOR geometry"),
+    ] {
+        if let Some(text) = at(name) {
+            out.push(format!("{text}: {why}"));
+            claim(name.into());
+        }
+    }
+    if params.values.contains_key("MPC_THR_HOVER") && params.get("MPC_USE_HTE").0 == 1.0 {
+        out.push(format!(
+            "MPC_THR_HOVER (line {}): read but not used, the hover-thrust estimator (MPC_USE_HTE = 1) takes over",
+            params.get("MPC_THR_HOVER").1
+        ));
+    }
+    let refs: Vec<&String> = params.others.keys().filter(|k| k.starts_with("MC_REF_")).collect();
+    if !refs.is_empty() {
+        out.push(format!(
+            "{}: the attitude reference model, not flown",
+            refs.iter().map(|s| s.as_str()).collect::<Vec<_>>().join(", ")
+        ));
+        for k in refs {
+            claim(k.clone());
+        }
+    }
+    let rest = params
+        .others
+        .keys()
+        .filter(|k| (k.starts_with("MC_") || k.starts_with("MPC_") || k.starts_with("CA_")) && !claimed.contains(*k))
+        .count();
+    if rest > 0 {
+        out.push(format!("{rest} other multicopter parameters (MC_*, MPC_*, CA_*) that no mapping uses"));
+    }
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -526,5 +796,44 @@ mod tests {
         assert_eq!(px4_name_of("rate_integral_limit[2]", true), "MC_YR_INT_LIM");
         assert_eq!(px4_name_of("hover_thrust", false), "MPC_THR_HOVER");
         assert_eq!(px4_name_of("max_demanded_tilt", false), "MPC_TILTMAX_AIR");
+    }
+
+    fn frame_file(extra: &str) -> String {
+        let mut t = String::from("1\t1\tCA_ROTOR_COUNT\t4\t6\n");
+        for (r, (x, y, km)) in
+            [(0.13, 0.22, 0.05), (-0.13, -0.2, 0.05), (0.13, -0.22, -0.05), (-0.13, 0.2, -0.05)].iter().enumerate()
+        {
+            t.push_str(&format!(
+                "1\t1\tCA_ROTOR{r}_PX\t{x}\t9\n1\t1\tCA_ROTOR{r}_PY\t{y}\t9\n1\t1\tCA_ROTOR{r}_KM\t{km}\t9\n"
+            ));
+        }
+        t.push_str(extra);
+        t
+    }
+
+    #[test]
+    fn an_airframe_is_read_in_ftsmcs_axes_and_its_mistakes_are_named() {
+        let f = airframe(&parse_qgc(&frame_file(""), "f.params").unwrap()).unwrap().unwrap();
+        assert_eq!(f.positions[0], [0.13, -0.22]);
+        assert_eq!(f.spin.map(|s| s.sign()), [1.0, 1.0, -1.0, -1.0]);
+        assert_eq!((f.idle_speed, f.max_speed), (None, None));
+        // A gains-only file has no airframe.
+        assert_eq!(airframe(&parse_qgc("1\t1\tMC_ROLL_P\t5\t9\n", "g.params").unwrap()).unwrap(), None);
+        let refused = |text: &str, wanted: &str| {
+            let e = parse_qgc(text, "f.params").and_then(|p| airframe(&p)).unwrap_err().to_string();
+            assert!(e.contains(wanted), "{wanted}: {e}");
+        };
+        refused(&frame_file("").replace("CA_ROTOR_COUNT\t4", "CA_ROTOR_COUNT\t6"), "`CA_ROTOR_COUNT` = 6");
+        refused(&frame_file("").replace("1\t1\tCA_ROTOR_COUNT\t4\t6\n", ""), "`CA_ROTOR_COUNT`");
+        refused(&frame_file("").replace("1\t1\tCA_ROTOR2_PY\t-0.22\t9\n", ""), "`CA_ROTOR2_PY`");
+        refused(&frame_file("").replace("CA_ROTOR1_KM\t0.05", "CA_ROTOR1_KM\t0"), "`CA_ROTOR1_KM` = 0");
+        let ec = "1\t1\tSIM_GZ_EC_MIN1\t150\t6\n1\t1\tSIM_GZ_EC_MIN2\t150\t6\n1\t1\tSIM_GZ_EC_MIN3\t150\t6\n1\t1\tSIM_GZ_EC_MIN4\t120\t6\n";
+        refused(&frame_file(ec), "`SIM_GZ_EC_MIN4` = 120");
+        let f =
+            airframe(&parse_qgc(&frame_file(&ec.replace("\t120\t", "\t150\t")), "f.params").unwrap()).unwrap().unwrap();
+        assert_eq!(f.idle_speed, Some(150.0));
+        // What is read but not flown is listed: here PX4's yaw ratio.
+        let listed = not_flown(&parse_qgc(&frame_file(""), "f.params").unwrap());
+        assert!(listed.iter().any(|l| l.starts_with("CA_ROTOR0_KM = 0.05 (line 4)")), "{listed:?}");
     }
 }

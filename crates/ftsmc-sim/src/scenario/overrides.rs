@@ -150,8 +150,15 @@ impl Scenario {
                         else {
                             continue;
                         };
+                        // The layout is one thing in two keys: a preset
+                        // with either replaces both, unless an override sets one.
+                        const LAYOUT: [&str; 2] = ["configuration", "rotor_positions"];
+                        let layout_set = LAYOUT.iter().any(|k| keys.contains(&format!("vehicle.{k}").as_str()));
+                        let preset_layout = section == "vehicle" && LAYOUT.iter().any(|k| values.contains_key(*k));
                         written.retain(|k, _| {
-                            !values.contains_key(k) || keys.contains(&format!("{section}.{k}").as_str())
+                            let replaced = values.contains_key(k)
+                                || (preset_layout && !layout_set && LAYOUT.contains(&k.as_ref()));
+                            !replaced || keys.contains(&format!("{section}.{k}").as_str())
                         });
                     }
                 }

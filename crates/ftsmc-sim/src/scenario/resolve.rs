@@ -679,15 +679,39 @@ fn import_px4_params(
         return Err(chain.parse_error(KEY, "expected a string: the path of a QGroundControl .params file"));
     };
     let dir = chain.layers[chain.writer(KEY)].dir.clone().unwrap_or_default();
-    let gains = px4_params::read_qgc(&dir.join(&file))
-        .and_then(|params| px4_params::gains_from_params(&params, vehicle))
-        .map_err(|e| chain.parse_error(KEY, &e.to_string()))?;
+    let params = px4_params::read_qgc(&dir.join(&file)).map_err(|e| chain.parse_error(KEY, &e.to_string()))?;
+    // The gains are normalised on this scenario's vehicle; a file that
+    // describes another airframe would be normalised on the wrong one.
+    if let Some(frame) = px4_params::airframe(&params).map_err(|e| chain.parse_error(KEY, &e.to_string()))? {
+        if !frame.same_layout_as(&vehicle.geometry) {
+            let shown = |p: [[f64; 2]; 4]| {
+                p.iter()
+                    .map(|[x, y]| format!("({}, {})", show(round4(*x)), show(round4(*y))))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            };
+            return Err(chain.parse_error(
+                KEY,
+                &format!(
+                    "set [vehicle] rotor_positions = the file's layout or remove its CA_ROTOR lines: {file} describes rotors at {} m (x forward, y left), this vehicle has them at {} m, and PX4's torque normalisation depends on the layout (`ftsmc px4 import` writes the file's layout with the gains)",
+                    shown(frame.positions),
+                    shown(vehicle.geometry.positions())
+                ),
+            ));
+        }
+    }
+    let gains = px4_params::gains_from_params(&params, vehicle).map_err(|e| chain.parse_error(KEY, &e.to_string()))?;
     let mut table = toml::Table::try_from(gains).map_err(|e| chain.parse_error(KEY, &e.to_string()))?;
     for (key, value) in std::mem::take(pid) {
         table.insert(key, value);
     }
     *pid = table;
     Ok(())
+}
+
+/// `x` to 4 significant digits, for messages (positions of a layout).
+fn round4(x: f64) -> f64 {
+    format!("{x:.4e}").parse().unwrap_or(x)
 }
 
 /// A likely unit slip: valid, but probably not what was meant.
