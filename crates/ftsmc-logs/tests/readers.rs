@@ -179,3 +179,18 @@ fn the_generic_csv_reads_the_groups_it_has_and_its_frame() {
     assert_eq!(m.unit, MotorUnit::Normalised);
     assert_eq!(m.values[1], [0.5, 0.6, 0.7, 0.8]);
 }
+
+#[test]
+fn the_generic_csv_example_of_docs_logs_md_reads_as_documented() {
+    let doc =
+        std::fs::read_to_string(std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../docs/logs.md")).unwrap();
+    let start = doc.find("```csv\n").expect("docs/logs.md has a ```csv example") + "```csv\n".len();
+    let example = &doc[start..start + doc[start..].find("```").unwrap()];
+    let tmp = tempfile::tempdir().unwrap();
+    let log = read_log(&write(tmp.path(), "example.csv", example.as_bytes()), &LogLimits::default()).unwrap();
+    assert_eq!(log.frame, Frame::NedFrd);
+    assert_eq!(log.time_s, [0.0, 0.01]);
+    assert_eq!(log.position_m, Some(vec![[0.0, 0.0, -1.0]; 2]));
+    assert_eq!(log.attitude_wxyz, Some(vec![[1.0, 0.0, 0.0, 0.0]; 2]));
+    assert_eq!(log.battery_v, Some(vec![16.4; 2]));
+}
