@@ -8,7 +8,7 @@
 //!
 //! | FlightLog | columns | unit in the file |
 //! | --- | --- | --- |
-//! | time | `t` | s, Unix time of the Vicon host |
+//! | time | `t` | s, Unix time of the Vicon host (as `f64`: steps of 2.4 × 10⁻⁷ s near 1.8 × 10⁹ s) |
 //! | position | `px`, `py`, `pz` | m, Vicon world frame (z up) |
 //! | velocity | `vx`, `vy`, `vz` | m/s, Vicon, Savitzky–Golay derivative |
 //! | attitude | `qw`, `qx`, `qy`, `qz` | Vicon unit quaternion, scalar last in the file |

@@ -35,18 +35,18 @@ impl Default for LogLimits {
 
 /// The number of bytes read so far, shared with the reader that counts them.
 #[derive(Clone, Debug, Default)]
-pub struct Offset(Rc<Cell<u64>>);
+pub(crate) struct Offset(Rc<Cell<u64>>);
 
 impl Offset {
     /// Bytes read so far.
-    pub fn get(&self) -> u64 {
+    pub(crate) fn get(&self) -> u64 {
         self.0.get()
     }
 }
 
 /// A reader that counts its bytes and refuses to pass `limit`.
 #[derive(Debug)]
-pub struct Counted<R> {
+pub(crate) struct Counted<R> {
     inner: R,
     read: Offset,
     limit: u64,
@@ -78,7 +78,7 @@ impl<R: Read> Read for Counted<R> {
 
 /// The marker of the error a [`Counted`] reader returns past its limit.
 #[derive(Debug)]
-pub struct GrewPastLimit;
+pub(crate) struct GrewPastLimit;
 
 impl std::fmt::Display for GrewPastLimit {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
@@ -90,21 +90,21 @@ impl std::error::Error for GrewPastLimit {}
 
 /// An open log: the buffered, counting reader and what it was opened with.
 #[derive(Debug)]
-pub struct Opened {
+pub(crate) struct Opened {
     /// The path as given, for error messages.
-    pub file: String,
+    pub(crate) file: String,
     /// The file's bytes, buffered, counted as they are consumed.
-    pub reader: Counted<BufReader<File>>,
+    pub(crate) reader: Counted<BufReader<File>>,
     /// Bytes read so far.
-    pub offset: Offset,
+    pub(crate) offset: Offset,
     /// The size limit it was opened with, bytes.
-    pub limit: u64,
+    pub(crate) limit: u64,
 }
 
 impl Opened {
     /// The error of a failed read: the size limit, the end of the file
     /// inside a record (`Truncated`), or another I/O error.
-    pub fn io_error(&self, err: io::Error) -> LogError {
+    pub(crate) fn io_error(&self, err: io::Error) -> LogError {
         let file = self.file.clone();
         if err.get_ref().is_some_and(|e| e.is::<GrewPastLimit>()) {
             return LogError::TooLarge { file, size: self.offset.get(), limit: self.limit };
@@ -118,7 +118,7 @@ impl Opened {
 
 /// Opens `path` for reading if it is a regular file of at most
 /// `limits.max_file_bytes` bytes.
-pub fn open(path: &Path, limits: &LogLimits) -> Result<Opened, LogError> {
+pub(crate) fn open(path: &Path, limits: &LogLimits) -> Result<Opened, LogError> {
     let file = path.display().to_string();
     let mut options = std::fs::OpenOptions::new();
     options.read(true);

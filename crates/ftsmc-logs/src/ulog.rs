@@ -19,7 +19,8 @@
 //! Two faults of `yule_log` 0.4.0 are worked around here rather than
 //! written around by hand: its array and nested-type allocation trusts the
 //! format text (an array of 10¹⁸ elements, a type that contains itself), so
-//! every format a subscription uses is checked first ([`check_format`]);
+//! every format a subscription uses is checked first (nesting, array and
+//! message sizes; see [`MAX_NESTING`]);
 //! and it reports every fault of the 16-byte file header as "Invalid
 //! Header", so the header is read and checked here. One is not: it prints
 //! a line to standard output when a format's name contains `heartbeat`.
@@ -339,7 +340,7 @@ fn base_size(base: &BaseType) -> Option<usize> {
 /// itself), every array and the whole at most [`MAX_MESSAGE_BYTES`] long,
 /// and no nested type of zero bytes (whose arrays would cost memory without
 /// bytes in the file). Returns the format, or what is wrong with it.
-pub fn check_format<'a>(formats: &'a HashMap<String, def::Format>, name: &str) -> Result<&'a def::Format, String> {
+fn check_format<'a>(formats: &'a HashMap<String, def::Format>, name: &str) -> Result<&'a def::Format, String> {
     fn size(formats: &HashMap<String, def::Format>, name: &str, depth: usize) -> Result<usize, String> {
         if depth > MAX_NESTING {
             return Err(format!("type `{name}` is nested more than {MAX_NESTING} deep (does it contain itself?)"));
