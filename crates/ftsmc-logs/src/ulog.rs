@@ -541,7 +541,9 @@ fn channel<'a>(data: &'a UlogData, topic: &str, fields: &[&str]) -> Option<Chann
 /// The [`FlightLog`] of a PX4 ULog file (frame [`Frame::NedFrd`]).
 ///
 /// Time base: `vehicle_attitude` instance 0, from the first time stamp at
-/// which every channel found has a sample. Body rates come from
+/// which every channel found has a sample (an attitude sample with the
+/// time stamp of the one before it is left out, so that time strictly
+/// increases). Body rates come from
 /// `vehicle_angular_velocity` if logged, else `sensor_combined.gyro_rad`;
 /// motors from `actuator_motors` (normalised) if logged, else
 /// `actuator_outputs` instance 0 (PWM µs). Errors: no `vehicle_attitude`
