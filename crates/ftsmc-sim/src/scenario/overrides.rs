@@ -156,8 +156,8 @@ impl Scenario {
                         let layout_set = LAYOUT.iter().any(|k| keys.contains(&format!("vehicle.{k}").as_str()));
                         let preset_layout = section == "vehicle" && LAYOUT.iter().any(|k| values.contains_key(*k));
                         written.retain(|k, _| {
-                            let replaced = values.contains_key(k)
-                                || (preset_layout && !layout_set && LAYOUT.contains(&k.as_ref()));
+                            let replaced =
+                                values.contains_key(k) || (preset_layout && !layout_set && LAYOUT.contains(&k));
                             !replaced || keys.contains(&format!("{section}.{k}").as_str())
                         });
                     }
