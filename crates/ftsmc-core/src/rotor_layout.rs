@@ -30,6 +30,8 @@
 //! dozen lines): the crate is `no_std` and depends on no linear-algebra
 //! library; the mixer of the simulator uses the same function.
 
+use crate::lanes::Real;
+
 /// A four-rotor layout: where the hubs are and which way each rotor turns.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum RotorGeometry {
@@ -145,7 +147,7 @@ pub fn px4_scales(mix: &[[f64; 4]; 4]) -> [f64; 4] {
     let rp_scale = |col: &[f64; 4]| {
         let n = col.iter().filter(|x| x.abs() > 1e-3).count();
         if n > 0 {
-            (col.iter().map(|x| x * x).sum::<f64>() / (n as f64 / 2.0)).sqrt()
+            Real::sqrt(col.iter().map(|x| x * x).sum::<f64>() / (n as f64 / 2.0))
         } else {
             1.0
         }
