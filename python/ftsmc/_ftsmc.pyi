@@ -126,6 +126,9 @@ _GymOut = Tuple[
     npt.NDArray[np.bool_],
 ]
 
+# The campaign defaults (ftsmc_sim::defaults): run counts and budgets as int, confidence as float.
+DEFAULTS: Dict[str, Union[int, float]]
+
 def simulate_native(scenario: Scenario, controller: str) -> RunData: ...
 def simulate_python(scenario: Scenario, controller: Any, state_cls: Any, reference_cls: Any, name: str) -> RunData: ...
 def gym_check_envs(scenario: Scenario, num_envs: int) -> None: ...

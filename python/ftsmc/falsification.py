@@ -18,7 +18,7 @@ from ._ftsmc import Scenario
 def falsify(
     scenario: Scenario,
     controller: str,
-    budget: int = 200,
+    budget: int = int(_ftsmc.DEFAULTS["falsify_budget"]),
     seed: Optional[int] = None,
     threads: Optional[int] = None,
 ) -> Dict[str, Any]:
@@ -41,8 +41,8 @@ def falsify(
 def failure_probability(
     scenario: Scenario,
     controller: str,
-    budget: int = 2000,
-    confidence: float = 0.95,
+    budget: int = int(_ftsmc.DEFAULTS["failure_probability_budget"]),
+    confidence: float = float(_ftsmc.DEFAULTS["confidence"]),
     seed: Optional[int] = None,
     threads: Optional[int] = None,
 ) -> Dict[str, Any]:

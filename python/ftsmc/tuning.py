@@ -32,7 +32,7 @@ class Tuned(NamedTuple):
 def tune(
     scenario: Scenario,
     controller: str,
-    budget: int = 2000,
+    budget: int = int(_ftsmc.DEFAULTS["tune_budget"]),
     seed: Optional[int] = None,
     threads: Optional[int] = None,
     extends: Optional[str] = None,

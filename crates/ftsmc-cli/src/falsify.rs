@@ -29,7 +29,7 @@ use crate::output::{provenance, ResultDir};
 use crate::plot::{controller_color, write_figure, Figure, Panel, Rgb, Series};
 
 /// Flights of a search when neither `--budget` nor `[falsify] budget` says.
-pub const DEFAULT_BUDGET: u64 = 200;
+pub const DEFAULT_BUDGET: u64 = ftsmc_sim::defaults::FALSIFY_BUDGET;
 
 /// The flights of a search: `--budget`, else `[falsify] budget`, else [`DEFAULT_BUDGET`].
 pub fn budget_of(scenario: &Scenario, budget: Option<u64>) -> u64 {

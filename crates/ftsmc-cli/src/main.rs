@@ -82,7 +82,7 @@ enum Command {
         #[arg(long = "limit", value_name = "KEY=VALUE")]
         limit: Vec<String>,
         /// Confidence level of the ladder's and tuned table's intervals and verdicts (family-wise error 1 − confidence).
-        #[arg(long, default_value_t = ftsmc_sim::stats::DEFAULT_CONFIDENCE)]
+        #[arg(long, default_value_t = ftsmc_sim::defaults::CONFIDENCE)]
         confidence: f64,
         /// Held-out draws per gain set in the table of the committed tuned gains against the defaults
         /// (`scenarios/tuned/`; 0: no table; docs/tuning.md's table uses 200).
@@ -143,7 +143,7 @@ enum Command {
         /// Scenario file (TOML) or built-in name.
         scenario: String,
         /// Number of randomised runs (each flown by every controller).
-        #[arg(long, allow_negative_numbers = true, default_value_t = 100)]
+        #[arg(long, allow_negative_numbers = true, default_value_t = ftsmc_sim::defaults::MONTECARLO_RUNS)]
         runs: u64,
         /// Master seed (default: the scenario's `seed`).
         #[arg(long, allow_negative_numbers = true)]
@@ -176,7 +176,7 @@ enum Command {
         #[arg(long, value_name = "K/N")]
         shard: Option<ftsmc_sim::batch::shard::Shard>,
         /// Confidence level of every interval in the tables and summary.json (recorded there).
-        #[arg(long, default_value_t = ftsmc_sim::stats::DEFAULT_CONFIDENCE)]
+        #[arg(long, default_value_t = ftsmc_sim::defaults::CONFIDENCE)]
         confidence: f64,
     },
     /// Search the scenario's [falsify] space for the flight with the lowest robustness margin (CMA-ES with restarts), beside uniform random search at the same budget.
@@ -216,10 +216,10 @@ enum Command {
         #[arg(long, short = 'c', value_parser = controller_names)]
         controller: String,
         /// Flights, CE levels included.
-        #[arg(long, allow_negative_numbers = true, default_value_t = 2000)]
+        #[arg(long, allow_negative_numbers = true, default_value_t = ftsmc_sim::defaults::FAILURE_PROBABILITY_BUDGET)]
         budget: u64,
         /// Confidence level of the interval.
-        #[arg(long, allow_negative_numbers = true, default_value_t = 0.95)]
+        #[arg(long, allow_negative_numbers = true, default_value_t = ftsmc_sim::defaults::CONFIDENCE)]
         confidence: f64,
         /// Also fly N plain Monte Carlo flights and print their estimate beside it (0: none).
         #[arg(long, allow_negative_numbers = true, default_value_t = 0)]
@@ -250,7 +250,7 @@ enum Command {
         #[arg(value_delimiter = ',', value_parser = controller_names)]
         contestants: Vec<String>,
         /// Runs per contestant (not with --until-decided).
-        #[arg(long, default_value_t = 100, conflicts_with_all = ["until_decided", "max_runs", "batch"])]
+        #[arg(long, default_value_t = ftsmc_sim::defaults::COMPARE_RUNS, conflicts_with_all = ["until_decided", "max_runs", "batch"])]
         runs: u64,
         /// Fly batches of --batch runs until every pair is decided (alpha spending keeps the error rate).
         #[arg(long)]
@@ -262,7 +262,7 @@ enum Command {
         #[arg(long)]
         batch: Option<u64>,
         /// Confidence level of every interval and verdict (family-wise error 1 − confidence).
-        #[arg(long, default_value_t = ftsmc_sim::stats::DEFAULT_CONFIDENCE)]
+        #[arg(long, default_value_t = ftsmc_sim::defaults::CONFIDENCE)]
         confidence: f64,
         /// A practical-difference margin (repeatable): `rms=0.005` (m), `success=0.02` (a fraction). Each
         /// verdict is then also judged against it: better by more than the margin, equivalent within it
@@ -307,7 +307,7 @@ enum Command {
         #[arg(long, conflicts_with = "style")]
         no_figures: bool,
         /// Confidence level of every interval in the tables and summary.json (recorded there).
-        #[arg(long, default_value_t = ftsmc_sim::stats::DEFAULT_CONFIDENCE)]
+        #[arg(long, default_value_t = ftsmc_sim::defaults::CONFIDENCE)]
         confidence: f64,
     },
     /// Tune controllers' declared gains on a scenario by CMA-ES over Monte Carlo flights; judge on held-out seeds.
@@ -319,10 +319,10 @@ enum Command {
         #[arg(long, short = 'c', value_parser = controller_names)]
         controller: String,
         /// Confidence level of every interval and verdict (family-wise error 1 − confidence).
-        #[arg(long, default_value_t = ftsmc_sim::stats::DEFAULT_CONFIDENCE)]
+        #[arg(long, default_value_t = ftsmc_sim::defaults::CONFIDENCE)]
         confidence: f64,
         /// Training flights the search may fly per controller (the start's and the race's included).
-        #[arg(long, allow_negative_numbers = true, default_value_t = tune::DEFAULT_BUDGET)]
+        #[arg(long, allow_negative_numbers = true, default_value_t = ftsmc_sim::defaults::TUNE_BUDGET)]
         budget: u64,
         /// Seed of the search and of the Monte Carlo draws (default: the scenario's `seed`).
         #[arg(long, allow_negative_numbers = true)]
@@ -399,9 +399,9 @@ enum Px4Action {
 }
 
 /// `ftsmc compare --until-decided`: most runs per contestant without `--max-runs`.
-const COMPARE_MAX_RUNS: u64 = 1000;
+const COMPARE_MAX_RUNS: u64 = ftsmc_sim::defaults::COMPARE_MAX_RUNS;
 /// `ftsmc compare --until-decided`: runs per look without `--batch`.
-const COMPARE_BATCH: u64 = 50;
+const COMPARE_BATCH: u64 = ftsmc_sim::defaults::COMPARE_BATCH;
 
 /// Load a scenario from a file path or a built-in name.
 pub fn load_scenario(arg: &str) -> Result<Scenario> {

@@ -55,7 +55,7 @@ fn history_json(p: &Problem, h: &History) -> serde_json::Value {
 /// margin, its flight, the first violation, every flight) and `worst_toml`,
 /// the worst case as a scenario file.
 #[pyfunction]
-#[pyo3(signature = (scenario, controller, budget=200, seed=None, threads=None))]
+#[pyo3(signature = (scenario, controller, budget=ftsmc_sim::defaults::FALSIFY_BUDGET, seed=None, threads=None))]
 pub fn falsify_native(
     py: Python<'_>,
     scenario: PyRef<'_, Scenario>,
@@ -91,7 +91,7 @@ pub fn falsify_native(
 /// `hi`, `confidence`, `flights`, `failures`, `ess`, `plain_mc_equivalent`,
 /// `one_sided`, `reliable`, `levels`).
 #[pyfunction]
-#[pyo3(signature = (scenario, controller, budget=2000, confidence=0.95, seed=None, threads=None))]
+#[pyo3(signature = (scenario, controller, budget=ftsmc_sim::defaults::FAILURE_PROBABILITY_BUDGET, confidence=ftsmc_sim::defaults::CONFIDENCE, seed=None, threads=None))]
 pub fn failure_probability_native(
     py: Python<'_>,
     scenario: PyRef<'_, Scenario>,

@@ -30,6 +30,17 @@ pub(crate) fn value_error(message: impl std::fmt::Display) -> PyErr {
 /// The module `ftsmc._ftsmc`.
 #[pymodule]
 fn _ftsmc(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    // The campaign defaults of `ftsmc_sim::defaults`, the one place they
+    // are written (the wrappers and `python/tests/test_defaults.py` read them).
+    let defaults = pyo3::types::PyDict::new(m.py());
+    for (name, value) in ftsmc_sim::defaults::ALL {
+        if name == "confidence" {
+            defaults.set_item(name, value)?;
+        } else {
+            defaults.set_item(name, value as u64)?;
+        }
+    }
+    m.add("DEFAULTS", defaults)?;
     m.add_class::<scenario::Scenario>()?;
     m.add_class::<controller::NativeController>()?;
     m.add_class::<flight::RunData>()?;

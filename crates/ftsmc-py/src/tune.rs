@@ -89,7 +89,7 @@ pub fn tune_evaluate(
 /// summary)`; the JSON has the parameters, every candidate
 /// (`history`) and the training and held-out statistics.
 #[pyfunction]
-#[pyo3(signature = (scenario, controller, budget=2000, seed=None, threads=None, extends=None, evaluator=None))]
+#[pyo3(signature = (scenario, controller, budget=ftsmc_sim::defaults::TUNE_BUDGET, seed=None, threads=None, extends=None, evaluator=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn tune_native(
     py: Python<'_>,

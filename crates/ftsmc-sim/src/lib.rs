@@ -73,6 +73,7 @@
 //!            per_lane.rs        any one-flight controller on lanes (one controller per lane)
 //!            on_isa.rs          a controller's updates on the instruction set picked at run time
 //! floor 1  axes.rs              AxisSet and other per-axis containers
+//!          defaults.rs          the defaults of every campaign (runs, budgets, confidence), read by the CLI and Python
 //!          desaturation.rs      PX4's sequential-desaturation allocation (airmode off)
 //!          signal/              time signals with analytic derivatives
 //!            waypoints.rs       quintic waypoint splines
@@ -91,6 +92,7 @@ pub mod analysis;
 pub mod axes;
 pub mod batch;
 pub mod controllers;
+pub mod defaults;
 pub mod desaturation;
 pub mod envelope;
 pub mod environment;

@@ -17,6 +17,7 @@ const FLOORS: &[(&str, u32)] = &[
     ("gauss", 0),
     ("rng", 0),
     ("stats", 0),
+    ("defaults", 1),
     ("text", 1),
     ("escape", 1),
     ("axes", 1),
