@@ -44,8 +44,6 @@ pub fn stats_cells(s: &OutcomeStats, success: String, median: String) -> Vec<Str
         num(s.saturated),
     ]
 }
-/// Default training-flight budget of `ftsmc tune`.
-pub const DEFAULT_BUDGET: u64 = ftsmc_sim::defaults::TUNE_BUDGET;
 
 /// `-c`'s controllers: `all` (every registered controller), or a
 /// comma-separated list (duplicates dropped, order kept).
