@@ -40,6 +40,9 @@ pub struct IdentifyArgs {
     /// Bootstrap segment length, s.
     #[arg(long, default_value_t = 2.0)]
     pub segment: f64,
+    /// Largest command delay tried, log steps (the log's timing; `ftsmc validate --command-delay` applies it).
+    #[arg(long, default_value_t = 5)]
+    pub max_delay: usize,
 }
 
 /// Reads every log as a [`Series`] for `purpose`.

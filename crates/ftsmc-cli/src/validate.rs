@@ -33,14 +33,25 @@ pub struct ValidateArgs {
     /// Seed of the bootstrap.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
+    /// The logged commands act this many log steps later (`ftsmc identify`'s command_delay_steps).
+    #[arg(long, default_value_t = 0)]
+    pub command_delay: usize,
 }
 
 /// Runs `ftsmc validate`.
 pub fn run(a: ValidateArgs) -> Result<()> {
     let vehicle = Vehicle::load(&a.vehicle)?;
     let series = read_series(&a.logs, "validation")?;
-    let rows =
-        validate(&series, &vehicle, &ValidateOptions { bootstrap: a.bootstrap, seed: a.seed, ..Default::default() })?;
+    let rows = validate(
+        &series,
+        &vehicle,
+        &ValidateOptions {
+            bootstrap: a.bootstrap,
+            seed: a.seed,
+            command_delay_steps: a.command_delay,
+            ..Default::default()
+        },
+    )?;
     std::fs::create_dir_all(&a.out).with_context(|| format!("cannot create {}", a.out.display()))?;
     let mut csv = String::from(
         "flight,horizon_s,steps,quantity,axis,n,r2,r2_lo,r2_hi,rms,rms_lo,rms_hi,baseline_r2,baseline_rms\n",

@@ -89,6 +89,12 @@ pub struct IdentifyOptions {
     /// A sample counts as flight when every rotor command is at least this
     /// (0–1, default 0.05).
     pub min_command: f64,
+    /// Largest command delay tried, log steps (default 0): the commands are
+    /// shifted later by 0…this many samples before the lag, a transport
+    /// delay of the log's timing (the motor values logged before they act,
+    /// the IMU's filters) that the vehicle file cannot hold; `ftsmc
+    /// validate --command-delay` applies it.
+    pub max_delay_steps: usize,
 }
 
 impl Default for IdentifyOptions {
@@ -101,6 +107,7 @@ impl Default for IdentifyOptions {
             tau_max_s: 0.2,
             tau_step_s: 0.002,
             min_command: 0.05,
+            max_delay_steps: 0,
         }
     }
 }
@@ -194,6 +201,16 @@ impl Sums {
     }
 }
 
+/// `s` with its commands shifted `d` samples later (`u'_k = u_{k−d}`, the
+/// first command held before).
+pub fn delay(s: &Series, d: usize) -> Series {
+    let mut out = s.clone();
+    for k in 0..s.len() {
+        out.commands[k] = s.commands[k.saturating_sub(d)];
+    }
+    out
+}
+
 /// Lagged commands `ū` of a series for time constant `tau` (module docs):
 /// `ū(t_0) = u(t_0)`, then the exact first-order response to the held command.
 pub fn lagged_commands(s: &Series, tau: f64, scale: Option<&[f64]>) -> Vec<[f64; 4]> {
@@ -278,11 +295,17 @@ pub fn identify(logs: &[Series], base: &Vehicle, options: &IdentifyOptions) -> R
     let spin = body.spin.map(|s| s.sign());
     let inertia = [body.inertia[0][0], body.inertia[1][1], body.inertia[2][2]];
     let n_tau = (options.tau_max_s / options.tau_step_s).round() as usize + 1;
-    let taus: Vec<f64> = (0..n_tau).map(|i| i as f64 * options.tau_step_s).collect();
-    // sums[t][segment]
-    let mut sums = vec![vec![Sums::default(); segments]; n_tau];
-    for (ti, &tau) in taus.iter().enumerate() {
-        for (s, r) in logs.iter().zip(&rows) {
+    // The grid: every delay (steps) with every τ.
+    let grid: Vec<(usize, f64)> = (0..=options.max_delay_steps)
+        .flat_map(|d| (0..n_tau).map(move |i| (d, i as f64 * options.tau_step_s)))
+        .collect();
+    let taus: Vec<f64> = grid.iter().map(|g| g.1).collect();
+    let delayed: Vec<Vec<Series>> =
+        (0..=options.max_delay_steps).map(|d| logs.iter().map(|s| delay(s, d)).collect()).collect();
+    // sums[grid point][segment]
+    let mut sums = vec![vec![Sums::default(); segments]; grid.len()];
+    for (ti, &(d, tau)) in grid.iter().enumerate() {
+        for (s, r) in delayed[d].iter().zip(&rows) {
             let lag = lagged_commands(s, tau, None);
             let scale: Option<Vec<f64>> = s.battery_v.as_ref().map(|v| v.iter().map(|x| x / battery_ref_v).collect());
             let lag_v = scale.as_ref().map(|sc| lagged_commands(s, tau, Some(sc)));
@@ -309,6 +332,7 @@ pub fn identify(logs: &[Series], base: &Vehicle, options: &IdentifyOptions) -> R
     let point = fit_all(&sums, &ones, &taus)
         .ok_or_else(|| IdentError::Singular { what: what(), channel: "the thrust, roll or pitch equations" })?;
     let mut replicates: Vec<[f64; N_PARAMS]> = Vec::new();
+    let mut replicate_grid: Vec<usize> = Vec::new();
     let mut rng = ftsmc_sim::rng::chacha_stream(options.seed, BOOTSTRAP_STREAM);
     for _ in 0..options.bootstrap {
         let mut w = vec![0.0; segments];
@@ -317,6 +341,7 @@ pub fn identify(logs: &[Series], base: &Vehicle, options: &IdentifyOptions) -> R
         }
         if let Some(f) = fit_all(&sums, &w, &taus) {
             replicates.push(f.params);
+            replicate_grid.push(f.tau_index);
         }
     }
     // Derived values of a parameter vector.
@@ -340,6 +365,9 @@ pub fn identify(logs: &[Series], base: &Vehicle, options: &IdentifyOptions) -> R
         estimates.push(estimate(name, unit, point.params[i], &col, "log", base_params[i]));
     }
     widen_by_grid(&mut estimates[0], options.tau_step_s);
+    let delay_of = |ti: usize| grid[ti].0 as f64;
+    let delay_reps: Vec<f64> = replicate_grid.iter().map(|&ti| delay_of(ti)).collect();
+    estimates.push(estimate("command_delay_steps", "log steps", delay_of(point.tau_index), &delay_reps, "log", 0.0));
     let d_point = derived(&point.params);
     let d_reps: Vec<[f64; N_DERIVED]> = replicates.iter().map(derived).collect();
     let base_derived = [
@@ -405,6 +433,13 @@ fn check_options(o: &IdentifyOptions) -> Result<(), IdentError> {
     }
     if !(o.tau_step_s > 0.0 && o.tau_max_s >= 0.0 && o.tau_max_s / o.tau_step_s <= 10_000.0) {
         return bad("tau_step_s", o.tau_step_s, "a positive step with at most 10,000 steps up to tau_max_s");
+    }
+    if o.max_delay_steps > 100 {
+        return Err(IdentError::Option {
+            option: "max_delay_steps",
+            value: o.max_delay_steps.to_string(),
+            expected: "at most 100 log steps",
+        });
     }
     if !(0.0..1.0).contains(&o.min_command) {
         return bad("min_command", o.min_command, "a command in [0, 1)");
@@ -668,6 +703,12 @@ impl Identification {
             ));
         }
         out.push_str("# The drag moments are reported only: ftsmc makes them from its rotor drags. A negative\n# rotor drag fit is written as 0 (ftsmc's drags are non-negative).\n");
+        if let Some(d) = self.get("command_delay_steps") {
+            out.push_str(&format!(
+                "# Command delay {} log step(s) (a property of the log's timing, not of the vehicle):\n#   validate with `ftsmc validate LOG --vehicle THIS_FILE --command-delay {}`.\n",
+                d.value, d.value
+            ));
+        }
         if let Some(p) = base_path {
             out.push_str(&format!("extends = {}\n", toml::Value::String(p.to_string())));
         }

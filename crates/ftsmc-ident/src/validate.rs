@@ -49,6 +49,9 @@ pub struct ValidateOptions {
     pub bootstrap: usize,
     /// Seed of the bootstrap (default 0).
     pub seed: u64,
+    /// Command delay, log steps (default 0): the logged commands act this
+    /// many samples later ([`crate::identify::IdentifyOptions::max_delay_steps`]).
+    pub command_delay_steps: usize,
 }
 
 impl Default for ValidateOptions {
@@ -60,6 +63,7 @@ impl Default for ValidateOptions {
             segment_s: 2.0,
             bootstrap: 200,
             seed: 0,
+            command_delay_steps: 0,
         }
     }
 }
@@ -237,7 +241,8 @@ pub fn validate(
     let mut seg_accs: Vec<Vec<[[Acc; 3]; 2]>> = vec![Vec::new(); options.horizons_s.len()];
     let mut steps_of = vec![0usize; options.horizons_s.len()];
     let mut dt_of = vec![0.0; options.horizons_s.len()];
-    for s in logs {
+    let delayed: Vec<Series> = logs.iter().map(|s| crate::identify::delay(s, options.command_delay_steps)).collect();
+    for s in &delayed {
         if s.len() < 3 {
             return Err(IdentError::TooShort {
                 what: s.source.clone(),
