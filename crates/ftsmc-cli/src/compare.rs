@@ -100,6 +100,9 @@ pub fn run(req: &Request<'_>) -> Result<()> {
         Plan::UntilDecided { max_runs, .. } => max_runs,
     };
     ftsmc_sim::limits::check_batch(&scenario.flight_size(), max_runs, list.len())?;
+    for c in &list {
+        ftsmc_sim::batch::gains_fit::check(&c.scenario, std::slice::from_ref(&c.controller))?;
+    }
     let folder = req.out.join(&scenario.name);
     let dir = ResultDir::begin(&folder, "compare")?;
     let spec = scenario.montecarlo.clone().unwrap_or_else(|| {

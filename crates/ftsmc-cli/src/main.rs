@@ -519,6 +519,7 @@ fn run(cli: Cli) -> Result<()> {
             let names = if controllers.is_empty() { scenario.controllers.clone() } else { controllers };
             check_names(&names)?;
             scenario.check_cost(names.len())?;
+            ftsmc_sim::batch::gains_fit::check(&scenario, &names)?;
             // The resolved scenario (written as scenario.toml) lists what was flown.
             scenario.controllers = names;
             reproduce::run_scenario(&scenario, &out, !no_figures)
@@ -572,6 +573,7 @@ fn run(cli: Cli) -> Result<()> {
             // A shard is priced by the runs it flies.
             let own = shard.map_or(Ok(0..runs), |k| k.range(runs))?;
             ftsmc_sim::limits::check_batch(&scenario.flight_size(), own.end - own.start, names.len())?;
+            ftsmc_sim::batch::gains_fit::check(&scenario, &names)?;
             if let Some(n) = threads {
                 ftsmc_sim::limits::check_threads(&scenario.limits, n)?;
             }

@@ -130,9 +130,9 @@ pub fn write(
             c.first_violation.map_or_else(|| "none".into(), |f| f.to_string()),
             format!("{}/{budget}", c.violations),
             if e.one_sided {
-                format!("0 [0, {:.2e}] one-sided", e.hi)
+                format!("0 [0, {}] one-sided", prob(e.hi))
             } else {
-                format!("{:.2e} [{:.2e}, {:.2e}]", e.p, e.lo, e.hi)
+                format!("{} [{}, {}]", prob(e.p), prob(e.lo), prob(e.hi))
             },
             if e.levels.is_empty() { "plain (not rare)".into() } else { format!("CE, {} levels", e.levels.len()) },
             if e.reliable { format!("{:.0}", e.ess) } else { format!("{:.0} (unreliable)", e.ess) },
@@ -236,10 +236,31 @@ fn worst_gust_figure(rung: &str, cells: &[&Cell], folder: &std::path::Path) -> R
     Ok(())
 }
 
+/// A probability for the table: `0` and `1` as such, otherwise three
+/// significant digits in scientific form (`4.42e-4`), never `0.00e0`.
+fn prob(p: f64) -> String {
+    if p == 0.0 {
+        "0".into()
+    } else if p == 1.0 {
+        "1".into()
+    } else {
+        format!("{p:.2e}")
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use ftsmc_sim::falsify::margin_of;
+
+    /// Probabilities print as `0`, `1` or three significant digits.
+    #[test]
+    fn probabilities_print_without_a_zero_mantissa() {
+        assert_eq!(prob(0.0), "0");
+        assert_eq!(prob(1.0), "1");
+        assert_eq!(prob(4.4213e-4), "4.42e-4");
+        assert_eq!(prob(9.992e-1), "9.99e-1");
+    }
 
     /// A cell's worst case, written as its file and read back, flies to the
     /// margin the table prints, bit for bit; the tuned cell flies the

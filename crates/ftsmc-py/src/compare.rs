@@ -129,6 +129,10 @@ pub fn compare_native<'py>(
     }
     ftsmc_sim::limits::check_batch(&base.flight_size(), most, list.len())
         .map_err(|e| value_error(chain_message(&e)))?;
+    for c in &list {
+        ftsmc_sim::batch::gains_fit::check(&c.scenario, std::slice::from_ref(&c.controller))
+            .map_err(|e| value_error(e.to_string()))?;
+    }
     if let Some(n) = threads {
         if n == 0 {
             return Err(value_error("threads must be at least 1"));

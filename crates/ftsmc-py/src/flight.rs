@@ -184,6 +184,7 @@ pub fn montecarlo_columns<'py>(
     }
     ftsmc_sim::limits::check_batch(&scenario.flight_size(), end - start, names.len())
         .map_err(|e| value_error(chain_message(&e)))?;
+    ftsmc_sim::batch::gains_fit::check(&scenario, &names).map_err(|e| value_error(e.to_string()))?;
     if let Some(n) = threads {
         ftsmc_sim::limits::check_threads(&scenario.limits, n).map_err(|e| value_error(chain_message(&e)))?;
     }

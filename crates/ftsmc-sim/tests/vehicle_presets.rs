@@ -249,3 +249,43 @@ fn presets_model_no_drag_the_vehicle_does_not_have() {
     let out = registry::run("tsm-sta", &phantom, RunOptions::default()).unwrap();
     assert!(!out.exit.is_completed(), "{}", out.exit);
 }
+
+/// The published sliding-mode gains on a vehicle of another size
+/// (`batch::gains_fit`): the size factor places the presets; a campaign is
+/// refused when the nominal flight fails with them, names the remedies, and
+/// is let through by a gain table, by `unfit_gains = "fly"`, by the
+/// vehicle-derived PID defaults, or when the nominal flight succeeds.
+#[test]
+fn published_gains_on_another_size_are_refused_when_their_nominal_flight_fails() {
+    use ftsmc_sim::batch::gains_fit::{check, size_factor, SIZE_FACTOR};
+    let calm = built_in("realistic-calm-1");
+    let on = |preset: &str| set(&calm, &[("vehicle.preset", toml::Value::String(preset.into()))]).unwrap();
+    let names = |n: &str| vec![n.to_string()];
+    assert_eq!(size_factor(&ftsmc_sim::controllers::NominalVehicle::default()), 1.0);
+    assert!(size_factor(&on("hummingbird").nominal_vehicle()) <= SIZE_FACTOR);
+    assert!(size_factor(&on("agilicious").nominal_vehicle()) <= SIZE_FACTOR);
+    assert!(size_factor(&on("crazyflie-2").nominal_vehicle()) > SIZE_FACTOR);
+    let x500 = on("px4-x500");
+    assert!(size_factor(&x500.nominal_vehicle()) > SIZE_FACTOR);
+
+    // Of the paper's size: no check, whatever the gains do.
+    assert!(check(&calm, &names("ftaftsmc")).is_ok());
+    // RANFTSMC's published gains leave the x500's envelope in its nominal flight.
+    let e = check(&x500, &names("ranftsmc")).unwrap_err();
+    let text = e.to_string();
+    assert!(e.controller == "ranftsmc" && e.vehicle == "px4-x500", "{e:?}");
+    for remedy in ["ftsmc tune <scenario> -c ranftsmc", "[ranftsmc]", "simulation.unfit_gains=fly"] {
+        assert!(text.contains(remedy), "{text}");
+    }
+    // The remedies let it through.
+    let fly = set(&x500, &[("simulation.unfit_gains", toml::Value::String("fly".into()))]).unwrap();
+    assert!(check(&fly, &names("ranftsmc")).is_ok());
+    let table = set(&x500, &[("ranftsmc.x.b1", toml::Value::Float(2.5))]).unwrap();
+    assert!(check(&table, &names("ranftsmc")).is_ok());
+    assert!(check(&x500, &names("pid")).is_ok(), "PID's defaults are derived from the vehicle");
+    // A nominal flight that succeeds is not refused (RANFTSMC on the Crazyflie 2).
+    assert!(check(&on("crazyflie-2"), &names("ranftsmc")).is_ok());
+    // A bad policy is refused with its key.
+    let bad = set(&x500, &[("simulation.unfit_gains", toml::Value::String("maybe".into()))]).unwrap_err();
+    assert!(bad.contains("unfit_gains"), "{bad}");
+}

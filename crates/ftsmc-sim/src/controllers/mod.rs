@@ -524,6 +524,33 @@ macro_rules! declare_controllers {
             Err(known_names())
         }
 
+        /// The TOML key of the gain section controller `name` reads
+        /// (`"ftaftsmc"` for `ftaftsmc-no-mass`); `None` for an unknown name.
+        pub fn section_key(name: &str) -> Option<&'static str> {
+            $($(
+                if name == <$controller as Declaration>::NAME {
+                    return Some(<$section as GainSection>::KEY);
+                }
+            )+)+
+            None
+        }
+
+        /// Whether controller `name` flies gains nobody fitted to `vehicle`:
+        /// its section of `gains` is exactly [`GainSection::defaults`] (the
+        /// gains published for the paper's vehicle) and those defaults do not
+        /// follow the vehicle (`defaults_for(vehicle) == defaults()`; the
+        /// PID and SE(3) defaults are derived from it, so they never do).
+        /// `None` for an unknown name.
+        pub fn flies_paper_defaults(name: &str, gains: &GainSections, vehicle: &NominalVehicle) -> Option<bool> {
+            $($(
+                if name == <$controller as Declaration>::NAME {
+                    let paper = <$section as GainSection>::defaults();
+                    return Some(gains.$field == paper && <$section as GainSection>::defaults_for(vehicle) == paper);
+                }
+            )+)+
+            None
+        }
+
         /// The reaching-time bound of channel `axis` of controller `name`,
         /// s, when it has one (see [`Declaration::reaching_time_bound`]).
         pub fn reaching_time_bound(name: &str, gains: &GainSections, axis: usize) -> Option<f64> {

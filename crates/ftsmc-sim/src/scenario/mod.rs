@@ -157,6 +157,33 @@ pub struct SimulationSettings {
     /// clamped to `[0, max_rotor_speed]`.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub max_rotor_speed: Option<f64>,
+    /// What `run`, `montecarlo` and `compare` do when a controller would
+    /// fly the default gains published for the paper's vehicle on a vehicle
+    /// of another size and the scenario's nominal flight fails with them
+    /// (the check is `ftsmc_sim::batch::gains_fit`): `"refuse"` (default)
+    /// or `"fly"` them anyway. Written only when not the default.
+    #[serde(skip_serializing_if = "UnfitGainsPolicy::is_refuse")]
+    pub unfit_gains: UnfitGainsPolicy,
+}
+
+/// `[simulation] unfit_gains`: refuse (default) or fly the paper vehicle's
+/// default gains on a vehicle they were not made for when its nominal
+/// flight fails with them.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum UnfitGainsPolicy {
+    /// Refuse the campaign before it starts, naming the remedies.
+    #[default]
+    Refuse,
+    /// Fly them (the result then says how they did).
+    Fly,
+}
+
+impl UnfitGainsPolicy {
+    /// `true` for the default, [`UnfitGainsPolicy::Refuse`] (serde's skip test).
+    pub fn is_refuse(&self) -> bool {
+        *self == Self::Refuse
+    }
 }
 
 impl Default for SimulationSettings {
@@ -172,6 +199,7 @@ impl Default for SimulationSettings {
             steady_state_after: 5.0,
             metrics_window: None,
             max_rotor_speed: None,
+            unfit_gains: UnfitGainsPolicy::Refuse,
         }
     }
 }
