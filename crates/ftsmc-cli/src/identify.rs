@@ -6,37 +6,26 @@
 //! `[actuators]` over the base vehicle, intervals in its header),
 //! DIR/parameters.csv and DIR/identification.json.
 
-use std::path::PathBuf;
-
 use anyhow::{Context, Result};
 use ftsmc_ident::identify::{identify, IdentifyOptions};
-use ftsmc_ident::series::Series;
 use ftsmc_ident::vehicle::Vehicle;
 use serde_json::json;
 
+use crate::log_args::LogArgs;
 use crate::output::write_atomic;
 
 /// Arguments of `ftsmc identify`.
 #[derive(clap::Args)]
 pub struct IdentifyArgs {
-    /// Flight logs: PX4 ULog, NanoBench CSV or the generic CSV (docs/logs.md).
-    #[arg(required = true)]
-    pub logs: Vec<PathBuf>,
+    /// Logs, output folder, bootstrap and seed.
+    #[command(flatten)]
+    pub common: LogArgs,
     /// Vehicle mass, kg (default: the base vehicle's); forces, inertias and drags need it.
     #[arg(long)]
     pub mass: Option<f64>,
     /// Base vehicle: a preset name or a scenario/vehicle file (its layout, max rotor speed, J_z).
     #[arg(long, default_value = "crazyflie-2.1")]
     pub vehicle: String,
-    /// Output folder.
-    #[arg(long)]
-    pub out: PathBuf,
-    /// Bootstrap replicates over flight segments.
-    #[arg(long, default_value_t = 200)]
-    pub bootstrap: usize,
-    /// Seed of the bootstrap.
-    #[arg(long, default_value_t = 0)]
-    pub seed: u64,
     /// Bootstrap segment length, s.
     #[arg(long, default_value_t = 2.0)]
     pub segment: f64,
@@ -45,40 +34,29 @@ pub struct IdentifyArgs {
     pub max_delay: usize,
 }
 
-/// Reads every log as a [`Series`] for `purpose`.
-pub fn read_series(logs: &[PathBuf], purpose: &'static str) -> Result<Vec<Series>> {
-    let limits = ftsmc_logs::LogLimits::default();
-    logs.iter()
-        .map(|p| {
-            let log = ftsmc_logs::read_log(p, &limits)?;
-            Ok(Series::from_log(&log, purpose)?)
-        })
-        .collect()
-}
-
 /// Runs `ftsmc identify`.
 pub fn run(a: IdentifyArgs) -> Result<()> {
     let base = Vehicle::load(&a.vehicle)?;
-    let series = read_series(&a.logs, "identification")?;
+    let series = a.common.read_series("identification")?;
     let options = IdentifyOptions {
         mass_kg: a.mass,
         segment_s: a.segment,
-        bootstrap: a.bootstrap,
-        seed: a.seed,
+        bootstrap: a.common.bootstrap,
+        seed: a.common.seed,
         ..Default::default()
     };
     let id = identify(&series, &base, &options)?;
-    std::fs::create_dir_all(&a.out).with_context(|| format!("cannot create {}", a.out.display()))?;
+    std::fs::create_dir_all(&a.common.out).with_context(|| format!("cannot create {}", a.common.out.display()))?;
     let base_path = match &base.file {
         Some(f) => Some(std::fs::canonicalize(f).with_context(|| format!("cannot resolve {f}"))?.display().to_string()),
         None => None,
     };
-    write_atomic(&a.out.join("vehicle.toml"), id.vehicle_toml(base_path.as_deref()).as_bytes())?;
+    write_atomic(&a.common.out.join("vehicle.toml"), id.vehicle_toml(base_path.as_deref()).as_bytes())?;
     let mut csv = String::from("name,unit,value,lo,hi,basis,base\n");
     for e in &id.estimates {
         csv.push_str(&format!("{},{},{:e},{:e},{:e},{},{:e}\n", e.name, e.unit, e.value, e.lo, e.hi, e.basis, e.base));
     }
-    write_atomic(&a.out.join("parameters.csv"), csv.as_bytes())?;
+    write_atomic(&a.common.out.join("parameters.csv"), csv.as_bytes())?;
     let num = |v: f64| if v.is_finite() { json!(v) } else { json!(null) };
     let report = json!({
         "flights": id.flights,
@@ -99,7 +77,7 @@ pub fn run(a: IdentifyArgs) -> Result<()> {
             "basis": e.basis, "base": num(e.base)
         })).collect::<Vec<_>>(),
     });
-    write_atomic(&a.out.join("identification.json"), serde_json::to_string_pretty(&report)?.as_bytes())?;
+    write_atomic(&a.common.out.join("identification.json"), serde_json::to_string_pretty(&report)?.as_bytes())?;
     println!(
         "identified from {} log(s): {} sample steps in {} segments, {} bootstrap replicates",
         id.flights.len(),
@@ -114,6 +92,6 @@ pub fn run(a: IdentifyArgs) -> Result<()> {
     for (n, v) in &id.r2 {
         println!("R² {n}: {v:.4}");
     }
-    println!("wrote {}", a.out.join("vehicle.toml").display());
+    println!("wrote {}", a.common.out.join("vehicle.toml").display());
     Ok(())
 }

@@ -14,6 +14,7 @@ mod html;
 mod identify;
 mod intervals;
 mod ladder;
+mod log_args;
 mod merge;
 mod montecarlo;
 mod output;

@@ -5,34 +5,23 @@
 //!
 //! Writes DIR/validation.csv and DIR/validation.json.
 
-use std::path::PathBuf;
-
 use anyhow::{Context, Result};
 use ftsmc_ident::validate::{validate, ValidateOptions};
 use ftsmc_ident::vehicle::Vehicle;
 use serde_json::json;
 
-use crate::identify::read_series;
+use crate::log_args::LogArgs;
 use crate::output::write_atomic;
 
 /// Arguments of `ftsmc validate`.
 #[derive(clap::Args)]
 pub struct ValidateArgs {
-    /// Flight logs: PX4 ULog, NanoBench CSV or the generic CSV (docs/logs.md).
-    #[arg(required = true)]
-    pub logs: Vec<PathBuf>,
+    /// Logs, output folder, bootstrap and seed.
+    #[command(flatten)]
+    pub common: LogArgs,
     /// The vehicle: a preset name or a vehicle file (e.g. `ftsmc identify`'s vehicle.toml).
     #[arg(long)]
     pub vehicle: String,
-    /// Output folder.
-    #[arg(long)]
-    pub out: PathBuf,
-    /// Bootstrap replicates over segments for the pooled intervals.
-    #[arg(long, default_value_t = 200)]
-    pub bootstrap: usize,
-    /// Seed of the bootstrap.
-    #[arg(long, default_value_t = 0)]
-    pub seed: u64,
     /// The logged commands act this many log steps later (`ftsmc identify`'s command_delay_steps).
     #[arg(long, default_value_t = 0)]
     pub command_delay: usize,
@@ -41,18 +30,18 @@ pub struct ValidateArgs {
 /// Runs `ftsmc validate`.
 pub fn run(a: ValidateArgs) -> Result<()> {
     let vehicle = Vehicle::load(&a.vehicle)?;
-    let series = read_series(&a.logs, "validation")?;
+    let series = a.common.read_series("validation")?;
     let rows = validate(
         &series,
         &vehicle,
         &ValidateOptions {
-            bootstrap: a.bootstrap,
-            seed: a.seed,
+            bootstrap: a.common.bootstrap,
+            seed: a.common.seed,
             command_delay_steps: a.command_delay,
             ..Default::default()
         },
     )?;
-    std::fs::create_dir_all(&a.out).with_context(|| format!("cannot create {}", a.out.display()))?;
+    std::fs::create_dir_all(&a.common.out).with_context(|| format!("cannot create {}", a.common.out.display()))?;
     let mut csv = String::from(
         "flight,horizon_s,steps,quantity,axis,n,r2,r2_lo,r2_hi,rms,rms_lo,rms_hi,baseline_r2,baseline_rms\n",
     );
@@ -75,7 +64,7 @@ pub fn run(a: ValidateArgs) -> Result<()> {
             r.baseline_rms
         ));
     }
-    write_atomic(&a.out.join("validation.csv"), csv.as_bytes())?;
+    write_atomic(&a.common.out.join("validation.csv"), csv.as_bytes())?;
     let num = |v: f64| if v.is_finite() { json!(v) } else { json!(null) };
     let report = json!({
         "vehicle": vehicle.name,
@@ -87,7 +76,7 @@ pub fn run(a: ValidateArgs) -> Result<()> {
             "baseline_rms": num(r.baseline_rms)
         })).collect::<Vec<_>>(),
     });
-    write_atomic(&a.out.join("validation.json"), serde_json::to_string_pretty(&report)?.as_bytes())?;
+    write_atomic(&a.common.out.join("validation.json"), serde_json::to_string_pretty(&report)?.as_bytes())?;
     println!(
         "{:<8} {:<21} {:<4} {:>8} {:>19} {:>10} {:>10} {:>10}",
         "horizon", "quantity", "axis", "R²", "R² interval", "RMS", "base R²", "base RMS"
@@ -98,6 +87,6 @@ pub fn run(a: ValidateArgs) -> Result<()> {
             r.horizon_s, r.quantity, r.axis, r.r2, r.r2_lo, r.r2_hi, r.rms, r.baseline_r2, r.baseline_rms
         );
     }
-    println!("wrote {}", a.out.join("validation.csv").display());
+    println!("wrote {}", a.common.out.join("validation.csv").display());
     Ok(())
 }
