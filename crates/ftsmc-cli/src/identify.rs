@@ -43,6 +43,7 @@ pub fn run(a: IdentifyArgs) -> Result<()> {
         segment_s: a.segment,
         bootstrap: a.common.bootstrap,
         seed: a.common.seed,
+        max_delay_steps: a.max_delay,
         ..Default::default()
     };
     let id = identify(&series, &base, &options)?;

@@ -128,3 +128,46 @@ fn bad_inputs_get_one_clear_error() {
     let e = err(&["identify", &clean, "--mass=-1", "--out", o]);
     assert!(e.contains("mass") && e.contains("-1"), "{e}");
 }
+
+/// `--max-delay` is flown: a synthetic flight whose logged motor commands
+/// lead the ones that act by 2 log steps (a log-timing offset) identifies a
+/// delay of 2 with `--max-delay 4`, and 0 with `--max-delay 0`; the τ
+/// interval never goes below 0.
+#[test]
+fn identify_finds_a_command_delay_within_max_delay() {
+    let dir = tempfile::tempdir().unwrap();
+    let v = Vehicle::load("crazyflie-2.1").unwrap();
+    let mut log = fly(&v, &SyntheticOptions { duration_s: 12.0, ..Default::default() }).unwrap();
+    let motors = log.motors.as_mut().unwrap();
+    let n = motors.values.len();
+    for k in 0..n - 2 {
+        motors.values[k] = motors.values[k + 2];
+    }
+    let path = dir.path().join("early.csv");
+    std::fs::write(&path, to_generic_csv(&log)).unwrap();
+    let delay_of = |max: &str| -> (f64, f64) {
+        let out_dir = dir.path().join(format!("d{max}"));
+        let out = ftsmc(&[
+            "identify",
+            path.to_str().unwrap(),
+            "--vehicle",
+            "crazyflie-2.1",
+            "--bootstrap",
+            "20",
+            "--max-delay",
+            max,
+            "--out",
+            out_dir.to_str().unwrap(),
+        ]);
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        let params = std::fs::read_to_string(out_dir.join("parameters.csv")).unwrap();
+        let field = |name: &str, i: usize| -> f64 {
+            let line = params.lines().find(|l| l.starts_with(name)).unwrap();
+            line.split(',').nth(i).unwrap().parse().unwrap()
+        };
+        assert!(field("tau,", 3) >= 0.0, "{params}");
+        (field("command_delay_steps,", 2), field("tau,", 2))
+    };
+    assert_eq!(delay_of("4").0, 2.0);
+    assert_eq!(delay_of("0").0, 0.0);
+}

@@ -591,9 +591,10 @@ fn estimate(
 }
 
 /// The τ estimate's interval widened by half a grid step each side: the
-/// grid's resolution is part of its uncertainty.
+/// grid's resolution is part of its uncertainty. A time constant is not
+/// negative: the lower end stops at 0 (the grid's first point).
 fn widen_by_grid(e: &mut Estimate, step: f64) {
-    e.lo -= 0.5 * step;
+    e.lo = (e.lo - 0.5 * step).max(0.0);
     e.hi += 0.5 * step;
 }
 
