@@ -456,7 +456,6 @@ impl Eskf {
                 UpdateKind::Mocap => &mut self.gated_out.mocap,
             };
             *count = count.saturating_add(1);
-            self.last_update = Some(report);
             return Ok(report);
         }
         // K = P Hᵀ S⁻¹ = (S⁻¹ H P)ᵀ, S symmetric.

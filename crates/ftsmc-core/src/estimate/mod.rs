@@ -171,7 +171,7 @@ pub mod index {
 /// covariance.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Estimate {
-    /// Time of the last IMU sample propagated, s.
+    /// Time of the last IMU sample propagated, s (NaN before the first sample).
     pub time: f64,
     /// Position `p`, m, world frame.
     pub position: [f64; 3],
@@ -206,7 +206,7 @@ impl Estimate {
 /// An attitude estimate (the Mahony filter's output).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct AttitudeEstimate {
-    /// Time of the last IMU sample, s.
+    /// Time of the last IMU sample, s (NaN before the first sample).
     pub time: f64,
     /// Attitude, unit quaternion `[w, x, y, z]`, body → world.
     pub quaternion: [f64; 4],
