@@ -15,6 +15,7 @@
 //! - [`kinematics`]: Z-Y-X Euler angles, quaternions, rotation matrices and their rates.
 //! - [`pid`]: the PX4 multicopter cascade (P/PID position, quaternion P attitude, PID rates).
 //! - [`se3`]: Lee, Leok & McClamroch 2010 geometric control on SE(3).
+//! - [`estimate`]: state estimators from onboard sensors (Mahony complementary filter, 15-state error-state Kalman filter).
 //!
 //! Every transcendental function, with or without the default `std`
 //! feature, is the pure-Rust `libm` crate's ([`math`]): the same bits on
@@ -26,6 +27,7 @@ pub mod allocation;
 pub mod cascade;
 pub mod controller;
 pub mod elementary;
+pub mod estimate;
 pub mod ftaftsmc;
 pub mod kinematics;
 pub mod lanes;
