@@ -23,6 +23,7 @@ import numpy as np
 from . import _ftsmc, _progress
 from ._frames import frame as _frame
 from ._ftsmc import Scenario
+from .logs import Identification, identify, read_log, validate
 
 if TYPE_CHECKING:
     import matplotlib.figure
@@ -48,6 +49,10 @@ __all__ = [
     "falsify",
     "failure_probability",
     "Tuned",
+    "Identification",
+    "identify",
+    "read_log",
+    "validate",
 ]
 
 __version__: str = _ftsmc.__version__

@@ -8,8 +8,8 @@
 
 use anyhow::{Context, Result};
 use ftsmc_ident::identify::{identify, IdentifyOptions};
+use ftsmc_ident::report;
 use ftsmc_ident::vehicle::Vehicle;
-use serde_json::json;
 
 use crate::log_args::LogArgs;
 use crate::output::write_atomic;
@@ -53,31 +53,8 @@ pub fn run(a: IdentifyArgs) -> Result<()> {
         None => None,
     };
     write_atomic(&a.common.out.join("vehicle.toml"), id.vehicle_toml(base_path.as_deref()).as_bytes())?;
-    let mut csv = String::from("name,unit,value,lo,hi,basis,base\n");
-    for e in &id.estimates {
-        csv.push_str(&format!("{},{},{:e},{:e},{:e},{},{:e}\n", e.name, e.unit, e.value, e.lo, e.hi, e.basis, e.base));
-    }
-    write_atomic(&a.common.out.join("parameters.csv"), csv.as_bytes())?;
-    let num = |v: f64| if v.is_finite() { json!(v) } else { json!(null) };
-    let report = json!({
-        "flights": id.flights,
-        "base_vehicle": id.base.name,
-        "mass_kg": id.mass_kg,
-        "mass_source": id.mass_source,
-        "rows": id.rows,
-        "segments": id.segments,
-        "bootstrap_replicates": id.replicates,
-        "seed": id.seed,
-        "battery_ref_v": num(id.battery_ref_v),
-        "r2": id.r2.iter().map(|(n, v)| (n.to_string(), num(*v))).collect::<serde_json::Map<_, _>>(),
-        "thrust_maps": id.thrust_maps.iter().map(|m| json!({
-            "name": m.name, "linear_n": m.linear_n, "quadratic_n": m.quadratic_n, "r2": num(m.r2)
-        })).collect::<Vec<_>>(),
-        "estimates": id.estimates.iter().map(|e| json!({
-            "name": e.name, "unit": e.unit, "value": num(e.value), "lo": num(e.lo), "hi": num(e.hi),
-            "basis": e.basis, "base": num(e.base)
-        })).collect::<Vec<_>>(),
-    });
+    write_atomic(&a.common.out.join("parameters.csv"), report::parameters_csv(&id).as_bytes())?;
+    let report = report::identification_json(&id);
     write_atomic(&a.common.out.join("identification.json"), serde_json::to_string_pretty(&report)?.as_bytes())?;
     println!(
         "identified from {} log(s): {} sample steps in {} segments, {} bootstrap replicates",

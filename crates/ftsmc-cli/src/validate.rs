@@ -6,9 +6,9 @@
 //! Writes DIR/validation.csv and DIR/validation.json.
 
 use anyhow::{Context, Result};
+use ftsmc_ident::report;
 use ftsmc_ident::validate::{validate, ValidateOptions};
 use ftsmc_ident::vehicle::Vehicle;
-use serde_json::json;
 
 use crate::log_args::LogArgs;
 use crate::output::write_atomic;
@@ -42,40 +42,9 @@ pub fn run(a: ValidateArgs) -> Result<()> {
         },
     )?;
     std::fs::create_dir_all(&a.common.out).with_context(|| format!("cannot create {}", a.common.out.display()))?;
-    let mut csv = String::from(
-        "flight,horizon_s,steps,quantity,axis,n,r2,r2_lo,r2_hi,rms,rms_lo,rms_hi,baseline_r2,baseline_rms\n",
-    );
-    for r in &rows {
-        csv.push_str(&format!(
-            "{},{},{},{},{},{},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e}\n",
-            r.flight.replace(',', ";"),
-            r.horizon_s,
-            r.steps,
-            r.quantity,
-            r.axis,
-            r.n,
-            r.r2,
-            r.r2_lo,
-            r.r2_hi,
-            r.rms,
-            r.rms_lo,
-            r.rms_hi,
-            r.baseline_r2,
-            r.baseline_rms
-        ));
-    }
-    write_atomic(&a.common.out.join("validation.csv"), csv.as_bytes())?;
-    let num = |v: f64| if v.is_finite() { json!(v) } else { json!(null) };
-    let report = json!({
-        "vehicle": vehicle.name,
-        "flights": series.iter().map(|s| s.source.clone()).collect::<Vec<_>>(),
-        "rows": rows.iter().map(|r| json!({
-            "flight": r.flight, "horizon_s": r.horizon_s, "steps": r.steps, "quantity": r.quantity, "axis": r.axis,
-            "n": r.n, "r2": num(r.r2), "r2_lo": num(r.r2_lo), "r2_hi": num(r.r2_hi), "rms": num(r.rms),
-            "rms_lo": num(r.rms_lo), "rms_hi": num(r.rms_hi), "baseline_r2": num(r.baseline_r2),
-            "baseline_rms": num(r.baseline_rms)
-        })).collect::<Vec<_>>(),
-    });
+    write_atomic(&a.common.out.join("validation.csv"), report::validation_csv(&rows).as_bytes())?;
+    let flights: Vec<String> = series.iter().map(|s| s.source.clone()).collect();
+    let report = report::validation_json(&vehicle.name, &flights, &rows);
     write_atomic(&a.common.out.join("validation.json"), serde_json::to_string_pretty(&report)?.as_bytes())?;
     println!(
         "{:<8} {:<21} {:<4} {:>8} {:>19} {:>10} {:>10} {:>10}",

@@ -12,6 +12,8 @@
 //! - [`validate`]: the plant's predicted specific force and angular
 //!   acceleration from logged states and commands (one step, 0.1 s, 0.5 s)
 //!   against the measured ones, beside a constant-acceleration baseline.
+//! - [`report`]: the identification's and the validation's tables (CSV,
+//!   JSON), shared by the CLI and the Python binding.
 //! - [`synthetic`]: a flight made by ftsmc's own plant and motor models, as a
 //!   [`ftsmc_logs::FlightLog`] and in the generic CSV schema (the tests'
 //!   known truth).
@@ -19,6 +21,7 @@
 pub mod error;
 pub mod identify;
 pub mod lsq;
+pub mod report;
 pub mod series;
 pub mod synthetic;
 pub mod validate;

@@ -17,6 +17,7 @@ mod falsify;
 mod flight;
 mod gym;
 mod kinematics;
+mod logs;
 mod progress;
 mod scenario;
 mod stats;
@@ -64,6 +65,10 @@ fn _ftsmc(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(stats::stats_binomial_quantile, m)?)?;
     m.add_function(wrap_pyfunction!(stats::stats_mcnemar_exact, m)?)?;
     m.add_function(wrap_pyfunction!(stats::stats_wilcoxon, m)?)?;
+    m.add_function(wrap_pyfunction!(logs::log_columns, m)?)?;
+    m.add_function(wrap_pyfunction!(logs::log_identify, m)?)?;
+    m.add_function(wrap_pyfunction!(logs::log_validate, m)?)?;
+    m.add_function(wrap_pyfunction!(logs::log_synthetic, m)?)?;
     m.add_function(wrap_pyfunction!(controller_names, m)?)?;
     m.add_function(wrap_pyfunction!(controller_label, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
