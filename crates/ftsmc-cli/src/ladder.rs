@@ -190,7 +190,8 @@ pub fn ladder(dir: &ResultDir, runs: u64, controllers: &[&str], figures: bool, c
         "torque activity (N·m/s)",
         "why not",
     ]);
-    let mut wind_table = Table::new(["rung", "mean wind (m/s)", "σ_u, σ_v, σ_w (m/s)", "u variance below 0.1 Hz"]);
+    let mut wind_table =
+        Table::new(["rung", "in words", "mean wind (m/s)", "σ_u, σ_v, σ_w (m/s)", "u variance below 0.1 Hz"]);
     let mut rungs = Map::new();
     let mut verdict_lines: Vec<String> = Vec::new();
     // Each rung's runs, kept for its box plot: the plots are drawn after the
@@ -211,6 +212,7 @@ pub fn ladder(dir: &ResultDir, runs: u64, controllers: &[&str], figures: bool, c
         if s.name.ends_with("-1") {
             wind_table.row(vec![
                 s.name.trim_start_matches("realistic-").trim_end_matches("-1").to_string(),
+                ftsmc_sim::scenario::ladder::rung_words(s).unwrap_or_default(),
                 format!("{:.2}", wind.mean_speed),
                 format!("{:.2}, {:.2}, {:.2}", wind.sigma[0], wind.sigma[1], wind.sigma[2]),
                 wind.u_share_below_0_1_hz.map_or_else(|| "— (no turbulence)".into(), |x| format!("{:.0} %", 100.0 * x)),
@@ -249,7 +251,7 @@ pub fn ladder(dir: &ResultDir, runs: u64, controllers: &[&str], figures: bool, c
         rungs.insert(
             s.name.clone(),
             json!({"envelope_max_position_error": s.envelope.and_then(|e| e.max_position_error),
-                   "wind": {"mean_speed": wind.mean_speed, "sigma": wind.sigma, "airspeed": wind.airspeed,
+                   "wind": {"in_words": ftsmc_sim::scenario::ladder::rung_words(s), "mean_speed": wind.mean_speed, "sigma": wind.sigma, "airspeed": wind.airspeed,
                             "u_share_below_0_1_hz": wind.u_share_below_0_1_hz},
                    "controllers": per}),
         );

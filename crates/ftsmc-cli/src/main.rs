@@ -774,7 +774,12 @@ fn list_text() -> Result<String> {
         .iter()
         .map(|(file, text)| {
             let s = Scenario::from_toml_str(text, file)?;
-            Ok((file.trim_end_matches(".toml").to_string(), s.description))
+            // A scenario with wind says it in a user's words, computed from its [wind].
+            let description = match ftsmc_sim::scenario::ladder::rung_words(&s) {
+                Some(words) => format!("{} — {words}", s.description),
+                None => s.description,
+            };
+            Ok((file.trim_end_matches(".toml").to_string(), description))
         })
         .collect::<Result<Vec<_>>>()?;
     let width = registry::CONTROLLERS
