@@ -502,7 +502,7 @@ pub fn missions(
         "\n### Missions on the ladder: {runs} Monte Carlo runs per rung, mission and controller\n\n\
          Each scenario-1 rung (`realistic-<level>-1`, its vehicle, sensors, wind, Monte Carlo draws and seed) flown \
          for a hover-hold (from rest at the steps' target), a figure-eight about it and a minimum-snap waypoint \
-         mission (`ftsmc tune/compare --mission`; docs/scenarios.md \"Missions\"). Tracking is measured after a \
+         mission (`ftsmc compare --mission`; docs/scenarios.md \"Missions\"). Tracking is measured after a \
          settling window of {} s: RMS of ‖p − p_d‖ over [{} s, end], the largest ‖p − p_d‖ after it, and the time \
          after which every position axis stays within {} m (`settled`: completed runs that settled). Success: \
          completed and inside the rung's envelope from {} s on. Each median with its distribution-free {level} % \
