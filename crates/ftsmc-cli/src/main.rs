@@ -872,6 +872,15 @@ mod tests {
     }
 
     #[test]
+    fn mission_names_round_trip_and_a_wrong_one_lists_them() {
+        for m in ftsmc_sim::analysis::missions::Mission::ALL {
+            assert_eq!(parse_mission(m.name()), Ok(m));
+        }
+        let e = parse_mission("eight").unwrap_err();
+        assert_eq!(e, "`eight`: expected one of steps, hover, figure-eight, waypoints");
+    }
+
+    #[test]
     fn list_names_every_built_in_scenario_and_vehicle_preset_in_one_aligned_column() {
         let text = list_text().unwrap();
         for (file, _) in BUILT_IN_SCENARIOS {
