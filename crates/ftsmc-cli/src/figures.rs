@@ -587,7 +587,11 @@ pub fn montecarlo(scenario: &Scenario, rows: &[McRun], controllers: &[String], d
         .collect();
     let runs = rows.len() / controllers.len().max(1);
     write_boxplots(
-        &format!("Beyond the paper — Monte Carlo, {runs} runs of {} per controller", scenario.name),
+        &format!(
+            "Beyond the paper — Monte Carlo, {runs} runs of {} per controller{}",
+            scenario.name,
+            ftsmc_sim::scenario::ladder::rung_title(scenario).map_or_else(String::new, |w| format!(" ({w})"))
+        ),
         &[BoxPanel {
             title: "completed runs: box q1–q3, whiskers p5–p95".into(),
             y_label: "RMS position error (m)".into(),

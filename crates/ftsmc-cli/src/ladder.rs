@@ -190,7 +190,8 @@ pub fn ladder(dir: &ResultDir, runs: u64, controllers: &[&str], figures: bool, c
         "torque activity (N·m/s)",
         "why not",
     ]);
-    let mut wind_table = Table::new(["rung", "mean wind (m/s)", "σ_u, σ_v, σ_w (m/s)", "u variance below 0.1 Hz"]);
+    let mut wind_table =
+        Table::new(["rung", "in words", "mean wind (m/s)", "σ_u, σ_v, σ_w (m/s)", "u variance below 0.1 Hz"]);
     let mut rungs = Map::new();
     let mut verdict_lines: Vec<String> = Vec::new();
     // Each rung's runs, kept for its box plot: the plots are drawn after the
@@ -211,6 +212,7 @@ pub fn ladder(dir: &ResultDir, runs: u64, controllers: &[&str], figures: bool, c
         if s.name.ends_with("-1") {
             wind_table.row(vec![
                 s.name.trim_start_matches("realistic-").trim_end_matches("-1").to_string(),
+                ftsmc_sim::scenario::ladder::rung_words(s).unwrap_or_default(),
                 format!("{:.2}", wind.mean_speed),
                 format!("{:.2}, {:.2}, {:.2}", wind.sigma[0], wind.sigma[1], wind.sigma[2]),
                 wind.u_share_below_0_1_hz.map_or_else(|| "— (no turbulence)".into(), |x| format!("{:.0} %", 100.0 * x)),
@@ -249,7 +251,7 @@ pub fn ladder(dir: &ResultDir, runs: u64, controllers: &[&str], figures: bool, c
         rungs.insert(
             s.name.clone(),
             json!({"envelope_max_position_error": s.envelope.and_then(|e| e.max_position_error),
-                   "wind": {"mean_speed": wind.mean_speed, "sigma": wind.sigma, "airspeed": wind.airspeed,
+                   "wind": {"in_words": ftsmc_sim::scenario::ladder::rung_words(s), "mean_speed": wind.mean_speed, "sigma": wind.sigma, "airspeed": wind.airspeed,
                             "u_share_below_0_1_hz": wind.u_share_below_0_1_hz},
                    "controllers": per}),
         );
@@ -303,14 +305,26 @@ pub fn ladder(dir: &ResultDir, runs: u64, controllers: &[&str], figures: bool, c
 /// The verdict line of one rung: the two controllers with the lowest
 /// median RMS position error, paired.
 fn rung_verdict(rung: &str, names: &[String], cells: &[Cell], confidence: f64) -> String {
-    let mut order: Vec<usize> = (0..names.len()).filter(|&i| cells[i].rms_median.is_some()).collect();
+    let contestants: Vec<_> = cells.iter().map(|c| (c.rms_median, &c.outcomes)).collect();
+    pair_verdict(rung, names, &contestants, confidence)
+}
+
+/// The verdict line of the two contestants `(median RMS error, outcomes)`
+/// with the lowest median, paired on the same draws.
+fn pair_verdict(
+    rung: &str,
+    names: &[String],
+    contestants: &[(Option<f64>, &ftsmc_sim::batch::verdicts::Outcomes)],
+    confidence: f64,
+) -> String {
+    let mut order: Vec<usize> = (0..names.len()).filter(|&i| contestants[i].0.is_some()).collect();
     order.sort_by(|&a, &b| {
-        cells[a].rms_median.unwrap_or(f64::INFINITY).total_cmp(&cells[b].rms_median.unwrap_or(f64::INFINITY))
+        contestants[a].0.unwrap_or(f64::INFINITY).total_cmp(&contestants[b].0.unwrap_or(f64::INFINITY))
     });
     let (Some(&a), Some(&b)) = (order.first(), order.get(1)) else {
         return format!("{rung}: fewer than two controllers completed a run");
     };
-    let pair = [(names[a].clone(), &cells[a].outcomes), (names[b].clone(), &cells[b].outcomes)];
+    let pair = [(names[a].clone(), contestants[a].1), (names[b].clone(), contestants[b].1)];
     match ftsmc_sim::batch::verdicts::pairwise(&pair, confidence) {
         Ok(v) => {
             let parts: Vec<String> = v
@@ -335,4 +349,183 @@ fn rung_verdict(rung: &str, names: &[String], cells: &[Cell], confidence: f64) -
         }
         Err(e) => format!("{rung}: {e}"),
     }
+}
+
+/// The per-mission numbers of one (rung, mission, controller).
+struct MissionCell {
+    runs: usize,
+    completed: usize,
+    success_interval: ftsmc_sim::stats::Interval,
+    rms_after: Vec<f64>,
+    max_after: Vec<f64>,
+    settled: Vec<f64>,
+    outcomes: ftsmc_sim::batch::verdicts::Outcomes,
+}
+
+fn mission_cell(rows: &[&McRun], scenario: &Scenario, window: f64, conf: f64) -> MissionCell {
+    use ftsmc_sim::analysis::missions::tracking;
+    let limit = scenario.envelope.and_then(|e| e.max_position_error);
+    let done: Vec<&&McRun> = rows.iter().filter(|r| r.exit.is_completed()).collect();
+    let tracked: Vec<_> = done.iter().filter_map(|r| tracking(&r.metrics, r.margin.as_ref(), limit, window)).collect();
+    let mut outcomes = ftsmc_sim::batch::verdicts::Outcomes::default();
+    for r in rows {
+        let rms = if r.exit.is_completed() {
+            tracking(&r.metrics, r.margin.as_ref(), limit, window).map_or(f64::NAN, |t| t.rms_after)
+        } else {
+            f64::NAN
+        };
+        outcomes.push(r.success, r.exit.is_completed(), r.exit.is_crashed(), rms);
+    }
+    let success = rows.iter().filter(|r| r.success).count();
+    MissionCell {
+        runs: rows.len(),
+        completed: done.len(),
+        success_interval: ftsmc_sim::stats::rate::wilson(success as u64, rows.len() as u64, conf)
+            .expect("counts and level are valid"),
+        rms_after: sorted(tracked.iter().map(|t| t.rms_after).collect()),
+        max_after: sorted(tracked.iter().filter_map(|t| t.max_after).collect()),
+        settled: sorted(tracked.iter().filter_map(|t| t.settle_time).collect()),
+        outcomes,
+    }
+}
+
+/// The median of sorted `values` with its distribution-free interval, as a cell (`—`: none).
+fn median_cell(values: &[f64], conf: f64, digits: usize) -> (String, Option<ftsmc_sim::stats::Interval>) {
+    let interval = ftsmc_sim::stats::order::quantile_interval(values, 0.5, conf).ok().flatten();
+    (interval.as_ref().map_or_else(|| "—".into(), |i| i.display(digits)), interval)
+}
+
+/// Fly `runs` Monte Carlo runs of each scenario-1 rung of the ladder for
+/// every mission but `steps` (`ftsmc_sim::analysis::missions`) with each of
+/// `controllers`, write `beyond/mission-runs/<scenario>.csv`, and return
+/// one table, rung × mission × controller: success, RMS position error
+/// after the settling window, max deviation after it, time to settle
+/// (each median with its interval), and per (rung, mission) the paired
+/// verdict of the two lowest medians.
+pub fn missions(
+    dir: &ResultDir,
+    runs: u64,
+    controllers: &[&str],
+    options: ftsmc_sim::analysis::missions::MissionOptions,
+    confidence: f64,
+) -> Result<Ladder> {
+    use ftsmc_sim::analysis::missions::{mission_scenario, Mission};
+    let names: Vec<String> = controllers.iter().map(|c| (*c).to_string()).collect();
+    let mut scenarios = Vec::new();
+    for (file, text) in LADDER.iter().filter(|(file, _)| file.ends_with("-1.toml")) {
+        let rung = Scenario::from_toml_str(text, file).map_err(|e| anyhow!("{e}"))?;
+        for mission in [Mission::Hover, Mission::FigureEight, Mission::Waypoints] {
+            let s = mission_scenario(&rung, mission, options).map_err(|e| anyhow!("{e}"))?;
+            scenarios.push((rung.clone(), mission, s));
+        }
+    }
+    let per = runs.saturating_mul(names.len() as u64);
+    let total = scenarios.iter().fold(0u64, |t, s| t.saturating_add(per.saturating_mul(planned_steps(&s.2))));
+    let bar = steps_bar(total, per.saturating_mul(scenarios.len() as u64));
+    eprintln!(
+        "beyond the paper: missions on the ladder, {runs} runs of each of {} (rung, mission) per controller …",
+        scenarios.len()
+    );
+    let mut table = Table::new([
+        "rung",
+        "mission",
+        "controller",
+        "success",
+        "completed",
+        "RMS pos. err. after window, median [interval] (m)",
+        "max deviation after window (m)",
+        "time to settle (s)",
+        "settled",
+    ]);
+    let mut flights = 0;
+    let mut verdict_lines = Vec::new();
+    let mut json_rows = Vec::new();
+    for (rung, mission, s) in &scenarios {
+        let spec = s.montecarlo.clone().unwrap_or_default();
+        let rows = run_batch(
+            s,
+            &spec,
+            &names,
+            BatchOptions { progress: Some(&|n| bar.inc(n)), ..BatchOptions::new(runs, s.seed) },
+        )
+        .map_err(|e| anyhow!(e))?;
+        flights += rows.len();
+        dir.write(format!("beyond/mission-runs/{}.csv", s.name), &crate::montecarlo::runs_csv(&rows)?)?;
+        let cells: Vec<MissionCell> = names
+            .iter()
+            .map(|name| {
+                mission_cell(
+                    &rows.iter().filter(|r| &r.controller == name).collect::<Vec<_>>(),
+                    s,
+                    options.window,
+                    confidence,
+                )
+            })
+            .collect();
+        let words = ftsmc_sim::scenario::ladder::rung_title(rung).unwrap_or_else(|| rung.name.clone());
+        let mut medians = Vec::new();
+        for (name, c) in names.iter().zip(&cells) {
+            let (rms, rms_i) = median_cell(&c.rms_after, confidence, 3);
+            let (max, max_i) = median_cell(&c.max_after, confidence, 3);
+            let (settle, settle_i) = median_cell(&c.settled, confidence, 2);
+            medians.push(rms_i.map(|i| i.estimate));
+            table.row(vec![
+                words.clone(),
+                mission.name().to_string(),
+                label(name).to_string(),
+                crate::intervals::rate_cell(&c.success_interval),
+                format!("{}/{}", c.completed, c.runs),
+                rms,
+                max,
+                settle,
+                format!("{}/{}", c.settled.len(), c.completed),
+            ]);
+            json_rows.push(json!({"rung": rung.name, "rung_in_words": words, "mission": mission.name(),
+                "scenario": s.name, "controller": name, "runs": c.runs, "completed": c.completed,
+                "success_rate_interval": c.success_interval, "median_rms_after_window_interval": rms_i,
+                "median_max_deviation_after_window_interval": max_i,
+                "median_time_to_settle_interval": settle_i, "settled": c.settled.len()}));
+        }
+        let contestants: Vec<(Option<f64>, &ftsmc_sim::batch::verdicts::Outcomes)> =
+            medians.iter().zip(&cells).map(|(m, c)| (*m, &c.outcomes)).collect();
+        verdict_lines.push(pair_verdict(
+            &format!("{} {}", rung.name, mission.name()),
+            &names,
+            &contestants,
+            confidence,
+        ));
+    }
+    bar.finish_and_clear();
+    let mut md = String::new();
+    let _ = writeln!(
+        md,
+        "\n### Missions on the ladder: {runs} Monte Carlo runs per rung, mission and controller\n\n\
+         Each scenario-1 rung (`realistic-<level>-1`, its vehicle, sensors, wind, Monte Carlo draws and seed) flown \
+         for a hover-hold (from rest at the steps' target), a figure-eight about it and a minimum-snap waypoint \
+         mission (`ftsmc compare --mission`; docs/scenarios.md \"Missions\"). Tracking is measured after a \
+         settling window of {} s: RMS of ‖p − p_d‖ over [{} s, end], the largest ‖p − p_d‖ after it, and the time \
+         after which every position axis stays within {} m (`settled`: completed runs that settled). Success: \
+         completed and inside the rung's envelope from {} s on. Each median with its distribution-free {level} % \
+         interval, success with its Wilson interval:\n\n{}",
+        ftsmc_sim::text::show(options.window),
+        ftsmc_sim::text::show(options.window),
+        ftsmc_sim::text::show(options.band),
+        ftsmc_sim::text::show(options.window),
+        table.render(),
+        level = crate::intervals::level_percent(confidence)
+    );
+    let _ = writeln!(
+        md,
+        "Per rung and mission, the two controllers with the lowest median RMS error after the window, paired on the \
+         same draws (Wilcoxon signed-rank on that RMS error, McNemar's exact test on success, Holm over both):\n"
+    );
+    for line in &verdict_lines {
+        let _ = writeln!(md, "- {line}");
+    }
+    Ok(Ladder {
+        markdown: md,
+        json: json!({"runs": runs, "confidence": confidence, "window": options.window, "band": options.band,
+                     "rows": json_rows, "verdicts": verdict_lines}),
+        flights,
+    })
 }

@@ -99,6 +99,16 @@ enum Command {
         /// (two rungs × every controller × default and tuned gains; 0: no table; docs/falsification.md).
         #[arg(long, default_value_t = 0)]
         worst_case_budget: u64,
+        /// Monte Carlo runs per scenario-1 rung, mission (hover, figure-eight, waypoints) and controller
+        /// in the missions table of "Beyond the paper" (0: none; docs/scenarios.md "Missions").
+        #[arg(long, default_value_t = reproduce::DEFAULT_MISSION_RUNS)]
+        mission_runs: u64,
+        /// Settling window of the missions' tracking metrics, s (they cover [window, end]).
+        #[arg(long, default_value_t = ftsmc_sim::analysis::missions::DEFAULT_SETTLING_WINDOW)]
+        mission_window: f64,
+        /// Settling band of the missions' time to settle, m.
+        #[arg(long, default_value_t = ftsmc_sim::analysis::missions::DEFAULT_SETTLING_BAND)]
+        mission_band: f64,
     },
     /// Run one scenario file with its controllers (or those given); write CSV, summary.json and comparison figures.
     Run {
@@ -279,6 +289,10 @@ enum Command {
         /// Fly a file's gains even if it was made for another vehicle.
         #[arg(long)]
         allow_other_vehicle: bool,
+        /// What SCENARIO is flown for: `steps` (its own reference, the default), `hover` (hold the steps' target
+        /// from rest at it), `figure-eight` or `waypoints` (docs/scenarios.md "Missions").
+        #[arg(long, default_value = "steps", value_parser = parse_mission)]
+        mission: ftsmc_sim::analysis::missions::Mission,
         /// Master seed (default: the scenario's `seed`).
         #[arg(long)]
         seed: Option<u64>,
@@ -498,7 +512,18 @@ fn main() -> std::process::ExitCode {
 
 fn run(cli: Cli) -> Result<()> {
     match cli.command {
-        Command::Reproduce { out, no_figures, realistic_runs, limit, confidence, tuned_runs, worst_case_budget } => {
+        Command::Reproduce {
+            out,
+            no_figures,
+            realistic_runs,
+            limit,
+            confidence,
+            tuned_runs,
+            worst_case_budget,
+            mission_runs,
+            mission_window,
+            mission_band,
+        } => {
             ftsmc_sim::stats::check_confidence(confidence).map_err(|e| anyhow::anyhow!("--confidence: {e}"))?;
             reproduce::price_realistic_runs(realistic_runs, &limit)?;
             // Two gain sets per tuned file, on the ladder's vehicles: priced as twice the runs per rung.
@@ -511,8 +536,19 @@ fn run(cli: Cli) -> Result<()> {
                 );
                 falsify::check_budget(worst_case_budget).map_err(|e| anyhow::anyhow!("--worst-case-budget: {e}"))?;
             }
-            let options =
-                reproduce::Options { figures: !no_figures, realistic_runs, tuned_runs, confidence, worst_case_budget };
+            // Three missions on four rungs: priced like the ladder's runs per rung.
+            reproduce::price_realistic_runs(mission_runs, &limit)
+                .map_err(|e| anyhow::anyhow!("--mission-runs {mission_runs}: {e:#}"))?;
+            let missions = ftsmc_sim::analysis::missions::MissionOptions { window: mission_window, band: mission_band };
+            let options = reproduce::Options {
+                figures: !no_figures,
+                realistic_runs,
+                tuned_runs,
+                confidence,
+                worst_case_budget,
+                mission_runs,
+                missions,
+            };
             reproduce::reproduce(&out, &options)
         }
         Command::Run { scenario, controllers, out, no_figures, limit, set } => {
@@ -649,6 +685,7 @@ fn run(cli: Cli) -> Result<()> {
         Command::Compare {
             scenario,
             contestants,
+            mission,
             runs,
             until_decided,
             max_runs,
@@ -684,7 +721,9 @@ fn run(cli: Cli) -> Result<()> {
                 }
             }
             let (max_runs, batch) = (max_runs.unwrap_or(COMPARE_MAX_RUNS), batch.unwrap_or(COMPARE_BATCH));
-            let mut scenario = load_scenario_with_limits(&scenario, &limit, &set)?;
+            let scenario = load_scenario_with_limits(&scenario, &limit, &set)?;
+            // `steps` is the scenario itself (its bits unchanged).
+            let mut scenario = ftsmc_sim::analysis::missions::mission_scenario(&scenario, mission, Default::default())?;
             ftsmc_sim::stats::check_confidence(confidence).map_err(|e| anyhow::anyhow!("--confidence: {e}"))?;
             anyhow::ensure!(
                 runs >= 1 && max_runs >= 1 && batch >= 1,
@@ -770,6 +809,12 @@ fn run(cli: Cli) -> Result<()> {
     }
 }
 
+/// `--mission NAME`: one of `ftsmc_sim::analysis::missions::Mission`.
+fn parse_mission(name: &str) -> Result<ftsmc_sim::analysis::missions::Mission, String> {
+    ftsmc_sim::analysis::missions::Mission::from_name(name)
+        .ok_or_else(|| format!("`{name}`: expected one of {}", ftsmc_sim::analysis::missions::Mission::names_joined()))
+}
+
 /// `ftsmc list`: every controller of the registry and every built-in
 /// scenario (`BUILT_IN_SCENARIOS`), names in one aligned column.
 fn list_text() -> Result<String> {
@@ -777,7 +822,12 @@ fn list_text() -> Result<String> {
         .iter()
         .map(|(file, text)| {
             let s = Scenario::from_toml_str(text, file)?;
-            Ok((file.trim_end_matches(".toml").to_string(), s.description))
+            // A scenario with wind says it in a user's words, computed from its [wind].
+            let description = match ftsmc_sim::scenario::ladder::rung_words(&s) {
+                Some(words) => format!("{} — {words}", s.description),
+                None => s.description,
+            };
+            Ok((file.trim_end_matches(".toml").to_string(), description))
         })
         .collect::<Result<Vec<_>>>()?;
     let width = registry::CONTROLLERS
@@ -822,6 +872,15 @@ mod tests {
         }
         let names: Vec<String> = ftsmc_sim::scenario::resolve::built_in_names().map(String::from).collect();
         assert_eq!(listed, names, "{line}");
+    }
+
+    #[test]
+    fn mission_names_round_trip_and_a_wrong_one_lists_them() {
+        for m in ftsmc_sim::analysis::missions::Mission::ALL {
+            assert_eq!(parse_mission(m.name()), Ok(m));
+        }
+        let e = parse_mission("eight").unwrap_err();
+        assert_eq!(e, "`eight`: expected one of steps, hover, figure-eight, waypoints");
     }
 
     #[test]

@@ -399,6 +399,11 @@ pub struct Options {
     pub confidence: f64,
     /// `--worst-case-budget`: flights per search and estimate (0: no table).
     pub worst_case_budget: u64,
+    /// `--mission-runs`: Monte Carlo runs per (scenario-1 rung, mission) and
+    /// controller of the missions table (0: none).
+    pub mission_runs: u64,
+    /// `--mission-window`, `--mission-band`: how the missions are measured.
+    pub missions: ftsmc_sim::analysis::missions::MissionOptions,
 }
 
 /// `ftsmc reproduce`: the paper's results, then "Beyond the paper"
@@ -407,7 +412,8 @@ pub struct Options {
 /// the tuned table (`tuned_runs` held-out draws, 0 skips it) and the
 /// worst-case table (`worst_case_budget`, 0 skips it).
 pub fn reproduce(out: &Path, options: &Options) -> Result<()> {
-    let Options { figures, realistic_runs, tuned_runs, confidence, worst_case_budget } = *options;
+    let Options { figures, realistic_runs, tuned_runs, confidence, worst_case_budget, mission_runs, missions } =
+        *options;
     let started = Instant::now();
     let scenarios = Scenario::paper_scenarios();
     let (s1, s2) = (&scenarios[0], &scenarios[1]);
@@ -544,7 +550,7 @@ pub fn reproduce(out: &Path, options: &Options) -> Result<()> {
     // Beyond the paper: its own files under `beyond/` (and `figures/beyond/`),
     // so everything above stays exactly what the paper part wrote before.
     let beyond_started = Instant::now();
-    let beyond = beyond_the_paper(&dir, figures, realistic_runs, confidence)?;
+    let beyond = beyond_the_paper(&dir, figures, realistic_runs, confidence, (mission_runs, missions))?;
     let beyond_elapsed = beyond_started.elapsed().as_secs_f64();
     // The committed tuned gains beside the defaults, on held-out draws (not re-tuned).
     let tuned = crate::tuned::write(&dir, tuned_runs, confidence)?;
@@ -623,6 +629,12 @@ pub const BEYOND_MC_CONTROLLERS: &[&str] = BEYOND_CONTROLLERS;
 /// numbers of docs/results.md).
 pub const DEFAULT_REALISTIC_RUNS: u64 = 10;
 
+/// Default `--mission-runs`: Monte Carlo runs per (scenario-1 rung,
+/// mission) and controller of the missions table: the fewest runs whose
+/// median has a finite distribution-free 95 % interval (six: 2 · 0.5⁶ <
+/// 0.05), so the missions add about half of `reproduce`'s time (docs/results.md).
+pub const DEFAULT_MISSION_RUNS: u64 = 6;
+
 /// The scenarios of "Beyond the paper": `(file name, TOML text)`, the
 /// paper's two and the realistic two. The Monte Carlo flies the last.
 pub const BEYOND_SCENARIOS: [(&str, &str); 4] = [
@@ -687,7 +699,13 @@ pub fn price_realistic_runs(runs: u64, limit_overrides: &[String]) -> Result<()>
 /// `beyond/ladder-runs/<rung>.csv` (when `mc_runs > 0`), per-run CSV and the
 /// resolved `scenario.toml` under `beyond/<scenario>/`, and with `figures`
 /// `figures/beyond/<scenario>-{position,rotors}.{svg,png}`.
-pub fn beyond_the_paper(dir: &ResultDir, figures: bool, mc_runs: u64, confidence: f64) -> Result<Beyond> {
+pub fn beyond_the_paper(
+    dir: &ResultDir,
+    figures: bool,
+    mc_runs: u64,
+    confidence: f64,
+    missions: (u64, ftsmc_sim::analysis::missions::MissionOptions),
+) -> Result<Beyond> {
     let scenarios: Vec<Scenario> = BEYOND_SCENARIOS
         .iter()
         .map(|(file, text)| Scenario::from_toml_str(text, file).map_err(anyhow::Error::from))
@@ -903,11 +921,22 @@ pub fn beyond_the_paper(dir: &ResultDir, figures: bool, mc_runs: u64, confidence
         flights += l.flights;
         json_mc = l.json;
     }
+    let mut json_missions = Value::Null;
+    if missions.0 > 0 {
+        // Missions on the scenario-1 rungs (crate::ladder::missions): hover,
+        // figure-eight, waypoints, with tracking metrics after a window.
+        let m = crate::ladder::missions(dir, missions.0, BEYOND_MC_CONTROLLERS, missions.1, confidence)?;
+        md.push_str(&m.markdown);
+        crate::console::print_now(&m.markdown);
+        flights += m.flights;
+        json_missions = m.json;
+    }
 
     let record = json!({
         "controllers": BEYOND_CONTROLLERS,
         "scenarios": json_scenarios,
         "montecarlo": json_mc,
+        "missions": json_missions,
         "provenance": provenance(&files),
     });
     dir.write("beyond/realism.json", serde_json::to_string_pretty(&record)?.as_bytes())?;

@@ -227,6 +227,136 @@ impl WindParams {
     }
 }
 
+/// The Beaufort wind force scale: `(force, description, lower bound of its
+/// mean wind speed at 10 m, m/s)`, force 0 to 12, as tabulated by the WMO
+/// (Manual on Marine Meteorological Services, WMO-No. 558, Annex I; the
+/// same ranges as the Met Office's "Beaufort wind force scale"). The
+/// ranges are given to 0.1 m/s, so a speed is rounded to 0.1 m/s before it
+/// is placed ([`beaufort`]).
+pub const BEAUFORT: [(u32, &str, f64); 13] = [
+    (0, "calm", 0.0),
+    (1, "light air", 0.3),
+    (2, "light breeze", 1.6),
+    (3, "gentle breeze", 3.4),
+    (4, "moderate breeze", 5.5),
+    (5, "fresh breeze", 8.0),
+    (6, "strong breeze", 10.8),
+    (7, "near gale", 13.9),
+    (8, "gale", 17.2),
+    (9, "strong gale", 20.8),
+    (10, "storm", 24.5),
+    (11, "violent storm", 28.5),
+    (12, "hurricane force", 32.7),
+];
+
+/// Height of the Beaufort scale's wind speed (the WMO standard height of
+/// surface wind measurements), m.
+pub const BEAUFORT_HEIGHT: f64 = 10.0;
+
+/// Beaufort force and description of a mean wind of `speed_10m` m/s at
+/// 10 m ([`BEAUFORT`]): the highest force whose lower bound the speed,
+/// rounded to 0.1 m/s, reaches. A negative or non-finite speed is force 0.
+pub fn beaufort(speed_10m: f64) -> (u32, &'static str) {
+    let rounded = (speed_10m * 10.0).round() / 10.0;
+    let mut out = (BEAUFORT[0].0, BEAUFORT[0].1);
+    for &(force, words, lower) in &BEAUFORT {
+        if rounded >= lower - 1e-9 {
+            out = (force, words);
+        }
+    }
+    out
+}
+
+/// The MIL-F-8785C / MIL-HDBK-1797 word for a turbulence of `W₂₀` (m/s):
+/// `Some("light")` at 15 kt, `"moderate"` at 30 kt, `"severe"` at 45 kt
+/// (to 0.05 kt), `None` for any other `W₂₀` (the specification names only
+/// these three).
+pub fn mil_intensity_word(w20: f64) -> Option<&'static str> {
+    let kt = w20 / KNOT;
+    [(15.0, "light"), (30.0, "moderate"), (45.0, "severe")]
+        .into_iter()
+        .find(|(k, _)| (kt - k).abs() < 0.05)
+        .map(|(_, w)| w)
+}
+
+impl WindParams {
+    /// The altitude this wind's mean speed and turbulence are given at, m:
+    /// `altitude` (or the preset's default 5 m) with a preset, else the
+    /// turbulence's altitude, else `altitude` if written; `None` for a
+    /// mean wind of no stated altitude.
+    pub fn stated_altitude(&self) -> Option<f64> {
+        if self.preset.is_some() {
+            return Some(self.preset_altitude());
+        }
+        self.turbulence.map(|t| t.altitude).or(self.altitude)
+    }
+
+    /// This wind in a user's words, computed from its parameters as flown
+    /// ([`WindParams::resolved`]): the mean wind in m/s at its altitude,
+    /// the Beaufort force of that wind carried to 10 m by the MIL-F-8785C
+    /// §3.7.2.1 logarithmic profile (`u(10 m) = u(h) ln(10 m/z₀)/ln(h/z₀)`,
+    /// [`ROUGHNESS_LENGTH`]), and the turbulence as its MIL-F-8785C word
+    /// ([`mil_intensity_word`]) or its `W₂₀` in kt, with σ_u. E.g.
+    /// `7.4 m/s mean wind at 5 m (Beaufort 5, fresh breeze), light turbulence
+    /// (MIL-F-8785C, W₂₀ 15 kt, σ_u 1.50 m/s)`.
+    pub fn in_words(&self) -> String {
+        let summary = self.summary();
+        let resolved = self.resolved();
+        let altitude = self.stated_altitude();
+        let mean = if summary.mean_speed == 0.0 {
+            "no mean wind".to_string()
+        } else {
+            let at = altitude.map_or_else(String::new, |h| format!(" at {} m", crate::text::show(h)));
+            let force = altitude.filter(|&h| h > ROUGHNESS_LENGTH).map(|h| {
+                let u10 = summary.mean_speed * ftsmc_core::math::ln(BEAUFORT_HEIGHT / ROUGHNESS_LENGTH)
+                    / ftsmc_core::math::ln(h / ROUGHNESS_LENGTH);
+                let (force, words) = beaufort(u10);
+                format!(" (Beaufort {force}, {words})")
+            });
+            format!("{:.1} m/s mean wind{at}{}", summary.mean_speed, force.unwrap_or_default())
+        };
+        let turbulence = match resolved.turbulence {
+            None => "no turbulence".to_string(),
+            Some(t) => {
+                let w20 = t.intensity.w20();
+                let kt = w20 / KNOT;
+                let sigma = format!("σ_u {:.2} m/s", summary.sigma[0]);
+                match mil_intensity_word(w20) {
+                    Some(word) => format!("{word} turbulence (MIL-F-8785C, W₂₀ {kt:.0} kt, {sigma})"),
+                    None if kt < 15.0 => {
+                        format!("turbulence below MIL-F-8785C light (W₂₀ {kt:.0} kt against 15 kt, {sigma})")
+                    }
+                    None => format!("turbulence of W₂₀ {kt:.0} kt (MIL-F-8785C, {sigma})"),
+                }
+            }
+        };
+        if summary.mean_speed == 0.0 && resolved.turbulence.is_none() {
+            return "still air (no mean wind, no turbulence)".into();
+        }
+        format!("{mean}, {turbulence}")
+    }
+
+    /// [`WindParams::in_words`] short enough for a figure title: the mean
+    /// wind in m/s at its altitude and the turbulence's MIL-F-8785C word
+    /// (or `W₂₀` in kt), e.g. `7.4 m/s mean wind at 5 m, light turbulence`.
+    pub fn in_short_words(&self) -> String {
+        let summary = self.summary();
+        let resolved = self.resolved();
+        if summary.mean_speed == 0.0 && resolved.turbulence.is_none() {
+            return "still air".into();
+        }
+        let at = self.stated_altitude().map_or_else(String::new, |h| format!(" at {} m", crate::text::show(h)));
+        let turbulence = match resolved.turbulence {
+            None => "no turbulence".to_string(),
+            Some(t) => match mil_intensity_word(t.intensity.w20()) {
+                Some(word) => format!("{word} turbulence"),
+                None => format!("turbulence of W₂₀ {:.0} kt", t.intensity.w20() / KNOT),
+            },
+        };
+        format!("{:.1} m/s mean wind{at}, {turbulence}", summary.mean_speed)
+    }
+}
+
 /// A discrete 1−cosine gust (MIL-F-8785C §3.7.3):
 /// `v(t) = A/2 (1 − cos(2π (t − t₀)/d))` for `t ∈ [t₀, t₀ + d]`, zero outside.
 #[derive(Clone, Copy, Debug, PartialEq, Deserialize, Serialize)]
@@ -770,5 +900,56 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn rungs_in_words_give_the_mean_wind_beaufort_force_and_mil_turbulence_from_the_parameters() {
+        // MIL-F-8785C / MIL-HDBK-1797: light, moderate, severe are W20 = 15, 30, 45 kt at 20 ft.
+        assert!((Intensity::Light.w20() / KNOT - 15.0).abs() < 1e-12);
+        assert!((Intensity::Moderate.w20() / KNOT - 30.0).abs() < 1e-12);
+        assert!((Intensity::Severe.w20() / KNOT - 45.0).abs() < 1e-12);
+        assert!((mean_wind_at(WindPreset::Light.w20(), 20.0 * FOOT) - 15.0 * KNOT).abs() < 1e-12);
+        let words = |preset| WindParams { preset: Some(preset), ..Default::default() }.in_words();
+        assert_eq!(words(WindPreset::Calm), "still air (no mean wind, no turbulence)");
+        assert_eq!(
+            words(WindPreset::Breeze),
+            "2.5 m/s mean wind at 5 m (Beaufort 2, light breeze), turbulence below MIL-F-8785C light \
+             (W₂₀ 5 kt against 15 kt, σ_u 0.50 m/s)"
+        );
+        assert_eq!(
+            words(WindPreset::Light),
+            "7.4 m/s mean wind at 5 m (Beaufort 5, fresh breeze), light turbulence (MIL-F-8785C, W₂₀ 15 kt, σ_u 1.50 m/s)"
+        );
+        assert_eq!(
+            words(WindPreset::Moderate),
+            "14.8 m/s mean wind at 5 m (Beaufort 7, near gale), moderate turbulence (MIL-F-8785C, W₂₀ 30 kt, σ_u 3.00 m/s)"
+        );
+        // The words follow the parameters, not the preset's name.
+        let faster = WindParams { preset: Some(WindPreset::Light), speed: Some(12.0), ..Default::default() };
+        assert!(
+            faster.in_words().starts_with("12.0 m/s mean wind at 5 m (Beaufort 6, strong breeze)"),
+            "{}",
+            faster.in_words()
+        );
+        let gusty = WindParams { mean: [3.0, 4.0, 0.0], ..Default::default() };
+        assert_eq!(gusty.in_words(), "5.0 m/s mean wind, no turbulence");
+        let light = WindParams { preset: Some(WindPreset::Light), ..Default::default() };
+        assert_eq!(light.in_short_words(), "7.4 m/s mean wind at 5 m, light turbulence");
+        assert_eq!(WindParams::default().in_short_words(), "still air");
+    }
+
+    #[test]
+    fn beaufort_places_a_speed_by_the_wmo_table_rounded_to_a_tenth() {
+        assert_eq!(beaufort(0.0), (0, "calm"));
+        assert_eq!(beaufort(0.24), (0, "calm"));
+        assert_eq!(beaufort(0.26), (1, "light air"));
+        assert_eq!(beaufort(1.54), (1, "light air"));
+        assert_eq!(beaufort(1.56), (2, "light breeze"));
+        assert_eq!(beaufort(7.9), (4, "moderate breeze"));
+        assert_eq!(beaufort(8.0), (5, "fresh breeze"));
+        assert_eq!(beaufort(32.7), (12, "hurricane force"));
+        assert_eq!(beaufort(-1.0), (0, "calm"));
+        assert_eq!(beaufort(f64::NAN), (0, "calm"));
+        assert!(BEAUFORT.windows(2).all(|w| w[0].0 + 1 == w[1].0 && w[0].2 < w[1].2));
     }
 }

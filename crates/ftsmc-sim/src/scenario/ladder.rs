@@ -38,3 +38,57 @@ pub const LADDER: [(&str, &str); 8] = [
     ("realistic-moderate-1.toml", REALISTIC_MODERATE_1),
     ("realistic-moderate-2.toml", REALISTIC_MODERATE_2),
 ];
+
+/// A rung in a user's words, computed from its scenario's `[wind]`
+/// ([`crate::environment::wind::WindParams::in_words`]): its level (the
+/// wind preset's name, else `custom`), then the mean wind in m/s at its
+/// altitude with its Beaufort force and the turbulence intensity, e.g.
+/// `light: 7.4 m/s mean wind at 5 m (Beaufort 5, fresh breeze), light
+/// turbulence (MIL-F-8785C, W₂₀ 15 kt, σ_u 1.50 m/s)`. `None` for a
+/// scenario without `[wind]`.
+pub fn rung_words(scenario: &super::Scenario) -> Option<String> {
+    let wind = scenario.wind.as_ref()?;
+    Some(format!("{}: {}", level(wind), wind.in_words()))
+}
+
+/// [`rung_words`] short enough for a figure title
+/// ([`crate::environment::wind::WindParams::in_short_words`]), e.g.
+/// `light: 7.4 m/s mean wind at 5 m, light turbulence`.
+pub fn rung_title(scenario: &super::Scenario) -> Option<String> {
+    let wind = scenario.wind.as_ref()?;
+    Some(format!("{}: {}", level(wind), wind.in_short_words()))
+}
+
+/// The rung's level: its wind preset's name, else `custom`.
+fn level(wind: &crate::environment::wind::WindParams) -> &'static str {
+    wind.preset.map_or("custom", |p| match p {
+        crate::environment::wind::WindPreset::Calm => "calm",
+        crate::environment::wind::WindPreset::Breeze => "breeze",
+        crate::environment::wind::WindPreset::Light => "light",
+        crate::environment::wind::WindPreset::Moderate => "moderate",
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_rung_names_its_level_and_its_wind_from_its_file() {
+        for (file, text) in LADDER {
+            let s = super::super::Scenario::from_toml_str(text, file).unwrap();
+            let words = rung_words(&s).expect("every rung has [wind]");
+            let level = file.trim_start_matches("realistic-").split('-').next().unwrap();
+            assert!(words.starts_with(&format!("{level}: ")), "{file}: {words}");
+            let expected = match level {
+                "calm" => "still air",
+                "breeze" => "2.5 m/s mean wind at 5 m (Beaufort 2, light breeze)",
+                "light" => "7.4 m/s mean wind at 5 m (Beaufort 5, fresh breeze), light turbulence",
+                _ => "14.8 m/s mean wind at 5 m (Beaufort 7, near gale), moderate turbulence",
+            };
+            assert!(words.contains(expected), "{file}: {words}");
+            let title = rung_title(&s).unwrap();
+            assert!(title.starts_with(&format!("{level}: ")) && title.len() < words.len(), "{title}");
+        }
+    }
+}
