@@ -11,6 +11,7 @@ mod figures;
 mod fixed_time;
 mod forest;
 mod html;
+mod identify;
 mod intervals;
 mod ladder;
 mod merge;
@@ -25,6 +26,7 @@ mod svg;
 mod ticks;
 mod tune;
 mod tuned;
+mod validate;
 mod worst_case;
 #[cfg(test)]
 mod writers_fuzz;
@@ -67,6 +69,10 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
+    /// Identify a vehicle's parameters from flight logs, with bootstrap intervals (docs/validation.md).
+    Identify(identify::IdentifyArgs),
+    /// Open-loop validation of a vehicle against flight logs (docs/validation.md).
+    Validate(validate::ValidateArgs),
     /// Run both paper scenarios with every controller; print Table 3 beside the paper's; write CSV, JSON, figures.
     Reproduce {
         /// Parent folder: writes `OUT/<scenario>/` per paper scenario, and summary.json, report.md, figures/ in OUT.
@@ -783,6 +789,8 @@ fn run(cli: Cli) -> Result<()> {
             print!("{}", list_text()?);
             Ok(())
         }
+        Command::Identify(args) => identify::run(args),
+        Command::Validate(args) => validate::run(args),
     }
 }
 

@@ -73,6 +73,10 @@
 //!            per_lane.rs        any one-flight controller on lanes (one controller per lane)
 //!            on_isa.rs          a controller's updates on the instruction set picked at run time
 //! floor 1  axes.rs              AxisSet and other per-axis containers
+//!          trajectory/          3-D trajectories with heading, exact to snap (`[reference] trajectory`)
+//!            min_snap.rs        minimum snap through waypoints, closed form, banded Cholesky
+//!            library.rs         hover, circle, oval, figure-eight, lissajous, helix, star, trefoil, ramp
+//!            feasibility.rs     thrust, tilt and body rates by differential flatness, and time fitting
 //!          defaults.rs          the defaults of every campaign (runs, budgets, confidence), read by the CLI and Python
 //!          desaturation.rs      PX4's sequential-desaturation allocation (airmode off)
 //!          signal/              time signals with analytic derivatives
@@ -113,6 +117,7 @@ pub mod sensors;
 pub mod signal;
 pub mod stats;
 pub mod text;
+pub mod trajectory;
 pub mod tune;
 pub mod vehicle;
 

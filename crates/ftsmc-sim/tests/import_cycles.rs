@@ -12,7 +12,7 @@ use std::path::{Path, PathBuf};
 mod source;
 use source::{module_of, paths_after, rust_files, without_comments};
 
-const CRATES: [&str; 5] = ["ftsmc-core", "ftsmc-sim", "ftsmc-logs", "ftsmc-cli", "ftsmc-py"];
+const CRATES: [&str; 6] = ["ftsmc-core", "ftsmc-sim", "ftsmc-logs", "ftsmc-ident", "ftsmc-cli", "ftsmc-py"];
 
 #[test]
 fn no_file_imports_a_file_that_imports_it_back() {

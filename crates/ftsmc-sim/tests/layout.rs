@@ -25,6 +25,7 @@ const FLOORS: &[(&str, u32)] = &[
     ("isa", 1),
     ("desaturation", 1),
     ("signal", 1),
+    ("trajectory", 1),
     ("noise", 1),
     ("vehicle", 2),
     ("actuators", 2),

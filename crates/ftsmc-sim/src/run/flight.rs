@@ -71,18 +71,23 @@ struct ReferenceGrid {
     y: GridSignal,
     z: GridSignal,
     psi: GridSignal,
+    /// The scenario's trajectory, when it has one (sampled instead of the signals).
+    trajectory: Option<crate::trajectory::Trajectory>,
 }
 
 impl ReferenceGrid {
     fn new(scenario: &Scenario, dt: f64) -> Self {
         let r = &scenario.reference;
         let g = |s| GridSignal::new(s, dt);
-        Self { x: g(&r.x), y: g(&r.y), z: g(&r.z), psi: g(&r.psi) }
+        Self { x: g(&r.x), y: g(&r.y), z: g(&r.z), psi: g(&r.psi), trajectory: r.trajectory.clone() }
     }
 
     /// The reference at control step `k`, whose time the loop computed as `t` (s).
     #[cfg_attr(not(debug_assertions), inline(always))]
     fn at(&mut self, k: u64, t: f64) -> Reference {
+        if let Some(trajectory) = &self.trajectory {
+            return super::reference_of_flat(&trajectory.sample(t));
+        }
         super::reference_of([self.x.sample(k, t), self.y.sample(k, t), self.z.sample(k, t), self.psi.sample(k, t)])
     }
 }

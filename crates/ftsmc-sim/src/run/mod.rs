@@ -69,7 +69,24 @@ impl RunOutput {
 #[inline]
 pub fn reference_at(scenario: &Scenario, t: f64) -> Reference {
     let r = &scenario.reference;
-    reference_of([r.x.sample(t), r.y.sample(t), r.z.sample(t), r.psi.sample(t)])
+    match &r.trajectory {
+        Some(trajectory) => reference_of_flat(&trajectory.sample(t)),
+        None => reference_of([r.x.sample(t), r.y.sample(t), r.z.sample(t), r.psi.sample(t)]),
+    }
+}
+
+/// The [`Reference`] of a trajectory's flat output (jerk and snap are not
+/// part of a controller's reference).
+#[inline]
+pub(crate) fn reference_of_flat(f: &crate::trajectory::FlatOutput) -> Reference {
+    Reference {
+        position: f.pos,
+        velocity: f.vel,
+        acceleration: f.acc,
+        yaw: f.yaw,
+        yaw_rate: f.yaw_rate,
+        yaw_acceleration: f.yaw_acc,
+    }
 }
 
 /// The [`Reference`] of the samples of its x, y, z and ψ signals.

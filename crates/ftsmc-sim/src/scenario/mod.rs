@@ -219,6 +219,19 @@ pub struct ReferenceSignals {
     pub z: Signal,
     /// ψ_d(t), rad.
     pub psi: Signal,
+    /// A 3-D trajectory with heading ([`crate::trajectory`]): when given,
+    /// x_d, y_d, z_d, ψ_d and their derivatives come from it, and `x`, `y`,
+    /// `z`, `psi` must be absent.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub trajectory: Option<crate::trajectory::Trajectory>,
+    /// `"fixed"` (default): refuse a trajectory the vehicle cannot fly;
+    /// `"fit"`: stretch its time by the smallest factor that fits.
+    #[serde(default, skip_serializing_if = "is_fixed_time_scale")]
+    pub time_scale: crate::trajectory::TimeScale,
+}
+
+fn is_fixed_time_scale(t: &crate::trajectory::TimeScale) -> bool {
+    *t == crate::trajectory::TimeScale::Fixed
 }
 
 impl ReferenceSignals {
@@ -230,6 +243,11 @@ impl ReferenceSignals {
             && self.y.same_bits(&other.y)
             && self.z.same_bits(&other.z)
             && self.psi.same_bits(&other.psi)
+            && match (&self.trajectory, &other.trajectory) {
+                (None, None) => true,
+                (Some(a), Some(b)) => a.same_bits(b),
+                _ => false,
+            }
     }
 }
 
@@ -530,7 +548,9 @@ impl Scenario {
                     signals.chain(self.inertia_variation.as_ref()).map(crate::signal::Signal::evaluation_cost).sum();
                 // Every discrete gust is evaluated at every substep (a
                 // 1 − cosine: priced like a sine term).
-                terms + self.wind.as_ref().map_or(0.0, |w| w.gusts.len() as f64)
+                terms
+                    + self.wind.as_ref().map_or(0.0, |w| w.gusts.len() as f64)
+                    + r.trajectory.as_ref().map_or(0.0, crate::trajectory::Trajectory::evaluation_cost)
             },
             limits: &self.limits,
         }
@@ -562,6 +582,7 @@ mod tests {
             y: circle(|phase| Term::Sine { amplitude: 1.0, omega: Some(0.5), frequency: None, phase }),
             z: Signal { terms: vec![Term::Polynomial { coefficients: vec![0.0, 0.1] }], window: None },
             psi: Signal::constant(0.0),
+            ..Default::default()
         }
     }
 

@@ -141,6 +141,19 @@ fn merge(base: &mut toml::Table, top: toml::Table, prefix: &str, file: usize, or
         origin.insert(path.clone(), file);
         match (base.get_mut(&key), value) {
             (Some(toml::Value::Table(b)), toml::Value::Table(t)) if !is_atomic(&path) => {
+                // A file that writes `reference.trajectory` replaces its
+                // base's x, y, z, psi signals, and one that writes a signal
+                // replaces its base's trajectory: the two forms exclude
+                // each other (docs/scenarios.md, "Trajectories").
+                if path == "reference" {
+                    let signals = ["x", "y", "z", "psi"];
+                    if t.contains_key("trajectory") {
+                        signals.iter().for_each(|k| drop(b.remove(*k)));
+                    } else if signals.iter().any(|k| t.contains_key(*k)) {
+                        b.remove("trajectory");
+                        b.remove("time_scale");
+                    }
+                }
                 merge(b, t, &path, file, origin);
             }
             (_, value) => {
@@ -647,9 +660,17 @@ pub fn load(source: Source<'_>, overrides: &[String]) -> Result<Loaded, Scenario
         }
         other => other,
     })?;
+    let fitted = fit_trajectory(&mut scenario);
+    scenario.check_trajectory_feasibility().map_err(|(key, value, expected)| ScenarioError::Invalid {
+        path: chain.shown(chain.writer(&key)),
+        key,
+        value,
+        expected,
+    })?;
     let warnings = renamed_warnings
         .into_iter()
         .chain(deprecations.into_iter().map(|(key, value, message)| Warning { key, value, message }))
+        .chain(fitted)
         .chain(unit_slip_warnings(&scenario))
         .map(|w| format!("{}: `{}` = {}: {}", chain.shown(chain.writer(&w.key)), w.key, w.value, w.message))
         .collect();
@@ -658,6 +679,33 @@ pub fn load(source: Source<'_>, overrides: &[String]) -> Result<Loaded, Scenario
         files: chain.layers.iter().map(|l| l.shown.clone()).collect(),
         warnings,
         built_in_base: chain.built_in_base,
+    })
+}
+
+/// `[reference] time_scale = "fit"`: stretch the trajectory's time by the
+/// smallest factor with which the vehicle can fly it
+/// ([`crate::trajectory::feasibility::fit`]), and say by how much (a note
+/// among the warnings). Runs on a validated scenario; when no factor up to
+/// the largest fits, the largest is set and the feasibility check that
+/// follows reports what is still exceeded.
+fn fit_trajectory(scenario: &mut Scenario) -> Option<Warning> {
+    use crate::trajectory::{feasibility, TimeScale};
+    if scenario.reference.time_scale != TimeScale::Fit {
+        return None;
+    }
+    let limits = scenario.trajectory_limits();
+    let duration = scenario.duration;
+    let trajectory = scenario.reference.trajectory.as_mut()?;
+    trajectory.check().ok()?;
+    let k = feasibility::fit(trajectory, &limits, duration).unwrap_or(feasibility::MAX_STRETCH);
+    trajectory.set_stretch(k);
+    (k > 1.0).then(|| Warning {
+        key: "reference.time_scale".into(),
+        value: "\"fit\"".into(),
+        message: format!(
+            "note: the trajectory's time is stretched by {k:.4} (x{k:.4} slower) to stay within the vehicle's thrust and tilt limits{}",
+            trajectory.end().map_or(String::new(), |e| format!("; it now ends at {} s", show(e)))
+        ),
     })
 }
 

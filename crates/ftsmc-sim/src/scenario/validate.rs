@@ -59,6 +59,45 @@ pub(crate) fn check_core_array_lengths(root: &toml::Table) -> Result<(), (String
 }
 
 impl Scenario {
+    /// The limits a trajectory is checked against
+    /// ([`crate::trajectory::feasibility`]): the true mass and gravity,
+    /// the collective thrust `4 k_f ω_max²` of the rotor limit (`[actuators]
+    /// max_rotor_speed` or `simulation.max_rotor_speed`; none with ideal
+    /// actuators) and the controllers' tilt demand limit
+    /// (`cascade.max_demanded_tilt`), no body-rate limit.
+    pub fn trajectory_limits(&self) -> crate::trajectory::feasibility::VehicleLimits {
+        let (_, p) = self.truth_allocation();
+        let limit =
+            self.actuators.map(|a| a.max_rotor_speed).filter(|w| w.is_finite()).or(self.simulation.max_rotor_speed);
+        crate::trajectory::feasibility::VehicleLimits {
+            mass: self.true_mass().0,
+            gravity: p.gravity,
+            max_thrust: limit.map(|w| 4.0 * p.lift_coefficient * w * w),
+            max_tilt: self.cascade.max_tilt.min(self.simulation.max_tilt),
+            max_body_rate: None,
+        }
+    }
+
+    /// The trajectory's feasibility ([`crate::trajectory::feasibility::check`]
+    /// against [`Scenario::trajectory_limits`] over the run):
+    /// `Err((key, value, expected))` naming the first violation.
+    pub fn check_trajectory_feasibility(&self) -> Result<(), (String, String, String)> {
+        let Some(trajectory) = &self.reference.trajectory else { return Ok(()) };
+        let limits = self.trajectory_limits();
+        crate::trajectory::feasibility::check(trajectory, &limits, self.duration).map_err(|v| {
+            let stretched = if trajectory.stretch() > 1.0 {
+                format!(" (time stretched by {})", show(trajectory.stretch()))
+            } else {
+                String::new()
+            };
+            (
+                "reference.trajectory".to_string(),
+                format!("a trajectory that {v}{stretched}"),
+                "a trajectory the vehicle can fly (slow it down, or set [reference] time_scale = \"fit\")".to_string(),
+            )
+        })
+    }
+
     /// Range-check every value; the error names `path` and the dotted key.
     pub fn validate(&self, path: &str) -> Result<(), ScenarioError> {
         let invalid = |key: String, value: String, expected: &str| ScenarioError::Invalid {
@@ -173,6 +212,22 @@ impl Scenario {
         for (name, s) in [("x", &r.x), ("y", &r.y), ("z", &r.z), ("psi", &r.psi)] {
             signal(format!("reference.{name}"), s)?;
         }
+        if let Some(trajectory) = &r.trajectory {
+            trajectory
+                .check()
+                .map_err(|(key, value, expected)| invalid(format!("reference.trajectory.{key}"), value, &expected))?;
+            for (name, s) in [("x", &r.x), ("y", &r.y), ("z", &r.z), ("psi", &r.psi)] {
+                if !s.is_zero() {
+                    return Err(invalid(
+                        format!("reference.{name}"),
+                        "given".into(),
+                        "no `x`, `y`, `z` or `psi` beside `reference.trajectory` (the trajectory gives all four)",
+                    ));
+                }
+            }
+        } else if r.time_scale != crate::trajectory::TimeScale::Fixed {
+            return Err(invalid("reference.time_scale".into(), "\"fit\"".into(), "a `reference.trajectory` to fit"));
+        }
         for (name, s) in self.disturbance.named() {
             signal(format!("disturbance.{name}"), s)?;
         }
@@ -263,6 +318,13 @@ impl Scenario {
         }
         self.check_cost(self.controllers.len())
             .map_err(|limit| ScenarioError::Limit { path: path.to_string(), limit })?;
+        // After the cost limits (the check samples the run's span) and the
+        // vehicle's own checks (its limits are read from them). With
+        // `time_scale = "fit"` the loader stretches the trajectory first
+        // and checks it then (`resolve::fit_trajectory`).
+        if self.reference.time_scale == crate::trajectory::TimeScale::Fixed {
+            self.check_trajectory_feasibility().map_err(|(key, value, expected)| invalid(key, value, &expected))?;
+        }
         // Last: the search space is checked against a scenario that is valid
         // itself, so an error of the scenario is never reported as one of
         // `[falsify]`.
