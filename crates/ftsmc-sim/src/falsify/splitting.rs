@@ -159,7 +159,11 @@ impl Settings {
             return Err(format!("particles = {}: expected at least 2", self.particles));
         }
         if self.kill < 1 || self.kill >= self.particles {
-            return Err(format!("kill = {}: expected 1 to {} (fewer than the particles)", self.kill, self.particles - 1));
+            return Err(format!(
+                "kill = {}: expected 1 to {} (fewer than the particles)",
+                self.kill,
+                self.particles - 1
+            ));
         }
         if self.repetitions < 1 {
             return Err(format!("repetitions = {}: expected at least 1", self.repetitions));
@@ -343,7 +347,7 @@ pub fn estimate<P: Splitting + ?Sized>(problem: &P, settings: Settings, seed: u6
     let p = reps.iter().map(|r| r.p).sum::<f64>() / rn;
     let std_error = if reps.len() > 1 {
         let var = reps.iter().map(|r| (r.p - p) * (r.p - p)).sum::<f64>() / (rn - 1.0);
-        (var / rn).sqrt()
+        ftsmc_core::math::sqrt(var / rn)
     } else {
         f64::NAN
     };
