@@ -46,6 +46,39 @@ pub fn check_budget(budget: u64) -> Result<()> {
     Ok(())
 }
 
+/// The flights `ftsmc failure-probability` may fly within `max_flights`
+/// (for splitting: `max_flights − plain`, its budget; otherwise `budget`),
+/// or the refusal of work that cannot finish within it: cross-entropy and
+/// plain Monte Carlo fly `budget + plain` flights; splitting at least its
+/// `particles · repetitions` first flights plus `plain` (its branches then
+/// stop at `max_flights`, which flags the estimate unreliable).
+pub fn check_max_flights(
+    method: Method,
+    budget: u64,
+    particles: usize,
+    repetitions: usize,
+    plain: u64,
+    max_flights: u64,
+) -> Result<u64> {
+    let (needed, what) = match method {
+        Method::Splitting => (
+            (particles as u64).saturating_mul(repetitions as u64).saturating_add(plain),
+            format!(
+                "{repetitions} repetitions of {particles} particles start with {} flights",
+                particles * repetitions
+            ),
+        ),
+        Method::CrossEntropy | Method::Plain => (budget.saturating_add(plain), format!("--budget {budget}")),
+    };
+    let plain_note = if plain > 0 { format!(" and --plain {plain}") } else { String::new() };
+    anyhow::ensure!(
+        needed <= max_flights,
+        "--max-flights {max_flights}: {what}{plain_note}, {needed} flights in all, more than the limit; \
+         raise it with --max-flights {needed} (or more) or ask for less work"
+    );
+    Ok(if method == Method::Splitting { max_flights - plain } else { budget })
+}
+
 fn pool(threads: Option<usize>) -> Result<rayon::ThreadPool> {
     let mut builder = rayon::ThreadPoolBuilder::new();
     if let Some(t) = threads {
@@ -324,7 +357,7 @@ impl Method {
 pub const SPLITTING_PARTICLES: usize = 100;
 /// Splitting repetitions by default (at least `MIN_REPETITIONS` for a reliable interval).
 pub const SPLITTING_REPETITIONS: usize = 10;
-/// Most flights of a splitting estimate by default (every repetition stops at its share).
+/// `--max-flights` by default: most flights of a `failure-probability` run (a splitting repetition stops at its share).
 pub const SPLITTING_MAX_FLIGHTS: u64 = 200_000;
 
 /// What `ftsmc failure-probability` estimates and how.
@@ -346,6 +379,24 @@ pub struct FailureRequest {
     pub threads: Option<usize>,
 }
 
+/// The fields every method's result carries (JSON top level and the CSV row).
+struct Row {
+    /// The estimate of `P(margin < 0)`.
+    p: f64,
+    /// Lower bound of its interval.
+    lo: f64,
+    /// Upper bound.
+    hi: f64,
+    /// Flights flown (splitting: branches included).
+    flights: u64,
+    /// Effective sample size of the final level (cross-entropy, plain); `None` for splitting.
+    ess: Option<f64>,
+    /// Levels: cross-entropy's, or splitting's mean per repetition (0 for plain).
+    levels: f64,
+    /// The interval can be trusted (the estimator's own reliability rule).
+    reliable: bool,
+}
+
 fn splitting_json(e: &ftsmc_sim::falsify::splitting::Estimate) -> serde_json::Value {
     json!({
         "p": e.p, "lo": e.lo, "hi": e.hi, "confidence": e.confidence,
@@ -357,8 +408,13 @@ fn splitting_json(e: &ftsmc_sim::falsify::splitting::Estimate) -> serde_json::Va
     })
 }
 
-/// Run `ftsmc failure-probability` and write `out/<scenario>/<controller>.failure-probability.json`.
-pub fn run_failure_probability(scenario: &Scenario, controller: &str, request: &FailureRequest, out: &Path) -> Result<()> {
+/// Run `ftsmc failure-probability` and write `out/<scenario>/<controller>.failure-probability.json` and `.csv`.
+pub fn run_failure_probability(
+    scenario: &Scenario,
+    controller: &str,
+    request: &FailureRequest,
+    out: &Path,
+) -> Result<()> {
     let FailureRequest { method, budget, seed, confidence, plain_runs, threads, .. } = *request;
     anyhow::ensure!(
         confidence > 0.0 && confidence < 1.0,
@@ -388,6 +444,7 @@ pub fn run_failure_probability(scenario: &Scenario, controller: &str, request: &
         "seed": seed,
     });
     let mut lines = Vec::new();
+    let row: Row;
     match method {
         Method::CrossEntropy | Method::Plain => {
             let e = if method == Method::Plain {
@@ -399,6 +456,15 @@ pub fn run_failure_probability(scenario: &Scenario, controller: &str, request: &
             // A speed-up only where the estimate's variance holds.
             let needed = if e.p > 0.0 && e.reliable { plain_flights_for(e.p, h, confidence) } else { f64::NAN };
             summary[name.replace('-', "_")] = estimate_json(&e);
+            row = Row {
+                p: e.p,
+                lo: e.lo,
+                hi: e.hi,
+                flights: e.flights,
+                ess: Some(e.ess),
+                levels: e.levels.len() as f64,
+                reliable: e.reliable,
+            };
             summary["plain_mc_flights_for_same_relative_half_width"] = json!(needed);
             summary["flights_saved_factor"] = json!(needed / e.flights as f64);
             let how = if method == Method::Plain {
@@ -441,6 +507,15 @@ pub fn run_failure_probability(scenario: &Scenario, controller: &str, request: &
                 .install(|| ftsmc_sim::falsify::splitting::estimate(&splitting, settings, seed))
                 .map_err(|e| anyhow::anyhow!("{e}"))?;
             summary["splitting"] = splitting_json(&e);
+            row = Row {
+                p: e.p,
+                lo: e.lo,
+                hi: e.hi,
+                flights: e.flights,
+                ess: None,
+                levels: e.mean_levels,
+                reliable: e.reliable,
+            };
             lines.push(format!(
                 "P(margin < 0) of {controller} on {} (adaptive multilevel splitting on the running margin, {} repetitions of {} particles, {} flights, {:.1} levels per repetition):",
                 scenario.name,
@@ -484,6 +559,29 @@ pub fn run_failure_probability(scenario: &Scenario, controller: &str, request: &
             m.flights, m.p, m.lo, m.hi, m.failures
         ));
     }
+    for (key, value) in [
+        ("p", json!(row.p)),
+        ("lo", json!(row.lo)),
+        ("hi", json!(row.hi)),
+        ("confidence", json!(confidence)),
+        ("flights", json!(row.flights)),
+        ("effective_sample_size", json!(row.ess)),
+        ("levels", json!(row.levels)),
+        ("reliable", json!(row.reliable)),
+    ] {
+        summary[key] = value;
+    }
+    let csv = format!(
+        "method,p,lo,hi,confidence,flights,effective_sample_size,levels,reliable\n{name},{:e},{:e},{:e},{confidence},{},{},{},{}\n",
+        row.p,
+        row.lo,
+        row.hi,
+        row.flights,
+        row.ess.map_or(String::new(), |v| format!("{v}")),
+        row.levels,
+        row.reliable
+    );
+    dir.write(format!("{controller}.failure-probability.csv"), csv.as_bytes())?;
     let file = dir.write_scenario(&format!("{controller}.scenario.toml"), scenario, "scenario.toml")?;
     summary["plain_monte_carlo"] = json!(mc.as_ref().map(estimate_json));
     summary["seconds"] = json!(seconds);

@@ -233,7 +233,7 @@ enum Command {
         /// Splitting: independent repetitions (their spread gives the interval).
         #[arg(long, allow_negative_numbers = true, default_value_t = falsify::SPLITTING_REPETITIONS)]
         repetitions: usize,
-        /// Splitting: most flights of all repetitions (branches included).
+        /// Most flights of the whole run (splitting's branches and --plain included); work that needs more is refused before it starts.
         #[arg(long, allow_negative_numbers = true, default_value_t = falsify::SPLITTING_MAX_FLIGHTS)]
         max_flights: u64,
         /// Confidence level of the interval.
@@ -652,7 +652,7 @@ fn run(cli: Cli) -> Result<()> {
             check_names(std::slice::from_ref(&controller))?;
             anyhow::ensure!(threads != Some(0), "--threads must be at least 1");
             let method = method.unwrap_or_else(|| falsify::Method::default_for(&scenario));
-            let flights = if method == falsify::Method::Splitting { max_flights } else { budget };
+            let flights = falsify::check_max_flights(method, budget, particles, repetitions, plain, max_flights)?;
             falsify::check_budget(flights)?;
             ftsmc_sim::limits::check_batch(&scenario.flight_size(), flights.saturating_add(plain), 1)?;
             if let Some(n) = threads {
@@ -662,7 +662,12 @@ fn run(cli: Cli) -> Result<()> {
             let request = falsify::FailureRequest {
                 method,
                 budget,
-                splitting: ftsmc_sim::falsify::splitting::Settings::new(particles, repetitions, max_flights, confidence),
+                splitting: ftsmc_sim::falsify::splitting::Settings::new(
+                    particles,
+                    repetitions,
+                    max_flights - plain,
+                    confidence,
+                ),
                 seed,
                 confidence,
                 plain_runs: plain,

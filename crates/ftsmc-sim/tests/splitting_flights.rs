@@ -8,7 +8,9 @@
 //! `tests/data/splitting-breeze-1-short-plain.toml` with the command that
 //! made them; [`the_committed_counts_are_these_flights`] (a default test)
 //! flies the first [`CHECKED`] of its flights again and checks their count.
-//! The slow measurements are `#[ignore]`d:
+//! The slow measurements are `#[ignore]`d. `splitting_covers_plain` does
+//! not pass today: its first seed gave 3.1e-4 (unreliable) against the
+//! plain 5.5e-3 (docs/falsification.md says why).
 //!
 //! ```text
 //! FTSMC_PLAIN_FLIGHTS=10000 nice -n 19 cargo test -p ftsmc-sim --test splitting_flights -- --ignored --nocapture plain_campaign
