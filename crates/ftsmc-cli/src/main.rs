@@ -225,16 +225,28 @@ enum Command {
         #[arg(long = "set", value_name = "KEY=VALUE")]
         set: Vec<String>,
     },
-    /// Estimate P(margin < 0) under the scenario's own draws by cross-entropy importance sampling, with its interval.
+    /// Estimate P(margin < 0) under the scenario's own draws (adaptive multilevel splitting, cross-entropy importance sampling or plain Monte Carlo), with its interval.
     FailureProbability {
         /// Scenario file (TOML) or built-in name with a [falsify] section and an [envelope].
         scenario: String,
         /// Controller.
         #[arg(long, short = 'c', value_parser = controller_names)]
         controller: String,
-        /// Flights, CE levels included.
+        /// Estimator (default: splitting when the flights draw sensor, turbulence, drag or motor noise, which cross-entropy cannot move; else cross-entropy).
+        #[arg(long, value_enum)]
+        method: Option<falsify::Method>,
+        /// Flights of cross-entropy (its levels included) or plain Monte Carlo.
         #[arg(long, allow_negative_numbers = true, default_value_t = ftsmc_sim::defaults::FAILURE_PROBABILITY_BUDGET)]
         budget: u64,
+        /// Splitting: particles per repetition.
+        #[arg(long, allow_negative_numbers = true, default_value_t = falsify::SPLITTING_PARTICLES)]
+        particles: usize,
+        /// Splitting: independent repetitions (their spread gives the interval).
+        #[arg(long, allow_negative_numbers = true, default_value_t = falsify::SPLITTING_REPETITIONS)]
+        repetitions: usize,
+        /// Most flights of the whole run (splitting's branches and --plain included); work that needs more is refused before it starts.
+        #[arg(long, allow_negative_numbers = true, default_value_t = falsify::SPLITTING_MAX_FLIGHTS)]
+        max_flights: u64,
         /// Confidence level of the interval.
         #[arg(long, allow_negative_numbers = true, default_value_t = ftsmc_sim::defaults::CONFIDENCE)]
         confidence: f64,
@@ -662,7 +674,11 @@ fn run(cli: Cli) -> Result<()> {
         Command::FailureProbability {
             scenario: arg,
             controller,
+            method,
             budget,
+            particles,
+            repetitions,
+            max_flights,
             confidence,
             plain,
             seed,
@@ -674,13 +690,29 @@ fn run(cli: Cli) -> Result<()> {
             let scenario = load_scenario_with_limits(&arg, &limit, &set)?;
             check_names(std::slice::from_ref(&controller))?;
             anyhow::ensure!(threads != Some(0), "--threads must be at least 1");
-            falsify::check_budget(budget)?;
-            ftsmc_sim::limits::check_batch(&scenario.flight_size(), budget.saturating_add(plain), 1)?;
+            let method = method.unwrap_or_else(|| falsify::Method::default_for(&scenario));
+            let flights = falsify::check_max_flights(method, budget, particles, repetitions, plain, max_flights)?;
+            falsify::check_budget(flights)?;
+            ftsmc_sim::limits::check_batch(&scenario.flight_size(), flights.saturating_add(plain), 1)?;
             if let Some(n) = threads {
                 ftsmc_sim::limits::check_threads(&scenario.limits, n)?;
             }
             let seed = seed.unwrap_or(scenario.seed);
-            falsify::run_failure_probability(&scenario, &controller, budget, seed, confidence, plain, threads, &out)
+            let request = falsify::FailureRequest {
+                method,
+                budget,
+                splitting: ftsmc_sim::falsify::splitting::Settings::new(
+                    particles,
+                    repetitions,
+                    max_flights - plain,
+                    confidence,
+                ),
+                seed,
+                confidence,
+                plain_runs: plain,
+                threads,
+            };
+            falsify::run_failure_probability(&scenario, &controller, &request, &out)
         }
         Command::Compare {
             scenario,

@@ -72,3 +72,112 @@ fn a_budget_of_zero_is_refused_before_flying() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(!out.status.success() && err.contains("[falsify]"), "{err}");
 }
+
+/// `--method splitting` on a tiny case: the result names the method, its
+/// levels and reliability in the printout, the JSON and the CSV; the same
+/// bits on 1 and 2 threads; work beyond `--max-flights` is refused before
+/// any flight, naming the limit and how to raise it; a noise-driven
+/// scenario defaults to splitting.
+#[test]
+fn splitting_failure_probability_on_a_tiny_case() {
+    let tmp = scratch("failure-probability-splitting");
+    let dir = tmp.path();
+    std::fs::write(
+        dir.join("s.toml"),
+        SHORT
+            .replace("duration = 3.0", "duration = 2.0")
+            .replace("1.5\n[falsify]", "0.15\n[falsify]")
+            .replace("settle_after = 1.5", "settle_after = 1.0"),
+    )
+    .unwrap();
+    let args = |threads: &str, out: &str| {
+        vec![
+            "failure-probability",
+            "s.toml",
+            "-c",
+            "pid",
+            "--method",
+            "splitting",
+            "--particles",
+            "4",
+            "--repetitions",
+            "5",
+            "--max-flights",
+            "200",
+            "--threads",
+            threads,
+            "--out",
+            out,
+        ]
+        .into_iter()
+        .map(String::from)
+        .collect::<Vec<_>>()
+    };
+    let run = |threads: &str, out: &str| {
+        let a = args(threads, out);
+        ok(&ftsmc(&a.iter().map(String::as_str).collect::<Vec<_>>(), dir))
+    };
+    let stdout = run("1", "a");
+    assert!(stdout.contains("adaptive multilevel splitting") && stdout.contains("levels per repetition"), "{stdout}");
+    assert!(stdout.contains("reliable") || stdout.contains("UNRELIABLE"), "{stdout}");
+    run("2", "b");
+    let summary = json(&dir.join("a/short/pid.failure-probability.json"));
+    assert_eq!(summary["method"], "splitting");
+    assert!(summary["reliable"].is_boolean() && summary["levels"].is_number(), "{summary}");
+    assert_eq!(summary["splitting"]["repetitions"].as_array().unwrap().len(), 5);
+    let flights = summary["flights"].as_u64().unwrap();
+    assert!((20..=200).contains(&flights), "{flights}");
+    let csv = |d: &str| std::fs::read_to_string(dir.join(d).join("short/pid.failure-probability.csv")).unwrap();
+    assert!(
+        csv("a").starts_with("method,p,lo,hi,confidence,flights,effective_sample_size,levels,reliable\nsplitting,"),
+        "{}",
+        csv("a")
+    );
+    assert_eq!(csv("a"), csv("b"), "same estimate on 1 and 2 threads");
+    assert_eq!(summary["splitting"], json(&dir.join("b/short/pid.failure-probability.json"))["splitting"]);
+
+    // 5 repetitions of 4 particles need 20 flights to start: refused at 19.
+    let mut a = args("1", "c");
+    a[11] = "19".into();
+    let out = ftsmc(&a.iter().map(String::as_str).collect::<Vec<_>>(), dir);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success() && err.contains("--max-flights 19") && err.contains("--max-flights 20"), "{err}");
+    assert!(!dir.join("c").exists(), "nothing written");
+    // Plain and cross-entropy: --budget beyond --max-flights is refused too.
+    let out = ftsmc(
+        &[
+            "failure-probability",
+            "s.toml",
+            "-c",
+            "pid",
+            "--method",
+            "plain",
+            "--budget",
+            "300",
+            "--max-flights",
+            "100",
+            "--out",
+            "d",
+        ],
+        dir,
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success() && err.contains("--max-flights 100") && err.contains("--max-flights 300"), "{err}");
+    // The rung draws turbulence and sensor noise: splitting by default.
+    let out = ftsmc(
+        &[
+            "failure-probability",
+            "s.toml",
+            "-c",
+            "pid",
+            "--particles",
+            "4",
+            "--repetitions",
+            "5",
+            "--max-flights",
+            "19",
+        ],
+        dir,
+    );
+    assert!(String::from_utf8_lossy(&out.stderr).contains("repetitions of 4 particles"), "the default is splitting");
+}

@@ -469,6 +469,23 @@ impl Sensors {
         }
     }
 
+    /// From now on every noise source draws from the streams of `seed`
+    /// (the same stream numbers as [`Sensors::new`]), each at its first
+    /// word; the sample clocks, held samples and latency lines are kept. A
+    /// flight branched at a control period boundary continues with fresh
+    /// noise this way (`falsify::splitting`).
+    pub fn reseed_noise(&mut self, seed: u64) {
+        let s = &mut self.sources;
+        for (source, stream) in [
+            (&mut s.position, POSITION_NOISE_STREAM),
+            (&mut s.velocity, VELOCITY_NOISE_STREAM),
+            (&mut s.attitude, ATTITUDE_NOISE_STREAM),
+            (&mut s.angular_rate, ANGULAR_RATE_NOISE_STREAM),
+        ] {
+            source.rng = NoiseStream::new(sensor_noise_rng(seed, stream));
+        }
+    }
+
     /// The parameters this sensor was built with.
     pub fn params(&self) -> &SensorParams {
         &self.params

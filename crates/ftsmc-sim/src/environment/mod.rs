@@ -92,6 +92,16 @@ impl Environment {
         Self { params, drag_rngs, drag_factor: [1.0; 6], grid: None }
     }
 
+    /// From now on the drag noise draws from the streams of `seed` (stream
+    /// `1 + k` for coefficient `k`, as [`Environment::new`]), each at its
+    /// first word; the current drag multipliers are kept (a flight branched
+    /// with fresh noise, `falsify::splitting`). Nothing without drag noise.
+    pub fn reseed_noise(&mut self, seed: u64) {
+        if let Some(rngs) = &mut self.drag_rngs {
+            *rngs = core::array::from_fn(|k| NoiseStream::new(chacha_stream(seed, 1 + k as u64)));
+        }
+    }
+
     /// The same environment sampled by [`Environment::time_varying_on_grid`]
     /// on the grid `t_m = m·step` (s): the run loop's substep boundaries.
     /// Its sines and cosines are rotated along the grid

@@ -746,6 +746,14 @@ impl Dryden {
         d
     }
 
+    /// From now on the filters are driven by the streams
+    /// [`WIND_TURBULENCE_STREAMS`] of `seed`, each at its first word; the
+    /// filter states carry over (a flight branched with fresh noise,
+    /// `falsify::splitting`).
+    pub fn reseed_noise(&mut self, seed: u64) {
+        self.rngs = core::array::from_fn(|k| NoiseStream::new(chacha_stream(seed, WIND_TURBULENCE_STREAMS[k])));
+    }
+
     /// Set the airspeed of the spatial-to-temporal conversion to
     /// `max(airspeed, airspeed_floor)` (m/s) and rediscretise the filters;
     /// the states carry over (their stationary law does not depend on V).
@@ -825,6 +833,14 @@ impl Wind {
         let speed = (horizontal * horizontal + mz * mz).sqrt();
         let turbulence = params.turbulence.map(|t| Dryden::new(t, dt, speed, seed));
         Ok(Self { params, turbulence, axes })
+    }
+
+    /// From now on the turbulence draws from the streams of `seed`
+    /// ([`Dryden::reseed_noise`]); the mean wind and gusts are deterministic.
+    pub fn reseed_noise(&mut self, seed: u64) {
+        if let Some(d) = &mut self.turbulence {
+            d.reseed_noise(seed);
+        }
     }
 
     /// Set the airspeed of the turbulence's spatial-to-temporal conversion

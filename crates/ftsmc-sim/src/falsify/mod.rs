@@ -5,7 +5,11 @@
 //!   the `[falsify]` box with CMA-ES and restarts, and the same budget of
 //!   uniform random draws beside it;
 //! - [`rare`]: the probability that the margin is negative under the
-//!   scenario's own random draws, by cross-entropy importance sampling.
+//!   scenario's own random draws, by cross-entropy importance sampling
+//!   of the `[falsify]` parameters;
+//! - [`splitting`]: the same probability by adaptive multilevel splitting
+//!   on the flight's running margin, acting on its whole random input
+//!   (turbulence, sensor, drag and motor noise, the `[montecarlo]` draws).
 //!
 //! Both run on an [`Objective`]: points in, margins out, many at a time.
 //! [`Problem`] is the objective of a real scenario and controller; tests
@@ -13,6 +17,9 @@
 
 pub mod rare;
 pub mod search;
+pub mod splitting;
+
+use std::sync::Arc;
 
 use rayon::prelude::*;
 
@@ -179,6 +186,106 @@ impl RareProblem {
         let mut s = apply(&drawn, &self.problem.params, &self.values(z));
         s.controllers = vec![self.problem.controller.clone()];
         s
+    }
+}
+
+/// A [`Problem`] under its whole random input, for [`splitting::estimate`]:
+/// particle `key` is draw 0 of `ftsmc montecarlo` with master seed `key`
+/// (its `[montecarlo]` draws and its own seed: turbulence, sensor, drag and
+/// motor noise) with the `[falsify]` parameters at the nominal quantiles
+/// ([`rare::nominal_value`]) of standard normal coordinates drawn from
+/// stream [`SPLITTING_Z_STREAM`] of `key` — the same law as
+/// [`RareProblem`]'s draws at `z ~ N(0, I)`, so both estimate the same
+/// `P(margin < 0)`. A branch flies its parent again to the branch
+/// boundary and rekeys every noise source there ([`crate::run::Flight::reseed_noise`]).
+#[derive(Clone, Debug)]
+pub struct FlightSplitting {
+    /// The scenario, controller and searched parameters.
+    pub problem: Problem,
+}
+
+/// True when flights of `scenario` draw noise period by period — sensor
+/// noise, Dryden turbulence, drag noise (paper plant) or motor noise —
+/// which the cross-entropy proposal of [`rare`] never moves and
+/// [`splitting`] does: `ftsmc failure-probability` then defaults to splitting.
+pub fn noise_driven(scenario: &Scenario) -> bool {
+    scenario.sensors.is_some_and(|s| !s.is_perfect())
+        || scenario.wind.as_ref().is_some_and(|w| w.turbulence.is_some())
+        || (scenario.drag_noise.is_some() && scenario.vehicle.model == crate::vehicle::VehicleModel::Paper)
+        || crate::run::actuators(scenario).noise.is_some()
+}
+
+/// ChaCha stream (of a particle's key) of its `[falsify]` coordinates.
+pub const SPLITTING_Z_STREAM: u64 = 7;
+
+/// One particle of [`FlightSplitting`]: its scenario (the draw it started
+/// from), where its noise was rekeyed, and its running margin's record.
+#[derive(Clone, Debug)]
+pub struct FlightPath {
+    /// The drawn scenario (its seed keys the noise up to the first reseed).
+    pub scenario: Arc<Scenario>,
+    /// `(k, seed)`: from period boundary `k` on, the noise is keyed by `seed`; increasing `k`.
+    pub reseeds: Vec<(u64, u64)>,
+    /// `(k, m)`: the boundaries `k` where the running margin fell, to `m` (1).
+    pub record: Vec<(u64, f64)>,
+    /// The flight's final margin ([`margin_of`]; `NaN`: none).
+    pub margin: f64,
+}
+
+impl FlightSplitting {
+    /// Fly `scenario` with the noise rekeyed at `reseeds`, recording the running margin.
+    pub fn fly(&self, scenario: Arc<Scenario>, reseeds: Vec<(u64, u64)>) -> FlightPath {
+        let controller = crate::registry::build(&self.problem.controller, &scenario).expect("checked by Problem::new");
+        let options = RunOptions { record: false, ..Default::default() };
+        let mut flight = crate::run::Flight::new(scenario.clone(), controller, options);
+        let mut record: Vec<(u64, f64)> = Vec::new();
+        let mut last = f64::INFINITY;
+        let mut next = 0;
+        loop {
+            let k = flight.steps_flown();
+            let m = flight.running_margin().unwrap_or(f64::INFINITY);
+            if m < last {
+                record.push((k, m));
+                last = m;
+            }
+            while next < reseeds.len() && reseeds[next].0 <= k {
+                flight.reseed_noise(reseeds[next].1);
+                next += 1;
+            }
+            if flight.step() == crate::run::StepOutcome::Done {
+                break;
+            }
+        }
+        let k = flight.steps_flown();
+        let out = flight.finish();
+        let margin = margin_of(&out);
+        if margin < last {
+            record.push((k, margin));
+        }
+        FlightPath { scenario, reseeds, record, margin }
+    }
+}
+
+impl splitting::Splitting for FlightSplitting {
+    type Path = FlightPath;
+
+    fn start(&self, key: u64) -> FlightPath {
+        let mut rng = crate::rng::chacha_stream(key, SPLITTING_Z_STREAM);
+        let z: Vec<f64> = (0..self.problem.params.len()).map(|_| crate::gauss::standard_normal(&mut rng)).collect();
+        let draws = RareProblem { problem: self.problem.clone(), master: key };
+        self.fly(Arc::new(draws.scenario(0, &z)), Vec::new())
+    }
+
+    fn margin(&self, path: &FlightPath) -> f64 {
+        path.margin
+    }
+
+    fn branch(&self, parent: &FlightPath, level: f64, key: u64) -> FlightPath {
+        // The first boundary below the level; the parent's final margin is, so one exists.
+        let k = parent.record.iter().find(|(_, m)| *m < level).map_or(u64::MAX, |r| r.0);
+        let mut reseeds: Vec<(u64, u64)> = parent.reseeds.iter().copied().filter(|r| r.0 < k).collect();
+        reseeds.push((k, key));
+        self.fly(parent.scenario.clone(), reseeds)
     }
 }
 

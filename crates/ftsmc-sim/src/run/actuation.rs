@@ -143,6 +143,14 @@ impl ActuatorStage {
         }
     }
 
+    /// From now on the motors' noise draws from the stream of `seed`
+    /// ([`motor_noise_rng`]) at its first word; motor speeds carry over.
+    pub(crate) fn reseed_noise(&mut self, seed: u64) {
+        if let ActuatorStage::Rotors { rng, .. } = self {
+            *rng = motor_noise_rng(seed);
+        }
+    }
+
     /// What the rotors make of `command` this period, written into `out`
     /// (the lane's delivery, assigned in place rather than returned and
     /// copied);

@@ -645,6 +645,40 @@ impl<'o, C: Controller> Flights<'o, C, f64> {
         m.euler
     }
 
+    /// From the current period boundary on, every noise source of the
+    /// flight — sensors, turbulence, drag noise, motor noise — draws from
+    /// the streams of `seed` (each source's own stream number, as the
+    /// scenario's seed keys them), each at its first word; every state
+    /// (truth, controller, filters, latency lines, motors, observers) is
+    /// kept. A flight flown to boundary `k` with its own seed and then
+    /// reseeded is a copy of its state at `k` continuing with fresh noise:
+    /// the branching of adaptive multilevel splitting
+    /// ([`crate::falsify::splitting`]). The same calls at the same steps give
+    /// the same bits.
+    pub fn reseed_noise(&mut self, seed: u64) {
+        let lane = &mut self.lanes[0];
+        lane.measured_ahead = None;
+        if let Some(s) = &mut lane.sensors {
+            s.reseed_noise(seed);
+        }
+        if let Some(w) = &mut lane.wind {
+            w.reseed_noise(seed);
+        }
+        lane.env.reseed_noise(seed);
+        lane.actuators.reseed_noise(seed);
+    }
+
+    /// The robustness margin of the flight so far ([`crate::margin`]): the
+    /// envelope margin over the period boundaries flown (a running minimum,
+    /// never increasing while the flight goes on), or the failed flight's
+    /// margin once it crashed or diverged; `None` while nothing limits it
+    /// (before `settle_after` with no tilt limit).
+    pub fn running_margin(&self) -> Option<f64> {
+        let lane = &self.lanes[0];
+        let end = lane.exit.as_ref().map_or(crate::margin::End::Completed, ExitStatus::margin_end);
+        lane.observers.margin.finish(end, lane.scenario.duration).map(|m| m.value)
+    }
+
     /// The truth's Euler state at the current period boundary.
     pub fn truth_state(&self) -> &QuadState {
         &self.at.euler
