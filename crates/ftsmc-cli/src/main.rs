@@ -232,7 +232,7 @@ enum Command {
         /// Controller.
         #[arg(long, short = 'c', value_parser = controller_names)]
         controller: String,
-        /// Estimator (default: splitting when the flights draw sensor, turbulence, drag or motor noise, which cross-entropy cannot move; else cross-entropy).
+        /// Estimator (default: plain Monte Carlo when the flights draw sensor, turbulence, drag or motor noise, which cross-entropy cannot move and splitting does not yet estimate reliably on real rungs; else cross-entropy).
         #[arg(long, value_enum)]
         method: Option<falsify::Method>,
         /// Flights of cross-entropy (its levels included) or plain Monte Carlo.

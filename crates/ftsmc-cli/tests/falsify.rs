@@ -77,7 +77,7 @@ fn a_budget_of_zero_is_refused_before_flying() {
 /// levels and reliability in the printout, the JSON and the CSV; the same
 /// bits on 1 and 2 threads; work beyond `--max-flights` is refused before
 /// any flight, naming the limit and how to raise it; a noise-driven
-/// scenario defaults to splitting.
+/// scenario defaults to plain Monte Carlo.
 #[test]
 fn splitting_failure_probability_on_a_tiny_case() {
     let tmp = scratch("failure-probability-splitting");
@@ -163,21 +163,12 @@ fn splitting_failure_probability_on_a_tiny_case() {
     );
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(!out.status.success() && err.contains("--max-flights 100") && err.contains("--max-flights 300"), "{err}");
-    // The rung draws turbulence and sensor noise: splitting by default.
+    // The rung draws turbulence and sensor noise: plain Monte Carlo by
+    // default (the only estimator whose interval held on a real rung).
     let out = ftsmc(
-        &[
-            "failure-probability",
-            "s.toml",
-            "-c",
-            "pid",
-            "--particles",
-            "4",
-            "--repetitions",
-            "5",
-            "--max-flights",
-            "19",
-        ],
+        &["failure-probability", "s.toml", "-c", "pid", "--budget", "300", "--max-flights", "100", "--out", "e"],
         dir,
     );
-    assert!(String::from_utf8_lossy(&out.stderr).contains("repetitions of 4 particles"), "the default is splitting");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success() && err.contains("--max-flights 300"), "the default is plain: {err}");
 }
