@@ -4,11 +4,9 @@
 //! return a log or an error; a panic, or an abort from unbounded recursion
 //! or allocation, fails the test. Sized to run in a few seconds.
 
-mod common;
-
 use std::path::Path;
 
-use common::*;
+use crate::common::*;
 use ftsmc_logs::ulog::{read_ulog, read_ulog_flight};
 use ftsmc_logs::{read_log, LogLimits};
 use proptest::prelude::*;

@@ -4,11 +4,9 @@
 //! flight (the `#[ignore]`d tests: `cargo test -p ftsmc-logs --
 //! --include-ignored`).
 
-mod common;
-
 use std::collections::{BTreeMap, BTreeSet};
 
-use common::data_dir;
+use crate::common::data_dir;
 use ftsmc_logs::{read_log, Frame, LogLimits, MotorUnit};
 use sha2::{Digest, Sha256};
 

@@ -3,9 +3,7 @@
 //! (zero-order hold onto the attitude time stamps), NanoBench and the
 //! generic CSV (units, quaternion order, optional groups).
 
-mod common;
-
-use common::*;
+use crate::common::*;
 use ftsmc_logs::nanobench::STANDARD_GRAVITY_M_S2;
 use ftsmc_logs::ulog::{read_ulog, read_ulog_flight, UlogStream};
 use ftsmc_logs::{read_log, Frame, LogLimits, MotorUnit};

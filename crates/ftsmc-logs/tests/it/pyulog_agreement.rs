@@ -9,12 +9,10 @@
 //! FTSMC_PYULOG_PYTHON=target/venv/bin/python cargo test -p ftsmc-logs --test pyulog_agreement -- --include-ignored
 //! ```
 
-mod common;
-
 use std::collections::BTreeMap;
 use std::process::Command;
 
-use common::data_dir;
+use crate::common::data_dir;
 use ftsmc_logs::ulog::read_ulog;
 use ftsmc_logs::LogLimits;
 

@@ -4,9 +4,7 @@
 //! and format definitions that would make the parser recurse or allocate
 //! without bound. The bad files are made from good synthetic ones.
 
-mod common;
-
-use common::*;
+use crate::common::*;
 use ftsmc_logs::ulog::{read_ulog, read_ulog_flight};
 use ftsmc_logs::{read_log, LogError, LogLimits};
 

@@ -1,0 +1,17 @@
+//! All integration tests of this crate in one test binary: one link of the
+//! crate (built at opt-level 2 by `[profile.test]`) instead of one per file.
+//!
+//! A new test file goes here as a module: put it in tests/it/ (with its
+//! `.proptest-regressions` file, if any, beside it) and add `mod name;` below;
+//! shared helpers are `crate::common` (tests/common/). Keep a test in its own
+//! tests/<name>.rs binary only when it needs its process alone (a
+//! `#[global_allocator]`, `std::env::set_var`, rayon's global pool).
+
+mod continuous_rhs;
+mod default_bit_identity;
+mod finite;
+mod lanes_math;
+mod lanes_ranftsmc_tsm_sta;
+mod px4_normalisation;
+mod quaternion_interface;
+mod regressions;
