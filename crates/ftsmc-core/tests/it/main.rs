@@ -9,6 +9,10 @@
 
 mod continuous_rhs;
 mod default_bit_identity;
+mod eskf_consistency;
+mod eskf_fixture;
+#[path = "../common/eskf_sim.rs"]
+mod eskf_sim;
 mod finite;
 mod lanes_math;
 mod lanes_ranftsmc_tsm_sta;

@@ -10,6 +10,7 @@
 #[path = "../common/mod.rs"]
 mod common;
 
+mod estimators_nanobench;
 mod fuzz;
 mod malformed;
 mod pyulog_agreement;

@@ -11,9 +11,7 @@
 //!
 //! `cargo test -p ftsmc-logs --test estimators_nanobench -- --include-ignored --nocapture`
 
-mod common;
-
-use common::data_dir;
+use crate::common::data_dir;
 use ftsmc_core::estimate::{Eskf, EskfConfig, GnssFix, ImuSample, InitialState, Mahony, MahonyConfig};
 use ftsmc_core::kinematics::euler_from_quaternion;
 use ftsmc_logs::{table::read_table, LogLimits};

@@ -5,10 +5,7 @@
 //! fixes resume; a 50-sigma outlier is gated out. Bounds from `statrs`'s
 //! chi-square quantiles.
 
-#[path = "common/eskf_sim.rs"]
-mod eskf_sim;
-
-use eskf_sim::{error_state, nees, simulate, Event, Noise, Rates};
+use crate::eskf_sim::{error_state, nees, simulate, Event, Noise, Rates};
 use ftsmc_core::estimate::{Eskf, EskfConfig, UpdateKind};
 use statrs::distribution::{ChiSquared, ContinuousCDF};
 

@@ -13,10 +13,7 @@
 //! `state` after the step: nominal state, gated-out total and the
 //! covariance's upper triangle (row major, diagonal included, 120 values).
 
-#[path = "common/eskf_sim.rs"]
-mod eskf_sim;
-
-use eskf_sim::{simulate, Event, Noise, Rates};
+use crate::eskf_sim::{simulate, Event, Noise, Rates};
 use ftsmc_core::estimate::{Eskf, EskfConfig, Estimate, UpdateReport};
 use serde_json::{json, Value};
 
