@@ -8,7 +8,7 @@
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 
-#[path = "common/source.rs"]
+#[path = "../common/source.rs"]
 mod source;
 use source::{module_of, paths_after, rust_files, without_comments};
 

@@ -7,8 +7,7 @@ use ftsmc_sim::scenario::{Scenario, PAPER_SCENARIO_1, PAPER_SCENARIO_2};
 use ftsmc_sim::signal::waypoints::{WaypointVelocity, Waypoints};
 use ftsmc_sim::signal::{Signal, Term};
 
-mod common;
-use common::scratch;
+use crate::common::scratch;
 
 fn write(dir: &Path, file: &str, text: &str) -> PathBuf {
     let path = dir.join(file);

@@ -52,7 +52,7 @@ fn plain_failures(problem: &FlightSplitting, n: usize) -> u64 {
 
 /// The committed counts: `(flights, failures, failures among the first CHECKED)`.
 fn committed() -> (u64, u64, u64) {
-    let text = include_str!("data/splitting-breeze-1-short-plain.toml");
+    let text = include_str!("../data/splitting-breeze-1-short-plain.toml");
     let table: toml::Table = text.parse().unwrap();
     let get = |k: &str| table[k].as_integer().unwrap_or_else(|| panic!("{k}")) as u64;
     (get("flights"), get("failures"), get("failures_first_200"))

@@ -9,8 +9,7 @@ use std::sync::OnceLock;
 
 use resvg::tiny_skia::Pixmap;
 
-mod common;
-use common::scratch;
+use crate::common::scratch;
 
 const FIGURES: [&str; 10] = [
     "fig1-attitude-scenario1",
@@ -81,7 +80,7 @@ fn reproduced() -> &'static Path {
         let tmp = scratch("reproduce");
         let out = tmp.path().join("res");
         ftsmc(&["reproduce", "--realistic-runs", "4", "--out", out.to_str().unwrap()]);
-        common::removed_at_exit(tmp).join("res")
+        crate::common::removed_at_exit(tmp).join("res")
     })
 }
 
@@ -92,7 +91,7 @@ fn flipped() -> &'static Path {
         let tmp = scratch("flip");
         let scenario = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenarios/realism/rigid-body-scenario-1.toml");
         ftsmc(&["run", scenario.to_str().unwrap(), "--out", tmp.path().to_str().unwrap()]);
-        common::removed_at_exit(tmp).join("rigid-body-scenario-1/figures")
+        crate::common::removed_at_exit(tmp).join("rigid-body-scenario-1/figures")
     })
 }
 

@@ -8,8 +8,6 @@ use std::process::{Command, Output};
 
 use tempfile::TempDir;
 
-mod common;
-
 /// A 1.5 s realistic scenario 2 with 2 training flights per candidate, 4
 /// candidates per generation and 3 held-out flights per gain set.
 const TINY: &str = r#"extends = "realistic-scenario-2"
@@ -35,9 +33,9 @@ fn ok(args: &[&str], cwd: &Path) {
     assert!(out.status.success(), "ftsmc {args:?}: {}", String::from_utf8_lossy(&out.stderr));
 }
 
-/// A fresh scratch folder ([`common::scratch`]) holding `tiny.toml`.
+/// A fresh scratch folder ([`crate::common::scratch`]) holding `tiny.toml`.
 fn scratch(name: &str) -> TempDir {
-    let d = common::scratch(name);
+    let d = crate::common::scratch(name);
     std::fs::write(d.path().join("tiny.toml"), TINY).unwrap();
     d
 }

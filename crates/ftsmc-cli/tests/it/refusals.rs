@@ -6,8 +6,7 @@
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
-mod common;
-use common::scratch;
+use crate::common::scratch;
 
 /// Longest time a refusal may take (they take milliseconds).
 const TIME_LIMIT: Duration = Duration::from_secs(20);

@@ -8,8 +8,7 @@ use std::process::Command;
 use ftsmc_sim::scenario::{Scenario, BUILT_IN_SCENARIOS};
 use serde_json::Value;
 
-mod common;
-use common::scratch;
+use crate::common::scratch;
 
 fn ftsmc(args: &[&str], cwd: &Path) {
     let out = Command::new(env!("CARGO_BIN_EXE_ftsmc")).args(args).current_dir(cwd).output().expect("binary runs");

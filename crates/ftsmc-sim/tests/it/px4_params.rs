@@ -3,8 +3,6 @@
 //! documented `[pid]` values, `[pid] px4_params` in a scenario, and errors
 //! that name the file, line, parameter and value.
 
-mod common;
-
 use ftsmc_core::pid::PidGains;
 use ftsmc_sim::controllers::px4_params::{self, gains_from_params, params_from_gains, parse_qgc, write_qgc};
 use ftsmc_sim::controllers::{GainSection, NominalVehicle};
@@ -138,7 +136,7 @@ fn bad_files_are_refused_naming_file_line_parameter_and_value() {
 
 #[test]
 fn a_scenario_flies_the_gains_of_its_px4_params_file() {
-    let dir = common::scratch("px4");
+    let dir = crate::common::scratch("px4");
     let hb = built_in("realistic-scenario-1");
     let vehicle = hb.nominal_vehicle();
     let tuned = PidGains { attitude_p: [6.5, 6.5, 2.8], ..PidGains::defaults_for(&vehicle) };

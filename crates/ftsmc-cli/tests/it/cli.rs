@@ -3,8 +3,7 @@
 use std::path::Path;
 use std::process::{Command, Output};
 
-mod common;
-use common::scratch;
+use crate::common::scratch;
 
 fn ftsmc(args: &[&str], cwd: &Path) -> Output {
     // RUST_BACKTRACE=1: errors must stay one readable line even then.

@@ -10,8 +10,7 @@ use std::sync::OnceLock;
 
 use resvg::tiny_skia::Pixmap;
 
-mod common;
-use common::scratch;
+use crate::common::scratch;
 
 /// Viewport of both the DOM dump and the screenshot, CSS px.
 const WINDOW: (u32, u32) = (1280, 5200);
@@ -39,7 +38,7 @@ fn flown() -> &'static Path {
             .output()
             .expect("binary runs");
         assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-        common::removed_at_exit(tmp).join("paper-scenario-1")
+        crate::common::removed_at_exit(tmp).join("paper-scenario-1")
     })
 }
 

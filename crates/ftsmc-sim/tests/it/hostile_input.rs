@@ -12,8 +12,7 @@ use std::time::Duration;
 use ftsmc_sim::limits::{self, Limits};
 use ftsmc_sim::scenario::{show, show_str, Scenario, ScenarioError, PAPER_SCENARIO_2};
 
-mod common;
-use common::scratch;
+use crate::common::scratch;
 
 const BASE: &str = "name = \"t\"\nduration = 1.0\n";
 

@@ -20,8 +20,7 @@
 use std::path::Path;
 use std::process::Command;
 
-mod common;
-use common::scratch;
+use crate::common::scratch;
 
 /// Fly `file` as a Monte Carlo batch on `lanes` lanes into `dir/<out>`;
 /// `baseline` asks glibc for its baseline (no AVX, no FMA) maths and ftsmc

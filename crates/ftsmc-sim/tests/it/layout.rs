@@ -7,7 +7,7 @@
 use std::collections::BTreeMap;
 use std::path::Path;
 
-#[path = "common/source.rs"]
+#[path = "../common/source.rs"]
 mod source;
 use source::{module_of, paths_after, rust_files, without_comments};
 

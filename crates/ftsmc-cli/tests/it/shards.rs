@@ -9,8 +9,7 @@ use std::sync::OnceLock;
 
 use serde_json::Value;
 
-mod common;
-use common::scratch;
+use crate::common::scratch;
 
 const SCENARIO: &str = "paper-scenario-2";
 const RUNS: &str = "7";
@@ -49,7 +48,7 @@ fn campaign() -> &'static Path {
         }
         ok(&[&mc[..], &["--runs", RUNS, "--seed", "99", "--shard", "2/3", "--out", "seed99"]].concat(), d);
         ok(&[&mc[..], &["--runs", "8", "--shard", "2/3", "--out", "runs8"]].concat(), d);
-        common::removed_at_exit(tmp)
+        crate::common::removed_at_exit(tmp)
     })
 }
 

@@ -14,8 +14,7 @@ use std::process::Command;
 
 use serde_json::Value;
 
-mod common;
-use common::scratch;
+use crate::common::scratch;
 
 const AXES: [&str; 6] = ["x", "y", "z", "phi", "theta", "psi"];
 const SIGNALS: [&str; 4] = ["thrust", "roll_torque", "pitch_torque", "yaw_torque"];

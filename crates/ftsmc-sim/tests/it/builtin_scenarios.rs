@@ -5,7 +5,7 @@
 use ftsmc_sim::scenario::resolve::{built_in, built_in_names, built_in_names_joined};
 use ftsmc_sim::scenario::{Scenario, BUILT_IN_SCENARIOS};
 
-const DOC: &str = include_str!("../../../docs/scenarios.md");
+const DOC: &str = include_str!("../../../../docs/scenarios.md");
 
 #[test]
 fn docs_table_names_every_built_in_scenario_and_nothing_else() {
