@@ -62,7 +62,8 @@
 //!          envelope.rs          success envelope and its verdict (`[envelope]`)
 //!          margin.rs            signed robustness margin to the envelope (STL robustness)
 //!          metrics.rs           ISE, IAE, ITAE, settling, chattering, online
-//!          sensors.rs           measured state: noise, bias, sample rate, latency (`[sensors]`)
+//!          sensors/             measured state: mocap.rs (`[sensors]`: noise, bias, sample rate, latency),
+//!                               sensor stages imu, gnss, baro, mag and the estimator stage
 //!          controllers/         each controller declared once: name, label, gain section, constructor
 //!            tunable.rs         what `ftsmc tune` may change, by controller (declared in each file)
 //!            tune_param.rs      TuneParam / TuneTarget: the type of a declared tune parameter
