@@ -8,9 +8,7 @@
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 
-#[path = "../common/source.rs"]
-mod source;
-use source::{module_of, paths_after, rust_files, without_comments};
+use crate::source::{module_of, paths_after, rust_files, without_comments};
 
 const CRATES: [&str; 6] = ["ftsmc-core", "ftsmc-sim", "ftsmc-logs", "ftsmc-ident", "ftsmc-cli", "ftsmc-py"];
 

@@ -7,9 +7,7 @@
 use std::collections::BTreeMap;
 use std::path::Path;
 
-#[path = "../common/source.rs"]
-mod source;
-use source::{module_of, paths_after, rust_files, without_comments};
+use crate::source::{module_of, paths_after, rust_files, without_comments};
 
 /// Module path (as written after `crate::`) → floor. The longest matching
 /// prefix decides, so a sub-module may sit on another floor than its parent.

@@ -9,6 +9,8 @@
 
 #[path = "../common/mod.rs"]
 mod common;
+#[path = "../common/source.rs"]
+mod source;
 
 mod actuators;
 mod builtin_scenarios;
@@ -40,6 +42,7 @@ mod run_loop;
 mod scenario_2;
 mod scenario_ergonomics;
 mod scenario_files;
+mod sensor_stages;
 mod sensors;
 mod sensors_body;
 mod sensors_imu;
