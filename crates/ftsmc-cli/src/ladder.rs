@@ -198,16 +198,8 @@ pub fn ladder(dir: &ResultDir, runs: u64, controllers: &[&str], figures: bool, c
     // flights, in parallel (rasterising one takes about a second).
     let mut flown: Vec<Vec<McRun>> = Vec::new();
     for s in &scenarios {
-        let spec = s.montecarlo.clone().unwrap_or_default();
-        let rows = run_batch(
-            s,
-            &spec,
-            &names,
-            BatchOptions { progress: Some(&|n| bar.inc(n)), ..BatchOptions::new(runs, s.seed) },
-        )
-        .map_err(|e| anyhow!(e))?;
+        let rows = fly_rung(dir, "ladder-runs", s, &names, runs, &bar)?;
         flights += rows.len();
-        dir.write(format!("beyond/ladder-runs/{}.csv", s.name), &crate::montecarlo::runs_csv(&rows)?)?;
         let wind = s.wind.clone().unwrap_or_default().summary();
         if s.name.ends_with("-1") {
             wind_table.row(vec![
@@ -441,16 +433,8 @@ pub fn missions(
     let mut verdict_lines = Vec::new();
     let mut json_rows = Vec::new();
     for (rung, mission, s) in &scenarios {
-        let spec = s.montecarlo.clone().unwrap_or_default();
-        let rows = run_batch(
-            s,
-            &spec,
-            &names,
-            BatchOptions { progress: Some(&|n| bar.inc(n)), ..BatchOptions::new(runs, s.seed) },
-        )
-        .map_err(|e| anyhow!(e))?;
+        let rows = fly_rung(dir, "mission-runs", s, &names, runs, &bar)?;
         flights += rows.len();
-        dir.write(format!("beyond/mission-runs/{}.csv", s.name), &crate::montecarlo::runs_csv(&rows)?)?;
         let cells: Vec<MissionCell> = names
             .iter()
             .map(|name| {
@@ -528,4 +512,22 @@ pub fn missions(
                      "rows": json_rows, "verdicts": verdict_lines}),
         flights,
     })
+}
+
+/// Fly `names` through `runs` draws of `s` (its own `[montecarlo]` and
+/// seed), ticking `bar`, and write the rows as `beyond/<folder>/<name>.csv`.
+fn fly_rung(
+    dir: &ResultDir,
+    folder: &str,
+    s: &Scenario,
+    names: &[String],
+    runs: u64,
+    bar: &indicatif::ProgressBar,
+) -> Result<Vec<McRun>> {
+    let spec = s.montecarlo.clone().unwrap_or_default();
+    let rows =
+        run_batch(s, &spec, names, BatchOptions { progress: Some(&|n| bar.inc(n)), ..BatchOptions::new(runs, s.seed) })
+            .map_err(|e| anyhow!(e))?;
+    dir.write(format!("beyond/{folder}/{}.csv", s.name), &crate::montecarlo::runs_csv(&rows)?)?;
+    Ok(rows)
 }
