@@ -27,13 +27,6 @@ pub struct LogArgs {
 impl LogArgs {
     /// Reads every log as a [`Series`] for `purpose` (named in errors).
     pub fn read_series(&self, purpose: &'static str) -> Result<Vec<Series>> {
-        let limits = ftsmc_logs::LogLimits::default();
-        self.logs
-            .iter()
-            .map(|p| {
-                let log = ftsmc_logs::read_log(p, &limits)?;
-                Ok(Series::from_log(&log, purpose)?)
-            })
-            .collect()
+        Ok(Series::read_all(&self.logs, purpose)?)
     }
 }

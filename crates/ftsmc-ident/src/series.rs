@@ -80,6 +80,14 @@ pub struct Series {
 }
 
 impl Series {
+    /// Every log at `paths` read ([`ftsmc_logs::read_log`], default limits)
+    /// and turned into a series for `purpose` ([`Series::from_log`]); the
+    /// first bad log's error names its file.
+    pub fn read_all<P: AsRef<std::path::Path>>(paths: &[P], purpose: &'static str) -> Result<Vec<Self>, IdentError> {
+        let limits = ftsmc_logs::LogLimits::default();
+        paths.iter().map(|p| Series::from_log(&ftsmc_logs::read_log(p.as_ref(), &limits)?, purpose)).collect()
+    }
+
     /// The log in ftsmc's frames; `purpose` names the computation in the
     /// error when a channel is missing. Needs velocity, attitude, body
     /// rates, accelerometer and motors.

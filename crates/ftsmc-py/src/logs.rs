@@ -86,13 +86,7 @@ fn read_series(logs: &[String], purpose: &'static str) -> PyResult<Vec<Series>> 
     if logs.is_empty() {
         return Err(value_error("logs = [] is invalid (expected at least one flight log)"));
     }
-    let limits = ftsmc_logs::LogLimits::default();
-    logs.iter()
-        .map(|p| {
-            let log = ftsmc_logs::read_log(Path::new(p), &limits).map_err(value_error)?;
-            Series::from_log(&log, purpose).map_err(value_error)
-        })
-        .collect()
+    Series::read_all(logs, purpose).map_err(value_error)
 }
 
 /// `ftsmc identify` (docs/validation.md): the vehicle file (TOML), the
