@@ -3,12 +3,39 @@
 //! printed with its interval (`estimate [lo, hi]`, `∞` where the runs
 //! cannot bound it), and the confidence level is stated above the table.
 
-use ftsmc_sim::batch::verdicts::{metric_label, Intervals, PairVerdict};
+use ftsmc_sim::batch::verdicts::{metric_label, Intervals, Outcomes, PairVerdict};
 use ftsmc_sim::registry::label;
 use ftsmc_sim::stats::paired::PairedMetric;
 use ftsmc_sim::stats::Interval;
+use ftsmc_sim::tune::{FlightOutcome, OutcomeStats};
 
-use crate::console::Table;
+use crate::console::{num, Table};
+
+/// The cells of one gain set's statistics after its `success` and RMS
+/// `median` cells (each already formatted with or without its interval):
+/// success, completed, crashed, median, p95, thrust and torque activity,
+/// saturated fraction. The tune's table and `reproduce`'s tuned table.
+pub fn stats_cells(s: &OutcomeStats, success: String, median: String) -> Vec<String> {
+    vec![
+        success,
+        s.completed.to_string(),
+        s.crashed.to_string(),
+        median,
+        num(s.rms_p95),
+        num(s.thrust_activity),
+        num(s.torque_activity),
+        num(s.saturated),
+    ]
+}
+
+/// The held-out flights as [`Outcomes`] (run order kept: the pairing).
+pub fn outcomes(flights: &[FlightOutcome]) -> Outcomes {
+    let mut o = Outcomes::default();
+    for f in flights {
+        o.push(f.success, f.completed, f.crashed, f.rms);
+    }
+    o
+}
 
 /// `label` of a registered controller, else the name as given (a file).
 pub fn display_name(name: &str) -> String {

@@ -528,6 +528,6 @@ fn fly_rung(
     let rows =
         run_batch(s, &spec, names, BatchOptions { progress: Some(&|n| bar.inc(n)), ..BatchOptions::new(runs, s.seed) })
             .map_err(|e| anyhow!(e))?;
-    dir.write(format!("beyond/{folder}/{}.csv", s.name), &crate::montecarlo::runs_csv(&rows)?)?;
+    dir.write(format!("beyond/{folder}/{}.csv", s.name), &crate::campaign::runs_csv(&rows)?)?;
     Ok(rows)
 }

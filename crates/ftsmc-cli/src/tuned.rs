@@ -13,7 +13,7 @@ use rayon::prelude::*;
 
 use crate::console::{num, Table};
 use crate::intervals::{effect_cell, level_note, metre_cell, p_cell, rate_cell};
-use crate::tune::{outcomes, stats_cells};
+use crate::intervals::{outcomes, stats_cells};
 
 /// Held-out flights per gain set of docs/tuning.md's table (`reproduce --tuned-runs 200`; the default run flies none).
 pub const DEFAULT_TUNED_RUNS: u64 = 200;

@@ -28,6 +28,88 @@ pub fn check_name(name: &str) -> Result<(), String> {
     crate::controllers::check_name(name)
 }
 
+/// A list of controller names as a front end received it (`-c` of the CLI,
+/// `controllers=` of the Python functions), checked here once for every
+/// front end: [`ControllerList::check`] refuses an empty list and an empty
+/// name (`-c ''`, `-c ,`, `-c pid,`), [`ControllerList::check_known`] also
+/// an unregistered one.
+#[derive(Clone, Copy, Debug)]
+pub struct ControllerList<'a> {
+    /// The argument the names came from, as the user wrote it (`-c/--controllers`, `controllers`).
+    pub argument: &'a str,
+    /// The names, one per entry (a comma-separated value split at its commas, empty entries kept).
+    pub names: &'a [String],
+}
+
+/// Why a [`ControllerList`] is refused; each names the argument and the value.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum ControllerListError {
+    /// No name at all.
+    #[error(
+        "{argument}: no controller named (an empty list): expected a name such as `pid`, or a comma-separated \
+         list such as `pid,se3` (`ftsmc list` lists them)"
+    )]
+    Empty {
+        /// The argument.
+        argument: String,
+    },
+    /// An entry that is empty or only spaces.
+    #[error(
+        "{argument} `{value}`: no controller named in entry {entry} of {entries}: expected a name such as `pid`, \
+         or a comma-separated list such as `pid,se3` (`ftsmc list` lists them)"
+    )]
+    EmptyName {
+        /// The argument.
+        argument: String,
+        /// The whole value, entries joined by commas.
+        value: String,
+        /// The empty entry, counted from 1.
+        entry: usize,
+        /// Entries in the value.
+        entries: usize,
+    },
+    /// A name no controller is registered under.
+    #[error("unknown controller `{name}` (known: {known})")]
+    Unknown {
+        /// The name.
+        name: String,
+        /// The registered names, comma-separated.
+        known: String,
+    },
+}
+
+impl ControllerList<'_> {
+    /// Refuses an empty list and an empty (or blank) name.
+    pub fn check(&self) -> Result<(), ControllerListError> {
+        if self.names.is_empty() {
+            return Err(ControllerListError::Empty { argument: self.argument.to_string() });
+        }
+        if let Some(i) = self.names.iter().position(|n| n.trim().is_empty()) {
+            return Err(ControllerListError::EmptyName {
+                argument: self.argument.to_string(),
+                value: self.names.join(","),
+                entry: i + 1,
+                entries: self.names.len(),
+            });
+        }
+        Ok(())
+    }
+
+    /// [`check`](Self::check), then every name registered ([`check_name`]).
+    pub fn check_known(&self) -> Result<(), ControllerListError> {
+        self.check()?;
+        for name in self.names {
+            check_name(name).map_err(|known| ControllerListError::Unknown { name: name.clone(), known })?;
+        }
+        Ok(())
+    }
+}
+
+/// [`ControllerList::check_known`] of `names` given as `argument`.
+pub fn check_controllers(argument: &str, names: &[String]) -> Result<(), ControllerListError> {
+    ControllerList { argument, names }.check_known()
+}
+
 /// Build the controller `name` with the gains of `scenario`. Returns the
 /// list of known names when `name` is not registered.
 pub fn build(name: &str, scenario: &Scenario) -> Result<BoxedController, String> {
@@ -93,5 +175,20 @@ mod tests {
         assert_eq!(label("ranftsmc"), "RANFTSMC [19]");
         assert_eq!(label("ftaftsmc-tuned"), "FTAFTSMC (tuned x/y reaching law)");
         assert_eq!(label("unknown"), "unknown");
+    }
+
+    #[test]
+    fn an_empty_controller_list_or_name_is_refused_naming_the_argument_and_value() {
+        let list = |v: &[&str]| v.iter().map(|s| s.to_string()).collect::<Vec<_>>();
+        let e = ControllerList { argument: "-c", names: &[] }.check().unwrap_err();
+        assert!(e.to_string().starts_with("-c: no controller named"), "{e}");
+        let names = list(&["pid", " "]);
+        let e = ControllerList { argument: "controllers", names: &names }.check().unwrap_err();
+        assert!(e.to_string().starts_with("controllers `pid, `: no controller named in entry 2 of 2"), "{e}");
+        let e = check_controllers("-c", &list(&["pid", "nope"])).unwrap_err();
+        assert!(matches!(e, ControllerListError::Unknown { ref name, .. } if name == "nope"), "{e}");
+        assert_eq!(check_controllers("-c", &list(&["pid", "se3"])), Ok(()));
+        // check() alone accepts a name it does not know (compare's gain files).
+        assert_eq!(ControllerList { argument: "-c", names: &list(&["x.tuned.toml"]) }.check(), Ok(()));
     }
 }

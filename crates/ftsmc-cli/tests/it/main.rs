@@ -16,6 +16,7 @@ mod cpu_levels;
 mod falsify;
 mod figures;
 mod identify_validate;
+mod layout;
 mod outputs_doc;
 mod provenance;
 mod refusals;

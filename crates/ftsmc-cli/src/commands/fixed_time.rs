@@ -2,7 +2,7 @@
 //! initial error, for every controller and channel, beside the paper's bound.
 
 use std::fmt::Write as _;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use anyhow::Result;
 use ftsmc_core::cascade::channel::NAMES;
@@ -15,9 +15,61 @@ use ftsmc_sim::scenario::Scenario;
 use rayon::prelude::*;
 use serde_json::json;
 
+use crate::args::{load_scenario_with_limits, ControllersArgs, LimitArgs, SetArgs};
 use crate::console::Table;
 use crate::output::{format_number, provenance, ResultDir};
 use crate::plot::{controller_color, write_figure, Figure, Panel, Series};
+
+/// Arguments of `ftsmc fixed-time`.
+#[derive(clap::Args)]
+pub struct Args {
+    /// Scenario whose gains are used (file or built-in name).
+    #[arg(long, default_value = "paper-scenario-1")]
+    scenario: String,
+    /// `--set`.
+    #[command(flatten)]
+    set: SetArgs,
+    /// `--limit`.
+    #[command(flatten)]
+    limits: LimitArgs,
+    /// `-c` (the controllers to sweep).
+    #[command(flatten)]
+    controllers: ControllersArgs,
+    /// Log-spaced magnitudes per decade.
+    #[arg(long, allow_negative_numbers = true, default_value_t = 3)]
+    per_decade: usize,
+    /// Parent folder: the results go to `OUT/<scenario name>/`.
+    #[arg(long, default_value = "results/fixed-time")]
+    out: PathBuf,
+}
+
+/// Runs `ftsmc fixed-time`: checks the sweep's cost before any flight, then sweeps.
+pub fn run(args: Args) -> Result<()> {
+    let mut scenario = load_scenario_with_limits(&args.scenario, &args.limits.limit, &args.set.set)?;
+    let controllers = args.controllers.or_scenario(&scenario)?;
+    scenario.controllers = controllers.clone();
+    let per_decade = args.per_decade;
+    anyhow::ensure!(per_decade >= 1, "--per-decade must be at least 1");
+    ftsmc_sim::limits::check_sweep(&scenario.limits, ftsmc_sim::limits::sweep_points(5, per_decade as u64))?;
+    // With `max_sweep_points = inf` the check is off: refuse what
+    // cannot be counted or held in memory instead of overflowing.
+    let points = per_decade.checked_mul(5).and_then(|n| n.checked_add(1));
+    let fits = points.is_some_and(|n| Vec::<f64>::new().try_reserve_exact(n).is_ok());
+    anyhow::ensure!(fits, "--per-decade {per_decade}: 5 × {per_decade} + 1 magnitudes do not fit in memory");
+    let sim = &scenario.simulation;
+    let t_max = SweepSettings::default().t_max;
+    scenario.limits.ensure(
+        "max_steps",
+        "integration steps per sweep flight (60 s × control_rate × substeps)",
+        t_max * sim.control_rate * f64::from(sim.substeps),
+    )?;
+    let settings = SweepSettings {
+        magnitudes: SweepSettings::log_magnitudes(-3, 2, per_decade),
+        dt: scenario.control_period(),
+        ..Default::default()
+    };
+    sweep(&scenario, &controllers, &settings, &args.out)
+}
 
 struct Row {
     controller: String,
@@ -41,7 +93,7 @@ fn reach_cell(t: Option<&ChannelTimes>) -> String {
 
 /// Run the sweep and write `fixed-time.csv`, `fixed-time.md`,
 /// `fixed-time.json`, `scenario.toml` and figures to `out/<name>/`.
-pub fn run(scenario: &Scenario, controllers: &[String], settings: &SweepSettings, out: &Path) -> Result<()> {
+fn sweep(scenario: &Scenario, controllers: &[String], settings: &SweepSettings, out: &Path) -> Result<()> {
     let folder = out.join(&scenario.name);
     // Refuse a bad --out before any flight; write into a staging folder.
     let dir = ResultDir::begin(&folder, "fixed-time")?;

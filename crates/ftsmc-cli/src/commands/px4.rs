@@ -4,11 +4,64 @@
 //! docs/px4.md).
 
 use std::io::Write as _;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context, Result};
 use ftsmc_sim::controllers::{px4_params, NominalVehicle};
 use ftsmc_sim::scenario::Scenario;
+
+use crate::args::{load_scenario_with_limits, SetArgs};
+
+/// Arguments of `ftsmc px4`.
+#[derive(clap::Args)]
+pub struct Args {
+    /// Export or import.
+    #[command(subcommand)]
+    action: Action,
+}
+
+#[derive(clap::Subcommand)]
+enum Action {
+    /// Write the scenario's [pid] gains as a QGroundControl .params file under PX4's names and units.
+    Export {
+        /// Scenario file (TOML) or built-in name: its [pid] gains and its vehicle (the normalisation).
+        scenario: String,
+        /// Output file (never overwritten); default: standard output.
+        #[arg(long, short = 'o')]
+        out: Option<PathBuf>,
+        /// `--set`, e.g. `--set vehicle.preset=px4-x500`.
+        #[command(flatten)]
+        set: SetArgs,
+    },
+    /// Convert a QGroundControl .params file into a [pid] section for a scenario's vehicle.
+    Import {
+        /// QGroundControl parameter file (.params).
+        params: PathBuf,
+        /// Scenario file or built-in name whose vehicle the gains are normalised to (the rotors' thrust, arm, inertia).
+        #[arg(long)]
+        scenario: String,
+        /// Output file (never overwritten); default: standard output.
+        #[arg(long, short = 'o')]
+        out: Option<PathBuf>,
+        /// `--set`, e.g. `--set vehicle.preset=px4-x500`.
+        #[command(flatten)]
+        set: SetArgs,
+    },
+}
+
+/// Runs `ftsmc px4 export|import`.
+pub fn run(args: Args) -> Result<()> {
+    match args.action {
+        Action::Export { scenario: arg, out, set } => {
+            let scenario = load_scenario_with_limits(&arg, &[], &set.set)?;
+            export(&scenario, &arg, out.as_deref())
+        }
+        Action::Import { params, scenario: arg, out, set } => {
+            let scenario = load_scenario_with_limits(&arg, &[], &set.set)?;
+            import(&params, &scenario, &arg, out.as_deref())
+        }
+    }
+}
 
 /// Rotor positions as `[[x, y], ..]` (m), as a scenario file writes them.
 fn positions_text(p: &[[f64; 2]; 4]) -> String {

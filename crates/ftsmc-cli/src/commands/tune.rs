@@ -19,45 +19,86 @@ use anyhow::{Context, Result};
 use ftsmc_sim::batch::verdicts::{intervals, pairwise, Intervals, Outcomes};
 use ftsmc_sim::scenario::Scenario;
 use ftsmc_sim::stats::rate::wilson;
-use ftsmc_sim::tune::{tune, tuned_toml, FlightOutcome, OutcomeStats, TuneOptions, TuneResult};
+use ftsmc_sim::tune::{tune, tuned_toml, OutcomeStats, TuneOptions, TuneResult};
 use indicatif::{ProgressBar, ProgressStyle};
 use serde_json::json;
 
+use crate::args::{controller_names, ConfidenceArgs, OutputArgs, ScenarioArgs, SeedArgs, ThreadsArgs};
 use crate::console::{num, Table};
 use crate::intervals::{interval_table, level_note, metre_cell, rate_cell, verdict_table};
+use crate::intervals::{outcomes, stats_cells};
 use crate::output::{provenance, ResultDir};
 use crate::plot::{controller_color, write_figure, Figure, Panel, Rgb, Series};
+use ftsmc_sim::registry::ControllerList;
 
-/// The cells of one gain set's statistics after its `success` and RMS
-/// `median` cells (each already formatted with or without its interval):
-/// success, completed, crashed, median, p95, thrust and torque activity,
-/// saturated fraction. The tune's table and `reproduce`'s tuned table.
-pub fn stats_cells(s: &OutcomeStats, success: String, median: String) -> Vec<String> {
-    vec![
-        success,
-        s.completed.to_string(),
-        s.crashed.to_string(),
-        median,
-        num(s.rms_p95),
-        num(s.thrust_activity),
-        num(s.torque_activity),
-        num(s.saturated),
-    ]
+/// Arguments of `ftsmc tune`.
+#[derive(clap::Args)]
+#[command(mut_arg("out", |a| a.default_value("results/tune")))]
+#[command(mut_arg("no_figures", |a| a.help("Skip the convergence figure")))]
+#[command(mut_arg("seed", |a| a.help("Seed of the search and of the Monte Carlo draws (default: the scenario's `seed`)")))]
+pub struct Args {
+    /// The scenario (its [tune] section, optional, narrows the parameters and sets the cost), `--set`, `--limit`.
+    #[command(flatten)]
+    scenario: ScenarioArgs,
+    /// Controller to tune; a comma-separated list or `all` tunes each on an equal budget, then compares them on
+    /// the same held-out draws.
+    #[arg(long, short = 'c', value_parser = controller_names)]
+    controller: String,
+    /// `--confidence`.
+    #[command(flatten)]
+    confidence: ConfidenceArgs,
+    /// Training flights the search may fly per controller (the start's and the race's included).
+    #[arg(long, allow_negative_numbers = true, default_value_t = ftsmc_sim::defaults::TUNE_BUDGET)]
+    budget: u64,
+    /// `--seed`.
+    #[command(flatten)]
+    seed: SeedArgs,
+    /// `--threads`.
+    #[command(flatten)]
+    threads: ThreadsArgs,
+    /// `--out`, `--no-figures`.
+    #[command(flatten)]
+    output: OutputArgs,
+}
+
+/// Runs `ftsmc tune`: every check before any flight, then each controller's tune.
+pub fn run(args: Args) -> Result<()> {
+    let scenario = args.scenario.load()?;
+    let controllers = controller_list(&args.controller)?;
+    let confidence = args.confidence.checked()?;
+    anyhow::ensure!(args.threads.threads != Some(0), "--threads must be at least 1");
+    let settings = scenario.tune.clone().unwrap_or_default();
+    ftsmc_sim::limits::check_batch(
+        &scenario.flight_size(),
+        args.budget.saturating_add(2 * settings.validation_runs),
+        controllers.len(),
+    )?;
+    let threads = args.threads.checked(&scenario)?;
+    let seed = args.seed.or_scenario(&scenario);
+    let figures = args.output.figures();
+    let request =
+        Request { budget: args.budget, seed: Some(seed), threads, out: &args.output.out, figures, confidence };
+    tune_all(&scenario, &args.scenario.scenario, &controllers, &request)
 }
 
 /// `-c`'s controllers: `all` (every registered controller), or a
-/// comma-separated list (duplicates dropped, order kept).
-pub fn controller_list(arg: &str) -> Vec<String> {
-    if arg.trim() == "all" {
-        return ftsmc_sim::registry::CONTROLLERS.iter().map(|(n, _)| n.to_string()).collect();
-    }
+/// comma-separated list (duplicates dropped, order kept), refused by the
+/// library's [`ControllerList::check_known`] when empty, when an entry is
+/// empty (`-c pid,`) or names no controller.
+pub fn controller_list(arg: &str) -> Result<Vec<String>> {
+    let given: Vec<String> = if arg.trim() == "all" {
+        ftsmc_sim::registry::CONTROLLERS.iter().map(|(n, _)| n.to_string()).collect()
+    } else {
+        arg.split(',').map(|c| c.trim().to_string()).collect()
+    };
+    ControllerList { argument: "-c/--controller", names: &given }.check_known()?;
     let mut out: Vec<String> = Vec::new();
-    for c in arg.split(',').map(str::trim).filter(|c| !c.is_empty()) {
-        if !out.iter().any(|o| o == c) {
-            out.push(c.to_string());
+    for c in given {
+        if !out.contains(&c) {
+            out.push(c);
         }
     }
-    out
+    Ok(out)
 }
 
 /// What every tune of one `ftsmc tune` command shares.
@@ -74,15 +115,6 @@ pub struct Request<'a> {
     pub figures: bool,
     /// Confidence level of every interval and verdict.
     pub confidence: f64,
-}
-
-/// The held-out flights as [`Outcomes`] (run order kept: the pairing).
-pub fn outcomes(flights: &[FlightOutcome]) -> Outcomes {
-    let mut o = Outcomes::default();
-    for f in flights {
-        o.push(f.success, f.completed, f.crashed, f.rms);
-    }
-    o
 }
 
 /// The result-folder owner of `ftsmc tune -c <controller>`: one manifest per
@@ -224,7 +256,7 @@ pub fn failure_line(r: &TuneResult) -> String {
 /// Run `ftsmc tune` for each of `controllers` (equal budgets, one seed)
 /// and write `out/<scenario name>/`; with more than one, compare the tuned
 /// gain sets on their common held-out draws.
-pub fn run(scenario: &Scenario, scenario_arg: &str, controllers: &[String], req: &Request<'_>) -> Result<()> {
+fn tune_all(scenario: &Scenario, scenario_arg: &str, controllers: &[String], req: &Request<'_>) -> Result<()> {
     let mut builder = rayon::ThreadPoolBuilder::new();
     if let Some(t) = req.threads {
         builder = builder.num_threads(t);

@@ -16,7 +16,7 @@ use crate::output::write_atomic;
 
 /// Arguments of `ftsmc identify`.
 #[derive(clap::Args)]
-pub struct IdentifyArgs {
+pub struct Args {
     /// Logs, output folder, bootstrap and seed.
     #[command(flatten)]
     pub common: LogArgs,
@@ -35,7 +35,7 @@ pub struct IdentifyArgs {
 }
 
 /// Runs `ftsmc identify`.
-pub fn run(a: IdentifyArgs) -> Result<()> {
+pub fn run(a: Args) -> Result<()> {
     let base = Vehicle::load(&a.vehicle)?;
     let series = a.common.read_series("identification")?;
     let options = IdentifyOptions {

@@ -15,7 +15,7 @@ use crate::output::write_atomic;
 
 /// Arguments of `ftsmc validate`.
 #[derive(clap::Args)]
-pub struct ValidateArgs {
+pub struct Args {
     /// Logs, output folder, bootstrap and seed.
     #[command(flatten)]
     pub common: LogArgs,
@@ -28,7 +28,7 @@ pub struct ValidateArgs {
 }
 
 /// Runs `ftsmc validate`.
-pub fn run(a: ValidateArgs) -> Result<()> {
+pub fn run(a: Args) -> Result<()> {
     let vehicle = Vehicle::load(&a.vehicle)?;
     let series = a.common.read_series("validation")?;
     let rows = validate(

@@ -3,19 +3,89 @@
 //! figures and the comparison tables.
 
 use std::fmt::Write as _;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::time::Instant;
 
 use anyhow::{anyhow, Context, Result};
 use ftsmc_core::cascade::AttitudeDerivatives;
-use ftsmc_sim::registry::{self, label};
-use ftsmc_sim::run::{planned_steps, reference_at, stream_csv, Recording, RunOptions, RunOutput, STREAM_CHUNK_ROWS};
+use ftsmc_sim::registry::label;
+use ftsmc_sim::run::RunOutput;
 use ftsmc_sim::scenario::Scenario;
-use rayon::prelude::*;
 use serde_json::{json, Map, Value};
 
-use crate::console::{num, steps_bar, Table};
+use crate::args::{check_budget, ConfidenceArgs, LimitArgs, OutputArgs};
+use crate::console::{num, Table};
+use crate::flights::{axis_value, find, fly_into, metrics_table, not_comparable, Flown, Job};
 use crate::output::{provenance, summary_json, ResultDir};
+
+/// Arguments of `ftsmc reproduce`.
+#[derive(clap::Args)]
+#[command(mut_arg("out", |a| a.help("Parent folder: writes `OUT/<scenario>/` per paper scenario, and summary.json, report.md, figures/ in OUT")))]
+pub struct Args {
+    /// `--out`, `--no-figures`.
+    #[command(flatten)]
+    output: OutputArgs,
+    /// Monte Carlo runs of each wind-ladder rung (`realistic-<level>-<n>`) per controller in the "Beyond the paper" section (0: none).
+    #[arg(long, allow_negative_numbers = true, default_value_t = DEFAULT_REALISTIC_RUNS)]
+    realistic_runs: u64,
+    /// `--limit` of the realistic Monte Carlo.
+    #[command(flatten)]
+    limits: LimitArgs,
+    /// `--confidence` of the ladder's and tuned table's intervals and verdicts.
+    #[command(flatten)]
+    confidence: ConfidenceArgs,
+    /// Held-out draws per gain set in the table of the committed tuned gains against the defaults
+    /// (`scenarios/tuned/`; 0: no table; docs/tuning.md's table uses 200).
+    #[arg(long, default_value_t = 0)]
+    tuned_runs: u64,
+    /// Flights per falsification and per failure-probability estimate in the worst-case table
+    /// (two rungs × every controller × default and tuned gains; 0: no table; docs/falsification.md).
+    #[arg(long, default_value_t = 0)]
+    worst_case_budget: u64,
+    /// Monte Carlo runs per scenario-1 rung, mission (hover, figure-eight, waypoints) and controller
+    /// in the missions table of "Beyond the paper" (0: none; docs/scenarios.md "Missions").
+    #[arg(long, default_value_t = DEFAULT_MISSION_RUNS)]
+    mission_runs: u64,
+    /// Settling window of the missions' tracking metrics, s (they cover [window, end]).
+    #[arg(long, default_value_t = ftsmc_sim::analysis::missions::DEFAULT_SETTLING_WINDOW)]
+    mission_window: f64,
+    /// Settling band of the missions' time to settle, m.
+    #[arg(long, default_value_t = ftsmc_sim::analysis::missions::DEFAULT_SETTLING_BAND)]
+    mission_band: f64,
+}
+
+/// Runs `ftsmc reproduce`: every count priced before any flight, then [`reproduce`].
+pub fn run(args: Args) -> Result<()> {
+    let confidence = args.confidence.checked()?;
+    let limit = &args.limits.limit;
+    let (realistic_runs, tuned_runs, worst_case_budget, mission_runs) =
+        (args.realistic_runs, args.tuned_runs, args.worst_case_budget, args.mission_runs);
+    price_realistic_runs(realistic_runs, limit)?;
+    // Two gain sets per tuned file, on the ladder's vehicles: priced as twice the runs per rung.
+    price_realistic_runs(tuned_runs.saturating_mul(2), limit)
+        .map_err(|e| anyhow!("--tuned-runs {tuned_runs}: {e:#}"))?;
+    if worst_case_budget > 0 {
+        anyhow::ensure!(
+            worst_case_budget >= 20,
+            "--worst-case-budget {worst_case_budget}: cross-entropy sampling needs at least 20 flights (0: no table)"
+        );
+        check_budget(worst_case_budget).map_err(|e| anyhow!("--worst-case-budget: {e}"))?;
+    }
+    // Three missions on four rungs: priced like the ladder's runs per rung.
+    price_realistic_runs(mission_runs, limit).map_err(|e| anyhow!("--mission-runs {mission_runs}: {e:#}"))?;
+    let missions =
+        ftsmc_sim::analysis::missions::MissionOptions { window: args.mission_window, band: args.mission_band };
+    let options = Options {
+        figures: args.output.figures(),
+        realistic_runs,
+        tuned_runs,
+        confidence,
+        worst_case_budget,
+        mission_runs,
+        missions,
+    };
+    reproduce(&args.output.out, &options)
+}
 
 /// Paper Table 3 (scenario 1 ISE): `(state, [RANFTSMC, TSM-STA, FTAFTSMC])`.
 pub const PAPER_TABLE_3: [(&str, [f64; 3]); 4] = [
@@ -27,98 +97,6 @@ pub const PAPER_TABLE_3: [(&str, [f64; 3]); 4] = [
 
 /// The paper's headline: FTAFTSMC's z ISE at least this far below both others.
 pub const HEADLINE_REDUCTION: f64 = 0.3765;
-
-/// One planned flight: which scenario (possibly modified), which controller,
-/// and the key it is stored under.
-pub struct Job {
-    /// Scenario to fly.
-    pub scenario: Scenario,
-    /// Registry name.
-    pub controller: String,
-    /// Output key (controller name or a variant name).
-    pub key: String,
-}
-
-/// Fly all jobs in parallel (deterministic: each job is independent). The
-/// progress bar counts simulated control steps, updated from inside each
-/// flight. (The commands fly with [`fly_into`], which writes the CSVs too.)
-#[cfg(test)]
-pub fn fly(jobs: &[Job]) -> Result<Vec<RunOutput>> {
-    fly_each(jobs, |job, progress| {
-        let options = RunOptions { progress: Some(progress), ..Default::default() };
-        registry::run_as(&job.controller, &job.key, &job.scenario, options)
-            .map_err(|known| anyhow!("unknown controller `{}` (known: {known})", job.controller))
-    })
-}
-
-/// `fly_one(job, progress)` for every job in parallel, in the jobs' order,
-/// under one progress bar of the jobs' planned control steps (`progress`
-/// adds steps to it; hand it to the flight's [`RunOptions::progress`]).
-fn fly_each(
-    jobs: &[Job],
-    fly_one: impl Fn(&Job, &(dyn Fn(u64) + Sync)) -> Result<RunOutput> + Sync,
-) -> Result<Vec<RunOutput>> {
-    let total = jobs.iter().map(|j| planned_steps(&j.scenario)).sum();
-    let bar = steps_bar(total, jobs.len() as u64);
-    let progress = |n: u64| bar.inc(n);
-    let out = jobs.par_iter().map(|job| fly_one(job, &progress)).collect();
-    bar.finish_and_clear();
-    out
-}
-
-/// [`fly`], each run's recording written as CSV into `dir` at `csv(job)`
-/// while it flies ([`stream_csv`]: another thread formats, hashes and
-/// writes the rows as they are recorded), the bytes those of
-/// [`Recording::write_csv`]. A failed write is an error; the file is then
-/// removed (and the uncommitted `dir` goes with its staging folder).
-fn fly_into(jobs: &[Job], dir: &ResultDir, csv: impl Fn(&Job) -> PathBuf + Sync) -> Result<Vec<RunOutput>> {
-    fly_each(jobs, |job, progress| {
-        let mut flown = None;
-        let written = dir.write_with(csv(job), |w| {
-            let (run, written) = stream_csv(w, STREAM_CHUNK_ROWS, |stream| {
-                let options = RunOptions { progress: Some(progress), stream: Some(stream), ..Default::default() };
-                registry::run_as(&job.controller, &job.key, &job.scenario, options)
-            });
-            flown = Some(run);
-            written
-        });
-        match flown {
-            Some(Err(known)) => Err(anyhow!("unknown controller `{}` (known: {known})", job.controller)),
-            Some(Ok(run)) => written.map(|()| run),
-            None => Err(written.err().unwrap_or_else(|| anyhow!("internal: {} was not flown", job.key))),
-        }
-    })
-}
-
-/// The cell shown instead of a metric of a run that did not complete: its
-/// integrals cover a shorter span, so a number would look better than a
-/// completed run's.
-pub fn not_comparable(run: &RunOutput) -> String {
-    format!("— ({})", run.exit.short())
-}
-
-fn find<'a>(runs: &'a [RunOutput], scenario: &str, key: &str) -> Option<&'a RunOutput> {
-    runs.iter().find(|r| r.scenario == scenario && r.controller == key)
-}
-
-fn axis_value(m: &ftsmc_sim::axes::AxisSet<f64>, axis: &str) -> f64 {
-    m.get(axis).copied().unwrap_or(f64::NAN)
-}
-
-fn settle(m: &ftsmc_sim::axes::AxisSet<Option<f64>>, axis: &str) -> String {
-    // (For a completed run; a diverged one shows `—`.)
-    m.get(axis).copied().flatten().map_or("not settled".into(), |t| format!("{t:.2}"))
-}
-
-/// `|e(0)|` of x, y, z, ψ in `scenario` (the metrics' initial errors).
-fn initial_errors(scenario: &Scenario) -> [f64; 4] {
-    let x = scenario.initial_state.state().to_array();
-    let r = reference_at(scenario, 0.0);
-    [(x[0] - r.position[0]).abs(), (x[1] - r.position[1]).abs(), (x[2] - r.position[2]).abs(), (x[5] - r.yaw).abs()]
-}
-
-/// The flights of one metrics table: each run with the scenario it flew.
-pub type Flown<'a> = (&'a RunOutput, &'a Scenario);
 
 /// Table 3 side by side with the verdicts, as Markdown; also a JSON record.
 pub fn table_3(runs: &[RunOutput], scenario: &str) -> (String, Value) {
@@ -210,133 +188,6 @@ pub fn table_3(runs: &[RunOutput], scenario: &str) -> (String, Value) {
         md.push('\n');
     }
     (md, Value::Object(record))
-}
-
-/// The per-run metrics as four tables narrow enough for a 120-column
-/// console: ISE (with the scenario's window), IAE and the error after
-/// `steady_state_after`, settling times, and exit status with chattering.
-/// A diverged run shows `—` beside its exit status (its integrals cover a
-/// shorter span and would look better than a completed run's; the numbers
-/// stay in the JSON, with `covered` and `completed`). A settling time shows
-/// `—` for a channel that starts within the settling floor (nothing to
-/// settle from).
-pub fn metrics_table(runs: &[Flown], title: &str) -> String {
-    let Some((_, first)) = runs.first() else { return format!("### {title}\n\n(no runs)\n") };
-    let sim = &first.simulation;
-    let window = sim.metrics_window;
-    let mut md = String::new();
-    let _ = writeln!(md, "### {title}\n");
-    let dash = || "—".to_string();
-    let completed = |r: &RunOutput| r.exit.is_completed();
-
-    let mut header = vec!["controller".to_string()];
-    header.extend(["x", "y", "z", "ψ"].map(|a| format!("ISE {a}")));
-    if let Some([a, b]) = window {
-        header.push(format!("ISE z {a}–{b} s"));
-    }
-    let mut ise = Table::new(header);
-    let mut iae = Table::new([
-        "controller",
-        "IAE x",
-        "IAE y",
-        "IAE z",
-        "IAE ψ",
-        &format!("max err z after {} s", sim.steady_state_after),
-    ]);
-    let mut settling = Table::new(["controller", "settle x (s)", "settle y (s)", "settle z (s)", "settle ψ (s)"]);
-    let mut control = Table::new(["controller", "exit", "chattering U1 (N/s)", "chattering u2 (N·m/s)"]);
-    // Realistic flights: the envelope's verdict and what was asked of the rotors.
-    let mut actuators = Table::new(["controller", "success", "peak ω demand (rad/s)", "saturated", "why not"]);
-    let mut realistic = false;
-    let mut notes = Vec::new();
-    let mut on_reference = false;
-    for (run, scenario) in runs {
-        let m = &run.metrics;
-        let name = label(&run.controller).to_string();
-        let ok = completed(run);
-        let v = |x: f64| if ok { num(x) } else { dash() };
-        let mut row = vec![name.clone(), v(m.ise.x), v(m.ise.y), v(m.ise.z), v(m.ise.psi)];
-        if window.is_some() {
-            row.push(if ok { m.ise_window.as_ref().map_or_else(dash, |w| num(w.z)) } else { dash() });
-        }
-        ise.row(row);
-        iae.row(vec![
-            name.clone(),
-            v(m.iae.x),
-            v(m.iae.y),
-            v(m.iae.z),
-            v(m.iae.psi),
-            if ok { m.max_error_after.z.map_or_else(dash, num) } else { dash() },
-        ]);
-        let e0 = initial_errors(scenario);
-        let floor = scenario.simulation.settling_floor;
-        let mut row = vec![name.clone()];
-        for (i, axis) in ["x", "y", "z", "psi"].into_iter().enumerate() {
-            row.push(if !ok {
-                dash()
-            } else if e0[i] <= floor {
-                on_reference = true;
-                dash()
-            } else {
-                settle(&m.settling_time, axis)
-            });
-        }
-        settling.row(row);
-        control.row(vec![name.clone(), run.exit.short(), v(m.chattering.thrust), v(m.chattering.roll_torque)]);
-        if run.envelope.is_some() || m.peak_rotor_speed_demand.is_some() {
-            realistic = true;
-        }
-        let why = match run.envelope.as_ref().and_then(|e| e.violation.clone()) {
-            _ if !ok => run.exit.short(),
-            Some(violation) => {
-                notes.push(format!("- {name}: left the envelope: {violation}."));
-                "envelope (below)".to_string()
-            }
-            None => dash(),
-        };
-        actuators.row(vec![
-            name.clone(),
-            if run.success() { "yes" } else { "no" }.to_string(),
-            m.peak_rotor_speed_demand.map_or_else(dash, |w| format!("{w:.0}")),
-            m.saturation_fraction.map_or_else(dash, |f| format!("{:.1} %", 100.0 * f)),
-            if run.success() { dash() } else { why },
-        ]);
-        if !ok {
-            notes.push(format!("- {name}: {}; metrics `—` (shorter span).", run.exit));
-        }
-    }
-    let units = "m²·s; ψ rad²·s";
-    let _ = writeln!(md, "ISE ∫e² dt ({units}):\n\n{}", ise.render());
-    let _ = writeln!(
-        md,
-        "IAE ∫|e| dt (m·s; ψ rad·s) and max |e_z| (m) after {} s:\n\n{}",
-        sim.steady_state_after,
-        iae.render()
-    );
-    let _ = writeln!(
-        md,
-        "Settling: |e| within {} % of |e(0)| (at least {}) from then on{}:\n\n{}",
-        100.0 * sim.settling_band,
-        sim.settling_floor,
-        if on_reference { "; — where the channel starts within that floor (nothing to settle)" } else { "" },
-        settling.render()
-    );
-    let _ = write!(md, "Exit status and chattering (total variation Σ|Δu| per second):\n\n{}", control.render());
-    if realistic {
-        let _ = write!(
-            md,
-            "\nSuccess (completed and inside `[envelope]`) and rotors (peak demand before the limits; periods the mixer saturated):\n\n{}",
-            actuators.render()
-        );
-    }
-    if !notes.is_empty() {
-        md.push('\n');
-        for n in notes {
-            md.push_str(&n);
-            md.push('\n');
-        }
-    }
-    md
 }
 
 fn final_value(run: &RunOutput, column: &str) -> f64 {
@@ -952,52 +803,10 @@ pub fn beyond_the_paper(
     Ok(Beyond { report: md, flights })
 }
 
-/// `ftsmc run`: fly `scenario.controllers` and write `out/<name>/`.
-pub fn run_scenario(scenario: &Scenario, out: &Path, figures: bool) -> Result<()> {
-    // `out/<name>/` is the result folder: checked before any flight,
-    // written in staging, swapped into place whole.
-    let dir = ResultDir::begin(&out.join(&scenario.name), "run")?;
-    let jobs: Vec<Job> = scenario
-        .controllers
-        .iter()
-        .map(|n| Job { scenario: scenario.clone(), controller: n.clone(), key: n.clone() })
-        .collect();
-    let started = std::time::Instant::now();
-    // Each CSV is written while its flight flies.
-    let csv = |job: &Job| PathBuf::from(format!("{}.csv", job.key));
-    let runs = fly_into(&jobs, &dir, csv)?;
-    let flight_seconds = started.elapsed().as_secs_f64();
-    let file = dir.write_scenario("scenario.toml", scenario, "scenario.toml")?;
-    let refs: Vec<&RunOutput> = runs.iter().collect();
-    let flown: Vec<Flown> = runs.iter().map(|r| (r, scenario)).collect();
-    let table = metrics_table(&flown, &format!("{} — metrics", scenario.name));
-    let mut extra = Map::new();
-    extra.insert("provenance".into(), provenance(&[file]));
-    let summary = summary_json(&refs, extra);
-    dir.write("summary.json", serde_json::to_string_pretty(&summary)?.as_bytes())?;
-    if figures {
-        crate::figures::generic(&refs, &dir.path().join("figures"))?;
-    }
-    // The replay's rows from the recordings in memory, not the files just written.
-    let recorded: Vec<(PathBuf, &Recording)> =
-        jobs.iter().zip(&runs).map(|(job, r)| (csv(job), &r.recording)).collect();
-    let html = crate::html::report_with(dir.path(), &format!("ftsmc run {}", scenario.name), &table, &recorded)?;
-    dir.write("report.html", html.as_bytes())?;
-    dir.commit()?;
-    println!("{table}");
-    println!(
-        "wrote {}/ (CSV per controller, scenario.toml, summary.json, report.html{}); {} flight{} in {flight_seconds:.3} s",
-        out.join(&scenario.name).display(),
-        if figures { ", figures/" } else { "" },
-        runs.len(),
-        if runs.len() == 1 { "" } else { "s" }
-    );
-    Ok(())
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::flights::fly;
 
     /// Scenario 1 with `max_rotor_speed = 1000`: FTAFTSMC diverges at
     /// 0.64 s, the others complete (6 s are enough to pass the 5 s mark).

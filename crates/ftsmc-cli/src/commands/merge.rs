@@ -28,9 +28,31 @@ use ftsmc_sim::batch::shard::Shard;
 use ftsmc_sim::scenario::Scenario;
 use serde_json::{json, Map, Value};
 
+use crate::args::{ConfidenceArgs, OutputArgs};
 use crate::bounded_read::{read_limited, MAX_RUNS_CSV_BYTES, MAX_SHARD_TEXT_BYTES};
-use crate::montecarlo::{shard_json, tables, write_ise_boxplots};
+use crate::campaign::{shard_json, tables, write_ise_boxplots};
 use crate::output::{provenance, sha256_hex, ResultDir, ScenarioFile};
+
+/// Arguments of `ftsmc merge`.
+#[derive(clap::Args)]
+#[command(mut_arg("out", |a| a.default_value("results/montecarlo").help("Parent folder: the merged result goes to `OUT/<scenario name>/`")))]
+pub struct Args {
+    /// Shard folders (all N of one campaign, any order).
+    #[arg(required = true, value_name = "DIR")]
+    shards: Vec<PathBuf>,
+    /// `--out`, `--no-figures` (the box-plot figure).
+    #[command(flatten)]
+    output: OutputArgs,
+    /// `--confidence` of every interval in the tables and summary.json (recorded there).
+    #[command(flatten)]
+    confidence: ConfidenceArgs,
+}
+
+/// Runs `ftsmc merge`.
+pub fn run(args: Args) -> Result<()> {
+    let confidence = args.confidence.checked()?;
+    merge(&args.shards, &args.output.out, args.output.figures(), confidence)
+}
 
 /// One shard folder, read and checked on its own.
 struct ShardFolder {

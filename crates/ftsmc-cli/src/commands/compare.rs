@@ -19,10 +19,124 @@ use ftsmc_sim::run::planned_steps;
 use ftsmc_sim::scenario::Scenario;
 use serde_json::{json, Map, Value};
 
+use crate::args::{
+    check_lanes, controller_names, parse_mission, ConfidenceArgs, OutputArgs, ScenarioArgs, SeedArgs, ThreadsArgs,
+};
 use crate::console::steps_bar;
 use crate::forest::{write_forest, ForestPanel};
 use crate::intervals::{interval_table, level_note, verdict_matrix, verdict_table};
 use crate::output::{provenance, ResultDir};
+use ftsmc_sim::analysis::missions::Mission;
+use ftsmc_sim::registry::ControllerList;
+
+/// Arguments of `ftsmc compare`.
+#[derive(clap::Args)]
+#[command(mut_arg("out", |a| a.default_value("results/compare")))]
+#[command(mut_arg("no_figures", |a| a.help("Skip the forest plot")))]
+pub struct Args {
+    /// The scenario (its vehicle, wind and [montecarlo] draws), `--set`, `--limit`.
+    #[command(flatten)]
+    scenario: ScenarioArgs,
+    /// Contestants (required; comma-separated or repeated): controller names, or files (a `*.tuned.toml`,
+    /// any scenario) whose controller section is flown on SCENARIO.
+    #[arg(long = "controllers", short = 'c', alias = "contestants", value_name = "CONTESTANTS")]
+    #[arg(value_delimiter = ',', value_parser = controller_names)]
+    contestants: Vec<String>,
+    /// Runs per contestant (not with --until-decided).
+    #[arg(long, default_value_t = ftsmc_sim::defaults::COMPARE_RUNS, conflicts_with_all = ["until_decided", "max_runs", "batch"])]
+    runs: u64,
+    /// Fly batches of --batch runs until every pair is decided (alpha spending keeps the error rate).
+    #[arg(long)]
+    until_decided: bool,
+    /// Most runs per contestant with --until-decided (only with it; default 1000).
+    #[arg(long)]
+    max_runs: Option<u64>,
+    /// Runs per look with --until-decided (only with it; default 50).
+    #[arg(long)]
+    batch: Option<u64>,
+    /// `--confidence`.
+    #[command(flatten)]
+    confidence: ConfidenceArgs,
+    /// A practical-difference margin (repeatable): `rms=0.005` (m), `success=0.02` (a fraction). Each
+    /// verdict is then also judged against it: better by more than the margin, equivalent within it
+    /// (two one-sided tests), or not decided.
+    #[arg(long = "min-effect", value_name = "METRIC=MARGIN")]
+    min_effect: Vec<String>,
+    /// Fly a file's gains even if it was made for another vehicle.
+    #[arg(long)]
+    allow_other_vehicle: bool,
+    /// What SCENARIO is flown for: `steps` (its own reference, the default), `hover` (hold the steps' target
+    /// from rest at it), `figure-eight` or `waypoints` (docs/scenarios.md "Missions").
+    #[arg(long, default_value = "steps", value_parser = parse_mission)]
+    mission: Mission,
+    /// `--seed`.
+    #[command(flatten)]
+    seed: SeedArgs,
+    /// `--threads`.
+    #[command(flatten)]
+    threads: ThreadsArgs,
+    /// Flights each thread flies side by side: 1, 2, 4 or 8. Results do not depend on it.
+    #[arg(long, default_value_t = ftsmc_sim::batch::montecarlo::DEFAULT_LANES)]
+    lanes: usize,
+    /// `--out`, `--no-figures`.
+    #[command(flatten)]
+    output: OutputArgs,
+}
+
+/// The plan of `--runs` or `--until-decided` (with `--max-runs`, `--batch`), refused when
+/// the sequential flags come without `--until-decided` or any count is 0.
+fn plan(args: &Args) -> Result<Plan> {
+    if !args.until_decided {
+        // Given without the sequential plan they would be ignored.
+        for (flag, value) in [("--max-runs", args.max_runs), ("--batch", args.batch)] {
+            anyhow::ensure!(
+                value.is_none(),
+                "{flag} sets the sequential plan: it needs --until-decided (a fixed number of runs is --runs)"
+            );
+        }
+    }
+    let max_runs = args.max_runs.unwrap_or(ftsmc_sim::defaults::COMPARE_MAX_RUNS);
+    let batch = args.batch.unwrap_or(ftsmc_sim::defaults::COMPARE_BATCH);
+    anyhow::ensure!(args.runs >= 1 && max_runs >= 1 && batch >= 1, "--runs, --max-runs and --batch must be at least 1");
+    Ok(if args.until_decided { Plan::UntilDecided { batch, max_runs } } else { Plan::Fixed { runs: args.runs } })
+}
+
+/// Runs `ftsmc compare`: every check before any flight, then [`fly_and_write`].
+pub fn run(args: Args) -> Result<()> {
+    let min_effect = if args.min_effect.is_empty() {
+        None
+    } else {
+        Some(ftsmc_sim::batch::verdicts::MinEffect::parse(&args.min_effect).map_err(anyhow::Error::msg)?)
+    };
+    anyhow::ensure!(
+        !args.contestants.is_empty(),
+        "compare needs its contestants, -c/--controllers: controller names or gain files (-c pid,se3 or \
+         -c pid.tuned.toml,pid)"
+    );
+    ControllerList { argument: "-c/--controllers", names: &args.contestants }.check()?;
+    let plan_checked = plan(&args);
+    let scenario = args.scenario.load()?;
+    // `steps` is the scenario itself (its bits unchanged).
+    let mut scenario = ftsmc_sim::analysis::missions::mission_scenario(&scenario, args.mission, Default::default())?;
+    let confidence = args.confidence.checked()?;
+    let plan = plan_checked?;
+    let threads = args.threads.checked(&scenario)?;
+    let lanes = check_lanes(args.lanes)?;
+    scenario.seed = args.seed.or_scenario(&scenario);
+    fly_and_write(&Request {
+        scenario: &scenario,
+        contestants: &args.contestants,
+        plan,
+        confidence,
+        min_effect,
+        allow_other_vehicle: args.allow_other_vehicle,
+        threads,
+        lanes,
+        out: &args.output.out,
+        figures: args.output.figures(),
+        limits: &args.scenario.limits.limit,
+    })
+}
 
 /// What `ftsmc compare` was asked.
 pub struct Request<'a> {
@@ -92,7 +206,7 @@ pub fn contestants(req: &Request<'_>) -> Result<Vec<Contestant>> {
 }
 
 /// Run the comparison and write its folder.
-pub fn run(req: &Request<'_>) -> Result<()> {
+pub fn fly_and_write(req: &Request<'_>) -> Result<()> {
     let scenario = req.scenario;
     let list = contestants(req)?;
     let max_runs = match req.plan {
@@ -123,7 +237,7 @@ pub fn run(req: &Request<'_>) -> Result<()> {
     bar.finish_and_clear();
     let elapsed = started.elapsed().as_secs_f64();
 
-    dir.write("runs.csv", &crate::montecarlo::runs_csv(&result.rows)?)?;
+    dir.write("runs.csv", &crate::campaign::runs_csv(&result.rows)?)?;
     let file = dir.write_scenario("scenario.toml", scenario, "scenario.toml")?;
     let names: Vec<String> = list.iter().map(|c| c.name.clone()).collect();
     let report = report_md(scenario, &names, &result, req.min_effect.as_ref());
