@@ -59,12 +59,36 @@ pub fn end_note(exit: &ExitStatus) -> Option<String> {
     }
 }
 
+/// The run with the longest recording (the first of the longest): the one
+/// to take a shared reference or plant signal from, so that a run that
+/// stopped early does not cut the reference line of every other run.
+fn longest<'a>(runs: &[&'a RunOutput]) -> Option<&'a RunOutput> {
+    runs.iter()
+        .copied()
+        .reduce(|a, b| if b.recording.column("t").len() > a.recording.column("t").len() { b } else { a })
+}
+
+/// How a run ended, for a panel title: [`end_note`] for a run that stopped
+/// early; for a completed one whether it stayed inside the scenario's
+/// envelope ("completed, inside the envelope", "completed, left the
+/// envelope"), or just "completed" when the scenario has none.
+pub fn outcome_note(exit: &ExitStatus, envelope: Option<&ftsmc_sim::envelope::Verdict>) -> String {
+    if let Some(note) = end_note(exit) {
+        return note;
+    }
+    match envelope {
+        Some(v) if v.success => "completed, inside the envelope".into(),
+        Some(_) => "completed, left the envelope".into(),
+        None => "completed".into(),
+    }
+}
+
 fn comparison(title: &str, runs: &[&RunOutput], specs: &[PanelSpec], columns: usize) -> Figure {
     let panels = specs
         .iter()
         .map(|spec| {
             let mut s: Vec<Series> = Vec::new();
-            if let (Some(col), Some(first)) = (spec.shared_reference, runs.first()) {
+            if let (Some(col), Some(first)) = (spec.shared_reference, longest(runs)) {
                 s.push(Series {
                     points: false,
                     label: "reference".into(),
@@ -163,7 +187,7 @@ fn first_seconds(panels: &[Panel], seconds: f64) -> Vec<Panel> {
 /// (dashed): the view of a flight a plan of the ground gives.
 fn path_figure(title: &str, runs: &[&RunOutput]) -> Figure {
     let mut s: Vec<Series> = Vec::new();
-    if let Some(first) = runs.first() {
+    if let Some(first) = longest(runs) {
         let (xs, ys) = (first.recording.column("x_ref"), first.recording.column("y_ref"));
         // A step reference holds a few set-points: drawn as a dashed line
         // it is a point or a jump that draws (next to) nothing, so its
@@ -374,7 +398,7 @@ pub fn scenario_1(runs: &[&RunOutput], dir: &Path) -> Result<Vec<PathBuf>> {
 /// Figures 5–9 (scenario 2): inertia, position, mass estimate, attitude, 3-D.
 pub fn scenario_2(runs: &[&RunOutput], no_mass: Option<&RunOutput>, dir: &Path) -> Result<Vec<PathBuf>> {
     let mut out = Vec::new();
-    let Some(first) = runs.first() else { return Ok(out) };
+    let Some(first) = longest(runs) else { return Ok(out) };
     let inertia_panels = (1..=3)
         .map(|i| Panel {
             title: format!("I{i}(t)"),
@@ -497,7 +521,7 @@ pub fn beyond(runs: &[&RunOutput], omega_max: f64, dir: &Path) -> Result<Vec<Pat
         let omegas: Vec<&[f64]> = (1..=4).map(|i| run.recording.column(&format!("omega_{i}"))).collect();
         let mean: Vec<f64> = (0..t.len()).map(|k| omegas.iter().map(|w| w[k]).sum::<f64>() / 4.0).collect();
         // Why and when the run stopped: in the panel title, not over the data.
-        let why = end_note(&run.exit).unwrap_or_else(|| "completed".to_string());
+        let why = outcome_note(&run.exit, run.envelope.as_ref());
         let mut s: Vec<Series> = (1..=4)
             .map(|i| Series {
                 points: false,
@@ -601,4 +625,48 @@ pub fn montecarlo(scenario: &Scenario, rows: &[McRun], controllers: &[String], d
         1,
         &dir.join(format!("{}-montecarlo", scenario.name)),
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use ftsmc_sim::envelope::Verdict;
+
+    /// A run that completed but left the envelope is not shown as plainly
+    /// "completed"; one that stopped early says how and when.
+    #[test]
+    fn a_panel_title_says_whether_a_completed_run_stayed_inside() {
+        let out = Verdict { success: false, violation: Some("position error 0.41 m at 14.4 s".into()) };
+        let inside = Verdict { success: true, violation: None };
+        assert_eq!(outcome_note(&ExitStatus::Completed, Some(&out)), "completed, left the envelope");
+        assert_eq!(outcome_note(&ExitStatus::Completed, Some(&inside)), "completed, inside the envelope");
+        assert_eq!(outcome_note(&ExitStatus::Completed, None), "completed");
+        let crashed = ExitStatus::Crashed { time: 11.66, impact_speed: 3.0 };
+        assert_eq!(outcome_note(&crashed, Some(&out)), "crashed at 11.66 s");
+    }
+
+    /// One short flight of `controller` on paper scenario 1 (0.3 s).
+    fn flight(controller: &str) -> RunOutput {
+        let mut s =
+            ftsmc_sim::scenario::Scenario::from_toml_str(ftsmc_sim::scenario::PAPER_SCENARIO_1, "p1.toml").unwrap();
+        s.duration = 0.3;
+        ftsmc_sim::registry::run(controller, &s, ftsmc_sim::run::RunOptions::default()).unwrap()
+    }
+
+    /// The reference line spans the whole flight even when the first run
+    /// drawn stopped early, and the legend lists the runs in the order given.
+    #[test]
+    fn an_early_stop_does_not_cut_the_reference() {
+        let full = flight("pid");
+        let mut short = flight("se3");
+        let rows = short.recording.column("t").len() / 3;
+        short.recording.columns.iter_mut().for_each(|c| c.truncate(rows));
+        short.exit = ExitStatus::Diverged { divergence: Divergence::Tilt { angle: 0.9 }, time: 0.1 };
+        let fig = comparison("t", &[&short, &full], &position_specs(), 3);
+        let reference = fig.panels[0].series.iter().find(|s| s.label == "reference").unwrap();
+        assert_eq!(reference.xs.len(), full.recording.column("t").len());
+        assert!(reference.xs.len() > 2 * rows);
+        let labels: Vec<&str> = fig.panels[0].series.iter().map(|s| s.label.as_str()).collect();
+        assert_eq!(labels, ["reference", label("se3"), label("pid")]);
+    }
 }

@@ -10,7 +10,7 @@ use anyhow::{Context, Result};
 use ftsmc_sim::stats::Interval;
 
 use crate::plot::controller_color;
-use crate::svg::{Anchor, Font, Rgb, Stroke, Svg};
+use crate::svg::{text_width, Anchor, Font, Rgb, Stroke, Svg};
 
 /// One panel: a metric and each contestant's interval (`None`: no value).
 pub struct ForestPanel {
@@ -25,9 +25,35 @@ const NAME_W: f64 = 150.0;
 const PANEL_W: f64 = 300.0;
 const TOP: f64 = 46.0;
 const BOTTOM: f64 = 40.0;
+/// Tick label size, px.
+const TICK_SIZE: f64 = 10.0;
+/// Gap between two panels' frames, px: a tick label may reach into it by
+/// at most [`LABEL_OVERHANG`], so labels of neighbouring panels keep apart.
+const PANEL_GAP: f64 = 30.0;
+/// How far a tick label may reach beyond its panel's frame, px.
+const LABEL_OVERHANG: f64 = 8.0;
+/// Least space between two tick labels of one axis, px.
+const LABEL_SPACE: f64 = 6.0;
 
 /// Write `stem.svg` and `stem.png`; returns their paths.
 pub fn write_forest(title: &str, panels: &[ForestPanel], stem: &Path) -> Result<Vec<PathBuf>> {
+    let svg = forest_svg(title, panels);
+    if let Some(dir) = stem.parent() {
+        std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    }
+    let (svg_path, png_path) = (stem.with_extension("svg"), stem.with_extension("png"));
+    let png = crate::raster::png_from_svg(&svg, 2.0, None)
+        .with_context(|| format!("cannot render {}", png_path.display()))?;
+    crate::output::write_atomic(&svg_path, svg.as_bytes())?;
+    crate::output::write_atomic(&png_path, &png)?;
+    Ok(vec![svg_path, png_path])
+}
+
+/// The forest plot as an SVG document. Ticks are "nice" values
+/// ([`crate::ticks::linear`]); a tick label that would overlap the one
+/// before it, or reach more than [`LABEL_OVERHANG`] beyond its panel, is
+/// left out (its tick stays), so no two labels collide.
+fn forest_svg(title: &str, panels: &[ForestPanel]) -> String {
     let rows = panels.first().map_or(0, |p| p.rows.len());
     let width = NAME_W + PANEL_W * panels.len() as f64 + 20.0;
     let height = TOP + ROW * rows as f64 + BOTTOM;
@@ -43,7 +69,7 @@ pub fn write_forest(title: &str, panels: &[ForestPanel], stem: &Path) -> Result<
     let frame = Stroke::solid(Rgb(120, 120, 120), 0.8);
     for (k, panel) in panels.iter().enumerate() {
         let x0 = NAME_W + PANEL_W * k as f64 + 10.0;
-        let w = PANEL_W - 30.0;
+        let w = PANEL_W - PANEL_GAP;
         let finite: Vec<f64> = panel
             .rows
             .iter()
@@ -64,12 +90,26 @@ pub fn write_forest(title: &str, panels: &[ForestPanel], stem: &Path) -> Result<
         let x = |v: f64| x0 + w * ((v.clamp(lo, hi) - lo) / (hi - lo));
         let y_bottom = TOP + ROW * rows as f64;
         svg.rect(x0, TOP - 6.0, w, y_bottom - TOP + 12.0, None, Some(&frame));
-        svg.text(x0 + w / 2.0, TOP - 18.0, &panel.label, &Font::new(11.0, Anchor::Middle));
-        let ticks = Font::new(10.0, Anchor::Middle);
-        for t in 0..=4 {
-            let v = lo + (hi - lo) * f64::from(t) / 4.0;
-            svg.line(x(v), y_bottom + 6.0, x(v), y_bottom + 10.0, &frame);
-            svg.text(x(v), y_bottom + 20.0, &format!("{v:.3}"), &ticks);
+        let ticks = crate::ticks::linear(lo, hi, 5);
+        let label = match &ticks.note {
+            Some(note) => format!("{} ({note})", panel.label),
+            None => panel.label.clone(),
+        };
+        svg.text(x0 + w / 2.0, TOP - 18.0, &label, &Font::new(11.0, Anchor::Middle));
+        let font = Font::new(TICK_SIZE, Anchor::Middle);
+        let mut right_of_last = f64::NEG_INFINITY;
+        for (v, text) in ticks.values.iter().zip(&ticks.labels) {
+            if *v < lo || *v > hi {
+                continue;
+            }
+            let xv = x(*v);
+            svg.line(xv, y_bottom + 6.0, xv, y_bottom + 10.0, &frame);
+            let half = text_width(text, TICK_SIZE) / 2.0;
+            let fits = xv - half >= x0 - LABEL_OVERHANG && xv + half <= x0 + w + LABEL_OVERHANG;
+            if fits && xv - half >= right_of_last + LABEL_SPACE {
+                svg.text(xv, y_bottom + 20.0, text, &font);
+                right_of_last = xv + half;
+            }
         }
         svg.group("data");
         for (r, (_, controller, interval)) in panel.rows.iter().enumerate() {
@@ -90,14 +130,70 @@ pub fn write_forest(title: &str, panels: &[ForestPanel], stem: &Path) -> Result<
         }
         svg.end_group();
     }
-    let svg = svg.finish();
-    if let Some(dir) = stem.parent() {
-        std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    svg.finish()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `(x, y, width)` of every text of `svg` on the line `y`, its width
+    /// estimated as 0.6 × font size per character, placed by its anchor.
+    fn boxes(svg: &str) -> Vec<(f64, f64, f64, String)> {
+        let doc = resvg::usvg::roxmltree::Document::parse(svg).unwrap();
+        doc.descendants()
+            .filter(|n| n.has_tag_name("text"))
+            .map(|n| {
+                let num = |a: &str| n.attribute(a).unwrap().parse::<f64>().unwrap();
+                let text = n.text().unwrap_or("").to_string();
+                let w = 0.6 * num("font-size") * text.chars().count() as f64;
+                let left = match n.attribute("text-anchor") {
+                    Some("middle") => num("x") - w / 2.0,
+                    Some("end") => num("x") - w,
+                    _ => num("x"),
+                };
+                (left, num("y"), w, text)
+            })
+            .collect()
     }
-    let (svg_path, png_path) = (stem.with_extension("svg"), stem.with_extension("png"));
-    let png = crate::raster::png_from_svg(&svg, 2.0, None)
-        .with_context(|| format!("cannot render {}", png_path.display()))?;
-    crate::output::write_atomic(&svg_path, svg.as_bytes())?;
-    crate::output::write_atomic(&png_path, &png)?;
-    Ok(vec![svg_path, png_path])
+
+    fn interval(lo: f64, estimate: f64, hi: f64) -> Option<Interval> {
+        Some(Interval { lo, estimate, hi })
+    }
+
+    /// Three panels whose ranges give long labels (large, small, offset
+    /// values): no two texts on one line overlap.
+    #[test]
+    fn tick_labels_never_overlap() {
+        let panel = |label: &str, a: [f64; 3], b: [f64; 3]| ForestPanel {
+            label: label.into(),
+            rows: vec![
+                ("pid".into(), "pid".into(), interval(a[0], a[1], a[2])),
+                ("se3".into(), "se3".into(), interval(b[0], b[1], b[2])),
+            ],
+        };
+        for panels in [
+            vec![
+                panel("success (pp)", [-32.0, -28.4, 0.1], [-6.5, -5.5, 100.0]),
+                panel("RMS (m)", [0.0631, 0.0672, 0.0719], [0.1341, 0.139, 0.1452]),
+                panel("ISE", [123456.7, 234567.8, 345678.9], [-98765.4, 1.0, 99999.9]),
+            ],
+            vec![
+                panel("a", [2.000001, 2.000002, 2.000003], [2.0000015, 2.0000025, 2.0000031]),
+                panel("b", [-1e-7, 0.0, 3e-7], [-2e-7, 1e-7, 4e-7]),
+                panel("c", [-0.3333, 0.1234, 0.9876], [0.5555, 0.6666, 0.7777]),
+            ],
+        ] {
+            let svg = forest_svg("forest", &panels);
+            let b = boxes(&svg);
+            assert!(b.len() >= 10, "{svg}");
+            for (i, p) in b.iter().enumerate() {
+                for q in &b[i + 1..] {
+                    if (p.1 - q.1).abs() < 1.0 {
+                        assert!(p.0 + p.2 <= q.0 || q.0 + q.2 <= p.0, "{p:?} overlaps {q:?}\n{svg}");
+                    }
+                }
+            }
+        }
+    }
 }

@@ -57,11 +57,49 @@ fn href(rel: &Path) -> String {
 
 // ------------------------------------------------------------ Markdown
 
-/// Inline Markdown of one line: `code`, **bold**, [text](url); the rest escaped.
+/// `text` escaped for HTML line by line, its line ends kept as line ends
+/// (for `<pre>`: [`escape`] alone would show each newline as a literal `\n`).
+fn escape_lines(text: &str) -> String {
+    text.split('\n').map(escape).collect::<Vec<_>>().join("\n")
+}
+
+/// The character a Markdown entity reference at the start of `s` stands
+/// for (`&lt;`, `&gt;`, `&amp;`, `&quot;`, `&#NN;`: the ones
+/// [`ftsmc_sim::escape::markdown_cell`] writes, and the decimal form), with
+/// its length in bytes.
+fn entity(s: &str) -> Option<(char, usize)> {
+    let end = s.find(';').filter(|&e| e <= 10)?;
+    let c = match &s[1..end] {
+        "lt" => '<',
+        "gt" => '>',
+        "amp" => '&',
+        "quot" => '"',
+        n => char::from_u32(n.strip_prefix('#')?.parse().ok()?)?,
+    };
+    Some((c, end + 1))
+}
+
+/// Inline Markdown of one line: `code`, **bold**, [text](url), backslash
+/// escapes of ASCII punctuation and entity references (CommonMark 0.31,
+/// sections 2.4 and 2.5: `\|` is a `|`, `&lt;` a `<`); the rest escaped.
 fn inline(s: &str) -> String {
     let mut out = String::new();
     let mut rest = s;
     while !rest.is_empty() {
+        if let Some(r) = rest.strip_prefix('\\') {
+            if let Some(c) = r.chars().next().filter(char::is_ascii_punctuation) {
+                out.push_str(&escape(&c.to_string()));
+                rest = &r[1..];
+                continue;
+            }
+        }
+        if rest.starts_with('&') {
+            if let Some((c, len)) = entity(rest) {
+                out.push_str(&escape(&c.to_string()));
+                rest = &rest[len..];
+                continue;
+            }
+        }
         if let Some(r) = rest.strip_prefix('`') {
             if let Some(end) = r.find('`') {
                 let _ = write!(out, "<code>{}</code>", escape(&r[..end]));
@@ -94,9 +132,30 @@ fn inline(s: &str) -> String {
     out
 }
 
+/// The cells of a table row, split at every `|` not escaped by a
+/// backslash (an escaped `\|` stays in its cell, still escaped, for [`inline`]).
 fn table_cells(line: &str) -> Vec<String> {
-    let t = line.trim().trim_start_matches('|').trim_end_matches('|');
-    t.split('|').map(|c| c.trim().to_string()).collect()
+    let t = line.trim();
+    let t = t.strip_prefix('|').unwrap_or(t);
+    let mut cells = Vec::new();
+    let mut cell = String::new();
+    let mut chars = t.chars();
+    while let Some(c) = chars.next() {
+        match c {
+            '\\' => {
+                cell.push(c);
+                if let Some(n) = chars.next() {
+                    cell.push(n);
+                }
+            }
+            '|' => cells.push(std::mem::take(&mut cell).trim().to_string()),
+            c => cell.push(c),
+        }
+    }
+    if !cell.trim().is_empty() {
+        cells.push(cell.trim().to_string());
+    }
+    cells
 }
 
 fn is_separator(line: &str) -> bool {
@@ -127,7 +186,7 @@ pub fn markdown(md: &str) -> String {
                 body.push(lines[i]);
                 i += 1;
             }
-            let _ = writeln!(out, "<pre><code>{}</code></pre>", escape(&body.join("\n")));
+            let _ = writeln!(out, "<pre><code>{}</code></pre>", escape_lines(&body.join("\n")));
             i += 1;
             continue;
         }
@@ -424,7 +483,7 @@ pub fn report_with(
             "<section id=\"provenance\"><h2>Provenance</h2><p>From <a href=\"summary.json\">summary.json</a>: \
              the scenario files flown and their SHA-256, the build and the machine.</p>\
              <pre><code>{}</code></pre></section>",
-            escape(&p)
+            escape_lines(&p)
         );
     }
     if !tracks.is_empty() {
@@ -507,6 +566,55 @@ mod tests {
         assert!(html.contains("<a href=\"beyond/report.md\">link</a>"), "{html}");
         assert!(html.contains("<th>a</th><th>b</th>") && html.contains("<td>1</td><td>—</td>"), "{html}");
         assert!(html.contains("<li>one</li>\n<li>two</li>"), "{html}");
+    }
+
+    /// The text a browser shows of `html`: tags removed, entities decoded once.
+    fn visible_text(html: &str) -> String {
+        let mut text = String::new();
+        let mut in_tag = false;
+        for c in html.chars() {
+            match c {
+                '<' => in_tag = true,
+                '>' if in_tag => in_tag = false,
+                c if !in_tag => text.push(c),
+                _ => {}
+            }
+        }
+        text.replace("&lt;", "<").replace("&gt;", ">").replace("&quot;", "\"").replace("&amp;", "&")
+    }
+
+    /// A ranking `A < B < C` reads as written on the console (the Markdown
+    /// table) and on the page (its HTML), with no entity shown literally; a
+    /// cell that could be a tag still cannot become one.
+    #[test]
+    fn a_ranking_reads_as_written_on_the_console_and_the_page() {
+        let mut t = crate::console::Table::new(["state", "ranking ours"]);
+        t.row(vec!["x".into(), "FTAFTSMC < TSM-STA < RANFTSMC".into()]);
+        t.row(vec!["y".into(), "a|b <script>alert(1)</script> & &amp;".into()]);
+        let md = t.render();
+        assert!(md.contains("FTAFTSMC < TSM-STA < RANFTSMC") && !md.contains("&lt; "), "{md}");
+        let html = markdown(&md);
+        assert!(!html.contains("<script>"), "{html}");
+        let text = visible_text(&html);
+        assert!(text.contains("FTAFTSMC < TSM-STA < RANFTSMC"), "{text}");
+        assert!(text.contains("a|b <script>alert(1)</script> & &amp;"), "{text}");
+        assert!(!text.contains("&lt;") && !text.contains("\\|"), "{text}");
+    }
+
+    /// The provenance block is the pretty JSON of `summary.json`, one key a
+    /// line: its line ends are line ends, not a literal `\n`.
+    #[test]
+    fn the_provenance_block_keeps_its_line_ends() {
+        let dir = std::env::temp_dir().join(format!("ftsmc-prov-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        std::fs::write(dir.join("summary.json"), r#"{"provenance": {"seed": 1, "git_commit": "abc"}}"#).unwrap();
+        let page = report(&dir, "t", "```\nline 1\nline 2\n```\n").unwrap();
+        std::fs::remove_dir_all(&dir).unwrap();
+        let block = page.split("<section id=\"provenance\">").nth(1).unwrap().split("</section>").next().unwrap();
+        let text = visible_text(block);
+        assert!(!text.contains("\\n"), "{text}");
+        assert!(text.contains("\n  \"git_commit\": \"abc\"") && text.contains("\n  \"seed\": 1"), "{text}");
+        assert!(page.contains("<pre><code>line 1\nline 2</code></pre>"), "{page}");
     }
 
     /// Rows are counted by their line ends; a last row without one counts,

@@ -311,22 +311,36 @@ fn drawable(s: &Series, panel: &Panel) -> bool {
         .any(|(x, y)| x.is_finite() && y.is_finite() && (!panel.log_x || *x > 0.0) && (!panel.log_y || *y > 0.0))
 }
 
-/// One entry per distinct label, in order of first appearance, for the
-/// series that are drawn (a series without a drawable point has no entry).
+/// One entry per distinct label for the series that are drawn (a series
+/// without a drawable point has no entry), in the order the series' own
+/// labels first appear: the runs in the order they were given (the
+/// controller order), a run's variants together — `ω1` drawn as a band on
+/// one panel and as a line on another gives two entries side by side, not
+/// one at each end of the legend.
 fn entries_of<'a>(series: impl Iterator<Item = (&'a Series, &'a Panel)>) -> Vec<Entry> {
-    let mut out: Vec<Entry> = Vec::new();
+    let mut bases: Vec<&str> = Vec::new();
+    let mut out: Vec<(usize, Entry)> = Vec::new();
     for (s, panel) in series {
         if s.label.is_empty() || !drawable(s, panel) {
             continue;
         }
         let band = banded(s, panel);
         let label = entry_label(s, band);
-        if out.iter().any(|e| e.label == label) {
+        if out.iter().any(|(_, e)| e.label == label) {
             continue;
         }
-        out.push(Entry { label, color: s.color, dashed: s.dashed, marker: has_markers(s), band, points: s.points });
+        let group = bases.iter().position(|b| *b == s.label).unwrap_or_else(|| {
+            bases.push(&s.label);
+            bases.len() - 1
+        });
+        out.push((
+            group,
+            Entry { label, color: s.color, dashed: s.dashed, marker: has_markers(s), band, points: s.points },
+        ));
     }
-    out
+    // Stable: within a group, the order of first appearance.
+    out.sort_by_key(|(group, _)| *group);
+    out.into_iter().map(|(_, e)| e).collect()
 }
 
 /// Rows of entry indices that fit in `width`, and the legend's height.
@@ -1129,6 +1143,37 @@ fn draw_box_panel(svg: &mut Svg, rect: (f64, f64, f64, f64), panel: &BoxPanel, l
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A legend lists a series' entries together, in the order the series
+    /// are given, even when one of them is a band on one panel only.
+    #[test]
+    fn legend_entries_keep_the_series_order() {
+        let xs: Vec<f64> = (0..1000).map(|k| k as f64 * 0.01).collect();
+        let line = |label: &str, ys: Vec<f64>| Series {
+            points: false,
+            label: label.into(),
+            xs: xs.clone(),
+            ys,
+            color: Rgb(0, 0, 0),
+            dashed: false,
+            end: None,
+        };
+        let smooth: Vec<f64> = xs.iter().map(|x| x * 0.1).collect();
+        let chatter: Vec<f64> = (0..1000).map(|k| if k % 2 == 0 { 1.0 } else { -1.0 }).collect();
+        let panel = |series: Vec<Series>| Panel {
+            title: "p".into(),
+            x_label: "t".into(),
+            y_label: "y".into(),
+            series,
+            log_x: false,
+            log_y: false,
+        };
+        let a = panel(vec![line("ω1", chatter), line("ω2", smooth.clone())]);
+        let b = panel(vec![line("ω1", smooth.clone()), line("ω2", smooth)]);
+        let entries = entries_of([&a, &b].into_iter().flat_map(|p| p.series.iter().map(move |s| (s, p))));
+        let labels: Vec<String> = entries.iter().map(|e| e.label.clone()).collect();
+        assert_eq!(labels, [format!("ω1{BAND_NOTE}"), "ω1".into(), "ω2".into()]);
+    }
 
     /// A fresh scratch folder `<temp dir>/ftsmc-plot-<name>-<random>`,
     /// removed when the returned guard drops: when the test ends, passed or failed.

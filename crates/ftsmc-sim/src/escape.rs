@@ -40,19 +40,26 @@ pub fn toml_comment(text: &str) -> String {
 }
 
 /// Text of a Markdown table cell (GitHub-flavoured Markdown): `|` becomes
-/// `\|` and `\` becomes `\\` (so the cell keeps its column), `<`, `>` and
-/// `&` their HTML entities (no tag or entity reaches the renderer), and
-/// control characters and line separators visible escapes (a newline would
-/// end the row).
+/// `\|` and `\` becomes `\\` (so the cell keeps its column), a `<` that
+/// could open raw HTML (followed by a letter, `/`, `!` or `?`: CommonMark
+/// 0.31, section 6.6) becomes `&lt;` and an `&` that could start an entity
+/// (followed by a letter or `#`, section 2.5) becomes `&amp;`, so no tag or
+/// entity reaches the renderer; control characters and line separators
+/// become visible escapes (a newline would end the row). Every other
+/// character is kept, so `FTAFTSMC < PID` reads as written on a console and
+/// in a rendered page.
 pub fn markdown_cell(text: &str) -> String {
     let mut out = String::with_capacity(text.len());
-    for c in text.chars() {
+    let mut chars = text.chars().peekable();
+    while let Some(c) = chars.next() {
+        let next = chars.peek().copied();
         match c {
             '|' => out.push_str("\\|"),
             '\\' => out.push_str("\\\\"),
-            '<' => out.push_str("&lt;"),
-            '>' => out.push_str("&gt;"),
-            '&' => out.push_str("&amp;"),
+            '<' if next.is_some_and(|n| n.is_ascii_alphabetic() || matches!(n, '/' | '!' | '?')) => {
+                out.push_str("&lt;")
+            }
+            '&' if next.is_some_and(|n| n.is_ascii_alphabetic() || n == '#') => out.push_str("&amp;"),
             c => push_visible(&mut out, c),
         }
     }
@@ -133,7 +140,9 @@ mod tests {
 
     #[test]
     fn markdown_cells_keep_their_column() {
-        assert_eq!(markdown_cell("a|b\\|c\n<b>&"), "a\\|b\\\\\\|c\\n&lt;b&gt;&amp;");
+        assert_eq!(markdown_cell("a|b\\|c\n<b>&x &#1"), "a\\|b\\\\\\|c\\n&lt;b>&amp;x &amp;#1");
+        // A comparison is not markup: kept as written.
+        assert_eq!(markdown_cell("FTAFTSMC < PID < SE(3) & more"), "FTAFTSMC < PID < SE(3) & more");
         assert_eq!(markdown_cell("ISE z (m²·s)"), "ISE z (m²·s)");
     }
 
