@@ -15,6 +15,8 @@
 //! - [`kinematics`]: Z-Y-X Euler angles, quaternions, rotation matrices and their rates.
 //! - [`pid`]: the PX4 multicopter cascade (P/PID position, quaternion P attitude, PID rates).
 //! - [`se3`]: Lee, Leok & McClamroch 2010 geometric control on SE(3).
+//! - [`crazyflie_pid`]: the Crazyflie firmware's PID cascade and power distribution (16-bit motor commands).
+//! - [`mellinger`]: the Crazyflie firmware's Mellinger controller.
 //! - [`estimate`]: state estimators from onboard sensors (Mahony complementary filter, 15-state error-state Kalman filter).
 //!
 //! Every transcendental function, with or without the default `std`
@@ -26,6 +28,7 @@
 pub mod allocation;
 pub mod cascade;
 pub mod controller;
+pub mod crazyflie_pid;
 pub mod elementary;
 pub mod estimate;
 pub mod ftaftsmc;
@@ -35,6 +38,7 @@ pub mod lanes_math;
 pub mod law;
 pub mod math;
 pub mod measured;
+pub mod mellinger;
 pub mod model;
 pub mod pid;
 pub mod ranftsmc;

@@ -88,8 +88,10 @@ use serde::Serialize;
 use crate::axes::AxisSet;
 use crate::text::show;
 
+pub mod crazyflie_pid;
 pub mod ftaftsmc;
 pub mod generic;
+pub mod mellinger;
 pub mod on_isa;
 pub mod per_lane;
 pub mod pid;
@@ -572,4 +574,6 @@ declare_controllers! {
     tsm_sta: AxisSet<ftsmc_core::tsm_sta::TsmStaGains> => [tsm_sta::TsmSta],
     pid: ftsmc_core::pid::PidGains => [pid::Pid],
     se3: ftsmc_core::se3::Se3Gains => [se3::Se3],
+    crazyflie_pid: ftsmc_core::crazyflie_pid::CrazyfliePidGains => [crazyflie_pid::CrazyfliePid],
+    mellinger: ftsmc_core::mellinger::MellingerGains => [mellinger::Mellinger],
 }
