@@ -47,6 +47,7 @@ pub fn end_note(exit: &ExitStatus) -> Option<String> {
                 Divergence::Tilt { .. } => "tilt",
                 Divergence::PositionError { .. } => "position error",
                 Divergence::NonFiniteMetric => "metric overflow",
+                Divergence::Estimator { .. } => "estimator lost",
                 Divergence::RigidBodyOutOfRange { .. } => {
                     return Some(format!("stopped (rigid body out of range) at {time:.2} s"))
                 }

@@ -25,6 +25,7 @@ fn measure_does_not_allocate() {
         latency: 7,
         // The IMU on its own clock: a second latency line, allocated once too.
         imu: Some(SensorClock { sample_rate: Some(1000.0), latency: 1 }),
+        ..SensorParams::default()
     };
     let mut sensors = Sensors::new(params, 1000.0, 3);
     let mut sink = 0.0;

@@ -209,7 +209,7 @@ pub struct FlightSplitting {
 /// which the cross-entropy proposal of [`rare`] never moves and
 /// [`splitting`] does: `ftsmc failure-probability` then defaults to splitting.
 pub fn noise_driven(scenario: &Scenario) -> bool {
-    scenario.sensors.is_some_and(|s| !s.is_perfect())
+    scenario.sensors.is_some_and(|s| !s.controller_sees_truth())
         || scenario.wind.as_ref().is_some_and(|w| w.turbulence.is_some())
         || (scenario.drag_noise.is_some() && scenario.vehicle.model == crate::vehicle::VehicleModel::Paper)
         || crate::run::actuators(scenario).noise.is_some()

@@ -35,6 +35,15 @@ pub enum Divergence {
     /// error or control integral) overflowed to ±∞ or NaN: the flight is
     /// not reported completed ([`crate::metrics::Metrics::first_non_finite`]).
     NonFiniteMetric,
+    /// The state estimator stopped giving a state (`[sensors] estimator`,
+    /// [`crate::sensors::pipeline`]): its estimate or covariance became
+    /// non-finite, a variance passed its bound, or its innovation gate
+    /// rejected every aiding reading for longer than
+    /// [`crate::sensors::pipeline::MAX_GATED_S`].
+    Estimator {
+        /// Why.
+        cause: crate::sensors::estimator::FailureReason,
+    },
 }
 
 /// How a run ended.
@@ -120,6 +129,9 @@ impl core::fmt::Display for ExitStatus {
                 }
                 Divergence::NonFiniteMetric => {
                     write!(f, "diverged: a metric (error or control integral) overflowed by t = {time:.3} s")
+                }
+                Divergence::Estimator { cause } => {
+                    write!(f, "diverged: estimator lost ({}) at t = {time:.3} s", cause.word())
                 }
                 Divergence::RigidBodyOutOfRange { mass, inertia_scale } => write!(
                     f,

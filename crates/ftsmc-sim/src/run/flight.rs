@@ -10,7 +10,10 @@
 //! ```
 //!
 //! 1. **Measure** ([`LaneFlight::measure`]): the sensors' reading of the truth
-//!    (`[sensors]`; the truth itself with perfect sensors).
+//!    (`[sensors]`; the truth itself with perfect sensors), or, when
+//!    `[sensors]` names an estimator or a sensor table, the sensor stages
+//!    sampled and the estimator's output ([`crate::sensors::pipeline`]; an
+//!    estimator that fails ends the flight, [`Divergence::Estimator`]).
 //! 2. **Controller** on its own clock: one update per control period
 //!    `dt = 1 / simulation.control_rate`, its command held over the period.
 //! 3. **Actuate** ([`LaneFlight::actuate`]): the period's drag noise, then the
@@ -53,6 +56,7 @@ use crate::environment::wind::Wind;
 use crate::environment::{Environment, TimeVarying};
 use crate::metrics::MetricsAccumulator;
 use crate::scenario::Scenario;
+use crate::sensors::pipeline::{self, Pipeline};
 use crate::sensors::Sensors;
 use crate::signal::grid::GridSignal;
 
@@ -110,7 +114,7 @@ fn reports_rotor_metrics(scenario: &Scenario) -> bool {
     scenario.vehicle.model != crate::vehicle::VehicleModel::Paper
         || scenario.actuators.is_some_and(|a| a != crate::actuators::ActuatorParams::default())
         || scenario.ground.is_some_and(|g| g.enabled)
-        || scenario.sensors.is_some_and(|s| !s.is_perfect())
+        || scenario.sensors.is_some_and(|s| !s.controller_sees_truth())
         || scenario.wind.is_some()
 }
 
@@ -179,6 +183,11 @@ struct LaneFlight<'o> {
     demand_params: QuadrotorParams,
     base_plant: QuadrotorParams,
     sensors: Option<Sensors>,
+    /// The sensor stages and the estimator, when `[sensors]` asks for them
+    /// (then `sensors` is `None`).
+    pipeline: Option<Pipeline>,
+    /// The pipeline's recorded columns at the last recorded tick.
+    pipeline_row: Vec<f64>,
     /// The measurement of the coming tick, when it was taken ahead of the
     /// step ([`Flight::measurement`]).
     measured_ahead: Option<Measurement>,
@@ -249,14 +258,20 @@ impl<'o> LaneFlight<'o> {
         // Sampled at the substep boundaries t_m = m·h: the sinusoids rotate along the grid.
         let mut env = Environment::new(env_params).on_grid(h);
         let wind = scenario.wind.clone().and_then(|w| Wind::new(w, h, scenario.seed).ok());
-        let sensors =
-            scenario.sensors.filter(|s| !s.is_perfect()).map(|s| Sensors::new(s, sim.control_rate, scenario.seed));
+        let base_plant = scenario.true_vehicle();
+        let pipeline = scenario.sensors.filter(pipeline::requested).map(|s| {
+            Pipeline::new(&s, sim.control_rate, scenario.seed, &scenario.initial_state.state(), base_plant.gravity)
+        });
+        let sensors = scenario
+            .sensors
+            .filter(|s| pipeline.is_none() && !s.is_perfect())
+            .map(|s| Sensors::new(s, sim.control_rate, scenario.seed));
+        let pipeline_row = vec![f64::NAN; pipeline.as_ref().map_or(0, |p| p.column_names().len())];
         let metrics = MetricsAccumulator::new(dt, sim.settling_band, sim.settling_floor, sim.steady_state_after)
             .with_window(sim.metrics_window);
         let tv_now = env.time_varying_on_grid(0, 0.0);
         let mut reference_grid = ReferenceGrid::new(scenario, dt);
         let reference = reference_grid.at(0, 0.0);
-        let base_plant = scenario.true_vehicle();
         let observers = Observers {
             metrics,
             recorder,
@@ -280,6 +295,8 @@ impl<'o> LaneFlight<'o> {
             demand_params,
             base_plant,
             sensors,
+            pipeline,
+            pipeline_row,
             measured_ahead: None,
             state: QuadState::default(),
             measured: None,
@@ -336,6 +353,16 @@ impl<'o> LaneFlight<'o> {
             (None, Some(s)) if self.exit.is_none() => {
                 s.measure_full(&Measurement { euler: self.state, body: body.map(|b| b.get_lane(i)) })
             }
+            (None, None) if self.exit.is_none() && self.pipeline.is_some() => {
+                let truth = Measurement { euler: self.state, body: body.map(|b| b.get_lane(i)) };
+                match self.estimate(&truth) {
+                    Some(m) => m,
+                    None => {
+                        self.measured = None;
+                        return None;
+                    }
+                }
+            }
             _ => {
                 self.measured = None;
                 return None;
@@ -343,6 +370,26 @@ impl<'o> LaneFlight<'o> {
         };
         self.measured = Some(m.euler);
         Some(m)
+    }
+
+    /// The pipeline's output for `truth` at the lane's boundary (its body
+    /// attitude only when the truth has one: the controller flies it); `None`
+    /// when the estimator failed, which ends the flight.
+    fn estimate(&mut self, truth: &Measurement) -> Option<Measurement> {
+        let pipeline = self.pipeline.as_mut()?;
+        match pipeline.measure(self.t, truth) {
+            Ok(mut m) => {
+                if truth.body.is_none() {
+                    m.body = None;
+                }
+                Some(m)
+            }
+            Err(f) => {
+                self.exit =
+                    Some(ExitStatus::Diverged { divergence: Divergence::Estimator { cause: f.reason }, time: f.time });
+                None
+            }
+        }
     }
 
     /// Stage 3: the period's drag noise, then the actuator stage delivers
@@ -389,6 +436,9 @@ impl<'o> LaneFlight<'o> {
         if self.observers.read_telemetry(self.k) {
             self.telemetry = telemetry.get_lane(i);
         }
+        if let Some(p) = self.pipeline.as_ref().filter(|_| self.observers.recorder.due(self.k)) {
+            p.record(&mut self.pipeline_row);
+        }
         let attitude_reference =
             [telemetry.attitude_reference[0].get_lane(i), telemetry.attitude_reference[1].get_lane(i)];
         let x = self.state.to_array();
@@ -412,6 +462,7 @@ impl<'o> LaneFlight<'o> {
             mass: self.tv_now.mass,
             inertia: self.tv_now.inertia,
             disturbance: self.tv_now.disturbance,
+            pipeline: &self.pipeline_row,
         };
         self.observers.tick(&tick);
         self.omega_bar = residual_speed(&delivered.target);
@@ -637,9 +688,16 @@ impl<'o, C: Controller> Flights<'o, C, f64> {
             return m.euler;
         }
         let truth = self.at;
-        let m = match lane.sensors.as_mut() {
-            Some(s) => s.measure_full(&truth),
-            None => truth,
+        let m = if let Some(s) = lane.sensors.as_mut() {
+            s.measure_full(&truth)
+        } else if lane.pipeline.is_some() && lane.flying() {
+            match lane.estimate(&truth) {
+                Some(m) => m,
+                // The estimator failed: the flight is over; the next step ends it.
+                None => return truth.euler,
+            }
+        } else {
+            truth
         };
         lane.measured_ahead = Some(m);
         m.euler
@@ -660,6 +718,9 @@ impl<'o, C: Controller> Flights<'o, C, f64> {
         lane.measured_ahead = None;
         if let Some(s) = &mut lane.sensors {
             s.reseed_noise(seed);
+        }
+        if let Some(p) = &mut lane.pipeline {
+            p.reseed(seed);
         }
         if let Some(w) = &mut lane.wind {
             w.reseed_noise(seed);

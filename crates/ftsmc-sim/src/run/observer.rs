@@ -53,6 +53,11 @@ pub struct Tick<'a> {
     pub inertia: [f64; 3],
     /// Disturbances `[D_x … D_ψ]` of this tick (m/s², rad/s²).
     pub disturbance: [f64; 6],
+    /// The sensor pipeline's recorded columns (its stages' last readings,
+    /// the estimate and its covariance diagonal,
+    /// [`crate::sensors::pipeline::Pipeline::column_names`]) at a recorded
+    /// tick; empty without a pipeline.
+    pub pipeline: &'a [f64],
 }
 
 /// Something that watches a flight.

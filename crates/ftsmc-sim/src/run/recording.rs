@@ -147,6 +147,15 @@ impl Recording {
         }
     }
 
+    /// Append one row given in two parts, `first` then `rest` (together one
+    /// value per column).
+    pub fn push_row_parts(&mut self, first: &[f64], rest: &[f64]) {
+        debug_assert_eq!(first.len() + rest.len(), self.columns.len());
+        for (col, &v) in self.columns.iter_mut().zip(first.iter().chain(rest)) {
+            col.push(v);
+        }
+    }
+
     /// The column called `name` (empty slice if unknown).
     pub fn column(&self, name: &str) -> &[f64] {
         self.names.iter().position(|n| n == name).map(|i| self.columns[i].as_slice()).unwrap_or(&[])
@@ -384,7 +393,11 @@ impl Recorder {
         let adapts_mass = controller.adapts_mass();
         let sliding = controller.telemetry().sliding_mode.is_some();
         let mut recording = if every > 0 {
-            Recording::with_columns(recording_columns(&estimate_names, sliding, adapts_mass))
+            let mut names = recording_columns(&estimate_names, sliding, adapts_mass);
+            if let Some(s) = scenario.sensors.filter(crate::sensors::pipeline::requested) {
+                names.extend(crate::sensors::pipeline::column_names(&s).iter().map(|n| n.to_string()));
+            }
+            Recording::with_columns(names)
         } else {
             Recording::default()
         };
@@ -467,7 +480,7 @@ impl Recorder {
         row.push(tick.mass);
         row.extend(&tick.inertia);
         row.extend(&tick.disturbance);
-        self.recording.push_row(row.as_slice());
+        self.recording.push_row_parts(row.as_slice(), tick.pipeline);
         if self.stream.as_ref().is_some_and(|s| self.recording.len() - self.sent >= s.chunk_rows()) {
             self.send_rows();
         }

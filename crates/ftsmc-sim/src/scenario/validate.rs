@@ -277,6 +277,10 @@ impl Scenario {
             })?;
         }
         check_realism(self).map_err(|(prefix, e)| gain(&prefix, e))?;
+        if let Some(s) = &self.sensors {
+            crate::sensors::pipeline::check(s, sim.control_rate)
+                .map_err(|e| invalid(format!("sensors.{}", e.key), e.value, &e.expected))?;
+        }
         if let Some(t) = &self.tune {
             t.check().map_err(|(key, e)| invalid(format!("tune.{key}"), show(e.value), e.expected))?;
             // Only gains are tunable: never the seed, the duration or anything

@@ -10,9 +10,10 @@
 //! outcome, never panic. It may record extra columns (its estimate and
 //! covariance diagonal).
 //!
-//! The only estimator here is [`Passthrough`]: the motion-capture reading
-//! straight to the controller. [`MotionCapture`] is the stage that gives
-//! it [`Sensors`]' reading every control period.
+//! [`Passthrough`] is the motion-capture reading straight to the
+//! controller; [`MotionCapture`] is the stage that gives it [`Sensors`]'
+//! reading every control period. The Mahony and ESKF stages are in
+//! [`super::pipeline`].
 
 use ftsmc_core::measured::Measurement;
 use serde::{Deserialize, Serialize};
@@ -29,8 +30,23 @@ pub enum FailureReason {
     NonFinite,
     /// Its covariance lost positive definiteness.
     CovarianceNotPositive,
+    /// A variance grew beyond the filter's bound (the estimate is lost).
+    CovarianceBound,
     /// Its innovations stayed beyond their gate (the filter diverged).
     InnovationGate,
+}
+
+impl FailureReason {
+    /// The reason as one word (its serde spelling), for exit texts.
+    pub fn word(self) -> &'static str {
+        match self {
+            Self::NoReading => "no-reading",
+            Self::NonFinite => "non-finite",
+            Self::CovarianceNotPositive => "covariance-not-positive",
+            Self::CovarianceBound => "covariance-bound",
+            Self::InnovationGate => "innovation-gate",
+        }
+    }
 }
 
 /// An estimator's failure: why, and when (s).
@@ -126,7 +142,7 @@ impl SensorStage for MotionCapture {
         Provides { position: true, velocity: true, attitude: true, rate: true }
     }
     fn step(&mut self, truth: &SensorTruth<'_>, sink: &mut dyn FnMut(&Stamped)) {
-        let m = self.measure(&Measurement::euler(*truth.state));
+        let m = self.measure(&Measurement { euler: *truth.state, body: truth.body });
         sink(&Stamped { t_sample: truth.t, t_available: truth.t, reading: Reading::Motion(m) });
     }
     fn reseed(&mut self, key: u64) {

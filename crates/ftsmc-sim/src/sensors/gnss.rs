@@ -45,9 +45,14 @@ pub struct GnssParams {
     pub rate_hz: f64,
     /// Latency from sample to estimator, s (typical receivers 0.1–0.2 s).
     pub latency_s: f64,
-    /// Stationary standard deviation of the horizontal position error, m.
+    /// Stationary standard deviation of the horizontal position error
+    /// (each axis), m; also spelled `eph` (PX4's horizontal accuracy,
+    /// which its EKF2 fuses as a per-axis standard deviation).
+    #[serde(alias = "eph")]
     pub position_std: f64,
-    /// Stationary standard deviation of the vertical position error, m.
+    /// Stationary standard deviation of the vertical position error, m;
+    /// also spelled `epv`.
+    #[serde(alias = "epv")]
     pub vertical_std: f64,
     /// Correlation time of the position error, s (> 0).
     pub position_correlation_time: f64,
@@ -64,6 +69,21 @@ pub struct GnssParams {
     /// A scheduled outage `[start, end]`, s (optional).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub outage: Option<[f64; 2]>,
+    /// A position jump: from `onset` (s) on, every position reads
+    /// `offset` (m, world frame) further (a wrong fix, e.g. multipath or
+    /// a false RTK ambiguity resolution). Optional.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub jump: Option<GnssJump>,
+}
+
+/// A step in the GNSS position solution (`gnss.jump`).
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct GnssJump {
+    /// When the jump starts, s (>= 0).
+    pub onset: f64,
+    /// The offset added to every position from then on, m, world frame.
+    pub offset: [f64; 3],
 }
 
 impl Default for GnssParams {
@@ -86,6 +106,7 @@ impl Default for GnssParams {
             mean_fix_s: 0.0,
             mean_outage_s: 0.0,
             outage: None,
+            jump: None,
         }
     }
 }
@@ -122,6 +143,20 @@ impl GnssParams {
                     value: a,
                     expected: "[start, end] with 0 <= start <= end",
                 });
+            }
+        }
+        if let Some(j) = self.jump {
+            if !(j.onset.is_finite() && j.onset >= 0.0) {
+                return Err(GainError { field: "gnss.jump.onset", value: j.onset, expected: "a finite onset >= 0 s" });
+            }
+            for o in j.offset {
+                if !(o.is_finite() && o.abs() <= 1e4) {
+                    return Err(GainError {
+                        field: "gnss.jump.offset",
+                        value: o,
+                        expected: "|offset| <= 1e4 m per axis",
+                    });
+                }
             }
         }
         Ok(())
@@ -209,8 +244,14 @@ impl SensorModel for Gnss {
         let fix = self.chain_fix && !scheduled_out;
         let s = truth.state;
         let read = |v: [f64; 3], e: [f64; 3]| if fix { [v[0] + e[0], v[1] + e[1], v[2] + e[2]] } else { [f64::NAN; 3] };
+        let mut position_error = self.error[0];
+        if let Some(j) = self.params.jump.filter(|j| truth.t >= j.onset) {
+            for k in 0..3 {
+                position_error[k] += j.offset[k];
+            }
+        }
         Reading::Gnss(GnssReading {
-            position: read(s.position, self.error[0]),
+            position: read(s.position, position_error),
             velocity: read(s.velocity, self.error[1]),
             fix,
         })

@@ -150,6 +150,32 @@ pub struct SensorParams {
     /// about 1 ms against 100–200 Hz and about 6 ms).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub imu: Option<SensorClock>,
+    /// The estimator between the sensor stages and the controller
+    /// ([`super::pipeline`]; absent with no sensor table: the reading
+    /// above straight to the controller, the loop of every committed
+    /// scenario).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub estimator: Option<super::pipeline::EstimatorKind>,
+    /// The reading above is a stage of the pipeline (default: true with
+    /// `estimator = "passthrough"`, false otherwise).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub motion_capture: Option<bool>,
+    /// The inertial unit (`[sensors.inertial]`, [`super::pipeline::InertialSection`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub inertial: Option<super::pipeline::InertialSection>,
+    /// GNSS (`[sensors.gnss]`, [`super::gnss::GnssParams`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub gnss: Option<super::gnss::GnssParams>,
+    /// The barometer (`[sensors.barometer]`, [`super::baro::BaroParams`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub barometer: Option<super::baro::BaroParams>,
+    /// The magnetometer (`[sensors.magnetometer]`, [`super::mag::MagParams`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub magnetometer: Option<super::mag::MagParams>,
+    /// The ESKF's gate and divergence settings (`[sensors.eskf]`,
+    /// [`super::pipeline::EskfSection`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub eskf: Option<super::pipeline::EskfSection>,
 }
 
 /// Sample rate and latency of one group of measured quantities.
@@ -182,9 +208,33 @@ impl SensorClock {
 }
 
 impl SensorParams {
-    /// Whether these parameters are the perfect sensor (truth bit-exactly).
+    /// Whether these parameters are the perfect sensor (truth bit-exactly)
+    /// with no sensor pipeline.
     pub fn is_perfect(&self) -> bool {
         *self == Self::default()
+    }
+
+    /// Whether the controller is given the truth bit-exactly: the perfect
+    /// motion-capture reading handed on by the passthrough estimator (the
+    /// other sensor stages, if any, only recorded).
+    pub fn controller_sees_truth(&self) -> bool {
+        self.motion_capture_part().is_perfect()
+            && self.estimator.unwrap_or_default() == super::pipeline::EstimatorKind::Passthrough
+    }
+
+    /// The motion-capture/attitude part alone (the pipeline's keys cleared):
+    /// what [`Sensors`] reads.
+    pub fn motion_capture_part(&self) -> Self {
+        Self {
+            estimator: None,
+            motion_capture: None,
+            inertial: None,
+            gnss: None,
+            barometer: None,
+            magnetometer: None,
+            eskf: None,
+            ..*self
+        }
     }
 
     /// Check every value: `0 <= std <= 1e3`, `|bias| <= 1e3` (per axis, in

@@ -16,9 +16,10 @@
 //!   here is [`estimator::Passthrough`] (the motion-capture reading
 //!   straight to the controller, today's behaviour).
 //!
-//! The sensor stages are a library: the run loop does not fly them yet
-//! (it flies [`Sensors`]); they are meant to be joined to an estimator
-//! library and then to the loop.
+//! The run loop flies the stages when `[sensors]` names an estimator or
+//! a sensor table ([`pipeline`]: the list of stages and the estimator,
+//! Mahony and the ESKF of `ftsmc_core::estimate` among them); otherwise it
+//! flies [`Sensors`] as before.
 //!
 //! # Random streams
 //!
@@ -38,6 +39,7 @@ pub mod estimator;
 pub mod gnss;
 pub mod imu;
 pub mod mag;
+pub mod pipeline;
 
 use ftsmc_core::law::GainError;
 use ftsmc_core::measured::Measurement;
@@ -66,6 +68,9 @@ pub struct SensorTruth<'a> {
     /// True state in Euler form (position m, Z-Y-X angles rad, velocity
     /// m/s, Euler rates rad/s), world frame with `z` up.
     pub state: &'a QuadState,
+    /// The same attitude as quaternion and body rates, when the truth
+    /// model has them (the rigid body); `None` for the paper plant.
+    pub body: Option<ftsmc_core::measured::BodyAttitude>,
     /// True acceleration of the centre of mass in the world frame, m/s²
     /// (the accelerometer measures `R^T (a − g)`).
     pub acceleration: [f64; 3],
@@ -184,7 +189,8 @@ pub struct StageClock {
 
 impl StageClock {
     /// Check the clock against the fastest rate the loop can sample,
-    /// `max_rate_hz` (its physics substep rate): `0 < rate_hz <=
+    /// `max_rate_hz` (its control rate: stages are sampled at the control
+    /// period boundaries): `0 < rate_hz <=
     /// max_rate_hz`, `0 <= latency_s <= 10` s, both finite. `rate_field`
     /// and `latency_field` name the keys (`"gnss.rate_hz"`).
     pub fn check(
@@ -200,7 +206,8 @@ impl StageClock {
             return Err(GainError {
                 field: rate_field,
                 value: self.rate_hz,
-                expected: "a rate at most the physics substep rate (control_rate * substeps)",
+                expected:
+                    "a rate at most simulation.control_rate (sensors are sampled at the control period boundaries)",
             });
         }
         if !(0.0..=MAX_STAGE_LATENCY_S).contains(&self.latency_s) {

@@ -42,6 +42,7 @@ mod run_loop;
 mod scenario_2;
 mod scenario_ergonomics;
 mod scenario_files;
+mod sensor_pipeline;
 mod sensor_stages;
 mod sensors;
 mod sensors_body;

@@ -14,7 +14,7 @@ use ftsmc_sim::sensors::{
 };
 
 fn truth_at<'a>(t: f64, state: &'a QuadState) -> SensorTruth<'a> {
-    SensorTruth { t, state, acceleration: [0.0; 3], gravity: 9.81 }
+    SensorTruth { t, state, body: None, acceleration: [0.0; 3], gravity: 9.81 }
 }
 
 /// Allan deviation of `x` (rate samples at `dt`) at cluster time `m · dt`
@@ -87,7 +87,7 @@ fn accelerometer_reads_specific_force_and_saturates() {
     let rolled = QuadState { attitude: [core::f64::consts::FRAC_PI_2, 0.0, 0.0], ..QuadState::default() };
     let Reading::Imu(r) = imu.sample(&truth_at(0.0, &rolled), 1e-3) else { panic!() };
     assert!((r.specific_force[1] - 9.81).abs() < 2e-3 && r.specific_force[2].abs() < 2e-3, "{:?}", r.specific_force);
-    let hard = SensorTruth { t: 0.0, state: &level, acceleration: [1e4, 0.0, 0.0], gravity: 9.81 };
+    let hard = SensorTruth { t: 0.0, state: &level, body: None, acceleration: [1e4, 0.0, 0.0], gravity: 9.81 };
     let Reading::Imu(r) = imu.sample(&hard, 1e-3) else { panic!() };
     assert_eq!(r.specific_force[0], params.accelerometer.range);
     // Quantised: a multiple of one LSB.
@@ -319,7 +319,7 @@ fn bad_sensor_parameters_are_refused_naming_the_key() {
     let gnss = GnssParams { rate_hz: -1.0, ..GnssParams::default() };
     assert!(field(gnss.check(physics)).starts_with("gnss.rate_hz = -1"));
     let gnss = GnssParams { rate_hz: 4000.0, ..GnssParams::default() };
-    assert!(field(gnss.check(physics)).contains("physics substep rate"));
+    assert!(field(gnss.check(physics)).contains("simulation.control_rate"));
     let gnss = GnssParams { position_std: f64::NAN, ..GnssParams::default() };
     assert!(field(gnss.check(physics)).starts_with("gnss.position_std = NaN"));
     let gnss = GnssParams { mean_fix_s: 10.0, mean_outage_s: 0.0, ..GnssParams::default() };

@@ -35,6 +35,7 @@ fn params(rates: RateFrame) -> SensorParams {
         sample_rate: Some(200.0),
         latency: 6,
         imu: Some(SensorClock { sample_rate: Some(1000.0), latency: 1 }),
+        ..SensorParams::default()
     }
 }
 
