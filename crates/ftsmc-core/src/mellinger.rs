@@ -418,11 +418,9 @@ mod tests {
 
     #[test]
     fn the_gain_check_names_the_field() {
-        let mut g = MellingerGains::default();
-        g.kw_xy = 0.0;
+        let g = MellingerGains { kw_xy: 0.0, ..Default::default() };
         assert_eq!(g.check().unwrap_err().field, "kw_xy");
-        let mut g = MellingerGains::default();
-        g.i_range_m_z = -1.0;
+        let g = MellingerGains { i_range_m_z: -1.0, ..Default::default() };
         assert_eq!(g.check().unwrap_err().field, "i_range_m_z");
     }
 }
