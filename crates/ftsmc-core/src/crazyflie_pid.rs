@@ -238,9 +238,9 @@ impl PwmMap {
 /// and the attitude outputs `roll`, `pitch`, `yaw` (int16 units, already
 /// saturated), with the firmware's integer truncations.
 pub fn power_distribution_uncapped(thrust: f64, roll: f64, pitch: f64, yaw: f64) -> [f64; 4] {
-    let r = (roll / 2.0).trunc();
-    let p = (pitch / 2.0).trunc();
-    [thrust - r + p + yaw, thrust - r - p - yaw, thrust + r - p + yaw, thrust + r + p - yaw].map(|m: f64| m.trunc())
+    let r = libm::trunc(roll / 2.0);
+    let p = libm::trunc(pitch / 2.0);
+    [thrust - r + p + yaw, thrust - r - p - yaw, thrust + r - p + yaw, thrust + r + p - yaw].map(libm::trunc)
 }
 
 /// The firmware's cap (`powerDistributionCap`): every motor lowered by the
@@ -261,7 +261,7 @@ pub fn power_distribution(thrust: f64, roll: f64, pitch: f64, yaw: f64, idle_thr
 /// `saturateSignedInt16` of `attitude_pid_controller.c`: clamp to ±32767
 /// and truncate towards zero.
 pub fn saturate_int16(x: f64) -> f64 {
-    x.clamp(-32767.0, 32767.0).trunc()
+    libm::trunc(x.clamp(-32767.0, 32767.0))
 }
 
 /// The motor-voltage → thrust cubic of the Crazyflie 2.1 with 2.1+

@@ -277,7 +277,7 @@ impl Mellinger {
         });
         self.thrust = g.mass_thrust * thrust_n;
         if self.thrust > 0.0 {
-            let out = |x: f64| clamp_sym(x, 32000.0).trunc();
+            let out = |x: f64| libm::trunc(clamp_sym(x, 32000.0));
             self.outputs = [out(moment[0]), out(-moment[1]), out(-moment[2])];
         } else {
             self.outputs = [0.0; 3];
