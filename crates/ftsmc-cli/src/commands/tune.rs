@@ -81,13 +81,19 @@ pub fn run(args: Args) -> Result<()> {
     tune_all(&scenario, &args.scenario.scenario, &controllers, &request)
 }
 
-/// `-c`'s controllers: `all` (every registered controller), or a
+/// `-c`'s controllers: `all` (every registered controller that declares
+/// tunable parameters — the Crazyflie firmware's `crazyflie-pid` and
+/// `mellinger` declare none yet, so `all` leaves them out), or a
 /// comma-separated list (duplicates dropped, order kept), refused by the
 /// library's [`ControllerList::check_known`] when empty, when an entry is
 /// empty (`-c pid,`) or names no controller.
 pub fn controller_list(arg: &str) -> Result<Vec<String>> {
     let given: Vec<String> = if arg.trim() == "all" {
-        ftsmc_sim::registry::CONTROLLERS.iter().map(|(n, _)| n.to_string()).collect()
+        ftsmc_sim::registry::CONTROLLERS
+            .iter()
+            .filter(|(n, _)| ftsmc_sim::controllers::tunable::parameters(n).is_ok_and(|p| !p.is_empty()))
+            .map(|(n, _)| n.to_string())
+            .collect()
     } else {
         arg.split(',').map(|c| c.trim().to_string()).collect()
     };
