@@ -23,6 +23,8 @@ import numpy as np
 from . import _ftsmc, _progress
 from ._frames import frame as _frame
 from ._ftsmc import Scenario
+from ._trajectory import SHAPES as TRAJECTORY_SHAPES
+from ._trajectory import Trajectory, TrajectorySample, trajectory
 from .logs import Identification, identify, read_log, validate
 
 if TYPE_CHECKING:
@@ -49,6 +51,10 @@ __all__ = [
     "falsify",
     "failure_probability",
     "Tuned",
+    "TRAJECTORY_SHAPES",
+    "Trajectory",
+    "TrajectorySample",
+    "trajectory",
     "Identification",
     "identify",
     "read_log",
@@ -180,6 +186,8 @@ class Run:
     metrics: the run's entry of the CLI's ``summary.json`` (same keys and
         values: ``ise``, ``iae``, …, ``exit``, ``steps``, ``covered``, ``completed``).
     columns: the CSV time series, column name → 1-D float64 array.
+    arm_length: the flown vehicle's arm length, m (rotor centre to body
+        centre; ``ftsmc.plot.animate`` draws it to scale), when known.
     """
 
     def __init__(self, data: _ftsmc.RunData) -> None:
@@ -191,6 +199,7 @@ class Run:
         detail: Dict[str, Any] = json.loads(data.exit_json())
         time = float(detail.get("time", self.metrics["duration"]))
         self.exit = Exit(str(detail["status"]), time, data.exit_text(), detail)
+        self.arm_length: Optional[float] = None
 
     @cached_property
     def columns(self) -> Dict[str, np.ndarray]:
@@ -229,11 +238,14 @@ def simulate(scenario: Scenario, controller: Union[str, PythonController] = "fta
     the scenario's cost limits.
     """
     if isinstance(controller, str):
-        return Run(_ftsmc.simulate_native(scenario, controller))
-    name = getattr(controller, "name", None)
-    if not isinstance(name, str):
-        name = type(controller).__name__
-    return Run(_ftsmc.simulate_python(scenario, controller, State, Reference, name))
+        run = Run(_ftsmc.simulate_native(scenario, controller))
+    else:
+        name = getattr(controller, "name", None)
+        if not isinstance(name, str):
+            name = type(controller).__name__
+        run = Run(_ftsmc.simulate_python(scenario, controller, State, Reference, name))
+    run.arm_length = _ftsmc.vehicle_arm_length(scenario)
+    return run
 
 
 def montecarlo(

@@ -10,7 +10,8 @@
 - ``ftsmc/HoverMotors-v0``: the same with the four rotor speeds as the action
   (``action="motors"``).
 - ``ftsmc/Track-v0``: track the scenario's own reference from its initial
-  state; collective thrust and body rates; the scenario's duration
+  state — or any :class:`ftsmc.Trajectory` (``trajectory=``), from rest on
+  its first point; collective thrust and body rates; the scenario's duration
   (``max_episode_steps`` 2000: the default scenario's 20 s at 100 Hz).
 
 ``max_episode_steps`` matches the default ``agent_rate``; the environment
@@ -19,8 +20,10 @@ itself truncates at its episode time, so with another rate pass
 
 ``render_mode="rgb_array"`` makes :meth:`FtsmcEnv.render` return an H×W×3
 uint8 frame (``RENDER_SHAPE``): a top view (x–y) and a side view (x–z) of
-the vehicle (a "+" of its arms rotated by its true attitude, the front arm
-red), its trail and the target (a red ring), drawn with matplotlib's Agg
+the vehicle (a "+" of its arms, to the scale of the scenario's vehicle,
+rotated by its true attitude, the front arm red), its trail (its position
+at each of the last 200 steps, recorded at every step) and the target (a
+red ring), each view grown to hold the vehicle and its trail, drawn with matplotlib's Agg
 canvas (no display needed); ``render_mode="human"`` shows the same frames
 in a matplotlib window at ``metadata["render_fps"]``.
 
@@ -51,6 +54,7 @@ from gymnasium.vector.utils import batch_space
 
 from . import _ftsmc
 from ._ftsmc import Scenario
+from ._trajectory import Trajectory
 from ._render import FrameRenderer, HumanWindow
 
 __all__ = [
@@ -111,8 +115,21 @@ def _scenario(scenario: ScenarioLike) -> Scenario:
     return Scenario.from_file(text)
 
 
-def _batch(scenario: ScenarioLike, num_envs: int, settings: Mapping[str, Any]) -> _ftsmc.GymBatch:
+def _flown(scenario: ScenarioLike, task: str, trajectory: Optional[Trajectory], time_scale: str) -> Scenario:
+    """The scenario an environment flies: with ``trajectory`` (task
+    ``"track"`` only) as its reference, started at rest on its first point."""
     s = _scenario(scenario)
+    if trajectory is None:
+        return s
+    if task != "track":
+        raise ValueError(f"`trajectory` is only for task = \"track\" (task = {task!r})")
+    if not isinstance(trajectory, Trajectory):
+        raise ValueError(f"`trajectory` = {trajectory!r} is invalid (expected an ftsmc.Trajectory: ftsmc.trajectory(...))")
+    return trajectory.into_scenario(s, time_scale=time_scale)
+
+
+def _batch(scenario: Scenario, num_envs: int, settings: Mapping[str, Any]) -> _ftsmc.GymBatch:
+    s = scenario
     # Priced before anything is allocated for the environments.
     _ftsmc.gym_check_envs(s, num_envs)
     return _ftsmc.GymBatch(s, [0] * num_envs, **settings)
@@ -203,6 +220,12 @@ class FtsmcEnv(gym.Env[ObsArray, ActArray]):
     hover_radius: m (task ``"hover"`` only; default ``HOVER_RADIUS`` = 2):
         the episode is terminated once the true position is farther than
         this from the target along any axis.
+    trajectory: task ``"track"`` only: an :class:`ftsmc.Trajectory` to
+        track instead of the scenario's reference; the episode starts at
+        rest on its first point (heading ψ there).
+    time_scale: with ``trajectory``: ``"fixed"`` refuses (ValueError) one
+        the vehicle's thrust or tilt cannot fly, ``"fit"`` slows it until
+        it can (with a warning saying by how much).
     render_mode: ``None``, ``"rgb_array"`` or ``"human"`` (module docs).
 
     ``terminated`` on a crash (ground) or divergence (position error beyond
@@ -229,6 +252,8 @@ class FtsmcEnv(gym.Env[ObsArray, ActArray]):
         max_rate: Optional[Sequence[float]] = None,
         randomize: bool = False,
         hover_radius: Optional[float] = None,
+        trajectory: Optional[Trajectory] = None,
+        time_scale: str = "fixed",
         render_mode: Optional[str] = None,
     ) -> None:
         if render_mode is not None and render_mode not in RENDER_MODES:
@@ -236,7 +261,9 @@ class FtsmcEnv(gym.Env[ObsArray, ActArray]):
         settings = _settings(
             task, target, action, observe, agent_rate, max_episode_time, reward, rate_gain, max_rate, randomize, hover_radius
         )
-        self._batch = _batch(scenario, 1, settings)
+        flown = _flown(scenario, task, trajectory, time_scale)
+        self._batch = _batch(flown, 1, settings)
+        self._arm = _ftsmc.vehicle_arm_length(flown)
         self.observation_space, self.action_space = _spaces(self._batch)
         self._ended = True
         self._no_seed = np.zeros(1, dtype=np.uint64)
@@ -258,8 +285,9 @@ class FtsmcEnv(gym.Env[ObsArray, ActArray]):
         obs, _, _, _, _, _, _ = self._batch.reset(np.array([episode_seed], dtype=np.uint64))
         self._ended = False
         self._time = 0.0
-        if self._renderer is not None:
-            self._renderer.clear_trail()
+        if self.render_mode is not None:
+            self._frames().clear_trail()
+            self._frames().record(self._batch.pose(0)[0])
         if self.render_mode == "human":
             self.render()
         return obs[0], {"time": 0.0, "seed": episode_seed}
@@ -272,6 +300,8 @@ class FtsmcEnv(gym.Env[ObsArray, ActArray]):
         obs, reward, terminated, truncated, reason, time, _ = self._batch.step(a, self._no_seed)
         info: Dict[str, Any] = {"time": float(time[0])}
         self._time = float(time[0])
+        if self._renderer is not None:
+            self._renderer.record(self._batch.pose(0)[0])
         if terminated[0] or truncated[0]:
             info["reason"] = reason[0]
             self._ended = True
@@ -284,16 +314,19 @@ class FtsmcEnv(gym.Env[ObsArray, ActArray]):
         uint8), or show it (``"human"``); ``None`` without a render mode."""
         if self.render_mode is None:
             return None
-        if self._renderer is None:
-            self._renderer = FrameRenderer(RENDER_SHAPE[0], RENDER_SHAPE[1], span=self._span)
         position, attitude, target = self._batch.pose(0)
-        frame: AnyArray = self._renderer.draw(position, attitude, target, self._time)
+        frame: AnyArray = self._frames().draw(position, attitude, target, self._time)
         if self.render_mode == "rgb_array":
             return frame
         if self._window is None:
             self._window = HumanWindow(self.metadata["render_fps"])
         self._window.show(frame)
         return None
+
+    def _frames(self) -> FrameRenderer:
+        if self._renderer is None:
+            self._renderer = FrameRenderer(RENDER_SHAPE[0], RENDER_SHAPE[1], span=self._span, arm=self._arm)
+        return self._renderer
 
     def close(self) -> None:
         """Close the render window, if any."""
@@ -337,6 +370,8 @@ class FtsmcVectorEnv(VectorEnv[ObsArray, ActArray, AnyArray]):
         randomize: bool = False,
         hover_radius: Optional[float] = None,
         max_episode_steps: Optional[int] = None,
+        trajectory: Optional[Trajectory] = None,
+        time_scale: str = "fixed",
     ) -> None:
         if int(num_envs) < 1:
             raise ValueError(f"`num_envs` = {num_envs} is invalid (expected at least 1 environment)")
@@ -351,7 +386,7 @@ class FtsmcVectorEnv(VectorEnv[ObsArray, ActArray, AnyArray]):
             task, target, action, observe, agent_rate, max_episode_time, reward, rate_gain, max_rate, randomize, hover_radius
         )
         self.num_envs = int(num_envs)
-        self._batch = _batch(scenario, self.num_envs, settings)
+        self._batch = _batch(_flown(scenario, task, trajectory, time_scale), self.num_envs, settings)
         self.single_observation_space, self.single_action_space = _spaces(self._batch)
         self.observation_space = batch_space(self.single_observation_space, self.num_envs)
         self.action_space = batch_space(self.single_action_space, self.num_envs)

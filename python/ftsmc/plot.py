@@ -12,13 +12,14 @@ Units: m, rad, rad/s, s. :func:`animate` replays a flight in 3-D.
     fig = ftsmc.plot.position([run, other])      # or run.plot("position")
     fig = ftsmc.plot.montecarlo_box(ftsmc.montecarlo(scenario, 100))
     anim = ftsmc.plot.animate(run)               # anim.save("flight.gif", writer="pillow")
+    fig = ftsmc.plot.trajectory(traj, run)       # a trajectory in 3-D, the flight over it
 
 Needs matplotlib (``pip install "./python[plot]"``).
 """
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any, Dict, List, Optional, Sequence, Union
+from typing import TYPE_CHECKING, Any, Dict, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
@@ -30,9 +31,9 @@ if TYPE_CHECKING:
     import matplotlib.figure
     import pandas
 
-    from . import Run
+    from . import Run, Trajectory
 
-__all__ = ["animate", "attitude", "montecarlo_box", "overview", "position", "rotors", "run"]
+__all__ = ["animate", "attitude", "montecarlo_box", "overview", "position", "rotors", "run", "trajectory"]
 
 COLORS: Dict[str, str] = {
     "ftaftsmc": "#1f77b4",
@@ -227,11 +228,74 @@ def montecarlo_box(
     return fig
 
 
-def animate(r: Run, frames: int = 120, interval: float = 50.0) -> matplotlib.animation.FuncAnimation:
+_PIXELS: List[Any] = []
+"""The artist class of :func:`_Pixels`, made once."""
+
+
+def _Pixels(frame: np.ndarray) -> Any:
+    """An artist that copies ``frame`` (H×W×4 uint8, bottom row first) onto
+    the figure's pixels; resized (Pillow) when the figure is drawn at
+    another size (``anim.save(..., dpi=…)``)."""
+    if _PIXELS:
+        return _PIXELS[0](frame)
+    from matplotlib.artist import Artist
+
+    class Pixels(Artist):
+        def __init__(self, frame: np.ndarray) -> None:
+            super().__init__()
+            self.frame = frame
+
+        # Defined here so that matplotlib does not build a signature and
+        # docstring of every setter for this class (half a second).
+        def set(self, **kwargs: Any) -> Any:
+            return Artist.set(self, **kwargs)
+
+        def draw(self, renderer: Any) -> None:
+            w, h = (int(round(v)) for v in renderer.get_canvas_width_height())
+            im = self.frame
+            if im.shape[:2] != (h, w):
+                from PIL import Image
+
+                im = np.asarray(Image.fromarray(im, "RGBA").resize((w, h), Image.Resampling.BILINEAR))
+            gc = renderer.new_gc()
+            renderer.draw_image(gc, 0, 0, im)
+            gc.restore()
+            self.stale = False
+
+    _PIXELS.append(Pixels)
+    return Pixels(frame)
+
+
+def _fit_box(points: np.ndarray, margin: float, least: float) -> Tuple[np.ndarray, np.ndarray]:
+    """Per-axis limits (low, high) holding every finite point of ``points``
+    (K × 3) with ``margin`` around it, each axis at least ``least`` wide, m."""
+    pts = points[np.isfinite(points).all(axis=1)]
+    if len(pts) == 0:
+        pts = np.zeros((1, 3))
+    lo, hi = pts.min(axis=0) - margin, pts.max(axis=0) + margin
+    mid, half = (lo + hi) / 2, np.maximum((hi - lo) / 2, least / 2)
+    return mid - half, mid + half
+
+
+def animate(
+    r: Run, frames: int = 120, interval: float = 50.0, arm: Optional[float] = None
+) -> matplotlib.animation.FuncAnimation:
     """A 3-D replay of one run: its path (up to the frame's time) and its
     reference (black, dashed), and the vehicle — a "+" of four arms rotated
     by its attitude ``R = Rz(ψ) Ry(θ) Rx(φ)`` (paper Eq. 1), the front arm
-    red — at ``frames`` evenly spaced times, ``interval`` ms apart.
+    red, drawn to scale — at ``frames`` evenly spaced times, ``interval`` ms apart.
+
+    arm: the arm length drawn, m (default: the flown vehicle's,
+        ``run.arm_length``, set by :func:`ftsmc.simulate`; else ``ARM``).
+        A dot marks the vehicle's centre, so a small vehicle stays visible.
+
+    The axes hold the whole flight and reference (with an arm's margin) at
+    one scale on the three axes, seen from matplotlib's default 3-D view.
+    The axes, reference and legend are drawn once; each frame restores
+    those pixels and draws only the moving artists on them (blitting), and
+    the animation shows the composed frames as an image — so a saved GIF
+    costs milliseconds per frame, not a full 3-D redraw.
+    ``anim.scene_axes`` is the 3-D axes the frames are drawn from.
 
     Returns a :class:`matplotlib.animation.FuncAnimation`:
     ``anim.save("flight.gif", writer="pillow")`` writes a GIF (Pillow comes
@@ -240,8 +304,10 @@ def animate(r: Run, frames: int = 120, interval: float = 50.0) -> matplotlib.ani
     """
     import matplotlib.pyplot as plt
     from matplotlib.animation import FuncAnimation
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
 
-    from ._render import arms
+    from ._render import ARM, arms
 
     if frames < 1:
         raise ValueError(f"frames = {frames} is invalid (expected at least 1)")
@@ -249,42 +315,133 @@ def animate(r: Run, frames: int = 120, interval: float = 50.0) -> matplotlib.ani
     t = c["t"]
     if len(t) == 0:
         raise ValueError(f"run {r!r} recorded no time series (its scenario's record_rate is 0)")
+    length = float(arm if arm is not None else (r.arm_length if r.arm_length is not None else ARM))
+    if not (np.isfinite(length) and length > 0):
+        raise ValueError(f"arm = {length} is invalid (expected a finite arm length > 0, m)")
     p = np.stack([c["x"], c["y"], c["z"]], axis=1)
     att = np.stack([c["phi"], c["theta"], c["psi"]], axis=1)
     ok = np.isfinite(p).all(axis=1) & np.isfinite(att).all(axis=1)
     last = int(np.flatnonzero(ok)[-1]) if ok.any() else 0
     picks = np.unique(np.linspace(0, last, frames).round().astype(int))
-    span = float(np.nanmax(np.ptp(p[: last + 1], axis=0))) if last > 0 else 1.0
-    arm = max(0.05, 0.06 * span)
+    has_ref = all(k in c for k in ("x_ref", "y_ref", "z_ref"))
+    ref = np.stack([c["x_ref"], c["y_ref"], c["z_ref"]], axis=1) if has_ref else np.empty((0, 3))
+    lo, hi = _fit_box(np.vstack([p[: last + 1][ok[: last + 1]], ref]), 1.5 * length, 6 * length)
 
-    fig = plt.figure(figsize=(6, 5), layout="constrained")
-    ax: Any = fig.add_subplot(projection="3d")  # mpl_toolkits' Axes3D (set_zlim, plot in 3-D)
-    if all(k in c for k in ("x_ref", "y_ref", "z_ref")):
-        ax.plot(c["x_ref"], c["y_ref"], c["z_ref"], "k--", lw=1.0, label="reference", zorder=4)
+    # The scene: a 3-D axes on its own Agg canvas. Its static part (axes,
+    # panes, ticks, reference, legend) is drawn once and kept as pixels;
+    # each frame restores them and draws only the moving artists (blitting).
+    dpi = 100
+    scene = Figure(figsize=(6, 5), dpi=dpi)
+    canvas = FigureCanvasAgg(scene)
+    scene.subplots_adjust(left=0.0, right=0.95, bottom=0.02, top=0.92)
+    ax: Any = scene.add_subplot(projection="3d")  # mpl_toolkits' Axes3D (set_zlim, plot in 3-D)
+    if has_ref:
+        ax.plot(ref[:, 0], ref[:, 1], ref[:, 2], "k--", lw=1.0, label="reference", zorder=4)
     color = _color(r.controller) or "#1f77b4"
-    (path,) = ax.plot([], [], [], color=color, lw=1.4, label=label(r.controller) + _ending(r))
-    arm_lines = [ax.plot([], [], [], color="#d62728" if k == 0 else "#222222", lw=2.5)[0] for k in range(4)]
-    (up,) = ax.plot([], [], [], color="#1f77b4", lw=1.5)
-    lo, hi = np.nanmin(p[: last + 1], axis=0) - arm, np.nanmax(p[: last + 1], axis=0) + arm
+    (path,) = ax.plot([], [], [], color=color, lw=1.4, label=label(r.controller) + _ending(r), animated=True)
+    arm_lines = [
+        ax.plot([], [], [], color="#d62728" if k == 0 else "#222222", lw=2.5, animated=True)[0] for k in range(4)
+    ]
+    (up,) = ax.plot([], [], [], color="#1f77b4", lw=1.5, animated=True)
+    (centre,) = ax.plot([], [], [], marker="o", ms=3, color="#111111", ls="none", animated=True)
     ax.set_xlim(lo[0], hi[0])
     ax.set_ylim(lo[1], hi[1])
     ax.set_zlim(lo[2], hi[2])
+    ax.set_box_aspect(tuple(hi - lo))  # one scale on x, y and z: the glyph is not distorted
     ax.set_xlabel("x (m)")
     ax.set_ylabel("y (m)")
     ax.set_zlabel("z (m)")
     ax.legend(loc="upper left", fontsize=8)
-    title = ax.set_title("")
+    ax.set_title(r.scenario, fontsize=10)
+    # The clock is the only text redrawn per frame (glyphs cost more than lines).
+    title = ax.text2D(1.0, 1.0, "", transform=ax.transAxes, ha="right", va="bottom", fontsize=9, animated=True)
+    moving = [path, up, centre, title, *arm_lines]
+    canvas.draw()  # the static part (animated artists are skipped)
+    background = canvas.copy_from_bbox(scene.bbox)
 
-    def draw(i: int) -> List[Any]:
+    def compose(i: int) -> np.ndarray:
         k = int(picks[i])
         path.set_data_3d(p[: k + 1, 0], p[: k + 1, 1], p[: k + 1, 2])
-        tips, top = arms(p[k], att[k], arm)
+        tips, top = arms(p[k], att[k], length)
         for line, tip in zip(arm_lines, tips):
             line.set_data_3d([p[k, 0], tip[0]], [p[k, 1], tip[1]], [p[k, 2], tip[2]])
         up.set_data_3d([p[k, 0], top[0]], [p[k, 1], top[1]], [p[k, 2], top[2]])
-        title.set_text(f"{r.scenario}: t = {t[k]:.2f} s")
-        return [path, up, title, *arm_lines]
+        centre.set_data_3d([p[k, 0]], [p[k, 1]], [p[k, 2]])
+        title.set_text(f"t = {t[k]:.2f} s")
+        canvas.restore_region(background)
+        for artist in moving:
+            ax.draw_artist(artist)
+        return np.asarray(canvas.buffer_rgba())[::-1].copy()  # rows bottom-up, as draw_image takes them
 
-    anim = FuncAnimation(fig, draw, frames=len(picks), interval=interval, blit=False)
+    # What is shown and saved: the composed frames, copied pixel for pixel
+    # onto the figure (an AxesImage would resample every frame).
+    fig = plt.figure(figsize=(6, 5), dpi=dpi)
+    fig.patch.set_visible(False)  # the frame covers it
+    pixels = _Pixels(compose(0))
+    fig.add_artist(pixels)
+
+    def draw(i: int) -> List[Any]:
+        pixels.frame = compose(i)
+        pixels.stale = True
+        return [pixels]
+
+    anim = FuncAnimation(fig, draw, frames=len(picks), init_func=lambda: draw(0), interval=interval, blit=True)
+    anim.scene_axes = ax  # type: ignore[attr-defined]  # the 3-D axes the frames are drawn from
     plt.close(fig)  # shown through the animation, not as a still figure
     return anim
+
+
+def trajectory(
+    traj: Trajectory, runs: Union[None, Run, Sequence[Run]] = None, until: Optional[float] = None, samples: int = 1000
+) -> matplotlib.figure.Figure:
+    """A trajectory in 3-D (black, dashed; a minimum-snap one's waypoints
+    as black dots) with each run's flown path over it in its controller's
+    colour (a × where a run stopped early, the reason in the legend).
+
+    until: last time drawn, s (default: the trajectory's end, else the
+        runs' last recorded time, else 10 s after its start).
+    samples: points of the trajectory drawn (evenly spaced in time).
+    The axes hold everything drawn, at one scale on x, y and z.
+    """
+    import matplotlib.pyplot as plt
+
+    rs = [] if runs is None else _runs(runs)
+    _check_recorded(rs)
+    if samples < 2:
+        raise ValueError(f"samples = {samples} is invalid (expected at least 2)")
+    if until is None:
+        ends = [float(r.columns["t"][-1]) for r in rs]
+        until = traj.end if traj.end is not None else (max(ends) if ends else traj.start + 10.0)
+    if not (np.isfinite(until) and until > traj.start):
+        raise ValueError(f"until = {until} is invalid (expected a time after the trajectory's start, {traj.start} s)")
+    ref = traj.position(np.linspace(traj.start, until, samples))
+    fig = plt.figure(figsize=(6, 5), layout="constrained")
+    ax: Any = fig.add_subplot(projection="3d")
+    drawn = [ref]
+    for r in rs:
+        c = r.columns
+        xyz = np.stack([c["x"], c["y"], c["z"]], axis=1)
+        color = _color(r.controller)
+        ax.plot(xyz[:, 0], xyz[:, 1], xyz[:, 2], color=color, lw=1.2, label=label(r.controller) + _ending(r), zorder=2)
+        ok = np.isfinite(xyz).all(axis=1)
+        if r.exit.status != "completed" and ok.any():
+            k = int(np.flatnonzero(ok)[-1])
+            ax.plot([xyz[k, 0]], [xyz[k, 1]], [xyz[k, 2]], marker="x", markersize=8, mew=2, color=color, zorder=5)
+        drawn.append(xyz)
+    ax.plot(ref[:, 0], ref[:, 1], ref[:, 2], "k--", lw=1.0, label=f"trajectory ({traj.kind})", zorder=4)
+    knots = traj.times
+    if knots is not None:
+        w = traj.position(knots)
+        ax.plot(w[:, 0], w[:, 1], w[:, 2], "ko", ms=4, ls="none", label="waypoints", zorder=5)
+    span = float(np.ptp(ref, axis=0).max()) if len(ref) else 1.0
+    lo, hi = _fit_box(np.vstack(drawn), 0.05 * max(span, 0.1), 0.1 * max(span, 0.1))
+    ax.set_xlim(lo[0], hi[0])
+    ax.set_ylim(lo[1], hi[1])
+    ax.set_zlim(lo[2], hi[2])
+    ax.set_box_aspect(tuple(hi - lo))
+    ax.set_xlabel("x (m)")
+    ax.set_ylabel("y (m)")
+    ax.set_zlabel("z (m)")
+    ax.legend(loc="upper left", fontsize=8)
+    ax.set_title(f"{traj.kind}: {traj.start:g}–{until:g} s" + (f" ({rs[0].scenario})" if rs else ""), fontsize=9)
+    return fig

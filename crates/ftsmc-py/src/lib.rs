@@ -21,6 +21,7 @@ mod logs;
 mod progress;
 mod scenario;
 mod stats;
+mod trajectory;
 mod tune;
 
 /// A `ValueError` carrying `message` (the text the CLI prints after `error: `).
@@ -46,6 +47,8 @@ fn _ftsmc(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<controller::NativeController>()?;
     m.add_class::<flight::RunData>()?;
     m.add_class::<gym::GymBatch>()?;
+    m.add_class::<trajectory::NativeTrajectory>()?;
+    m.add_function(wrap_pyfunction!(trajectory::vehicle_arm_length, m)?)?;
     m.add_function(wrap_pyfunction!(flight::simulate_native, m)?)?;
     m.add_function(wrap_pyfunction!(flight::simulate_python, m)?)?;
     m.add_function(wrap_pyfunction!(flight::montecarlo_columns, m)?)?;

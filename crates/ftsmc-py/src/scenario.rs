@@ -40,7 +40,7 @@ pub struct Scenario {
 
 /// Issue the loader's unit-slip warnings as Python `UserWarning`s (the CLI
 /// prints them as `warning: …` lines).
-fn warn_all(py: Python<'_>, loaded: Loaded) -> PyResult<Scenario> {
+pub(crate) fn warn_all(py: Python<'_>, loaded: Loaded) -> PyResult<Scenario> {
     for w in &loaded.warnings {
         PyErr::warn(py, &py.get_type::<PyUserWarning>(), &std::ffi::CString::new(w.as_str())?, 2)?;
     }
@@ -190,7 +190,7 @@ pub use ftsmc_sim::scenario::overrides::{MAX_KEY_CHARS, MAX_KEY_PARTS};
 /// [`to_toml_value`] within [`MAX_OVERRIDE_DEPTH`] and a budget of
 /// [`MAX_OVERRIDE_VALUES`] values, so that a self-referencing or hugely
 /// nested dict raises `ValueError` instead of exhausting the stack.
-fn to_toml_value(value: &Bound<'_, PyAny>, budget: &mut usize) -> Result<toml::Value, String> {
+pub(crate) fn to_toml_value(value: &Bound<'_, PyAny>, budget: &mut usize) -> Result<toml::Value, String> {
     to_toml_value_at(value, 0, budget)
 }
 
