@@ -291,8 +291,9 @@ def montecarlo(
                 )
 
     names_arg = None if controllers is None else list(controllers)
-    if names_arg is not None and not names_arg:
-        raise ValueError(f"controllers = [] is invalid (expected at least one controller name; known: {', '.join(CONTROLLERS)})")
+    if names_arg is not None:
+        # The library's check (as the CLI's -c): an empty list or name, an unknown name.
+        _ftsmc.check_controllers("controllers", names_arg)
     if client is not None:
         from .dask import montecarlo_columns
 

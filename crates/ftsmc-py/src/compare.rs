@@ -90,6 +90,17 @@ pub fn compare_native<'py>(
     let mut base = scenario.inner.clone();
     base.seed = seed.unwrap_or(base.seed);
     ftsmc_sim::stats::check_confidence(confidence).map_err(|e| value_error(format!("confidence: {e}")))?;
+    // The names as given (a `Scenario` by its name), refused when the list
+    // or a name is empty, as the CLI's `-c`; the unknown ones below, since a
+    // contestant may also be a file.
+    let given: Vec<String> = contestants
+        .iter()
+        .map(|c| {
+            c.extract::<PyRef<'_, Scenario>>()
+                .map_or_else(|_| c.extract::<String>().unwrap_or_default(), |s| s.inner.name.clone())
+        })
+        .collect();
+    ftsmc_sim::registry::ControllerList { argument: "contestants", names: &given }.check().map_err(value_error)?;
     let mut list: Vec<Contestant> = Vec::new();
     for c in &contestants {
         let contestant = if let Ok(file) = c.extract::<PyRef<'_, Scenario>>() {

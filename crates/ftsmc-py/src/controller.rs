@@ -41,7 +41,7 @@ pub(crate) fn floats<const N: usize>(value: &Bound<'_, PyAny>, what: &str) -> Py
 
 /// Build a registry controller, with the CLI's message for an unknown name.
 pub(crate) fn build(name: &str, scenario: &ftsmc_sim::Scenario) -> PyResult<BoxedController> {
-    registry::check_name(name).map_err(|known| value_error(format!("unknown controller `{name}` (known: {known})")))?;
+    crate::check_controllers("controller", &[name.to_string()])?;
     registry::build(name, scenario).map_err(value_error)
 }
 

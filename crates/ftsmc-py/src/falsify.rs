@@ -25,6 +25,7 @@ fn pool(threads: Option<usize>) -> PyResult<rayon::ThreadPool> {
 
 fn problem(scenario: &ftsmc_sim::Scenario, controller: &str, budget: u64) -> PyResult<Problem> {
     use ftsmc_sim::scenario::falsify_section::MAX_BUDGET;
+    crate::check_controllers("controller", &[controller.to_string()])?;
     if !(1..=MAX_BUDGET).contains(&budget) {
         return Err(value_error(format!("budget = {budget}: expected 1 to {MAX_BUDGET} flights")));
     }

@@ -162,16 +162,7 @@ pub fn montecarlo_columns<'py>(
 ) -> PyResult<(Vec<String>, Vec<Bound<'py, PyAny>>)> {
     let mut scenario = scenario.inner.clone();
     let names = controllers.unwrap_or_else(|| scenario.controllers.clone());
-    if names.is_empty() {
-        return Err(value_error(format!(
-            "controllers = [] is invalid (expected at least one controller name; known: {})",
-            ftsmc_sim::registry::CONTROLLERS.iter().map(|(n, _)| *n).collect::<Vec<_>>().join(", ")
-        )));
-    }
-    for name in &names {
-        ftsmc_sim::registry::check_name(name)
-            .map_err(|known| value_error(format!("unknown controller `{name}` (known: {known})")))?;
-    }
+    crate::check_controllers("controllers", &names)?;
     if runs < 1 {
         return Err(value_error("runs must be at least 1"));
     }

@@ -29,6 +29,23 @@ pub(crate) fn value_error(message: impl std::fmt::Display) -> PyErr {
     PyValueError::new_err(message.to_string())
 }
 
+/// The library's [`ftsmc_sim::registry::ControllerList::check_known`] of
+/// the controller `names` a Python function received as `argument`
+/// (`controllers`, `controller`, `contestants`): an empty list, an empty
+/// or blank name, or an unregistered one is a `ValueError` naming the
+/// argument and the value — the same check, and words, as the CLI's `-c`.
+pub(crate) fn check_controllers(argument: &str, names: &[String]) -> PyResult<()> {
+    ftsmc_sim::registry::ControllerList { argument, names }.check_known().map_err(value_error)
+}
+
+/// [`check_controllers`] from Python, for the paths that do not reach the
+/// native flight functions at once (a Dask batch is planned in Python first).
+#[pyfunction]
+#[pyo3(name = "check_controllers")]
+fn check_controllers_py(argument: &str, names: Vec<String>) -> PyResult<()> {
+    check_controllers(argument, &names)
+}
+
 /// The module `ftsmc._ftsmc`.
 #[pymodule]
 fn _ftsmc(m: &Bound<'_, PyModule>) -> PyResult<()> {
@@ -73,6 +90,7 @@ fn _ftsmc(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(logs::log_validate, m)?)?;
     m.add_function(wrap_pyfunction!(logs::log_synthetic, m)?)?;
     m.add_function(wrap_pyfunction!(controller_names, m)?)?;
+    m.add_function(wrap_pyfunction!(check_controllers_py, m)?)?;
     m.add_function(wrap_pyfunction!(controller_label, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
