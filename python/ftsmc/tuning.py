@@ -38,6 +38,7 @@ def tune(
     extends: Optional[str] = None,
     client: Any = None,
     batch: Optional[int] = None,
+    mission: Optional[str] = None,
 ) -> Tuned:
     """Tune ``controller``'s declared gains on ``scenario`` by CMA-ES (``ftsmc tune``).
 
@@ -60,9 +61,14 @@ def tune(
     ``_ftsmc.tune_evaluate`` on ``threads`` worker threads (default 1),
     gathered in order by :func:`ftsmc.dask.map_batches`. The result equals
     the local call's: every candidate flies the same draws either way.
+
+    ``mission``: ``"steps"`` (default: the scenario's own reference),
+    ``"hover"``, ``"figure-eight"`` or ``"waypoints"``, flown as ``ftsmc tune
+    --mission`` flies it; the tuned TOML states it (``[tune] mission``) and
+    ``Tuned.scenario.tune_mission`` reads it back.
     """
     if client is None:
-        tuned, text, summary = _ftsmc.tune_native(scenario, controller, budget, seed, threads, extends)
+        tuned, text, summary = _ftsmc.tune_native(scenario, controller, budget, seed, threads, extends, None, mission)
         return Tuned(tuned, text, json.loads(summary))
     if batch is not None and batch < 1:
         raise ValueError(f"batch must be at least 1, got {batch}")
@@ -77,7 +83,7 @@ def tune(
         results = map_batches(client, _evaluate_batch, batches, controller, master, indices, task_threads)
         return [stats for result in results for stats in result]
 
-    tuned, text, summary = _ftsmc.tune_native(scenario, controller, budget, seed, threads, extends, evaluator)
+    tuned, text, summary = _ftsmc.tune_native(scenario, controller, budget, seed, threads, extends, evaluator, mission)
     return Tuned(tuned, text, json.loads(summary))
 
 

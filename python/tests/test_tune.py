@@ -102,3 +102,19 @@ def test_only_declared_gains_are_tunable(key: str) -> None:
     # A gain of the controller's own section is accepted.
     gain = {"tune": {"extra": [{"key": "pid.rate_p.0", "low": 0.01, "high": 1.0}]}}
     assert tiny().with_overrides(gain).to_toml()
+
+
+def test_a_tune_for_a_mission_states_it_in_the_tuned_file(tmp_path: Path) -> None:
+    s = tiny().with_overrides({"duration": 6.0})
+    hover = ftsmc.tune(s, "pid", budget=BUDGET, seed=3, threads=2, mission="hover")
+    assert 'mission = "hover"' in hover.toml
+    (tmp_path / "tuned.toml").write_text(hover.toml)
+    loaded = ftsmc.Scenario.from_file(tmp_path / "tuned.toml")
+    assert loaded.tune_mission == "hover"
+    assert hover.scenario.tune_mission == "hover"
+    # steps (the default) writes the file of a tune without a mission.
+    plain = ftsmc.tune(s, "pid", budget=BUDGET, seed=3, threads=2)
+    assert ftsmc.tune(s, "pid", budget=BUDGET, seed=3, threads=2, mission="steps").toml == plain.toml
+    assert "mission" not in plain.toml and plain.scenario.tune_mission is None
+    with pytest.raises(ValueError, match='mission = "eight" is invalid \\(expected one of steps, hover'):
+        ftsmc.tune(s, "pid", budget=BUDGET, mission="eight")

@@ -131,6 +131,14 @@ impl Scenario {
         self.inner.name.clone()
     }
 
+    /// The mission its gains were tuned for (`[tune] mission` of a tuned
+    /// file: `hover`, `figure-eight`, `waypoints`, or `steps`); None when
+    /// the file states none (the scenario's own reference).
+    #[getter]
+    fn tune_mission(&self) -> Option<String> {
+        self.inner.tune.as_ref().and_then(|t| t.mission.clone())
+    }
+
     /// Free-text description.
     #[getter]
     fn description(&self) -> String {

@@ -92,7 +92,9 @@ impl NativeTrajectory {
         } else if let Some(y) = yaw {
             table.insert("yaw".into(), float_array(y.as_array().iter().copied()));
         }
-        for (key, value) in [("speed", speed), ("duration", duration), ("start", start), ("min_segment_time", min_segment_time)] {
+        for (key, value) in
+            [("speed", speed), ("duration", duration), ("start", start), ("min_segment_time", min_segment_time)]
+        {
             if let Some(v) = value {
                 table.insert(key.into(), toml::Value::Float(v));
             }
@@ -241,7 +243,9 @@ impl NativeTrajectory {
         start_on_it: bool,
     ) -> PyResult<Scenario> {
         if !matches!(time_scale, "fixed" | "fit") {
-            return Err(value_error(format!("`time_scale` = {time_scale:?} is invalid (expected \"fixed\" or \"fit\")")));
+            return Err(value_error(format!(
+                "`time_scale` = {time_scale:?} is invalid (expected \"fixed\" or \"fit\")"
+            )));
         }
         let spec = toml::Value::try_from(self.inner.spec())
             .map_err(|e| value_error(format!("cannot write the trajectory as TOML: {e}")))?;

@@ -50,8 +50,7 @@ pub fn tune_evaluate(
     indices: Vec<u64>,
     threads: Option<usize>,
 ) -> PyResult<Vec<Vec<f64>>> {
-    ftsmc_sim::registry::check_name(&controller)
-        .map_err(|known| value_error(format!("unknown controller `{controller}` (known: {known})")))?;
+    crate::check_controllers("controller", std::slice::from_ref(&controller))?;
     if threads == Some(0) {
         return Err(value_error("threads must be at least 1"));
     }
@@ -84,12 +83,14 @@ pub fn tune_evaluate(
 
 /// Tune `controller` on `scenario` with a `budget` of training flights and
 /// `seed` (default: the scenario's), on `threads` workers (default: all
-/// cores; the result does not depend on it), with the GIL released.
+/// cores; the result does not depend on it), with the GIL released, flown
+/// for `mission` (`steps`, `hover`, `figure-eight`, `waypoints`; None:
+/// `steps`) as `ftsmc tune --mission` ([`ftsmc_sim::tune::mission_base`]).
 /// Returns `(tuned scenario, tuned TOML text extending `extends`, JSON
 /// summary)`; the JSON has the parameters, every candidate
 /// (`history`) and the training and held-out statistics.
 #[pyfunction]
-#[pyo3(signature = (scenario, controller, budget=ftsmc_sim::defaults::TUNE_BUDGET, seed=None, threads=None, extends=None, evaluator=None))]
+#[pyo3(signature = (scenario, controller, budget=ftsmc_sim::defaults::TUNE_BUDGET, seed=None, threads=None, extends=None, evaluator=None, mission=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn tune_native(
     py: Python<'_>,
@@ -100,10 +101,17 @@ pub fn tune_native(
     threads: Option<usize>,
     extends: Option<String>,
     evaluator: Option<Py<PyAny>>,
+    mission: Option<String>,
 ) -> PyResult<(Scenario, String, String)> {
-    let base = scenario.inner.clone();
-    ftsmc_sim::registry::check_name(&controller)
-        .map_err(|known| value_error(format!("unknown controller `{controller}` (known: {known})")))?;
+    use ftsmc_sim::analysis::missions::Mission;
+    let mission = match mission.as_deref() {
+        None => Mission::Steps,
+        Some(name) => Mission::from_name(name).ok_or_else(|| {
+            value_error(format!("mission = {name:?} is invalid (expected one of {})", Mission::names_joined()))
+        })?,
+    };
+    let base = ftsmc_sim::tune::mission_base(&scenario.inner, mission).map_err(|e| value_error(chain_message(&e)))?;
+    crate::check_controllers("controller", std::slice::from_ref(&controller))?;
     if threads == Some(0) {
         return Err(value_error("threads must be at least 1"));
     }
@@ -116,7 +124,8 @@ pub fn tune_native(
     let options = ftsmc_sim::tune::TuneOptions { controller, budget, seed: seed.unwrap_or(base.seed) };
     // A built-in scenario to extend: the one named, else the scenario's own
     // name when it is one; otherwise the file holds every key.
-    let extends = extends.or_else(|| Some(base.name.clone()));
+    // (the name given, not the mission's `<name>-<mission>`).
+    let extends = extends.or_else(|| Some(scenario.inner.name.clone()));
     let result = py.detach(move || {
         let mut builder = rayon::ThreadPoolBuilder::new();
         if let Some(t) = threads {

@@ -23,12 +23,13 @@ use ftsmc_sim::tune::{tune, tuned_toml, OutcomeStats, TuneOptions, TuneResult};
 use indicatif::{ProgressBar, ProgressStyle};
 use serde_json::json;
 
-use crate::args::{controller_names, ConfidenceArgs, OutputArgs, ScenarioArgs, SeedArgs, ThreadsArgs};
+use crate::args::{controller_names, parse_mission, ConfidenceArgs, OutputArgs, ScenarioArgs, SeedArgs, ThreadsArgs};
 use crate::console::{num, Table};
 use crate::intervals::{interval_table, level_note, metre_cell, rate_cell, verdict_table};
 use crate::intervals::{outcomes, stats_cells};
 use crate::output::{provenance, ResultDir};
 use crate::plot::{controller_color, write_figure, Figure, Panel, Rgb, Series};
+use ftsmc_sim::analysis::missions::Mission;
 use ftsmc_sim::registry::ControllerList;
 
 /// Arguments of `ftsmc tune`.
@@ -44,6 +45,10 @@ pub struct Args {
     /// the same held-out draws.
     #[arg(long, short = 'c', value_parser = controller_names)]
     controller: String,
+    /// The mission to tune for: `steps` (the scenario's own reference), `hover`, `figure-eight` or `waypoints`, as
+    /// `compare --mission` flies it; the tuned file states it (`[tune] mission`).
+    #[arg(long, default_value = "steps", value_parser = parse_mission)]
+    mission: Mission,
     /// `--confidence`.
     #[command(flatten)]
     confidence: ConfidenceArgs,
@@ -63,7 +68,7 @@ pub struct Args {
 
 /// Runs `ftsmc tune`: every check before any flight, then each controller's tune.
 pub fn run(args: Args) -> Result<()> {
-    let scenario = args.scenario.load()?;
+    let scenario = ftsmc_sim::tune::mission_base(&args.scenario.load()?, args.mission)?;
     let controllers = controller_list(&args.controller)?;
     let confidence = args.confidence.checked()?;
     anyhow::ensure!(args.threads.threads != Some(0), "--threads must be at least 1");

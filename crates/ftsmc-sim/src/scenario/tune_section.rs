@@ -35,6 +35,21 @@ fn yes() -> bool {
     true
 }
 
+/// The names `[tune] mission` takes: those of
+/// `crate::analysis::missions::Mission` (which sits on a higher floor; a
+/// test in `crate::tune` keeps the two lists equal).
+pub const MISSIONS: [&str; 4] = ["steps", "hover", "figure-eight", "waypoints"];
+
+/// `[tune] mission`: a name of [`MISSIONS`], refused otherwise with the value and the names.
+fn mission_name<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Option<String>, D::Error> {
+    let name = String::deserialize(d)?;
+    if MISSIONS.contains(&name.as_str()) {
+        Ok(Some(name))
+    } else {
+        Err(serde::de::Error::custom(format!("mission `{name}`: expected one of {}", MISSIONS.join(", "))))
+    }
+}
+
 /// `[tune]`: parameter set, search settings and cost weights. Every key is
 /// optional; the defaults are [`TuneSection::default`].
 #[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
@@ -82,6 +97,13 @@ pub struct TuneSection {
     /// CMA-ES population λ (default `4 + ⌊3 ln n⌋` for n parameters).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub population: Option<u64>,
+    /// The mission the gains were tuned for (`ftsmc tune --mission`, and
+    /// `mission=` of Python's `ftsmc.tune`): one of [`MISSIONS`], stated in
+    /// the tuned file; absent means `steps`, the scenario's own reference
+    /// (a file tuned without `--mission` has no such key). Informative:
+    /// loading the file flies the reference the file holds.
+    #[serde(skip_serializing_if = "Option::is_none", deserialize_with = "mission_name")]
+    pub mission: Option<String>,
     /// Cost of a flight that diverged or crashed at time t of a flight of
     /// duration T: `divergence × (2 − t/T)`, averaged over the runs
     /// (default 1000).
@@ -121,6 +143,7 @@ impl Default for TuneSection {
             race_runs: 8,
             race_final_runs: 32,
             population: None,
+            mission: None,
             divergence: 1000.0,
             envelope: 10.0,
             margin: 4.0,

@@ -368,6 +368,26 @@ pub const COLLAPSED_STEP: f64 = 0.03;
 /// restarts (step units).
 pub const MIN_RESTART_STEP: f64 = 0.125;
 
+/// `base` flown for `mission`, to be tuned on: the mission's scenario
+/// (`crate::analysis::missions::mission_scenario` with its default
+/// settling window and band — the scenario `ftsmc compare --mission`
+/// flies) with `[tune] mission` set, so the tuned file states it. `steps`
+/// returns `base` unchanged (no `mission` key: the tuned file is the one a
+/// tune without a mission writes). Refused with the scenario's error when
+/// the vehicle cannot fly the mission.
+pub fn mission_base(
+    base: &Scenario,
+    mission: crate::analysis::missions::Mission,
+) -> Result<Scenario, crate::scenario::ScenarioError> {
+    use crate::analysis::missions::{mission_scenario, Mission, MissionOptions};
+    if mission == Mission::Steps {
+        return Ok(base.clone());
+    }
+    let mut s = mission_scenario(base, mission, MissionOptions::default())?;
+    s.tune.get_or_insert_with(TuneSection::default).mission = Some(mission.name().to_string());
+    Ok(s)
+}
+
 /// Tune `options.controller` on `base` (see the module docs). `progress`
 /// receives every flight flown (training, race and held-out).
 pub fn tune(base: &Scenario, options: &TuneOptions, progress: &(dyn Fn(u64) + Sync)) -> Result<TuneResult, String> {

@@ -56,6 +56,7 @@ mod tilt_names;
 mod trajectories;
 mod true_vehicle;
 mod tune;
+mod tune_mission;
 mod tuning;
 mod vehicle_presets;
 mod verdicts;
