@@ -36,7 +36,7 @@ def test_animate_draws_the_vehicle_to_its_own_scale(overrides: dict) -> None:
     assert run.arm_length == arm
     anim = ftsmc.plot.animate(run, frames=5)
     anim._func(3)  # draw a frame
-    ax = anim._fig.axes[0]
+    ax = anim.scene_axes
     lines = four_arms(ax)
     assert len(lines) == 4
     assert np.allclose(arm_lengths_3d(lines), arm, rtol=1e-12)
@@ -45,7 +45,7 @@ def test_animate_draws_the_vehicle_to_its_own_scale(overrides: dict) -> None:
     # An explicit arm wins.
     anim = ftsmc.plot.animate(run, frames=2, arm=0.3)
     anim._func(1)
-    assert np.allclose(arm_lengths_3d(four_arms(anim._fig.axes[0])), 0.3)
+    assert np.allclose(arm_lengths_3d(four_arms(anim.scene_axes)), 0.3)
     with pytest.raises(ValueError, match="arm"):
         ftsmc.plot.animate(run, arm=0.0)
 
@@ -53,7 +53,7 @@ def test_animate_draws_the_vehicle_to_its_own_scale(overrides: dict) -> None:
 def test_animate_axes_hold_the_flight_and_its_reference_and_blit() -> None:
     run = ftsmc.simulate(ftsmc.Scenario.builtin("paper-scenario-1").with_overrides({"duration": 4.0}), "ftaftsmc")
     anim = ftsmc.plot.animate(run, frames=4)
-    ax = anim._fig.axes[0]
+    ax = anim.scene_axes
     c = run.columns
     for lim, col in zip((ax.get_xlim(), ax.get_ylim(), ax.get_zlim()), "xyz"):
         values = np.concatenate([c[col], c[f"{col}_ref"]])
@@ -98,5 +98,8 @@ def test_gym_frames_show_the_trail_the_vehicle_to_scale_and_fit_the_flight() -> 
     x, y = top_arms[0].get_data()
     assert np.hypot(x[1] - x[0], y[1] - y[0]) <= arm + 1e-12
     # The trail's blue is in the picture.
-    blue = (frame[:, :, 2] > 150) & (frame[:, :, 0] < 90) & (frame[:, :, 1] > 90) & (frame[:, :, 1] < 160)
-    assert blue.sum() > 30
+    # (A 1.2-pixel antialiased line: bluish pixels, blue well above red; the
+    # 5 m climb in the side view is about 150 pixels long.)
+    rgb = frame.astype(int)
+    blue = (rgb[:, :, 2] - rgb[:, :, 0] > 60) & (rgb[:, :, 2] > 120)
+    assert blue.sum() > 50, blue.sum()

@@ -107,7 +107,10 @@ def test_min_snap_matches_a_dense_qp_solve() -> None:
             mine = ours[m][:, o] if o < 3 else [s.yaw, s.yaw_rate, s.yaw_acceleration][m]
             scale = float(np.max(np.abs(dense)))
             assert scale > 0
-            assert np.max(np.abs(mine - dense)) <= 1e-6 * scale, (o, m)
+            # The snap jumps at both ends (the trajectory holds at rest outside
+            # [start, end], and is at rest there up to the jerk): compared inside.
+            inside = slice(1, -1) if m == 4 else slice(None)
+            assert np.max(np.abs(np.asarray(mine)[inside] - dense[inside])) <= 1e-6 * scale, (o, m)
 
 
 def test_min_snap_passes_the_waypoints_at_rest_at_the_ends() -> None:
