@@ -64,11 +64,11 @@
 //!   in it the velocity set-point's feed-forward is not used.
 //! * The state estimator: the controller is given the state it is given.
 
-use crate::controller::{Controller, Telemetry};
+use crate::controller::Telemetry;
 use crate::kinematics::{body_rates_from_euler_rates, euler_from_quaternion, quaternion_from_euler};
 use crate::law::{check_closed, check_gain, check_gain_or_zero, check_left_open, GainError};
 use crate::math::{cbrt, sin_cos, sqrt, Vec3};
-use crate::measured::{BodyAttitude, Measurement};
+use crate::measured::BodyAttitude;
 use crate::model::{Command, QuadState, QuadrotorParams, Reference};
 
 /// Largest 16-bit motor command, `UINT16_MAX`.
@@ -634,47 +634,77 @@ impl CrazyfliePid {
         self.telemetry.attitude_demand = [d[0].to_radians(), -d[1].to_radians()];
         self.pwm
     }
-
-    fn update_with(
-        &mut self,
-        euler: &QuadState,
-        body: Option<&BodyAttitude>,
-        reference: &Reference,
-        dt: f64,
-    ) -> Command {
-        let s = FirmwareState::from_measurement(euler, body);
-        let pwm = self.step(&s, reference, dt);
-        let command = self.gains.motors.command(&self.model, &pwm);
-        self.telemetry.nominal_thrust = command.thrust;
-        command
-    }
 }
 
-impl Controller for CrazyfliePid {
-    fn name(&self) -> &'static str {
-        "crazyflie-pid"
-    }
+/// The [`Controller`] glue of the firmware's controllers (this module's
+/// [`CrazyfliePid`] and `crate::mellinger::Mellinger`), one definition for
+/// both: the measured state as the firmware's estimator reports it
+/// ([`FirmwareState::from_measurement`]), the controller's own `step`
+/// (firmware units, PWM m1…m4 after the power distribution and cap), then
+/// [`PwmMap::command`]: PWM → rotor speed `ω = (m/65535) ω_max` → rotor
+/// thrusts `k_f ω²` → collective thrust and body moments on the nominal
+/// model. The type must have the fields `model: QuadrotorParams`,
+/// `gains` (with `motors: PwmMap`) and `telemetry: Telemetry`, and the
+/// methods `step(&FirmwareState, &Reference, dt) -> [f64; 4]` and
+/// `fresh(model, gains) -> Self`.
+macro_rules! firmware_controller {
+    ($ty:ident, $name:literal) => {
+        impl $ty {
+            fn update_with(
+                &mut self,
+                euler: &$crate::model::QuadState,
+                body: Option<&$crate::measured::BodyAttitude>,
+                reference: &$crate::model::Reference,
+                dt: f64,
+            ) -> $crate::model::Command {
+                let s = $crate::crazyflie_pid::FirmwareState::from_measurement(euler, body);
+                let pwm = self.step(&s, reference, dt);
+                let command = self.gains.motors.command(&self.model, &pwm);
+                self.telemetry.nominal_thrust = command.thrust;
+                command
+            }
+        }
 
-    fn update(&mut self, state: &QuadState, reference: &Reference, dt: f64) -> Command {
-        self.update_with(state, None, reference, dt)
-    }
+        impl $crate::controller::Controller for $ty {
+            fn name(&self) -> &'static str {
+                $name
+            }
 
-    fn update_measured(&mut self, measured: &Measurement, reference: &Reference, dt: f64) -> Command {
-        self.update_with(&measured.euler, measured.body.as_ref(), reference, dt)
-    }
+            fn update(
+                &mut self,
+                state: &$crate::model::QuadState,
+                reference: &$crate::model::Reference,
+                dt: f64,
+            ) -> $crate::model::Command {
+                self.update_with(state, None, reference, dt)
+            }
 
-    fn uses_body_attitude(&self) -> bool {
-        true
-    }
+            fn update_measured(
+                &mut self,
+                measured: &$crate::measured::Measurement,
+                reference: &$crate::model::Reference,
+                dt: f64,
+            ) -> $crate::model::Command {
+                self.update_with(&measured.euler, measured.body.as_ref(), reference, dt)
+            }
 
-    fn telemetry(&self) -> &Telemetry {
-        &self.telemetry
-    }
+            fn uses_body_attitude(&self) -> bool {
+                true
+            }
 
-    fn reset(&mut self) {
-        *self = Self::fresh(self.model, self.gains);
-    }
+            fn telemetry(&self) -> &$crate::controller::Telemetry {
+                &self.telemetry
+            }
+
+            fn reset(&mut self) {
+                *self = Self::fresh(self.model, self.gains);
+            }
+        }
+    };
 }
+pub(crate) use firmware_controller;
+
+firmware_controller!(CrazyfliePid, "crazyflie-pid");
 
 #[cfg(test)]
 mod tests {

@@ -31,13 +31,14 @@
 //! Not modelled: the firmware's `f32` arithmetic; the modes other than
 //! position (`modeAbs`).
 
-use crate::controller::{Controller, Telemetry};
-use crate::crazyflie_pid::{cap_angle, power_cap, power_distribution_uncapped, FirmwareState, PwmMap};
+use crate::controller::Telemetry;
+use crate::crazyflie_pid::{
+    cap_angle, firmware_controller, power_cap, power_distribution_uncapped, FirmwareState, PwmMap,
+};
 use crate::kinematics::rotation_from_quaternion;
 use crate::law::{check_gain, check_gain_or_zero, check_left_open, GainError};
 use crate::math::{cross, dot, mat_t_mat, norm, sin_cos, Vec3};
-use crate::measured::{BodyAttitude, Measurement};
-use crate::model::{Command, QuadState, QuadrotorParams, Reference};
+use crate::model::{QuadrotorParams, Reference};
 
 /// Gains of [`Mellinger`]. `Default` is the firmware's (`g_self` of
 /// `controller_mellinger.c`, 2025.12.1); NanoBench's published code sets
@@ -290,47 +291,9 @@ impl Mellinger {
         self.telemetry.commanded_acceleration = force.map(|x| x / g.mass);
         self.pwm
     }
-
-    fn update_with(
-        &mut self,
-        euler: &QuadState,
-        body: Option<&BodyAttitude>,
-        reference: &Reference,
-        dt: f64,
-    ) -> Command {
-        let s = FirmwareState::from_measurement(euler, body);
-        let pwm = self.step(&s, reference, dt);
-        let command = self.gains.motors.command(&self.model, &pwm);
-        self.telemetry.nominal_thrust = command.thrust;
-        command
-    }
 }
 
-impl Controller for Mellinger {
-    fn name(&self) -> &'static str {
-        "mellinger"
-    }
-
-    fn update(&mut self, state: &QuadState, reference: &Reference, dt: f64) -> Command {
-        self.update_with(state, None, reference, dt)
-    }
-
-    fn update_measured(&mut self, measured: &Measurement, reference: &Reference, dt: f64) -> Command {
-        self.update_with(&measured.euler, measured.body.as_ref(), reference, dt)
-    }
-
-    fn uses_body_attitude(&self) -> bool {
-        true
-    }
-
-    fn telemetry(&self) -> &Telemetry {
-        &self.telemetry
-    }
-
-    fn reset(&mut self) {
-        *self = Self::fresh(self.model, self.gains);
-    }
-}
+firmware_controller!(Mellinger, "mellinger");
 
 #[cfg(test)]
 mod tests {

@@ -12,12 +12,16 @@
 //! - [`validate`]: the plant's predicted specific force and angular
 //!   acceleration from logged states and commands (one step, 0.1 s, 0.5 s)
 //!   against the measured ones, beside a constant-acceleration baseline.
+//! - [`closed_loop`]: the log's set-point flown in ftsmc by the log's
+//!   controller (the Crazyflie firmware's PID or Mellinger), the simulated
+//!   tracking error beside the real one, flight by flight.
 //! - [`report`]: the identification's and the validation's tables (CSV,
 //!   JSON), shared by the CLI and the Python binding.
 //! - [`synthetic`]: a flight made by ftsmc's own plant and motor models, as a
 //!   [`ftsmc_logs::FlightLog`] and in the generic CSV schema (the tests'
 //!   known truth).
 
+pub mod closed_loop;
 pub mod error;
 pub mod identify;
 pub mod lsq;

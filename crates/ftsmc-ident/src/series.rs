@@ -13,9 +13,10 @@
 //! (the NED→z-up change is the half turn about x, `S = diag(1, −1, −1)`,
 //! applied to both frames: `R' = S R S`). Motor commands become 0–1:
 //! Crazyflie 16-bit PWM ÷ 65535, PX4 PWM `(µs − 1000)/1000`, normalised as
-//! they are; and they are renumbered by [`MotorOrder`].
+//! they are; and they are renumbered by [`MotorOrder`]. A set-point is
+//! turned like a position (yaw: `−ψ` from NED).
 
-use ftsmc_logs::{FlightLog, Frame, MotorUnit};
+use ftsmc_logs::{FlightLog, Frame, MotorUnit, Setpoint};
 
 use crate::error::IdentError;
 
@@ -77,6 +78,9 @@ pub struct Series {
     pub battery_v: Option<Vec<f64>>,
     /// How the log's motors were renumbered.
     pub order: MotorOrder,
+    /// The flight controller's position set-point (world, m) and yaw
+    /// set-point (rad), when logged.
+    pub setpoint: Option<Setpoint>,
 }
 
 impl Series {
@@ -124,6 +128,10 @@ impl Series {
             commands: motors.values.iter().map(|m| idx.map(|i| normalise(m[i]))).collect(),
             battery_v: log.battery_v.clone(),
             order,
+            setpoint: log.setpoint.as_ref().map(|sp| Setpoint {
+                position_m: sp.position_m.iter().map(v3).collect(),
+                yaw_rad: sp.yaw_rad.iter().map(|&y| if flip { -y } else { y }).collect(),
+            }),
         })
     }
 

@@ -142,6 +142,7 @@ pub fn fly(vehicle: &Vehicle, o: &SyntheticOptions) -> Result<FlightLog, IdentEr
         accel_m_s2: Some(Vec::with_capacity(n)),
         motors: Some(LogMotors { unit: MotorUnit::Normalised, values: Vec::with_capacity(n) }),
         battery_v: None,
+        setpoint: None,
     };
     let every = ((0.1 * o.rate_hz).round() as usize).max(1);
     for k in 0..n {
@@ -224,7 +225,7 @@ pub fn to_generic_csv(log: &FlightLog) -> String {
     };
     let mut out = String::from(frame);
     let mut header = vec!["time_s"];
-    let groups: [(bool, &[&str]); 7] = [
+    let groups: [(bool, &[&str]); 8] = [
         (log.position_m.is_some(), &["x_m", "y_m", "z_m"]),
         (log.velocity_m_s.is_some(), &["vx_m_s", "vy_m_s", "vz_m_s"]),
         (log.attitude_wxyz.is_some(), &["qw", "qx", "qy", "qz"]),
@@ -232,6 +233,7 @@ pub fn to_generic_csv(log: &FlightLog) -> String {
         (log.accel_m_s2.is_some(), &["ax_m_s2", "ay_m_s2", "az_m_s2"]),
         (log.motors.is_some(), &["motor1", "motor2", "motor3", "motor4"]),
         (log.battery_v.is_some(), &["battery_v"]),
+        (log.setpoint.is_some(), &["sp_x_m", "sp_y_m", "sp_z_m", "sp_yaw_rad"]),
     ];
     for (on, names) in groups {
         if on {
@@ -262,6 +264,10 @@ pub fn to_generic_csv(log: &FlightLog) -> String {
         }
         if let Some(v) = &log.battery_v {
             row.push(v[k]);
+        }
+        if let Some(sp) = &log.setpoint {
+            row.extend_from_slice(&sp.position_m[k]);
+            row.push(sp.yaw_rad[k]);
         }
         let cells: Vec<String> = row.iter().map(|v| format!("{v:?}")).collect();
         out.push_str(&cells.join(","));

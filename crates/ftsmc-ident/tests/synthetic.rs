@@ -119,3 +119,74 @@ fn identification_recovers_the_parameters_of_a_noisy_synthetic_flight_within_its
 fn identification_covers_the_truth_in_90_percent_of_200_seeds() {
     assert_coverage(200);
 }
+
+/// A flight made by ftsmc's closed loop (`closed_loop::fly`, the firmware
+/// PID on the `crazyflie-2.1` preset with battery compensation at 3.7 V):
+/// take-off from rest, climb to 1 m, a 0.5 m circle; written as a generic
+/// CSV with its set-point.
+fn closed_loop_log(v: &Vehicle) -> ftsmc_logs::FlightLog {
+    use ftsmc_ident::closed_loop::{fly, ClosedLoopOptions, LogController, SetpointTrack};
+    let n = 1201; // 12 s at 100 Hz
+    let time: Vec<f64> = (0..n).map(|k| k as f64 * 0.01).collect();
+    let sp: Vec<[f64; 3]> = time
+        .iter()
+        .map(|&t| {
+            let z = 0.05 + 0.95 * (t / 2.0).min(1.0);
+            let a = if t > 3.0 { 0.8 * (t - 3.0) } else { 0.0 };
+            [0.5 * ftsmc_core::math::sin(a), 0.5 - 0.5 * ftsmc_core::math::cos(a), z]
+        })
+        .collect();
+    let yaw = vec![0.0; n];
+    let battery = vec![3.7; n];
+    let mut initial = [0.0; 13];
+    initial[2] = 0.05;
+    initial[6] = 1.0;
+    let track = SetpointTrack { time_s: &time, position_m: &sp, yaw_rad: &yaw, battery_v: Some(&battery) };
+    let traj = fly(v, LogController::CrazyfliePid, &initial, &track, &ClosedLoopOptions::default()).unwrap();
+    assert_eq!(traj.diverged_at_s, None);
+    let at = |k: usize| (k as f64 * 0.01 / 0.002).round() as usize;
+    let x = |k: usize| traj.state[at(k)];
+    ftsmc_logs::FlightLog {
+        source: "closed-loop synthetic".into(),
+        frame: ftsmc_logs::Frame::ZUpFlu,
+        time_origin_s: 0.0,
+        time_s: time.clone(),
+        position_m: Some((0..n).map(|k| [x(k)[0], x(k)[1], x(k)[2]]).collect()),
+        velocity_m_s: Some((0..n).map(|k| [x(k)[3], x(k)[4], x(k)[5]]).collect()),
+        attitude_wxyz: Some((0..n).map(|k| [x(k)[6], x(k)[7], x(k)[8], x(k)[9]]).collect()),
+        body_rates_rad_s: Some((0..n).map(|k| [x(k)[10], x(k)[11], x(k)[12]]).collect()),
+        accel_m_s2: Some((0..n).map(|k| traj.specific_force[at(k)]).collect()),
+        motors: Some(ftsmc_logs::Motors {
+            unit: ftsmc_logs::MotorUnit::Normalised,
+            values: (0..n).map(|k| traj.commands[at(k)]).collect(),
+        }),
+        battery_v: Some(battery),
+        setpoint: Some(ftsmc_logs::Setpoint { position_m: sp, yaw_rad: yaw }),
+    }
+}
+
+#[test]
+fn closed_loop_validation_of_a_flight_flown_by_ftsmc_gives_the_real_rms_to_round_off() {
+    use ftsmc_ident::closed_loop::{fly_log, table, ClosedLoopOptions, LogController};
+    let v = crazyflie();
+    let s = through_csv(&closed_loop_log(&v));
+    let f = fly_log(&s, &v, &ClosedLoopOptions::default()).unwrap();
+    assert_eq!(f.diverged_at_s, None);
+    // The window is the flight at ≥ 90 % of the top set-point height: from 1.79 s on.
+    assert!(f.time_s[0] > 1.7 && f.time_s[0] < 1.9, "{}", f.time_s[0]);
+    assert!(f.real_rms_m > 0.01, "the flight tracks with an error: {}", f.real_rms_m);
+    assert!((f.sim_rms_m - f.real_rms_m).abs() <= 1e-12, "{} vs {}", f.sim_rms_m, f.real_rms_m);
+    for (a, b) in f.sim_m.iter().zip(&f.real_m) {
+        for i in 0..3 {
+            assert!((a[i] - b[i]).abs() <= 1e-12, "{a:?} vs {b:?}");
+        }
+    }
+    let rows = table(&[f.clone(), f.clone()]);
+    let all = rows.iter().find(|r| r.flight == "all").unwrap();
+    assert_eq!((all.flights, all.difference_m), (2, 0.0));
+    // Another controller, or no battery compensation, flies another flight.
+    let mellinger = ClosedLoopOptions { controller: LogController::Mellinger, ..Default::default() };
+    assert!((fly_log(&s, &v, &mellinger).unwrap().sim_rms_m - f.real_rms_m).abs() > 1e-3);
+    let uncompensated = ClosedLoopOptions { battery_compensation: false, ..Default::default() };
+    assert!((fly_log(&s, &v, &uncompensated).unwrap().sim_rms_m - f.real_rms_m).abs() > 1e-4);
+}

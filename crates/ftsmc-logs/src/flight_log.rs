@@ -75,6 +75,18 @@ pub struct FlightLog {
     pub motors: Option<Motors>,
     /// Battery voltage, V.
     pub battery_v: Option<Vec<f64>>,
+    /// The flight controller's position and yaw set-point, when logged.
+    pub setpoint: Option<Setpoint>,
+}
+
+/// A flight controller's set-point, one row per time stamp, in the log's
+/// frames ([`Frame`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Setpoint {
+    /// Position set-point in the world frame, m.
+    pub position_m: Vec<[f64; 3]>,
+    /// Yaw (heading) set-point, rad.
+    pub yaw_rad: Vec<f64>,
 }
 
 impl FlightLog {
@@ -144,6 +156,10 @@ impl FlightLog {
         }
         if let Some(v) = &self.battery_v {
             channels.push(("battery voltage", v.iter().map(std::slice::from_ref).collect()));
+        }
+        if let Some(sp) = &self.setpoint {
+            channels.push(("position set-point", sp.position_m.iter().map(|r| &r[..]).collect()));
+            channels.push(("yaw set-point", sp.yaw_rad.iter().map(std::slice::from_ref).collect()));
         }
         for (name, rows) in channels {
             if rows.len() != n {

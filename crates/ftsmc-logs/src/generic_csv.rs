@@ -3,7 +3,7 @@
 //! SI units in the column names (docs/logs.md lists them).
 //!
 //! `time_s` is required; every other group (position, velocity, attitude,
-//! body rates, accelerometer, motors, battery) is optional but all or
+//! body rates, accelerometer, motors, battery, set-point) is optional but all or
 //! nothing: `x_m` without `z_m` is an error naming the missing column.
 //! Columns of other names are ignored. An optional comment line before the
 //! header, `# frame: ned-frd` or `# frame: zup-flu`, states the frames.
@@ -11,12 +11,12 @@
 use std::path::Path;
 
 use crate::error::LogError;
-use crate::flight_log::{FlightLog, Frame, MotorUnit, Motors};
+use crate::flight_log::{FlightLog, Frame, MotorUnit, Motors, Setpoint};
 use crate::source::LogLimits;
 use crate::table::{read_table, Table};
 
 /// The column groups of the schema, in order, with what each holds.
-pub const GROUPS: [(&str, &[&str]); 7] = [
+pub const GROUPS: [(&str, &[&str]); 8] = [
     ("position, m, world frame", &["x_m", "y_m", "z_m"]),
     ("velocity, m/s, world frame", &["vx_m_s", "vy_m_s", "vz_m_s"]),
     ("attitude quaternion body to world, scalar first", &["qw", "qx", "qy", "qz"]),
@@ -24,6 +24,7 @@ pub const GROUPS: [(&str, &[&str]); 7] = [
     ("accelerometer specific force, m/s², body frame", &["ax_m_s2", "ay_m_s2", "az_m_s2"]),
     ("motor commands, normalised 0..1", &["motor1", "motor2", "motor3", "motor4"]),
     ("battery voltage, V", &["battery_v"]),
+    ("position (m, world frame) and yaw (rad) set-point", &["sp_x_m", "sp_y_m", "sp_z_m", "sp_yaw_rad"]),
 ];
 
 /// Whether a CSV header is the generic schema's (it has `time_s`).
@@ -89,6 +90,10 @@ pub fn flight_from_generic(table: &Table) -> Result<FlightLog, LogError> {
         accel_m_s2: vec3(&groups[4]),
         motors: vec4(&groups[5]).map(|values| Motors { unit: MotorUnit::Normalised, values }),
         battery_v: groups[6].as_ref().map(|c| c[0].to_vec()),
+        setpoint: vec4(&groups[7]).map(|rows| Setpoint {
+            position_m: rows.iter().map(|r| [r[0], r[1], r[2]]).collect(),
+            yaw_rad: rows.iter().map(|r| r[3]).collect(),
+        }),
     };
     log.validate()?;
     Ok(log)

@@ -33,7 +33,7 @@ pub mod ulog;
 use std::path::Path;
 
 pub use error::LogError;
-pub use flight_log::{FlightLog, Frame, MotorUnit, Motors};
+pub use flight_log::{FlightLog, Frame, MotorUnit, Motors, Setpoint};
 pub use source::LogLimits;
 
 /// Reads a flight log of any supported kind, told apart by content: the

@@ -16,14 +16,14 @@
 //! | accelerometer | `imu_acc_x`, `_y`, `_z` | g (multiplied by 9.80665 m/s²) |
 //! | motors | `motor_motor_m1` … `m4` | 16-bit PWM, 0–65535 |
 //! | battery | `pwr_pm_vbat` | V (10 Hz, held) |
+//! | set-point (when present) | `sp_ctrltarget_x`, `_y`, `_z`, `_yaw` | m, deg (converted to rad) |
 //!
-//! The other 24 columns (onboard EKF, set points, PID outputs) are left in
-//! the file. The body frame is the Crazyflie's: x forward, y left, z up.
+//! The other 20 columns (onboard EKF, PID outputs) are left in the file. The body frame is the Crazyflie's: x forward, y left, z up.
 
 use std::path::Path;
 
 use crate::error::LogError;
-use crate::flight_log::{FlightLog, Frame, MotorUnit, Motors};
+use crate::flight_log::{FlightLog, Frame, MotorUnit, Motors, Setpoint};
 use crate::source::LogLimits;
 use crate::table::{read_table, Table};
 
@@ -79,10 +79,20 @@ pub fn flight_from_nanobench(table: &Table) -> Result<FlightLog, LogError> {
             values: (0..n).map(|i| [m[0][i], m[1][i], m[2][i], m[3][i]]).collect(),
         }),
         battery_v: Some(b.to_vec()),
+        setpoint: setpoint(table),
     };
     check_columns(table)?;
     log.validate()?;
     Ok(log)
+}
+
+/// The `sp_ctrltarget_*` columns, when all four are there.
+fn setpoint(table: &Table) -> Option<Setpoint> {
+    let c = table.require(&["sp_ctrltarget_x", "sp_ctrltarget_y", "sp_ctrltarget_z", "sp_ctrltarget_yaw"], "").ok()?;
+    Some(Setpoint {
+        position_m: (0..c[0].len()).map(|i| [c[0][i], c[1][i], c[2][i]]).collect(),
+        yaw_rad: c[3].iter().map(|d| d.to_radians()).collect(),
+    })
 }
 
 /// Names the CSV column of a non-finite value or of time going back,

@@ -652,6 +652,7 @@ pub fn flight_from_ulog(data: &UlogData) -> Result<FlightLog, LogError> {
             .as_ref()
             .map(|ch| Ok::<_, LogError>(hold(ch)?.into_iter().map(|r| r[0]).collect()))
             .transpose()?,
+        setpoint: None,
     };
     log.validate()?;
     Ok(log)

@@ -16,6 +16,7 @@ mod actuators;
 mod builtin_scenarios;
 mod cascade_remedies;
 mod closed_loop;
+mod crazyflie_firmware;
 mod custom_layout;
 mod falsify;
 mod gym;
