@@ -772,14 +772,34 @@ impl EstimatorStage for EskfStage {
 }
 
 /// The [`Mahony`] filter as an estimator stage: attitude and body rates
-/// from the IMU (and magnetometer, the last reading held), position and
-/// velocity from the last GNSS fix or motion-capture reading (the
-/// scenario's initial state until the first arrives).
+/// from the IMU (and magnetometer, the last reading held); position and
+/// velocity dead-reckoned on the IMU between fixes and reset to each GNSS
+/// fix or motion-capture reading, moved forward by the motion propagated
+/// since it was sampled (as [`EskfStage`] does with late readings).
+///
+/// Between fixes, with `R̂` the filter's attitude, `f` the specific force
+/// and `g` gravity (world `z` up): `a = R̂ f − g e₃`, `p ← p + v Δt + ½ a Δt²`,
+/// `v ← v + a Δt` (strapdown navigation, Titterton & Weston, *Strapdown
+/// Inertial Navigation Technology*, 2nd ed., 2004, §3.5). At a fix sampled
+/// at `t_s`: `p ← z_p + Δp(t) − Δp(t_s)`, `v ← z_v + Δv(t) − Δv(t_s)`. Holding
+/// the last fix instead (what this stage did first) handed the controller a
+/// position up to latency + one GNSS period old (150 + 125 ms) and the
+/// scenario's initial state until the first fix: a stiff position loop
+/// (FTAFTSMC on the paper's steps) wound its thrust up against a frozen
+/// altitude and crashed within 0.3 s.
 pub struct MahonyStage {
     filter: Mahony,
     mag: Option<estimate::MagReading>,
     position: [f64; 3],
     velocity: [f64; 3],
+    gravity: f64,
+    /// Time of the last IMU sample, s.
+    last_imu: Option<f64>,
+    /// `(time, Δp, Δv)` after each propagation, oldest first (allocated once).
+    history: std::collections::VecDeque<(f64, [f64; 3], [f64; 3])>,
+    history_len: usize,
+    /// Running sums `Δp` (m), `Δv` (m/s) of the propagations.
+    propagated: ([f64; 3], [f64; 3]),
     failed: Option<EstimatorFailure>,
 }
 
@@ -796,7 +816,66 @@ impl MahonyStage {
         }
         let filter = Mahony::new(config, quaternion_from_euler(&initial.attitude))
             .expect("a checked [sensors] gives a valid Mahony configuration");
-        Self { filter, mag: None, position: initial.position, velocity: initial.velocity, failed: None }
+        let imu = params.inertial.map(|s| s.params()).unwrap_or_else(|| ImuParams::of_class(ImuClass::Px4Sitl));
+        // The history covers the GNSS latency, and at least 0.5 s (a
+        // motion-capture reading's latency is whole control periods).
+        let latency = params.gnss.map_or(0.0, |g| g.latency_s).max(0.5);
+        let history_len = (latency * imu.rate_hz).ceil() as usize + 4;
+        Self {
+            filter,
+            mag: None,
+            position: initial.position,
+            velocity: initial.velocity,
+            gravity,
+            last_imu: None,
+            history: std::collections::VecDeque::with_capacity(history_len),
+            history_len,
+            propagated: ([0.0; 3], [0.0; 3]),
+            failed: None,
+        }
+    }
+
+    /// Dead-reckon position and velocity over the IMU interval ending at
+    /// `t` (s) with specific force `f` (m/s², body) and the filter's attitude.
+    fn propagate(&mut self, t: f64, f: &[f64; 3]) {
+        if let Some(t0) = self.last_imu.filter(|t0| t > *t0) {
+            let dt = t - t0;
+            let r = ftsmc_core::kinematics::rotation_from_quaternion(&self.filter.estimate().quaternion);
+            let rf = ftsmc_core::math::mat_vec(&r, f);
+            let a = [rf[0], rf[1], rf[2] - self.gravity];
+            let (dp, dv) = &mut self.propagated;
+            for i in 0..3 {
+                let step_p = self.velocity[i] * dt + 0.5 * a[i] * dt * dt;
+                let step_v = a[i] * dt;
+                self.position[i] += step_p;
+                self.velocity[i] += step_v;
+                dp[i] += step_p;
+                dv[i] += step_v;
+            }
+        }
+        self.last_imu = Some(t);
+        if self.history.len() == self.history_len {
+            self.history.pop_front();
+        }
+        self.history.push_back((t, self.propagated.0, self.propagated.1));
+    }
+
+    /// Reset position and velocity to a fix sampled at `t_sample` (s),
+    /// moved forward by the motion propagated since.
+    fn reset_to(&mut self, t_sample: f64, position: &[f64; 3], velocity: &[f64; 3]) {
+        let mut then = self.history.front().map_or(self.propagated, |h| (h.1, h.2));
+        for h in &self.history {
+            if h.0 <= t_sample + 1e-9 {
+                then = (h.1, h.2);
+            } else {
+                break;
+            }
+        }
+        let (p_now, v_now) = self.propagated;
+        for i in 0..3 {
+            self.position[i] = position[i] + p_now[i] - then.0[i];
+            self.velocity[i] = velocity[i] + v_now[i] - then.1[i];
+        }
     }
 
     /// The filter's current attitude estimate.
@@ -821,17 +900,13 @@ impl EstimatorStage for MahonyStage {
                 let imu = ImuSample { time: s.t_sample, gyro: r.body_rates, specific_force: r.specific_force };
                 if let Err(e) = self.filter.update(&imu, self.mag.take().as_ref()) {
                     self.failed = Some(failure_of(e, s.t_available));
+                    return;
                 }
+                self.propagate(s.t_sample, &r.specific_force);
             }
             Reading::Mag(r) => self.mag = Some(estimate::MagReading { time: s.t_available, field: r.field, std: 1.0 }),
-            Reading::Gnss(r) if r.fix => {
-                self.position = r.position;
-                self.velocity = r.velocity;
-            }
-            Reading::Motion(m) => {
-                self.position = m.euler.position;
-                self.velocity = m.euler.velocity;
-            }
+            Reading::Gnss(r) if r.fix => self.reset_to(s.t_sample, &r.position, &r.velocity),
+            Reading::Motion(m) => self.reset_to(s.t_sample, &m.euler.position, &m.euler.velocity),
             Reading::Gnss(_) | Reading::Baro(_) => {}
         }
     }
