@@ -198,8 +198,8 @@ impl NativeTrajectory {
         let times: Vec<f64> = t.iter().copied().collect();
         let traj = &self.inner;
         let (vectors, scalars) = py.detach(|| {
-            let mut vectors = vec![Vec::with_capacity(3 * n); 5];
-            let mut scalars = vec![Vec::with_capacity(n); 3];
+            let mut vectors: [Vec<f64>; 5] = std::array::from_fn(|_| Vec::with_capacity(3 * n));
+            let mut scalars: [Vec<f64>; 3] = std::array::from_fn(|_| Vec::with_capacity(n));
             for &tk in &times {
                 let f = traj.sample(tk);
                 for (out, v) in vectors.iter_mut().zip([f.pos, f.vel, f.acc, f.jerk, f.snap]) {
@@ -234,6 +234,9 @@ impl NativeTrajectory {
     /// slows it until it can, with a warning saying by how much) and, with
     /// `start_on_it`, its initial state at rest on the trajectory's first
     /// point, heading ψ there. Validated as a file would be (feasibility at load).
+    // The Python method's name (`Trajectory.into_scenario`) reads as a
+    // conversion into a scenario; it does not consume the trajectory.
+    #[allow(clippy::wrong_self_convention)]
     #[pyo3(signature = (scenario, time_scale="fixed", start_on_it=true))]
     fn into_scenario(
         &self,
