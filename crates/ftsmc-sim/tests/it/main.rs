@@ -17,6 +17,7 @@ mod builtin_scenarios;
 mod cascade_remedies;
 mod closed_loop;
 mod custom_layout;
+mod docs_numbers;
 mod falsify;
 mod gym;
 mod hostile_input;
