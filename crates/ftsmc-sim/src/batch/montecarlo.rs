@@ -252,9 +252,12 @@ pub fn stats(values: &[f64]) -> Option<Stats> {
 pub struct ControllerSummary {
     /// Runs flown.
     pub runs: usize,
-    /// Runs that diverged.
+    /// Runs that diverged (every run neither completed nor crashed:
+    /// [`crate::run::ExitCategory::Diverged`], and the rare interrupted run).
     pub diverged: usize,
-    /// Runs that hit the ground too fast (`[ground]`).
+    /// Runs that ended on the ground, hitting it too fast or landing and
+    /// staying there ([`crate::run::ExitCategory::Crashed`]; docs/statistics.md,
+    /// "Exit categories").
     pub crashed: usize,
     /// Runs that completed but left the scenario's `[envelope]`.
     pub envelope_failures: usize,
@@ -282,7 +285,8 @@ pub struct RowOutcome {
     pub controller: String,
     /// The run completed (no divergence, no crash).
     pub completed: bool,
-    /// The run hit the ground too fast (`[ground]`).
+    /// The run ended on the ground, crashed or landed
+    /// ([`crate::run::ExitStatus::is_crashed`]).
     pub crashed: bool,
     /// Completed and inside the scenario's `[envelope]`.
     pub success: bool,

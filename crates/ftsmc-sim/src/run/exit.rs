@@ -81,7 +81,94 @@ pub enum ExitStatus {
     },
 }
 
+/// The exit categories every table and count of ftsmc uses — `runs.csv`'s
+/// `completed` and `crashed` columns, `ftsmc montecarlo`'s and `ftsmc
+/// compare`'s counts and rates, the wind ladder's calibration table — one
+/// per run, so the four counts of a batch add up to its runs
+/// (docs/statistics.md, "Exit categories").
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum ExitCategory {
+    /// Flew the whole duration ([`ExitStatus::Completed`]).
+    Completed,
+    /// Stopped by a divergence check ([`ExitStatus::Diverged`]).
+    Diverged,
+    /// Ended on the ground: hit it too fast ([`ExitStatus::Crashed`]) or
+    /// landed and stayed there ([`ExitStatus::Grounded`], "landed").
+    Crashed,
+    /// Stopped on request ([`ExitStatus::Interrupted`]).
+    Interrupted,
+}
+
+impl ExitCategory {
+    /// Every category, in table order.
+    pub const ALL: [ExitCategory; 4] =
+        [ExitCategory::Completed, ExitCategory::Diverged, ExitCategory::Crashed, ExitCategory::Interrupted];
+
+    /// The word tables print: `completed`, `diverged`, `crashed`, `interrupted`.
+    pub fn word(self) -> &'static str {
+        match self {
+            ExitCategory::Completed => "completed",
+            ExitCategory::Diverged => "diverged",
+            ExitCategory::Crashed => "crashed",
+            ExitCategory::Interrupted => "interrupted",
+        }
+    }
+}
+
+/// How many runs of a batch ended in each [`ExitCategory`], and how many
+/// of the crashed ones landed ([`ExitStatus::Grounded`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct ExitCounts {
+    /// Runs that completed.
+    pub completed: usize,
+    /// Runs that diverged.
+    pub diverged: usize,
+    /// Runs that ended on the ground, landings included.
+    pub crashed: usize,
+    /// Of `crashed`, the runs that landed and stayed on the ground.
+    pub landed: usize,
+    /// Runs stopped on request.
+    pub interrupted: usize,
+}
+
+impl ExitCounts {
+    /// Count one run's exit.
+    pub fn add(&mut self, exit: &ExitStatus) {
+        match exit.category() {
+            ExitCategory::Completed => self.completed += 1,
+            ExitCategory::Diverged => self.diverged += 1,
+            ExitCategory::Crashed => self.crashed += 1,
+            ExitCategory::Interrupted => self.interrupted += 1,
+        }
+        self.landed += usize::from(matches!(exit, ExitStatus::Grounded { .. }));
+    }
+
+    /// The counts of `exits`.
+    pub fn of<'a>(exits: impl IntoIterator<Item = &'a ExitStatus>) -> Self {
+        let mut counts = Self::default();
+        for e in exits {
+            counts.add(e);
+        }
+        counts
+    }
+
+    /// Runs counted: the four categories add up to it.
+    pub fn runs(&self) -> usize {
+        self.completed + self.diverged + self.crashed + self.interrupted
+    }
+}
+
 impl ExitStatus {
+    /// The run's [`ExitCategory`].
+    pub fn category(&self) -> ExitCategory {
+        match self {
+            ExitStatus::Completed => ExitCategory::Completed,
+            ExitStatus::Diverged { .. } => ExitCategory::Diverged,
+            ExitStatus::Crashed { .. } | ExitStatus::Grounded { .. } => ExitCategory::Crashed,
+            ExitStatus::Interrupted { .. } => ExitCategory::Interrupted,
+        }
+    }
+
     /// True for [`ExitStatus::Completed`].
     pub fn is_completed(&self) -> bool {
         matches!(self, ExitStatus::Completed)
@@ -102,7 +189,7 @@ impl ExitStatus {
     /// (too fast) and [`ExitStatus::Grounded`] (stayed there); the
     /// `crashed` column of `runs.csv`.
     pub fn is_crashed(&self) -> bool {
-        matches!(self, ExitStatus::Crashed { .. } | ExitStatus::Grounded { .. })
+        self.category() == ExitCategory::Crashed
     }
 
     /// Short form for table cells: `completed`, `diverged at 0.64 s` or `crashed at 1.23 s`.
@@ -193,5 +280,31 @@ impl ExitStatus {
             ExitStatus::Crashed { time, .. } | ExitStatus::Grounded { time, .. } => End::Crashed(time),
             ExitStatus::Diverged { time, .. } => End::Diverged(time),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every exit falls in one category; a landing counts as crashed (as in
+    /// `runs.csv`'s `crashed` column) and is counted among the landed too.
+    #[test]
+    fn every_exit_is_counted_once_and_landings_are_crashes() {
+        let exits = [
+            ExitStatus::Completed,
+            ExitStatus::Diverged { divergence: Divergence::Tilt { angle: 1.0 }, time: 1.0 },
+            ExitStatus::Crashed { time: 2.0, impact_speed: 3.0 },
+            ExitStatus::Grounded { time: 5.0, since: 4.0 },
+            ExitStatus::Interrupted { time: 1.0 },
+        ];
+        let counts = ExitCounts::of(&exits);
+        assert_eq!(counts, ExitCounts { completed: 1, diverged: 1, crashed: 2, landed: 1, interrupted: 1 });
+        assert_eq!(counts.runs(), exits.len());
+        for e in &exits {
+            assert_eq!(e.is_crashed(), e.category() == ExitCategory::Crashed);
+            assert_eq!(e.is_completed(), e.category() == ExitCategory::Completed);
+        }
+        assert_eq!(ExitCategory::ALL.map(ExitCategory::word), ["completed", "diverged", "crashed", "interrupted"]);
     }
 }

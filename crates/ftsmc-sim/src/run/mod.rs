@@ -26,7 +26,7 @@ pub mod summary;
 mod truth;
 
 pub use actuation::actuators;
-pub use exit::{Divergence, ExitStatus};
+pub use exit::{Divergence, ExitCategory, ExitCounts, ExitStatus};
 pub use flight::{Flight, Flights, StepOutcome};
 pub use observer::{FlightStats, Observer, Tick};
 pub use recording::{push_number, recording_columns, Recording, RowStream, CSV_CHUNK_BYTES, MAX_RECORDING_COLUMNS};

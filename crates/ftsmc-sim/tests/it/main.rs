@@ -18,6 +18,7 @@ mod cascade_remedies;
 mod closed_loop;
 mod crazyflie_firmware;
 mod custom_layout;
+mod docs_numbers;
 mod falsify;
 mod gym;
 mod hostile_input;
