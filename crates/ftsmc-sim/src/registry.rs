@@ -23,6 +23,14 @@ pub fn label(name: &str) -> &str {
         .unwrap_or(name)
 }
 
+/// The registered controllers that declare tunable parameters (their
+/// list line's `tune`, see [`crate::controllers::tunable`]), in list
+/// order: what `ftsmc tune -c all` tunes. A controller declared with
+/// `tune_param::none` is left out.
+pub fn tunable_controllers() -> Vec<&'static str> {
+    crate::controllers::tunable::tunable_in(DECLARED)
+}
+
 /// `Ok(())` for a registered name; otherwise the list of known names.
 pub fn check_name(name: &str) -> Result<(), String> {
     crate::controllers::check_name(name)

@@ -264,3 +264,13 @@ pub fn tune_parameters(with_mass: bool) -> Vec<super::tune_param::TuneParam> {
     list.push(COMMAND_FILTER);
     list
 }
+
+/// [`tune_parameters`] of `ftaftsmc` (with the mass adaptation's β1).
+pub fn tune_parameters_with_mass() -> Vec<super::tune_param::TuneParam> {
+    tune_parameters(true)
+}
+
+/// [`tune_parameters`] of `ftaftsmc-no-mass` (without β1).
+pub fn tune_parameters_no_mass() -> Vec<super::tune_param::TuneParam> {
+    tune_parameters(false)
+}

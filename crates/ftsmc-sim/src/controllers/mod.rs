@@ -43,7 +43,11 @@
 //!    sliding laws), as FTAFTSMC, whose section also holds the mass
 //!    adaptation.
 //! 3. Add `pub mod NAME;` and one line to the list at the bottom of this
-//!    file: `field: NAME::Gains => [NAME::Controller],`.
+//!    file: `field: NAME::Gains => [NAME::Controller { tune: NAME::tune_parameters }],`,
+//!    naming what `ftsmc tune` may change in it (a `tune_parameters()`
+//!    beside its gains returning [`tune_param::TuneParam`]s, see
+//!    [`tunable`]), or `{ tune: tune_param::none }` for nothing yet: the
+//!    list does not compile without it.
 //!
 //! That is all: the scenario reads, defaults, writes and validates
 //! `[KEY]`, every command (`run`, `montecarlo`, `reproduce`) can fly it, and
@@ -300,7 +304,7 @@ pub trait Declaration {
 }
 
 /// What the list says about one declared controller.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug)]
 pub struct Declared {
     /// [`Declaration::NAME`].
     pub name: &'static str,
@@ -310,6 +314,11 @@ pub struct Declared {
     pub description: &'static str,
     /// The [`GainSection::KEY`] it reads.
     pub section: &'static str,
+    /// What `ftsmc tune` may change in it: the `tune_parameters` function
+    /// its list line names next to it (`{ tune: NAME::tune_parameters }`),
+    /// [`tune_param::none`] for a controller that declares none. The list
+    /// cannot name a controller without one (the macro requires it).
+    pub tune_parameters: fn() -> Vec<tune_param::TuneParam>,
 }
 
 /// A declared section that could not be deserialized.
@@ -372,7 +381,7 @@ fn merge_tables(base: &mut toml::Table, top: toml::Table) {
 /// Generates the gain sections, the name lists and the dispatch from the
 /// list of `field: SectionType => [Controller, …]` lines.
 macro_rules! declare_controllers {
-    ($( $field:ident : $section:ty => [ $( $controller:ty ),+ $(,)? ] ),+ $(,)?) => {
+    ($( $field:ident : $section:ty => [ $( $controller:ty { tune: $tune:path } ),+ $(,)? ] ),+ $(,)?) => {
         /// The gain section of every declared controller, one field per
         /// section (see the list in `controllers/mod.rs`). In a scenario:
         /// `scenario.gains`, written as the top-level tables `[KEY]`.
@@ -466,6 +475,7 @@ macro_rules! declare_controllers {
                     label: <$controller as Declaration>::LABEL,
                     description: <$controller as Declaration>::DESCRIPTION,
                     section: <$section as GainSection>::KEY,
+                    tune_parameters: $tune,
                 },
             )+)+
         ];
@@ -569,11 +579,64 @@ macro_rules! declare_controllers {
 // The list: one line per gain section, `field: type => [controllers that read it]`.
 // Order = order of `ftsmc list` and of the sections in a written scenario.toml.
 declare_controllers! {
-    ftaftsmc: ftaftsmc::FtaftsmcConfig => [ftaftsmc::Ftaftsmc, ftaftsmc::FtaftsmcNoMass],
-    ranftsmc: AxisSet<ftsmc_core::ranftsmc::RanftsmcGains> => [ranftsmc::Ranftsmc],
-    tsm_sta: AxisSet<ftsmc_core::tsm_sta::TsmStaGains> => [tsm_sta::TsmSta],
-    pid: ftsmc_core::pid::PidGains => [pid::Pid],
-    se3: ftsmc_core::se3::Se3Gains => [se3::Se3],
-    crazyflie_pid: ftsmc_core::crazyflie_pid::CrazyfliePidGains => [crazyflie_pid::CrazyfliePid],
-    mellinger: ftsmc_core::mellinger::MellingerGains => [mellinger::Mellinger],
+    ftaftsmc: ftaftsmc::FtaftsmcConfig => [
+        ftaftsmc::Ftaftsmc { tune: ftaftsmc::tune_parameters_with_mass },
+        ftaftsmc::FtaftsmcNoMass { tune: ftaftsmc::tune_parameters_no_mass },
+    ],
+    ranftsmc: AxisSet<ftsmc_core::ranftsmc::RanftsmcGains> => [ranftsmc::Ranftsmc { tune: ranftsmc::tune_parameters }],
+    tsm_sta: AxisSet<ftsmc_core::tsm_sta::TsmStaGains> => [tsm_sta::TsmSta { tune: tsm_sta::tune_parameters }],
+    pid: ftsmc_core::pid::PidGains => [pid::Pid { tune: pid::tune_parameters }],
+    se3: ftsmc_core::se3::Se3Gains => [se3::Se3 { tune: se3::tune_parameters }],
+    crazyflie_pid: ftsmc_core::crazyflie_pid::CrazyfliePidGains => [crazyflie_pid::CrazyfliePid { tune: tune_param::none }],
+    mellinger: ftsmc_core::mellinger::MellingerGains => [mellinger::Mellinger { tune: tune_param::none }],
+}
+
+/// A controller planted in a list of its own: one list line (with its
+/// `tune`) and its law are all it takes to be declared, built, labelled
+/// and tuned; nothing else names it.
+#[cfg(test)]
+#[allow(dead_code)] // the macro generates the whole dispatch; the test uses part of it
+mod planted {
+    use super::*;
+
+    /// A new controller: PID's law under another name, with one tunable.
+    pub struct Planted;
+
+    impl Declaration for Planted {
+        const NAME: &'static str = "planted";
+        const LABEL: &'static str = "Planted";
+        const DESCRIPTION: &'static str = "a controller declared only in this test's list";
+        type Section = ftsmc_core::pid::PidGains;
+        fn build(gains: &Self::Section, ctx: &BuildContext) -> Result<BoxedController, String> {
+            <pid::Pid as Declaration>::build(gains, ctx)
+        }
+    }
+
+    fn planted_tunables() -> Vec<tune_param::TuneParam> {
+        vec![tune_param::TuneParam::factor("planted_p", "factor on position_p", 0.5, 2.0, |t, k| {
+            tune_param::scale(&mut t.gains.pid.position_p, &[0, 1, 2], k)
+        })]
+    }
+
+    declare_controllers! {
+        pid: ftsmc_core::pid::PidGains => [pid::Pid { tune: pid::tune_parameters }, Planted { tune: planted_tunables }],
+    }
+
+    #[test]
+    fn a_planted_controller_needs_only_its_list_line() {
+        let d = DECLARED.iter().find(|d| d.name == "planted").expect("declared");
+        assert_eq!((d.label, d.section), ("Planted", "pid"));
+        assert!(CONTROLLERS.iter().any(|(n, _)| *n == "planted"));
+        let names: Vec<&str> = tunable::parameters_in(DECLARED, "planted").unwrap().iter().map(|p| p.name).collect();
+        assert_eq!(names, ["planted_p"]);
+        assert_eq!(tunable::tunable_in(DECLARED), ["pid", "planted"]);
+        assert!(tunable::parameters_in(DECLARED, "se3").is_err(), "not in the planted list");
+        let ctx = BuildContext {
+            plant: QuadrotorParams::default(),
+            cascade: CascadeSettings::default(),
+            control_period: 0.001,
+        };
+        assert!(build("planted", &GainSections::default(), &ctx).is_ok());
+        assert_eq!(section_key("planted"), Some("pid"));
+    }
 }

@@ -1,7 +1,9 @@
 //! What `ftsmc tune` may change in each controller: named parameters with
 //! bounds and scale, declared in the controller's own file
-//! (`tune_parameters()` in `ftaftsmc.rs`, `pid.rs`, …) and listed here by
-//! controller name.
+//! (`tune_parameters()` in `ftaftsmc.rs`, `pid.rs`, …) and named by the
+//! controller's line in the list of `controllers/mod.rs`
+//! ([`super::Declared::tune_parameters`]); this module only looks them up,
+//! so a new controller cannot be missed here.
 //!
 //! Every declared parameter is a **factor** on the gains the scenario
 //! already has (its start is 1: the controller's defaults, or the gains the
@@ -30,16 +32,22 @@ pub use super::tune_param::{TuneParam, TuneTarget, COMMAND_FILTER};
 /// The declared parameters of controller `name`; `Err(known names)` for an
 /// unknown one.
 pub fn parameters(name: &str) -> Result<Vec<TuneParam>, String> {
-    super::check_name(name)?;
-    Ok(match name {
-        "ftaftsmc" => super::ftaftsmc::tune_parameters(true),
-        "ftaftsmc-no-mass" => super::ftaftsmc::tune_parameters(false),
-        "ranftsmc" => super::ranftsmc::tune_parameters(),
-        "tsm-sta" => super::tsm_sta::tune_parameters(),
-        "pid" => super::pid::tune_parameters(),
-        "se3" => super::se3::tune_parameters(),
-        _ => Vec::new(),
-    })
+    parameters_in(super::DECLARED, name)
+}
+
+/// [`parameters`] of `name` among the declarations `declared` (a list the
+/// `declare_controllers!` macro generated).
+pub fn parameters_in(declared: &[super::Declared], name: &str) -> Result<Vec<TuneParam>, String> {
+    match declared.iter().find(|d| d.name == name) {
+        Some(d) => Ok((d.tune_parameters)()),
+        None => Err(declared.iter().map(|d| d.name).collect::<Vec<_>>().join(", ")),
+    }
+}
+
+/// The names of the controllers among `declared` that declare at least one
+/// tunable parameter, in list order (what `ftsmc tune -c all` tunes).
+pub fn tunable_in(declared: &[super::Declared]) -> Vec<&'static str> {
+    declared.iter().filter(|d| !(d.tune_parameters)().is_empty()).map(|d| d.name).collect()
 }
 
 /// The `[cascade]` keys `[[tune.extra]]` may search, for a controller that

@@ -1,7 +1,8 @@
 //! The type of a declared `ftsmc tune` parameter ([`TuneParam`]: a named
 //! factor with bounds on some gains) and what it may change
 //! ([`TuneTarget`]). The controllers' files declare their parameters with
-//! it (`tune_parameters()`); `tunable.rs` lists them by controller name.
+//! it (`tune_parameters()`), and each controller's line in the list of
+//! `controllers/mod.rs` names its function; `tunable.rs` looks them up.
 //! Kept apart from `tunable.rs` so that no controller file imports a file
 //! that imports it back.
 
@@ -44,6 +45,15 @@ impl TuneParam {
     ) -> Self {
         Self { name, doc, low, high, apply }
     }
+}
+
+/// The declaration of a controller with no tunable parameters (yet): what
+/// its line in the list of `controllers/mod.rs` names as `tune`, so that
+/// declaring none is written down, not forgotten. `ftsmc tune -c all`
+/// leaves such a controller out; `ftsmc tune -c NAME` tunes only its
+/// `[[tune.extra]]` keys.
+pub fn none() -> Vec<TuneParam> {
+    Vec::new()
 }
 
 /// Command-filter bandwidth factor on `[cascade] command_filter.natural_frequency`

@@ -206,3 +206,41 @@ fn the_docs_list_every_controller_and_section() {
     }
     assert!(controllers.contains("## Adding a controller"));
 }
+
+/// Every controller's declaration names what `ftsmc tune` may change
+/// (possibly nothing, declared as `tune_param::none`): unique non-empty
+/// names with a line of documentation, factor bounds around the start 1,
+/// and factor 1 leaves the default gains bit for bit; `tunable_controllers`
+/// is exactly the controllers with at least one parameter.
+#[test]
+fn every_declaration_declares_its_tunables() {
+    use ftsmc_sim::controllers::tunable::{self, TuneTarget};
+    let scenario = default_scenario();
+    let mut with_any = Vec::new();
+    for d in DECLARED {
+        let params = tunable::parameters(d.name).unwrap_or_else(|e| panic!("{}: {e}", d.name));
+        assert_eq!(params.len(), (d.tune_parameters)().len(), "{}", d.name);
+        let mut names: Vec<&str> = params.iter().map(|p| p.name).collect();
+        names.sort_unstable();
+        names.dedup();
+        assert_eq!(names.len(), params.len(), "{}: duplicate tunable names", d.name);
+        for p in &params {
+            assert!(!p.name.is_empty() && !p.doc.is_empty(), "{}: {} undocumented", d.name, p.name);
+            assert!(0.0 < p.low && p.low <= 1.0 && 1.0 <= p.high, "{}.{}: [{}, {}]", d.name, p.name, p.low, p.high);
+            let (mut gains, mut cascade) = (scenario.gains.clone(), scenario.cascade);
+            (p.apply)(&mut TuneTarget { gains: &mut gains, cascade: &mut cascade }, 1.0);
+            assert!(
+                gains == scenario.gains && cascade == scenario.cascade,
+                "{}.{}: factor 1 changes gains",
+                d.name,
+                p.name
+            );
+        }
+        if !params.is_empty() {
+            with_any.push(d.name);
+        }
+    }
+    assert_eq!(registry::tunable_controllers(), with_any);
+    assert_eq!(with_any, ["ftaftsmc", "ftaftsmc-no-mass", "ranftsmc", "tsm-sta", "pid", "se3"]);
+    assert!(tunable::parameters("no-such-controller").is_err());
+}
