@@ -130,7 +130,7 @@ class FrameRenderer:
         """Forget the trail (a new episode)."""
         self.trail = []
 
-    def record(self, position: Sequence[float]) -> None:
+    def record(self, position: npt.ArrayLike) -> None:
         """Add ``position`` (m) to the trail (called at every environment step)."""
         self.trail.append(np.asarray(position, dtype=float))
         if len(self.trail) > self.max_trail:

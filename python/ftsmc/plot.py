@@ -332,7 +332,7 @@ def animate(
     # each frame restores them and draws only the moving artists (blitting).
     dpi = 100
     scene = Figure(figsize=(6, 5), dpi=dpi)
-    canvas = FigureCanvasAgg(scene)
+    canvas: Any = FigureCanvasAgg(scene)  # draw, copy_from_bbox, restore_region: untyped in matplotlib
     scene.subplots_adjust(left=0.0, right=0.95, bottom=0.02, top=0.92)
     ax: Any = scene.add_subplot(projection="3d")  # mpl_toolkits' Axes3D (set_zlim, plot in 3-D)
     if has_ref:
