@@ -12,6 +12,7 @@ use ftsmc_sim::registry::label;
 use ftsmc_sim::run::{planned_steps, Divergence, ExitStatus};
 use ftsmc_sim::scenario::ladder::LADDER;
 use ftsmc_sim::scenario::Scenario;
+use ftsmc_sim::stats::order::{finite_sorted, interpolated_quantile};
 use rayon::prelude::*;
 use serde_json::{json, Map, Value};
 
@@ -26,26 +27,6 @@ pub struct Ladder {
     pub json: Value,
     /// Flights flown.
     pub flights: usize,
-}
-
-/// `q`-quantile (0..1) of sorted values by linear interpolation; `None` if empty.
-fn quantile(sorted: &[f64], q: f64) -> Option<f64> {
-    match sorted.len() {
-        0 => None,
-        1 => Some(sorted[0]),
-        n => {
-            let x = q * (n - 1) as f64;
-            let i = x.floor() as usize;
-            let j = (i + 1).min(n - 1);
-            Some(sorted[i] + (x - i as f64) * (sorted[j] - sorted[i]))
-        }
-    }
-}
-
-fn sorted(mut v: Vec<f64>) -> Vec<f64> {
-    v.retain(|x| x.is_finite());
-    v.sort_by(f64::total_cmp);
-    v
 }
 
 /// The per-(rung, controller) numbers of the table.
@@ -68,14 +49,14 @@ struct Cell {
 
 fn cell(rows: &[&McRun], conf: f64) -> Cell {
     let done: Vec<&&McRun> = rows.iter().filter(|r| r.exit.is_completed()).collect();
-    let rms = sorted(
+    let rms = finite_sorted(
         done.iter()
             .map(|r| (r.metrics.rms.x.powi(2) + r.metrics.rms.y.powi(2) + r.metrics.rms.z.powi(2)).sqrt())
             .collect(),
     );
-    let saturated = sorted(rows.iter().filter_map(|r| r.metrics.saturation_fraction).collect());
-    let thrust = sorted(done.iter().map(|r| r.metrics.chattering.thrust).collect());
-    let torque = sorted(
+    let saturated = finite_sorted(rows.iter().filter_map(|r| r.metrics.saturation_fraction).collect());
+    let thrust = finite_sorted(done.iter().map(|r| r.metrics.chattering.thrust).collect());
+    let torque = finite_sorted(
         done.iter()
             .map(|r| {
                 r.metrics.chattering.roll_torque + r.metrics.chattering.pitch_torque + r.metrics.chattering.yaw_torque
@@ -105,7 +86,7 @@ fn cell(rows: &[&McRun], conf: f64) -> Cell {
     let envelope = done.len() - done.iter().filter(|r| r.success).count();
     let mut why = Vec::new();
     if !diverged.is_empty() {
-        let times = sorted(diverged.iter().map(|d| d.0).collect());
+        let times = finite_sorted(diverged.iter().map(|d| d.0).collect());
         let tilt = diverged.iter().filter(|d| d.1 == "tilt").count();
         let kind = if tilt == diverged.len() {
             "tilt"
@@ -117,12 +98,16 @@ fn cell(rows: &[&McRun], conf: f64) -> Cell {
         why.push(format!(
             "{} diverged ({kind}, median {:.1} s)",
             diverged.len(),
-            quantile(&times, 0.5).unwrap_or(f64::NAN)
+            interpolated_quantile(&times, 0.5).unwrap_or(f64::NAN)
         ));
     }
     if !crashed.is_empty() {
-        let times = sorted(crashed.clone());
-        why.push(format!("{} crashed (median {:.1} s)", crashed.len(), quantile(&times, 0.5).unwrap_or(f64::NAN)));
+        let times = finite_sorted(crashed.clone());
+        why.push(format!(
+            "{} crashed (median {:.1} s)",
+            crashed.len(),
+            interpolated_quantile(&times, 0.5).unwrap_or(f64::NAN)
+        ));
     }
     if envelope > 0 {
         why.push(format!("{envelope} left the envelope"));
@@ -148,11 +133,11 @@ fn cell(rows: &[&McRun], conf: f64) -> Cell {
         completed: done.len(),
         crashed: crashed.len(),
         diverged: diverged.len(),
-        rms_median: quantile(&rms, 0.5),
-        rms_p95: quantile(&rms, 0.95),
-        saturated: quantile(&saturated, 0.5),
-        thrust_activity: quantile(&thrust, 0.5),
-        torque_activity: quantile(&torque, 0.5),
+        rms_median: interpolated_quantile(&rms, 0.5),
+        rms_p95: interpolated_quantile(&rms, 0.95),
+        saturated: interpolated_quantile(&saturated, 0.5),
+        thrust_activity: interpolated_quantile(&thrust, 0.5),
+        torque_activity: interpolated_quantile(&torque, 0.5),
         why: if why.is_empty() { "—".into() } else { why.join("; ") },
     }
 }
@@ -374,9 +359,9 @@ fn mission_cell(rows: &[&McRun], scenario: &Scenario, window: f64, conf: f64) ->
         completed: done.len(),
         success_interval: ftsmc_sim::stats::rate::wilson(success as u64, rows.len() as u64, conf)
             .expect("counts and level are valid"),
-        rms_after: sorted(tracked.iter().map(|t| t.rms_after).collect()),
-        max_after: sorted(tracked.iter().filter_map(|t| t.max_after).collect()),
-        settled: sorted(tracked.iter().filter_map(|t| t.settle_time).collect()),
+        rms_after: finite_sorted(tracked.iter().map(|t| t.rms_after).collect()),
+        max_after: finite_sorted(tracked.iter().filter_map(|t| t.max_after).collect()),
+        settled: finite_sorted(tracked.iter().filter_map(|t| t.settle_time).collect()),
         outcomes,
     }
 }

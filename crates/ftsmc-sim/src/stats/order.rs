@@ -73,9 +73,47 @@ pub fn quantile_of(values: &[f64], q: f64, confidence: f64) -> Result<Option<Int
     quantile_interval(&v, q, confidence)
 }
 
+/// The finite values of `values`, ascending (the input of [`quantile_interval`]
+/// and [`interpolated_quantile`]).
+pub fn finite_sorted(mut values: Vec<f64>) -> Vec<f64> {
+    values.retain(|x| x.is_finite());
+    values.sort_by(f64::total_cmp);
+    values
+}
+
+/// The `q`-quantile (`0 ≤ q ≤ 1`) of `sorted` (ascending) by linear
+/// interpolation between order statistics, `x₍ᵢ₎ + (h − i)(x₍ᵢ₊₁₎ − x₍ᵢ₎)`
+/// with `h = q (n − 1)` (0-based; Hyndman & Fan 1996, "Sample quantiles in
+/// statistical packages", Am. Stat. 50, definition 7 — R's and NumPy's
+/// default). `None` for no values. The ladder table's medians and p95s use
+/// it; [`quantile_interval`]'s estimate is the nearest-rank one.
+pub fn interpolated_quantile(sorted: &[f64], q: f64) -> Option<f64> {
+    match sorted.len() {
+        0 => None,
+        1 => Some(sorted[0]),
+        n => {
+            let x = q * (n - 1) as f64;
+            let i = x.floor() as usize;
+            let j = (i + 1).min(n - 1);
+            Some(sorted[i] + (x - i as f64) * (sorted[j] - sorted[i]))
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn interpolated_quantile_is_hyndman_fan_type_7() {
+        assert_eq!(interpolated_quantile(&[], 0.5), None);
+        assert_eq!(interpolated_quantile(&[3.0], 0.95), Some(3.0));
+        assert_eq!(interpolated_quantile(&[1.0, 2.0, 3.0, 4.0], 0.5), Some(2.5));
+        let ramp: Vec<f64> = (0..=100).map(f64::from).collect();
+        assert_eq!(interpolated_quantile(&ramp, 0.95), Some(95.0));
+        assert_eq!(interpolated_quantile(&[0.0, 10.0], 0.25), Some(2.5));
+        assert_eq!(finite_sorted(vec![2.0, f64::NAN, -1.0, f64::INFINITY]), vec![-1.0, 2.0]);
+    }
 
     #[test]
     fn median_of_ten_uses_the_second_and_ninth_values() {

@@ -19,6 +19,7 @@
 //!   that summary is rewritten from the `runs.csv` files first;
 //! - the sample-size table of docs/statistics.md from its formulas.
 
+use ftsmc_sim::stats::order::{finite_sorted, interpolated_quantile};
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -482,26 +483,6 @@ fn rows_of_runs_csv(dir: &Path) -> Vec<Row> {
     rows
 }
 
-fn sorted(mut v: Vec<f64>) -> Vec<f64> {
-    v.retain(|x| x.is_finite());
-    v.sort_by(f64::total_cmp);
-    v
-}
-
-/// Linear-interpolation quantile, as the ladder table's p95 and medians of activity.
-fn quantile(s: &[f64], q: f64) -> Option<f64> {
-    match s.len() {
-        0 => None,
-        1 => Some(s[0]),
-        n => {
-            let x = q * (n - 1) as f64;
-            let i = x.floor() as usize;
-            let j = (i + 1).min(n - 1);
-            Some(s[i] + (x - i as f64) * (s[j] - s[i]))
-        }
-    }
-}
-
 /// The committed summary's columns: one row per rung and controller, every
 /// exit counted in the library's categories ([`ExitCounts`]), the medians
 /// and quantiles as `ftsmc reproduce`'s ladder table computes them (full
@@ -563,7 +544,7 @@ fn cells_of(rows: &[Row]) -> Vec<Cell> {
             );
             let done: Vec<&&Row> = mine.iter().filter(|r| r.exit.is_completed()).collect();
             let times = |f: &dyn Fn(&ExitStatus) -> bool| {
-                let t = sorted(
+                let t = finite_sorted(
                     mine.iter()
                         .filter(|r| f(&r.exit))
                         .filter_map(|r| match r.exit {
@@ -575,7 +556,7 @@ fn cells_of(rows: &[Row]) -> Vec<Cell> {
                         })
                         .collect(),
                 );
-                quantile(&t, 0.5)
+                interpolated_quantile(&t, 0.5)
             };
             let kinds: Vec<&str> = mine
                 .iter()
@@ -597,7 +578,7 @@ fn cells_of(rows: &[Row]) -> Vec<Cell> {
             } else {
                 "tilt/position/other"
             };
-            let rms = sorted(done.iter().map(|r| r.rms).collect());
+            let rms = finite_sorted(done.iter().map(|r| r.rms).collect());
             cells.push(Cell {
                 rung: rung.to_string(),
                 controller: c.to_string(),
@@ -608,10 +589,13 @@ fn cells_of(rows: &[Row]) -> Vec<Cell> {
                 diverged_median: times(&|e| matches!(e, ExitStatus::Diverged { .. })),
                 crashed_median: times(&|e| e.is_crashed()),
                 rms_median: quantile_interval(&rms, 0.5, 0.95).unwrap(),
-                rms_p95: quantile(&rms, 0.95),
-                saturated: quantile(&sorted(mine.iter().filter_map(|r| r.saturated).collect()), 0.5),
-                thrust: quantile(&sorted(done.iter().map(|r| r.thrust).collect()), 0.5),
-                torque: quantile(&sorted(done.iter().map(|r| r.torque).collect()), 0.5),
+                rms_p95: interpolated_quantile(&rms, 0.95),
+                saturated: interpolated_quantile(
+                    &finite_sorted(mine.iter().filter_map(|r| r.saturated).collect()),
+                    0.5,
+                ),
+                thrust: interpolated_quantile(&finite_sorted(done.iter().map(|r| r.thrust).collect()), 0.5),
+                torque: interpolated_quantile(&finite_sorted(done.iter().map(|r| r.torque).collect()), 0.5),
             });
         }
     }
